@@ -1,0 +1,88 @@
+"""Ground truth about the target stop sign as the camera sees it (for ``info`` only).
+
+The sign's pixel mask comes from projecting the octagon through the camera's intrinsics
+and keeping the pixels where the noise-free rendered depth agrees with the sign's plane,
+so parts hidden behind other objects are excluded. No extra render pass is needed.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from sim.sensors.camera import CameraIntrinsics
+from sim.world.stop_signs import SIGN_FACE_ACROSS_FLATS_M, StopSign
+
+__all__ = ["SignView", "sign_view"]
+
+#: Converts MuJoCo's camera frame (x right, y up, looking along -z) to the optical frame.
+_MJ_TO_OPTICAL = np.diag([1.0, -1.0, -1.0])
+_DEPTH_TOLERANCE_M = 0.03
+
+
+@dataclass(frozen=True)
+class SignView:
+    """How the camera sees one stop sign.
+
+    Attributes:
+        d_true: depth of the octagon's centre along the optical axis, metres (what a depth
+            camera measures for it); NaN when the centre is behind the camera.
+        d_euclid: straight-line distance from the optical centre to the octagon's centre.
+        bearing: angle of the centre from the optical axis, radians (left positive).
+        mask: (H, W) bool, visible pixels of the sign's face.
+        in_view: whether any pixel of the face is visible.
+    """
+
+    d_true: float
+    d_euclid: float
+    bearing: float
+    mask: np.ndarray
+    in_view: bool
+
+
+def _octagon_world(sign: StopSign) -> np.ndarray:
+    r = SIGN_FACE_ACROSS_FLATS_M / (2 * math.cos(math.pi / 8))
+    a = math.pi / 8 + np.arange(8) * math.pi / 4
+    lateral, up = r * np.cos(a), r * np.sin(a)
+    yaw = sign.face_yaw
+    left = np.array([-math.sin(yaw), math.cos(yaw), 0.0])
+    return sign.centre + lateral[:, None] * left + up[:, None] * np.array([0.0, 0.0, 1.0])
+
+
+def sign_view(sign: StopSign, cam_pos: np.ndarray, cam_mat: np.ndarray,
+              intrinsics: CameraIntrinsics, clean_depth: np.ndarray) -> SignView:
+    """Ground truth of ``sign`` from a camera pose.
+
+    Args:
+        sign: the stop sign.
+        cam_pos: (3,) camera position in the map frame.
+        cam_mat: (3, 3) camera-to-world rotation (MuJoCo's ``cam_xmat``).
+        intrinsics: the camera's pinhole intrinsics.
+        clean_depth: (H, W) noise-free z-depth of the same frame, metres.
+    """
+    world_to_opt = _MJ_TO_OPTICAL @ cam_mat.T
+    centre = world_to_opt @ (sign.centre - cam_pos)
+    d_euclid = float(np.linalg.norm(centre))
+    mask = np.zeros((intrinsics.height, intrinsics.width), bool)
+    if centre[2] <= 0.05:
+        return SignView(float("nan"), d_euclid, float("nan"), mask, False)
+    bearing = float(math.atan2(-centre[0], centre[2]))
+    corners = (world_to_opt @ (_octagon_world(sign) - cam_pos).T).T
+    facing = float(np.dot(cam_pos - sign.centre, [math.cos(sign.face_yaw), math.sin(sign.face_yaw), 0.0])) > 0
+    if facing and (corners[:, 2] > 0.05).all():
+        uv = intrinsics.project(corners)
+        poly = np.round(uv * 16).astype(np.int32)
+        cv2.fillPoly(mask.view(np.uint8), [poly], 1, lineType=cv2.LINE_8, shift=4)
+        if mask.any():
+            # Depth of the sign's plane at each masked pixel: intersect the pixel's ray with it.
+            normal_opt = world_to_opt @ np.array([math.cos(sign.face_yaw), math.sin(sign.face_yaw), 0.0])
+            rows, cols = np.nonzero(mask)
+            rays = np.column_stack([(cols - intrinsics.cx) / intrinsics.fx,
+                                    (rows - intrinsics.cy) / intrinsics.fy, np.ones(len(rows))])
+            plane_z = float(normal_opt @ centre) / (rays @ normal_opt)
+            visible = np.abs(clean_depth[rows, cols] - plane_z) < _DEPTH_TOLERANCE_M
+            mask[rows[~visible], cols[~visible]] = False
+    return SignView(float(centre[2]), d_euclid, bearing, mask, bool(mask.any()))

@@ -1,0 +1,252 @@
+"""``RACF/QCar2-v0``: the QCar 2 on the indoor map, approaching a stop sign.
+
+Plumbing only: step order, seeding, spaces, sensor scheduling and the reward and
+termination hooks. The world, the car and the sensors are built by their own modules.
+
+Step order: validate action -> write controls -> ``substeps`` physics steps -> read the
+sensors that are due (others hold their last reading) -> ground truth -> reward and flags.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+
+from sim._gl import ensure_gl_backend, gl_context_class
+from sim.env.config import RESET_OPTIONS, EnvConfig
+from sim.env.ground_truth import sign_view
+from sim.sensors import DepthCamera, Lidar2D, RGBCamera, RGBDCameraRig, Sensor, VehicleStateSensor
+from sim.vehicle import QCar2
+from sim.world.scene import load_model
+from sim.world.stop_signs import StopSign, stop_signs
+
+ensure_gl_backend()
+import mujoco  # noqa: E402
+
+__all__ = ["QCar2Env"]
+
+_BUMPER_AHEAD_M = 0.2125  # body origin to front bumper
+
+
+class QCar2Env(gym.Env):
+    """The QCar 2 driving a road-graph route towards one of the four stop signs.
+
+    Observation (``Dict``): ``rgb`` (H, W, 3) uint8; ``depth`` (H, W) float32 m, 0 = no
+    return; ``lidar`` (N,) float32 m, inf = no return; ``state`` (5,) float32, see
+    ``sim.sensors.STATE_FIELDS``. Action (``Box``): [speed command m/s, steering rad].
+
+    ``reset(options=...)`` accepts ``sign`` (0..3), ``cruise_speed`` (m/s; the car starts
+    moving at it) and ``run_up_m`` (distance from the front bumper to the stop line at the
+    start). Ground truth is in ``info``: ``d_true`` (sign depth along the camera axis, m),
+    ``d_true_euclid``, ``sign_bearing``, ``sign_mask``, ``sign_in_view``, ``pose``,
+    ``speed``, ``route_s``, ``lateral_error``, ``dist_to_stop_line`` (front bumper to the
+    stop line along the route, m; negative once past it), ``collision``, ``off_road``.
+
+    Reward per step: metres of route progress, minus 0.1 x lateral error (m), minus 10
+    on leaving the road or colliding (both end the episode).
+
+    Example:
+        >>> import gymnasium as gym, sim
+        >>> env = gym.make("RACF/QCar2-v0", camera_width=160, camera_height=120)
+        >>> obs, info = env.reset(seed=0, options={"sign": 2, "cruise_speed": 1.0})
+        >>> obs["rgb"].shape, obs["lidar"].shape
+        ((120, 160, 3), (360,))
+    """
+
+    metadata = {"render_modes": ["rgb_array"], "render_fps": 50}
+
+    def __init__(self, render_mode: str | None = None, config: EnvConfig | None = None, **overrides: Any) -> None:
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            raise ValueError(f"render_mode must be None or one of {self.metadata['render_modes']}, got {render_mode!r}")
+        if config is not None and overrides:
+            raise ValueError("pass either config=EnvConfig(...) or keyword overrides, not both")
+        self.config = config or EnvConfig.from_kwargs(**overrides)
+        self.render_mode = render_mode
+        self.metadata = {**self.metadata, "render_fps": self.config.control_hz}
+
+        self.model = load_model()
+        self.model.opt.timestep = self.config.physics_dt_s
+        self.data = mujoco.MjData(self.model)
+        self.car = QCar2(self.model, self.config.vehicle)
+        self.rig = RGBDCameraRig(self.config.camera)
+        self.rig.configure_model(self.model)
+        self.sensors: tuple[Sensor, ...] = (RGBCamera(self.rig), DepthCamera(self.rig),
+                                            Lidar2D(self.config.lidar), VehicleStateSensor(self.car))
+        self._decimation = {"rgb": self.config.decimation(self.config.camera_hz),
+                            "depth": self.config.decimation(self.config.camera_hz),
+                            "lidar": self.config.decimation(self.config.lidar_hz),
+                            "state": self.config.decimation(self.config.state_hz)}
+        self.observation_space = spaces.Dict({
+            s.name: spaces.Box(low=s.low, high=s.high, shape=s.shape, dtype=s.dtype) for s in self.sensors})
+        v = self.config.vehicle
+        self.action_space = spaces.Box(low=np.array([-v.max_reverse_mps, -v.max_steer_rad], np.float32),
+                                       high=np.array([v.max_speed_mps, v.max_steer_rad], np.float32),
+                                       dtype=np.float32)
+        self._chassis_geom = self.model.geom("chassis").id
+        self._wheel_geoms = {self.model.geom(w).id for w in ("wheel_fl", "wheel_fr", "wheel_rl", "wheel_rr")}
+        self._floor_geoms = {self.model.geom("mat").id, self.model.geom("lab_floor").id}
+        self._viewer = None
+        self._sign: StopSign = stop_signs()[0]
+        self._obs: dict[str, np.ndarray] = {}
+        self._step = 0
+        self._route_s = 0.0
+        self._sensor_rng = np.random.default_rng()
+
+    # -- gymnasium API --------------------------------------------------------------------
+    def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
+        super().reset(seed=seed)
+        options = dict(options or {})
+        unknown = sorted(set(options) - set(RESET_OPTIONS))
+        if unknown:
+            raise ValueError(f"unknown reset option(s) {unknown}; allowed: {list(RESET_OPTIONS)}")
+        signs = stop_signs()
+        sign_index = options.get("sign", int(self.np_random.integers(len(signs))))
+        if sign_index not in range(len(signs)):
+            raise ValueError(f"options['sign'] must be an int in 0..{len(signs) - 1}, got {sign_index!r}")
+        speed = options.get("cruise_speed", float(self.np_random.choice(self.config.cruise_speeds_mps)))
+        if not (isinstance(speed, (int, float)) and 0.0 <= speed <= self.config.vehicle.max_speed_mps):
+            raise ValueError(f"options['cruise_speed'] must be in [0, {self.config.vehicle.max_speed_mps}] m/s, got {speed!r}")
+        sign = signs[sign_index]
+        longest = sign.stop_s - sign.earliest_start_s - _BUMPER_AHEAD_M
+        run_up = options.get("run_up_m", min(3.0, longest))
+        if not (isinstance(run_up, (int, float)) and 0.3 <= run_up <= longest + 1e-9):
+            raise ValueError(f"options['run_up_m'] for sign {sign_index} must be in [0.3, {longest:.2f}] m, got {run_up!r}")
+
+        # One generator for all sensor noise, derived from the env's seeded generator.
+        self._sensor_rng = np.random.default_rng(self.np_random.integers(2**63))
+        self._sign = sign
+        self._cruise_speed = float(speed)
+        mujoco.mj_resetData(self.model, self.data)
+        self._route_s = sign.stop_s - run_up - _BUMPER_AHEAD_M
+        x, y, yaw = sign.path.pose_at(self._route_s)
+        self.car.place(self.data, x, y, yaw, speed=float(speed))
+        mujoco.mj_forward(self.model, self.data)
+        self._step = 0
+        self._obs = {}
+        self._read_sensors(force=True)
+        return self._observation(), self._info(collision=False, off_road=False)
+
+    def step(self, action):
+        action = np.asarray(action, dtype=np.float64)
+        if action.shape != self.action_space.shape:
+            raise ValueError(f"action must have shape {self.action_space.shape} (speed m/s, steering rad), got {action.shape}")
+        if not np.isfinite(action).all():
+            raise ValueError(f"action must be finite (speed m/s, steering rad), got {action.tolist()}")
+        s_before = self._route_s
+        self.car.apply(self.data, float(action[0]), float(action[1]))
+        mujoco.mj_step(self.model, self.data, nstep=self.config.substeps)
+        self._step += 1
+        self._read_sensors(force=False)
+        self._update_route_progress()
+        collision = self._collided()
+        off_road = abs(self._lateral) > self.config.off_road_m
+        info = self._info(collision=collision, off_road=off_road)
+        reward = self._reward(self._route_s - s_before, collision, off_road)
+        terminated = collision or off_road or self._route_s >= self._sign.path.length - 0.05
+        truncated = self._step * (1.0 / self.config.control_hz) >= self.config.max_episode_s - 1e-9
+        return self._observation(), reward, terminated, truncated, info
+
+    def render(self):
+        if self.render_mode != "rgb_array":
+            return None
+        if self._viewer is None:
+            self._viewer = _ChaseView(self.model, self.config.render_width, self.config.render_height)
+        return self._viewer.render(self.data)
+
+    def close(self) -> None:
+        for s in self.sensors:
+            s.close()
+        if self._viewer is not None:
+            self._viewer.close()
+            self._viewer = None
+
+    # -- hooks ----------------------------------------------------------------------------
+    def _reward(self, progress_m: float, collision: bool, off_road: bool) -> float:
+        return float(progress_m - 0.1 * abs(self._lateral) - 10.0 * (collision or off_road))
+
+    def _collided(self) -> bool:
+        """A contact of the chassis with anything, or of a wheel with anything but the floor."""
+        for i in range(self.data.ncon):
+            g1, g2 = self.data.contact.geom1[i], self.data.contact.geom2[i]
+            if self._chassis_geom in (g1, g2):
+                return True
+            if (g1 in self._wheel_geoms and g2 not in self._floor_geoms) or (
+                    g2 in self._wheel_geoms and g1 not in self._floor_geoms):
+                return True
+        return False
+
+    # -- internals ------------------------------------------------------------------------
+    def _read_sensors(self, force: bool) -> None:
+        for sensor in self.sensors:
+            if force or self._step % self._decimation[sensor.name] == 0:
+                self._obs[sensor.name] = sensor.read(self.model, self.data, self._sensor_rng)
+
+    def _observation(self) -> dict[str, np.ndarray]:
+        return {k: v.copy() for k, v in self._obs.items()}
+
+    def _update_route_progress(self) -> None:
+        x, y = self.data.qpos[self.car.root_qpos : self.car.root_qpos + 2]
+        self._route_s, self._lateral = self._sign.path.project(np.array([x, y]), s_hint=self._route_s, window_m=0.5)
+
+    def _info(self, collision: bool, off_road: bool) -> dict[str, Any]:
+        if self._step == 0:
+            self._update_route_progress()
+        state = self.car.state(self.data)
+        cam_pos, cam_mat = self.car.camera_pose(self.model, self.data)
+        _, clean_depth = self.rig.render(self.model, self.data)
+        view = sign_view(self._sign, cam_pos, cam_mat, self.rig.intrinsics, clean_depth)
+        return {
+            "target_sign": self._sign.index,
+            "cruise_speed": self._cruise_speed,
+            "d_true": view.d_true,
+            "d_true_euclid": view.d_euclid,
+            "sign_bearing": view.bearing,
+            "sign_mask": view.mask,
+            "sign_in_view": view.in_view,
+            "pose": np.array([state.x, state.y, state.yaw]),
+            "speed": state.speed,
+            "route_s": self._route_s,
+            "lateral_error": self._lateral,
+            "dist_to_stop_line": self._sign.stop_s - (self._route_s + _BUMPER_AHEAD_M),
+            "collision": collision,
+            "off_road": off_road,
+            "time": self._step / self.config.control_hz,
+        }
+
+    # Route and sign, for controllers and experiments that plan on the road graph.
+    @property
+    def target_sign(self) -> StopSign:
+        return self._sign
+
+
+class _ChaseView:
+    """Offscreen third-person view behind the car (for ``render()``)."""
+
+    def __init__(self, model: mujoco.MjModel, width: int, height: int) -> None:
+        self._gl = gl_context_class()(width, height)
+        self._gl.make_current()
+        self._con = mujoco.MjrContext(model, mujoco.mjtFontScale.mjFONTSCALE_100.value)
+        mujoco.mjr_setBuffer(mujoco.mjtFramebuffer.mjFB_OFFSCREEN.value, self._con)
+        self._scene = mujoco.MjvScene(model, maxgeom=2000)
+        self._cam = mujoco.MjvCamera()
+        self._cam.type = mujoco.mjtCamera.mjCAMERA_FIXED
+        self._cam.fixedcamid = model.camera("chase").id
+        self._opt = mujoco.MjvOption()
+        self._model = model
+        self._rect = mujoco.MjrRect(0, 0, width, height)
+        self._rgb = np.empty((height, width, 3), np.uint8)
+
+    def render(self, data: mujoco.MjData) -> np.ndarray:
+        self._gl.make_current()
+        mujoco.mjv_updateScene(self._model, data, self._opt, None, self._cam, mujoco.mjtCatBit.mjCAT_ALL.value, self._scene)
+        mujoco.mjr_render(self._rect, self._scene, self._con)
+        mujoco.mjr_readPixels(self._rgb, None, self._rect, self._con)
+        return self._rgb[::-1].copy()
+
+    def close(self) -> None:
+        self._con.free()
+        self._gl.free()
