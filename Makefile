@@ -1,0 +1,40 @@
+# racf: the two commands are `make demo` (main job) and `make test` (tests).
+# Both create .venv and install what is missing: the CPU build of torch first (a newer
+# or unpinned torch would pull several GB of CUDA packages), then racf and its deps.
+
+PYTHON ?= python3
+VENV := .venv
+PY := $(VENV)/bin/python
+STAMP := $(VENV)/.racf-installed
+TORCH := torch==2.13.0
+export MUJOCO_GL ?= egl
+
+.PHONY: demo test test-all bench-sim snapshot clean
+
+$(PY):
+	$(PYTHON) -m venv $(VENV)
+	$(PY) -m pip install --quiet --upgrade pip
+
+$(STAMP): pyproject.toml | $(PY)
+	$(PY) -m pip install --quiet $(TORCH)
+	$(PY) -m pip install --quiet -e ".[test]"
+	touch $(STAMP)
+
+demo: $(STAMP)
+	$(VENV)/bin/racf demo --out outputs/demo
+	$(VENV)/bin/racf snapshot --out outputs/snapshot
+
+test: $(STAMP)
+	$(PY) -m pytest -q
+
+test-all: $(STAMP)
+	$(PY) -m pytest -q -m ""
+
+bench-sim: $(STAMP)
+	$(VENV)/bin/racf bench-sim
+
+snapshot: $(STAMP)
+	$(VENV)/bin/racf snapshot --out outputs/snapshot
+
+clean:
+	rm -rf $(VENV) outputs

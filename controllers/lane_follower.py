@@ -1,0 +1,77 @@
+"""Stanley lane following along a lane-centre polyline, with a speed PI loop.
+
+Pure numpy: the route arrives as arrays (x, y, heading per point), the car's pose and
+speed as numbers; nothing here knows the simulator. Quanser's reference controller is
+Stanley with k = 1 and a PI speed loop (Kp 0.1, Ki 1); ours commands speed directly, so
+the PI loop shapes a speed command rather than a motor duty.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["StanleyConfig", "StanleyController"]
+
+
+@dataclass(frozen=True)
+class StanleyConfig:
+    """Stanley gains.
+
+    Attributes:
+        k: cross-track gain (1/s in the atan2(k e, v) term).
+        softening_mps: added to the speed so the law stays gentle near standstill.
+        max_steer_rad: steering limit.
+        front_axle_m: body origin to the front axle along x (half the wheelbase).
+    """
+
+    k: float = 1.0
+    softening_mps: float = 0.3
+    max_steer_rad: float = math.radians(30.0)
+    front_axle_m: float = 0.128
+
+    def __post_init__(self) -> None:
+        if not 0.0 < self.k <= 20.0:
+            raise ValueError(f"k must be in (0, 20], got {self.k}")
+        if not 0.0 <= self.softening_mps <= 5.0:
+            raise ValueError(f"softening_mps must be in [0, 5] m/s, got {self.softening_mps}")
+        if not 0.0 < self.max_steer_rad <= math.radians(45):
+            raise ValueError(f"max_steer_rad must be in (0, 0.785] rad, got {self.max_steer_rad}")
+
+
+class StanleyController:
+    """Steering from the front axle's heading and cross-track error to a polyline.
+
+    Args:
+        points: (N, 2) lane-centre points, metres.
+        headings: (N,) heading of travel at each point, radians.
+        config: gains.
+    """
+
+    def __init__(self, points: np.ndarray, headings: np.ndarray, config: StanleyConfig | None = None) -> None:
+        points, headings = np.asarray(points, float), np.asarray(headings, float)
+        if points.ndim != 2 or points.shape[1] != 2 or len(points) < 2 or headings.shape != (len(points),):
+            raise ValueError(f"need points (N>=2, 2) and headings (N,), got {points.shape} and {headings.shape}")
+        self.points, self.headings = points, headings
+        self.config = config or StanleyConfig()
+        self._index = 0
+
+    def reset(self) -> None:
+        self._index = 0
+
+    def steer(self, x: float, y: float, yaw: float, speed: float) -> float:
+        """Steering angle (rad, left positive) for a car at pose (x, y, yaw) and ``speed`` m/s."""
+        c = self.config
+        front = np.array([x + c.front_axle_m * math.cos(yaw), y + c.front_axle_m * math.sin(yaw)])
+        # Search forward from the last match only: routes may pass near themselves.
+        lo, hi = max(0, self._index - 20), min(len(self.points), self._index + 200)
+        k = lo + int(np.argmin(((self.points[lo:hi] - front) ** 2).sum(axis=1)))
+        self._index = k
+        heading = self.headings[k]
+        rel = front - self.points[k]
+        lateral = -math.sin(heading) * rel[0] + math.cos(heading) * rel[1]  # left positive
+        heading_err = (heading - yaw + math.pi) % (2 * math.pi) - math.pi
+        delta = heading_err + math.atan2(-c.k * lateral, abs(speed) + c.softening_mps)
+        return float(np.clip(delta, -c.max_steer_rad, c.max_steer_rad))
