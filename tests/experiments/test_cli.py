@@ -1,0 +1,38 @@
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from experiments.cli import main
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def test_help_lists_the_commands():
+    out = subprocess.run([sys.executable, "-m", "experiments.cli", "--help"], cwd=ROOT,
+                         capture_output=True, text=True, check=True).stdout
+    for command in ("snapshot", "bench-sim", "demo"):
+        assert command in out
+
+
+def test_bad_sign_is_a_clear_error(capsys):
+    with pytest.raises(SystemExit) as err:
+        main(["snapshot", "--sign", "9"])
+    assert err.value.code == 2
+    assert "sign must be 0, 1, 2 or 3" in capsys.readouterr().err
+
+
+def test_snapshot_writes_the_four_pictures(tmp_path):
+    assert main(["snapshot", "--sign", "3", "--width", "160", "--height", "120", "--out", str(tmp_path)]) == 0
+    names = {p.name for p in tmp_path.glob("*.png")}
+    assert names == {"map_top.png", "camera_rgb.png", "camera_depth.png", "lidar.png"}
+    assert all(p.stat().st_size > 5000 for p in tmp_path.glob("*.png"))
+
+
+def test_demo_stops_in_the_success_band(tmp_path):
+    from experiments.demo import run_demo
+
+    summary = run_demo(tmp_path, sign=3, speed=1.0)
+    assert summary["stopped"] and 0.0 <= summary["stop_distance_m"] <= 0.60
+    assert (tmp_path / "demo_frames.png").exists() and (tmp_path / "demo_traces.png").exists()
