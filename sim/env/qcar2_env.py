@@ -9,7 +9,7 @@ sensors that are due (others hold their last reading) -> ground truth -> reward 
 
 from __future__ import annotations
 
-import math
+import numbers
 from typing import Any
 
 import gymnasium as gym
@@ -105,16 +105,16 @@ class QCar2Env(gym.Env):
             raise ValueError(f"unknown reset option(s) {unknown}; allowed: {list(RESET_OPTIONS)}")
         signs = stop_signs()
         sign_index = options.get("sign", int(self.np_random.integers(len(signs))))
-        if sign_index not in range(len(signs)):
+        if not _is_int(sign_index) or int(sign_index) not in range(len(signs)):
             raise ValueError(f"options['sign'] must be an int in 0..{len(signs) - 1}, got {sign_index!r}")
+        sign = signs[int(sign_index)]
         speed = options.get("cruise_speed", float(self.np_random.choice(self.config.cruise_speeds_mps)))
-        if not (isinstance(speed, (int, float)) and 0.0 <= speed <= self.config.vehicle.max_speed_mps):
+        if not (_is_real(speed) and 0.0 <= speed <= self.config.vehicle.max_speed_mps):
             raise ValueError(f"options['cruise_speed'] must be in [0, {self.config.vehicle.max_speed_mps}] m/s, got {speed!r}")
-        sign = signs[sign_index]
         longest = sign.stop_s - sign.earliest_start_s - _BUMPER_AHEAD_M
         run_up = options.get("run_up_m", min(3.0, longest))
-        if not (isinstance(run_up, (int, float)) and 0.3 <= run_up <= longest + 1e-9):
-            raise ValueError(f"options['run_up_m'] for sign {sign_index} must be in [0.3, {longest:.2f}] m, got {run_up!r}")
+        if not (_is_real(run_up) and 0.3 <= run_up <= longest + 1e-9):
+            raise ValueError(f"options['run_up_m'] for sign {sign.index} must be in [0.3, {longest:.2f}] m, got {run_up!r}")
 
         # One generator for all sensor noise, derived from the env's seeded generator.
         self._sensor_rng = np.random.default_rng(self.np_random.integers(2**63))
@@ -221,6 +221,15 @@ class QCar2Env(gym.Env):
     @property
     def target_sign(self) -> StopSign:
         return self._sign
+
+
+def _is_int(value: Any) -> bool:
+    return isinstance(value, numbers.Integral) and not isinstance(value, bool)
+
+
+def _is_real(value: Any) -> bool:
+    """A finite real number (NaN compares false with every range check, reject it here)."""
+    return isinstance(value, numbers.Real) and not isinstance(value, bool) and value == value
 
 
 class _ChaseView:

@@ -75,6 +75,9 @@ class CameraConfig:
     depth_quantum_m: float = 0.001
 
     def __post_init__(self) -> None:
+        for name in ("width", "height"):
+            if isinstance(getattr(self, name), bool) or not isinstance(getattr(self, name), (int, np.integer)):
+                raise ValueError(f"camera {name} must be an integer number of pixels, got {getattr(self, name)!r}")
         if not (16 <= self.width <= 1280 and 12 <= self.height <= 960):
             raise ValueError(f"camera width/height must be in [16, 1280] x [12, 960] px, got {self.width}x{self.height}")
         if not 0.0 < self.depth_min_m < self.depth_max_m <= 50.0:
@@ -115,9 +118,11 @@ class RGBDCameraRig:
         k, pixel = self.intrinsics, 1e-5  # sensor pixel pitch: any value, only ratios matter
         model.cam_resolution[cid] = (k.width, k.height)
         model.cam_sensorsize[cid] = (k.width * pixel, k.height * pixel)
-        # MuJoCo's principal point is the offset of the optical axis from the image centre.
+        # MuJoCo's principal point is the offset of the optical axis from the image centre,
+        # in continuous coordinates (pixel i spans [i, i+1]); our cx, cy put pixel centres
+        # on integers (OpenCV), hence the half pixel.
         model.cam_intrinsic[cid] = (k.fx * pixel, k.fy * pixel,
-                                    (k.width / 2 - k.cx) * pixel, (k.height / 2 - k.cy) * pixel)
+                                    (k.width / 2 - k.cx - 0.5) * pixel, (k.height / 2 - k.cy - 0.5) * pixel)
 
     def _ensure_context(self, model: mujoco.MjModel) -> None:
         if self._con is not None:

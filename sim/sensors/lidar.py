@@ -45,6 +45,8 @@ class LidarConfig:
     dropout: float = 0.0
 
     def __post_init__(self) -> None:
+        if isinstance(self.n_beams, bool) or not isinstance(self.n_beams, (int, np.integer)):
+            raise ValueError(f"n_beams must be an integer, got {self.n_beams!r}")
         if not 4 <= self.n_beams <= 4096:
             raise ValueError(f"n_beams must be in [4, 4096], got {self.n_beams}")
         if not 0.0 <= self.range_min_m < self.range_max_m <= 50.0:

@@ -31,6 +31,10 @@ def _left(heading: float) -> np.ndarray:
     return np.array([-math.sin(heading), math.cos(heading)])
 
 
+def _cross(a: np.ndarray, b: np.ndarray) -> float:
+    return float(a[0] * b[1] - a[1] * b[0])
+
+
 def _wrap(angle: np.ndarray | float) -> np.ndarray | float:
     return (np.asarray(angle) + np.pi) % (2 * np.pi) - np.pi
 
@@ -148,8 +152,8 @@ def scs_path(start: tuple[float, float, float], end: tuple[float, float, float],
     h1, h2 = float(start[2]), float(end[2])
     chord = p2 - p1
     parallel = abs(math.sin(h2 - h1)) < 1e-6 and math.cos(h2 - h1) > 0
-    if radius_m is None or (parallel and abs(np.cross(_unit(h1), chord)) < 1e-3):
-        if abs(float(np.cross(_unit(h1), chord))) > _LEG_TOLERANCE_M:
+    if radius_m is None or (parallel and abs(_cross(_unit(h1), chord)) < 1e-3):
+        if abs(_cross(_unit(h1), chord)) > _LEG_TOLERANCE_M:
             raise ValueError(f"straight edge from {start} to {end}: end is off the start heading")
         pts, hds, crv = _straight(p1, p2, h1)
         return Path(pts, hds, crv)
