@@ -36,12 +36,11 @@ def _drive(env, steps: int, step_fn) -> float:
     follower = StanleyController(sign.path.points, sign.path.headings)
     t0 = time.perf_counter()
     for _ in range(steps):
-        x, y, yaw = base.car.state(base.data).x, base.car.state(base.data).y, base.car.state(base.data).yaw
-        speed = base.car.state(base.data).speed
+        state = base.car.state(base.data)
         if base.target_sign.path.length - base._route_s < 0.6:  # loop the approach
             env.reset(options={"sign": sign.index, "cruise_speed": 1.0})
             follower.reset()
-        step_fn(np.array([1.0, follower.steer(x, y, yaw, speed)], np.float32))
+        step_fn(np.array([1.0, follower.steer(state.x, state.y, state.yaw, state.speed)], np.float32))
     return time.perf_counter() - t0
 
 
