@@ -1,12 +1,15 @@
 """The four stop signs, their stop lines and the approach routes that lead to them.
 
-A sign's face normal points along ``face_yaw``. For signs 2 and 3 the published yaw is the
-face normal and looks straight down the lane that has an official stop line. Signs 0 and 1
-stand beside the west road's northbound lane (x = -1.716 m), the only lane that passes them;
-the published yaw of sign 1 (35 deg) would show that lane the sign's back, so its face is
-turned by 180 deg (same plane, face on the lane side). Signs 0 and 1 have no published stop
-line: theirs is placed where the sign projects onto the lane, the rule the two official
-stop lines follow.
+A sign's face normal points along the published yaw (``face_yaw``). Signs 2 and 3 look
+straight down the lanes that have official stop lines. Signs 0 and 1 stand between the west
+road's two lanes: sign 0 (yaw -35 deg) faces the northbound lane (x = -1.716 m), sign 1
+(yaw 35 deg) the southbound one (x = -1.984 m), which it stands on the left of. Both are
+seen 55 deg off their normal. Signs 0 and 1 have no published stop line: theirs is placed
+where the sign projects onto the lane, the rule the two official stop lines follow.
+
+Sign 1 once served the northbound lane with its face turned by 180 deg; that approach comes
+out of a right-hand curve beside the sign, so the camera never saw it. The southbound lane
+has a 1.4 m straight in the sign's view, as the published yaw suggests.
 """
 
 from __future__ import annotations
@@ -28,12 +31,12 @@ SIGN_FACE_ACROSS_FLATS_M = 0.10
 #: Height of the octagon's centre above the floor.
 SIGN_CENTRE_HEIGHT_M = 0.23
 
-# sign index -> (route through the road graph, face flipped?, official stop line index or None)
-_APPROACHES: dict[int, tuple[tuple[int, ...], bool, int | None]] = {
-    0: ((8, 23, 21), False, None),
-    1: ((6, 8, 23, 21), True, None),
-    2: ((0, 2, 4, 14), False, 0),
-    3: ((16, 17, 15, 5), False, 1),
+# sign index -> (route through the road graph, official stop line index or None)
+_APPROACHES: dict[int, tuple[tuple[int, ...], int | None]] = {
+    0: ((8, 23, 21), None),
+    1: ((14, 20, 22, 10), None),
+    2: ((0, 2, 4, 14), 0),
+    3: ((16, 17, 15, 5), 1),
 }
 
 
@@ -50,7 +53,7 @@ class StopSign:
         stop_line: (x, y) centre of the stop line, metres.
         stop_s: arclength of the stop line along ``path``, metres.
         earliest_start_s: the first arclength a trial may start at (after any other sign
-            on the same lane, so the target is the first stop sign the car meets).
+            that faces the same lane, so the target is the first stop sign the car meets).
     """
 
     index: int
@@ -74,7 +77,7 @@ def stop_signs() -> tuple[StopSign, ...]:
     graph = qcar2_road_graph()
     signs = []
     for index, (x, y, yaw_deg) in enumerate(map_facts.STOP_SIGNS):
-        route, flipped, line_index = _APPROACHES[index]
+        route, line_index = _APPROACHES[index]
         path = graph.route_path(list(route))
         if line_index is None:
             s_line, _ = path.project(np.array([x, y]))
@@ -82,7 +85,7 @@ def stop_signs() -> tuple[StopSign, ...]:
         else:
             lx, ly = map_facts.STOP_LINES[line_index]
             s_line, _ = path.project(np.array([lx, ly]))
-        signs.append((index, (x, y), math.radians(yaw_deg + (180.0 if flipped else 0.0)),
+        signs.append((index, (x, y), math.radians(yaw_deg),
                       route, path, (lx, ly), s_line))
     out = []
     for index, pos, face, route, path, line, s_line in signs:
@@ -91,7 +94,9 @@ def stop_signs() -> tuple[StopSign, ...]:
             if other[0] == index:
                 continue
             s_other, lateral = path.project(np.array(other[1]))
-            if abs(lateral) < 0.4 and s_other < s_line:
+            # A sign showing this lane its back is no stop sign for it.
+            faces_lane = math.cos(other[2] - path.pose_at(s_other)[2]) < 0
+            if abs(lateral) < 0.5 and faces_lane and s_other < s_line:
                 earliest = max(earliest, s_other + 0.15)
         out.append(StopSign(index, pos, face, route, path, line, s_line, earliest))
     return tuple(out)
