@@ -1,5 +1,16 @@
 """Perception and control that see observations only (no simulator imports)."""
 
-from controllers.lane_follower import StanleyConfig, StanleyController
+from controllers.braking import BrakeDecision, BrakingConfig, Phase, StopSignBraker
+from controllers.detector import Detection, DetectorConfig, StopSignDetector
+from controllers.distance import CameraModel, DepthDistance, LidarReference, LidarReferenceConfig
+from controllers.estimators import DistanceEstimator, RawDepthEstimator
+from controllers.lane_follower import RouteFollower, StanleyConfig, StanleyController
+from controllers.perception import Perception, PerceptionSample
+from controllers.speed import SpeedPI, SpeedPIConfig, SpeedProfile
 
-__all__ = ["StanleyConfig", "StanleyController"]
+__all__ = [
+    "BrakeDecision", "BrakingConfig", "CameraModel", "DepthDistance", "Detection", "DetectorConfig",
+    "DistanceEstimator", "LidarReference", "LidarReferenceConfig", "Perception", "PerceptionSample", "Phase",
+    "RawDepthEstimator", "RouteFollower", "SpeedPI", "SpeedPIConfig", "SpeedProfile", "StanleyConfig",
+    "StanleyController", "StopSignBraker",
+]

@@ -13,7 +13,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["StanleyConfig", "StanleyController"]
+from controllers.speed import SpeedPI, SpeedPIConfig, SpeedProfile
+
+__all__ = ["StanleyConfig", "StanleyController", "RouteFollower"]
 
 
 @dataclass(frozen=True)
@@ -61,6 +63,11 @@ class StanleyController:
     def reset(self) -> None:
         self._index = 0
 
+    @property
+    def index(self) -> int:
+        """Index of the route point last matched to the front axle."""
+        return self._index
+
     def steer(self, x: float, y: float, yaw: float, speed: float) -> float:
         """Steering angle (rad, left positive) for a car at pose (x, y, yaw) and ``speed`` m/s."""
         c = self.config
@@ -75,3 +82,39 @@ class StanleyController:
         heading_err = (heading - yaw + math.pi) % (2 * math.pi) - math.pi
         delta = heading_err + math.atan2(-c.k * lateral, abs(speed) + c.softening_mps)
         return float(np.clip(delta, -c.max_steer_rad, c.max_steer_rad))
+
+
+class RouteFollower:
+    """Drives a route: Stanley steering, a curvature speed limit and the PI speed loop.
+
+    Args:
+        points, headings, arclength, curvature: the route's (N,) / (N, 2) arrays.
+        cruise_mps: speed on straights, m/s.
+        stanley, speed_pi: gains.
+        max_lateral_accel_mps2: the curve speed limit's lateral acceleration bound.
+    """
+
+    def __init__(self, points: np.ndarray, headings: np.ndarray, arclength: np.ndarray, curvature: np.ndarray,
+                 cruise_mps: float, stanley: StanleyConfig | None = None, speed_pi: SpeedPIConfig | None = None,
+                 max_lateral_accel_mps2: float = 3.0) -> None:
+        if not 0.0 <= cruise_mps <= 10.0:
+            raise ValueError(f"cruise_mps must be in [0, 10] m/s, got {cruise_mps}")
+        self.steering = StanleyController(points, headings, stanley)
+        self.profile = SpeedProfile(arclength, curvature, max_lateral_accel_mps2)
+        self.speed_loop = SpeedPI(speed_pi)
+        self.cruise_mps = float(cruise_mps)
+
+    def reset(self) -> None:
+        self.steering.reset()
+        self.speed_loop.reset()
+
+    def act(self, x: float, y: float, yaw: float, speed: float, dt: float,
+            speed_cap_mps: float = float("inf")) -> tuple[float, float]:
+        """(speed command m/s, steering rad) for the car's pose and speed.
+
+        ``speed_cap_mps`` lowers the reference (the braking controller's profile).
+        """
+        steer = self.steering.steer(x, y, yaw, speed)
+        s = self.profile.arclength[self.steering.index]
+        reference = min(self.profile.at(s, self.cruise_mps), speed_cap_mps)
+        return self.speed_loop.command(reference, speed, dt), steer

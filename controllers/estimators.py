@@ -1,0 +1,39 @@
+"""Distance estimators the braking controller can use: the pluggable distance source.
+
+An estimator turns the per-step perception signals (and the car's speed) into the
+distance the controller acts on. Raw depth is the paper's undefended pipeline; ODCA and
+the forecasting baselines implement the same protocol.
+"""
+
+from __future__ import annotations
+
+from typing import Protocol, runtime_checkable
+
+from controllers.perception import PerceptionSample
+
+__all__ = ["DistanceEstimator", "RawDepthEstimator"]
+
+
+@runtime_checkable
+class DistanceEstimator(Protocol):
+    """Causal distance source: one call per control step, in order."""
+
+    name: str
+
+    def reset(self) -> None:
+        """Forget the past (a new episode)."""
+
+    def estimate(self, sample: PerceptionSample, speed_mps: float, dt: float) -> float:
+        """Camera-to-sign distance in metres for this step; NaN when there is none."""
+
+
+class RawDepthEstimator:
+    """d~ as perception measured it: no defence."""
+
+    name = "raw_depth"
+
+    def reset(self) -> None:
+        pass
+
+    def estimate(self, sample: PerceptionSample, speed_mps: float, dt: float) -> float:
+        return sample.d_meas

@@ -1,0 +1,46 @@
+"""Glue between the simulator and the controllers: what a real car's software is told.
+
+The controllers see observations; this module hands them the map knowledge a real stack
+has (the route, where the stop line is relative to the sign) and the camera intrinsics.
+"""
+
+from __future__ import annotations
+
+import gymnasium as gym
+import numpy as np
+
+from controllers import CameraModel, RouteFollower
+from sim.world.stop_signs import StopSign
+
+__all__ = ["camera_model", "sign_depth_at_line", "route_follower", "all_sign_masks"]
+
+
+def camera_model(env: gym.Env) -> CameraModel:
+    """The perception stack's camera model from the env's camera intrinsics."""
+    k = env.unwrapped.rig.intrinsics
+    return CameraModel(width=k.width, fx=k.fx, cx=k.cx)
+
+
+def sign_depth_at_line(env: gym.Env, sign: StopSign) -> float:
+    """The sign's camera depth when the front bumper is on the stop line, m (from the map and the car's geometry)."""
+    model = env.unwrapped.model
+    camera_to_bumper = float(model.site("front_bumper").pos[0] - model.camera("d435").pos[0])
+    s_sign, _ = sign.path.project(np.asarray(sign.position), s_hint=sign.stop_s, window_m=0.5)
+    return camera_to_bumper + (s_sign - sign.stop_s)
+
+
+def route_follower(sign: StopSign, cruise_mps: float) -> RouteFollower:
+    """Lane following along the approach route of ``sign``."""
+    p = sign.path
+    return RouteFollower(p.points, p.headings, p.arclength, p.curvature, cruise_mps)
+
+
+def all_sign_masks(env: gym.Env) -> list[np.ndarray]:
+    """Ground-truth face masks of all four stop signs in the current frame (evaluation only)."""
+    from sim.env.ground_truth import sign_view
+    from sim.world.stop_signs import stop_signs
+
+    u = env.unwrapped
+    cam_pos, cam_mat = u.car.camera_pose(u.model, u.data)
+    _, clean_depth = u.rig.render(u.model, u.data)
+    return [sign_view(s, cam_pos, cam_mat, u.rig.intrinsics, clean_depth).mask for s in stop_signs()]
