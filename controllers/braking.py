@@ -9,11 +9,15 @@ car's speed. Its output is a speed cap for the lane follower.
   estimator still gives a finite distance (raw depth does not without a detection; a
   repairing estimator does), for at most ``track_timeout_s``.
 - Trigger: on a confirmed track, brake once the distance left to the stop point (the
-  stop line less ``target_gap_m``) is within the stopping distance v^2 / (2 a) plus the
-  distance covered during ``reaction_s``.
+  stop line less ``target_gap_m``) is within the larger of the stopping distance
+  v^2 / (2 a) (plus the distance covered during ``reaction_s``) and ``min_trigger_m``.
+  The floor starts slow approaches early enough: signs beside the line leave the
+  camera's view in the last ~0.6 m, before a 1 m/s car would need to brake. It is a
+  distance, not a time, because distances measured on a curve (camera depth, a straight
+  line) fall short of the distance along the curved lane.
 - Braking: the remaining distance is dead-reckoned from the measured speed (wheel
-  odometry; the sign leaves the camera's view near the line) and the cap follows
-  v = sqrt(2 a d_remaining); a late trigger therefore brakes harder.
+  odometry) and the cap follows v = sqrt(2 a' d_remaining) with the constant deceleration
+  a' = v^2 / (2 d_remaining) fixed at the trigger; a late trigger therefore brakes harder.
 - Stopped (speed < ``stopped_mps``) -> dwell for ``dwell_s`` -> done (cap lifted; the
   sign is served and ignored from then on).
 """
@@ -40,7 +44,9 @@ class BrakingConfig:
 
     Attributes:
         confirm_frames: consecutive detections that confirm a stop-sign track.
-        decel_mps2: planning deceleration (the tyres give ~7 m/s^2).
+        decel_mps2: planning deceleration: the trigger fires no later than this needs
+            (the tyres give ~7 m/s^2).
+        min_trigger_m: the trigger fires no later than this far before the stop point.
         target_gap_m: where to come to rest, metres before the stop line (the success
             band is 0 to 0.60 m).
         reaction_s: allowance for the speed loop's and the motors' lag, seconds.
@@ -52,6 +58,7 @@ class BrakingConfig:
 
     confirm_frames: int = 3
     decel_mps2: float = 3.0
+    min_trigger_m: float = 0.45
     target_gap_m: float = 0.30
     reaction_s: float = 0.06
     max_distance_m: float = 3.5
@@ -62,7 +69,7 @@ class BrakingConfig:
     def __post_init__(self) -> None:
         if not (isinstance(self.confirm_frames, int) and 1 <= self.confirm_frames <= 100):
             raise ValueError(f"confirm_frames must be an int in [1, 100], got {self.confirm_frames!r}")
-        for name, lo, hi in (("decel_mps2", 0.1, 10.0), ("target_gap_m", 0.0, 2.0), ("reaction_s", 0.0, 1.0),
+        for name, lo, hi in (("decel_mps2", 0.1, 10.0), ("min_trigger_m", 0.0, 5.0), ("target_gap_m", 0.0, 2.0), ("reaction_s", 0.0, 1.0),
                              ("max_distance_m", 0.2, 20.0), ("track_timeout_s", 0.0, 60.0),
                              ("stopped_mps", 0.001, 0.5), ("dwell_s", 0.0, 60.0)):
             value = getattr(self, name)
@@ -112,6 +119,7 @@ class StopSignBraker:
         self._confirmed = False
         self._since_detection_s = 0.0
         self._remaining_m = math.inf
+        self._profile_decel = self.config.decel_mps2
         self._dwell_s = 0.0
 
     def step(self, detected: bool, distance_m: float, speed_mps: float, dt: float) -> BrakeDecision:
@@ -134,8 +142,10 @@ class StopSignBraker:
 
         if self.phase is Phase.CRUISE and self._confirmed and has_distance:
             remaining = to_line - c.target_gap_m
-            if remaining <= speed * speed / (2 * c.decel_mps2) + speed * c.reaction_s:
+            if remaining <= max(speed * speed / (2 * c.decel_mps2) + speed * c.reaction_s, c.min_trigger_m):
                 self.phase, self._remaining_m = Phase.BRAKING, remaining
+                # Brake from now on at the constant deceleration that ends at the stop point.
+                self._profile_decel = speed * speed / (2 * remaining) if remaining > 0 else math.inf
         elif self.phase is Phase.BRAKING:
             self._remaining_m -= speed * dt
         if self.phase is Phase.BRAKING and speed < c.stopped_mps:
@@ -146,7 +156,7 @@ class StopSignBraker:
                 self.phase = Phase.DONE
 
         if self.phase is Phase.BRAKING:
-            cap = math.sqrt(2 * c.decel_mps2 * max(self._remaining_m, 0.0))
+            cap = math.sqrt(2 * self._profile_decel * self._remaining_m) if self._remaining_m > 0 else 0.0
         elif self.phase is Phase.STOPPED:
             cap = 0.0
         else:

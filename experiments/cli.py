@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 from pathlib import Path
 
@@ -48,7 +49,53 @@ def _parser() -> argparse.ArgumentParser:
     d.add_argument("--speed", type=_positive, default=1.0, help="cruise speed m/s (default 1.0)")
     d.add_argument("--seed", type=int, default=0)
     d.add_argument("--out", type=Path, default=Path("outputs/demo"), help="output folder")
+    t = sub.add_parser("trial", help="one closed-loop stop-sign trial: per-step log (Parquet) and result row")
+    t.add_argument("--setting", choices=_settings(), default="clean", help="trial setting (default clean)")
+    t.add_argument("--sign", type=_sign, default=2, help="stop sign 0-3 (default 2)")
+    t.add_argument("--speed", type=_speed, default=1.0, help="cruise speed m/s, 0.1-3.0 (default 1.0)")
+    t.add_argument("--seed", type=int, default=0)
+    t.add_argument("--out", type=Path, default=Path("outputs/trial"), help="output folder")
+
+    ts = sub.add_parser("trials", help="a batch of trials over the four signs and speeds 1.0/1.5/2.0 m/s: SCR, latency")
+    ts.add_argument("--setting", choices=_settings(), default="clean", help="trial setting (default clean)")
+    ts.add_argument("-n", type=_count, default=30, help="number of trials (default 30; 12 cover every sign x speed)")
+    ts.add_argument("--seed", type=int, default=0, help="seed of the first trial; trial i uses seed + i")
+    ts.add_argument("--workers", type=_count, default=min(2, os.cpu_count() or 1), help="parallel processes")
+    ts.add_argument("--out", type=Path, default=None,
+                    help="output folder (default outputs/trials/<setting>); finished trials there are reused")
+    ts.add_argument("--json", action="store_true", help="print one JSON summary object instead of tables")
+
+    bd = sub.add_parser("bench-detector", help="stop-sign detector recall and false-positive frames on rendered drives")
+    bd.add_argument("--seed", type=int, default=0)
+    bd.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
     return p
+
+
+def _settings() -> tuple[str, ...]:
+    from experiments.trial import SETTINGS
+
+    return SETTINGS
+
+
+def _speed(value: str) -> float:
+    v = float(value)
+    if not 0.1 <= v <= 3.0:
+        raise argparse.ArgumentTypeError(f"speed must be in [0.1, 3.0] m/s, got {value}")
+    return v
+
+
+def _count(value: str) -> int:
+    try:
+        n = int(value)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a positive integer, got {value!r}") from None
+    if n < 1:
+        raise argparse.ArgumentTypeError(f"must be >= 1, got {n}")
+    return n
+
+
+def _fmt_ci(lo: float, hi: float) -> str:
+    return f"[{lo:.2f}, {hi:.2f}]"
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -79,6 +126,57 @@ def main(argv: list[str] | None = None) -> int:
 
         summary = run_demo(args.out, sign=args.sign, speed=args.speed, seed=args.seed)
         print(json.dumps(summary, indent=2))
+    elif args.command == "trial":
+        from experiments.trial import TrialSpec, run_trial
+
+        spec = TrialSpec(args.setting, args.sign, args.speed, args.seed)
+        result, log = run_trial(spec)
+        args.out.mkdir(parents=True, exist_ok=True)
+        log.to_parquet(args.out / f"{spec.trial_id}.parquet", index=False)
+        (args.out / f"{spec.trial_id}.json").write_text(json.dumps(result.to_dict(), indent=2))
+        print(json.dumps({**result.to_dict(), "log": str(args.out / f"{spec.trial_id}.parquet")}, indent=2))
+    elif args.command == "trials":
+        return _trials(args)
+    elif args.command == "bench-detector":
+        from experiments.bench_detector import bench_detector
+
+        r = bench_detector(seed=args.seed, progress=not args.json)
+        if args.json:
+            print(json.dumps(r.to_dict()))
+        else:
+            print(f"frames {r.n_frames}, ms per frame {r.ms_per_frame:.2f}")
+            print(f"recall (signs 0.5-2.5 m, N = {r.n_positive}): {r.recall:.3f} {_fmt_ci(*r.recall_ci)}  "
+                  + "  ".join(f"sign {s}: {v:.3f}" for s, v in r.recall_by_sign.items()))
+            print(f"false-positive frames: {r.n_fp_frames} / {r.n_frames} = {r.fp_rate:.4f} {_fmt_ci(*r.fp_rate_ci)}")
+            print("mean confidence with a share of the sign's box occluded:")
+            for side, row in r.occlusion_confidence.items():
+                print(f"  from the {side:<5}" + "".join(f"  {q:.1f}: {c:.2f}" for q, c in row.items()))
+    return 0
+
+
+def _trials(args: argparse.Namespace) -> int:
+    from experiments.trials import batch_specs, run_batch, summarize
+
+    out = args.out or Path("outputs/trials") / args.setting
+    results = run_batch(batch_specs(args.setting, args.n, args.seed), out, workers=args.workers,
+                        progress=not args.json)
+    summary = summarize(results, attack=args.setting != "clean")
+    if args.json:
+        print(json.dumps(summary))
+        return 0
+    print(f"{'sign':>4} {'speed':>6} {'N':>3} {'SCR':>5} {'latency s (mean +- std)':>26}  outcomes")
+    for (sign, speed), group in results.groupby(["sign", "speed"]):
+        lat = group.loc[group["success"], "latency_s"]
+        lat_text = f"{lat.mean():.3f} +- {lat.std(ddof=1) if len(lat) > 1 else 0:.3f}" if len(lat) else "-"
+        outcomes = ", ".join(f"{k} {v}" for k, v in group["outcome"].value_counts().items())
+        print(f"{sign:>4} {speed:>6.1f} {len(group):>3} {group['success'].mean():>5.2f} {lat_text:>26}  {outcomes}")
+    print(f"SCR = {summary['scr']:.2f} {_fmt_ci(*summary['scr_ci'])} (N = {summary['n']}, 95 % Wilson)")
+    if summary["asr"] is not None:
+        print(f"ASR = {summary['asr']:.2f}")
+    if summary["n_latency"]:
+        std = summary["latency_std"] if summary["latency_std"] is not None else 0.0
+        print(f"braking latency = {summary['latency_mean']:.3f} +- {std:.3f} s over {summary['n_latency']} successful stops")
+    print(f"results: {out / 'results.parquet'}; per-step logs: {out / 'trials'}")
     return 0
 
 

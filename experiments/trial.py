@@ -1,0 +1,155 @@
+"""One closed-loop stop-sign trial: env -> perception -> estimator -> braking -> lane follower.
+
+Per step the runner records every signal of the protocol (d_true, d_clean, d_meas, c_meas,
+l, d_fused), the controller's state and brake command, pose and speed. The result row
+holds success, the stop distance and the braking latency, defined as in
+``shared/reference/protocol.md``:
+
+- success: the car comes to rest (speed < 0.05 m/s) with its front bumper 0 to 0.60 m
+  before the stop line;
+- latency: t(brake command) - t*, where t* is the first step at which the same braking
+  controller fed d_true (and told the sign is detected whenever it is in view) would have
+  commanded the brake. It runs beside the real one on the same trajectory.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+from typing import Callable
+
+import gymnasium as gym
+import numpy as np
+import pandas as pd
+
+import sim
+from controllers import BrakingConfig, DistanceEstimator, Perception, Phase, RawDepthEstimator, StopSignBraker
+from experiments.closed_loop import camera_model, route_follower, sign_depth_at_line
+
+__all__ = ["TrialSpec", "TrialResult", "run_trial", "SETTINGS", "SUCCESS_BAND_M", "RUN_THROUGH_M"]
+
+#: Settings the runner knows; later issues add attack settings and defences.
+SETTINGS = ("clean",)
+#: The protocol's success band: front bumper this far before the stop line, metres.
+SUCCESS_BAND_M = (0.0, 0.60)
+#: A trial ends once the bumper is this far past the line.
+RUN_THROUGH_M = 0.5
+_AT_REST_MPS = 0.05
+
+
+@dataclass(frozen=True)
+class TrialSpec:
+    """One trial: setting, target sign, cruise speed (m/s) and seed."""
+
+    setting: str
+    sign: int
+    speed: float
+    seed: int
+
+    def __post_init__(self) -> None:
+        if self.setting not in SETTINGS:
+            raise ValueError(f"setting must be one of {SETTINGS}, got {self.setting!r}")
+        if self.sign not in range(4):
+            raise ValueError(f"sign must be 0..3, got {self.sign!r}")
+        if not 0.1 <= self.speed <= 3.0:
+            raise ValueError(f"speed must be in [0.1, 3.0] m/s, got {self.speed!r}")
+
+    @property
+    def trial_id(self) -> str:
+        return f"{self.setting}_sign{self.sign}_v{self.speed:.2f}_seed{self.seed}"
+
+
+@dataclass(frozen=True)
+class TrialResult:
+    """The result row of one trial."""
+
+    trial_id: str
+    setting: str
+    sign: int
+    speed: float
+    seed: int
+    success: bool
+    stopped: bool
+    stop_distance_m: float
+    t_brake_s: float
+    t_ideal_s: float
+    latency_s: float
+    duration_s: float
+    outcome: str
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+def run_trial(spec: TrialSpec, estimator: DistanceEstimator | None = None,
+              braking: BrakingConfig | None = None,
+              make_env: Callable[[TrialSpec], gym.Env] | None = None) -> tuple[TrialResult, pd.DataFrame]:
+    """Runs one episode; returns its result row and per-step log."""
+    env = make_env(spec) if make_env is not None else gym.make(sim.ENV_ID)
+    try:
+        return _run(env, spec, estimator or RawDepthEstimator(), braking or BrakingConfig())
+    finally:
+        env.close()
+
+
+def _run(env: gym.Env, spec: TrialSpec, estimator: DistanceEstimator,
+         braking: BrakingConfig) -> tuple[TrialResult, pd.DataFrame]:
+    obs, info = env.reset(seed=spec.seed, options={"sign": spec.sign, "cruise_speed": spec.speed})
+    sign = env.unwrapped.target_sign
+    dt = 1.0 / env.unwrapped.config.control_hz
+    perception = Perception(camera_model(env))
+    follower = route_follower(sign, spec.speed)
+    depth_at_line = sign_depth_at_line(env, sign)
+    braker = StopSignBraker(braking, depth_at_line)
+    ideal = StopSignBraker(braking, depth_at_line)
+    estimator.reset()
+
+    rows: list[dict] = []
+    t_brake = t_ideal = math.nan
+    rest_distance = math.nan
+    outcome = "timeout"
+    max_steps = int(round(env.unwrapped.config.max_episode_s / dt))
+    for _ in range(max_steps):
+        speed = float(obs["state"][0])
+        sample = perception.process(obs["rgb"], obs["depth"], obs["lidar"])
+        d_fused = float(estimator.estimate(sample, speed, dt))
+        decision = braker.step(sample.detected, d_fused, speed, dt)
+        ideal_decision = ideal.step(bool(info["sign_in_view"]), float(info["d_true"]), speed, dt)
+        if decision.brake and math.isnan(t_brake):
+            t_brake = info["time"]
+        if ideal_decision.brake and math.isnan(t_ideal):
+            t_ideal = info["time"]
+        x, y, yaw = info["pose"]
+        speed_cmd, steer_cmd = follower.act(x, y, yaw, speed, dt, decision.speed_cap_mps)
+        rows.append({
+            "t": info["time"], "d_true": info["d_true"], "d_clean": sample.d_meas, "d_meas": sample.d_meas,
+            "c_meas": sample.c_meas, "lidar": sample.lidar_m, "d_fused": d_fused, "detected": sample.detected,
+            "det_confidence": sample.detection_confidence, "bearing": sample.bearing_rad,
+            "sign_in_view": bool(info["sign_in_view"]), "confirmed": decision.confirmed, "phase": decision.phase.value,
+            "brake": decision.brake, "ideal_brake": ideal_decision.brake, "speed_cap": decision.speed_cap_mps,
+            "speed_cmd": speed_cmd, "steer_cmd": steer_cmd, "x": x, "y": y, "yaw": yaw, "speed": info["speed"],
+            "dist_to_stop_line": info["dist_to_stop_line"], "lateral_error": info["lateral_error"],
+        })
+        if math.isnan(rest_distance) and abs(info["speed"]) < _AT_REST_MPS and info["time"] > 0:
+            rest_distance = float(info["dist_to_stop_line"])
+        if decision.phase is Phase.DONE:
+            outcome = "stopped"
+            break
+        if info["dist_to_stop_line"] < -RUN_THROUGH_M:
+            outcome = "ran_line"
+            break
+        obs, _, terminated, truncated, info = env.step(np.array([speed_cmd, steer_cmd], np.float32))
+        if terminated or truncated:
+            outcome = "collision" if info["collision"] else "off_road" if info["off_road"] else \
+                "ran_line" if info["dist_to_stop_line"] < 0 else "timeout"
+            break
+
+    stopped = not math.isnan(rest_distance)
+    success = stopped and SUCCESS_BAND_M[0] <= rest_distance <= SUCCESS_BAND_M[1]
+    if stopped and not success:
+        outcome = "stopped_early" if rest_distance > SUCCESS_BAND_M[1] else "stopped_past_line"
+    log = pd.DataFrame(rows)
+    log.insert(0, "trial_id", spec.trial_id)
+    result = TrialResult(spec.trial_id, spec.setting, spec.sign, spec.speed, spec.seed, bool(success), stopped,
+                         rest_distance, t_brake, t_ideal, t_brake - t_ideal, float(log["t"].iloc[-1]), outcome)
+    return result, log
