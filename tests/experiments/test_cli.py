@@ -12,7 +12,7 @@ ROOT = Path(__file__).resolve().parents[2]
 def test_help_lists_the_commands():
     out = subprocess.run([sys.executable, "-m", "experiments.cli", "--help"], cwd=ROOT,
                          capture_output=True, text=True, check=True).stdout
-    for command in ("snapshot", "bench-sim", "demo"):
+    for command in ("snapshot", "bench-sim", "demo", "trial", "trials", "bench-detector"):
         assert command in out
 
 

@@ -1,0 +1,98 @@
+"""Closed-loop trials: one episode end to end, batch resume and the summary."""
+
+import json
+import math
+
+import pandas as pd
+import pytest
+
+from experiments.cli import main
+from experiments.stats import wilson_interval
+from experiments.trial import TrialSpec, run_trial
+from experiments.trials import batch_specs, run_batch, summarize
+
+PROTOCOL_SIGNALS = ("d_true", "d_clean", "d_meas", "c_meas", "lidar", "d_fused")
+
+
+@pytest.fixture(scope="module")
+def sign0_trial():
+    return run_trial(TrialSpec("clean", 0, 1.5, 3))
+
+
+def test_clean_trial_stops_in_the_band_and_logs_every_signal(sign0_trial):
+    result, log = sign0_trial
+    assert result.success and result.outcome == "stopped"
+    assert 0.0 <= result.stop_distance_m <= 0.60
+    assert abs(result.latency_s) < 0.2
+    for col in PROTOCOL_SIGNALS + ("brake", "x", "y", "yaw", "speed", "dist_to_stop_line", "phase"):
+        assert col in log.columns
+    assert (log["t"].diff().dropna().round(6) == 0.02).all()
+    # Perception tracks the truth while the sign is detected.
+    seen = log[log["detected"] & log["sign_in_view"]]
+    assert len(seen) > 20
+    assert (seen["d_meas"] - seen["d_true"]).abs().median() < 0.03
+    lidar = seen["lidar"].dropna()
+    assert len(lidar) > 0.8 * len(seen)
+    # Brake on from the trigger until the dwell is over (the last row), the car at rest at the end.
+    first = log["brake"].idxmax()
+    assert log["brake"].iloc[first:-1].all() and not log["brake"].iloc[:first].any()
+    assert log["phase"].iloc[-1] == "done"
+    assert log["speed"].iloc[-1] < 0.05
+
+
+def test_same_seed_same_log(sign0_trial):
+    result, log = sign0_trial
+    again_result, again_log = run_trial(TrialSpec("clean", 0, 1.5, 3))
+    assert again_result == result
+    pd.testing.assert_frame_equal(again_log, log)
+
+
+def test_batch_covers_every_sign_and_speed_and_resumes(tmp_path, monkeypatch):
+    specs = batch_specs("clean", 12)
+    assert {(s.sign, s.speed) for s in specs} == {(g, v) for g in range(4) for v in (1.0, 1.5, 2.0)}
+    assert len({s.seed for s in specs}) == 12
+    two = batch_specs("clean", 2, seed=5)
+    first = run_batch(two, tmp_path, workers=1, progress=False)
+    assert len(first) == 2 and (tmp_path / "results.parquet").exists()
+    # A rerun finds both trials finished and runs nothing.
+    import experiments.trials as trials_module
+
+    monkeypatch.setattr(trials_module, "_run_and_save", lambda *a: pytest.fail("re-ran a finished trial"))
+    again = run_batch(two, tmp_path, workers=1, progress=False)
+    pd.testing.assert_frame_equal(first, again)
+
+
+def test_summary_has_the_protocol_keys_and_wilson_interval():
+    rows = pd.DataFrame({"success": [True] * 9 + [False], "latency_s": [0.1] * 9 + [math.nan]})
+    s = summarize(rows, attack=True)
+    assert set(s) == {"n", "scr", "scr_ci", "asr", "latency_mean", "latency_std", "n_latency"}
+    assert s["n"] == 10 and s["scr"] == 0.9 and s["asr"] == pytest.approx(0.1) and s["n_latency"] == 9
+    assert s["scr_ci"] == pytest.approx(list(wilson_interval(9, 10)))
+    lo, hi = wilson_interval(9, 10)
+    assert lo == pytest.approx(0.596, abs=1e-3) and hi == pytest.approx(0.982, abs=1e-3)
+    assert summarize(rows)["asr"] is None
+
+
+def test_cli_trials_json(tmp_path, capsys):
+    assert main(["trials", "-n", "1", "--seed", "11", "--workers", "1", "--json", "--out", str(tmp_path)]) == 0
+    summary = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    assert summary["n"] == 1 and summary["scr"] == 1.0
+    assert list((tmp_path / "trials").glob("*.parquet"))
+
+
+def test_cli_trial_writes_log_and_result(tmp_path, capsys):
+    assert main(["trial", "--sign", "2", "--speed", "1.0", "--seed", "0", "--out", str(tmp_path)]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["success"] is True
+    log = pd.read_parquet(out["log"])
+    assert set(PROTOCOL_SIGNALS) <= set(log.columns)
+
+
+def test_bad_trial_inputs_are_clear_errors(capsys):
+    with pytest.raises(ValueError, match="setting must be one of"):
+        TrialSpec("nope", 0, 1.0, 0)
+    with pytest.raises(ValueError, match="speed"):
+        TrialSpec("clean", 0, 9.0, 0)
+    with pytest.raises(SystemExit):
+        main(["trials", "-n", "0"])
+    assert "must be >= 1" in capsys.readouterr().err
