@@ -23,6 +23,7 @@ $(STAMP): pyproject.toml | $(PY)
 demo: $(STAMP)
 	$(VENV)/bin/racf demo --out outputs/demo
 	$(VENV)/bin/racf snapshot --out outputs/snapshot
+	$(VENV)/bin/racf trial --setting clean --sign 2 --speed 1.5 --out outputs/trial
 
 test: $(STAMP)
 	$(PY) -m pytest -q
@@ -35,6 +36,12 @@ bench-sim: $(STAMP)
 
 snapshot: $(STAMP)
 	$(VENV)/bin/racf snapshot --out outputs/snapshot
+
+trials: $(STAMP)
+	$(VENV)/bin/racf trials --setting clean -n 30
+
+bench-detector: $(STAMP)
+	$(VENV)/bin/racf bench-detector
 
 clean:
 	rm -rf $(VENV) outputs

@@ -94,8 +94,8 @@ def _count(value: str) -> int:
     return n
 
 
-def _fmt_ci(lo: float, hi: float) -> str:
-    return f"[{lo:.2f}, {hi:.2f}]"
+def _fmt_ci(lo: float, hi: float, digits: int = 2) -> str:
+    return f"[{lo:.{digits}f}, {hi:.{digits}f}]"
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -147,7 +147,7 @@ def main(argv: list[str] | None = None) -> int:
             print(f"frames {r.n_frames}, ms per frame {r.ms_per_frame:.2f}")
             print(f"recall (signs 0.5-2.5 m, N = {r.n_positive}): {r.recall:.3f} {_fmt_ci(*r.recall_ci)}  "
                   + "  ".join(f"sign {s}: {v:.3f}" for s, v in r.recall_by_sign.items()))
-            print(f"false-positive frames: {r.n_fp_frames} / {r.n_frames} = {r.fp_rate:.4f} {_fmt_ci(*r.fp_rate_ci)}")
+            print(f"false-positive frames: {r.n_fp_frames} / {r.n_frames} = {r.fp_rate:.4f} {_fmt_ci(*r.fp_rate_ci, digits=4)}")
             print("mean confidence with a share of the sign's box occluded:")
             for side, row in r.occlusion_confidence.items():
                 print(f"  from the {side:<5}" + "".join(f"  {q:.1f}: {c:.2f}" for q, c in row.items()))
