@@ -8,8 +8,8 @@ holds success, the stop distance and the braking latency, defined as in
 - success: the car comes to rest (speed < 0.05 m/s) with its front bumper 0 to 0.60 m
   before the stop line;
 - latency: t(brake command) - t*, where t* is the first step at which the same braking
-  controller fed d_true (and told the sign is detected whenever it is in view) would have
-  commanded the brake. It runs beside the real one on the same trajectory.
+  controller fed d_true while the sign is in view (detected exactly then, no distance
+  otherwise) would have commanded the brake. It runs beside the real one on the same trajectory.
 """
 
 from __future__ import annotations
@@ -114,7 +114,9 @@ def _run(env: gym.Env, spec: TrialSpec, estimator: DistanceEstimator,
         sample = perception.process(obs["rgb"], obs["depth"], obs["lidar"])
         d_fused = float(estimator.estimate(sample, speed, dt))
         decision = braker.step(sample.detected, d_fused, speed, dt)
-        ideal_decision = ideal.step(bool(info["sign_in_view"]), float(info["d_true"]), speed, dt)
+        # Perfect perception: d_true while the sign is in view, no measurement otherwise.
+        in_view = bool(info["sign_in_view"])
+        ideal_decision = ideal.step(in_view, float(info["d_true"]) if in_view else math.nan, speed, dt)
         if decision.brake and math.isnan(t_brake):
             t_brake = info["time"]
         if ideal_decision.brake and math.isnan(t_ideal):
