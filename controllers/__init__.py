@@ -12,5 +12,5 @@ __all__ = [
     "BrakeDecision", "BrakingConfig", "CameraModel", "DepthDistance", "Detection", "DetectorConfig",
     "DistanceEstimator", "LidarReference", "LidarReferenceConfig", "Perception", "PerceptionSample", "Phase",
     "RawDepthEstimator", "RouteFollower", "SpeedPI", "SpeedPIConfig", "SpeedProfile", "StanleyConfig",
-    "StanleyController", "StopSignBraker",
+    "StanleyController", "StopSignBraker", "StopSignDetector",
 ]

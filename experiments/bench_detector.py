@@ -17,6 +17,7 @@ other stop signs come into view on the way.
 
 from __future__ import annotations
 
+import time
 from dataclasses import asdict, dataclass
 
 import cv2
@@ -79,8 +80,6 @@ def _resolvable(mask: np.ndarray) -> bool:
 def bench_detector(seed: int = 0, speeds: tuple[float, ...] = SPEEDS_MPS, signs: tuple[int, ...] = (0, 1, 2, 3),
                    progress: bool = True) -> DetectorBenchResult:
     """Runs the benchmark; see the module docstring for the definitions."""
-    import time
-
     from tqdm import tqdm
 
     detector = StopSignDetector()

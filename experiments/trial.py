@@ -123,6 +123,7 @@ def _run(env: gym.Env, spec: TrialSpec, estimator: DistanceEstimator,
             t_ideal = info["time"]
         x, y, yaw = info["pose"]
         speed_cmd, steer_cmd = follower.act(x, y, yaw, speed, dt, decision.speed_cap_mps)
+        # With no attack the pipeline's output is d_clean itself (the protocol's pseudo ground truth).
         rows.append({
             "t": info["time"], "d_true": info["d_true"], "d_clean": sample.d_meas, "d_meas": sample.d_meas,
             "c_meas": sample.c_meas, "lidar": sample.lidar_m, "d_fused": d_fused, "detected": sample.detected,
