@@ -26,7 +26,7 @@ import sim
 from controllers import BrakingConfig, DistanceEstimator, Perception, Phase, RawDepthEstimator, StopSignBraker
 from experiments.closed_loop import camera_model, route_follower, sign_depth_at_line
 
-__all__ = ["TrialSpec", "TrialResult", "run_trial", "SETTINGS", "SUCCESS_BAND_M", "RUN_THROUGH_M"]
+__all__ = ["TrialSpec", "TrialResult", "StepHook", "run_trial", "SETTINGS", "SUCCESS_BAND_M", "RUN_THROUGH_M"]
 
 #: Settings the runner knows; later issues add attack settings and defences.
 SETTINGS = ("clean",)
@@ -81,19 +81,32 @@ class TrialResult:
         return asdict(self)
 
 
+StepHook = Callable[[gym.Env, dict, dict, dict], None]
+
+
 def run_trial(spec: TrialSpec, estimator: DistanceEstimator | None = None,
               braking: BrakingConfig | None = None,
-              make_env: Callable[[TrialSpec], gym.Env] | None = None) -> tuple[TrialResult, pd.DataFrame]:
-    """Runs one episode; returns its result row and per-step log."""
+              make_env: Callable[[TrialSpec], gym.Env] | None = None,
+              on_step: StepHook | None = None) -> tuple[TrialResult, pd.DataFrame]:
+    """Runs one episode; returns its result row and per-step log.
+
+    Args:
+        spec: the trial.
+        estimator: the distance source (default raw depth).
+        braking: braking parameters.
+        make_env: builds the env (default ``gym.make(sim.ENV_ID)``).
+        on_step: called as ``on_step(env, obs, info, row)`` after each step's decision
+            (figures, viewers); it must not change anything.
+    """
     env = make_env(spec) if make_env is not None else gym.make(sim.ENV_ID)
     try:
-        return _run(env, spec, estimator or RawDepthEstimator(), braking or BrakingConfig())
+        return _run(env, spec, estimator or RawDepthEstimator(), braking or BrakingConfig(), on_step)
     finally:
         env.close()
 
 
-def _run(env: gym.Env, spec: TrialSpec, estimator: DistanceEstimator,
-         braking: BrakingConfig) -> tuple[TrialResult, pd.DataFrame]:
+def _run(env: gym.Env, spec: TrialSpec, estimator: DistanceEstimator, braking: BrakingConfig,
+         on_step: StepHook | None) -> tuple[TrialResult, pd.DataFrame]:
     obs, info = env.reset(seed=spec.seed, options={"sign": spec.sign, "cruise_speed": spec.speed})
     sign = env.unwrapped.target_sign
     dt = 1.0 / env.unwrapped.config.control_hz
@@ -128,11 +141,15 @@ def _run(env: gym.Env, spec: TrialSpec, estimator: DistanceEstimator,
             "t": info["time"], "d_true": info["d_true"], "d_clean": sample.d_meas, "d_meas": sample.d_meas,
             "c_meas": sample.c_meas, "lidar": sample.lidar_m, "d_fused": d_fused, "detected": sample.detected,
             "det_confidence": sample.detection_confidence, "bearing": sample.bearing_rad,
+            **dict(zip(("det_x0", "det_y0", "det_x1", "det_y1"),
+                       sample.detection.box if sample.detection is not None else (-1, -1, -1, -1))),
             "sign_in_view": bool(info["sign_in_view"]), "confirmed": decision.confirmed, "phase": decision.phase.value,
             "brake": decision.brake, "ideal_brake": ideal_decision.brake, "speed_cap": decision.speed_cap_mps,
             "speed_cmd": speed_cmd, "steer_cmd": steer_cmd, "x": x, "y": y, "yaw": yaw, "speed": info["speed"],
             "dist_to_stop_line": info["dist_to_stop_line"], "lateral_error": info["lateral_error"],
         })
+        if on_step is not None:
+            on_step(env, obs, info, rows[-1])
         if math.isnan(rest_distance) and abs(info["speed"]) < _AT_REST_MPS and info["time"] > 0:
             rest_distance = float(info["dist_to_stop_line"])
         if decision.phase is Phase.DONE:
