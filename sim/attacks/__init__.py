@@ -1,0 +1,18 @@
+"""Attack wrappers for the racf env, one per module; they compose.
+
+- :class:`PatchAttack`: a naturalistic patch over a share of the sign (RGB).
+- :class:`DepthBlackout`, :class:`DepthBias`, :class:`ConfidenceDegradation`: depth attacks.
+- :class:`LidarDropout`, :class:`LidarSpoof`: LiDAR faults (beyond the paper).
+Each marks ``info["attack"]`` (active attacks) and ``info["attack_active"]``.
+"""
+
+from sim.attacks.confidence_degradation import ConfidenceDegradation
+from sim.attacks.depth_bias import DepthBias
+from sim.attacks.depth_blackout import DepthBlackout
+from sim.attacks.lidar_dropout import LidarDropout
+from sim.attacks.lidar_spoof import LidarSpoof
+from sim.attacks.patch import PatchAttack, patch_rows
+from sim.attacks.schedule import AttackSchedule
+
+__all__ = ["AttackSchedule", "ConfidenceDegradation", "DepthBias", "DepthBlackout", "LidarDropout", "LidarSpoof",
+           "PatchAttack", "patch_rows"]

@@ -1,0 +1,89 @@
+"""The common part of the attack wrappers: schedule, seeding and the ``info`` marks."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+
+from sim.attacks.schedule import AttackSchedule
+
+__all__ = ["AttackWrapper"]
+
+
+class AttackWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
+    """Applies ``_attack`` to the observation on the steps its schedule makes active.
+
+    Subclasses set ``name`` and implement ``_attack(obs, info) -> obs`` (and, for
+    per-episode draws, ``_on_reset()``). Wrappers compose: ``info["attack"]`` is the tuple
+    of the attacks active this step, ``info["attack_active"]`` whether there is any.
+    Randomness comes from a generator drawn from the env's seeded one at each reset.
+    """
+
+    name = "attack"
+
+    def __init__(self, env: gym.Env, schedule: AttackSchedule | None) -> None:
+        gym.Wrapper.__init__(self, env)
+        for key in ("rgb", "depth", "lidar"):
+            if not isinstance(env.observation_space, gym.spaces.Dict) or key not in env.observation_space.spaces:
+                raise ValueError(f"{type(self).__name__} needs a Dict observation space with 'rgb', 'depth' and "
+                                 f"'lidar' (the racf env), got {env.observation_space}")
+        self.schedule = schedule or AttackSchedule()
+        self.rng = np.random.default_rng(0)
+        self.active = False
+
+    def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
+        obs, info = self.env.reset(seed=seed, options=options)
+        self.rng = np.random.default_rng(self.np_random.integers(2**63))
+        self.schedule.reset(np.random.default_rng(self.rng.integers(2**63)))
+        self._on_reset()
+        self.active = False
+        return obs, self._mark(info)
+
+    def step(self, action):
+        obs, reward, terminated, truncated, info = self.env.step(action)
+        self.active = self.schedule.update(info)
+        if self.active:
+            obs = self._attack(dict(obs), info)
+        return obs, reward, terminated, truncated, self._mark(info)
+
+    def _mark(self, info: dict) -> dict:
+        info = dict(info)
+        attacks = tuple(info.get("attack", ())) + ((self.name,) if self.active else ())
+        info["attack"] = attacks
+        info["attack_active"] = bool(attacks)
+        return info
+
+    def _on_reset(self) -> None:
+        """Per-episode draws (textures, signs of a bias, ...)."""
+
+    def _attack(self, obs: dict, info: dict) -> dict:
+        raise NotImplementedError
+
+    def sign_region(self, info: dict, margin_px: int = 0) -> np.ndarray:
+        """(H, W) bool: the target sign's pixels (ground truth, the attacker's knowledge), optionally grown."""
+        mask = np.asarray(info["sign_mask"], bool)
+        if margin_px > 0 and mask.any():
+            import cv2
+
+            k = 2 * margin_px + 1
+            mask = cv2.dilate(mask.view(np.uint8), np.ones((k, k), np.uint8)).astype(bool)
+        return mask
+
+    def sign_beams(self, n_beams: int, extra_half_width_rad: float = 0.0) -> np.ndarray:
+        """(n_beams,) bool: LiDAR beams that point at the target sign's plate (ground truth)."""
+        u = self.env.unwrapped
+        sign = u.target_sign
+        lidar = u.data.site("lidar")
+        yaw = float(np.arctan2(lidar.xmat[3], lidar.xmat[0]))
+        dx, dy = sign.position[0] - lidar.xpos[0], sign.position[1] - lidar.xpos[1]
+        dist = max(float(np.hypot(dx, dy)), 1e-3)
+        bearing = np.arctan2(dy, dx) - yaw
+        half = np.arctan(0.05 / dist) + extra_half_width_rad
+        angles = 2 * np.pi * np.arange(n_beams) / n_beams
+        diff = (angles - bearing + np.pi) % (2 * np.pi) - np.pi
+        beams = np.abs(diff) <= half
+        if not beams.any():
+            beams[int(np.argmin(np.abs(diff)))] = True
+        return beams

@@ -1,0 +1,56 @@
+"""``ConfidenceDegradation``: depth dropout and heavy noise on the sign, lowering c~."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+
+from sim.attacks.base import AttackWrapper
+from sim.attacks.schedule import AttackSchedule
+
+__all__ = ["ConfidenceDegradation"]
+
+
+class ConfidenceDegradation(AttackWrapper):
+    """Removes a share ``1 - confidence_multiplier`` of the sign's valid depth pixels and adds
+    Gaussian noise of ``noise_std_m`` to the rest.
+
+    The pipeline's confidence is detection confidence x valid-pixel share, so it falls by
+    about ``confidence_multiplier``; the noise perturbs the median (the protocol's
+    "confidence degradation with heavy noise").
+
+    Args:
+        env: the racf env.
+        confidence_multiplier: in [0, 1].
+        noise_std_m: >= 0, metres.
+        duration_s, cooldown_s, window_s, stable_steps, trigger: see ``AttackSchedule``.
+    """
+
+    name = "confidence_degradation"
+
+    def __init__(self, env: gym.Env, confidence_multiplier: float = 0.3, noise_std_m: float = 0.10,
+                 duration_s: Any = (0.5, 3.0), cooldown_s: float = 2.0, window_s: float = 1.0,
+                 stable_steps: int = 3, trigger: str = "braking_window") -> None:
+        gym.utils.RecordConstructorArgs.__init__(self, confidence_multiplier=confidence_multiplier,
+                                                 noise_std_m=noise_std_m, duration_s=duration_s,
+                                                 cooldown_s=cooldown_s, window_s=window_s,
+                                                 stable_steps=stable_steps, trigger=trigger)
+        if not 0.0 <= confidence_multiplier <= 1.0:
+            raise ValueError(f"confidence_multiplier must be in [0, 1], got {confidence_multiplier!r}")
+        if not 0.0 <= noise_std_m <= 10.0:
+            raise ValueError(f"noise_std_m must be in [0, 10] m, got {noise_std_m!r}")
+        self.confidence_multiplier, self.noise_std_m = float(confidence_multiplier), float(noise_std_m)
+        super().__init__(env, AttackSchedule(duration_s=duration_s, cooldown_s=cooldown_s, window_s=window_s,
+                                             stable_steps=stable_steps, trigger=trigger))
+
+    def _attack(self, obs: dict, info: dict) -> dict:
+        depth = obs["depth"].copy()
+        rows, cols = np.nonzero(self.sign_region(info, 1) & (depth > 0))
+        if rows.size:
+            drop = self.rng.random(rows.size) >= self.confidence_multiplier
+            noisy = depth[rows, cols] + self.rng.normal(0.0, self.noise_std_m, rows.size)
+            depth[rows, cols] = np.where(drop | (noisy <= 0), 0.0, noisy).astype(depth.dtype)
+        obs["depth"] = depth
+        return obs

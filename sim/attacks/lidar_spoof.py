@@ -1,0 +1,45 @@
+"""``LidarSpoof``: a fake LiDAR return at an attacker-chosen range in the sign's direction."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import gymnasium as gym
+
+from sim.attacks.base import AttackWrapper
+from sim.attacks.schedule import AttackSchedule, as_range
+
+__all__ = ["LidarSpoof"]
+
+
+class LidarSpoof(AttackWrapper):
+    """Replaces the beams that hit the sign's plate with returns at ``range_m``.
+
+    Beyond the paper: a spoofed LiDAR agrees with a spoofed depth and defeats a gate
+    that trusts the LiDAR.
+
+    Args:
+        env: the racf env.
+        range_m: the fake range, metres: a value or a (low, high) range drawn per episode.
+        duration_s, cooldown_s, window_s, stable_steps, trigger: see ``AttackSchedule``.
+    """
+
+    name = "lidar_spoof"
+
+    def __init__(self, env: gym.Env, range_m: Any = 3.0, duration_s: Any = (0.5, 3.0), cooldown_s: float = 2.0,
+                 window_s: float = 1.0, stable_steps: int = 3, trigger: str = "braking_window") -> None:
+        gym.utils.RecordConstructorArgs.__init__(self, range_m=range_m, duration_s=duration_s, cooldown_s=cooldown_s,
+                                                 window_s=window_s, stable_steps=stable_steps, trigger=trigger)
+        self.range_bounds = as_range("range_m", range_m, 0.15, 12.0)
+        super().__init__(env, AttackSchedule(duration_s=duration_s, cooldown_s=cooldown_s, window_s=window_s,
+                                             stable_steps=stable_steps, trigger=trigger))
+        self.range_m = self.range_bounds[0]
+
+    def _on_reset(self) -> None:
+        self.range_m = float(self.rng.uniform(*self.range_bounds))
+
+    def _attack(self, obs: dict, info: dict) -> dict:
+        ranges = obs["lidar"].copy()
+        ranges[self.sign_beams(ranges.size)] = self.range_m
+        obs["lidar"] = ranges
+        return obs
