@@ -62,7 +62,7 @@ class DetectorConfig:
     full_aspect: float = 0.9
     thin_aspect: float = 0.30
     max_asymmetry: float = 0.30
-    min_confidence: float = 0.25
+    min_confidence: float = 0.20
 
     def __post_init__(self) -> None:
         for name, lo, hi in (("red_hue_max", 1, 30), ("red_min_saturation", 0, 255), ("red_min_value", 0, 255),

@@ -64,6 +64,19 @@ def _parser() -> argparse.ArgumentParser:
     ts.add_argument("--out", type=Path, default=None,
                     help="output folder (default outputs/trials/<setting>); finished trials there are reused")
     ts.add_argument("--json", action="store_true", help="print one JSON summary object instead of tables")
+    ts.add_argument("--rho", type=_share, nargs="+", default=None, metavar="R",
+                    help="attack: patch coverage, a value or LOW HIGH (uniform), in [0, 1] (default 0.9 1.0)")
+    ts.add_argument("--t-atk", type=_duration, nargs="+", default=None, metavar="S",
+                    help="attack: patch duration s, a value or LOW HIGH (uniform) (default 0.5 3.0)")
+
+    st = sub.add_parser("attack-study", help="no-defence patch attack tables: persistence, coverage, strong regime")
+    st.add_argument("studies", nargs="*", default=None, metavar="STUDY",
+                    help="persistence, coverage and/or strong (default all three)")
+    st.add_argument("-n", type=_count, default=24, help="trials per table row (default 24; the strong row uses max(n, 30))")
+    st.add_argument("--seed", type=int, default=0)
+    st.add_argument("--workers", type=_count, default=min(2, os.cpu_count() or 1), help="parallel processes")
+    st.add_argument("--out", type=Path, default=Path("outputs/attack_study"), help="output folder (trials are reused)")
+    st.add_argument("--json", action="store_true", help="print one JSON object instead of tables")
 
     bd = sub.add_parser("bench-detector", help="stop-sign detector recall and false-positive frames on rendered drives")
     bd.add_argument("--seed", type=int, default=0)
@@ -82,6 +95,28 @@ def _speed(value: str) -> float:
     if not 0.1 <= v <= 3.0:
         raise argparse.ArgumentTypeError(f"speed must be in [0.1, 3.0] m/s, got {value}")
     return v
+
+
+def _share(value: str) -> float:
+    v = float(value)
+    if not 0.0 <= v <= 1.0:
+        raise argparse.ArgumentTypeError(f"rho must be in [0, 1], got {value}")
+    return v
+
+
+def _duration(value: str) -> float:
+    v = float(value)
+    if not 0.0 <= v <= 60.0:
+        raise argparse.ArgumentTypeError(f"t-atk must be in [0, 60] s, got {value}")
+    return v
+
+
+def _pair(name: str, values: list[float] | None, default: tuple[float, float]) -> tuple[float, float]:
+    if values is None:
+        return default
+    if len(values) > 2 or (len(values) == 2 and values[0] > values[1]):
+        raise SystemExit(f"racf trials: {name} takes a value or LOW HIGH with LOW <= HIGH, got {values}")
+    return (values[0], values[-1])
 
 
 def _count(value: str) -> int:
@@ -137,6 +172,8 @@ def main(argv: list[str] | None = None) -> int:
         print(json.dumps({**result.to_dict(), "log": str(args.out / f"{spec.trial_id}.parquet")}, indent=2))
     elif args.command == "trials":
         return _trials(args)
+    elif args.command == "attack-study":
+        return _attack_study(args)
     elif args.command == "bench-detector":
         from experiments.bench_detector import bench_detector
 
@@ -157,10 +194,17 @@ def main(argv: list[str] | None = None) -> int:
 def _trials(args: argparse.Namespace) -> int:
     from experiments.trials import batch_specs, run_batch, summarize
 
+    from experiments.trial import STRONG_RHO, STRONG_T_ATK_S
+
+    attack = args.setting != "clean"
+    if not attack and (args.rho is not None or args.t_atk is not None):
+        print("racf trials: --rho and --t-atk apply to --setting attack only", file=sys.stderr)
+        return 2
+    params = {"rho": _pair("--rho", args.rho, STRONG_RHO), "t_atk": _pair("--t-atk", args.t_atk, STRONG_T_ATK_S)}
     out = args.out or Path("outputs/trials") / args.setting
-    results = run_batch(batch_specs(args.setting, args.n, args.seed), out, workers=args.workers,
-                        progress=not args.json)
-    summary = summarize(results, attack=args.setting != "clean")
+    results = run_batch(batch_specs(args.setting, args.n, args.seed, **(params if attack else {})), out,
+                        workers=args.workers, progress=not args.json)
+    summary = summarize(results, attack=attack)
     if args.json:
         print(json.dumps(summary))
         return 0
@@ -171,12 +215,39 @@ def _trials(args: argparse.Namespace) -> int:
         outcomes = ", ".join(f"{k} {v}" for k, v in group["outcome"].value_counts().items())
         print(f"{sign:>4} {speed:>6.1f} {len(group):>3} {group['success'].mean():>5.2f} {lat_text:>26}  {outcomes}")
     print(f"SCR = {summary['scr']:.2f} {_fmt_ci(*summary['scr_ci'])} (N = {summary['n']}, 95 % Wilson)")
-    if summary["asr"] is not None:
-        print(f"ASR = {summary['asr']:.2f}")
+    if attack:
+        print(f"ASR = {summary['asr']:.2f} {_fmt_ci(*summary['asr_ci'])}; lost-detection frames (50 Hz) "
+              f"mean {summary['lost_frames_mean']:.1f}; attacked in {summary['attacked_share']:.0%} of trials")
     if summary["n_latency"]:
         std = summary["latency_std"] if summary["latency_std"] is not None else 0.0
         print(f"braking latency = {summary['latency_mean']:.3f} +- {std:.3f} s over {summary['n_latency']} successful stops")
     print(f"results: {out / 'results.parquet'}; per-step logs: {out / 'trials'}")
+    return 0
+
+
+def _attack_study(args: argparse.Namespace) -> int:
+    from experiments.attack_study import run_study
+
+    names = list(dict.fromkeys(args.studies or ("persistence", "coverage", "strong")))
+    unknown = [n for n in names if n not in ("persistence", "coverage", "strong")]
+    if unknown:
+        print(f"racf attack-study: unknown study {unknown}; choose from persistence, coverage, strong", file=sys.stderr)
+        return 2
+    tables = {}
+    for name in names:
+        n = max(args.n, 30) if name == "strong" else args.n
+        tables[name] = run_study(name, n, args.out, seed=args.seed, workers=args.workers, progress=not args.json)
+    if args.json:
+        print(json.dumps(tables))
+        return 0
+    for name, rows in tables.items():
+        print(f"\n{name} (no defence)")
+        print(f"{'setting':<42}{'N':>4}{'lost frames':>13}{'ASR [95% Wilson]':>22}{'SCR':>6}{'latency s':>18}")
+        for r in rows:
+            lat = f"{r['latency_mean']:.2f} +- {r['latency_std'] or 0:.2f} ({r['n_latency']})" if r["n_latency"] else "-"
+            print(f"{r['label']:<42}{r['n']:>4}{r['lost_frames_mean']:>13.1f}"
+                  f"{r['asr']:>8.2f} {_fmt_ci(*r['asr_ci']):>13}{r['scr']:>6.2f}{lat:>18}")
+    print(f"\ntrials and logs under {args.out}")
     return 0
 
 

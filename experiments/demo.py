@@ -12,11 +12,9 @@ from __future__ import annotations
 from pathlib import Path
 
 import cv2
-import gymnasium as gym
 import numpy as np
 
-import sim
-from experiments.trial import TrialSpec, run_trial
+from experiments.trial import TrialSpec, default_env, run_trial
 
 __all__ = ["run_demo"]
 
@@ -50,7 +48,7 @@ def run_demo(out_dir: Path, sign: int = 2, speed: float = 1.0, seed: int = 0) ->
         last["steps"].append(row["t"])
 
     spec = TrialSpec("clean", sign, speed, seed)
-    result, log = run_trial(spec, make_env=lambda s: gym.make(sim.ENV_ID, render_mode="rgb_array"), on_step=on_step)
+    result, log = run_trial(spec, make_env=lambda s: default_env(s, render_mode="rgb_array"), on_step=on_step)
     bar.close()
     log.to_parquet(out_dir / "demo_log.parquet", index=False)
 

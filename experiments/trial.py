@@ -25,11 +25,17 @@ import pandas as pd
 import sim
 from controllers import BrakingConfig, DistanceEstimator, Perception, Phase, RawDepthEstimator, StopSignBraker
 from experiments.closed_loop import camera_model, route_follower, sign_depth_at_line
+from sim.attacks import PatchAttack
+from sim.attacks.base import AttackWrapper
+from sim.attacks.schedule import as_range
 
-__all__ = ["TrialSpec", "TrialResult", "StepHook", "run_trial", "SETTINGS", "SUCCESS_BAND_M", "RUN_THROUGH_M"]
+__all__ = ["TrialSpec", "TrialResult", "StepHook", "run_trial", "default_env", "STRONG_RHO", "STRONG_T_ATK_S", "SETTINGS", "SUCCESS_BAND_M", "RUN_THROUGH_M"]
 
-#: Settings the runner knows; later issues add attack settings and defences.
-SETTINGS = ("clean",)
+#: Settings the runner knows: no attack, and the patch attack with no defence.
+SETTINGS = ("clean", "attack")
+#: The protocol's strong regime.
+STRONG_RHO = (0.9, 1.0)
+STRONG_T_ATK_S = (0.5, 3.0)
 #: The protocol's success band: front bumper this far before the stop line, metres.
 SUCCESS_BAND_M = (0.0, 0.60)
 #: A trial ends once the bumper is this far past the line.
@@ -39,12 +45,15 @@ _AT_REST_MPS = 0.05
 
 @dataclass(frozen=True)
 class TrialSpec:
-    """One trial: setting, target sign, cruise speed (m/s) and seed."""
+    """One trial: setting, target sign, cruise speed (m/s), seed, and for ``attack`` the
+    patch's coverage ``rho`` and duration ``t_atk`` (each a (low, high) uniform range)."""
 
     setting: str
     sign: int
     speed: float
     seed: int
+    rho: tuple[float, float] = STRONG_RHO
+    t_atk: tuple[float, float] = STRONG_T_ATK_S
 
     def __post_init__(self) -> None:
         if self.setting not in SETTINGS:
@@ -53,10 +62,23 @@ class TrialSpec:
             raise ValueError(f"sign must be 0..3, got {self.sign!r}")
         if not 0.1 <= self.speed <= 3.0:
             raise ValueError(f"speed must be in [0.1, 3.0] m/s, got {self.speed!r}")
+        object.__setattr__(self, "rho", as_range("rho", self.rho, 0.0, 1.0))
+        object.__setattr__(self, "t_atk", as_range("t_atk", self.t_atk, 0.0, 60.0))
 
     @property
     def trial_id(self) -> str:
-        return f"{self.setting}_sign{self.sign}_v{self.speed:.2f}_seed{self.seed}"
+        base = f"{self.setting}_sign{self.sign}_v{self.speed:.2f}_seed{self.seed}"
+        if self.setting == "clean":
+            return base
+        return base + "_rho{:.2f}-{:.2f}_t{:.2f}-{:.2f}".format(*self.rho, *self.t_atk)
+
+
+def default_env(spec: TrialSpec, **env_kwargs) -> gym.Env:
+    """The env of a setting: the plain env, or wrapped in the patch attack."""
+    env = gym.make(sim.ENV_ID, **env_kwargs)
+    if spec.setting == "attack":
+        env = PatchAttack(env, rho=spec.rho, duration_s=spec.t_atk)
+    return env
 
 
 @dataclass(frozen=True)
@@ -68,6 +90,10 @@ class TrialResult:
     sign: int
     speed: float
     seed: int
+    rho: float
+    t_atk_s: float
+    attack_start_s: float
+    lost_frames: int
     success: bool
     stopped: bool
     stop_distance_m: float
@@ -98,7 +124,7 @@ def run_trial(spec: TrialSpec, estimator: DistanceEstimator | None = None,
         on_step: called as ``on_step(env, obs, info, row)`` after each step's decision
             (figures, viewers); it must not change anything.
     """
-    env = make_env(spec) if make_env is not None else gym.make(sim.ENV_ID)
+    env = make_env(spec) if make_env is not None else default_env(spec)
     try:
         return _run(env, spec, estimator or RawDepthEstimator(), braking or BrakingConfig(), on_step)
     finally:
@@ -116,6 +142,8 @@ def _run(env: gym.Env, spec: TrialSpec, estimator: DistanceEstimator, braking: B
     braker = StopSignBraker(braking, depth_at_line)
     ideal = StopSignBraker(braking, depth_at_line)
     estimator.reset()
+    # d_clean under an attack: the same pipeline on the env's own, unattacked readings.
+    attacked = _has_attack(env)
 
     rows: list[dict] = []
     t_brake = t_ideal = math.nan
@@ -125,6 +153,11 @@ def _run(env: gym.Env, spec: TrialSpec, estimator: DistanceEstimator, braking: B
     for _ in range(max_steps):
         speed = float(obs["state"][0])
         sample = perception.process(obs["rgb"], obs["depth"], obs["lidar"])
+        if attacked:
+            clean = env.unwrapped.sensor_observation()
+            d_clean = perception.depth.estimate(clean["depth"], perception.detector.detect(clean["rgb"]))[0]
+        else:
+            d_clean = sample.d_meas
         d_fused = float(estimator.estimate(sample, speed, dt))
         decision = braker.step(sample.detected, d_fused, speed, dt)
         # Perfect perception: d_true while the sign is in view, no measurement otherwise.
@@ -136,9 +169,8 @@ def _run(env: gym.Env, spec: TrialSpec, estimator: DistanceEstimator, braking: B
             t_ideal = info["time"]
         x, y, yaw = info["pose"]
         speed_cmd, steer_cmd = follower.act(x, y, yaw, speed, dt, decision.speed_cap_mps)
-        # With no attack the pipeline's output is d_clean itself (the protocol's pseudo ground truth).
         rows.append({
-            "t": info["time"], "d_true": info["d_true"], "d_clean": sample.d_meas, "d_meas": sample.d_meas,
+            "t": info["time"], "d_true": info["d_true"], "d_clean": d_clean, "d_meas": sample.d_meas,
             "c_meas": sample.c_meas, "lidar": sample.lidar_m, "d_fused": d_fused, "detected": sample.detected,
             "det_confidence": sample.detection_confidence, "bearing": sample.bearing_rad,
             **dict(zip(("det_x0", "det_y0", "det_x1", "det_y1"),
@@ -147,6 +179,7 @@ def _run(env: gym.Env, spec: TrialSpec, estimator: DistanceEstimator, braking: B
             "brake": decision.brake, "ideal_brake": ideal_decision.brake, "speed_cap": decision.speed_cap_mps,
             "speed_cmd": speed_cmd, "steer_cmd": steer_cmd, "x": x, "y": y, "yaw": yaw, "speed": info["speed"],
             "dist_to_stop_line": info["dist_to_stop_line"], "lateral_error": info["lateral_error"],
+            "attack_active": bool(info.get("attack_active", False)), "attack": "+".join(info.get("attack", ())),
         })
         if on_step is not None:
             on_step(env, obs, info, rows[-1])
@@ -170,6 +203,24 @@ def _run(env: gym.Env, spec: TrialSpec, estimator: DistanceEstimator, braking: B
         outcome = "stopped_early" if rest_distance > SUCCESS_BAND_M[1] else "stopped_past_line"
     log = pd.DataFrame(rows)
     log.insert(0, "trial_id", spec.trial_id)
-    result = TrialResult(spec.trial_id, spec.setting, spec.sign, spec.speed, spec.seed, bool(success), stopped,
+    patch = _find_wrapper(env, PatchAttack)
+    windows = patch.schedule.windows if patch is not None else []
+    lost = int((log["attack_active"] & log["sign_in_view"] & ~log["detected"]).sum())
+    result = TrialResult(spec.trial_id, spec.setting, spec.sign, spec.speed, spec.seed,
+                         patch.rho if patch is not None else math.nan,
+                         windows[0][1] - windows[0][0] if windows else math.nan,
+                         windows[0][0] if windows else math.nan, lost, bool(success), stopped,
                          rest_distance, t_brake, t_ideal, t_brake - t_ideal, float(log["t"].iloc[-1]), outcome)
     return result, log
+
+
+def _find_wrapper(env: gym.Env, kind: type) -> gym.Env | None:
+    while isinstance(env, gym.Wrapper):
+        if isinstance(env, kind):
+            return env
+        env = env.env
+    return None
+
+
+def _has_attack(env: gym.Env) -> bool:
+    return _find_wrapper(env, AttackWrapper) is not None

@@ -30,11 +30,11 @@ SPEEDS_MPS = (1.0, 1.5, 2.0)
 
 
 def batch_specs(setting: str, n: int, seed: int = 0, signs: tuple[int, ...] = SIGNS,
-                speeds: tuple[float, ...] = SPEEDS_MPS) -> list[TrialSpec]:
-    """``n`` trials cycling through every (sign, speed) pair."""
+                speeds: tuple[float, ...] = SPEEDS_MPS, **attack) -> list[TrialSpec]:
+    """``n`` trials cycling through every (sign, speed) pair; ``attack`` holds ``rho`` / ``t_atk``."""
     if n < 1:
         raise ValueError(f"n must be >= 1, got {n}")
-    return [TrialSpec(setting, signs[i % len(signs)], speeds[(i // len(signs)) % len(speeds)], seed + i)
+    return [TrialSpec(setting, signs[i % len(signs)], speeds[(i // len(signs)) % len(speeds)], seed + i, **attack)
             for i in range(n)]
 
 
@@ -86,7 +86,7 @@ def summarize(results: pd.DataFrame, attack: bool = False) -> dict:
     scr = k / n if n else math.nan
     latencies = results.loc[results["success"], "latency_s"].astype(float)
     latencies = latencies[np.isfinite(latencies)]
-    return {
+    summary = {
         "n": n,
         "scr": scr,
         "scr_ci": list(wilson_interval(k, n)),
@@ -95,4 +95,9 @@ def summarize(results: pd.DataFrame, attack: bool = False) -> dict:
         "latency_std": float(latencies.std(ddof=1)) if len(latencies) > 1 else None,
         "n_latency": int(len(latencies)),
     }
+    if attack:
+        summary["asr_ci"] = [1.0 - summary["scr_ci"][1], 1.0 - summary["scr_ci"][0]]
+        summary["lost_frames_mean"] = float(results["lost_frames"].mean()) if n else None
+        summary["attacked_share"] = float(results["attack_start_s"].notna().mean()) if n else None
+    return summary
 

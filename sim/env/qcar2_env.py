@@ -222,6 +222,13 @@ class QCar2Env(gym.Env):
     def target_sign(self) -> StopSign:
         return self._sign
 
+    def sensor_observation(self) -> dict[str, np.ndarray]:
+        """The current sensor readings as the env returned them, before any wrapper changed them.
+
+        For evaluation (e.g. the protocol's d_clean under an attack), like ``info``.
+        """
+        return self._observation()
+
 
 def _is_int(value: Any) -> bool:
     return isinstance(value, numbers.Integral) and not isinstance(value, bool)

@@ -13,7 +13,6 @@ import os
 from functools import lru_cache
 from pathlib import Path
 
-import numpy as np
 
 from sim._gl import ensure_gl_backend
 
