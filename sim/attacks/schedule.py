@@ -83,7 +83,7 @@ class AttackSchedule:
         t = float(info["time"])
         visible = int(np.count_nonzero(info["sign_mask"])) >= self.min_sign_px
         self._visible = self._visible + 1 if visible else 0
-        if t < self._end:
+        if t < self._end - 1e-6:  # float times: a 0.2 s window is 10 steps at 50 Hz, not 11
             return True
         if len(self.windows) < self.max_windows and t >= self._quiet_until and self._should_open(info):
             duration = float(self._rng.uniform(*self.duration_s))

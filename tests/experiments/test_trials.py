@@ -63,9 +63,12 @@ def test_batch_covers_every_sign_and_speed_and_resumes(tmp_path, monkeypatch):
 
 
 def test_summary_has_the_protocol_keys_and_wilson_interval():
-    rows = pd.DataFrame({"success": [True] * 9 + [False], "latency_s": [0.1] * 9 + [math.nan]})
+    rows = pd.DataFrame({"success": [True] * 9 + [False], "latency_s": [0.1] * 9 + [math.nan],
+                         "lost_frames": [0] * 9 + [30], "attack_start_s": [math.nan] * 9 + [1.2]})
     s = summarize(rows, attack=True)
-    assert set(s) == {"n", "scr", "scr_ci", "asr", "latency_mean", "latency_std", "n_latency"}
+    assert set(s) == {"n", "scr", "scr_ci", "asr", "asr_ci", "latency_mean", "latency_std", "n_latency",
+                      "lost_frames_mean", "attacked_share"}
+    assert s["lost_frames_mean"] == 3.0 and s["attacked_share"] == pytest.approx(0.1)
     assert s["n"] == 10 and s["scr"] == 0.9 and s["asr"] == pytest.approx(0.1) and s["n_latency"] == 9
     assert s["scr_ci"] == pytest.approx(list(wilson_interval(9, 10)))
     lo, hi = wilson_interval(9, 10)
@@ -96,3 +99,30 @@ def test_bad_trial_inputs_are_clear_errors(capsys):
     with pytest.raises(SystemExit):
         main(["trials", "-n", "0"])
     assert "must be >= 1" in capsys.readouterr().err
+
+
+def test_strong_patch_attack_hides_the_sign_and_the_car_runs_the_line():
+    result, log = run_trial(TrialSpec("attack", 2, 2.0, 0, rho=1.0, t_atk=3.0))
+    assert not result.success and result.outcome == "ran_line"
+    assert result.rho == 1.0 and result.t_atk_s == pytest.approx(3.0)
+    attacked = log[log["attack_active"]]
+    assert len(attacked) > 10 and (attacked["attack"] == "patch").all()
+    assert result.lost_frames == int((attacked["sign_in_view"] & ~attacked["detected"]).sum()) > 10
+    # d_clean comes from the unattacked readings: finite where the attacked pipeline has nothing.
+    hidden = attacked[attacked["sign_in_view"] & ~attacked["detected"]]
+    assert hidden["d_meas"].isna().all() and hidden["d_clean"].notna().mean() > 0.8
+    # The attack starts only after a stable sighting, inside the braking window.
+    first = attacked.index[0]
+    assert log.loc[first - 2:first, "sign_in_view"].all()
+    assert log.loc[first, "dist_to_stop_line"] <= 1.0 * log.loc[first, "speed"] + 0.05
+
+
+def test_cli_attack_trials_json_has_lost_frames(tmp_path, capsys):
+    assert main(["trials", "--setting", "attack", "--rho", "1.0", "--t-atk", "3.0", "-n", "1", "--seed", "2",
+                 "--workers", "1", "--json", "--out", str(tmp_path)]) == 0
+    summary = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    assert {"n", "scr", "scr_ci", "asr", "latency_mean", "latency_std", "n_latency", "lost_frames_mean"} <= set(summary)
+    assert summary["asr"] == 1.0 - summary["scr"]
+    assert main(["trials", "--setting", "clean", "--rho", "0.5", "-n", "1"]) == 2
+    with pytest.raises(SystemExit):
+        main(["trials", "--setting", "attack", "--rho", "1.5"])
