@@ -1,5 +1,8 @@
 """One closed-loop stop-sign trial: env -> perception -> estimator -> braking -> lane follower.
 
+Settings: ``clean`` (no attack) and ``attack`` (the patch attack of the protocol with no
+defence; ``rho`` and ``t_atk`` are uniform ranges, the strong regime by default).
+
 Per step the runner records every signal of the protocol (d_true, d_clean, d_meas, c_meas,
 l, d_fused), the controller's state and brake command, pose and speed. The result row
 holds success, the stop distance and the braking latency, defined as in
@@ -120,7 +123,7 @@ def run_trial(spec: TrialSpec, estimator: DistanceEstimator | None = None,
         spec: the trial.
         estimator: the distance source (default raw depth).
         braking: braking parameters.
-        make_env: builds the env (default ``gym.make(sim.ENV_ID)``).
+        make_env: builds the env (default :func:`default_env`: plain, or under the patch attack).
         on_step: called as ``on_step(env, obs, info, row)`` after each step's decision
             (figures, viewers); it must not change anything.
     """
