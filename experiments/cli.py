@@ -78,6 +78,14 @@ def _parser() -> argparse.ArgumentParser:
     st.add_argument("--out", type=Path, default=Path("outputs/attack_study"), help="output folder (trials are reused)")
     st.add_argument("--json", action="store_true", help="print one JSON object instead of tables")
 
+    co = sub.add_parser("collect", help="record the multi-sensor dataset (Parquet, split, card); resumes")
+    co.add_argument("--out", type=Path, default=Path("data/qcar2"), help="dataset folder (default data/qcar2)")
+    co.add_argument("--runs", type=_count, default=None,
+                    help="approaches per sign and speed (default 36: 432 series, ~70k samples)")
+    co.add_argument("--seed", type=int, default=0, help="collection seed (series seeds and the split)")
+    co.add_argument("--workers", type=_count, default=min(2, os.cpu_count() or 1), help="parallel processes")
+    co.add_argument("--summary", action="store_true", help="print the summary as one JSON object")
+
     bd = sub.add_parser("bench-detector", help="stop-sign detector recall and false-positive frames on rendered drives")
     bd.add_argument("--seed", type=int, default=0)
     bd.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
@@ -172,6 +180,18 @@ def main(argv: list[str] | None = None) -> int:
         print(json.dumps({**result.to_dict(), "log": str(args.out / f"{spec.trial_id}.parquet")}, indent=2))
     elif args.command == "trials":
         return _trials(args)
+    elif args.command == "collect":
+        from experiments.dataset import DEFAULT_RUNS, collect, load_dataset, summarize_dataset
+
+        path = collect(args.out, runs=args.runs or DEFAULT_RUNS, seed=args.seed, workers=args.workers,
+                       progress=True)  # the bar is on stderr; --summary JSON stays alone on stdout
+        ds = load_dataset(args.out)
+        summary = summarize_dataset(ds.frame, ds.split)
+        if args.summary:
+            print(json.dumps(summary))
+        else:
+            print(json.dumps(summary, indent=1))
+            print(f"dataset: {path}; card: {args.out / 'dataset_card.md'}; plot: {args.out / 'series.png'}")
     elif args.command == "attack-study":
         return _attack_study(args)
     elif args.command == "bench-detector":

@@ -31,6 +31,7 @@ from experiments.closed_loop import camera_model, route_follower, sign_depth_at_
 from sim.attacks import PatchAttack
 from sim.attacks.base import AttackWrapper
 from sim.attacks.schedule import as_range
+from sim.sensors import STATE_FIELDS
 
 __all__ = ["TrialSpec", "TrialResult", "StepHook", "run_trial", "default_env", "STRONG_RHO", "STRONG_T_ATK_S", "SETTINGS", "SUCCESS_BAND_M", "RUN_THROUGH_M"]
 
@@ -44,6 +45,15 @@ SUCCESS_BAND_M = (0.0, 0.60)
 #: A trial ends once the bumper is this far past the line.
 RUN_THROUGH_M = 0.5
 _AT_REST_MPS = 0.05
+#: Half-width of the LiDAR sector kept in the logs, in beams of the 360-beam scan (1 deg each).
+SCAN_FOV_HALF_BEAMS = 40
+
+
+def scan_fov(ranges: np.ndarray, half_beams: int = SCAN_FOV_HALF_BEAMS) -> np.ndarray:
+    """The forward sector of a scan: beams -half..+half (entry j at (j - half) beam steps CCW
+    from forward), float32 m, inf = no return. For 360 beams that is -40..+40 deg."""
+    ranges = np.asarray(ranges, np.float32)
+    return np.concatenate([ranges[-half_beams:], ranges[:half_beams + 1]])
 
 
 @dataclass(frozen=True)
@@ -183,6 +193,9 @@ def _run(env: gym.Env, spec: TrialSpec, estimator: DistanceEstimator, braking: B
             "speed_cmd": speed_cmd, "steer_cmd": steer_cmd, "x": x, "y": y, "yaw": yaw, "speed": info["speed"],
             "dist_to_stop_line": info["dist_to_stop_line"], "lateral_error": info["lateral_error"],
             "attack_active": bool(info.get("attack_active", False)), "attack": "+".join(info.get("attack", ())),
+            # The vehicle state as the car measures it, and the LiDAR's forward sector (compact scan).
+            **{f"state_{name}": float(v) for name, v in zip(STATE_FIELDS, obs["state"])},
+            "scan_fov": scan_fov(obs["lidar"]),
         })
         if on_step is not None:
             on_step(env, obs, info, rows[-1])
