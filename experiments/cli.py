@@ -81,7 +81,7 @@ def _parser() -> argparse.ArgumentParser:
     co = sub.add_parser("collect", help="record the multi-sensor dataset (Parquet, split, card); resumes")
     co.add_argument("--out", type=Path, default=Path("data/qcar2"), help="dataset folder (default data/qcar2)")
     co.add_argument("--runs", type=_count, default=None,
-                    help="approaches per sign and speed (default 36: 432 series, ~70k samples)")
+                    help="approaches per target (4 signs, 2 crates) and speed (default 26: 468 series, ~74k samples)")
     co.add_argument("--seed", type=int, default=0, help="collection seed (series seeds and the split)")
     co.add_argument("--workers", type=_count, default=min(2, os.cpu_count() or 1), help="parallel processes")
     co.add_argument("--summary", action="store_true", help="print the summary as one JSON object")

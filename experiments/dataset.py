@@ -5,7 +5,8 @@ pipeline's clean depth distance and confidence, the LiDAR reference and a compac
 the vehicle state and pose, and the simulator's ground truth. One series is one clean
 closed-loop approach (``experiments.trial``): the car cruises at 1.0, 1.5 or 2.0 m/s along
 a stop-sign approach (straight ones for signs 0 and 1, curves of about +-15 deg steering
-for signs 2 and 3), brakes on the pipeline's own distance, stops and dwells.
+for signs 2 and 3) or towards a crate on the lane (an obstacle both sensors see), brakes on
+the pipeline's own distance, stops and dwells.
 
 Layout of a dataset folder:
 
@@ -32,21 +33,23 @@ from experiments.trials import SIGNS, SPEEDS_MPS, run_batch
 __all__ = ["COLUMNS", "DEFAULT_RUNS", "collection_specs", "collect", "summarize_dataset", "load_dataset",
            "QCarDataset", "SPLIT_SHARES"]
 
-#: Runs per (sign, speed): 12 x 36 = 432 series, ~70k samples (the paper: 67,821 in 13 sequences).
-DEFAULT_RUNS = 36
+#: Runs per (target, speed): (4 signs + 2 crates) x 3 speeds x 26 = 468 series, ~74k samples
+#: (the paper: 67,821 samples in 13 sequences).
+DEFAULT_RUNS = 26
+OBSTACLES = (0, 1)
 SPLIT_SHARES = (0.7, 0.1, 0.2)
 
 #: Dataset columns: name -> (unit, meaning).
 COLUMNS: dict[str, tuple[str, str]] = {
     "series_id": ("", "one approach; the split is by series"),
     "t": ("s", "time since the start of the series (50 Hz)"),
-    "sign": ("", "target stop sign 0-3"),
+    "target": ("", "what the car approaches: sign0-sign3 (stop signs) or obstacle0-obstacle1 (blue crates)"),
     "speed_set": ("m/s", "cruise speed of the series"),
     "d_clean": ("m", "perception output: median depth in the detector's mask (NaN: no detection)"),
     "c_clean": ("1", "its confidence: detection confidence x valid-depth share"),
-    "d_true": ("m", "ground truth: depth of the sign's centre along the camera axis (never an input)"),
-    "sign_in_view": ("bool", "ground truth: some of the sign's face is visible"),
-    "detected": ("bool", "the detector reported the sign"),
+    "d_true": ("m", "ground truth: depth of the target's centre (sign plate / crate's near face) along the camera axis"),
+    "sign_in_view": ("bool", "ground truth: some of the target is visible"),
+    "detected": ("bool", "the detector reported the target"),
     "lidar": ("m", "range of the nearest DBSCAN cluster in the camera's view near the detection (NaN: none)"),
     "scan_fov_mm": ("mm", f"LiDAR ranges (uint16), beams -{SCAN_FOV_HALF_BEAMS}..+{SCAN_FOV_HALF_BEAMS} deg "
                             "CCW from forward; 0 = no return"),
@@ -66,26 +69,29 @@ _RENAME = {"c_meas": "c_clean", "state_speed_mps": "speed", "state_steering_rad"
 
 
 def collection_specs(runs: int = DEFAULT_RUNS, seed: int = 0, signs: tuple[int, ...] = SIGNS,
-                     speeds: tuple[float, ...] = SPEEDS_MPS) -> list[TrialSpec]:
-    """The series to record: every sign at every speed, ``runs`` times, seeds from ``seed``."""
+                     speeds: tuple[float, ...] = SPEEDS_MPS,
+                     obstacles: tuple[int, ...] = OBSTACLES) -> list[TrialSpec]:
+    """The series to record: every sign and crate at every speed, ``runs`` times, seeds from ``seed``."""
     if runs < 1:
         raise ValueError(f"runs must be >= 1, got {runs}")
-    return [TrialSpec("clean", sign, speed, seed * 100_000 + k)
-            for k in range(runs) for speed in speeds for sign in signs]
+    targets = [("sign", i) for i in signs] + [("obstacle", i) for i in obstacles]
+    return [TrialSpec("clean", index, speed, seed * 100_000 + k, target=kind)
+            for k in range(runs) for speed in speeds for kind, index in targets]
 
 
 def collect(out_dir: Path, runs: int = DEFAULT_RUNS, seed: int = 0, workers: int = 2, progress: bool = True,
-            signs: tuple[int, ...] = SIGNS, speeds: tuple[float, ...] = SPEEDS_MPS) -> Path:
+            signs: tuple[int, ...] = SIGNS, speeds: tuple[float, ...] = SPEEDS_MPS,
+            obstacles: tuple[int, ...] = OBSTACLES) -> Path:
     """Records (or resumes) the collection and writes the dataset files; returns ``dataset.parquet``."""
     out_dir = Path(out_dir)
-    specs = collection_specs(runs, seed, signs, speeds)
+    specs = collection_specs(runs, seed, signs, speeds, obstacles)
     run_batch(specs, out_dir / "_runs", workers=workers, progress=progress)
     frames = []
     for spec in specs:
         log = pd.read_parquet(out_dir / "_runs" / "trials" / f"{spec.trial_id}.parquet")
         log = log.drop(columns=["speed"]).rename(columns=_RENAME)  # speed: the measured one
         log["series_id"] = spec.trial_id
-        log["sign"] = spec.sign
+        log["target"] = f"{spec.target}{spec.sign}"
         log["speed_set"] = spec.speed
         log["scan_fov_mm"] = [_scan_mm(r) for r in log["scan_fov"]]
         frames.append(log[list(COLUMNS)])
@@ -137,7 +143,7 @@ def summarize_dataset(data: pd.DataFrame, split: dict[str, list[str]] | None = N
         "d_clean_m": [float(data["d_clean"].min()), float(data["d_clean"].max())],
         "measured_speed_mps": [float(data["speed"].min()), float(data["speed"].max())],
         "steering_deg": [float(np.degrees(data["steering"].min())), float(np.degrees(data["steering"].max()))],
-        "signs": sorted(int(s) for s in data["sign"].unique()),
+        "targets": sorted(str(s) for s in data["target"].unique()),
     }
     if split is not None:
         summary["split"] = {k: len(v) for k, v in split.items()}
@@ -155,13 +161,16 @@ simulator's ground truth. Shaped like the RACF paper's QCar 2 benchmark (67,821 
 13 sequences, speeds 1.0 / 1.5 / 2.0 m/s, steering about 0 and +-15 deg). Simulated data,
 not recordings of a real car.
 
-**How it was made.** `racf collect --runs {runs} --seed {seed}`: for every stop sign (0-3) and
+**How it was made.** `racf collect --runs {runs} --seed {seed}`: for every target and
 cruise speed (1.0, 1.5, 2.0 m/s), {runs} clean closed-loop approaches (seeds
-`{seed} * 100000 + run`). The car follows the approach route with Stanley lane following, a
-curve speed limit and a PI speed loop; the detector (RGB), the depth distance and the braking
-controller run as in `racf trial --setting clean`; each series ends after the car has stopped
-and dwelt 1 s. Signs 0 and 1 have straight approaches; signs 2 and 3 approach through
-curves (steering up to about 16-22 deg). Sensor noise is the simulator's (depth
+`{seed} * 100000 + run`). The targets are the four stop signs and two blue crates
+(0.12 x 0.16 x 0.22 m) standing on lanes, with a virtual stop line 0.25 m before them; the
+camera and the LiDAR both see them. The car follows the approach route with Stanley lane
+following, a curve speed limit and a PI speed loop. The detector (stop sign, or crate by
+colour), the depth distance and the braking controller run as in
+`racf trial --setting clean`; each series ends after the car has stopped and dwelt 1 s.
+Signs 0 and 1 and the crates have straight final approaches; signs 2 and 3 approach
+through curves (steering up to about 16-22 deg). Sensor noise is the simulator's (depth
 0.0037 z^2 m, LiDAR 1 %).
 
 **Counts.** {summary['n_series']} series, {summary['n_samples']} samples; samples per series
@@ -185,14 +194,14 @@ seed per series.
 
 
 def plot_series(data: pd.DataFrame, path: Path, per_sign: int = 1) -> None:
-    """Plots one series per sign: distances and speed over time."""
+    """Plots one series per target: distances and speed over time."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    picks = [sid for sign in sorted(data["sign"].unique())
-             for sid in data.loc[data["sign"] == sign, "series_id"].unique()[:per_sign]]
+    picks = [sid for target in sorted(data["target"].unique())
+             for sid in data.loc[data["target"] == target, "series_id"].unique()[:per_sign]]
     fig, axes = plt.subplots(len(picks), 1, figsize=(8, 2.2 * len(picks)), squeeze=False, sharex=False)
     for ax, sid in zip(axes[:, 0], picks):
         s = data[data["series_id"] == sid]

@@ -26,7 +26,8 @@ import numpy as np
 import pandas as pd
 
 import sim
-from controllers import BrakingConfig, DistanceEstimator, Perception, Phase, RawDepthEstimator, StopSignBraker
+from controllers import (BrakingConfig, DistanceEstimator, ObstacleDetector, Perception, Phase, RawDepthEstimator,
+                         StopSignBraker)
 from experiments.closed_loop import camera_model, route_follower, sign_depth_at_line
 from sim.attacks import PatchAttack
 from sim.attacks.base import AttackWrapper
@@ -37,6 +38,8 @@ __all__ = ["TrialSpec", "TrialResult", "StepHook", "run_trial", "default_env", "
 
 #: Settings the runner knows: no attack, and the patch attack with no defence.
 SETTINGS = ("clean", "attack")
+#: What a trial approaches (``TrialSpec.sign`` is the index): the four stop signs or the two crates.
+TARGETS = {"sign": 4, "obstacle": 2}
 #: The protocol's strong regime.
 STRONG_RHO = (0.9, 1.0)
 STRONG_T_ATK_S = (0.5, 3.0)
@@ -67,12 +70,15 @@ class TrialSpec:
     seed: int
     rho: tuple[float, float] = STRONG_RHO
     t_atk: tuple[float, float] = STRONG_T_ATK_S
+    target: str = "sign"
 
     def __post_init__(self) -> None:
         if self.setting not in SETTINGS:
             raise ValueError(f"setting must be one of {SETTINGS}, got {self.setting!r}")
-        if self.sign not in range(4):
-            raise ValueError(f"sign must be 0..3, got {self.sign!r}")
+        if self.target not in TARGETS:
+            raise ValueError(f"target must be one of {tuple(TARGETS)}, got {self.target!r}")
+        if self.sign not in range(TARGETS[self.target]):
+            raise ValueError(f"{self.target} index must be 0..{TARGETS[self.target] - 1}, got {self.sign!r}")
         if not 0.1 <= self.speed <= 3.0:
             raise ValueError(f"speed must be in [0.1, 3.0] m/s, got {self.speed!r}")
         object.__setattr__(self, "rho", as_range("rho", self.rho, 0.0, 1.0))
@@ -80,7 +86,7 @@ class TrialSpec:
 
     @property
     def trial_id(self) -> str:
-        base = f"{self.setting}_sign{self.sign}_v{self.speed:.2f}_seed{self.seed}"
+        base = f"{self.setting}_{self.target}{self.sign}_v{self.speed:.2f}_seed{self.seed}"
         if self.setting == "clean":
             return base
         return base + "_rho{:.2f}-{:.2f}_t{:.2f}-{:.2f}".format(*self.rho, *self.t_atk)
@@ -146,10 +152,10 @@ def run_trial(spec: TrialSpec, estimator: DistanceEstimator | None = None,
 
 def _run(env: gym.Env, spec: TrialSpec, estimator: DistanceEstimator, braking: BrakingConfig,
          on_step: StepHook | None) -> tuple[TrialResult, pd.DataFrame]:
-    obs, info = env.reset(seed=spec.seed, options={"sign": spec.sign, "cruise_speed": spec.speed})
+    obs, info = env.reset(seed=spec.seed, options={spec.target: spec.sign, "cruise_speed": spec.speed})
     sign = env.unwrapped.target_sign
     dt = 1.0 / env.unwrapped.config.control_hz
-    perception = Perception(camera_model(env))
+    perception = Perception(camera_model(env), detector=ObstacleDetector() if spec.target == "obstacle" else None)
     follower = route_follower(sign, spec.speed)
     depth_at_line = sign_depth_at_line(env, sign)
     braker = StopSignBraker(braking, depth_at_line)

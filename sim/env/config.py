@@ -13,7 +13,7 @@ from sim.vehicle.qcar2 import VehicleConfig
 __all__ = ["EnvConfig", "RESET_OPTIONS"]
 
 #: Keys ``reset(options=...)`` accepts.
-RESET_OPTIONS = ("sign", "cruise_speed", "run_up_m")
+RESET_OPTIONS = ("sign", "obstacle", "cruise_speed", "run_up_m")
 
 
 @dataclass(frozen=True)

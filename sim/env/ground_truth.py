@@ -16,7 +16,7 @@ import numpy as np
 from sim.sensors.camera import CameraIntrinsics
 from sim.world.stop_signs import SIGN_FACE_ACROSS_FLATS_M, StopSign
 
-__all__ = ["SignView", "sign_view"]
+__all__ = ["SignView", "sign_view", "obstacle_view"]
 
 #: Converts MuJoCo's camera frame (x right, y up, looking along -z) to the optical frame.
 _MJ_TO_OPTICAL = np.diag([1.0, -1.0, -1.0])
@@ -85,4 +85,28 @@ def sign_view(sign: StopSign, cam_pos: np.ndarray, cam_mat: np.ndarray,
             plane_z = float(normal_opt @ centre) / (rays @ normal_opt)
             visible = np.abs(clean_depth[rows, cols] - plane_z) < _DEPTH_TOLERANCE_M
             mask[rows[~visible], cols[~visible]] = False
+    return SignView(float(centre[2]), d_euclid, bearing, mask, bool(mask.any()))
+
+
+def obstacle_view(obstacle, cam_pos: np.ndarray, cam_mat: np.ndarray,
+                  intrinsics: CameraIntrinsics, clean_depth: np.ndarray) -> SignView:
+    """Ground truth of an obstacle crate, in the same form as a sign's.
+
+    ``d_true`` is the depth of the centre of the crate's near face; the mask is the crate's
+    projected outline where the rendered depth lies within the crate's depth span (so
+    parts hidden behind something nearer are excluded).
+    """
+    world_to_opt = _MJ_TO_OPTICAL @ cam_mat.T
+    centre = world_to_opt @ (obstacle.centre - cam_pos)
+    d_euclid = float(np.linalg.norm(centre))
+    mask = np.zeros((intrinsics.height, intrinsics.width), bool)
+    if centre[2] <= 0.05:
+        return SignView(float("nan"), d_euclid, float("nan"), mask, False)
+    bearing = float(math.atan2(-centre[0], centre[2]))
+    corners = (world_to_opt @ (obstacle.corners() - cam_pos).T).T
+    if (corners[:, 2] > 0.05).all():
+        hull = cv2.convexHull(np.round(intrinsics.project(corners) * 16).astype(np.int32))
+        cv2.fillPoly(mask.view(np.uint8), [hull], 1, lineType=cv2.LINE_8, shift=4)
+        z_lo, z_hi = corners[:, 2].min() - _DEPTH_TOLERANCE_M, corners[:, 2].max() + _DEPTH_TOLERANCE_M
+        mask &= (clean_depth >= z_lo) & (clean_depth <= z_hi)
     return SignView(float(centre[2]), d_euclid, bearing, mask, bool(mask.any()))

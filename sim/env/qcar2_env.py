@@ -18,10 +18,11 @@ from gymnasium import spaces
 
 from sim._gl import ensure_gl_backend, gl_context_class
 from sim.env.config import RESET_OPTIONS, EnvConfig
-from sim.env.ground_truth import sign_view
+from sim.env.ground_truth import obstacle_view, sign_view
 from sim.sensors import DepthCamera, Lidar2D, RGBCamera, RGBDCameraRig, Sensor, VehicleStateSensor
 from sim.vehicle import QCar2
 from sim.world.scene import load_model
+from sim.world.obstacles import Obstacle, obstacles
 from sim.world.stop_signs import StopSign, stop_signs
 
 ensure_gl_backend()
@@ -39,9 +40,11 @@ class QCar2Env(gym.Env):
     return; ``lidar`` (N,) float32 m, inf = no return; ``state`` (5,) float32, see
     ``sim.sensors.STATE_FIELDS``. Action (``Box``): [speed command m/s, steering rad].
 
-    ``reset(options=...)`` accepts ``sign`` (0..3), ``cruise_speed`` (m/s; the car starts
-    moving at it) and ``run_up_m`` (distance from the front bumper to the stop line at the
-    start). Ground truth is in ``info``: ``d_true`` (sign depth along the camera axis, m),
+    ``reset(options=...)`` accepts ``sign`` (0..3) or ``obstacle`` (0..1, a crate on a lane
+    with a virtual stop line before it), ``cruise_speed`` (m/s; the car starts moving at it)
+    and ``run_up_m`` (distance from the front bumper to the stop line at the start). Ground
+    truth is in ``info`` (the ``sign_*`` keys describe the target, sign or crate;
+    ``target_kind`` says which): ``d_true`` (target depth along the camera axis, m),
     ``d_true_euclid``, ``sign_bearing``, ``sign_mask``, ``sign_in_view``, ``pose``,
     ``speed``, ``route_s``, ``lateral_error``, ``dist_to_stop_line`` (front bumper to the
     stop line along the route, m; negative once past it), ``collision``, ``off_road``.
@@ -90,7 +93,10 @@ class QCar2Env(gym.Env):
         self._wheel_geoms = {self.model.geom(w).id for w in ("wheel_fl", "wheel_fr", "wheel_rl", "wheel_rr")}
         self._floor_geoms = {self.model.geom("mat").id, self.model.geom("lab_floor").id}
         self._viewer = None
-        self._sign: StopSign = stop_signs()[0]
+        # Crates stand on the map only in their own episodes (as a test operator would place one).
+        self._crates = [(self.model.body(f"obstacle_{o.index}").id, self.model.body(f"obstacle_{o.index}").pos.copy())
+                        for o in obstacles()]
+        self._sign: StopSign | Obstacle = stop_signs()[0]
         self._obs: dict[str, np.ndarray] = {}
         self._step = 0
         self._route_s = 0.0
@@ -103,11 +109,13 @@ class QCar2Env(gym.Env):
         unknown = sorted(set(options) - set(RESET_OPTIONS))
         if unknown:
             raise ValueError(f"unknown reset option(s) {unknown}; allowed: {list(RESET_OPTIONS)}")
-        signs = stop_signs()
-        sign_index = options.get("sign", int(self.np_random.integers(len(signs))))
-        if not _is_int(sign_index) or int(sign_index) not in range(len(signs)):
-            raise ValueError(f"options['sign'] must be an int in 0..{len(signs) - 1}, got {sign_index!r}")
-        sign = signs[int(sign_index)]
+        if "sign" in options and "obstacle" in options:
+            raise ValueError("pass options['sign'] (a stop sign) or options['obstacle'] (a crate), not both")
+        key, targets = ("obstacle", obstacles()) if "obstacle" in options else ("sign", stop_signs())
+        index = options.get(key, int(self.np_random.integers(len(targets))))
+        if not _is_int(index) or int(index) not in range(len(targets)):
+            raise ValueError(f"options[{key!r}] must be an int in 0..{len(targets) - 1}, got {index!r}")
+        sign = targets[int(index)]
         speed = options.get("cruise_speed", float(self.np_random.choice(self.config.cruise_speeds_mps)))
         if not (_is_real(speed) and 0.0 <= speed <= self.config.vehicle.max_speed_mps):
             raise ValueError(f"options['cruise_speed'] must be in [0, {self.config.vehicle.max_speed_mps}] m/s, got {speed!r}")
@@ -120,6 +128,9 @@ class QCar2Env(gym.Env):
         self._sensor_rng = np.random.default_rng(self.np_random.integers(2**63))
         self._sign = sign
         self._cruise_speed = float(speed)
+        for i, (body, home) in enumerate(self._crates):
+            here = isinstance(sign, Obstacle) and sign.index == i
+            self.model.body_pos[body] = home if here else home + np.array([0.0, 0.0, -5.0])
         mujoco.mj_resetData(self.model, self.data)
         self._route_s = sign.stop_s - run_up - _BUMPER_AHEAD_M
         x, y, yaw = sign.path.pose_at(self._route_s)
@@ -198,8 +209,10 @@ class QCar2Env(gym.Env):
         state = self.car.state(self.data)
         cam_pos, cam_mat = self.car.camera_pose(self.model, self.data)
         _, clean_depth = self.rig.render(self.model, self.data)
-        view = sign_view(self._sign, cam_pos, cam_mat, self.rig.intrinsics, clean_depth)
+        view_of = obstacle_view if isinstance(self._sign, Obstacle) else sign_view
+        view = view_of(self._sign, cam_pos, cam_mat, self.rig.intrinsics, clean_depth)
         return {
+            "target_kind": "obstacle" if isinstance(self._sign, Obstacle) else "stop_sign",
             "target_sign": self._sign.index,
             "cruise_speed": self._cruise_speed,
             "d_true": view.d_true,
@@ -219,7 +232,8 @@ class QCar2Env(gym.Env):
 
     # Route and sign, for controllers and experiments that plan on the road graph.
     @property
-    def target_sign(self) -> StopSign:
+    def target_sign(self) -> StopSign | Obstacle:
+        """The episode's target: a stop sign, or a crate when reset with ``options['obstacle']``."""
         return self._sign
 
     def sensor_observation(self) -> dict[str, np.ndarray]:

@@ -21,6 +21,7 @@ import mujoco  # noqa: E402  (the GL backend must be chosen before mujoco is imp
 
 from sim.world import map_facts  # noqa: E402
 from sim.world.mat_texture import mat_png_bytes  # noqa: E402
+from sim.world.obstacles import OBSTACLE_SIZE_M, obstacles  # noqa: E402
 from sim.world.stop_signs import SIGN_CENTRE_HEIGHT_M, SIGN_FACE_ACROSS_FLATS_M, stop_signs  # noqa: E402
 
 __all__ = ["ASSETS_DIR", "build_scene_xml", "load_model", "PROP_GEOM_GROUP", "CAR_GEOM_GROUP"]
@@ -112,6 +113,14 @@ def _room_xml(cx: float, cy: float) -> str:
                     ' contype="0" conaffinity="0" group="1"/>')
 
 
+def _obstacle_xml(index: int, x: float, y: float, yaw: float) -> str:
+    lx, ly, h = OBSTACLE_SIZE_M
+    return f"""
+    <body name="obstacle_{index}" pos="{x} {y} 0" euler="0 0 {math.degrees(yaw)}">
+      <geom name="obstacle_{index}" type="box" pos="0 0 {h / 2}" size="{lx / 2} {ly / 2} {h / 2}" rgba="0.16 0.33 0.78 1"/>
+    </body>"""
+
+
 def build_scene_xml() -> str:
     """The full MJCF text of the map with the car (the car's file is an include)."""
     x0, x1, y0, y1 = map_facts.WALL_BOUNDS_M
@@ -119,6 +128,7 @@ def build_scene_xml() -> str:
     props = "".join(_stop_sign_xml(s.index, *s.position, s.face_yaw) for s in stop_signs())
     props += "".join(_traffic_light_xml(i, *p) for i, p in enumerate(map_facts.TRAFFIC_LIGHTS))
     props += "".join(_yield_sign_xml(i, *p) for i, p in enumerate(map_facts.YIELD_SIGNS))
+    props += "".join(_obstacle_xml(o.index, *o.body_centre, o.yaw) for o in obstacles())
     w, h = MAX_IMAGE_SIZE
     return f"""<mujoco model="qcar2_sdcs_map">
   <compiler angle="degree" autolimits="true"/>

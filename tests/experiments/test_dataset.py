@@ -22,8 +22,9 @@ def test_counts_columns_units_and_files(small):
     ds = load_dataset(small)
     df = ds.frame
     assert list(df.columns) == list(COLUMNS)
-    assert df["series_id"].nunique() == 12 and len(df) > 12 * 100
-    assert sorted(df["speed_set"].unique()) == [1.0, 1.5, 2.0] and sorted(df["sign"].unique()) == [0, 1, 2, 3]
+    assert df["series_id"].nunique() == 18 and len(df) > 18 * 100
+    assert sorted(df["speed_set"].unique()) == [1.0, 1.5, 2.0]
+    assert sorted(df["target"].unique()) == ["obstacle0", "obstacle1", "sign0", "sign1", "sign2", "sign3"]
     for sid, s in df.groupby("series_id"):
         np.testing.assert_allclose(np.diff(s["t"]), 0.02, atol=1e-9)  # 50 Hz, contiguous
         assert s["t"].iloc[0] == 0.0
@@ -47,10 +48,11 @@ def test_d_clean_tracks_d_true(small):
 
 def test_split_is_by_series_disjoint_and_70_10_20():
     ids = [s.trial_id for s in collection_specs(runs=10, seed=1)]
+    assert len(ids) == 180
     split = make_split(ids, seed=1)
     sets = [set(split[k]) for k in ("train", "val", "test")]
     assert set.union(*sets) == set(ids) and sum(map(len, sets)) == len(ids)
-    assert [len(s) for s in sets] == [round(SPLIT_SHARES[0] * 120), round(SPLIT_SHARES[1] * 120), 120 - 84 - 12]
+    assert [len(s) for s in sets] == [round(SPLIT_SHARES[0] * 180), round(SPLIT_SHARES[1] * 180), 180 - 126 - 18]
     assert make_split(ids, seed=1) == split and make_split(ids, seed=2) != split
 
 
@@ -83,7 +85,8 @@ def test_same_seed_same_bytes_and_resume_redoes_nothing(tmp_path, small, monkeyp
 
 def test_fresh_recording_gives_identical_bytes(tmp_path):
     for name in ("x", "y"):
-        collect(tmp_path / name, runs=1, seed=5, workers=1, progress=False, signs=(2, 3), speeds=(1.5,))
+        collect(tmp_path / name, runs=1, seed=5, workers=1, progress=False, signs=(2,), speeds=(1.5,),
+                obstacles=(1,))
     assert (tmp_path / "x" / "dataset.parquet").read_bytes() == (tmp_path / "y" / "dataset.parquet").read_bytes()
 
 
@@ -91,6 +94,6 @@ def test_cli_summary_json_and_missing_dataset_error(small, capsys, tmp_path):
     assert main(["collect", "--out", str(small), "--runs", "1", "--seed", "3", "--summary"]) == 0
     summary = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
     assert {"n_series", "n_samples", "speeds", "rmse_clean_vs_true"} <= set(summary)
-    assert summary["n_series"] == 12
+    assert summary["n_series"] == 18
     with pytest.raises(FileNotFoundError, match="racf collect"):
         load_dataset(tmp_path / "nothing")
