@@ -51,7 +51,9 @@ def _parser() -> argparse.ArgumentParser:
     d.add_argument("--out", type=Path, default=Path("outputs/demo"), help="output folder")
     t = sub.add_parser("trial", help="one closed-loop stop-sign trial: per-step log (Parquet) and result row")
     t.add_argument("--setting", choices=_settings(), default="clean", help="trial setting (default clean)")
-    t.add_argument("--sign", type=_sign, default=2, help="stop sign 0-3 (default 2)")
+    t.add_argument("--sign", type=_sign, default=2, help="stop sign 0-3, or crate 0-1 with --target obstacle (default 2)")
+    t.add_argument("--target", choices=("sign", "obstacle"), default="sign",
+                   help="approach a stop sign (default) or an obstacle crate")
     t.add_argument("--speed", type=_speed, default=1.0, help="cruise speed m/s, 0.1-3.0 (default 1.0)")
     t.add_argument("--seed", type=int, default=0)
     t.add_argument("--out", type=Path, default=Path("outputs/trial"), help="output folder")
@@ -172,7 +174,11 @@ def main(argv: list[str] | None = None) -> int:
     elif args.command == "trial":
         from experiments.trial import TrialSpec, run_trial
 
-        spec = TrialSpec(args.setting, args.sign, args.speed, args.seed)
+        try:
+            spec = TrialSpec(args.setting, args.sign, args.speed, args.seed, target=args.target)
+        except ValueError as err:
+            print(f"racf trial: {err}", file=sys.stderr)
+            return 2
         result, log = run_trial(spec)
         args.out.mkdir(parents=True, exist_ok=True)
         log.to_parquet(args.out / f"{spec.trial_id}.parquet", index=False)

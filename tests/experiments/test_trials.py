@@ -126,3 +126,13 @@ def test_cli_attack_trials_json_has_lost_frames(tmp_path, capsys):
     assert main(["trials", "--setting", "clean", "--rho", "0.5", "-n", "1"]) == 2
     with pytest.raises(SystemExit):
         main(["trials", "--setting", "attack", "--rho", "1.5"])
+
+
+def test_clean_obstacle_trial_stops_before_the_crate():
+    result, log = run_trial(TrialSpec("clean", 1, 2.0, 0, target="obstacle"))
+    assert result.trial_id == "clean_obstacle1_v2.00_seed0"
+    assert result.success and 0.0 <= result.stop_distance_m <= 0.60
+    seen = log[log["detected"] & log["sign_in_view"]]
+    assert len(seen) > 20 and (seen["d_meas"] - seen["d_true"]).abs().median() < 0.05
+    with pytest.raises(ValueError, match="obstacle index must be 0..1"):
+        TrialSpec("clean", 3, 1.0, 0, target="obstacle")
