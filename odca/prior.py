@@ -1,0 +1,128 @@
+"""The temporal prior: context -> mean and std over the next H steps, batched.
+
+``TemporalPrior`` is the protocol; ``Chronos2Prior`` wraps ``chronos.Chronos2Pipeline``
+(frozen) and loads a checkpoint by local path or hub id (``amazon/chronos-2`` for users
+who can reach the Hugging Face hub); ``LastValuePrior`` is the naive baseline and a stub
+for tests. The std comes from the predicted quantiles (the 10-90 % spread of a normal).
+
+Forecasts run in fixed-size batches (padded), so a window gets bit-identical numbers
+whether it is forecast alone (online) or with others (offline): CPU kernels compute the
+rows of a fixed-shape batch independently, but pick different paths for other shapes.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Protocol, runtime_checkable
+
+import numpy as np
+
+__all__ = ["TemporalPrior", "LastValuePrior", "Chronos2Prior", "CheckpointError", "SHIPPED_PRIOR"]
+
+#: The project's own small Chronos-2-architecture checkpoint (see its MODEL_CARD.md).
+SHIPPED_PRIOR = Path(__file__).resolve().parents[1] / "assets" / "checkpoints" / "chronos2-racf-tiny"
+_Z90 = 1.2815515655446004  # standard normal 90 % quantile
+
+
+class CheckpointError(ValueError):
+    """A checkpoint that is missing, incomplete or corrupt."""
+
+
+@runtime_checkable
+class TemporalPrior(Protocol):
+    """Forecasts the next ``horizon`` steps of each context window."""
+
+    context_length: int
+
+    def forecast(self, context: np.ndarray, horizon: int) -> tuple[np.ndarray, np.ndarray]:
+        """Args: context (B, W) float, NaN = missing. Returns (mean, std), each (B, horizon)."""
+
+
+class LastValuePrior:
+    """The last finite value, held; std = the context's recent step spread (a naive baseline)."""
+
+    def __init__(self, context_length: int = 64) -> None:
+        self.context_length = context_length
+
+    def forecast(self, context: np.ndarray, horizon: int) -> tuple[np.ndarray, np.ndarray]:
+        ctx = _check_context(context)
+        mean = np.full((ctx.shape[0], horizon), np.nan)
+        std = np.full((ctx.shape[0], horizon), np.nan)
+        for i, row in enumerate(ctx):
+            finite = row[np.isfinite(row)]
+            if finite.size:
+                mean[i] = finite[-1]
+                spread = np.std(np.diff(finite[-16:])) if finite.size > 2 else 0.0
+                std[i] = spread * np.sqrt(np.arange(1, horizon + 1))
+        return mean, std
+
+
+class Chronos2Prior:
+    """A frozen Chronos-2 forecaster.
+
+    Args:
+        checkpoint: local folder with ``config.json`` + weights, or a hub id.
+        batch_size: the fixed batch the model always runs with (see the module docstring).
+    """
+
+    def __init__(self, checkpoint: str | Path = SHIPPED_PRIOR, batch_size: int = 8) -> None:
+        import torch
+        from chronos import Chronos2Pipeline
+
+        path = Path(checkpoint)
+        looks_local = path.is_absolute() or str(checkpoint).startswith(".") or path.exists()
+        if looks_local and not (path / "config.json").exists():
+            raise CheckpointError(f"no Chronos-2 checkpoint at {path} (need config.json and model weights; "
+                                  "`racf pretrain-prior` makes one)")
+        try:
+            pipeline = Chronos2Pipeline.from_pretrained(str(checkpoint))
+        except Exception as err:  # transformers raises many kinds; the user needs one message
+            raise CheckpointError(f"could not load the Chronos-2 checkpoint {checkpoint}: "
+                                  f"{type(err).__name__}: {err}") from None
+        self.pipeline = pipeline
+        self.model = pipeline.model.eval()
+        self.context_length = int(pipeline.model_context_length)
+        self.quantiles = np.asarray(pipeline.quantiles, float)
+        self.batch_size = int(batch_size)
+        self._torch = torch
+        lo, hi = np.argmin(np.abs(self.quantiles - 0.1)), np.argmin(np.abs(self.quantiles - 0.9))
+        mid = np.argmin(np.abs(self.quantiles - 0.5))
+        self._lo, self._hi, self._mid = int(lo), int(hi), int(mid)
+        self._patches = None
+
+    def forecast(self, context: np.ndarray, horizon: int) -> tuple[np.ndarray, np.ndarray]:
+        """Median and quantile-spread std for each window; NaN where a window has no finite value.
+
+        Args:
+            context: (B, W) windows, NaN = missing; only the last ``context_length`` are used.
+            horizon: steps ahead (<= the checkpoint's prediction length).
+        Returns:
+            (mean, std), each (B, horizon).
+        """
+        torch = self._torch
+        ctx = _check_context(context)[:, -self.context_length:].astype(np.float32)
+        patch = int(self.pipeline.model_output_patch_size)
+        n_patches = -(-horizon // patch)
+        out_q = np.empty((ctx.shape[0], len(self.quantiles), n_patches * patch), np.float32)
+        with torch.no_grad():
+            for start in range(0, ctx.shape[0], self.batch_size):
+                chunk = ctx[start:start + self.batch_size]
+                # NaN marks missing values: the model masks them itself (zeros plus a mask leak through).
+                padded = np.zeros((self.batch_size, ctx.shape[1]), np.float32)
+                padded[:len(chunk)] = chunk
+                pred = self.model(torch.from_numpy(padded), group_ids=torch.arange(self.batch_size),
+                                  num_output_patches=n_patches)
+                out_q[start:start + len(chunk)] = pred.quantile_preds[:len(chunk)].numpy()
+        q = out_q[..., :horizon].astype(float)
+        mean = q[:, self._mid]
+        std = np.maximum((q[:, self._hi] - q[:, self._lo]) / (2 * _Z90), 0.0)
+        empty = ~np.isfinite(ctx).any(axis=1)
+        mean[empty], std[empty] = np.nan, np.nan
+        return mean, std
+
+
+def _check_context(context: np.ndarray) -> np.ndarray:
+    ctx = np.asarray(context, float)
+    if ctx.ndim != 2 or ctx.shape[1] < 1:
+        raise ValueError(f"context must be a (batch, window) array, got shape {ctx.shape}")
+    return np.where(np.isfinite(ctx), ctx, np.nan)

@@ -1,0 +1,62 @@
+"""The temporal prior: the shipped Chronos-2 checkpoint loads, forecasts and beats the naive forecast."""
+
+import numpy as np
+import pytest
+
+from odca import CheckpointError, Chronos2Prior, LastValuePrior
+from odca.pretrain import score_prior
+from odca.prior import SHIPPED_PRIOR
+from odca.synthetic import synthetic_series
+
+
+@pytest.fixture(scope="module")
+def prior():
+    return Chronos2Prior()
+
+
+def test_shipped_checkpoint_is_small_and_has_a_model_card():
+    size = sum(p.stat().st_size for p in SHIPPED_PRIOR.iterdir())
+    assert size < 5e6
+    card = (SHIPPED_PRIOR / "MODEL_CARD.md").read_text()
+    assert "**not** Amazon" in card and "ratio" in card
+
+
+def test_forecast_shapes_quantile_std_and_missing_windows(prior):
+    ctx = np.stack([np.linspace(3, 1, 64), np.full(64, np.nan), np.r_[np.full(40, np.nan), np.linspace(2, 1.5, 24)]])
+    mean, std = prior.forecast(ctx, 16)
+    assert mean.shape == std.shape == (3, 16)
+    assert np.isfinite(mean[[0, 2]]).all() and (std[[0, 2]] >= 0).all()
+    assert np.isnan(mean[1]).all()  # nothing to go on
+    assert mean[0, -1] < mean[0, 0] + 0.05  # a falling approach keeps falling (or holds)
+    with pytest.raises(ValueError, match=r"\(batch, window\)"):
+        prior.forecast(np.zeros(64), 16)
+
+
+def test_a_window_gets_the_same_numbers_alone_or_in_a_batch(prior):
+    rng = np.random.default_rng(1)
+    ctx = rng.normal(2, 0.2, (11, 64))
+    alone = prior.forecast(ctx[7:8], 16)[0][0]
+    together = prior.forecast(ctx, 16)[0][7]
+    assert np.array_equal(alone, together)
+
+
+def test_beats_the_last_value_forecast_on_held_out_synthetic_series(prior):
+    scores = score_prior(prior, synthetic_series(150, seed=12345))
+    assert scores["n_windows"] > 500
+    assert scores["mae_ratio"] < 1.0
+
+
+def test_missing_or_corrupt_checkpoint_is_a_clear_error(tmp_path):
+    with pytest.raises(CheckpointError, match="no Chronos-2 checkpoint"):
+        Chronos2Prior(tmp_path / "nothing")
+    bad = tmp_path / "bad"
+    bad.mkdir()
+    (bad / "config.json").write_text((SHIPPED_PRIOR / "config.json").read_text())
+    (bad / "model.safetensors").write_bytes(b"not a safetensors file")
+    with pytest.raises(CheckpointError, match="could not load"):
+        Chronos2Prior(bad)
+
+
+def test_last_value_prior_holds_the_last_finite_value():
+    mean, std = LastValuePrior().forecast(np.array([[1.0, 2.0, np.nan]]), 4)
+    np.testing.assert_array_equal(mean, [[2.0] * 4])
