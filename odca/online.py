@@ -42,7 +42,8 @@ class ODCAConfig:
         dt: sample period, seconds.
         gate: gate thresholds.
         alignment: LiDAR -> depth map.
-        prior: prior checkpoint (path relative to the ODCA folder, absolute path, or hub id).
+        prior: prior checkpoint: ``"shipped"`` (the project's own), a path (absolute or relative to
+            the ODCA folder) or a hub id.
     """
 
     context_length: int = 64
@@ -51,7 +52,7 @@ class ODCAConfig:
     dt: float = 0.02
     gate: GateConfig = field(default_factory=GateConfig)
     alignment: Alignment = field(default_factory=Alignment)
-    prior: str = str(SHIPPED_PRIOR)
+    prior: str = "shipped"
 
     def __post_init__(self) -> None:
         if not 1 <= self.refresh_steps <= self.horizon:
@@ -116,10 +117,13 @@ class ODCA:
         except (ValueError, TypeError, KeyError, OSError, json.JSONDecodeError) as err:
             raise CheckpointError(f"the ODCA checkpoint at {folder} is corrupt: {type(err).__name__}: {err}") from None
         if prior is None:
-            prior_path = Path(config.prior)
-            if not prior_path.is_absolute() and (folder / prior_path).exists():
-                prior_path = folder / prior_path
-            prior = Chronos2Prior(prior_path if prior_path.exists() else config.prior)
+            if config.prior == "shipped":
+                prior = Chronos2Prior(SHIPPED_PRIOR)
+            else:
+                prior_path = Path(config.prior)
+                if not prior_path.is_absolute() and (folder / prior_path).exists():
+                    prior_path = folder / prior_path
+                prior = Chronos2Prior(prior_path if prior_path.exists() else config.prior)
         return cls(config, head, prior)
 
     def save(self, path: str | Path) -> None:

@@ -36,3 +36,20 @@ def test_demo_stops_in_the_success_band(tmp_path):
     summary = run_demo(tmp_path, sign=3, speed=1.0)
     assert summary["stopped"] and 0.0 <= summary["stop_distance_m"] <= 0.60
     assert (tmp_path / "demo_frames.png").exists() and (tmp_path / "demo_traces.png").exists()
+
+
+def test_odca_commands_are_listed_and_latency_prints_json(capsys):
+    out = subprocess.run([sys.executable, "-m", "experiments.cli", "--help"], cwd=ROOT,
+                         capture_output=True, text=True, check=True).stdout
+    for command in ("pretrain-prior", "train", "odca-latency", "collect", "attack-study"):
+        assert command in out
+    assert main(["odca-latency", "--steps", "120", "--json"]) == 0
+    import json
+
+    r = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    assert {"median_ms", "p99_ms"} <= set(r) and 0 < r["median_ms"] <= r["p99_ms"]
+
+
+def test_train_without_a_dataset_is_a_clear_error(tmp_path):
+    with pytest.raises(FileNotFoundError, match="racf collect"):
+        main(["train", "--dataset", str(tmp_path / "none")])

@@ -10,7 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from odca import ODCA, Alignment, CheckpointError, GateConfig, LastValuePrior, ODCAConfig
-from odca.head import HeadWeights, head_parameters, make_head
+from odca.head import head_parameters, make_head
 from odca.online import SHIPPED_HEAD
 
 
