@@ -189,7 +189,7 @@ class ODCA:
                 "lidar": _pick(df, "lidar", None), "speed": _pick(df, "speed", None)}
         groups = df.groupby("series_id", sort=False).indices.values() if "series_id" in df else [np.arange(len(df))]
         out = np.full((len(df), 8), np.nan)
-        for idx in groups:
+        for idx in (g for g in groups if len(g)):
             out[idx] = np.column_stack(self._run_series(*(cols[k][idx] for k in cols)))
         return pd.DataFrame(out, index=df.index, columns=[f.name for f in FusedSample.__dataclass_fields__.values()])
 
