@@ -101,7 +101,7 @@ def _parser() -> argparse.ArgumentParser:
     tr = sub.add_parser("train", help="train the ODCA delta head, alignment and gate on the dataset's train split")
     tr.add_argument("--dataset", type=Path, default=Path("data/qcar2"), help="dataset folder (racf collect)")
     tr.add_argument("--out", type=Path, default=None, help="checkpoint folder (default: the shipped one in assets/)")
-    tr.add_argument("--epochs", type=_count, default=400)
+    tr.add_argument("--epochs", type=_count, default=800)
     tr.add_argument("--seed", type=int, default=0)
 
     ol = sub.add_parser("odca-latency", help="per-step latency of the online ODCA module (median, p99)")

@@ -12,7 +12,7 @@ class LossWeights:
     """lambda_ID, lambda_Delta0, lambda_cons, lambda_kin and the low-confidence emphasis kappa
     (a step's weight is 1 + kappa (1 - c~))."""
 
-    identity: float = 1.0
+    identity: float = 3.0
     minimal_change: float = 0.01
     consistency: float = 1.0
     kinematics: float = 0.1
