@@ -218,8 +218,15 @@ class ODCA:
     def _compute(self, d, c, l, v, mu, sigma, d_prev, hold, dt):
         l_al = self.config.alignment(l)
         x = features(d, c, l_al, v, mu, sigma, d_prev, hold, dt)
+        return self.repair(x, d, l_al, base_distance(d, mu, l_al, hold), hold, mu, sigma)
+
+    def repair(self, x, d, l_al, base, hold, mu=np.nan, sigma=np.nan):
+        """Head, gate and fusion from precomputed features (training and scoring reuse it).
+
+        Returns the ``FusedSample`` fields as arrays, in order.
+        """
         delta = self.head(x)
-        d_rep = base_distance(d, mu, l_al, hold) + delta
+        d_rep = base + delta
         r_xs = np.abs(d - l_al)  # NaN when either is missing -> w = 1
         w = gate_weight(r_xs, self.config.gate)
         d_fused = fuse(d, d_rep, w)
@@ -227,7 +234,8 @@ class ODCA:
         d_fused = np.where(np.isfinite(d_fused), d_fused, hold)
         d_rep = np.where(np.isfinite(d_rep), d_rep, hold)
         r_post = np.abs(d_fused - l_al)
-        return d_fused, w, d_rep, r_xs, np.abs(delta), r_post, mu, sigma
+        n = len(d_fused)
+        return (d_fused, w, d_rep, r_xs, np.abs(delta), r_post, np.broadcast_to(mu, n), np.broadcast_to(sigma, n))
 
 
 def _pick(df: pd.DataFrame, name: str, alt: str | None) -> np.ndarray:

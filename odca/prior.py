@@ -88,7 +88,6 @@ class Chronos2Prior:
         lo, hi = np.argmin(np.abs(self.quantiles - 0.1)), np.argmin(np.abs(self.quantiles - 0.9))
         mid = np.argmin(np.abs(self.quantiles - 0.5))
         self._lo, self._hi, self._mid = int(lo), int(hi), int(mid)
-        self._patches = None
 
     def forecast(self, context: np.ndarray, horizon: int) -> tuple[np.ndarray, np.ndarray]:
         """Median and quantile-spread std for each window; NaN where a window has no finite value.

@@ -39,7 +39,8 @@ def prepare(model: ODCA, frame: pd.DataFrame) -> dict[str, np.ndarray]:
         x = features(d, c, l_al, v, mu, sigma, d_prev, hold, model.config.dt)
         # The LiDAR is trusted where it agrees with the prior (or there is no prior yet).
         trusted = np.isfinite(l_al) & (~np.isfinite(mu) | (np.abs(l_al - mu) <= 0.3 + 2 * np.nan_to_num(sigma)))
-        parts.append({"x": x, "base": base_distance(d, mu, l_al, hold), "d": d, "c": c, "l_al": l_al, "v": v,
+        parts.append({"x": x, "base": base_distance(d, mu, l_al, hold), "hold": hold, "d": d, "c": c,
+                      "l_al": l_al, "v": v,
                       "trusted": trusted,
                       "label": s["label"].to_numpy(), "d_clean": s["d_clean"].to_numpy(float),
                       "first": np.arange(len(d)) == 0})
@@ -74,12 +75,8 @@ def train_head(data: dict[str, np.ndarray], tau_low: float, dt: float = 0.02, ep
 
 
 def _fused(model: ODCA, data: dict[str, np.ndarray]) -> np.ndarray:
-    from odca.gate import fuse, gate_weight
-
-    d_rep = data["base"] + model.head(data["x"])
-    w = gate_weight(np.abs(data["d"] - data["l_al"]), model.config.gate)
-    out = fuse(data["d"], d_rep, w)
-    return np.where(np.isfinite(out), out, data["base"])
+    """The module's own output from the prepared features (no second copy of the fusion)."""
+    return model.repair(data["x"], data["d"], data["l_al"], data["base"], data["hold"])[0]
 
 
 def score(model: ODCA, data: dict[str, np.ndarray]) -> dict[str, float]:
