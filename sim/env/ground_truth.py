@@ -63,19 +63,13 @@ def sign_view(sign: StopSign, cam_pos: np.ndarray, cam_mat: np.ndarray,
         intrinsics: the camera's pinhole intrinsics.
         clean_depth: (H, W) noise-free z-depth of the same frame, metres.
     """
-    world_to_opt = _MJ_TO_OPTICAL @ cam_mat.T
-    centre = world_to_opt @ (sign.centre - cam_pos)
-    d_euclid = float(np.linalg.norm(centre))
-    mask = np.zeros((intrinsics.height, intrinsics.width), bool)
-    if centre[2] <= 0.05:
-        return SignView(float("nan"), d_euclid, float("nan"), mask, False)
-    bearing = float(math.atan2(-centre[0], centre[2]))
-    corners = (world_to_opt @ (_octagon_world(sign) - cam_pos).T).T
+    world_to_opt, centre, corners, mask, behind = _project(sign.centre, _octagon_world(sign), cam_pos, cam_mat,
+                                                           intrinsics)
+    if behind is not None:
+        return behind
     facing = float(np.dot(cam_pos - sign.centre, [math.cos(sign.face_yaw), math.sin(sign.face_yaw), 0.0])) > 0
     if facing and (corners[:, 2] > 0.05).all():
-        uv = intrinsics.project(corners)
-        poly = np.round(uv * 16).astype(np.int32)
-        cv2.fillPoly(mask.view(np.uint8), [poly], 1, lineType=cv2.LINE_8, shift=4)
+        _fill(mask, intrinsics.project(corners))
         if mask.any():
             # Depth of the sign's plane at each masked pixel: intersect the pixel's ray with it.
             normal_opt = world_to_opt @ np.array([math.cos(sign.face_yaw), math.sin(sign.face_yaw), 0.0])
@@ -85,7 +79,7 @@ def sign_view(sign: StopSign, cam_pos: np.ndarray, cam_mat: np.ndarray,
             plane_z = float(normal_opt @ centre) / (rays @ normal_opt)
             visible = np.abs(clean_depth[rows, cols] - plane_z) < _DEPTH_TOLERANCE_M
             mask[rows[~visible], cols[~visible]] = False
-    return SignView(float(centre[2]), d_euclid, bearing, mask, bool(mask.any()))
+    return _result(centre, mask)
 
 
 def obstacle_view(obstacle, cam_pos: np.ndarray, cam_mat: np.ndarray,
@@ -96,17 +90,33 @@ def obstacle_view(obstacle, cam_pos: np.ndarray, cam_mat: np.ndarray,
     projected outline where the rendered depth lies within the crate's depth span (so
     parts hidden behind something nearer are excluded).
     """
-    world_to_opt = _MJ_TO_OPTICAL @ cam_mat.T
-    centre = world_to_opt @ (obstacle.centre - cam_pos)
-    d_euclid = float(np.linalg.norm(centre))
-    mask = np.zeros((intrinsics.height, intrinsics.width), bool)
-    if centre[2] <= 0.05:
-        return SignView(float("nan"), d_euclid, float("nan"), mask, False)
-    bearing = float(math.atan2(-centre[0], centre[2]))
-    corners = (world_to_opt @ (obstacle.corners() - cam_pos).T).T
+    _, centre, corners, mask, behind = _project(obstacle.centre, obstacle.corners(), cam_pos, cam_mat, intrinsics)
+    if behind is not None:
+        return behind
     if (corners[:, 2] > 0.05).all():
-        hull = cv2.convexHull(np.round(intrinsics.project(corners) * 16).astype(np.int32))
-        cv2.fillPoly(mask.view(np.uint8), [hull], 1, lineType=cv2.LINE_8, shift=4)
+        _fill(mask, cv2.convexHull(intrinsics.project(corners).astype(np.float32))[:, 0])
         z_lo, z_hi = corners[:, 2].min() - _DEPTH_TOLERANCE_M, corners[:, 2].max() + _DEPTH_TOLERANCE_M
         mask &= (clean_depth >= z_lo) & (clean_depth <= z_hi)
-    return SignView(float(centre[2]), d_euclid, bearing, mask, bool(mask.any()))
+    return _result(centre, mask)
+
+
+def _project(centre_world, points_world, cam_pos, cam_mat, intrinsics):
+    """Target centre and outline points in the optical frame, an empty mask, and the
+    ready answer when the centre is behind the camera (else None)."""
+    world_to_opt = _MJ_TO_OPTICAL @ cam_mat.T
+    centre = world_to_opt @ (centre_world - cam_pos)
+    mask = np.zeros((intrinsics.height, intrinsics.width), bool)
+    behind = None
+    if centre[2] <= 0.05:
+        behind = SignView(float("nan"), float(np.linalg.norm(centre)), float("nan"), mask, False)
+    return world_to_opt, centre, (world_to_opt @ (points_world - cam_pos).T).T, mask, behind
+
+
+def _fill(mask: np.ndarray, uv: np.ndarray) -> None:
+    """Fills the polygon ``uv`` (pixels) into ``mask`` with 1/16-pixel precision."""
+    cv2.fillPoly(mask.view(np.uint8), [np.round(uv * 16).astype(np.int32)], 1, lineType=cv2.LINE_8, shift=4)
+
+
+def _result(centre: np.ndarray, mask: np.ndarray) -> SignView:
+    bearing = float(math.atan2(-centre[0], centre[2]))
+    return SignView(float(centre[2]), float(np.linalg.norm(centre)), bearing, mask, bool(mask.any()))
