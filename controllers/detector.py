@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-__all__ = ["DetectorConfig", "Detection", "StopSignDetector"]
+__all__ = ["DetectorConfig", "Detection", "BlobDetector", "StopSignDetector", "check_rgb"]
 
 
 @dataclass(frozen=True)
@@ -96,7 +96,30 @@ class Detection:
     centroid: tuple[float, float]
 
 
-class StopSignDetector:
+def check_rgb(rgb: np.ndarray) -> np.ndarray:
+    """``rgb`` as an array; ValueError unless it is an (H, W, 3) uint8 image."""
+    rgb = np.asarray(rgb)
+    if rgb.ndim != 3 or rgb.shape[2] != 3 or rgb.dtype != np.uint8:
+        raise ValueError(f"rgb must be an (H, W, 3) uint8 image, got shape {rgb.shape} dtype {rgb.dtype}")
+    return rgb
+
+
+class BlobDetector:
+    """Shared by the colour detectors: subclasses list ``candidates``; ``detect`` keeps the
+    largest one at or above ``config.min_confidence``."""
+
+    config: DetectorConfig  # or any config with min_confidence
+
+    def candidates(self, rgb: np.ndarray) -> list[Detection]:
+        raise NotImplementedError
+
+    def detect(self, rgb: np.ndarray) -> Detection | None:
+        """The largest candidate with confidence >= ``min_confidence``, or None."""
+        passing = [d for d in self.candidates(rgb) if d.confidence >= self.config.min_confidence]
+        return max(passing, key=lambda d: d.area_px) if passing else None
+
+
+class StopSignDetector(BlobDetector):
     """Finds the most prominent stop sign in an RGB frame.
 
     Example:
@@ -110,20 +133,13 @@ class StopSignDetector:
         k = 2 * self.config.ring_px + 1
         self._ring_kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (k, k))
 
-    def detect(self, rgb: np.ndarray) -> Detection | None:
-        """The largest candidate with confidence >= ``min_confidence``, or None."""
-        passing = [d for d in self.candidates(rgb) if d.confidence >= self.config.min_confidence]
-        return max(passing, key=lambda d: d.area_px) if passing else None
-
     def candidates(self, rgb: np.ndarray) -> list[Detection]:
         """Every red component that passes the shape tests, with its confidence.
 
         Args:
             rgb: (H, W, 3) uint8 image.
         """
-        rgb = np.asarray(rgb)
-        if rgb.ndim != 3 or rgb.shape[2] != 3 or rgb.dtype != np.uint8:
-            raise ValueError(f"rgb must be an (H, W, 3) uint8 image, got shape {rgb.shape} dtype {rgb.dtype}")
+        rgb = check_rgb(rgb)
         c = self.config
         hsv = cv2.cvtColor(rgb, cv2.COLOR_RGB2HSV)
         h, s, v = hsv[..., 0], hsv[..., 1], hsv[..., 2]

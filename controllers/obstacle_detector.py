@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from controllers.detector import Detection
+from controllers.detector import BlobDetector, Detection, check_rgb
 
 __all__ = ["ObstacleDetectorConfig", "ObstacleDetector"]
 
@@ -47,21 +47,14 @@ class ObstacleDetectorConfig:
                 raise ValueError(f"{name} must be in (0, 1], got {getattr(self, name)}")
 
 
-class ObstacleDetector:
+class ObstacleDetector(BlobDetector):
     """Finds the largest blue crate in an RGB frame."""
 
     def __init__(self, config: ObstacleDetectorConfig | None = None) -> None:
         self.config = config or ObstacleDetectorConfig()
 
-    def detect(self, rgb: np.ndarray) -> Detection | None:
-        """The largest candidate with confidence >= ``min_confidence``, or None."""
-        passing = [d for d in self.candidates(rgb) if d.confidence >= self.config.min_confidence]
-        return max(passing, key=lambda d: d.area_px) if passing else None
-
     def candidates(self, rgb: np.ndarray) -> list[Detection]:
-        rgb = np.asarray(rgb)
-        if rgb.ndim != 3 or rgb.shape[2] != 3 or rgb.dtype != np.uint8:
-            raise ValueError(f"rgb must be an (H, W, 3) uint8 image, got shape {rgb.shape} dtype {rgb.dtype}")
+        rgb = check_rgb(rgb)
         c = self.config
         hsv = cv2.cvtColor(rgb, cv2.COLOR_RGB2HSV)
         blue = ((hsv[..., 0] >= c.hue_range[0]) & (hsv[..., 0] <= c.hue_range[1])
