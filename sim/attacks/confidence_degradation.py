@@ -25,25 +25,22 @@ class ConfidenceDegradation(AttackWrapper):
         env: the racf env.
         confidence_multiplier: in [0, 1].
         noise_std_m: >= 0, metres.
-        duration_s, cooldown_s, window_s, stable_steps, trigger: see ``AttackSchedule``.
+        **schedule: ``AttackSchedule`` fields (duration_s, cooldown_s, window_s, stable_steps,
+            trigger, ...); its defaults are the protocol's.
     """
 
     name = "confidence_degradation"
 
     def __init__(self, env: gym.Env, confidence_multiplier: float = 0.3, noise_std_m: float = 0.10,
-                 duration_s: Any = (0.5, 3.0), cooldown_s: float = 2.0, window_s: float = 1.0,
-                 stable_steps: int = 3, trigger: str = "braking_window") -> None:
+                 **schedule: Any) -> None:
         gym.utils.RecordConstructorArgs.__init__(self, confidence_multiplier=confidence_multiplier,
-                                                 noise_std_m=noise_std_m, duration_s=duration_s,
-                                                 cooldown_s=cooldown_s, window_s=window_s,
-                                                 stable_steps=stable_steps, trigger=trigger)
+                                                 noise_std_m=noise_std_m, **schedule)
         if not 0.0 <= confidence_multiplier <= 1.0:
             raise ValueError(f"confidence_multiplier must be in [0, 1], got {confidence_multiplier!r}")
         if not 0.0 <= noise_std_m <= 10.0:
             raise ValueError(f"noise_std_m must be in [0, 10] m, got {noise_std_m!r}")
         self.confidence_multiplier, self.noise_std_m = float(confidence_multiplier), float(noise_std_m)
-        super().__init__(env, AttackSchedule(duration_s=duration_s, cooldown_s=cooldown_s, window_s=window_s,
-                                             stable_steps=stable_steps, trigger=trigger))
+        super().__init__(env, AttackSchedule(**schedule))
 
     def _attack(self, obs: dict, info: dict) -> dict:
         depth = obs["depth"].copy()

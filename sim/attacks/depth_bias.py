@@ -22,7 +22,8 @@ class DepthBias(AttackWrapper):
         bias_m: magnitude, metres: a value or a (low, high) range drawn once per episode.
         direction: ``+1`` (farther: the dangerous case), ``-1`` (nearer) or ``0`` (random per episode).
         region: ``"sign"`` or ``"frame"``.
-        duration_s, cooldown_s, window_s, stable_steps, trigger: see ``AttackSchedule``.
+        **schedule: ``AttackSchedule`` fields (duration_s, cooldown_s, window_s, stable_steps,
+            trigger, ...); its defaults are the protocol's.
 
     Pixels pushed to or below zero read as no return.
     """
@@ -30,18 +31,14 @@ class DepthBias(AttackWrapper):
     name = "depth_bias"
 
     def __init__(self, env: gym.Env, bias_m: Any = (0.5, 1.0), direction: int = 1, region: str = "sign",
-                 duration_s: Any = (0.5, 3.0), cooldown_s: float = 2.0, window_s: float = 1.0,
-                 stable_steps: int = 3, trigger: str = "braking_window") -> None:
-        gym.utils.RecordConstructorArgs.__init__(self, bias_m=bias_m, direction=direction, region=region,
-                                                 duration_s=duration_s, cooldown_s=cooldown_s, window_s=window_s,
-                                                 stable_steps=stable_steps, trigger=trigger)
+                 **schedule: Any) -> None:
+        gym.utils.RecordConstructorArgs.__init__(self, bias_m=bias_m, direction=direction, region=region, **schedule)
         self.bias_range = as_range("bias_m", bias_m, 0.0, 20.0)
         if direction not in (-1, 0, 1):
             raise ValueError(f"direction must be -1, 0 (random) or 1, got {direction!r}")
         self.direction = direction
         self.region = check_region(region)
-        super().__init__(env, AttackSchedule(duration_s=duration_s, cooldown_s=cooldown_s, window_s=window_s,
-                                             stable_steps=stable_steps, trigger=trigger))
+        super().__init__(env, AttackSchedule(**schedule))
         self.bias = 0.0
 
     def _on_reset(self) -> None:

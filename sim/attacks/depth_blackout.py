@@ -20,23 +20,19 @@ class DepthBlackout(AttackWrapper):
         env: the racf env.
         region: ``"sign"`` or ``"frame"``.
         margin_px: growth of the sign's region, pixels.
-        duration_s, cooldown_s, window_s, stable_steps, trigger: see ``AttackSchedule``.
+        **schedule: ``AttackSchedule`` fields (duration_s, cooldown_s, window_s, stable_steps,
+            trigger, ...); its defaults are the protocol's.
     """
 
     name = "depth_blackout"
 
-    def __init__(self, env: gym.Env, region: str = "sign", margin_px: int = 2, duration_s: Any = (0.5, 3.0),
-                 cooldown_s: float = 2.0, window_s: float = 1.0, stable_steps: int = 3,
-                 trigger: str = "braking_window") -> None:
-        gym.utils.RecordConstructorArgs.__init__(self, region=region, margin_px=margin_px, duration_s=duration_s,
-                                                 cooldown_s=cooldown_s, window_s=window_s,
-                                                 stable_steps=stable_steps, trigger=trigger)
+    def __init__(self, env: gym.Env, region: str = "sign", margin_px: int = 2, **schedule: Any) -> None:
+        gym.utils.RecordConstructorArgs.__init__(self, region=region, margin_px=margin_px, **schedule)
         self.region = check_region(region)
         if not (isinstance(margin_px, int) and 0 <= margin_px <= 50):
             raise ValueError(f"margin_px must be an int in [0, 50], got {margin_px!r}")
         self.margin_px = margin_px
-        super().__init__(env, AttackSchedule(duration_s=duration_s, cooldown_s=cooldown_s, window_s=window_s,
-                                             stable_steps=stable_steps, trigger=trigger))
+        super().__init__(env, AttackSchedule(**schedule))
 
     def _attack(self, obs: dict, info: dict) -> dict:
         depth = obs["depth"].copy()

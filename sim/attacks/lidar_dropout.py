@@ -24,17 +24,15 @@ class LidarDropout(AttackWrapper):
         share: share of the sector's beams removed, in [0, 1].
         sector: ``"sign"`` (beams on the sign's plate plus ``margin_deg``) or ``"all"``.
         margin_deg: widening of the sign sector, degrees.
-        duration_s, cooldown_s, window_s, stable_steps, trigger: see ``AttackSchedule``.
+        **schedule: ``AttackSchedule`` fields (duration_s, cooldown_s, window_s, stable_steps,
+            trigger, ...); its defaults are the protocol's.
     """
 
     name = "lidar_dropout"
 
     def __init__(self, env: gym.Env, share: float = 1.0, sector: str = "sign", margin_deg: float = 3.0,
-                 duration_s: Any = (0.5, 3.0), cooldown_s: float = 2.0, window_s: float = 1.0,
-                 stable_steps: int = 3, trigger: str = "braking_window") -> None:
-        gym.utils.RecordConstructorArgs.__init__(self, share=share, sector=sector, margin_deg=margin_deg,
-                                                 duration_s=duration_s, cooldown_s=cooldown_s, window_s=window_s,
-                                                 stable_steps=stable_steps, trigger=trigger)
+                 **schedule: Any) -> None:
+        gym.utils.RecordConstructorArgs.__init__(self, share=share, sector=sector, margin_deg=margin_deg, **schedule)
         if not 0.0 <= share <= 1.0:
             raise ValueError(f"share must be in [0, 1], got {share!r}")
         if sector not in ("sign", "all"):
@@ -42,8 +40,7 @@ class LidarDropout(AttackWrapper):
         if not 0.0 <= margin_deg <= 180.0:
             raise ValueError(f"margin_deg must be in [0, 180], got {margin_deg!r}")
         self.share, self.sector, self.margin_rad = float(share), sector, math.radians(margin_deg)
-        super().__init__(env, AttackSchedule(duration_s=duration_s, cooldown_s=cooldown_s, window_s=window_s,
-                                             stable_steps=stable_steps, trigger=trigger))
+        super().__init__(env, AttackSchedule(**schedule))
 
     def _attack(self, obs: dict, info: dict) -> dict:
         ranges = obs["lidar"].copy()

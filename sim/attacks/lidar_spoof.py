@@ -21,18 +21,16 @@ class LidarSpoof(AttackWrapper):
     Args:
         env: the racf env.
         range_m: the fake range, metres: a value or a (low, high) range drawn per episode.
-        duration_s, cooldown_s, window_s, stable_steps, trigger: see ``AttackSchedule``.
+        **schedule: ``AttackSchedule`` fields (duration_s, cooldown_s, window_s, stable_steps,
+            trigger, ...); its defaults are the protocol's.
     """
 
     name = "lidar_spoof"
 
-    def __init__(self, env: gym.Env, range_m: Any = 3.0, duration_s: Any = (0.5, 3.0), cooldown_s: float = 2.0,
-                 window_s: float = 1.0, stable_steps: int = 3, trigger: str = "braking_window") -> None:
-        gym.utils.RecordConstructorArgs.__init__(self, range_m=range_m, duration_s=duration_s, cooldown_s=cooldown_s,
-                                                 window_s=window_s, stable_steps=stable_steps, trigger=trigger)
+    def __init__(self, env: gym.Env, range_m: Any = 3.0, **schedule: Any) -> None:
+        gym.utils.RecordConstructorArgs.__init__(self, range_m=range_m, **schedule)
         self.range_bounds = as_range("range_m", range_m, 0.15, 12.0)
-        super().__init__(env, AttackSchedule(duration_s=duration_s, cooldown_s=cooldown_s, window_s=window_s,
-                                             stable_steps=stable_steps, trigger=trigger))
+        super().__init__(env, AttackSchedule(**schedule))
         self.range_m = self.range_bounds[0]
 
     def _on_reset(self) -> None:

@@ -43,8 +43,8 @@ class PatchAttack(AttackWrapper):
     Args:
         env: the racf env (or a wrapper of it).
         rho: covered share, a value or a (low, high) range drawn once per episode, in [0, 1].
-        duration_s: ``T_atk``, a value or a (low, high) range, seconds (>= 0).
-        cooldown_s, window_s, stable_steps, trigger: see ``AttackSchedule``.
+        **schedule: ``AttackSchedule`` fields; ``duration_s`` is ``T_atk`` (a value or a
+            (low, high) range, default U(0.5, 3.0) s); cooldown_s, window_s, stable_steps, trigger.
 
     Example:
         >>> import gymnasium as gym, sim
@@ -57,13 +57,10 @@ class PatchAttack(AttackWrapper):
 
     name = "patch"
 
-    def __init__(self, env: gym.Env, rho: Any = (0.9, 1.0), duration_s: Any = (0.5, 3.0), cooldown_s: float = 2.0,
-                 window_s: float = 1.0, stable_steps: int = 3, trigger: str = "braking_window") -> None:
-        gym.utils.RecordConstructorArgs.__init__(self, rho=rho, duration_s=duration_s, cooldown_s=cooldown_s,
-                                                 window_s=window_s, stable_steps=stable_steps, trigger=trigger)
+    def __init__(self, env: gym.Env, rho: Any = (0.9, 1.0), **schedule: Any) -> None:
+        gym.utils.RecordConstructorArgs.__init__(self, rho=rho, **schedule)
         self.rho_range = as_range("rho", rho, 0.0, 1.0)
-        super().__init__(env, AttackSchedule(duration_s=duration_s, cooldown_s=cooldown_s, window_s=window_s,
-                                             stable_steps=stable_steps, trigger=trigger))
+        super().__init__(env, AttackSchedule(**schedule))
         self.rho = self.rho_range[0]
         self._texture = np.zeros((64, 64, 3), np.uint8)
 
