@@ -37,15 +37,14 @@ def run_demo(out_dir: Path, sign: int = 2, speed: float = 1.0, seed: int = 0) ->
     bar = tqdm(desc=f"demo: stop sign {sign} at {speed} m/s", unit="step")
 
     def on_step(env, obs, info, row):
-        bar.update()
         last.update(obs=obs, info=info)
-        if len(last.setdefault("steps", [])) % _FRAME_EVERY == 0:
+        if bar.n % _FRAME_EVERY == 0:
             rgb = obs["rgb"].copy()
             if row["detected"]:
                 cv2.rectangle(rgb, (row["det_x0"] - 2, row["det_y0"] - 2), (row["det_x1"] + 1, row["det_y1"] + 1),
                               (0, 255, 0), 1)
             frames.append((row["t"], rgb, obs["depth"], env.render(), row["brake"]))
-        last["steps"].append(row["t"])
+        bar.update()
 
     spec = TrialSpec("clean", sign, speed, seed)
     result, log = run_trial(spec, make_env=lambda s: default_env(s, render_mode="rgb_array"), on_step=on_step)
