@@ -94,7 +94,7 @@ def bench_detector(seed: int = 0, speeds: tuple[float, ...] = SPEEDS_MPS, signs:
     bar = tqdm(runs, desc="bench-detector", unit="approach", disable=not progress)
     for k, (sign, speed) in enumerate(bar):
         obs, info = env.reset(seed=seed + k, options={"sign": sign, "cruise_speed": speed})
-        follower = route_follower(env.unwrapped.target_sign, speed)
+        follower = route_follower(env.unwrapped.route_path, speed, info["route_s"])
         dt = 1.0 / env.unwrapped.config.control_hz
         for _ in range(int(env.unwrapped.config.max_episode_s / dt)):
             x, y, yaw = info["pose"]

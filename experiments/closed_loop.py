@@ -10,7 +10,8 @@ import gymnasium as gym
 import numpy as np
 
 from controllers import CameraModel, RouteFollower
-from sim.world.stop_signs import StopSign
+from sim.world.drives import RouteTarget
+from sim.world.road_graph import Path
 
 __all__ = ["camera_model", "sign_depth_at_line", "route_follower", "all_sign_masks"]
 
@@ -21,18 +22,18 @@ def camera_model(env: gym.Env) -> CameraModel:
     return CameraModel(width=k.width, fx=k.fx, cx=k.cx)
 
 
-def sign_depth_at_line(env: gym.Env, sign: StopSign) -> float:
-    """The sign's camera depth when the front bumper is on the stop line, m (from the map and the car's geometry)."""
+def sign_depth_at_line(env: gym.Env, target: RouteTarget) -> float:
+    """The target's camera depth when the front bumper is on its stop line, m (from the map and the car's geometry)."""
     model = env.unwrapped.model
     camera_to_bumper = float(model.site("front_bumper").pos[0] - model.camera("d435").pos[0])
-    s_sign, _ = sign.path.project(np.asarray(sign.position), s_hint=sign.stop_s, window_m=0.5)
-    return camera_to_bumper + (s_sign - sign.stop_s)
+    return camera_to_bumper + (target.target_s - target.stop_s)
 
 
-def route_follower(sign: StopSign, cruise_mps: float) -> RouteFollower:
-    """Lane following along the approach route of ``sign``."""
-    p = sign.path
-    return RouteFollower(p.points, p.headings, p.arclength, p.curvature, cruise_mps)
+def route_follower(path: Path, cruise_mps: float, start_s: float = 0.0) -> RouteFollower:
+    """Lane following along ``path`` (an approach's or a drive's), starting ``start_s`` m along it."""
+    follower = RouteFollower(path.points, path.headings, path.arclength, path.curvature, cruise_mps)
+    follower.reset(start_s)
+    return follower
 
 
 def all_sign_masks(env: gym.Env) -> list[np.ndarray]:

@@ -29,6 +29,8 @@ import sim
 from controllers import (BrakingConfig, DistanceEstimator, ObstacleDetector, Perception, Phase, RawDepthEstimator,
                          StopSignBraker)
 from experiments.closed_loop import camera_model, route_follower, sign_depth_at_line
+from sim.env.qcar2_env import PASS_LINE_M
+from sim.world.drives import DriveSpec, draw_drive
 from sim.attacks import PatchAttack
 from sim.attacks.base import AttackWrapper
 from sim.attacks.schedule import as_range
@@ -38,8 +40,11 @@ __all__ = ["TrialSpec", "TrialResult", "StepHook", "run_trial", "default_env", "
 
 #: Settings the runner knows: no attack, and the patch attack with no defence.
 SETTINGS = ("clean", "attack")
-#: What a trial approaches (``TrialSpec.sign`` is the index): the four stop signs or the two crates.
-TARGETS = {"sign": 4, "obstacle": 2}
+#: What a trial approaches (``TrialSpec.sign`` is the index): the four stop signs or the two
+#: crates; or a ``drive`` (index 0), a random route drawn from the seed that meets >= 2 targets.
+TARGETS = {"sign": 4, "obstacle": 2, "drive": 1}
+#: Episode time limit of a drive, s (drives last 20-60 s).
+DRIVE_MAX_EPISODE_S = 120.0
 #: The protocol's strong regime.
 STRONG_RHO = (0.9, 1.0)
 STRONG_T_ATK_S = (0.5, 3.0)
@@ -85,6 +90,13 @@ class TrialSpec:
         object.__setattr__(self, "t_atk", as_range("t_atk", self.t_atk, 0.0, 60.0))
 
     @property
+    def drive(self) -> DriveSpec | None:
+        """The drive this spec's seed draws (``target == "drive"``; ``speed`` is the nominal speed)."""
+        if self.target != "drive":
+            return None
+        return draw_drive(np.random.default_rng(self.seed), nominal_speed_mps=self.speed)
+
+    @property
     def trial_id(self) -> str:
         base = f"{self.setting}_{self.target}{self.sign}_v{self.speed:.2f}_seed{self.seed}"
         if self.setting == "clean":
@@ -92,8 +104,18 @@ class TrialSpec:
         return base + "_rho{:.2f}-{:.2f}_t{:.2f}-{:.2f}".format(*self.rho, *self.t_atk)
 
 
+def reset_options(spec: TrialSpec) -> dict:
+    """The env's reset options for a spec: an approach to one target, or a drive."""
+    drive = spec.drive
+    if drive is not None:
+        return drive.reset_options()
+    return {spec.target: spec.sign, "cruise_speed": spec.speed}
+
+
 def default_env(spec: TrialSpec, **env_kwargs) -> gym.Env:
     """The env of a setting: the plain env, or wrapped in the patch attack."""
+    if spec.target == "drive":
+        env_kwargs.setdefault("max_episode_s", DRIVE_MAX_EPISODE_S)
     env = gym.make(sim.ENV_ID, **env_kwargs)
     if spec.setting == "attack":
         env = PatchAttack(env, rho=spec.rho, duration_s=spec.t_atk)
@@ -121,6 +143,8 @@ class TrialResult:
     latency_s: float
     duration_s: float
     outcome: str
+    n_targets: int = 1
+    targets_served: int = 0
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -150,30 +174,61 @@ def run_trial(spec: TrialSpec, estimator: DistanceEstimator | None = None,
         env.close()
 
 
+@dataclass
+class _TargetScore:
+    """What one target of an episode came to (filled while the episode runs)."""
+
+    t_brake: float = math.nan
+    t_ideal: float = math.nan
+    rest_distance: float = math.nan
+    outcome: str = "timeout"
+
+    @property
+    def success(self) -> bool:
+        return SUCCESS_BAND_M[0] <= self.rest_distance <= SUCCESS_BAND_M[1]
+
+    def close(self) -> None:
+        """Final outcome once the target is left behind: a rest outside the band names the failure."""
+        if not math.isnan(self.rest_distance) and not self.success:
+            self.outcome = "stopped_early" if self.rest_distance > SUCCESS_BAND_M[1] else "stopped_past_line"
+
+
 def _run(env: gym.Env, spec: TrialSpec, estimator: DistanceEstimator, braking: BrakingConfig,
          on_step: StepHook | None) -> tuple[TrialResult, pd.DataFrame]:
-    obs, info = env.reset(seed=spec.seed, options={spec.target: spec.sign, "cruise_speed": spec.speed})
-    sign = env.unwrapped.target_sign
-    dt = 1.0 / env.unwrapped.config.control_hz
-    perception = Perception(camera_model(env), detector=ObstacleDetector() if spec.target == "obstacle" else None)
-    follower = route_follower(sign, spec.speed)
-    depth_at_line = sign_depth_at_line(env, sign)
-    braker = StopSignBraker(braking, depth_at_line)
-    ideal = StopSignBraker(braking, depth_at_line)
-    estimator.reset()
+    obs, info = env.reset(seed=spec.seed, options=reset_options(spec))
+    u = env.unwrapped
+    dt = 1.0 / u.config.control_hz
+    camera = camera_model(env)
+    perceptions = {"sign": Perception(camera), "obstacle": Perception(camera, detector=ObstacleDetector())}
+    targets = u.route_targets
+    follower = route_follower(u.route_path, info["cruise_speed"], info["route_s"])
+    bumper_ahead_of_axle = float(u.model.site("front_bumper").pos[0]) - follower.steering.config.front_axle_m
     # d_clean under an attack: the same pipeline on the env's own, unattacked readings.
     attacked = _has_attack(env)
 
+    def begin(slot: int):
+        depth_at_line = sign_depth_at_line(env, targets[slot])
+        estimator.reset()
+        return (perceptions[targets[slot].kind], StopSignBraker(braking, depth_at_line),
+                StopSignBraker(braking, depth_at_line), _TargetScore())
+
+    slot = 0
+    perception, braker, ideal, score = begin(slot)
+    scores = [score]
     rows: list[dict] = []
-    t_brake = t_ideal = math.nan
-    rest_distance = math.nan
-    outcome = "timeout"
-    max_steps = int(round(env.unwrapped.config.max_episode_s / dt))
+    max_steps = int(round(u.config.max_episode_s / dt))
     for _ in range(max_steps):
+        # The car's own localisation and the map say which target is next (as the env's rule does).
+        while (slot + 1 < len(targets) and follower.progress_m + bumper_ahead_of_axle - targets[slot].stop_s
+               > PASS_LINE_M):
+            score.close()
+            slot += 1
+            perception, braker, ideal, score = begin(slot)
+            scores.append(score)
         speed = float(obs["state"][0])
         sample = perception.process(obs["rgb"], obs["depth"], obs["lidar"])
         if attacked:
-            clean = env.unwrapped.sensor_observation()
+            clean = u.sensor_observation()
             d_clean = perception.depth.estimate(clean["depth"], perception.detector.detect(clean["rgb"]))[0]
         else:
             d_clean = sample.d_meas
@@ -182,14 +237,15 @@ def _run(env: gym.Env, spec: TrialSpec, estimator: DistanceEstimator, braking: B
         # Perfect perception: d_true while the sign is in view, no measurement otherwise.
         in_view = bool(info["sign_in_view"])
         ideal_decision = ideal.step(in_view, float(info["d_true"]) if in_view else math.nan, speed, dt)
-        if decision.brake and math.isnan(t_brake):
-            t_brake = info["time"]
-        if ideal_decision.brake and math.isnan(t_ideal):
-            t_ideal = info["time"]
+        if decision.brake and math.isnan(score.t_brake):
+            score.t_brake = info["time"]
+        if ideal_decision.brake and math.isnan(score.t_ideal):
+            score.t_ideal = info["time"]
         x, y, yaw = info["pose"]
         speed_cmd, steer_cmd = follower.act(x, y, yaw, speed, dt, decision.speed_cap_mps)
         rows.append({
-            "t": info["time"], "d_true": info["d_true"], "d_clean": d_clean, "d_meas": sample.d_meas,
+            "t": info["time"], "slot": slot, "target": targets[slot].name,
+            "d_true": info["d_true"], "d_clean": d_clean, "d_meas": sample.d_meas,
             "c_meas": sample.c_meas, "lidar": sample.lidar_m, "d_fused": d_fused, "detected": sample.detected,
             "det_confidence": sample.detection_confidence, "bearing": sample.bearing_rad,
             **dict(zip(("det_x0", "det_y0", "det_x1", "det_y1"),
@@ -205,34 +261,40 @@ def _run(env: gym.Env, spec: TrialSpec, estimator: DistanceEstimator, braking: B
         })
         if on_step is not None:
             on_step(env, obs, info, rows[-1])
-        if math.isnan(rest_distance) and abs(info["speed"]) < _AT_REST_MPS and info["time"] > 0:
-            rest_distance = float(info["dist_to_stop_line"])
+        if math.isnan(score.rest_distance) and abs(info["speed"]) < _AT_REST_MPS and info["time"] > 0:
+            score.rest_distance = float(info["dist_to_stop_line"])
+        last = slot == len(targets) - 1
         if decision.phase is Phase.DONE:
-            outcome = "stopped"
-            break
-        if info["dist_to_stop_line"] < -RUN_THROUGH_M:
-            outcome = "ran_line"
-            break
+            score.outcome = "stopped"
+            if last:
+                break
+        if info["dist_to_stop_line"] < -RUN_THROUGH_M and score.outcome == "timeout":
+            score.outcome = "ran_line"
+            if last:
+                break
         obs, _, terminated, truncated, info = env.step(np.array([speed_cmd, steer_cmd], np.float32))
         if terminated or truncated:
-            outcome = "collision" if info["collision"] else "off_road" if info["off_road"] else \
-                "ran_line" if info["dist_to_stop_line"] < 0 else "timeout"
+            if score.outcome == "timeout":
+                score.outcome = "collision" if info["collision"] else "off_road" if info["off_road"] else \
+                    "ran_line" if info["dist_to_stop_line"] < 0 else "timeout"
             break
+    score.close()
 
-    stopped = not math.isnan(rest_distance)
-    success = stopped and SUCCESS_BAND_M[0] <= rest_distance <= SUCCESS_BAND_M[1]
-    if stopped and not success:
-        outcome = "stopped_early" if rest_distance > SUCCESS_BAND_M[1] else "stopped_past_line"
+    first = scores[0]
     log = pd.DataFrame(rows)
     log.insert(0, "trial_id", spec.trial_id)
     patch = _find_wrapper(env, PatchAttack)
     windows = patch.schedule.windows if patch is not None else []
     lost = int((log["attack_active"] & log["sign_in_view"] & ~log["detected"]).sum())
+    served = sum(sc.success for sc in scores)
     result = TrialResult(spec.trial_id, spec.setting, spec.sign, spec.speed, spec.seed,
                          patch.rho if patch is not None else math.nan,
                          windows[0][1] - windows[0][0] if windows else math.nan,
-                         windows[0][0] if windows else math.nan, lost, bool(success), stopped,
-                         rest_distance, t_brake, t_ideal, t_brake - t_ideal, float(log["t"].iloc[-1]), outcome)
+                         windows[0][0] if windows else math.nan, lost,
+                         bool(served == len(targets)), not math.isnan(first.rest_distance),
+                         first.rest_distance, first.t_brake, first.t_ideal, first.t_brake - first.t_ideal,
+                         float(log["t"].iloc[-1]), first.outcome if len(targets) == 1 else
+                         ",".join(sc.outcome for sc in scores), len(targets), served)
     return result, log
 
 

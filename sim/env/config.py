@@ -13,7 +13,8 @@ from sim.vehicle.qcar2 import VehicleConfig
 __all__ = ["EnvConfig", "RESET_OPTIONS"]
 
 #: Keys ``reset(options=...)`` accepts.
-RESET_OPTIONS = ("sign", "obstacle", "cruise_speed", "run_up_m")
+RESET_OPTIONS = ("sign", "obstacle", "cruise_speed", "run_up_m", "route", "start_s_m", "lateral_offset_m",
+                 "heading_error_rad", "crate")
 
 
 @dataclass(frozen=True)
@@ -25,7 +26,8 @@ class EnvConfig:
         physics_dt_s: MuJoCo time step; ``1/control_hz`` must be a whole number of steps.
         camera, lidar, vehicle: component configs.
         camera_hz, lidar_hz, state_hz: sensor rates; a sensor between readings holds its
-            last one. Each must divide ``control_hz`` into whole steps.
+            last one. Each must divide ``control_hz`` into whole steps. The LiDAR scans at
+            the A2M12's 10 Hz by default.
         cruise_speeds_mps: speeds ``reset`` draws from when no ``cruise_speed`` is given.
         max_episode_s: episode time limit (truncation).
         off_road_m: lateral distance from the route's lane centre that ends the episode.
@@ -38,7 +40,7 @@ class EnvConfig:
     lidar: LidarConfig = field(default_factory=LidarConfig)
     vehicle: VehicleConfig = field(default_factory=VehicleConfig)
     camera_hz: float = 50.0
-    lidar_hz: float = 50.0
+    lidar_hz: float = 10.0
     state_hz: float = 50.0
     cruise_speeds_mps: tuple[float, ...] = (1.0, 1.5, 2.0)
     max_episode_s: float = 20.0

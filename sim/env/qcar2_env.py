@@ -21,6 +21,8 @@ from sim.env.config import RESET_OPTIONS, EnvConfig
 from sim.env.ground_truth import obstacle_view, sign_view
 from sim.sensors import DepthCamera, Lidar2D, RGBCamera, RGBDCameraRig, Sensor, VehicleStateSensor
 from sim.vehicle import QCar2
+from sim.world.drives import RouteTarget, start_pose, targets_on_path
+from sim.world.road_graph import Path, qcar2_road_graph
 from sim.world.scene import load_model
 from sim.world.obstacles import Obstacle, obstacles
 from sim.world.stop_signs import StopSign, stop_signs
@@ -31,6 +33,10 @@ import mujoco  # noqa: E402
 __all__ = ["QCar2Env"]
 
 _BUMPER_AHEAD_M = 0.2125  # body origin to front bumper
+#: On a drive, the next target becomes current once the front bumper is this far past
+#: the current one's stop line (the car has served it and driven on).
+PASS_LINE_M = 0.3
+_DRIVE_OPTIONS = ("route", "start_s_m", "lateral_offset_m", "heading_error_rad", "crate")
 
 
 class QCar2Env(gym.Env):
@@ -40,14 +46,25 @@ class QCar2Env(gym.Env):
     return; ``lidar`` (N,) float32 m, inf = no return; ``state`` (5,) float32, see
     ``sim.sensors.STATE_FIELDS``. Action (``Box``): [speed command m/s, steering rad].
 
-    ``reset(options=...)`` accepts ``sign`` (0..3) or ``obstacle`` (0..1, a crate on a lane
-    with a virtual stop line before it), ``cruise_speed`` (m/s; the car starts moving at it)
-    and ``run_up_m`` (distance from the front bumper to the stop line at the start). Ground
-    truth is in ``info`` (the ``sign_*`` keys describe the target, sign or crate;
-    ``target_kind`` says which): ``d_true`` (target depth along the camera axis, m),
+    ``reset(options=...)`` sets up one of two kinds of episode:
+
+    - an approach: ``sign`` (0..3) or ``obstacle`` (0..1, a crate on a lane with a virtual
+      stop line before it), ``cruise_speed`` (m/s; the car starts moving at it) and
+      ``run_up_m`` (distance from the front bumper to the stop line at the start);
+    - a drive (``sim.world.drives``): ``route`` (road-graph nodes), ``start_s_m`` (start
+      along the route's path), ``lateral_offset_m``, ``heading_error_rad``, ``crate`` (a
+      crate index to place on the route, which ends the drive, or None) and
+      ``cruise_speed``. Its targets are the stop signs whose stop lines the route crosses
+      in their direction (and the crate); the next becomes current once the bumper is
+      ``PASS_LINE_M`` past the current one's stop line (``info["target_slot"]``).
+
+    Ground truth is in ``info`` (the ``sign_*`` keys describe the current target, sign or
+    crate; ``target_kind`` says which): ``d_true`` (target depth along the camera axis, m),
     ``d_true_euclid``, ``sign_bearing``, ``sign_mask``, ``sign_in_view``, ``pose``,
     ``speed``, ``route_s``, ``lateral_error``, ``dist_to_stop_line`` (front bumper to the
     stop line along the route, m; negative once past it), ``collision``, ``off_road``.
+    ``info["lidar_time"]`` is sensor metadata, not ground truth: the time (s) the held
+    LiDAR scan was taken (the LiDAR scans at ``lidar_hz``, 10 Hz by default, like the A2M12).
 
     Reward per step: metres of route progress, minus 0.1 x lateral error (m), minus 10
     on leaving the road or colliding (both end the episode).
@@ -96,7 +113,11 @@ class QCar2Env(gym.Env):
         # Crates stand on the map only in their own episodes (as a test operator would place one).
         self._crates = [(self.model.body(f"obstacle_{o.index}").id, self.model.body(f"obstacle_{o.index}").pos.copy())
                         for o in obstacles()]
-        self._sign: StopSign | Obstacle = stop_signs()[0]
+        first = stop_signs()[0]
+        self._path: Path = first.path
+        self._targets: tuple[RouteTarget, ...] = (RouteTarget(first, first.stop_s, first.stop_s),)
+        self._slot = 0
+        self._lidar_time = 0.0
         self._obs: dict[str, np.ndarray] = {}
         self._step = 0
         self._route_s = 0.0
@@ -109,6 +130,30 @@ class QCar2Env(gym.Env):
         unknown = sorted(set(options) - set(RESET_OPTIONS))
         if unknown:
             raise ValueError(f"unknown reset option(s) {unknown}; allowed: {list(RESET_OPTIONS)}")
+        if "route" in options:
+            path, targets, crate, start_s, pose, speed = self._drive_from_options(options)
+        else:
+            path, targets, crate, start_s, pose, speed = self._approach_from_options(options)
+
+        # One generator for all sensor noise, derived from the env's seeded generator.
+        self._sensor_rng = np.random.default_rng(self.np_random.integers(2**63))
+        self._path, self._targets, self._slot = path, targets, 0
+        self._cruise_speed = float(speed)
+        for i, (body, home) in enumerate(self._crates):
+            self.model.body_pos[body] = home if crate == i else home + np.array([0.0, 0.0, -5.0])
+        mujoco.mj_resetData(self.model, self.data)
+        self._route_s = start_s
+        self.car.place(self.data, *pose, speed=float(speed))
+        mujoco.mj_forward(self.model, self.data)
+        self._step = 0
+        self._obs = {}
+        self._read_sensors(force=True)
+        return self._observation(), self._info(collision=False, off_road=False)
+
+    def _approach_from_options(self, options: dict[str, Any]):
+        extra = sorted(set(options) & set(_DRIVE_OPTIONS))
+        if extra:
+            raise ValueError(f"reset option(s) {extra} need options['route'] (a drive)")
         if "sign" in options and "obstacle" in options:
             raise ValueError("pass options['sign'] (a stop sign) or options['obstacle'] (a crate), not both")
         key, targets = ("obstacle", obstacles()) if "obstacle" in options else ("sign", stop_signs())
@@ -116,30 +161,50 @@ class QCar2Env(gym.Env):
         if not _is_int(index) or int(index) not in range(len(targets)):
             raise ValueError(f"options[{key!r}] must be an int in 0..{len(targets) - 1}, got {index!r}")
         sign = targets[int(index)]
-        speed = options.get("cruise_speed", float(self.np_random.choice(self.config.cruise_speeds_mps)))
-        if not (_is_real(speed) and 0.0 <= speed <= self.config.vehicle.max_speed_mps):
-            raise ValueError(f"options['cruise_speed'] must be in [0, {self.config.vehicle.max_speed_mps}] m/s, got {speed!r}")
+        speed = self._cruise_option(options)
         longest = sign.stop_s - sign.earliest_start_s - _BUMPER_AHEAD_M
         run_up = options.get("run_up_m", min(3.0, longest))
         if not (_is_real(run_up) and 0.3 <= run_up <= longest + 1e-9):
             raise ValueError(f"options['run_up_m'] for sign {sign.index} must be in [0.3, {longest:.2f}] m, got {run_up!r}")
+        s_target, _ = sign.path.project(np.asarray(sign.position), s_hint=sign.stop_s, window_m=0.6)
+        start_s = sign.stop_s - run_up - _BUMPER_AHEAD_M
+        crate = sign.index if isinstance(sign, Obstacle) else None
+        return (sign.path, (RouteTarget(sign, sign.stop_s, s_target),), crate, start_s,
+                sign.path.pose_at(start_s), speed)
 
-        # One generator for all sensor noise, derived from the env's seeded generator.
-        self._sensor_rng = np.random.default_rng(self.np_random.integers(2**63))
-        self._sign = sign
-        self._cruise_speed = float(speed)
-        for i, (body, home) in enumerate(self._crates):
-            here = isinstance(sign, Obstacle) and sign.index == i
-            self.model.body_pos[body] = home if here else home + np.array([0.0, 0.0, -5.0])
-        mujoco.mj_resetData(self.model, self.data)
-        self._route_s = sign.stop_s - run_up - _BUMPER_AHEAD_M
-        x, y, yaw = sign.path.pose_at(self._route_s)
-        self.car.place(self.data, x, y, yaw, speed=float(speed))
-        mujoco.mj_forward(self.model, self.data)
-        self._step = 0
-        self._obs = {}
-        self._read_sensors(force=True)
-        return self._observation(), self._info(collision=False, off_road=False)
+    def _drive_from_options(self, options: dict[str, Any]):
+        clash = sorted(set(options) & {"sign", "obstacle", "run_up_m"})
+        if clash:
+            raise ValueError(f"reset option(s) {clash} do not combine with options['route'] (a drive)")
+        route = options["route"]
+        if isinstance(route, (str, bytes)) or not all(_is_int(n) for n in route):
+            raise ValueError(f"options['route'] must be a sequence of road-graph node ids, got {route!r}")
+        path = qcar2_road_graph().route_path([int(n) for n in route])  # ValueError names a bad edge
+        crate = options.get("crate")
+        if crate is not None and (not _is_int(crate) or int(crate) not in range(len(obstacles()))):
+            raise ValueError(f"options['crate'] must be None or an int in 0..{len(obstacles()) - 1}, got {crate!r}")
+        start_s = options.get("start_s_m", 0.0)
+        if not (_is_real(start_s) and 0.0 <= start_s < path.length - 0.5):
+            raise ValueError(f"options['start_s_m'] must be in [0, {path.length - 0.5:.2f}) m, got {start_s!r}")
+        lateral = options.get("lateral_offset_m", 0.0)
+        if not (_is_real(lateral) and abs(lateral) <= 0.1):
+            raise ValueError(f"options['lateral_offset_m'] must be in [-0.1, 0.1] m, got {lateral!r}")
+        heading_err = options.get("heading_error_rad", 0.0)
+        if not (_is_real(heading_err) and abs(heading_err) <= 0.5):
+            raise ValueError(f"options['heading_error_rad'] must be in [-0.5, 0.5] rad, got {heading_err!r}")
+        targets = targets_on_path(path, crate, float(start_s))
+        if not targets:
+            raise ValueError(f"route {list(route)} meets no target after start_s_m={start_s}: no stop sign "
+                             "faces its lanes (and no crate is placed on it)")
+        speed = self._cruise_option(options)
+        return (path, targets, crate, float(start_s), start_pose(path, float(start_s), float(lateral),
+                                                                  float(heading_err)), speed)
+
+    def _cruise_option(self, options: dict[str, Any]) -> float:
+        speed = options.get("cruise_speed", float(self.np_random.choice(self.config.cruise_speeds_mps)))
+        if not (_is_real(speed) and 0.0 <= speed <= self.config.vehicle.max_speed_mps):
+            raise ValueError(f"options['cruise_speed'] must be in [0, {self.config.vehicle.max_speed_mps}] m/s, got {speed!r}")
+        return float(speed)
 
     def step(self, action):
         action = np.asarray(action, dtype=np.float64)
@@ -157,7 +222,7 @@ class QCar2Env(gym.Env):
         off_road = abs(self._lateral) > self.config.off_road_m
         info = self._info(collision=collision, off_road=off_road)
         reward = self._reward(self._route_s - s_before, collision, off_road)
-        terminated = collision or off_road or self._route_s >= self._sign.path.length - 0.05
+        terminated = collision or off_road or self._route_s >= self._path.length - 0.05
         truncated = self._step * (1.0 / self.config.control_hz) >= self.config.max_episode_s - 1e-9
         return self._observation(), reward, terminated, truncated, info
 
@@ -195,13 +260,19 @@ class QCar2Env(gym.Env):
         for sensor in self.sensors:
             if force or self._step % self._decimation[sensor.name] == 0:
                 self._obs[sensor.name] = sensor.read(self.model, self.data, self._sensor_rng)
+                if sensor.name == "lidar":
+                    self._lidar_time = self._step / self.config.control_hz
 
     def _observation(self) -> dict[str, np.ndarray]:
         return {k: v.copy() for k, v in self._obs.items()}
 
     def _update_route_progress(self) -> None:
         x, y = self.data.qpos[self.car.root_qpos : self.car.root_qpos + 2]
-        self._route_s, self._lateral = self._sign.path.project(np.array([x, y]), s_hint=self._route_s, window_m=0.5)
+        self._route_s, self._lateral = self._path.project(np.array([x, y]), s_hint=self._route_s, window_m=0.5)
+        # Served and passed: the next target of a drive becomes current.
+        while (self._slot + 1 < len(self._targets)
+               and self._route_s + _BUMPER_AHEAD_M - self._targets[self._slot].stop_s > PASS_LINE_M):
+            self._slot += 1
 
     def _info(self, collision: bool, off_road: bool) -> dict[str, Any]:
         if self._step == 0:
@@ -214,6 +285,8 @@ class QCar2Env(gym.Env):
         return {
             "target_kind": "obstacle" if isinstance(self._sign, Obstacle) else "stop_sign",
             "target_sign": self._sign.index,
+            "target_slot": self._slot,
+            "lidar_time": self._lidar_time,
             "cruise_speed": self._cruise_speed,
             "d_true": view.d_true,
             "d_true_euclid": view.d_euclid,
@@ -224,7 +297,7 @@ class QCar2Env(gym.Env):
             "speed": state.speed,
             "route_s": self._route_s,
             "lateral_error": self._lateral,
-            "dist_to_stop_line": self._sign.stop_s - (self._route_s + _BUMPER_AHEAD_M),
+            "dist_to_stop_line": self._targets[self._slot].stop_s - (self._route_s + _BUMPER_AHEAD_M),
             "collision": collision,
             "off_road": off_road,
             "time": self._step / self.config.control_hz,
@@ -232,9 +305,23 @@ class QCar2Env(gym.Env):
 
     # Route and sign, for controllers and experiments that plan on the road graph.
     @property
+    def _sign(self) -> StopSign | Obstacle:
+        return self._targets[self._slot].target
+
+    @property
     def target_sign(self) -> StopSign | Obstacle:
-        """The episode's target: a stop sign, or a crate when reset with ``options['obstacle']``."""
+        """The current target: a stop sign, or a crate (``options['obstacle']`` / ``options['crate']``)."""
         return self._sign
+
+    @property
+    def route_targets(self) -> tuple[RouteTarget, ...]:
+        """Every target of the episode in the order the route meets them (map knowledge)."""
+        return self._targets
+
+    @property
+    def route_path(self) -> Path:
+        """The episode's lane-centre path (an approach's route, or a drive's)."""
+        return self._path
 
     def sensor_observation(self) -> dict[str, np.ndarray]:
         """The current sensor readings as the env returned them, before any wrapper changed them.

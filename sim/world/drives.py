@@ -1,0 +1,209 @@
+"""Drives: continuous routes through the road graph, and the targets met along them.
+
+A drive is a route (road-graph nodes), the lane-centre path along it, where on that path
+the car starts, and the targets it meets in order: every stop sign whose stop line the
+path crosses in the sign's own direction of travel, and at most one crate, which ends
+the drive. ``draw_drive`` draws one from a seeded generator (start node, run-up, lateral
+offset, heading error, cruise speed); the env places the car with ``reset(options=...)``.
+Pure numpy: nothing here knows MuJoCo.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from sim.world.obstacles import Obstacle, obstacles
+from sim.world.road_graph import Path, qcar2_road_graph
+from sim.world.stop_signs import StopSign, stop_signs
+
+__all__ = ["RouteTarget", "DriveSpec", "targets_on_path", "draw_drive", "start_pose", "NOMINAL_SPEEDS_MPS",
+           "MIN_TARGET_AHEAD_M"]
+
+#: The nominal cruise speeds a drive draws from (each then scaled by U(0.9, 1.1)).
+NOMINAL_SPEEDS_MPS = (1.0, 1.5, 2.0)
+#: A target whose stop line is closer than this to the start is not one the car can serve.
+MIN_TARGET_AHEAD_M = 2.0
+#: How close to a stop line (laterally) and how aligned (cos of the heading difference)
+#: the path must pass for the target to count as met.
+_ON_LINE_M = 0.06
+_ALIGNED_COS = 0.9
+
+
+@dataclass(frozen=True)
+class RouteTarget:
+    """One target on a drive's path.
+
+    Attributes:
+        target: the stop sign or crate.
+        stop_s: arclength of its stop line along the drive's path, m.
+        target_s: arclength where the path passes the target (sign pole / crate face), m.
+    """
+
+    target: StopSign | Obstacle
+    stop_s: float
+    target_s: float
+
+    @property
+    def kind(self) -> str:
+        """``"sign"`` or ``"obstacle"``."""
+        return "obstacle" if isinstance(self.target, Obstacle) else "sign"
+
+    @property
+    def name(self) -> str:
+        """``sign0``..``sign3`` or ``obstacle0``..``obstacle1``."""
+        return f"{self.kind}{self.target.index}"
+
+
+@dataclass(frozen=True)
+class DriveSpec:
+    """What a drive is, as drawn from its seed (all the env's ``reset`` options).
+
+    Attributes:
+        route: road-graph nodes.
+        start_s_m: where on the path the car's body origin starts (the run-up along the first edge), m.
+        lateral_offset_m: start offset left of the lane centre, m.
+        heading_error_rad: start heading minus the lane's, rad.
+        cruise_speed_mps: cruise speed.
+        crate: index of the crate that ends the drive, or None.
+    """
+
+    route: tuple[int, ...]
+    start_s_m: float
+    lateral_offset_m: float
+    heading_error_rad: float
+    cruise_speed_mps: float
+    crate: int | None = None
+
+    def reset_options(self) -> dict:
+        """The env's ``reset(options=...)`` for this drive."""
+        return {"route": self.route, "start_s_m": self.start_s_m, "lateral_offset_m": self.lateral_offset_m,
+                "heading_error_rad": self.heading_error_rad, "cruise_speed": self.cruise_speed_mps,
+                "crate": self.crate}
+
+
+def _crossings(path: Path, point: np.ndarray, heading: float) -> list[float]:
+    """Arclengths where ``path`` passes within ``_ON_LINE_M`` of ``point`` heading along ``heading``."""
+    near = np.linalg.norm(path.points - point, axis=1) < 0.25
+    aligned = np.cos(path.headings - heading) > _ALIGNED_COS
+    idx = np.flatnonzero(near & aligned)
+    out: list[float] = []
+    if idx.size == 0:
+        return out
+    # One crossing per run of consecutive points (a route may pass the same place twice).
+    for run in np.split(idx, np.flatnonzero(np.diff(idx) > 1) + 1):
+        s_mid = float(path.arclength[run[len(run) // 2]])
+        s, lateral = path.project(point, s_hint=s_mid, window_m=0.3)
+        if abs(lateral) < _ON_LINE_M:
+            out.append(s)
+    return out
+
+
+def targets_on_path(path: Path, crate: int | None = None, start_s: float = 0.0) -> tuple[RouteTarget, ...]:
+    """The stop signs (and the crate, if placed) the path meets after ``start_s``, in order.
+
+    A stop sign counts where the path crosses its stop line in the direction of the sign's
+    own approach; a crate where the path reaches its virtual stop line. Targets whose stop
+    line lies less than ``MIN_TARGET_AHEAD_M`` past ``start_s`` are left out (no car could
+    serve them). Nothing after the crate counts: the crate ends the drive.
+    """
+    found: list[RouteTarget] = []
+    candidates: list[StopSign | Obstacle] = list(stop_signs())
+    if crate is not None:
+        candidates.append(obstacles()[crate])
+    for target in candidates:
+        line = np.asarray(target.stop_line, float)
+        heading = target.path.pose_at(target.stop_s)[2]
+        for stop_s in _crossings(path, line, heading):
+            if stop_s < start_s + MIN_TARGET_AHEAD_M:
+                continue
+            if isinstance(target, Obstacle):
+                target_s = stop_s + _standoff(target)
+            else:
+                target_s, _ = path.project(np.asarray(target.position), s_hint=stop_s, window_m=0.6)
+            found.append(RouteTarget(target, float(stop_s), float(target_s)))
+    found.sort(key=lambda t: t.stop_s)
+    for i, t in enumerate(found):
+        if t.kind == "obstacle":
+            return tuple(found[:i + 1])
+    return tuple(found)
+
+
+def _standoff(crate: Obstacle) -> float:
+    """Stop line to the crate's near face, along the lane, m."""
+    s_face, _ = crate.path.project(np.asarray(crate.position), s_hint=crate.stop_s, window_m=1.0)
+    return s_face - crate.stop_s
+
+
+def draw_drive(rng: np.random.Generator, min_duration_s: float = 20.0, max_duration_s: float = 60.0,
+               crate_share: float = 0.3, min_targets: int = 2, nominal_speed_mps: float | None = None,
+               max_tries: int = 200) -> DriveSpec:
+    """Draws a drive: a random walk through the road graph that meets ``min_targets`` or more.
+
+    The seed draws the start node, the run-up (start point along the first edge), the
+    lateral offset (+-3 cm), the heading error (+-5 deg), the cruise speed (a nominal
+    speed of ``NOMINAL_SPEEDS_MPS`` x U(0.9, 1.1)), a duration U(min, max) the walk is
+    grown to (estimated from length / speed plus ~3 s per stop), and whether the drive ends
+    at a crate. Walks with too few targets are drawn again (from the same generator).
+    ``nominal_speed_mps`` fixes the nominal speed (a collection balances them); the
+    +-10 % draw still applies.
+    """
+    if not 0 < min_duration_s <= max_duration_s:
+        raise ValueError(f"need 0 < min_duration_s <= max_duration_s, got {min_duration_s}, {max_duration_s}")
+    if not 0.0 <= crate_share <= 1.0:
+        raise ValueError(f"crate_share must be in [0, 1], got {crate_share}")
+    graph = qcar2_road_graph()
+    nodes = sorted(graph.nodes)
+    for _ in range(max_tries):
+        start = int(rng.choice(nodes))
+        nominal = float(rng.choice(NOMINAL_SPEEDS_MPS)) if nominal_speed_mps is None else nominal_speed_mps
+        speed = nominal * float(rng.uniform(0.9, 1.1))
+        lateral = float(rng.uniform(-0.03, 0.03))
+        heading_err = float(np.radians(rng.uniform(-5.0, 5.0)))
+        duration = float(rng.uniform(min_duration_s, max_duration_s))
+        crate = int(rng.integers(len(obstacles()))) if rng.random() < crate_share else None
+        route = [start]
+        while True:
+            route.append(int(rng.choice(graph.successors(route[-1]))))
+            if len(route) == 2:
+                first_edge = graph.paths[(route[0], route[1])].length
+                start_s = float(rng.uniform(0.0, 0.6) * first_edge)
+            path = graph.route_path(route)
+            targets = targets_on_path(path, crate, start_s)
+            # Average speed is lower than the cruise speed on curves: ~0.8 of it.
+            est_s = (path.length - start_s) / (0.8 * speed) + 3.0 * len(targets)
+            if crate is not None and targets and targets[-1].kind == "obstacle":
+                break
+            if est_s >= duration and crate is None:
+                break
+            if est_s >= max_duration_s * 1.5:
+                break
+        if len(targets) < min_targets or (crate is not None and targets[-1].kind != "obstacle"):
+            continue
+        if not min_duration_s <= est_s <= max_duration_s * 1.2:
+            continue
+        if crate is not None:
+            # The route ends at the crate: drop the nodes beyond the edge that holds it.
+            route = _trim_after(route, targets[-1].stop_s)
+        return DriveSpec(tuple(route), start_s, lateral, heading_err, speed, crate)
+    raise RuntimeError(f"no drive with >= {min_targets} targets in {max_tries} draws; loosen the limits")
+
+
+def _trim_after(route: list[int], s: float) -> list[int]:
+    """The route up to and including the first edge that ends past arclength ``s`` (+ 0.5 m)."""
+    graph = qcar2_road_graph()
+    total = 0.0
+    for i, (a, b) in enumerate(zip(route, route[1:])):
+        total += graph.paths[(a, b)].length
+        if total >= s + 0.5:
+            return route[:i + 2]
+    return route
+
+
+def start_pose(path: Path, start_s: float, lateral_offset_m: float, heading_error_rad: float
+               ) -> tuple[float, float, float]:
+    """(x, y, yaw) of the car's body origin at the drive's start, map frame."""
+    x, y, h = path.pose_at(start_s)
+    return (x - math.sin(h) * lateral_offset_m, y + math.cos(h) * lateral_offset_m, h + heading_error_rad)
