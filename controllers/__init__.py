@@ -2,7 +2,9 @@
 
 from controllers.braking import BrakeDecision, BrakingConfig, Phase, StopSignBraker
 from controllers.detector import Detection, DetectorConfig, StopSignDetector
-from controllers.distance import CameraModel, DepthDistance, LidarReference, LidarReferenceConfig
+from controllers.distance import CameraModel, DepthDistance
+from controllers.lidar_segmentation import scan_points, segment_scan
+from controllers.lidar_target import LidarTargetConfig, LidarTargetState, LidarTargetTracker
 from controllers.estimators import DistanceEstimator, RawDepthEstimator
 from controllers.obstacle_detector import ObstacleDetector, ObstacleDetectorConfig
 from controllers.lane_follower import RouteFollower, StanleyConfig, StanleyController
@@ -11,7 +13,7 @@ from controllers.speed import SpeedPI, SpeedPIConfig, SpeedProfile
 
 __all__ = [
     "BrakeDecision", "BrakingConfig", "CameraModel", "DepthDistance", "Detection", "DetectorConfig",
-    "DistanceEstimator", "LidarReference", "LidarReferenceConfig", "ObstacleDetector", "ObstacleDetectorConfig", "Perception", "PerceptionSample", "Phase",
-    "RawDepthEstimator", "RouteFollower", "SpeedPI", "SpeedPIConfig", "SpeedProfile", "StanleyConfig",
+    "DistanceEstimator", "LidarTargetConfig", "LidarTargetState", "LidarTargetTracker", "ObstacleDetector", "ObstacleDetectorConfig", "Perception", "PerceptionSample", "Phase",
+    "RawDepthEstimator", "RouteFollower", "scan_points", "segment_scan", "SpeedPI", "SpeedPIConfig", "SpeedProfile", "StanleyConfig",
     "StanleyController", "StopSignBraker", "StopSignDetector",
 ]

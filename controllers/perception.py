@@ -1,4 +1,4 @@
-"""One frame of perception: detector -> depth distance d~, confidence c~ -> LiDAR reference l."""
+"""One frame of perception: detector -> depth distance d~, confidence c~; LiDAR target reference l."""
 
 from __future__ import annotations
 
@@ -7,8 +7,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from controllers.detector import Detection, StopSignDetector
-from controllers.distance import CameraModel, DepthDistance, LidarReference
+from controllers.detector import BlobDetector, Detection, StopSignDetector
+from controllers.distance import CameraModel, DepthDistance
+from controllers.lidar_target import TARGET_KINDS, LidarTargetTracker
 
 __all__ = ["PerceptionSample", "Perception"]
 
@@ -21,7 +22,8 @@ class PerceptionSample:
         detection: the detector's output, or None.
         d_meas: median valid depth inside the detection's mask, m (NaN: none).
         c_meas: its confidence in [0, 1].
-        lidar_m: range of the selected LiDAR cluster, m (NaN: none).
+        lidar_m: the LiDAR target reference: the tracked target's depth along the
+            camera's optical axis, m (NaN: nothing fits the track).
         bearing_rad: bearing of the detection's centre, left positive (NaN: none).
     """
 
@@ -41,24 +43,66 @@ class PerceptionSample:
 
 
 class Perception:
-    """The perception pipeline of the paper for one camera and one LiDAR.
+    """The perception pipeline of the paper for one camera, one LiDAR and one kind of target.
 
     Args:
         camera: the camera's intrinsics.
         detector, depth, lidar: the stages; defaults are built when omitted.
+        target: the kind of target the detector finds, ``"sign"`` or ``"obstacle"`` (the
+            LiDAR tracker fits cluster widths to it).
+        map_margin_rad: with a map bearing (``process(map_bearing=...)``), a detection
+            counts only if its box, widened by this margin, holds that bearing.
     """
 
-    def __init__(self, camera: CameraModel, detector: StopSignDetector | None = None,
-                 depth: DepthDistance | None = None, lidar: LidarReference | None = None) -> None:
+    def __init__(self, camera: CameraModel, detector: BlobDetector | None = None,
+                 depth: DepthDistance | None = None, lidar: LidarTargetTracker | None = None,
+                 target: str = "sign", map_margin_rad: float = math.radians(3.0)) -> None:
+        if target not in TARGET_KINDS:
+            raise ValueError(f"target must be one of {TARGET_KINDS}, got {target!r}")
         self.camera = camera
         self.detector = detector or StopSignDetector()
         self.depth = depth or DepthDistance()
-        self.lidar = lidar or LidarReference(camera)
+        self.lidar = lidar or LidarTargetTracker()
+        self.target = target
+        self.map_margin_rad = float(map_margin_rad)
 
-    def process(self, rgb: np.ndarray, depth: np.ndarray, lidar_ranges: np.ndarray) -> PerceptionSample:
-        """Runs the pipeline on one synchronized frame (rgb (H, W, 3) uint8, depth (H, W) m, scan (N,) m)."""
+    def reset(self) -> None:
+        """Forget the tracked target (a new target or episode)."""
+        self.lidar.reset()
+
+    def process(self, rgb: np.ndarray, depth: np.ndarray, scan: np.ndarray | None, *, speed: float = 0.0,
+                yaw_rate: float = 0.0, dt: float = 0.02, lateral_speed: float = 0.0,
+                map_bearing: float | None = None) -> PerceptionSample:
+        """Runs the pipeline on one control step.
+
+        Args:
+            rgb: (H, W, 3) uint8 image. depth: (H, W) metres.
+            scan: (N,) LiDAR ranges, m, on the step a new scan arrived; None otherwise (the
+                tracker carries the reference forward with odometry).
+            speed, yaw_rate, lateral_speed: odometry (m/s, rad/s, m/s) over the last ``dt`` s.
+            map_bearing: where the map says the current target is, rad from the optical
+                axis (left positive), from the car's localisation; NaN = the map says the
+                target's face cannot be seen from here; None = no map. A real
+                route passes stop signs that serve other lanes: this keeps perception on
+                the one the car must stop at, as a map-aided stack does.
+        """
         detection = self.detector.detect(rgb)
+        if detection is not None and map_bearing is not None and not (
+                math.isfinite(map_bearing) and self._on_map(detection, map_bearing)):
+            detection = None
         d_meas, c_meas = self.depth.estimate(depth, detection)
-        lidar_m = self.lidar.estimate(lidar_ranges, detection)
-        bearing = self.camera.bearing(detection.centroid[0]) if detection is not None else math.nan
+        if detection is not None:
+            x0, _, x1, _ = detection.box
+            bearing = self.camera.bearing(detection.centroid[0])
+            span = (self.camera.bearing(x0 - 0.5), self.camera.bearing(x1 - 0.5))
+        else:
+            bearing, span = math.nan, None
+        lidar_m = self.lidar.step(scan=scan, detection_bearing=bearing, detection_span=span, target=self.target,
+                                  speed=speed, yaw_rate=yaw_rate, dt=dt, lateral_speed=lateral_speed,
+                                  detection_depth=d_meas)
         return PerceptionSample(detection, d_meas, c_meas, lidar_m, bearing)
+
+    def _on_map(self, detection: Detection, map_bearing: float) -> bool:
+        x0, _, x1, _ = detection.box
+        left, right = self.camera.bearing(x0 - 0.5), self.camera.bearing(x1 - 0.5)
+        return right - self.map_margin_rad <= map_bearing <= left + self.map_margin_rad

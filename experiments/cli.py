@@ -82,16 +82,18 @@ def _parser() -> argparse.ArgumentParser:
     st.add_argument("--out", type=Path, default=Path("outputs/attack_study"), help="output folder (trials are reused)")
     st.add_argument("--json", action="store_true", help="print one JSON object instead of tables")
 
-    co = sub.add_parser("collect", help="record the multi-sensor dataset (Parquet, split, card); resumes")
+    co = sub.add_parser("collect", help="record the multi-sensor dataset of drives (Parquet, splits, card); resumes")
     co.add_argument("--out", type=Path, default=Path("data/qcar2"), help="dataset folder (default data/qcar2)")
-    co.add_argument("--runs", type=_count, default=None,
-                    help="approaches per target (4 signs, 2 crates) and speed (default 26: 468 series, ~74k samples)")
-    co.add_argument("--seed", type=int, default=0, help="collection seed (series seeds and the split)")
+    co.add_argument("--drives", type=_count, default=None,
+                    help="drives of 20-60 s, each meeting >= 2 targets (default 40: > 67,821 samples)")
+    co.add_argument("--seed", type=int, default=0, help="collection seed (drive seeds and the splits)")
     co.add_argument("--workers", type=_count, default=min(2, os.cpu_count() or 1), help="parallel processes")
     co.add_argument("--summary", action="store_true", help="print the summary as one JSON object")
 
     pp = sub.add_parser("pretrain-prior", help="pretrain the small Chronos-2 prior on synthetic series (writes a model card)")
-    pp.add_argument("--out", type=Path, default=None, help="checkpoint folder (default: the shipped one in assets/)")
+    pp.add_argument("--out", type=Path, default=Path("outputs/chronos2-prior"),
+                    help="checkpoint folder (default outputs/chronos2-prior; name assets/checkpoints/chronos2-racf-tiny "
+                         "to replace the shipped prior)")
     pp.add_argument("--steps", type=_count, default=3000, help="training steps (default 3000)")
     pp.add_argument("--series", type=_count, default=6000, help="synthetic training series (default 6000)")
     pp.add_argument("--seed", type=int, default=0)
@@ -100,7 +102,11 @@ def _parser() -> argparse.ArgumentParser:
 
     tr = sub.add_parser("train", help="train the ODCA delta head, alignment and gate on the dataset's train split")
     tr.add_argument("--dataset", type=Path, default=Path("data/qcar2"), help="dataset folder (racf collect)")
-    tr.add_argument("--out", type=Path, default=None, help="checkpoint folder (default: the shipped one in assets/)")
+    tr.add_argument("--split", choices=("by_series", "leave_target_out"), default="by_series",
+                    help="split scheme to train on and score (default by_series)")
+    tr.add_argument("--out", type=Path, default=Path("outputs/odca-head"),
+                    help="checkpoint folder (default outputs/odca-head; name assets/checkpoints/odca-head to replace "
+                         "the shipped head)")
     tr.add_argument("--epochs", type=_count, default=800)
     tr.add_argument("--seed", type=int, default=0)
 
@@ -208,12 +214,12 @@ def main(argv: list[str] | None = None) -> int:
     elif args.command == "trials":
         return _trials(args)
     elif args.command == "collect":
-        from experiments.dataset import DEFAULT_RUNS, collect, load_dataset, summarize_dataset
+        from experiments.dataset import DEFAULT_DRIVES, collect, load_dataset, summarize_dataset
 
-        path = collect(args.out, runs=args.runs or DEFAULT_RUNS, seed=args.seed, workers=args.workers,
+        path = collect(args.out, drives=args.drives or DEFAULT_DRIVES, seed=args.seed, workers=args.workers,
                        progress=True)  # the bar is on stderr; --summary JSON stays alone on stdout
         ds = load_dataset(args.out)
-        summary = summarize_dataset(ds.frame, ds.split)
+        summary = summarize_dataset(ds.frame, ds.splits)
         if args.summary:
             print(json.dumps(summary))
         else:
@@ -301,8 +307,10 @@ def _pretrain_prior(args: argparse.Namespace) -> int:
         sim_series = [g["d_clean"].to_numpy(np.float32) for _, g in test.groupby("series_id", sort=False)]
     else:
         print(f"no dataset at {args.dataset}: scoring on synthetic series only", file=sys.stderr)
-    meta = pretrain_prior(args.out or SHIPPED_PRIOR, steps=args.steps, n_series=args.series, seed=args.seed,
+    meta = pretrain_prior(args.out, steps=args.steps, n_series=args.series, seed=args.seed,
                           sim_series=sim_series)
+    if args.out.resolve() != SHIPPED_PRIOR.resolve():
+        print(f"wrote {args.out}; the shipped prior ({SHIPPED_PRIOR}) is unchanged", file=sys.stderr)
     print(json.dumps(meta, indent=1))
     return 0
 
@@ -313,13 +321,15 @@ def _train(args: argparse.Namespace) -> int:
     from odca.prior import Chronos2Prior
     from odca.train import train_odca
 
-    dataset = load_dataset(args.dataset)
+    dataset = load_dataset(args.dataset, split=args.split)
     model, report = train_odca(dataset, Chronos2Prior(), epochs=args.epochs, seed=args.seed)
-    out = args.out or SHIPPED_HEAD
+    out = args.out
     model.save(out)
     (out / "train_report.json").write_text(json.dumps(report, indent=1))
     print(json.dumps(report, indent=1))
-    print(f"head parameters: {report['head_parameters']}; checkpoint: {out}")
+    shipped = " (the shipped head)" if out.resolve() == SHIPPED_HEAD.resolve() else \
+        f"; the shipped head ({SHIPPED_HEAD}) is unchanged"
+    print(f"head parameters: {report['head_parameters']}; checkpoint: {out}{shipped}")
     return 0
 
 

@@ -13,7 +13,7 @@ from controllers import CameraModel, RouteFollower
 from sim.world.drives import RouteTarget
 from sim.world.road_graph import Path
 
-__all__ = ["camera_model", "sign_depth_at_line", "route_follower", "all_sign_masks"]
+__all__ = ["camera_model", "sign_depth_at_line", "route_follower", "map_bearing", "all_sign_masks"]
 
 
 def camera_model(env: gym.Env) -> CameraModel:
@@ -34,6 +34,24 @@ def route_follower(path: Path, cruise_mps: float, start_s: float = 0.0) -> Route
     follower = RouteFollower(path.points, path.headings, path.arclength, path.curvature, cruise_mps)
     follower.reset(start_s)
     return follower
+
+
+def map_bearing(env: gym.Env, target: RouteTarget, pose: np.ndarray) -> float:
+    """Bearing of ``target`` from the camera's optical axis (rad, left positive), from the map and the car's pose.
+
+    NaN when the map says the camera cannot see the target's face (a stop sign showing
+    the car its back): no detection is its then.
+    """
+    model = env.unwrapped.model
+    cx, cy = (float(v) for v in model.camera("d435").pos[:2])
+    x, y, yaw = (float(v) for v in pose)
+    c, s = np.cos(yaw), np.sin(yaw)
+    tx, ty = target.target.centre[:2]
+    dx, dy = tx - (x + c * cx - s * cy), ty - (y + s * cx + c * cy)
+    face = getattr(target.target, "face_yaw", None)
+    if face is not None and -(dx * np.cos(face) + dy * np.sin(face)) < 0.0:
+        return float("nan")
+    return float(np.arctan2(-s * dx + c * dy, c * dx + s * dy))
 
 
 def all_sign_masks(env: gym.Env) -> list[np.ndarray]:

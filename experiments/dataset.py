@@ -1,18 +1,19 @@
 """The multi-sensor driving dataset: ``racf collect`` and its loader.
 
 Shaped like the paper's QCar 2 benchmark: synchronized 50 Hz series of the perception
-pipeline's clean depth distance and confidence, the LiDAR reference and a compact scan,
-the vehicle state and pose, and the simulator's ground truth. One series is one clean
-closed-loop approach (``experiments.trial``): the car cruises at 1.0, 1.5 or 2.0 m/s along
-a stop-sign approach (straight ones for signs 0 and 1, curves of about +-15 deg steering
-for signs 2 and 3) or towards a crate on the lane (an obstacle both sensors see), brakes on
-the pipeline's own distance, stops and dwells.
+pipeline's clean depth distance and confidence, the LiDAR target reference and a compact
+scan, the vehicle state and pose, and the simulator's ground truth. One series is one
+continuous clean closed-loop drive (``experiments.trial`` with ``target="drive"``): a random
+road-graph route of 20-60 s that meets two or more targets; the car stops at every stop
+sign, dwells and drives on, and a crate on the lane ends the drive. The seed draws the
+start node, run-up, lateral offset, heading error and cruise speed
+(``sim.world.drives.draw_drive``); the nominal speeds 1.0 / 1.5 / 2.0 m/s take turns.
 
 Layout of a dataset folder:
 
-- ``series/<series_id>.parquet`` + ``.json``: one finished series (the resume unit);
+- ``_runs/trials/<series_id>.parquet`` + ``.json``: one finished drive (the resume unit);
 - ``dataset.parquet``: every series in long format (``series_id``, ``t``, ...), in order;
-- ``split.json``: the fixed by-series split (70 / 10 / 20 %), seeded;
+- ``split.json``: both splits: by series (70 / 10 / 20 %, seeded) and leave-one-target-out;
 - ``dataset_card.md``: what, how made, columns and units, seed, counts;
 - ``series.png``: a few series plotted.
 """
@@ -27,30 +28,36 @@ import numpy as np
 import pandas as pd
 
 from experiments.corruption import corrupt_series, series_seed
-from experiments.trial import SCAN_FOV_HALF_BEAMS, TrialSpec
-from experiments.trials import SIGNS, SPEEDS_MPS, run_batch
+from experiments.trial import DRIVE_S, SCAN_FOV_HALF_BEAMS, TrialSpec
+from experiments.trials import SPEEDS_MPS, run_batch
 
-__all__ = ["COLUMNS", "DEFAULT_RUNS", "collection_specs", "collect", "summarize_dataset", "load_dataset",
-           "QCarDataset", "SPLIT_SHARES"]
+__all__ = ["COLUMNS", "DEFAULT_DRIVES", "SPLITS", "collection_specs", "collect", "summarize_dataset",
+           "reference_quality", "load_dataset", "QCarDataset", "SPLIT_SHARES", "make_split",
+           "make_target_split"]
 
-#: Runs per (target, speed): (4 signs + 2 crates) x 3 speeds x 26 = 468 series, ~74k samples
-#: (the paper: 67,821 samples in 13 sequences).
-DEFAULT_RUNS = 26
-OBSTACLES = (0, 1)
+#: Drives in the default collection: ~40 x 40 s of 50 Hz samples, > 67,821 (the paper's count).
+DEFAULT_DRIVES = 40
 SPLIT_SHARES = (0.7, 0.1, 0.2)
+#: The two split schemes ``load_dataset`` offers.
+SPLITS = ("by_series", "leave_target_out")
+#: A sample counts as moving above this speed (the protocol's standstill bound), m/s.
+MOVING_MPS = 0.05
 
 #: Dataset columns: name -> (unit, meaning).
 COLUMNS: dict[str, tuple[str, str]] = {
-    "series_id": ("", "one approach; the split is by series"),
+    "series_id": ("", "one drive; the splits are by series"),
     "t": ("s", "time since the start of the series (50 Hz)"),
-    "target": ("", "what the car approaches: sign0-sign3 (stop signs) or obstacle0-obstacle1 (blue crates)"),
-    "speed_set": ("m/s", "cruise speed of the series"),
+    "slot": ("", "which of the drive's targets is current (0, 1, ...: the order the route meets them)"),
+    "target": ("", "the current target: sign0-sign3 (stop signs) or obstacle0-obstacle1 (blue crates)"),
+    "speed_set": ("m/s", "nominal cruise speed of the series (1.0, 1.5 or 2.0; the drive's own is within +-10 %)"),
     "d_clean": ("m", "perception output: median depth in the detector's mask (NaN: no detection)"),
     "c_clean": ("1", "its confidence: detection confidence x valid-depth share"),
     "d_true": ("m", "ground truth: depth of the target's centre (sign plate / crate's near face) along the camera axis"),
     "sign_in_view": ("bool", "ground truth: some of the target is visible"),
-    "detected": ("bool", "the detector reported the target"),
-    "lidar": ("m", "range of the nearest DBSCAN cluster in the camera's view near the detection (NaN: none)"),
+    "detected": ("bool", "the detector reported a target"),
+    "lidar": ("m", "LiDAR target reference: the tracked cluster's depth along the camera axis, carried "
+                   "forward by odometry between scans (NaN: nothing fits the track)"),
+    "scan_new": ("bool", "a new LiDAR scan arrived this step (10 Hz)"),
     "scan_fov_mm": ("mm", f"LiDAR ranges (uint16), beams -{SCAN_FOV_HALF_BEAMS}..+{SCAN_FOV_HALF_BEAMS} deg "
                             "CCW from forward; 0 = no return"),
     "speed": ("m/s", "measured speed"),
@@ -60,7 +67,7 @@ COLUMNS: dict[str, tuple[str, str]] = {
     "x": ("m", "pose in the map frame"),
     "y": ("m", "pose in the map frame"),
     "yaw": ("rad", "heading in the map frame"),
-    "dist_to_stop_line": ("m", "ground truth: front bumper to the stop line along the route"),
+    "dist_to_stop_line": ("m", "ground truth: front bumper to the current target's stop line along the route"),
     "brake": ("bool", "the braking controller's command"),
 }
 
@@ -68,41 +75,36 @@ _RENAME = {"c_meas": "c_clean", "state_speed_mps": "speed", "state_steering_rad"
            "state_yaw_rate_radps": "yaw_rate", "state_accel_mps2": "accel"}
 
 
-def collection_specs(runs: int = DEFAULT_RUNS, seed: int = 0, signs: tuple[int, ...] = SIGNS,
-                     speeds: tuple[float, ...] = SPEEDS_MPS,
-                     obstacles: tuple[int, ...] = OBSTACLES) -> list[TrialSpec]:
-    """The series to record: every sign and crate at every speed, ``runs`` times, seeds from ``seed``."""
-    if runs < 1:
-        raise ValueError(f"runs must be >= 1, got {runs}")
-    targets = [("sign", i) for i in signs] + [("obstacle", i) for i in obstacles]
-    return [TrialSpec("clean", index, speed, seed * 100_000 + k, target=kind)
-            for k in range(runs) for speed in speeds for kind, index in targets]
+def collection_specs(drives: int = DEFAULT_DRIVES, seed: int = 0, speeds: tuple[float, ...] = SPEEDS_MPS,
+                     duration_s: tuple[float, float] = DRIVE_S) -> list[TrialSpec]:
+    """The drives to record: ``drives`` of them, nominal speeds in turn, seeds ``seed * 100000 + k``."""
+    if drives < 1:
+        raise ValueError(f"drives must be >= 1, got {drives}")
+    return [TrialSpec("clean", 0, speeds[k % len(speeds)], seed * 100_000 + k, target="drive", drive_s=duration_s)
+            for k in range(drives)]
 
 
-def collect(out_dir: Path, runs: int = DEFAULT_RUNS, seed: int = 0, workers: int = 2, progress: bool = True,
-            signs: tuple[int, ...] = SIGNS, speeds: tuple[float, ...] = SPEEDS_MPS,
-            obstacles: tuple[int, ...] = OBSTACLES) -> Path:
+def collect(out_dir: Path, drives: int = DEFAULT_DRIVES, seed: int = 0, workers: int = 2, progress: bool = True,
+            speeds: tuple[float, ...] = SPEEDS_MPS, duration_s: tuple[float, float] = DRIVE_S) -> Path:
     """Records (or resumes) the collection and writes the dataset files; returns ``dataset.parquet``."""
     out_dir = Path(out_dir)
-    specs = collection_specs(runs, seed, signs, speeds, obstacles)
+    specs = collection_specs(drives, seed, speeds, duration_s)
     run_batch(specs, out_dir / "_runs", workers=workers, progress=progress)
     frames = []
     for spec in specs:
         log = pd.read_parquet(out_dir / "_runs" / "trials" / f"{spec.trial_id}.parquet")
         log = log.drop(columns=["speed"]).rename(columns=_RENAME)  # speed: the measured one
         log["series_id"] = spec.trial_id
-        log["target"] = f"{spec.target}{spec.sign}"
         log["speed_set"] = spec.speed
         log["scan_fov_mm"] = [_scan_mm(r) for r in log["scan_fov"]]
         frames.append(log[list(COLUMNS)])
     data = pd.concat(frames, ignore_index=True)
     path = out_dir / "dataset.parquet"
     data.to_parquet(path, index=False)
-    ids = [s.trial_id for s in specs]
-    split = make_split(ids, seed)
-    (out_dir / "split.json").write_text(json.dumps({"seed": seed, "shares": SPLIT_SHARES, **split}, indent=1))
-    summary = summarize_dataset(data, split)
-    _write_card(out_dir / "dataset_card.md", summary, runs, seed)
+    splits = make_splits(data, seed)
+    (out_dir / "split.json").write_text(json.dumps({"seed": seed, "shares": SPLIT_SHARES, **splits}, indent=1))
+    summary = summarize_dataset(data, splits)
+    _write_card(out_dir / "dataset_card.md", summary, drives, seed)
     plot_series(data, out_dir / "series.png")
     return path
 
@@ -113,73 +115,148 @@ def _scan_mm(ranges) -> np.ndarray:
     return np.where(np.isfinite(r) & (r > 0), np.round(r * 1000), 0).clip(0, 65535).astype(np.uint16)
 
 
-def make_split(series_ids: list[str], seed: int) -> dict[str, list[str]]:
+def make_split(series_ids: list[str], seed: int, shares: tuple[float, float, float] = SPLIT_SHARES
+               ) -> dict[str, list[str]]:
     """Fixed by-series split: a seeded permutation cut 70 / 10 / 20 %."""
     ids = sorted(series_ids)
     order = np.random.default_rng(seed).permutation(len(ids))
-    n_train = int(round(SPLIT_SHARES[0] * len(ids)))
-    n_val = int(round(SPLIT_SHARES[1] * len(ids)))
+    n_train = int(round(shares[0] * len(ids)))
+    n_val = int(round(shares[1] * len(ids)))
     picked = [ids[i] for i in order]
     return {"train": sorted(picked[:n_train]), "val": sorted(picked[n_train:n_train + n_val]),
             "test": sorted(picked[n_train + n_val:])}
 
 
-def summarize_dataset(data: pd.DataFrame, split: dict[str, list[str]] | None = None) -> dict:
-    """The collection's summary: counts, speeds, ranges and how well d_clean tracks d_true."""
-    per_series = data.groupby("series_id", sort=False).size()
+def make_target_split(data: pd.DataFrame, held_out: str, seed: int) -> dict:
+    """Leave-one-target-out: every series that meets ``held_out`` is test; the rest is cut 7:1 into train and val."""
+    met = data.groupby("series_id", sort=False)["target"].agg(lambda t: held_out in set(t))
+    if held_out not in set(data["target"]):
+        raise ValueError(f"held_out must be a target of the dataset, one of {sorted(set(data['target']))}; "
+                         f"got {held_out!r}")
+    rest = make_split([str(i) for i in met.index[~met]], seed, (0.875, 0.125, 0.0))
+    return {"held_out": held_out, "train": rest["train"], "val": rest["val"],
+            "test": sorted(str(i) for i in met.index[met])}
+
+
+def default_held_out(data: pd.DataFrame) -> str:
+    """The stop sign met by the share of series nearest 25 % (a test split near the by-series one's size)."""
+    share = {t: data.loc[data["target"] == t, "series_id"].nunique() / data["series_id"].nunique()
+             for t in sorted(set(data["target"])) if t.startswith("sign")}
+    return min(share, key=lambda t: (abs(share[t] - 0.25), t))
+
+
+def make_splits(data: pd.DataFrame, seed: int, held_out: str | None = None) -> dict[str, dict]:
+    """Both split schemes (``SPLITS``) of a collected frame."""
+    ids = list(dict.fromkeys(data["series_id"]))
+    return {"by_series": make_split(ids, seed),
+            "leave_target_out": make_target_split(data, held_out or default_held_out(data), seed)}
+
+
+def reference_quality(frame: pd.DataFrame, outlier_m: float = 0.15, within_m: float = 3.0) -> dict:
+    """How well the LiDAR reference tracks the target (the issue's three checks), on the given series.
+
+    ``rmse_vs_true``: |l - d_true| over the steps where the tracker reports a range;
+    ``coverage``: share of the steps with the target in view within ``within_m`` that have
+    one; ``outlier_share``: share of reported values more than ``outlier_m`` off (another
+    object). Also the same RMSE over moving steps only.
+    """
+    reported = frame[np.isfinite(frame["lidar"]) & np.isfinite(frame["d_true"])]
+    err = (reported["lidar"] - reported["d_true"]).to_numpy()
+    moving = (reported["speed"] > MOVING_MPS).to_numpy()
+    near = frame[frame["sign_in_view"] & (frame["d_true"] <= within_m)]
+    return {
+        "n_reported": int(len(err)),
+        "rmse_vs_true": _rmse(err),
+        "rmse_vs_true_moving": _rmse(err[moving]),
+        "coverage": float(np.isfinite(near["lidar"]).mean()) if len(near) else None,
+        "n_in_view_within_3m": int(len(near)),
+        "outlier_share": float(np.mean(np.abs(err) > outlier_m)) if len(err) else None,
+    }
+
+
+def _rmse(err: np.ndarray) -> float | None:
+    return float(np.sqrt(np.mean(err**2))) if len(err) else None
+
+
+def summarize_dataset(data: pd.DataFrame, splits: dict[str, dict] | None = None) -> dict:
+    """The collection's summary: counts, drives, speeds, ranges, d_clean and LiDAR quality (strict JSON)."""
+    per_series = data.groupby("series_id", sort=False)
+    sizes = per_series.size()
     both = data[np.isfinite(data["d_clean"]) & np.isfinite(data["d_true"]) & data["sign_in_view"]]
-    err = both["d_clean"] - both["d_true"]
+    err = (both["d_clean"] - both["d_true"]).to_numpy()
     finite_true = data.loc[data["sign_in_view"], "d_true"]
+    targets = per_series["slot"].max() + 1
+    starts = per_series[["x", "y", "yaw"]].first().round(3)
     summary = {
-        "n_series": int(per_series.size),
+        "n_series": int(sizes.size),
         "n_samples": int(len(data)),
+        "n_moving_samples": int((data["speed"] > MOVING_MPS).sum()),
+        "standstill_share": float((data["speed"] <= MOVING_MPS).mean()),
         "speeds": sorted(float(v) for v in data["speed_set"].unique()),
-        "rmse_clean_vs_true": float(np.sqrt(np.mean(err**2))) if len(err) else None,
+        "series_duration_s": {"min": float(sizes.min() / 50), "median": float(sizes.median() / 50),
+                              "max": float(sizes.max() / 50)},
+        "samples_per_series": {"min": int(sizes.min()), "median": float(sizes.median()), "max": int(sizes.max())},
+        "targets_per_series": {"min": int(targets.min()), "median": float(targets.median()),
+                               "max": int(targets.max())},
+        "series_per_target": {t: int(n) for t, n in data.groupby("target")["series_id"].nunique().items()},
+        "distinct_start_poses": int(len(starts.drop_duplicates())),
+        "rmse_clean_vs_true": _rmse(err),
         "mae_clean_vs_true": float(np.mean(np.abs(err))) if len(err) else None,
         "n_clean_samples": int(len(err)),
-        "samples_per_series": {"min": int(per_series.min()), "median": float(per_series.median()),
-                               "max": int(per_series.max())},
         "d_true_in_view_m": [float(finite_true.min()), float(finite_true.max())] if len(finite_true) else None,
-        "d_clean_m": [float(data["d_clean"].min()), float(data["d_clean"].max())],
         "measured_speed_mps": [float(data["speed"].min()), float(data["speed"].max())],
         "steering_deg": [float(np.degrees(data["steering"].min())), float(np.degrees(data["steering"].max()))],
         "targets": sorted(str(s) for s in data["target"].unique()),
+        "lidar_reference": reference_quality(data),
     }
-    if split is not None:
-        summary["split"] = {k: len(v) for k, v in split.items()}
+    if splits is not None:
+        summary["split"] = {scheme: {k: (len(v) if isinstance(v, list) else v) for k, v in split.items()}
+                            for scheme, split in splits.items()}
+        test = data[data["series_id"].isin(splits["by_series"]["test"])]
+        summary["lidar_reference_test"] = reference_quality(test)
     return summary
 
 
-def _write_card(path: Path, summary: dict, runs: int, seed: int) -> None:
+def _write_card(path: Path, summary: dict, drives: int, seed: int) -> None:
     rows = "\n".join(f"| `{name}` | {unit} | {meaning} |" for name, (unit, meaning) in COLUMNS.items())
-    path.write_text(f"""# RACF QCar 2 simulated approach dataset
+    ref = summary["lidar_reference"]
+    path.write_text(f"""# RACF QCar 2 simulated driving dataset
 
 **What.** Synchronized 50 Hz series from the racf MuJoCo simulation of the Quanser QCar 2 on
-its indoor map: the perception pipeline's clean depth distance to a stop sign and its
-confidence, the LiDAR reference and a compact scan, the vehicle state and pose, and the
-simulator's ground truth. Shaped like the RACF paper's QCar 2 benchmark (67,821 samples,
-13 sequences, speeds 1.0 / 1.5 / 2.0 m/s, steering about 0 and +-15 deg). Simulated data,
-not recordings of a real car.
+its indoor map: the perception pipeline's clean depth distance to the current target and
+its confidence, the LiDAR target reference and a compact scan, the vehicle state and pose,
+and the simulator's ground truth. Shaped like the RACF paper's QCar 2 benchmark (67,821
+samples, 13 sequences of ~100 s, speeds 1.0 / 1.5 / 2.0 m/s). Simulated data, not
+recordings of a real car.
 
-**How it was made.** `racf collect --runs {runs} --seed {seed}`: for every target and
-cruise speed (1.0, 1.5, 2.0 m/s), {runs} clean closed-loop approaches (seeds
-`{seed} * 100000 + run`). The targets are the four stop signs and two blue crates
-(0.12 x 0.16 x 0.22 m) standing on lanes, with a virtual stop line 0.25 m before them; the
-camera and the LiDAR both see them. The car follows the approach route with Stanley lane
-following, a curve speed limit and a PI speed loop. The detector (stop sign, or crate by
-colour), the depth distance and the braking controller run as in
-`racf trial --setting clean`; each series ends after the car has stopped and dwelt 1 s.
-Signs 0 and 1 and the crates have straight final approaches; signs 2 and 3 approach
-through curves (steering up to about 16-22 deg). Sensor noise is the simulator's (depth
-0.0037 z^2 m, LiDAR 1 %).
+**How it was made.** `racf collect --drives {drives} --seed {seed}`: {drives} continuous clean
+closed-loop drives (seeds `{seed} * 100000 + k`). Each drive is a random road-graph route
+of 20-60 s that meets at least two targets; its seed draws the start node, the run-up
+along the first edge, a lateral offset (+-3 cm), a heading error (+-5 deg) and the cruise
+speed (nominal 1.0 / 1.5 / 2.0 m/s in turn, x U(0.9, 1.1)). The car follows the route
+(Stanley, a curve speed limit, a PI speed loop), stops at every stop sign, dwells 1 s and
+drives on; a blue crate (0.12 x 0.16 x 0.22 m) on the lane, with a virtual stop line
+0.25 m before it, ends the drive. The detector (stop sign, or crate by colour), the depth
+distance, the LiDAR target tracker and the braking controller run as in
+`racf trial --setting clean`. Sensor noise is the simulator's (depth 0.0037 z^2 m, LiDAR
+1 %, scans at 10 Hz).
 
-**Counts.** {summary['n_series']} series, {summary['n_samples']} samples; samples per series
-{summary['samples_per_series']['min']}-{summary['samples_per_series']['max']} (median
-{summary['samples_per_series']['median']:.0f}); split {summary.get('split')} (by series, seed {seed}).
+**Counts.** {summary['n_series']} series, {summary['n_samples']} samples
+({summary['n_moving_samples']} moving, standstill share {summary['standstill_share']:.2f});
+{summary['series_duration_s']['min']:.0f}-{summary['series_duration_s']['max']:.0f} s per series
+(median {summary['series_duration_s']['median']:.0f} s); targets per series
+{summary['targets_per_series']['min']}-{summary['targets_per_series']['max']}; series per target
+{summary['series_per_target']}; {summary['distinct_start_poses']} distinct start poses.
 
-**Quality of the pseudo ground truth.** d_clean vs d_true over {summary['n_clean_samples']}
-samples with the sign in view and detected: RMSE {summary['rmse_clean_vs_true']:.4f} m,
-MAE {summary['mae_clean_vs_true']:.4f} m.
+**Splits** (`split.json`; `load_dataset(path, split=...)`): `by_series` (seeded 70 / 10 / 20 %)
+and `leave_target_out` (every series that meets the held-out target is test):
+{summary.get('split')}.
+
+**Quality.** d_clean vs d_true over {summary['n_clean_samples']} samples with the target in view
+and detected: RMSE {summary['rmse_clean_vs_true']:.4f} m, MAE {summary['mae_clean_vs_true']:.4f} m.
+LiDAR reference vs d_true over {ref['n_reported']} reported steps: RMSE {ref['rmse_vs_true']:.4f} m;
+it reports on {ref['coverage']:.1%} of the steps with the target in view within 3 m; {ref['outlier_share']:.2%}
+of the reported values are more than 0.15 m off.
 
 **Columns** (long format, one row per 50 Hz step):
 
@@ -193,23 +270,22 @@ seed per series.
 """)
 
 
-def plot_series(data: pd.DataFrame, path: Path, per_sign: int = 1) -> None:
-    """Plots one series per target: distances and speed over time."""
+def plot_series(data: pd.DataFrame, path: Path) -> None:
+    """Plots the first three drives: distances and speed over time."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    picks = [sid for target in sorted(data["target"].unique())
-             for sid in data.loc[data["target"] == target, "series_id"].unique()[:per_sign]]
-    fig, axes = plt.subplots(len(picks), 1, figsize=(8, 2.2 * len(picks)), squeeze=False, sharex=False)
+    picks = list(dict.fromkeys(data["series_id"]))[:3]
+    fig, axes = plt.subplots(len(picks), 1, figsize=(11, 2.6 * len(picks)), squeeze=False, sharex=False)
     for ax, sid in zip(axes[:, 0], picks):
         s = data[data["series_id"] == sid]
         ax.plot(s["t"], s["d_true"].where(s["sign_in_view"]), lw=2.5, alpha=0.5, label="d_true (in view)")
         ax.plot(s["t"], s["d_clean"], ".", ms=3, label="d_clean")
-        ax.plot(s["t"], s["lidar"], "x", ms=3, label="LiDAR cluster")
+        ax.plot(s["t"], s["lidar"], "x", ms=3, label="LiDAR reference")
         ax.plot(s["t"], s["speed"], "k-", lw=1, label="speed (m/s)")
-        ax.set_title(sid, fontsize=9)
+        ax.set_title(f"{sid}: " + " -> ".join(s.groupby("slot")["target"].first()), fontsize=9)
         ax.set_ylabel("m, m/s")
         ax.set_ylim(0, 3.5)
     axes[0, 0].legend(fontsize=7, ncol=4)
@@ -221,11 +297,21 @@ def plot_series(data: pd.DataFrame, path: Path, per_sign: int = 1) -> None:
 
 @dataclass
 class QCarDataset:
-    """A collected dataset: the clean frame, the split and corrupted views."""
+    """A collected dataset: the clean frame, one split scheme and corrupted views.
+
+    Attributes:
+        frame: every series, long format.
+        split: the active scheme's ``train`` / ``val`` / ``test`` series ids.
+        path: the dataset folder.
+        scheme: ``by_series`` or ``leave_target_out``.
+        splits: both schemes, as in ``split.json``.
+    """
 
     frame: pd.DataFrame
     split: dict[str, list[str]]
     path: Path
+    scheme: str = "by_series"
+    splits: dict[str, dict] | None = None
 
     def series_ids(self, split: str | None = None) -> list[str]:
         if split is None:
@@ -256,17 +342,32 @@ class QCarDataset:
         return frame.join(pd.concat(parts)) if parts else frame
 
 
-def load_dataset(path: Path) -> QCarDataset:
-    """Loads a dataset folder written by ``racf collect``; a clear error if it is not one."""
+def load_dataset(path: Path, split: str = "by_series", held_out: str | None = None) -> QCarDataset:
+    """Loads a dataset folder written by ``racf collect``; a clear error if it is not one.
+
+    Args:
+        path: the dataset folder.
+        split: ``by_series`` (70 / 10 / 20 %) or ``leave_target_out``.
+        held_out: with ``leave_target_out``, the target to hold out (default: the one in
+            ``split.json``), e.g. ``sign2`` or ``obstacle0``.
+    """
     path = Path(path)
+    if split not in SPLITS:
+        raise ValueError(f"split must be one of {SPLITS}, got {split!r}")
+    if held_out is not None and split != "leave_target_out":
+        raise ValueError("held_out applies to split='leave_target_out' only")
     data_file, split_file = path / "dataset.parquet", path / "split.json"
     if not data_file.exists() or not split_file.exists():
         raise FileNotFoundError(f"{path} is not a racf dataset folder (need dataset.parquet and split.json; "
                                 f"make one with `racf collect --out {path}`)")
     frame = pd.read_parquet(data_file)
     missing = sorted(set(COLUMNS) - set(frame.columns))
-    if missing:
-        raise ValueError(f"{data_file} lacks columns {missing}; recollect it with this version of racf")
-    split = json.loads(split_file.read_text())
-    return QCarDataset(frame, {k: split[k] for k in ("train", "val", "test")}, path)
-
+    raw = json.loads(split_file.read_text())
+    if missing or "by_series" not in raw:
+        raise ValueError(f"{path} is a dataset of an older racf (lacks columns {missing} or both splits); "
+                         f"recollect it with `racf collect --out {path}`")
+    splits = {k: raw[k] for k in SPLITS}
+    if held_out is not None and held_out != splits["leave_target_out"]["held_out"]:
+        splits["leave_target_out"] = make_target_split(frame, held_out, int(raw["seed"]))
+    chosen = {k: splits[split][k] for k in ("train", "val", "test")}
+    return QCarDataset(frame, chosen, path, split, splits)

@@ -28,7 +28,7 @@ import pandas as pd
 import sim
 from controllers import (BrakingConfig, DistanceEstimator, ObstacleDetector, Perception, Phase, RawDepthEstimator,
                          StopSignBraker)
-from experiments.closed_loop import camera_model, route_follower, sign_depth_at_line
+from experiments.closed_loop import camera_model, map_bearing, route_follower, sign_depth_at_line
 from sim.env.qcar2_env import PASS_LINE_M
 from sim.world.drives import DriveSpec, draw_drive
 from sim.attacks import PatchAttack
@@ -43,7 +43,8 @@ SETTINGS = ("clean", "attack")
 #: What a trial approaches (``TrialSpec.sign`` is the index): the four stop signs or the two
 #: crates; or a ``drive`` (index 0), a random route drawn from the seed that meets >= 2 targets.
 TARGETS = {"sign": 4, "obstacle": 2, "drive": 1}
-#: Episode time limit of a drive, s (drives last 20-60 s).
+#: How long a drive is drawn to last, s, and its episode time limit.
+DRIVE_S = (20.0, 60.0)
 DRIVE_MAX_EPISODE_S = 120.0
 #: The protocol's strong regime.
 STRONG_RHO = (0.9, 1.0)
@@ -76,6 +77,7 @@ class TrialSpec:
     rho: tuple[float, float] = STRONG_RHO
     t_atk: tuple[float, float] = STRONG_T_ATK_S
     target: str = "sign"
+    drive_s: tuple[float, float] = DRIVE_S
 
     def __post_init__(self) -> None:
         if self.setting not in SETTINGS:
@@ -88,17 +90,20 @@ class TrialSpec:
             raise ValueError(f"speed must be in [0.1, 3.0] m/s, got {self.speed!r}")
         object.__setattr__(self, "rho", as_range("rho", self.rho, 0.0, 1.0))
         object.__setattr__(self, "t_atk", as_range("t_atk", self.t_atk, 0.0, 60.0))
+        object.__setattr__(self, "drive_s", as_range("drive_s", self.drive_s, 5.0, 100.0))
 
     @property
     def drive(self) -> DriveSpec | None:
         """The drive this spec's seed draws (``target == "drive"``; ``speed`` is the nominal speed)."""
         if self.target != "drive":
             return None
-        return draw_drive(np.random.default_rng(self.seed), nominal_speed_mps=self.speed)
+        return draw_drive(np.random.default_rng(self.seed), *self.drive_s, nominal_speed_mps=self.speed)
 
     @property
     def trial_id(self) -> str:
         base = f"{self.setting}_{self.target}{self.sign}_v{self.speed:.2f}_seed{self.seed}"
+        if self.target == "drive" and self.drive_s != DRIVE_S:
+            base += "_d{:.0f}-{:.0f}".format(*self.drive_s)
         if self.setting == "clean":
             return base
         return base + "_rho{:.2f}-{:.2f}_t{:.2f}-{:.2f}".format(*self.rho, *self.t_atk)
@@ -199,7 +204,8 @@ def _run(env: gym.Env, spec: TrialSpec, estimator: DistanceEstimator, braking: B
     u = env.unwrapped
     dt = 1.0 / u.config.control_hz
     camera = camera_model(env)
-    perceptions = {"sign": Perception(camera), "obstacle": Perception(camera, detector=ObstacleDetector())}
+    perceptions = {"sign": Perception(camera),
+                   "obstacle": Perception(camera, detector=ObstacleDetector(), target="obstacle")}
     targets = u.route_targets
     follower = route_follower(u.route_path, info["cruise_speed"], info["route_s"])
     bumper_ahead_of_axle = float(u.model.site("front_bumper").pos[0]) - follower.steering.config.front_axle_m
@@ -209,10 +215,12 @@ def _run(env: gym.Env, spec: TrialSpec, estimator: DistanceEstimator, braking: B
     def begin(slot: int):
         depth_at_line = sign_depth_at_line(env, targets[slot])
         estimator.reset()
+        perceptions[targets[slot].kind].reset()
         return (perceptions[targets[slot].kind], StopSignBraker(braking, depth_at_line),
                 StopSignBraker(braking, depth_at_line), _TargetScore())
 
     slot = 0
+    scan_time = -math.inf
     perception, braker, ideal, score = begin(slot)
     scores = [score]
     rows: list[dict] = []
@@ -226,7 +234,12 @@ def _run(env: gym.Env, spec: TrialSpec, estimator: DistanceEstimator, braking: B
             perception, braker, ideal, score = begin(slot)
             scores.append(score)
         speed = float(obs["state"][0])
-        sample = perception.process(obs["rgb"], obs["depth"], obs["lidar"])
+        # A scan is handed to the tracker once, on the step it arrives (the LiDAR runs at 10 Hz).
+        scan_new = info["lidar_time"] != scan_time
+        scan_time = info["lidar_time"]
+        sample = perception.process(obs["rgb"], obs["depth"], obs["lidar"] if scan_new else None, speed=speed,
+                                    yaw_rate=float(obs["state"][2]), lateral_speed=float(obs["state"][4]), dt=dt,
+                                    map_bearing=map_bearing(env, targets[slot], info["pose"]))
         if attacked:
             clean = u.sensor_observation()
             d_clean = perception.depth.estimate(clean["depth"], perception.detector.detect(clean["rgb"]))[0]
@@ -257,7 +270,7 @@ def _run(env: gym.Env, spec: TrialSpec, estimator: DistanceEstimator, braking: B
             "attack_active": bool(info.get("attack_active", False)), "attack": "+".join(info.get("attack", ())),
             # The vehicle state as the car measures it, and the LiDAR's forward sector (compact scan).
             **{f"state_{name}": float(v) for name, v in zip(STATE_FIELDS, obs["state"])},
-            "scan_fov": scan_fov(obs["lidar"]),
+            "scan_new": scan_new, "scan_fov": scan_fov(obs["lidar"]),
         })
         if on_step is not None:
             on_step(env, obs, info, rows[-1])

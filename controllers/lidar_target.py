@@ -1,0 +1,419 @@
+"""The LiDAR reference l(t): the detected target's depth along the camera's optical axis,
+measured by the 2D LiDAR and tracked with odometry.
+
+:class:`LidarTargetTracker` implements the protocol's ``l`` (reference/protocol.md):
+
+1. **Predict** (every control step). The tracked target is a point in the body frame (x
+   forward, y left, origin at the car's reference point). Each step moves it by the car's
+   odometry over ``dt``: the car advances ``speed * dt`` (plus ``lateral_speed * dt``
+   sideways) along its mean heading and turns ``yaw_rate * dt``, and the point is written in
+   the new body frame. Targets (stop signs, crates) are static, so this is the whole motion
+   model. It is also the age compensation of the 10 Hz scans: between scans (four control
+   steps out of five at 50 Hz) the reported value is the last supported position carried
+   forward by odometry, so it is valid for the current step, not for the scan's.
+2. **Measure** (on a step with a new scan). The returns in a forward sector (camera bearing
+   within ``sector_half_angle_rad``, depth > 0, range <= ``max_range_m``) are segmented with
+   :func:`~controllers.lidar_segmentation.segment_scan` (DBSCAN with ``min_samples=1``,
+   ``eps_m``), and each cluster is described in the camera frame: centroid, depth (median of
+   its points' x along the optical axis, which fits the simulator's d_true for the sign's
+   plate and for a crate's near face), bearing span (min and max bearing of its points,
+   widened by half a beam step at its range) and width across the line of sight (extent of
+   its points plus one beam spacing, the sampling tolerance).
+3. **Associate.** With a detection, a candidate's widened span (plus
+   ``bearing_margin_rad``) must hold the detection's centre bearing and its width must fit
+   the target kind. With a track, a candidate must also lie within the gate around the
+   predicted position (``gate_radius_m + gate_growth_mps * time since support``), and the
+   nearest one wins. Without a track, the detection starts one: the box's width implied at
+   the cluster's depth must fit the kind too (this rejects background far behind the box),
+   and the winner is the cluster whose bearing is closest to the detection's, plus a
+   penalty for the part of its span outside the box (so a wall fragment straddling the box
+   edge loses to the target inside it). Without a detection only a gated candidate of an
+   existing track counts: a track is never started without a detection.
+4. **Update.** A supported track moves to the measured point (exponentially smoothed with
+   weight ``smoothing`` when the previous scan supported it too). When no candidate fits,
+   the value is NaN on that step and until the next supported scan (never another object),
+   but the track coasts on odometry so it can be re-acquired inside its growing gate. After
+   ``drop_after_s`` (default 1 s) without support the track is dropped; the value is also
+   NaN once the last support is older than ``report_max_age_s`` (missing scans).
+
+The value is NaN before any track. Changing ``target`` between "sign" and "obstacle"
+drops the track. Pure numpy/scipy: no simulator imports.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from controllers.lidar_segmentation import segment_scan
+
+__all__ = ["LidarTargetConfig", "LidarTargetState", "LidarTargetTracker", "TARGET_KINDS"]
+
+#: Target kinds the tracker knows (``step(target=...)``).
+TARGET_KINDS = ("sign", "obstacle")
+
+
+def _check_pair(name: str, value: tuple[float, float], lo: float, hi: float) -> None:
+    ok = (isinstance(value, tuple) and len(value) == 2 and all(isinstance(v, (int, float)) for v in value)
+          and lo <= value[0] < value[1] <= hi)
+    if not ok:
+        raise ValueError(f"{name} must be a (min, max) pair with {lo} <= min < max <= {hi} m, got {value!r}")
+
+
+def _check_range(name: str, value: float, lo: float, hi: float, unit: str) -> None:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not lo <= value <= hi:
+        raise ValueError(f"{name} must be in [{lo}, {hi}] {unit}, got {value!r}")
+
+
+@dataclass(frozen=True)
+class LidarTargetConfig:
+    """Geometry, segmentation, association and track keeping of the LiDAR reference.
+
+    Attributes:
+        lidar_position_m: (x, y) of the RPLIDAR in the body frame, metres (the scan plane's
+            origin; the scanner is level and its 0 deg beam points along body +x).
+        camera_position_m: (x, y) of the D435's optical centre in the body frame, metres
+            (level, optical axis along body +x). l is the depth along that axis.
+        eps_m: segmentation link distance (DBSCAN eps, min_samples 1), metres.
+        max_range_m: returns farther than this from the LiDAR are ignored, metres.
+        sector_half_angle_rad: returns with a camera bearing beyond +-this are ignored
+            (the D435 colour camera sees +-35 deg; the rest keeps the track while the
+            target passes beside the car, out of the camera's view).
+        bearing_margin_rad: slack on "the cluster's span holds the detection's bearing".
+        sign_width_m: (min, max) width of a stop sign's LiDAR cut across the line of sight:
+            0.07 m face on, ~0.04 m at 55 deg, a single return when seen nearly edge on.
+        obstacle_width_m: the same for a crate (0.16 m face on, up to ~0.2 m at an angle).
+        sign_box_width_m: (min, max) width the detection's box implies at the cluster's
+            depth, for a stop sign (0.10 m across flats, narrower when seen obliquely);
+            checked when a track starts.
+        obstacle_box_width_m: the same for a crate.
+        gate_radius_m: association gate around the predicted position right after support.
+        gate_growth_mps: the gate grows by this per second without support (slowly: odometry
+            drifts little in a second, and a wide gate would take in other objects).
+        smoothing: weight of a new measurement in the position update, (0, 1]; 1 = none.
+        start_depth_tolerance_m: a track starts only on a cluster whose depth agrees with
+            the detection's depth distance within this, m (when there is one).
+        report_max_age_s: the coasted value is reported (not NaN) for at most this long
+            after the last support, seconds (2.5 scan periods: covers the gap between
+            scans, not a missing scan).
+        drop_after_s: the track is dropped after this long without support, seconds.
+    """
+
+    lidar_position_m: tuple[float, float] = (-0.012, 0.0)
+    camera_position_m: tuple[float, float] = (0.095, 0.032)
+    eps_m: float = 0.06
+    max_range_m: float = 4.0
+    sector_half_angle_rad: float = math.radians(80.0)
+    bearing_margin_rad: float = math.radians(1.0)
+    sign_width_m: tuple[float, float] = (0.02, 0.12)
+    obstacle_width_m: tuple[float, float] = (0.06, 0.24)
+    sign_box_width_m: tuple[float, float] = (0.015, 0.16)
+    obstacle_box_width_m: tuple[float, float] = (0.06, 0.32)
+    gate_radius_m: float = 0.12
+    gate_growth_mps: float = 0.1
+    smoothing: float = 0.5
+    start_depth_tolerance_m: float = 0.08
+    report_max_age_s: float = 0.25
+    drop_after_s: float = 1.0
+
+    def __post_init__(self) -> None:
+        for name in ("lidar_position_m", "camera_position_m"):
+            value = getattr(self, name)
+            if not (isinstance(value, tuple) and len(value) == 2
+                    and all(isinstance(v, (int, float)) and abs(v) <= 1.0 for v in value)):
+                raise ValueError(f"{name} must be an (x, y) pair with |x|, |y| <= 1 m, got {value!r}")
+        _check_range("eps_m", self.eps_m, 0.005, 1.0, "m")
+        _check_range("max_range_m", self.max_range_m, 0.2, 50.0, "m")
+        _check_range("sector_half_angle_rad", self.sector_half_angle_rad, 0.05, math.radians(85.0), "rad")
+        _check_range("bearing_margin_rad", self.bearing_margin_rad, 0.0, 0.5, "rad")
+        for name in ("sign_width_m", "obstacle_width_m", "sign_box_width_m", "obstacle_box_width_m"):
+            _check_pair(name, getattr(self, name), 0.0, 2.0)
+        _check_range("gate_radius_m", self.gate_radius_m, 0.01, 2.0, "m")
+        _check_range("gate_growth_mps", self.gate_growth_mps, 0.0, 5.0, "m/s")
+        if isinstance(self.smoothing, bool) or not isinstance(self.smoothing, (int, float)) or not 0 < self.smoothing <= 1:
+            raise ValueError(f"smoothing must be in (0, 1], got {self.smoothing!r}")
+        _check_range("start_depth_tolerance_m", self.start_depth_tolerance_m, 0.0, 5.0, "m")
+        _check_range("report_max_age_s", self.report_max_age_s, 0.0, 10.0, "s")
+        _check_range("drop_after_s", self.drop_after_s, 0.0, 60.0, "s")
+
+    def width_m(self, target: str) -> tuple[float, float]:
+        """(min, max) LiDAR width of a target kind, metres."""
+        return self.sign_width_m if target == "sign" else self.obstacle_width_m
+
+    def box_width_m(self, target: str) -> tuple[float, float]:
+        """(min, max) width a detection box of a target kind implies, metres."""
+        return self.sign_box_width_m if target == "sign" else self.obstacle_box_width_m
+
+
+@dataclass(frozen=True)
+class LidarTargetState:
+    """What the tracker holds after a step (for logs and viewers).
+
+    Attributes:
+        has_track: whether a target is tracked (supported recently or coasting).
+        target: the tracked kind ("sign" or "obstacle"), None without a track.
+        position: (x, y) of the tracked point in the camera frame (x along the optical
+            axis, y left), metres; NaN without a track. Coasting tracks are included.
+        depth: the value the last step returned (l), metres; NaN when not supported.
+        supported: whether ``depth`` is a supported value (finite).
+        last_support_age_s: seconds since the last scan that supported the track; inf
+            without a track.
+        gate_radius_m: the association gate for the next scan, metres; NaN without a track.
+        n_points: returns in the cluster that last supported the track (0 without one).
+        n_clusters: clusters in the forward sector on the last scan.
+    """
+
+    has_track: bool
+    target: str | None
+    position: tuple[float, float]
+    depth: float
+    supported: bool
+    last_support_age_s: float
+    gate_radius_m: float
+    n_points: int
+    n_clusters: int
+
+
+class LidarTargetTracker:
+    """l(t) for one target: see the module docstring.
+
+    Args:
+        config: geometry, association and track keeping; defaults fit the QCar 2.
+
+    Example:
+        >>> import numpy as np
+        >>> tracker = LidarTargetTracker(LidarTargetConfig())
+        >>> scan = np.full(360, np.inf)
+        >>> scan[[359, 0, 1]] = 1.5 / np.cos(np.radians([-1.0, 0.0, 1.0]))  # a plate 1.5 m ahead
+        >>> l = tracker.step(scan=scan, detection_bearing=-0.021, detection_span=(0.0, -0.045),
+        ...                  target="sign", speed=0.0, yaw_rate=0.0, dt=0.02)
+        >>> round(l, 3)
+        1.393
+    """
+
+    def __init__(self, config: LidarTargetConfig | None = None) -> None:
+        self.config = config or LidarTargetConfig()
+        c = self.config
+        # The LiDAR's position in the camera frame, (2, 1) m: camera = LiDAR + offset.
+        self._offset = np.array([[c.lidar_position_m[0] - c.camera_position_m[0]],
+                                 [c.lidar_position_m[1] - c.camera_position_m[1]]])
+        self._n_beams = -1
+        self._sector_idx = np.zeros(0, np.int64)
+        self._cos_sin = np.zeros((2, 0))
+        self._beam_step = 0.0
+        self.reset()
+
+    def reset(self) -> None:
+        """Forgets the track (start of an episode)."""
+        self._pos: tuple[float, float] | None = None  # body frame, m
+        self._kind: str | None = None
+        self._age = math.inf  # since support, s
+        self._reporting = False  # the latest scan since the track started supported it
+        self._n_points = 0
+        self._n_clusters = 0
+        self._value = math.nan
+
+    @property
+    def state(self) -> LidarTargetState:
+        """The track after the last step."""
+        if self._pos is None:
+            return LidarTargetState(False, None, (math.nan, math.nan), self._value, False, math.inf, math.nan,
+                                    0, self._n_clusters)
+        cx, cy = self.config.camera_position_m
+        return LidarTargetState(True, self._kind, (self._pos[0] - cx, self._pos[1] - cy), self._value,
+                                math.isfinite(self._value), self._age, self._gate(), self._n_points,
+                                self._n_clusters)
+
+    def step(self, *, scan: np.ndarray | None, detection_bearing: float,
+             detection_span: tuple[float, float] | None, target: str, speed: float, yaw_rate: float,
+             dt: float, lateral_speed: float = 0.0, detection_depth: float = math.nan) -> float:
+        """Advances one control step and returns l.
+
+        Args:
+            scan: (N,) ranges of a scan that arrived on this step, metres (beam i at
+                2 pi i / N counter-clockwise from forward; inf, NaN or <= 0 = no return);
+                None on steps without a new scan.
+            detection_bearing: bearing of the detection's centre from the optical axis,
+                rad, left positive; NaN without a detection.
+            detection_span: (left, right) bearings of the detection box's edges, rad, or None.
+            target: "sign" or "obstacle", the kind the detection is of.
+            speed: forward speed of the car's reference point, m/s.
+            yaw_rate: rad/s, counter-clockwise positive.
+            dt: time since the previous step, s.
+            lateral_speed: body-frame sideways speed of the reference point, m/s (left).
+            detection_depth: the camera's depth distance of the detection, m (NaN: none).
+                Used only to start a track: the first cluster must agree with it within
+                ``start_depth_tolerance_m``. When a sign is seen so obliquely that no beam
+                hits its plate, the cluster inside its box is whatever stands behind it.
+
+        Returns:
+            Depth of the tracked target along the camera's optical axis, metres; NaN before
+            any track, on and after a scan that does not support it, and once the last
+            support is older than ``report_max_age_s``.
+        """
+        if target not in TARGET_KINDS:
+            raise ValueError(f"target must be one of {TARGET_KINDS}, got {target!r}")
+        if not (dt >= 0 and math.isfinite(dt)):
+            raise ValueError(f"dt must be a finite number >= 0 s, got {dt!r}")
+        if self._pos is not None and target != self._kind:
+            self.reset()
+        c = self.config
+        if self._pos is not None:
+            self._pos = _move(self._pos, speed * dt, lateral_speed * dt, yaw_rate * dt)
+            self._age += dt
+        if scan is not None:
+            det = detection_bearing is not None and math.isfinite(detection_bearing)
+            self._measure(scan, detection_bearing if det else None, detection_span if det else None, target,
+                          detection_depth if det else math.nan)
+        if self._pos is not None and self._age > c.drop_after_s:
+            self.reset_track()
+        if self._pos is not None and self._reporting and self._age <= c.report_max_age_s:
+            self._value = self._pos[0] - c.camera_position_m[0]
+        else:
+            self._value = math.nan
+        return self._value
+
+    def reset_track(self) -> None:
+        """Drops the track but keeps the last scan's cluster count (for the state)."""
+        n = self._n_clusters
+        self.reset()
+        self._n_clusters = n
+
+    # -- internals ------------------------------------------------------------------------
+    def _gate(self) -> float:
+        return self.config.gate_radius_m + self.config.gate_growth_mps * self._age
+
+    def _measure(self, scan: np.ndarray, bearing: float | None, span: tuple[float, float] | None,
+                 target: str, depth: float) -> None:
+        """Associates one scan with the track (or starts one) and updates it."""
+        c = self.config
+        cl = self._clusters(scan)
+        self._n_clusters = 0 if cl is None else cl[0].shape[1]
+        tracked = self._pos is not None
+        if cl is None or (not tracked and bearing is None):
+            self._reporting = False
+            return
+        mean, lo, hi, half, counts, starts, pts = cl
+        mx, my = mean[0], mean[1]
+        # Vectorised pre-selection; the width check below runs on the few survivors.
+        if bearing is not None:
+            pad = half + c.bearing_margin_rad
+            ok = (lo - pad <= bearing) & (hi + pad >= bearing) & (mx > 0)
+        else:
+            ok = mx > 0
+        if tracked:
+            px, py = self._pos[0] - c.camera_position_m[0], self._pos[1] - c.camera_position_m[1]
+            dist = np.hypot(mx - px, my - py)
+            ok &= dist <= self._gate()
+        picked, best = -1, math.inf
+        w_lo, w_hi = c.width_m(target)
+        if span is not None:
+            left, right = max(span), min(span)
+            box_lo, box_hi = c.box_width_m(target)
+            tan_span = math.tan(left) - math.tan(right)
+        for k in np.flatnonzero(ok).tolist():
+            x, y = float(mx[k]), float(my[k])
+            rho = math.hypot(x, y)
+            spacing = 2.0 * float(half[k]) * rho  # beam spacing at the cluster's range, m
+            s, e = int(starts[k]), int(starts[k] + counts[k])
+            sin_b, cos_b = y / rho, x / rho
+            across = (cos_b * pts[1, s:e] - sin_b * pts[0, s:e]).tolist()
+            extent = max(across) - min(across)
+            if extent > w_hi + spacing or extent + 2.0 * spacing < w_lo:
+                continue
+            if tracked:
+                score = float(dist[k])
+            else:
+                if span is not None:
+                    implied = x * tan_span  # width of the box at the cluster's depth, m
+                    if not box_lo <= implied <= box_hi:
+                        continue
+                if abs(x - depth) > c.start_depth_tolerance_m:  # False when depth is NaN
+                    continue
+                score = abs(math.atan2(y, x) - bearing)
+                if span is not None:
+                    score += max(float(hi[k] + half[k]) - left, 0.0) + max(right - float(lo[k] - half[k]), 0.0)
+            if score < best:
+                picked, best = k, score
+        if picked < 0:
+            self._reporting = False
+            return
+        zx = float(mx[picked]) + c.camera_position_m[0]
+        zy = float(my[picked]) + c.camera_position_m[1]
+        if tracked and self._reporting:
+            a = c.smoothing
+            zx = self._pos[0] + a * (zx - self._pos[0])
+            zy = self._pos[1] + a * (zy - self._pos[1])
+        self._pos = (zx, zy)
+        self._kind = target
+        self._age = 0.0
+        self._reporting = True
+        self._n_points = int(counts[picked])
+
+    def _clusters(self, scan: np.ndarray):
+        """Clusters of the forward sector's returns, camera frame; None without returns.
+
+        Returns:
+            ``(mean, lo, hi, half, counts, starts, points)``: (2, K) centroids (x, y), m;
+            (K,) min and max bearing of the points, rad; (K,) half a beam step at the
+            cluster's range, as a bearing, rad; (K,) point counts; (K,) offsets of each
+            cluster's points in ``points``, (2, M) the points (x, y) grouped by cluster, m.
+        """
+        c = self.config
+        scan = np.asarray(scan)
+        if scan.ndim != 1 or scan.size < 8:
+            raise ValueError(f"scan must be a 1-D array of >= 8 ranges, got shape {scan.shape}")
+        if scan.size != self._n_beams:
+            self._set_beams(scan.size)
+        r = scan[self._sector_idx]
+        with np.errstate(invalid="ignore"):
+            ok = (r <= c.max_range_m) & (r > 0)
+        r = r[ok].astype(np.float64)
+        if r.size == 0:
+            return None
+        lidar = r * self._cos_sin[:, ok]  # (2, M) in the LiDAR frame
+        labels = segment_scan(lidar.T, c.eps_m, beam_step_rad=self._beam_step)
+        order = np.argsort(labels, kind="stable")
+        counts = np.bincount(labels)
+        starts = np.cumsum(counts) - counts
+        pts = np.empty((3, r.size))
+        pts[:2] = lidar
+        pts[:2] += self._offset  # camera frame
+        pts[2] = r
+        pts = pts[:, order]
+        sums = np.add.reduceat(pts, starts, axis=1) / counts
+        bearing = np.arctan2(pts[1], pts[0])
+        lo = np.minimum.reduceat(bearing, starts)
+        hi = np.maximum.reduceat(bearing, starts)
+        half = (0.5 * self._beam_step) * sums[2] / np.hypot(sums[0], sums[1])
+        return sums[:2], lo, hi, half, counts, starts, pts
+
+    def _set_beams(self, n: int) -> None:
+        """Caches the beams of the forward sector, in increasing angle (-sector..+sector)."""
+        step = 2 * math.pi / n
+        # A point ahead of the camera (x > 0) at camera bearing beta is, seen from a LiDAR
+        # behind the camera at (-a, -b) in the camera frame, x (1, tan beta) + (a, b): its
+        # LiDAR bearing lies between beta and atan2(b, a). So that sector holds them all.
+        a, b = -self._offset[0, 0], -self._offset[1, 0]
+        half = max(self.config.sector_half_angle_rad, math.atan2(abs(b), a)) if a > 0 else math.pi
+        m = int(half / step + 1e-9)
+        idx = np.concatenate([np.arange(n - m, n), np.arange(0, m + 1)]) if 2 * m + 1 < n else np.arange(n)
+        angles = idx * step
+        self._n_beams = n
+        self._sector_idx = idx
+        self._cos_sin = np.stack([np.cos(angles), np.sin(angles)])
+        self._beam_step = step
+
+
+def _move(pos: tuple[float, float], forward: float, sideways: float, turn: float) -> tuple[float, float]:
+    """A static point in the body frame after the car moves (forward, sideways) along its
+    mean heading and turns by ``turn`` radians."""
+    h = 0.5 * turn
+    ch, sh = math.cos(h), math.sin(h)
+    tx = forward * ch - sideways * sh
+    ty = forward * sh + sideways * ch
+    dx, dy = pos[0] - tx, pos[1] - ty
+    c, s = math.cos(turn), math.sin(turn)
+    return (c * dx + s * dy, -s * dx + c * dy)
