@@ -85,7 +85,7 @@ def _parser() -> argparse.ArgumentParser:
     co = sub.add_parser("collect", help="record the multi-sensor dataset of drives (Parquet, splits, card); resumes")
     co.add_argument("--out", type=Path, default=Path("data/qcar2"), help="dataset folder (default data/qcar2)")
     co.add_argument("--drives", type=_count, default=None,
-                    help="drives of 20-60 s, each meeting >= 2 targets (default 40: > 67,821 samples)")
+                    help="drives of 20-60 s, each meeting >= 2 targets (default 36: > 67,821 samples)")
     co.add_argument("--seed", type=int, default=0, help="collection seed (drive seeds and the splits)")
     co.add_argument("--workers", type=_count, default=min(2, os.cpu_count() or 1), help="parallel processes")
     co.add_argument("--summary", action="store_true", help="print the summary as one JSON object")
@@ -327,10 +327,30 @@ def _train(args: argparse.Namespace) -> int:
     model.save(out)
     (out / "train_report.json").write_text(json.dumps(report, indent=1))
     print(json.dumps(report, indent=1))
+    print(_train_table(report))
     shipped = " (the shipped head)" if out.resolve() == SHIPPED_HEAD.resolve() else \
         f"; the shipped head ({SHIPPED_HEAD}) is unchanged"
     print(f"head parameters: {report['head_parameters']}; checkpoint: {out}{shipped}")
     return 0
+
+
+def _train_table(report: dict) -> str:
+    """The test-split table of a training report: raw depth against ODCA per preset, and clean pass-through."""
+    def f(v):
+        return "-" if v is None else f"{v:.4f}"
+
+    lines = [f"test split ({report['split']}); RMSE/MAE in m against d_clean (all, moving) and against d_true",
+             f"{'preset':<8}{'N':>7}{'N moving':>9}{'RMSE raw':>10}{'RMSE ODCA':>11}{'moving raw':>12}"
+             f"{'moving ODCA':>13}{'MAE raw':>9}{'MAE ODCA':>10}{'vs true raw':>13}{'vs true ODCA':>14}"]
+    for preset, r in report["test"].items():
+        lines.append(f"{preset:<8}{r['n']:>7}{r['n_moving']:>9}{f(r['rmse_raw']):>10}{f(r['rmse']):>11}"
+                     f"{f(r['rmse_moving_raw']):>12}{f(r['rmse_moving']):>13}{f(r['mae_raw']):>9}{f(r['mae']):>10}"
+                     f"{f(r['rmse_true_raw']):>13}{f(r['rmse_true']):>14}")
+    p = report["clean_pass_through"]
+    lines.append(f"clean pass-through (input = d_clean): unchanged on {p['unchanged_share_both_present']:.2%} of "
+                 f"{p['n_both_present']} steps with depth and LiDAR; RMSE vs input {p['rmse_vs_input']:.4f} m over "
+                 f"{p['n_depth']} steps with depth; changed > 1 cm on {p['changed_over_1cm_share']:.2%}")
+    return "\n".join(lines)
 
 
 def _attack_study(args: argparse.Namespace) -> int:

@@ -218,9 +218,9 @@ class ODCA:
     def _compute(self, d, c, l, v, mu, sigma, d_prev, hold, dt):
         l_al = self.config.alignment(l)
         x = features(d, c, l_al, v, mu, sigma, d_prev, hold, dt)
-        return self.repair(x, d, l_al, base_distance(d, mu, l_al, hold), hold, mu, sigma)
+        return self.repair(x, d, c, l_al, base_distance(d, mu, l_al, hold), hold, mu, sigma)
 
-    def repair(self, x, d, l_al, base, hold, mu=np.nan, sigma=np.nan):
+    def repair(self, x, d, c, l_al, base, hold, mu=np.nan, sigma=np.nan):
         """Head, gate and fusion from precomputed features (training and scoring reuse it).
 
         Returns the ``FusedSample`` fields as arrays, in order.
@@ -228,7 +228,7 @@ class ODCA:
         delta = self.head(x)
         d_rep = base + delta
         r_xs = np.abs(d - l_al)  # NaN when either is missing -> w = 1
-        w = gate_weight(r_xs, self.config.gate)
+        w = gate_weight(r_xs, self.config.gate, d, c)
         d_fused = fuse(d, d_rep, w)
         # Never NaN or inf out: an unusable repair falls back to the hold value.
         d_fused = np.where(np.isfinite(d_fused), d_fused, hold)

@@ -43,6 +43,7 @@ def prepare(model: ODCA, frame: pd.DataFrame) -> dict[str, np.ndarray]:
                       "l_al": l_al, "v": v,
                       "trusted": trusted,
                       "label": s["label"].to_numpy(), "d_clean": s["d_clean"].to_numpy(float),
+                      "d_true": s["d_true"].to_numpy(float) if "d_true" in s else np.full(len(d), np.nan),
                       "first": np.arange(len(d)) == 0})
     return {k: np.concatenate([p[k] for p in parts]) for k in parts[0]}
 
@@ -76,30 +77,74 @@ def train_head(data: dict[str, np.ndarray], tau_low: float, dt: float = 0.02, ep
 
 def _fused(model: ODCA, data: dict[str, np.ndarray]) -> np.ndarray:
     """The module's own output from the prepared features (no second copy of the fusion)."""
-    return model.repair(data["x"], data["d"], data["l_al"], data["base"], data["hold"])[0]
+    return model.repair(data["x"], data["d"], data["c"], data["l_al"], data["base"], data["hold"])[0]
+
+
+#: A sample is moving above this speed, m/s (the protocol's standstill bound).
+MOVING_MPS = 0.05
+
+
+def _rmse(err: np.ndarray) -> float | None:
+    return float(np.sqrt(np.mean(err**2))) if len(err) else None
 
 
 def score(model: ODCA, data: dict[str, np.ndarray]) -> dict[str, float]:
-    """RMSE/MAE against d_clean of ODCA's output and of the raw measurement (last valid value held)."""
-    ok = np.isfinite(data["d_clean"])
+    """RMSE/MAE against d_clean (all and moving samples) and RMSE against d_true, of ODCA and of raw depth.
+
+    Raw depth holds the last valid value of its series; the steps before a series' first
+    valid measurement are scored for neither.
+    """
     fused = _fused(model, data)
-    raw = pd.Series(data["d"]).ffill().fillna(0.0).to_numpy()
-    err, err_raw = (fused - data["d_clean"])[ok], (raw - data["d_clean"])[ok]
-    return {"rmse": float(np.sqrt(np.mean(err**2))), "mae": float(np.mean(np.abs(err))),
-            "rmse_raw": float(np.sqrt(np.mean(err_raw**2))), "mae_raw": float(np.mean(np.abs(err_raw))),
-            "n": int(ok.sum())}
+    held = pd.Series(data["d"]).groupby(np.cumsum(data["first"])).ffill().to_numpy()
+    scored = np.isfinite(held)
+    ok = scored & np.isfinite(data["d_clean"])
+    moving = ok & (np.abs(data["v"]) > MOVING_MPS)
+    ok_true = scored & np.isfinite(data["d_true"])
+    out = {"n": int(ok.sum()), "n_moving": int(moving.sum())}
+    for name, est in (("", fused), ("_raw", held)):
+        err = est - data["d_clean"]
+        out[f"rmse{name}"] = _rmse(err[ok])
+        out[f"mae{name}"] = float(np.mean(np.abs(err[ok]))) if ok.any() else None
+        out[f"rmse_moving{name}"] = _rmse(err[moving])
+        out[f"rmse_true{name}"] = _rmse((est - data["d_true"])[ok_true])
+    return out
+
+
+def pass_through(model: ODCA, frame: pd.DataFrame, tolerance_m: float = 1e-9) -> dict[str, float]:
+    """Clean pass-through: ODCA fed clean series (the input is d_clean itself).
+
+    Returns the share of steps with depth and LiDAR both present that come out unchanged,
+    and ODCA's RMSE against its input over every step with a depth.
+    """
+    clean = frame.assign(d_meas=frame["d_clean"], c_meas=frame["c_clean"])
+    fused = model.run(clean)["d_fused"].to_numpy()
+    d = clean["d_meas"].to_numpy(float)
+    has_d = np.isfinite(d)
+    both = has_d & np.isfinite(clean["lidar"].to_numpy(float))
+    change = np.abs(fused - d)
+    return {"unchanged_share_both_present": float(np.mean(change[both] <= tolerance_m)) if both.any() else None,
+            "changed_over_1cm_share": float(np.mean(change[has_d] > 0.01)) if has_d.any() else None,
+            "rmse_vs_input": _rmse((fused - d)[has_d]), "n_both_present": int(both.sum()), "n_depth": int(has_d.sum())}
 
 
 def calibrate_gate(model: ODCA, val: dict[str, np.ndarray]) -> GateConfig:
-    """tau_low among high percentiles of unattacked residuals, (tau_high, gamma) by grid search on validation RMSE."""
+    """The gate from validation data.
+
+    tau_low among the 99th / 99.5th percentiles of unattacked depth-LiDAR residuals (so
+    clean samples pass unchanged: Proposition 1); trust_confidence at the 1st percentile
+    of unattacked confidences (a clean depth with no LiDAR passes too); (tau_high, gamma)
+    by grid search for the lowest validation RMSE.
+    """
     r = np.abs(val["d"] - val["l_al"])
-    clean_r = r[(val["label"] == 0) & np.isfinite(r)]
+    unattacked = (val["label"] == 0) & np.isfinite(val["d"])
+    clean_r = r[unattacked & np.isfinite(r)]
+    trust = float(np.percentile(val["c"][unattacked], 1.0)) if unattacked.any() else 1.01
     best = None
-    for pct in (95.0, 99.0, 99.5):
+    for pct in (99.0, 99.5):
         tau_low = float(np.percentile(clean_r, pct)) if clean_r.size else 0.1
         for span in (0.05, 0.1, 0.2, 0.3, 0.5):
             for gamma in (0.5, 1.0, 2.0):
-                gate = GateConfig(tau_low, tau_low + span, gamma)
+                gate = GateConfig(tau_low, tau_low + span, gamma, trust)
                 model.config = replace(model.config, gate=gate)
                 rmse = score(model, val)["rmse"]
                 if best is None or rmse < best[0]:
@@ -130,9 +175,10 @@ def train_odca(dataset, prior, epochs: int = 800, seed: int = 0, presets=("weak"
     head, history = train_head(train, tau_low, config.dt, epochs=epochs, seed=seed, progress=progress)
     model.head = head
     gate = calibrate_gate(model, val)
-    report = {"alignment": asdict(alignment), "gate": asdict(gate), "head_parameters": head.n_parameters,
-              "final_losses": history[-1], "epochs": epochs, "seed": seed, "train_steps": int(len(train["d"])),
-              "test": {}}
+    report = {"split": getattr(dataset, "scheme", "by_series"), "alignment": asdict(alignment), "gate": asdict(gate),
+              "head_parameters": head.n_parameters, "final_losses": history[-1], "epochs": epochs, "seed": seed,
+              "train_steps": int(len(train["d"])), "test": {}}
     for preset in presets:
         report["test"][preset] = score(model, prepare(model, dataset.corrupted(preset, "test")))
+    report["clean_pass_through"] = pass_through(model, dataset.clean("test"))
     return model, report

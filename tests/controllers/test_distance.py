@@ -1,4 +1,4 @@
-"""Depth distance and the LiDAR reference on known geometry."""
+"""Depth distance and the camera model on known geometry (the LiDAR reference: test_lidar_target.py)."""
 
 import math
 
@@ -7,7 +7,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from controllers import CameraModel, DepthDistance, Detection, LidarReference, LidarReferenceConfig
+from controllers import CameraModel, DepthDistance, Detection
 
 CAM = CameraModel(width=320, fx=227.6, cx=160.0)
 
@@ -56,48 +56,7 @@ def test_depth_median_ignores_a_minority_of_outliers(true_d, outlier_share):
     assert d == pytest.approx(true_d, rel=1e-6)
 
 
-def _scan_with_plate(x: float, y: float, width: float = 0.1, n: int = 360, wall_m: float = np.inf) -> np.ndarray:
-    """Ranges (LiDAR frame) of a flat plate centred at (x, y), facing the LiDAR, plus an optional wall ring."""
-    angles = 2 * np.pi * np.arange(n) / n
-    ranges = np.full(n, wall_m)
-    for i, a in enumerate(angles):
-        if math.cos(a) <= 0:
-            continue
-        r = x / math.cos(a)  # plate in the plane x = const
-        if abs(r * math.sin(a) - y) <= width / 2:
-            ranges[i] = min(ranges[i], r)
-    return ranges
-
-
-def test_lidar_reference_is_the_plate_range_near_the_detection():
-    ref = LidarReference(CAM)
-    scan = _scan_with_plate(1.5, -0.2, wall_m=4.0)
-    # A detection box around the plate's bearing as the camera sees it.
-    cam_x, cam_y = 1.5 - 0.107, -0.2 - 0.032
-    u = CAM.cx - CAM.fx * cam_y / cam_x
-    mask = _box_mask(int(u) - 3, 100, int(u) + 4, 110)
-    l = ref.estimate(scan, _detection(mask))
-    assert l == pytest.approx(math.hypot(1.5, 0.2), abs=0.01)
-
-
-def test_lidar_reference_picks_the_nearest_cluster_in_view_and_ignores_what_is_behind_or_outside():
-    ref = LidarReference(CAM)
-    scan = _scan_with_plate(2.0, 0.3)
-    near = _scan_with_plate(1.0, -0.1)
-    scan = np.minimum(scan, near)
-    assert ref.estimate(scan) == pytest.approx(math.hypot(1.0, 0.1), abs=0.01)
-    behind = np.full(360, np.inf)
-    behind[180] = 0.5  # straight behind the car
-    behind[90] = 0.4  # straight to the left: outside a 70 deg field of view
-    assert math.isnan(ref.estimate(behind))
-    assert math.isnan(ref.estimate(np.full(360, np.inf)))
-
-
-def test_lidar_bad_input_and_config():
-    with pytest.raises(ValueError, match="1-D scan"):
-        LidarReference(CAM).estimate(np.ones((2, 180)))
-    with pytest.raises(ValueError, match="eps_m"):
-        LidarReferenceConfig(eps_m=0.0)
+def test_camera_model_rejects_bad_intrinsics():
     with pytest.raises(ValueError, match="fx > 0"):
         CameraModel(width=320, fx=-1.0, cx=160.0)
 

@@ -40,3 +40,21 @@ def test_gate_shape_and_missing_residual():
         GateConfig(0.3, 0.2)
     with pytest.raises(ValueError, match="gamma"):
         GateConfig(0.1, 0.2, 0.0)
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.floats(0.01, 40), finite, gates, st.floats(0, 1), st.floats(0, 1))
+def test_without_lidar_a_trusted_depth_passes_and_anything_less_is_repaired(d, rep, gate, trust, c):
+    gate = GateConfig(gate.tau_low, gate.tau_high, gate.gamma, trust)
+    w = float(gate_weight(np.nan, gate, depth=d, confidence=c))
+    if c >= trust:
+        assert w == 0.0 and fuse(d, rep, w) == d
+    else:
+        assert w == 1.0
+    assert gate_weight(np.nan, gate, depth=np.nan, confidence=1.0) == 1.0  # no depth: always the repair
+
+
+def test_default_gate_never_trusts_a_depth_without_lidar():
+    assert gate_weight(np.nan, GateConfig(), depth=1.0, confidence=1.0) == 1.0
+    with pytest.raises(ValueError, match="trust_confidence"):
+        GateConfig(0.1, 0.2, 1.0, 2.0)
