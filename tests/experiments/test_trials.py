@@ -3,6 +3,8 @@
 import json
 import math
 
+import numpy as np
+
 import pandas as pd
 import pytest
 
@@ -136,3 +138,17 @@ def test_clean_obstacle_trial_stops_before_the_crate():
     assert len(seen) > 20 and (seen["d_meas"] - seen["d_true"]).abs().median() < 0.05
     with pytest.raises(ValueError, match="obstacle index must be 0..1"):
         TrialSpec("clean", 3, 1.0, 0, target="obstacle")
+
+
+def test_clean_drive_serves_every_target_in_turn():
+    spec = TrialSpec("clean", 0, 1.5, 4, target="drive", drive_s=(10.0, 15.0))
+    result, log = run_trial(spec)
+    assert result.n_targets >= 2 and result.targets_served == result.n_targets and result.success
+    assert (np.diff(log["slot"]) >= 0).all() and log["slot"].max() == result.n_targets - 1
+    for _, part in log.groupby("slot"):
+        assert part["brake"].any()  # every target got its own stop
+    # The LiDAR reference is the target's: within a few cm of d_true wherever it reports.
+    ref = log[np.isfinite(log["lidar"])]
+    assert len(ref) > 100 and np.abs(ref["lidar"] - ref["d_true"]).max() < 0.15
+    assert log["scan_new"].mean() == pytest.approx(0.2, abs=0.01)
+    assert "_d10-15" in spec.trial_id
