@@ -110,7 +110,8 @@ def targets_on_path(path: Path, crate: int | None = None, start_s: float = 0.0) 
     serve them). Nothing after the crate counts: the crate ends the drive.
 
     Raises:
-        ValueError: the crate stands on the path closer than that ahead of the start.
+        ValueError: the crate stands on the path closer than that ahead of the start, or
+            the path runs into it without crossing its stop line first.
     """
     found: list[RouteTarget] = []
     candidates: list[StopSign | Obstacle] = list(stop_signs())
@@ -133,8 +134,28 @@ def targets_on_path(path: Path, crate: int | None = None, start_s: float = 0.0) 
     found.sort(key=lambda t: t.stop_s)
     for i, t in enumerate(found):
         if t.kind == "obstacle":
-            return tuple(found[:i + 1])
+            found = found[:i + 1]
+            break
+    if crate is not None:
+        _check_crate_clear(path, obstacles()[crate], start_s, found[-1].stop_s if found and
+                           found[-1].kind == "obstacle" else path.length)
     return tuple(found)
+
+
+#: The car's path must keep this far from a placed crate's centre (half the car's width,
+#: half the crate's width across the lane and a margin; the opposite lane, 0.27 m away,
+#: passes), except on the approach that ends at it.
+_CRATE_CLEARANCE_M = 0.2
+
+
+def _check_crate_clear(path: Path, crate: Obstacle, start_s: float, end_s: float) -> None:
+    """Raises ValueError when the path between start_s and end_s runs into the crate (e.g. by
+    merging onto its lane past its stop line)."""
+    part = (path.arclength >= start_s - 0.3) & (path.arclength <= end_s)
+    gap = np.linalg.norm(path.points[part] - np.asarray(crate.body_centre), axis=1)
+    if gap.size and gap.min() < _CRATE_CLEARANCE_M:
+        raise ValueError(f"the route runs into crate {crate.index} (within {gap.min():.2f} m of it) "
+                         "without meeting its stop line first")
 
 
 def _standoff(crate: Obstacle) -> float:
@@ -152,14 +173,17 @@ def draw_drive(rng: np.random.Generator, min_duration_s: float = 20.0, max_durat
     lateral offset (+-3 cm), the heading error (+-5 deg), the cruise speed (a nominal
     speed of ``NOMINAL_SPEEDS_MPS`` x U(0.9, 1.1)), a duration the walk is grown to
     (``estimate_duration_s``; drawn within the limits less a margin for the estimate's
-    error), and whether the drive ends at a crate. Walks with too few targets are drawn again (from the same generator).
-    ``nominal_speed_mps`` fixes the nominal speed (a collection balances them); the
-    +-10 % draw still applies.
+    error), and whether the drive ends at a crate (the walk then takes the shortest way
+    onto the crate's lane). Walks with too few targets, or that would run into the crate,
+    are drawn again from the same generator. ``nominal_speed_mps`` fixes the nominal speed
+    (a collection balances them); the +-10 % draw still applies.
     """
     if not 0 < min_duration_s <= max_duration_s:
         raise ValueError(f"need 0 < min_duration_s <= max_duration_s, got {min_duration_s}, {max_duration_s}")
     if not 0.0 <= crate_share <= 1.0:
         raise ValueError(f"crate_share must be in [0, 1], got {crate_share}")
+    if min_targets < 1:
+        raise ValueError(f"min_targets must be >= 1, got {min_targets}")
     graph = qcar2_road_graph()
     nodes = sorted(graph.nodes)
     for _ in range(max_tries):
@@ -172,24 +196,9 @@ def draw_drive(rng: np.random.Generator, min_duration_s: float = 20.0, max_durat
         duration = float(rng.uniform(lo, hi))
         crate = int(rng.integers(len(obstacles()))) if rng.random() < crate_share else None
         route = [start]
-        while True:
-            route.append(int(rng.choice(graph.successors(route[-1]))))
-            if len(route) == 2:
-                first_edge = graph.paths[(route[0], route[1])].length
-                start_s = float(rng.uniform(0.0, 0.6) * first_edge)
-            path = graph.route_path(route)
-            try:
-                targets = targets_on_path(path, crate, start_s)
-            except ValueError:  # the crate stands right ahead of the start
-                targets = ()
-                break
-            est_s = estimate_duration_s(path, start_s, targets, speed)
-            if crate is not None and targets and targets[-1].kind == "obstacle":
-                break
-            if est_s >= duration and crate is None:
-                break
-            if est_s >= max_duration_s * 1.5:
-                break
+        route.append(int(rng.choice(graph.successors(start))))
+        start_s = float(rng.uniform(0.0, 0.6) * graph.paths[(route[0], route[1])].length)
+        targets, est_s = _grow(rng, route, start_s, speed, duration, crate)
         if len(targets) < min_targets or (crate is not None and targets[-1].kind != "obstacle"):
             continue
         if not lo <= est_s <= hi:
@@ -229,6 +238,33 @@ def estimate_duration_s(path: Path, start_s: float, targets: tuple[RouteTarget, 
     v = np.minimum(speed_mps, np.sqrt(_CURVE_ACCEL_MPS2 / np.maximum(k[part], 1e-9)))
     ds = np.diff(s[part], append=s[part][-1]) if part.any() else np.zeros(0)
     return float(_DRIVE_STRETCH * np.sum(ds / v) + _STOP_COST_S * len(targets) + _END_OFFSET_S)
+
+
+def _grow(rng: np.random.Generator, route: list[int], start_s: float, speed: float, duration: float,
+          crate: int | None) -> tuple[tuple[RouteTarget, ...], float]:
+    """Extends ``route`` in place by random successors until the drive lasts ``duration``;
+    with a crate, then by the shortest way onto the crate's lane and up to it. Returns the
+    targets and the estimated duration (no targets when the route runs into the crate)."""
+    graph = qcar2_road_graph()
+    # A crate's approach from its lane's first node takes about this long.
+    reserve = 0.0 if crate is None else obstacles()[crate].stop_s / speed + 3.0
+    while True:
+        path = graph.route_path(route)
+        targets = targets_on_path(path, None, start_s)
+        est_s = estimate_duration_s(path, start_s, targets, speed)
+        if est_s >= duration - reserve or path.length > 200.0:
+            break
+        route.append(int(rng.choice(graph.successors(route[-1]))))
+    if crate is not None:
+        lane = obstacles()[crate].route
+        route += graph.shortest_route(route[-1], lane[0])[1:] + list(lane[1:])
+        path = graph.route_path(route)
+        try:
+            targets = targets_on_path(path, crate, start_s)
+        except ValueError:  # the route runs into the crate
+            return (), math.inf
+        est_s = estimate_duration_s(path, start_s, targets, speed)
+    return targets, est_s
 
 
 def _trim_after(route: list[int], s: float) -> list[int]:
