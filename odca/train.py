@@ -71,7 +71,7 @@ def train_head(data: dict[str, np.ndarray], tau_low: float, dt: float = 0.02, ep
                                    dt, tau_low, weights, trusted)
         total.backward()
         opt.step()
-        history.append({"total": float(total), **{k: float(v) for k, v in parts.items()}})
+        history.append({"total": float(total.detach()), **{k: float(v.detach()) for k, v in parts.items()}})
     return HeadWeights.from_module(head), history
 
 
