@@ -110,6 +110,14 @@ def _parser() -> argparse.ArgumentParser:
     tr.add_argument("--epochs", type=_count, default=800)
     tr.add_argument("--seed", type=int, default=0)
 
+    ev = sub.add_parser("evaluate", help="score an ODCA checkpoint against raw depth on a dataset's test split "
+                                         "(weak/mid/strong presets, clean pass-through)")
+    ev.add_argument("--checkpoint", type=Path, default=None, help="ODCA folder (default: the shipped head)")
+    ev.add_argument("--dataset", type=Path, default=Path("data/qcar2"), help="dataset folder (racf collect)")
+    ev.add_argument("--split", choices=("by_series", "leave_target_out"), default="by_series",
+                    help="split scheme whose test series are scored (default by_series)")
+    ev.add_argument("--json", action="store_true", help="print one JSON object instead of the table")
+
     ol = sub.add_parser("odca-latency", help="per-step latency of the online ODCA module (median, p99)")
     ol.add_argument("--steps", type=_count, default=2000)
     ol.add_argument("--threads", type=_count, default=1, help="torch threads (default 1)")
@@ -229,6 +237,13 @@ def main(argv: list[str] | None = None) -> int:
         return _pretrain_prior(args)
     elif args.command == "train":
         return _train(args)
+    elif args.command == "evaluate":
+        from experiments.dataset import load_dataset
+        from odca.online import ODCA
+        from odca.train import evaluate
+
+        report = evaluate(ODCA.load(args.checkpoint), load_dataset(args.dataset, split=args.split))
+        print(json.dumps(report) if args.json else _train_table(report))
     elif args.command == "odca-latency":
         from experiments.odca_latency import odca_latency
 
