@@ -12,7 +12,7 @@ from experiments.dataset import (COLUMNS, SPLIT_SHARES, collect, collection_spec
                                  make_target_split)
 
 #: Short drives keep the test collection small (the default drives last 20-60 s).
-SHORT = (10.0, 15.0)
+SHORT = (10.0, 20.0)
 
 
 @pytest.fixture(scope="module")
@@ -40,8 +40,10 @@ def test_counts_columns_units_and_files(small):
     assert df["scan_new"].mean() == pytest.approx(0.2, abs=0.01)
     scans = np.stack(df["scan_fov_mm"].to_numpy())
     assert scans.shape[1] == 81 and scans.dtype == np.uint16
-    for name in ("dataset_card.md", "series.png", "split.json"):
+    for name in ("dataset_card.md", "series.png"):
         assert (small / name).stat().st_size > 500
+    split = json.loads((small / "split.json").read_text())
+    assert {"by_series", "leave_target_out"} <= set(split)
 
 
 def test_start_poses_differ_between_series(small):
