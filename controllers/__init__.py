@@ -5,7 +5,8 @@ from controllers.detector import Detection, DetectorConfig, StopSignDetector
 from controllers.distance import CameraModel, DepthDistance
 from controllers.lidar_segmentation import scan_points, segment_scan
 from controllers.lidar_target import LidarTargetConfig, LidarTargetState, LidarTargetTracker
-from controllers.estimators import DistanceEstimator, RawDepthEstimator
+from controllers.ekf import DistanceEKF, EKFConfig
+from controllers.estimators import DistanceEstimator, EKFEstimator, RawDepthEstimator
 from controllers.obstacle_detector import ObstacleDetector, ObstacleDetectorConfig
 from controllers.lane_follower import RouteFollower, StanleyConfig, StanleyController
 from controllers.perception import Perception, PerceptionSample
@@ -13,7 +14,7 @@ from controllers.speed import SpeedPI, SpeedPIConfig, SpeedProfile
 
 __all__ = [
     "BrakeDecision", "BrakingConfig", "CameraModel", "DepthDistance", "Detection", "DetectorConfig",
-    "DistanceEstimator", "LidarTargetConfig", "LidarTargetState", "LidarTargetTracker", "ObstacleDetector", "ObstacleDetectorConfig", "Perception", "PerceptionSample", "Phase",
+    "DistanceEKF", "DistanceEstimator", "EKFConfig", "EKFEstimator", "LidarTargetConfig", "LidarTargetState", "LidarTargetTracker", "ObstacleDetector", "ObstacleDetectorConfig", "Perception", "PerceptionSample", "Phase",
     "RawDepthEstimator", "RouteFollower", "scan_points", "segment_scan", "SpeedPI", "SpeedPIConfig", "SpeedProfile", "StanleyConfig",
     "StanleyController", "StopSignBraker", "StopSignDetector",
 ]

@@ -9,9 +9,10 @@ from __future__ import annotations
 
 from typing import Protocol, runtime_checkable
 
+from controllers.ekf import DistanceEKF, EKFConfig
 from controllers.perception import PerceptionSample
 
-__all__ = ["DistanceEstimator", "RawDepthEstimator"]
+__all__ = ["DistanceEstimator", "RawDepthEstimator", "EKFEstimator"]
 
 
 @runtime_checkable
@@ -37,3 +38,18 @@ class RawDepthEstimator:
 
     def estimate(self, sample: PerceptionSample, speed_mps: float, dt: float) -> float:
         return sample.d_meas
+
+
+class EKFEstimator:
+    """The EKF baseline (:mod:`controllers.ekf`): depth and LiDAR fused with odometry."""
+
+    name = "ekf"
+
+    def __init__(self, config: EKFConfig | None = None) -> None:
+        self.filter = DistanceEKF(config)
+
+    def reset(self) -> None:
+        self.filter.reset()
+
+    def estimate(self, sample: PerceptionSample, speed_mps: float, dt: float) -> float:
+        return self.filter.step(sample.d_meas, sample.c_meas, sample.lidar_m, speed_mps, dt)

@@ -17,7 +17,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from experiments.trial import STRONG_RHO, STRONG_T_ATK_S
+from experiments.episode import STRONG_RHO, STRONG_T_ATK_S
 from experiments.trials import batch_specs, run_batch, summarize
 
 __all__ = ["StudyRow", "STUDIES", "run_study"]

@@ -52,26 +52,26 @@ def _parser() -> argparse.ArgumentParser:
     d.add_argument("--seed", type=int, default=0)
     d.add_argument("--out", type=Path, default=Path("outputs/demo"), help="output folder")
     t = sub.add_parser("trial", help="one closed-loop stop-sign trial: per-step log (Parquet) and result row")
-    t.add_argument("--setting", choices=_settings(), default="clean", help="trial setting (default clean)")
+    _episode_flags(t)
     t.add_argument("--sign", type=_sign, default=2, help="stop sign 0-3, or crate 0-1 with --target obstacle (default 2)")
-    t.add_argument("--target", choices=("sign", "obstacle"), default="sign",
-                   help="approach a stop sign (default) or an obstacle crate")
+    t.add_argument("--target", choices=("sign", "obstacle", "drive"), default="sign",
+                   help="approach a stop sign (default) or an obstacle crate, or a random 20-60 s drive (--sign 0)")
     t.add_argument("--speed", type=_speed, default=1.0, help="cruise speed m/s, 0.1-3.0 (default 1.0)")
     t.add_argument("--seed", type=int, default=0)
     t.add_argument("--out", type=Path, default=Path("outputs/trial"), help="output folder")
 
     ts = sub.add_parser("trials", help="a batch of trials over the four signs and speeds 1.0/1.5/2.0 m/s: SCR, latency")
-    ts.add_argument("--setting", choices=_settings(), default="clean", help="trial setting (default clean)")
+    _episode_flags(ts)
+    ts.add_argument("--table", action="store_true",
+                    help="the paper's table: every setting of TABLE_SETTINGS (clean, clean+odca, attack, attack+odca, "
+                         "attack+ekf, attack+chronos, attack+lidar_spoof+odca), N per setting")
     ts.add_argument("-n", type=_count, default=30, help="number of trials (default 30; 12 cover every sign x speed)")
     ts.add_argument("--seed", type=int, default=0, help="seed of the first trial; trial i uses seed + i")
     ts.add_argument("--workers", type=_count, default=min(2, os.cpu_count() or 1), help="parallel processes")
     ts.add_argument("--out", type=Path, default=None,
-                    help="output folder (default outputs/trials/<setting>); finished trials there are reused")
+                    help="output folder (default outputs/trials/<setting>, outputs/table with --table); finished "
+                         "trials there are reused (their ids hash the spec, configs and code version)")
     ts.add_argument("--json", action="store_true", help="print one JSON summary object instead of tables")
-    ts.add_argument("--rho", type=_share, nargs="+", default=None, metavar="R",
-                    help="attack: patch coverage, a value or LOW HIGH (uniform), in [0, 1] (default 0.9 1.0)")
-    ts.add_argument("--t-atk", type=_duration, nargs="+", default=None, metavar="S",
-                    help="attack: patch duration s, a value or LOW HIGH (uniform) (default 0.5 3.0)")
 
     st = sub.add_parser("attack-study", help="no-defence patch attack tables: persistence, coverage, strong regime")
     st.add_argument("studies", nargs="*", default=None, metavar="STUDY",
@@ -129,10 +129,47 @@ def _parser() -> argparse.ArgumentParser:
     return p
 
 
-def _settings() -> tuple[str, ...]:
-    from experiments.trial import SETTINGS
+def _episode_flags(p: argparse.ArgumentParser) -> None:
+    """The flags ``racf trial`` and ``racf trials`` share: what runs and how."""
+    p.add_argument("--setting", default=None,
+                   help="clean or attack, then extra attacks and an estimator joined by '+', e.g. attack+odca, "
+                        "attack+lidar_spoof+odca (default clean; --attack/--estimator compose one instead)")
+    p.add_argument("--attack", default=None, metavar="A[,B]",
+                   help="attacks, comma-separated: patch, lidar_spoof, lidar_dropout (default none)")
+    p.add_argument("--estimator", default=None, help="distance estimator: raw, odca, ekf or chronos (default raw)")
+    p.add_argument("--rho", type=_share, nargs="+", default=None, metavar="R",
+                   help="patch coverage, a value or LOW HIGH (uniform), in [0, 1] (default 0.9 1.0)")
+    p.add_argument("--t-atk", type=_duration, nargs="+", default=None, metavar="S",
+                   help="attack duration s, a value or LOW HIGH (uniform) (default 0.5 3.0)")
+    p.add_argument("--delay-ms", type=float, default=0.0,
+                   help="perception-to-actuation delay, ms (default 0; the paper's offboard loop: 49)")
+    p.add_argument("--control-hz", type=float, default=None, help="controller rate, Hz (default: every 50 Hz step)")
 
-    return SETTINGS
+
+def _episode_params(args: argparse.Namespace, command: str) -> tuple[str, dict]:
+    """The setting and the spec fields the episode flags give; SystemExit(2) naming what is wrong."""
+    from experiments.episode import STRONG_RHO, STRONG_T_ATK_S, parse_setting, setting_name
+
+    def fail(msg: str):
+        print(f"racf {command}: {msg}", file=sys.stderr)
+        raise SystemExit(2)
+
+    try:
+        if args.setting is not None and (args.attack is not None or args.estimator is not None):
+            fail("give --setting, or --attack/--estimator, not both")
+        if args.setting is not None:
+            setting = args.setting
+            parse_setting(setting)
+        else:
+            attacks = [a.strip() for a in args.attack.split(",") if a.strip()] if args.attack else []
+            setting = setting_name(attacks, args.estimator or "raw")
+        if not parse_setting(setting)[0] and (args.rho is not None or args.t_atk is not None):
+            fail("--rho and --t-atk apply to settings with an attack")
+        params = {"rho": _pair("--rho", args.rho, STRONG_RHO), "t_atk": _pair("--t-atk", args.t_atk, STRONG_T_ATK_S),
+                  "delay_ms": args.delay_ms, "control_hz": args.control_hz}
+    except ValueError as err:
+        fail(str(err))
+    return setting, params
 
 
 def _speed(value: str) -> float:
@@ -207,18 +244,20 @@ def main(argv: list[str] | None = None) -> int:
         summary = run_demo(args.out, sign=args.sign, speed=args.speed, seed=args.seed)
         print(json.dumps(summary, indent=2))
     elif args.command == "trial":
-        from experiments.trial import TrialSpec, run_trial
+        from experiments.episode import TrialSpec, run_trial
 
+        setting, params = _episode_params(args, "trial")
         try:
-            spec = TrialSpec(args.setting, args.sign, args.speed, args.seed, target=args.target)
+            spec = TrialSpec(setting, args.sign, args.speed, args.seed, target=args.target, **params)
         except ValueError as err:
             print(f"racf trial: {err}", file=sys.stderr)
             return 2
         result, log = run_trial(spec)
         args.out.mkdir(parents=True, exist_ok=True)
         log.to_parquet(args.out / f"{spec.trial_id}.parquet", index=False)
-        (args.out / f"{spec.trial_id}.json").write_text(json.dumps(result.to_dict(), indent=2))
-        print(json.dumps({**result.to_dict(), "log": str(args.out / f"{spec.trial_id}.parquet")}, indent=2))
+        (args.out / f"{spec.trial_id}.json").write_text(json.dumps(result.to_dict(), indent=2, allow_nan=False))
+        print(json.dumps({**result.to_dict(), "log": str(args.out / f"{spec.trial_id}.parquet")}, indent=2,
+                         allow_nan=False))
     elif args.command == "trials":
         return _trials(args)
     elif args.command == "collect":
@@ -274,37 +313,65 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _trials(args: argparse.Namespace) -> int:
-    from experiments.trials import batch_specs, run_batch, summarize
+    from experiments.trials import batch_specs, run_batch, run_table, summarize
 
-    from experiments.trial import STRONG_RHO, STRONG_T_ATK_S
-
-    attack = args.setting != "clean"
-    if not attack and (args.rho is not None or args.t_atk is not None):
-        print("racf trials: --rho and --t-atk apply to --setting attack only", file=sys.stderr)
-        return 2
-    params = {"rho": _pair("--rho", args.rho, STRONG_RHO), "t_atk": _pair("--t-atk", args.t_atk, STRONG_T_ATK_S)}
-    out = args.out or Path("outputs/trials") / args.setting
-    results = run_batch(batch_specs(args.setting, args.n, args.seed, **(params if attack else {})), out,
-                        workers=args.workers, progress=not args.json)
-    summary = summarize(results, attack=attack)
-    if args.json:
-        print(json.dumps(summary))
+    if args.table:
+        if args.setting is not None or args.attack is not None or args.estimator is not None:
+            print("racf trials: --table runs its own settings; drop --setting/--attack/--estimator", file=sys.stderr)
+            return 2
+        args.setting = "attack"  # only to validate the shared flags
+        _, params = _episode_params(args, "trials")
+        try:
+            table = run_table(args.n, args.out or Path("outputs/table"), seed=args.seed, workers=args.workers,
+                              progress=not args.json, **params)
+        except ValueError as err:
+            print(f"racf trials: {err}", file=sys.stderr)
+            return 2
+        if args.json:
+            print(json.dumps(table, allow_nan=False))
+        else:
+            print(_table_text(table))
         return 0
-    print(f"{'sign':>4} {'speed':>6} {'N':>3} {'SCR':>5} {'latency s (mean +- std)':>26}  outcomes")
+    setting, params = _episode_params(args, "trials")
+    try:
+        specs = batch_specs(setting, args.n, args.seed, **params)
+    except ValueError as err:
+        print(f"racf trials: {err}", file=sys.stderr)
+        return 2
+    out = args.out or Path("outputs/trials") / setting
+    results = run_batch(specs, out, workers=args.workers, progress=not args.json)
+    summary = summarize(results)
+    if args.json:
+        print(json.dumps(summary, allow_nan=False))
+        return 0
+    print(f"{'sign':>4} {'speed':>6} {'N':>3} {'SCR':>5} {'dt_brake s (mean +- std)':>26}  failures")
     for (sign, speed), group in results.groupby(["sign", "speed"]):
-        lat = group.loc[group["success"], "latency_s"]
+        lat = group.loc[group["success"], "dt_brake_s"].astype(float).dropna()
         lat_text = f"{lat.mean():.3f} +- {lat.std(ddof=1) if len(lat) > 1 else 0:.3f}" if len(lat) else "-"
-        outcomes = ", ".join(f"{k} {v}" for k, v in group["outcome"].value_counts().items())
-        print(f"{sign:>4} {speed:>6.1f} {len(group):>3} {group['success'].mean():>5.2f} {lat_text:>26}  {outcomes}")
-    print(f"SCR = {summary['scr']:.2f} {_fmt_ci(*summary['scr_ci'])} (N = {summary['n']}, 95 % Wilson)")
-    if attack:
-        print(f"ASR = {summary['asr']:.2f} {_fmt_ci(*summary['asr_ci'])}; lost-detection frames (50 Hz) "
-              f"mean {summary['lost_frames_mean']:.1f}; attacked in {summary['attacked_share']:.0%} of trials")
-    if summary["n_latency"]:
-        std = summary["latency_std"] if summary["latency_std"] is not None else 0.0
-        print(f"braking latency = {summary['latency_mean']:.3f} +- {std:.3f} s over {summary['n_latency']} successful stops")
+        failures = ", ".join(f"{k} {v}" for k, v in group["failure"].dropna().value_counts().items()) or "-"
+        print(f"{sign:>4} {speed:>6.1f} {len(group):>3} {group['success'].mean():>5.2f} {lat_text:>26}  {failures}")
+    print(_table_text({setting: summary}))
     print(f"results: {out / 'results.parquet'}; per-step logs: {out / 'trials'}")
     return 0
+
+
+def _table_text(table: dict[str, dict]) -> str:
+    """SCR / ASR with Wilson intervals, trigger delay and dt_brake over successes, failures by cause."""
+    def ms(mean, std):
+        return "-" if mean is None else f"{mean:.3f} +- {std or 0:.3f}"
+
+    lines = [f"{'setting':<26}{'N':>4}{'SCR [95% Wilson]':>20}{'ASR [95% Wilson]':>20}{'trigger delay s':>18}"
+             f"{'dt_brake s':>18}{'n':>4}  failures"]
+    for name, r in table.items():
+        asr = f"{r['asr']:.2f} {_fmt_ci(*r['asr_ci'])}" if r.get("asr") is not None else "-"
+        fails = ", ".join(f"{k} {v}" for k, v in r["failures"].items() if v) or "-"
+        lines.append(f"{name:<26}{r['n']:>4}{r['scr']:>6.2f} {_fmt_ci(*r['scr_ci']):>13}{asr:>20}"
+                     f"{ms(r['trigger_delay_mean'], r['trigger_delay_std']):>18}"
+                     f"{ms(r['dt_brake_mean'], r['dt_brake_std']):>18}{r['n_latency']:>4}  {fails}")
+    lines.append("trigger delay = t(brake) - t*; dt_brake = t* to braking within 0.60 m of the line (the paper's "
+                 "latency); both over successful stops (n). Paper (QCar 2, N = 30): clean SCR 1.00, dt 0.165 s; "
+                 "attack 0.17, 2.65 s; attack + ODCA 0.80, 0.190 s")
+    return "\n".join(lines)
 
 
 def _pretrain_prior(args: argparse.Namespace) -> int:
@@ -385,9 +452,9 @@ def _attack_study(args: argparse.Namespace) -> int:
         return 0
     for name, rows in tables.items():
         print(f"\n{name} (no defence)")
-        print(f"{'setting':<42}{'N':>4}{'lost frames':>13}{'ASR [95% Wilson]':>22}{'SCR':>6}{'latency s':>18}")
+        print(f"{'setting':<42}{'N':>4}{'lost frames':>13}{'ASR [95% Wilson]':>22}{'SCR':>6}{'dt_brake s':>18}")
         for r in rows:
-            lat = f"{r['latency_mean']:.2f} +- {r['latency_std'] or 0:.2f} ({r['n_latency']})" if r["n_latency"] else "-"
+            lat = f"{r['dt_brake_mean']:.2f} +- {r['dt_brake_std'] or 0:.2f} ({r['n_latency']})" if r["n_latency"] else "-"
             print(f"{r['label']:<42}{r['n']:>4}{r['lost_frames_mean']:>13.1f}"
                   f"{r['asr']:>8.2f} {_fmt_ci(*r['asr_ci']):>13}{r['scr']:>6.2f}{lat:>18}")
     print(f"\ntrials and logs under {args.out}")

@@ -3,7 +3,7 @@
 Shaped like the paper's QCar 2 benchmark: synchronized 50 Hz series of the perception
 pipeline's clean depth distance and confidence, the LiDAR target reference and a compact
 scan, the vehicle state and pose, and the simulator's ground truth. One series is one
-continuous clean closed-loop drive (``experiments.trial`` with ``target="drive"``): a random
+continuous clean closed-loop drive (``experiments.episode`` with ``target="drive"``): a random
 road-graph route of 20-60 s that meets two or more targets; the car stops at every stop
 sign, dwells and drives on, and a crate on the lane ends the drive. The seed draws the
 start node, run-up, lateral offset, heading error and cruise speed
@@ -28,7 +28,8 @@ import numpy as np
 import pandas as pd
 
 from experiments.corruption import corrupt_series, series_seed
-from experiments.trial import DRIVE_S, SCAN_FOV_HALF_BEAMS, TrialSpec
+from experiments.episode import DRIVE_S, TrialSpec
+from experiments.episode.runner import SCAN_FOV_HALF_BEAMS
 from experiments.trials import SPEEDS_MPS, run_batch
 
 __all__ = ["COLUMNS", "DEFAULT_DRIVES", "SPLITS", "collection_specs", "collect", "summarize_dataset",

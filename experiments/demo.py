@@ -14,7 +14,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from experiments.trial import TrialSpec, default_env, run_trial
+from experiments.episode import TrialSpec, default_env, run_trial
 
 __all__ = ["run_demo"]
 
@@ -92,6 +92,7 @@ def run_demo(out_dir: Path, sign: int = 2, speed: float = 1.0, seed: int = 0) ->
     plt.close(fig)
 
     return {"sign": sign, "speed": speed, "steps": len(log), "stopped": result.stopped,
-            "stop_distance_m": result.stop_distance_m, "success": result.success, "latency_s": result.latency_s,
-            "outcome": result.outcome, "outputs": sorted(str(p) for p in out_dir.glob("*.png"))}
+            "stop_distance_m": result.stop_distance_m, "success": result.success,
+            "trigger_delay_s": result.to_dict()["trigger_delay_s"], "dt_brake_s": result.to_dict()["dt_brake_s"],
+            "failure": result.failure, "outputs": sorted(str(p) for p in out_dir.glob("*.png"))}
 

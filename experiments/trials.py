@@ -20,21 +20,23 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from experiments.episode import TABLE_SETTINGS, TrialSpec, parse_setting, run_trial
+from experiments.episode.scoring import FAILURES
 from experiments.stats import wilson_interval
-from experiments.trial import TrialSpec, run_trial
 
-__all__ = ["SIGNS", "SPEEDS_MPS", "batch_specs", "run_batch", "summarize"]
+__all__ = ["SIGNS", "SPEEDS_MPS", "batch_specs", "run_batch", "run_table", "summarize"]
 
 SIGNS = (0, 1, 2, 3)
 SPEEDS_MPS = (1.0, 1.5, 2.0)
 
 
 def batch_specs(setting: str, n: int, seed: int = 0, signs: tuple[int, ...] = SIGNS,
-                speeds: tuple[float, ...] = SPEEDS_MPS, **attack) -> list[TrialSpec]:
-    """``n`` trials cycling through every (sign, speed) pair; ``attack`` holds ``rho`` / ``t_atk``."""
+                speeds: tuple[float, ...] = SPEEDS_MPS, **params) -> list[TrialSpec]:
+    """``n`` trials cycling through every (sign, speed) pair; ``params`` are further
+    ``TrialSpec`` fields (``rho``, ``t_atk``, ``delay_ms``, ...). Bad values fail here, before any trial runs."""
     if n < 1:
         raise ValueError(f"n must be >= 1, got {n}")
-    return [TrialSpec(setting, signs[i % len(signs)], speeds[(i // len(signs)) % len(speeds)], seed + i, **attack)
+    return [TrialSpec(setting, signs[i % len(signs)], speeds[(i // len(signs)) % len(speeds)], seed + i, **params)
             for i in range(n)]
 
 
@@ -44,7 +46,7 @@ def _run_and_save(spec: TrialSpec, out_dir: str) -> dict:
     # Log first, result last: a result file marks a finished trial.
     log.to_parquet(folder / f"{spec.trial_id}.parquet", index=False)
     tmp = folder / f"{spec.trial_id}.json.tmp"
-    tmp.write_text(json.dumps(result.to_dict()))
+    tmp.write_text(json.dumps(result.to_dict(), allow_nan=False))
     os.replace(tmp, folder / f"{spec.trial_id}.json")
     return result.to_dict()
 
@@ -79,25 +81,40 @@ def run_batch(specs: list[TrialSpec], out_dir: Path, workers: int = 2, progress:
     return results
 
 
-def summarize(results: pd.DataFrame, attack: bool = False) -> dict:
-    """The protocol's summary: N, SCR with its 95 % Wilson interval, ASR, latency over successes."""
+def summarize(results: pd.DataFrame, attack: bool | None = None) -> dict:
+    """The protocol's summary (strict JSON: None, never NaN).
+
+    N; SCR with its 95 % Wilson interval; ASR (attack settings); the trigger delay and the
+    paper's dt_brake, mean and std over successful stops with their count; the failures by
+    cause; lost-detection frames and the share of trials the attack reached.
+    """
     n = int(len(results))
-    k = int(results["success"].sum())
-    scr = k / n if n else math.nan
-    latencies = results.loc[results["success"], "latency_s"].astype(float)
-    latencies = latencies[np.isfinite(latencies)]
-    summary = {
-        "n": n,
-        "scr": scr,
-        "scr_ci": list(wilson_interval(k, n)),
-        "asr": (1.0 - scr) if attack else None,
-        "latency_mean": float(latencies.mean()) if len(latencies) else None,
-        "latency_std": float(latencies.std(ddof=1)) if len(latencies) > 1 else None,
-        "n_latency": int(len(latencies)),
-    }
+    k = int(results["success"].sum()) if n else 0
+    if attack is None:
+        attack = bool(n) and "patch" in parse_setting(str(results["setting"].iloc[0]))[0]
+    scr = k / n if n else None
+    ok = results[results["success"]] if n else results
+    summary = {"n": n, "scr": scr, "scr_ci": list(wilson_interval(k, n)), "asr": (1.0 - scr) if attack and n else None}
+    for name, col in (("trigger_delay", "trigger_delay_s"), ("dt_brake", "dt_brake_s")):
+        values = pd.to_numeric(ok[col], errors="coerce").dropna() if n else pd.Series(dtype=float)
+        summary[f"{name}_mean"] = float(values.mean()) if len(values) else None
+        summary[f"{name}_std"] = float(values.std(ddof=1)) if len(values) > 1 else None
+        if name == "dt_brake":
+            summary["n_latency"] = int(len(values))
+    summary["failures"] = {f: int((results["failure"] == f).sum()) for f in FAILURES} if n else {}
     if attack:
         summary["asr_ci"] = [1.0 - summary["scr_ci"][1], 1.0 - summary["scr_ci"][0]]
         summary["lost_frames_mean"] = float(results["lost_frames"].mean()) if n else None
         summary["attacked_share"] = float(results["attack_start_s"].notna().mean()) if n else None
     return summary
 
+
+def run_table(n: int, out_dir: Path, seed: int = 0, settings: tuple[str, ...] = TABLE_SETTINGS, workers: int = 2,
+              progress: bool = True, **params) -> dict[str, dict]:
+    """The paper's closed-loop table: ``n`` trials per setting (the same signs, speeds and
+    seeds in each), one summary per setting. All specs are built, and so checked, first."""
+    specs = {s: batch_specs(s, n, seed, **params) for s in settings}
+    table = {}
+    for setting, batch in specs.items():
+        table[setting] = summarize(run_batch(batch, Path(out_dir) / setting, workers=workers, progress=progress))
+    return table

@@ -1,0 +1,13 @@
+"""One closed-loop episode: spec (what to run), stack (perception + estimator + brakers),
+runner (the one step loop) and scoring (pure: per-step log -> outcome)."""
+
+from experiments.episode.estimators import ESTIMATORS, make_estimator
+from experiments.episode.runner import TrialResult, reset_options, run_trial
+from experiments.episode.scoring import TargetOutcome, score_log, score_target
+from experiments.episode.spec import (DRIVE_S, STRONG_RHO, STRONG_T_ATK_S, TABLE_SETTINGS, TrialSpec, parse_setting,
+                                      setting_name)
+from experiments.episode.stack import default_env
+
+__all__ = ["DRIVE_S", "ESTIMATORS", "STRONG_RHO", "STRONG_T_ATK_S", "TABLE_SETTINGS", "TargetOutcome", "TrialResult",
+           "TrialSpec", "default_env", "make_estimator", "parse_setting", "reset_options", "run_trial", "score_log",
+           "score_target", "setting_name"]

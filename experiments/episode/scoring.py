@@ -1,0 +1,102 @@
+"""Scoring: a pure function from an episode's per-step log to each target's outcome.
+
+Definitions (``shared/reference/protocol.md``):
+
+- success: the car comes to rest (speed < 0.05 m/s) with its front bumper 0 to 0.60 m
+  before the stop line;
+- t*: the first step at which the reference controller (the same braking controller fed
+  d_true while the target is in view; the log's ``ideal_brake``) commands the brake;
+- trigger delay = t(first brake command) - t*;
+- dt_brake (the paper's braking latency): from t* to the first step at which the
+  controller under test is braking with the front bumper within 0.60 m of the line.
+
+Failures are named by where they come from: ``never_confirmed`` (no confirmed track before
+the line), ``confirmed_lost`` (a track was confirmed but lost, and no brake followed),
+``braked_late`` (braked, but came to rest past the line or ran it), ``braked_early``
+(came to rest more than 0.60 m before the line: phantom or early braking), ``timeout``.
+Old logs can be rescored: nothing here reads the simulator.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+
+import numpy as np
+import pandas as pd
+
+__all__ = ["TargetOutcome", "score_target", "score_log", "SUCCESS_BAND_M", "AT_REST_MPS", "FAILURES"]
+
+#: The protocol's success band: front bumper this far before the stop line, metres.
+SUCCESS_BAND_M = (0.0, 0.60)
+#: At rest below this speed, m/s.
+AT_REST_MPS = 0.05
+#: Failure causes, in the order tables show them.
+FAILURES = ("never_confirmed", "confirmed_lost", "braked_late", "braked_early", "timeout")
+#: Columns the scorer reads.
+LOG_COLUMNS = ("t", "slot", "speed", "dist_to_stop_line", "brake", "ideal_brake", "confirmed")
+
+
+@dataclass(frozen=True)
+class TargetOutcome:
+    """What one target of an episode came to."""
+
+    slot: int
+    success: bool
+    failure: str | None
+    rest_distance_m: float
+    t_star_s: float
+    t_brake_s: float
+    trigger_delay_s: float
+    dt_brake_s: float
+    confirmed: bool
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+def score_target(steps: pd.DataFrame) -> TargetOutcome:
+    """The outcome of one target from its steps of the log (``LOG_COLUMNS``, time-ordered)."""
+    missing = [c for c in LOG_COLUMNS if c not in steps]
+    if missing:
+        raise ValueError(f"the log lacks column(s) {missing}; a scoreable log has {list(LOG_COLUMNS)}")
+    if steps.empty:
+        raise ValueError("no steps to score")
+    t = steps["t"].to_numpy(float)
+    speed = np.abs(steps["speed"].to_numpy(float))
+    dist = steps["dist_to_stop_line"].to_numpy(float)
+    brake = steps["brake"].to_numpy(bool)
+    ideal = steps["ideal_brake"].to_numpy(bool)
+    confirmed = steps["confirmed"].to_numpy(bool)
+
+    at_rest = np.flatnonzero((speed < AT_REST_MPS) & (t > 0))
+    rest = float(dist[at_rest[0]]) if at_rest.size else math.nan
+    t_star = _first(t, ideal)
+    t_brake = _first(t, brake)
+    t_near = _first(t, brake & (dist <= SUCCESS_BAND_M[1]))
+    success = SUCCESS_BAND_M[0] <= rest <= SUCCESS_BAND_M[1]
+    failure = None
+    if not success:
+        before_line = dist >= 0
+        if not confirmed[before_line].any() and math.isnan(t_brake):
+            failure = "never_confirmed"
+        elif math.isnan(t_brake):
+            failure = "confirmed_lost" if confirmed.any() else "never_confirmed"
+        elif rest > SUCCESS_BAND_M[1]:
+            failure = "braked_early"
+        elif rest < SUCCESS_BAND_M[0] or dist.min() < 0:
+            failure = "braked_late"
+        else:  # braking when the episode ended
+            failure = "timeout"
+    return TargetOutcome(int(steps["slot"].iloc[0]), bool(success), failure, rest, t_star, t_brake,
+                         t_brake - t_star, t_near - t_star, bool(confirmed.any()))
+
+
+def score_log(log: pd.DataFrame) -> list[TargetOutcome]:
+    """One outcome per target slot of an episode's log, in the order the targets were met."""
+    return [score_target(steps) for _, steps in log.groupby("slot", sort=True)]
+
+
+def _first(t: np.ndarray, mask: np.ndarray) -> float:
+    idx = np.flatnonzero(mask)
+    return float(t[idx[0]]) if idx.size else math.nan

@@ -1,0 +1,181 @@
+"""What an episode runs: the setting (attacks and estimator), target, speed, seed, attack
+parameters and timing, and the id that names its result.
+
+A setting is a ``+``-joined name: ``clean`` or ``attack`` (the patch attack), then any
+extra attacks (``lidar_spoof``, ``lidar_dropout``), then the estimator when it is not raw
+depth (``odca``, ``ekf``, ``chronos``). The paper's table uses ``clean``, ``clean+odca``,
+``attack``, ``attack+odca``, ``attack+ekf``, ``attack+chronos`` and, beyond the paper,
+``attack+lidar_spoof+odca``.
+
+The trial id hashes the spec, every config the episode uses and the code version (the
+source of the packages and the shipped checkpoints), so a resumed batch never reuses a
+result that other code or configs produced.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from dataclasses import asdict, dataclass, field
+from functools import lru_cache
+from pathlib import Path
+
+import numpy as np
+
+from controllers import BrakingConfig
+from experiments.episode.estimators import ESTIMATORS
+from sim.attacks.schedule import as_range
+from sim.world.drives import DriveSpec, draw_drive
+
+__all__ = ["TrialSpec", "parse_setting", "setting_name", "code_version", "TARGETS", "DRIVE_S", "STRONG_RHO",
+           "STRONG_T_ATK_S", "EXTRA_ATTACKS", "TABLE_SETTINGS", "LIDAR_SPOOF_RANGE_M"]
+
+#: What a trial approaches (``TrialSpec.sign`` is the index): the four stop signs or the two
+#: crates; or a ``drive`` (index 0), a random route drawn from the seed that meets >= 2 targets.
+TARGETS = {"sign": 4, "obstacle": 2, "drive": 1}
+#: How long a drive is drawn to last, s.
+DRIVE_S = (20.0, 60.0)
+#: The protocol's strong regime.
+STRONG_RHO = (0.9, 1.0)
+STRONG_T_ATK_S = (0.5, 3.0)
+#: Attacks that may join the patch in a setting (LiDAR faults, since ODCA's gate trusts the LiDAR).
+EXTRA_ATTACKS = ("lidar_spoof", "lidar_dropout")
+#: The fake range of the LiDAR spoof, m: far enough that the repair would not brake in time.
+LIDAR_SPOOF_RANGE_M = (2.5, 3.5)
+#: The paper's closed-loop table, plus the LiDAR spoof under ODCA.
+TABLE_SETTINGS = ("clean", "clean+odca", "attack", "attack+odca", "attack+ekf", "attack+chronos",
+                  "attack+lidar_spoof+odca")
+
+
+def parse_setting(setting: str) -> tuple[tuple[str, ...], str]:
+    """``"attack+lidar_spoof+odca"`` -> (("patch", "lidar_spoof"), "odca"); ValueError names what is allowed."""
+    if not isinstance(setting, str) or not setting:
+        raise ValueError(f"setting must be a non-empty string, got {setting!r}")
+    base, *rest = setting.split("+")
+    if base not in ("clean", "attack"):
+        raise ValueError(f"a setting starts with 'clean' or 'attack', got {setting!r}")
+    estimator = "raw"
+    if rest and rest[-1] in ESTIMATORS:
+        estimator = rest.pop()
+    unknown = [r for r in rest if r not in EXTRA_ATTACKS]
+    if unknown:
+        raise ValueError(f"unknown part(s) {unknown} of setting {setting!r}: after 'clean'/'attack' come extra "
+                         f"attacks {EXTRA_ATTACKS}, then an estimator {ESTIMATORS}")
+    attacks = (("patch",) if base == "attack" else ()) + tuple(rest)
+    return attacks, estimator
+
+
+def setting_name(attacks: tuple[str, ...] | list[str], estimator: str = "raw") -> str:
+    """The setting of a set of attacks (``patch`` and/or ``EXTRA_ATTACKS``) and an estimator."""
+    attacks = tuple(attacks)
+    unknown = [a for a in attacks if a != "patch" and a not in EXTRA_ATTACKS]
+    if unknown:
+        raise ValueError(f"unknown attack(s) {unknown}; choose from {('patch',) + EXTRA_ATTACKS}")
+    if estimator not in ESTIMATORS:
+        raise ValueError(f"estimator must be one of {ESTIMATORS}, got {estimator!r}")
+    parts = ["attack" if "patch" in attacks else "clean"] + [a for a in EXTRA_ATTACKS if a in attacks]
+    name = "+".join(parts + ([estimator] if estimator != "raw" else []))
+    parse_setting(name)
+    return name
+
+
+@dataclass(frozen=True)
+class TrialSpec:
+    """One episode.
+
+    Attributes:
+        setting: attacks and estimator (see the module docstring).
+        sign: the target's index (a stop sign 0-3, a crate 0-1, or 0 for a drive).
+        speed: cruise speed (a drive's nominal speed), m/s.
+        seed: the episode's seed (env noise, attack draws, a drive's route).
+        rho, t_atk: the patch's coverage share and duration, s: (low, high) uniform ranges.
+        target: ``sign``, ``obstacle`` or ``drive``.
+        drive_s: how long a drive is drawn to last, s.
+        stable_steps: steps the sign must be visible before an attack may start; None:
+            ``confirm_frames + 3`` of the braking config, so that the controller has a
+            confirmed track (the detector may lag the ground-truth visibility by a step or two).
+        delay_ms: perception-to-actuation delay (0: off). The paper's offboard loop: 49 ms.
+        control_hz: the controller's rate (None: every 50 Hz step); the action is held between.
+        braking: the braking controller's parameters.
+    """
+
+    setting: str
+    sign: int
+    speed: float
+    seed: int
+    rho: tuple[float, float] = STRONG_RHO
+    t_atk: tuple[float, float] = STRONG_T_ATK_S
+    target: str = "sign"
+    drive_s: tuple[float, float] = DRIVE_S
+    stable_steps: int | None = None
+    delay_ms: float = 0.0
+    control_hz: float | None = None
+    braking: BrakingConfig = field(default_factory=BrakingConfig)
+
+    def __post_init__(self) -> None:
+        parse_setting(self.setting)
+        if self.target not in TARGETS:
+            raise ValueError(f"target must be one of {tuple(TARGETS)}, got {self.target!r}")
+        if self.sign not in range(TARGETS[self.target]):
+            raise ValueError(f"{self.target} index must be 0..{TARGETS[self.target] - 1}, got {self.sign!r}")
+        if not 0.1 <= self.speed <= 3.0:
+            raise ValueError(f"speed must be in [0.1, 3.0] m/s, got {self.speed!r}")
+        object.__setattr__(self, "rho", as_range("rho", self.rho, 0.0, 1.0))
+        object.__setattr__(self, "t_atk", as_range("t_atk", self.t_atk, 0.0, 60.0))
+        object.__setattr__(self, "drive_s", as_range("drive_s", self.drive_s, 5.0, 100.0))
+        if self.stable_steps is not None and not (isinstance(self.stable_steps, int) and 1 <= self.stable_steps <= 500):
+            raise ValueError(f"stable_steps must be an int in [1, 500] or None, got {self.stable_steps!r}")
+        if not 0.0 <= self.delay_ms <= 1000.0:
+            raise ValueError(f"delay_ms must be in [0, 1000] ms, got {self.delay_ms!r}")
+        if self.control_hz is not None and not 1.0 <= self.control_hz <= 50.0:
+            raise ValueError(f"control_hz must be in [1, 50] Hz (the env steps at 50 Hz) or None, "
+                             f"got {self.control_hz!r}")
+
+    @property
+    def attacks(self) -> tuple[str, ...]:
+        return parse_setting(self.setting)[0]
+
+    @property
+    def estimator(self) -> str:
+        return parse_setting(self.setting)[1]
+
+    @property
+    def attack_stable_steps(self) -> int:
+        return self.stable_steps if self.stable_steps is not None else self.braking.confirm_frames + 3
+
+    @property
+    def drive(self) -> DriveSpec | None:
+        """The drive this spec's seed draws (``target == "drive"``; ``speed`` is the nominal speed)."""
+        if self.target != "drive":
+            return None
+        return draw_drive(np.random.default_rng(self.seed), *self.drive_s, nominal_speed_mps=self.speed)
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+    @property
+    def trial_id(self) -> str:
+        """Readable prefix + a hash of the spec, its configs and the code version."""
+        from sim.env.config import EnvConfig
+
+        payload = {"spec": self.to_dict(), "env": asdict(EnvConfig()), "code": code_version()}
+        digest = hashlib.sha256(json.dumps(payload, sort_keys=True, default=str).encode()).hexdigest()[:12]
+        return f"{self.setting}_{self.target}{self.sign}_v{self.speed:.2f}_seed{self.seed}_{digest}"
+
+
+#: What "the code" is: the packages' source and the assets (map, shipped checkpoints).
+_CODE_ROOTS = ("sim", "controllers", "odca", "experiments", "assets")
+_CODE_SUFFIXES = (".py", ".xml", ".json", ".npz", ".safetensors", ".png", ".bin")
+
+
+@lru_cache(maxsize=1)
+def code_version() -> str:
+    """A hash of the source and assets that produce results (changes with any edit, committed or not)."""
+    root = Path(__file__).resolve().parents[2]
+    h = hashlib.sha256()
+    for top in _CODE_ROOTS:
+        for path in sorted((root / top).rglob("*")):
+            if path.is_file() and path.suffix in _CODE_SUFFIXES and "__pycache__" not in path.parts:
+                h.update(str(path.relative_to(root)).encode())
+                h.update(path.read_bytes())
+    return h.hexdigest()[:16]

@@ -1,0 +1,58 @@
+"""The parts an episode wires together: the env under the spec's attacks, the perception
+pipelines, the distance estimator and the brakers (the one under test and the reference)."""
+
+from __future__ import annotations
+
+import gymnasium as gym
+
+import sim
+from controllers import ObstacleDetector, Perception, StopSignBraker
+from experiments.closed_loop import camera_model, sign_depth_at_line
+from experiments.episode.estimators import make_estimator
+from experiments.episode.spec import LIDAR_SPOOF_RANGE_M, TrialSpec
+from sim.attacks import LidarDropout, LidarSpoof, PatchAttack
+from sim.world.drives import RouteTarget
+
+__all__ = ["default_env", "Stack", "DRIVE_MAX_EPISODE_S"]
+
+#: A drive's episode time limit, s.
+DRIVE_MAX_EPISODE_S = 120.0
+
+
+def default_env(spec: TrialSpec, **env_kwargs) -> gym.Env:
+    """The env of a spec: the plain env wrapped in its attacks, all on the protocol's schedule
+    (after a stable detection, inside the braking window; each draws its own duration)."""
+    if spec.target == "drive":
+        env_kwargs.setdefault("max_episode_s", DRIVE_MAX_EPISODE_S)
+    env = gym.make(sim.ENV_ID, **env_kwargs)
+    schedule = {"duration_s": spec.t_atk, "stable_steps": spec.attack_stable_steps}
+    for attack in spec.attacks:
+        if attack == "patch":
+            env = PatchAttack(env, rho=spec.rho, **schedule)
+        elif attack == "lidar_spoof":
+            env = LidarSpoof(env, range_m=LIDAR_SPOOF_RANGE_M, **schedule)
+        elif attack == "lidar_dropout":
+            env = LidarDropout(env, **schedule)
+    return env
+
+
+class Stack:
+    """Perception (one pipeline per target kind), the estimator and, per target, two brakers:
+    the one under test (fed the estimator) and the reference that defines t* (fed d_true
+    while the target is in view)."""
+
+    def __init__(self, env: gym.Env, spec: TrialSpec, estimator=None) -> None:
+        camera = camera_model(env)
+        self.env, self.spec = env, spec
+        self.perceptions = {"sign": Perception(camera),
+                            "obstacle": Perception(camera, detector=ObstacleDetector(), target="obstacle")}
+        self.estimator = estimator if estimator is not None else make_estimator(spec.estimator)
+
+    def begin(self, target: RouteTarget) -> tuple[Perception, StopSignBraker, StopSignBraker]:
+        """Fresh state for the next target of the route."""
+        depth_at_line = sign_depth_at_line(self.env, target)
+        self.estimator.reset()
+        perception = self.perceptions[target.kind]
+        perception.reset()
+        return (perception, StopSignBraker(self.spec.braking, depth_at_line),
+                StopSignBraker(self.spec.braking, depth_at_line))
