@@ -7,7 +7,10 @@ car's speed. Its output is a speed cap for the lane follower.
 - Track: confirmed after ``confirm_frames`` consecutive detections (the paper's
   accumulated detections). A confirmed track survives a missed detection while the
   estimator still gives a finite distance (raw depth does not without a detection; a
-  repairing estimator does), for at most ``track_timeout_s``.
+  repairing estimator does) and the map says the target should be in the camera's view,
+  for at most ``track_timeout_s``. A miss with the target outside the view (it went round
+  a bend, or the car passed it) is no attack: the track is dropped, so a repaired distance
+  is never acted on for a target the camera cannot see.
 - Trigger: on a confirmed track, brake once the distance left to the stop point (the
   stop line less ``target_gap_m``) is within the larger of the stopping distance
   v^2 / (2 a) (plus the distance covered during ``reaction_s``) and ``min_trigger_m``.
@@ -122,7 +125,8 @@ class StopSignBraker:
         self._profile_decel = self.config.decel_mps2
         self._dwell_s = 0.0
 
-    def step(self, detected: bool, distance_m: float, speed_mps: float, dt: float) -> BrakeDecision:
+    def step(self, detected: bool, distance_m: float, speed_mps: float, dt: float,
+             expected_in_view: bool = True) -> BrakeDecision:
         """Advance one control step.
 
         Args:
@@ -130,6 +134,7 @@ class StopSignBraker:
             distance_m: the estimator's camera-to-sign distance (NaN when none).
             speed_mps: measured speed.
             dt: control period, seconds.
+            expected_in_view: whether the map puts the target inside the camera's view.
         """
         if not dt > 0:
             raise ValueError(f"dt must be > 0 s, got {dt}")
@@ -137,7 +142,7 @@ class StopSignBraker:
         distance_m = float(distance_m)
         has_distance = math.isfinite(distance_m) and 0.0 < distance_m <= c.max_distance_m
         to_line = distance_m - self.sign_depth_at_line_m if has_distance else math.nan
-        self._update_track(bool(detected), has_distance, dt)
+        self._update_track(bool(detected), has_distance and bool(expected_in_view), dt)
         speed = max(0.0, float(speed_mps))
 
         if self.phase is Phase.CRUISE and self._confirmed and has_distance:

@@ -24,7 +24,7 @@ import numpy as np
 import pandas as pd
 
 from controllers import Phase
-from experiments.closed_loop import map_bearing, route_follower
+from experiments.closed_loop import camera_model, map_bearing, route_follower
 from experiments.episode.scoring import score_log
 from experiments.episode.spec import TrialSpec
 from experiments.episode.stack import Stack, default_env
@@ -131,6 +131,7 @@ def _run(env: gym.Env, spec: TrialSpec, stack: Stack, on_step: StepHook | None) 
     bumper_ahead_of_axle = float(u.model.site("front_bumper").pos[0]) - follower.steering.config.front_axle_m
     attacked = _find_wrapper(env, AttackWrapper) is not None
     estimator = stack.estimator
+    half_fov = camera_model(env).half_hfov_rad
 
     slot = 0
     perception, braker, ideal = stack.begin(targets[slot])
@@ -153,16 +154,18 @@ def _run(env: gym.Env, spec: TrialSpec, stack: Stack, on_step: StepHook | None) 
         scan_time = info["lidar_time"]
         control = decision is None or step % every == 0
         if control:
+            bearing = map_bearing(env, targets[slot], info["pose"])
             sample = perception.process(obs["rgb"], obs["depth"], obs["lidar"] if scan_new else None, speed=speed,
                                         yaw_rate=float(obs["state"][2]), lateral_speed=float(obs["state"][4]),
-                                        dt=dt * every, map_bearing=map_bearing(env, targets[slot], info["pose"]))
+                                        dt=dt * every, map_bearing=bearing)
             if attacked:  # d_clean: the same pipeline on the env's own, unattacked readings
                 clean = u.sensor_observation()
                 d_clean = perception.depth.estimate(clean["depth"], perception.detector.detect(clean["rgb"]))[0]
             else:
                 d_clean = sample.d_meas
             d_fused = float(estimator.estimate(sample, speed, dt * every))
-            decision = braker.step(sample.detected, d_fused, speed, dt * every)
+            in_fov = math.isfinite(bearing) and abs(bearing) <= half_fov
+            decision = braker.step(sample.detected, d_fused, speed, dt * every, expected_in_view=in_fov)
         # The reference: perfect perception (d_true while the target is in view) at every step.
         in_view = bool(info["sign_in_view"])
         ideal_decision = ideal.step(in_view, float(info["d_true"]) if in_view else math.nan, speed, dt)
