@@ -10,7 +10,7 @@ import pytest
 
 from experiments.cli import main
 from experiments.stats import wilson_interval
-from experiments.trial import TrialSpec, run_trial
+from experiments.episode import TrialSpec, run_trial
 from experiments.trials import batch_specs, run_batch, summarize
 
 PROTOCOL_SIGNALS = ("d_true", "d_clean", "d_meas", "c_meas", "lidar", "d_fused")
@@ -23,9 +23,9 @@ def sign0_trial():
 
 def test_clean_trial_stops_in_the_band_and_logs_every_signal(sign0_trial):
     result, log = sign0_trial
-    assert result.success and result.outcome == "stopped"
+    assert result.success and result.failure is None
     assert 0.0 <= result.stop_distance_m <= 0.60
-    assert abs(result.latency_s) < 0.2
+    assert abs(result.trigger_delay_s) < 0.2 and 0.0 <= result.dt_brake_s < 0.5
     for col in PROTOCOL_SIGNALS + ("brake", "x", "y", "yaw", "speed", "dist_to_stop_line", "phase"):
         assert col in log.columns
     assert (log["t"].diff().dropna().round(6) == 0.02).all()
@@ -65,17 +65,22 @@ def test_batch_covers_every_sign_and_speed_and_resumes(tmp_path, monkeypatch):
 
 
 def test_summary_has_the_protocol_keys_and_wilson_interval():
-    rows = pd.DataFrame({"success": [True] * 9 + [False], "latency_s": [0.1] * 9 + [math.nan],
+    rows = pd.DataFrame({"setting": "attack", "success": [True] * 9 + [False],
+                         "trigger_delay_s": [0.02] * 9 + [math.nan], "dt_brake_s": [0.1] * 9 + [math.nan],
+                         "failure": [None] * 9 + ["confirmed_lost"],
                          "lost_frames": [0] * 9 + [30], "attack_start_s": [math.nan] * 9 + [1.2]})
     s = summarize(rows, attack=True)
-    assert set(s) == {"n", "scr", "scr_ci", "asr", "asr_ci", "latency_mean", "latency_std", "n_latency",
-                      "lost_frames_mean", "attacked_share"}
+    assert set(s) == {"n", "scr", "scr_ci", "asr", "asr_ci", "trigger_delay_mean", "trigger_delay_std",
+                      "dt_brake_mean", "dt_brake_std", "n_latency", "failures", "lost_frames_mean", "attacked_share"}
+    assert s["dt_brake_mean"] == pytest.approx(0.1) and s["trigger_delay_mean"] == pytest.approx(0.02)
+    assert s["failures"]["confirmed_lost"] == 1 and sum(s["failures"].values()) == 1
+    json.dumps(s, allow_nan=False)  # strict JSON
     assert s["lost_frames_mean"] == 3.0 and s["attacked_share"] == pytest.approx(0.1)
     assert s["n"] == 10 and s["scr"] == 0.9 and s["asr"] == pytest.approx(0.1) and s["n_latency"] == 9
     assert s["scr_ci"] == pytest.approx(list(wilson_interval(9, 10)))
     lo, hi = wilson_interval(9, 10)
     assert lo == pytest.approx(0.596, abs=1e-3) and hi == pytest.approx(0.982, abs=1e-3)
-    assert summarize(rows)["asr"] is None
+    assert summarize(rows.assign(setting="clean"))["asr"] is None
 
 
 def test_cli_trials_json(tmp_path, capsys):
@@ -94,8 +99,10 @@ def test_cli_trial_writes_log_and_result(tmp_path, capsys):
 
 
 def test_bad_trial_inputs_are_clear_errors(capsys):
-    with pytest.raises(ValueError, match="setting must be one of"):
+    with pytest.raises(ValueError, match="starts with 'clean' or 'attack'"):
         TrialSpec("nope", 0, 1.0, 0)
+    with pytest.raises(ValueError, match="unknown part"):
+        TrialSpec("attack+kalman", 0, 1.0, 0)
     with pytest.raises(ValueError, match="speed"):
         TrialSpec("clean", 0, 9.0, 0)
     with pytest.raises(SystemExit):
@@ -104,8 +111,8 @@ def test_bad_trial_inputs_are_clear_errors(capsys):
 
 
 def test_strong_patch_attack_hides_the_sign_and_the_car_runs_the_line():
-    result, log = run_trial(TrialSpec("attack", 2, 2.0, 0, rho=1.0, t_atk=3.0))
-    assert not result.success and result.outcome == "ran_line"
+    result, log = run_trial(TrialSpec("attack", 0, 1.0, 0, rho=1.0, t_atk=3.0))
+    assert not result.success and result.failure == "confirmed_lost"
     assert result.rho == 1.0 and result.t_atk_s == pytest.approx(3.0)
     attacked = log[log["attack_active"]]
     assert len(attacked) > 10 and (attacked["attack"] == "patch").all()
@@ -115,7 +122,7 @@ def test_strong_patch_attack_hides_the_sign_and_the_car_runs_the_line():
     assert hidden["d_meas"].isna().all() and hidden["d_clean"].notna().mean() > 0.8
     # The attack starts only after a stable sighting, inside the braking window.
     first = attacked.index[0]
-    assert log.loc[first - 2:first, "sign_in_view"].all()
+    assert log.loc[first - 5:first, "sign_in_view"].all() and log.loc[first - 1, "confirmed"]
     assert log.loc[first, "dist_to_stop_line"] <= 1.0 * log.loc[first, "speed"] + 0.05
 
 
@@ -123,7 +130,7 @@ def test_cli_attack_trials_json_has_lost_frames(tmp_path, capsys):
     assert main(["trials", "--setting", "attack", "--rho", "1.0", "--t-atk", "3.0", "-n", "1", "--seed", "2",
                  "--workers", "1", "--json", "--out", str(tmp_path)]) == 0
     summary = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
-    assert {"n", "scr", "scr_ci", "asr", "latency_mean", "latency_std", "n_latency", "lost_frames_mean"} <= set(summary)
+    assert {"n", "scr", "scr_ci", "asr", "dt_brake_mean", "dt_brake_std", "n_latency", "lost_frames_mean"} <= set(summary)
     assert summary["asr"] == 1.0 - summary["scr"]
     assert main(["trials", "--setting", "clean", "--rho", "0.5", "-n", "1"]) == 2
     with pytest.raises(SystemExit):
@@ -132,7 +139,7 @@ def test_cli_attack_trials_json_has_lost_frames(tmp_path, capsys):
 
 def test_clean_obstacle_trial_stops_before_the_crate():
     result, log = run_trial(TrialSpec("clean", 1, 2.0, 0, target="obstacle"))
-    assert result.trial_id == "clean_obstacle1_v2.00_seed0"
+    assert result.trial_id.startswith("clean_obstacle1_v2.00_seed0_")
     assert result.success and 0.0 <= result.stop_distance_m <= 0.60
     seen = log[log["detected"] & log["sign_in_view"]]
     assert len(seen) > 20 and (seen["d_meas"] - seen["d_true"]).abs().median() < 0.05
@@ -151,4 +158,4 @@ def test_clean_drive_serves_every_target_in_turn():
     ref = log[np.isfinite(log["lidar"])]
     assert len(ref) > 100 and np.abs(ref["lidar"] - ref["d_true"]).max() < 0.15
     assert log["scan_new"].mean() == pytest.approx(0.2, abs=0.01)
-    assert "_d10-15" in spec.trial_id
+    assert spec.trial_id != TrialSpec("clean", 0, 1.5, 4, target="drive").trial_id

@@ -1,0 +1,44 @@
+"""The closed-loop estimators by name: each causal, each giving a distance from the live signals."""
+
+import math
+
+import numpy as np
+import pytest
+
+from controllers import PerceptionSample
+from experiments.episode import ESTIMATORS, make_estimator
+
+
+def _samples(depths, lidar_offset=0.0):
+    return [PerceptionSample(None, d, 0.9 if math.isfinite(d) else 0.0, d + lidar_offset, 0.0) for d in depths]
+
+
+def _run(name, samples):
+    est = make_estimator(name)
+    est.reset()
+    return np.array([est.estimate(s, 1.0, 0.02) for s in samples])
+
+
+@pytest.mark.parametrize("name", ESTIMATORS)
+def test_changing_the_future_does_not_change_the_past(name):
+    rng = np.random.default_rng(0)
+    depths = list(2.0 - 0.02 * np.arange(40) + rng.normal(0, 0.005, 40))
+    cut = 23
+    future = depths[:cut] + [math.nan] * 5 + [0.5] * (len(depths) - cut - 5)
+    np.testing.assert_array_equal(_run(name, _samples(depths))[:cut], _run(name, _samples(future))[:cut])
+
+
+@pytest.mark.parametrize("name", ["odca", "ekf"])
+def test_repairing_estimators_bridge_a_missing_depth_with_the_lidar(name):
+    depths = list(2.0 - 0.02 * np.arange(30))
+    hidden = [PerceptionSample(None, math.nan, 0.0, d, 0.0) for d in depths[20:]]
+    out = _run(name, _samples(depths[:20]) + hidden)
+    assert np.isfinite(out[20:]).all()
+    assert np.abs(out[20:] - np.array(depths[20:])).max() < 0.1
+
+
+def test_raw_depth_has_nothing_without_a_detection_and_unknown_names_fail():
+    out = _run("raw", _samples([1.0, math.nan]))
+    assert out[0] == 1.0 and math.isnan(out[1])
+    with pytest.raises(ValueError, match="estimator must be one of"):
+        make_estimator("kalman")

@@ -1,0 +1,64 @@
+"""Episode specs: settings, content-hashed ids (stale-result protection) and bad flags rejected early."""
+
+import dataclasses
+
+import pytest
+
+import experiments.episode.spec as spec_module
+from controllers import BrakingConfig
+from experiments.cli import main
+from experiments.episode import TABLE_SETTINGS, TrialSpec, parse_setting, setting_name
+
+
+def test_settings_parse_into_attacks_and_estimator():
+    assert parse_setting("clean") == ((), "raw")
+    assert parse_setting("attack+odca") == (("patch",), "odca")
+    assert parse_setting("attack+lidar_spoof+odca") == (("patch", "lidar_spoof"), "odca")
+    assert setting_name(["lidar_spoof", "patch"], "ekf") == "attack+lidar_spoof+ekf"
+    for name in TABLE_SETTINGS:
+        assert setting_name(*parse_setting(name)) == name
+    with pytest.raises(ValueError, match="unknown attack"):
+        setting_name(["laser"], "raw")
+
+
+def test_the_id_changes_with_the_spec_the_configs_and_the_code(monkeypatch):
+    base = TrialSpec("attack+odca", 1, 1.5, 7)
+    assert base.trial_id == TrialSpec("attack+odca", 1, 1.5, 7).trial_id
+    others = [TrialSpec("attack+ekf", 1, 1.5, 7), TrialSpec("attack+odca", 1, 1.5, 7, rho=1.0),
+              TrialSpec("attack+odca", 1, 1.5, 7, delay_ms=49.0),
+              TrialSpec("attack+odca", 1, 1.5, 7, braking=BrakingConfig(confirm_frames=4))]
+    assert len({base.trial_id, *(o.trial_id for o in others)}) == 1 + len(others)
+    base_id = base.trial_id  # the id is computed on access: keep the one from before the edit
+    monkeypatch.setattr(spec_module, "code_version", lambda: "edited")
+    assert TrialSpec("attack+odca", 1, 1.5, 7).trial_id != base_id
+
+
+def test_attack_waits_for_more_steps_than_confirmation_needs():
+    spec = TrialSpec("attack", 0, 1.0, 0)
+    assert spec.attack_stable_steps > spec.braking.confirm_frames
+    assert dataclasses.replace(spec, stable_steps=4).attack_stable_steps == 4
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--estimator", "kalman"], "estimator must be one of"),
+    (["--attack", "patch,laser"], "unknown attack"),
+    (["--setting", "attack+foo"], "unknown part"),
+    (["--setting", "attack", "--estimator", "odca"], "not both"),
+    (["--setting", "clean", "--rho", "0.5"], "apply to settings with an attack"),
+    (["--setting", "attack", "--control-hz", "200"], "control_hz"),
+])
+def test_bad_flags_are_rejected_before_any_episode_runs(argv, message, monkeypatch, capsys, tmp_path):
+    import experiments.trials as trials_module
+
+    monkeypatch.setattr(trials_module, "run_batch", lambda *a, **k: pytest.fail("ran an episode"))
+    with pytest.raises(SystemExit) as exit_info:
+        code = main(["trials", "-n", "2", "--out", str(tmp_path), *argv])
+        raise SystemExit(code)
+    assert exit_info.value.code == 2
+    assert message in capsys.readouterr().err
+
+
+def test_rho_outside_the_unit_interval_is_a_usage_error(capsys):
+    with pytest.raises(SystemExit):
+        main(["trial", "--attack", "patch", "--rho", "1.5"])
+    assert "rho must be in [0, 1]" in capsys.readouterr().err
