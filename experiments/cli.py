@@ -144,6 +144,9 @@ def _episode_flags(p: argparse.ArgumentParser) -> None:
     p.add_argument("--delay-ms", type=float, default=0.0,
                    help="perception-to-actuation delay, ms (default 0; the paper's offboard loop: 49)")
     p.add_argument("--control-hz", type=float, default=None, help="controller rate, Hz (default: every 50 Hz step)")
+    p.add_argument("--stable-steps", type=int, default=None,
+                   help="steps the sign must be visible before an attack may start (default: the braking "
+                        "controller's confirm_frames + 3 = 6)")
 
 
 def _episode_params(args: argparse.Namespace, command: str) -> tuple[str, dict]:
@@ -166,7 +169,7 @@ def _episode_params(args: argparse.Namespace, command: str) -> tuple[str, dict]:
         if not parse_setting(setting)[0] and (args.rho is not None or args.t_atk is not None):
             fail("--rho and --t-atk apply to settings with an attack")
         params = {"rho": _pair("--rho", args.rho, STRONG_RHO), "t_atk": _pair("--t-atk", args.t_atk, STRONG_T_ATK_S),
-                  "delay_ms": args.delay_ms, "control_hz": args.control_hz}
+                  "delay_ms": args.delay_ms, "control_hz": args.control_hz, "stable_steps": args.stable_steps}
     except ValueError as err:
         fail(str(err))
     return setting, params
@@ -361,15 +364,17 @@ def _table_text(table: dict[str, dict]) -> str:
         return "-" if mean is None else f"{mean:.3f} +- {std or 0:.3f}"
 
     lines = [f"{'setting':<26}{'N':>4}{'SCR [95% Wilson]':>20}{'ASR [95% Wilson]':>20}{'trigger delay s':>18}"
-             f"{'dt_brake s':>18}{'n':>4}  failures"]
+             f"{'dt_brake s':>18}{'n':>4}{'SCR, attack before t*':>28}  failures"]
     for name, r in table.items():
         asr = f"{r['asr']:.2f} {_fmt_ci(*r['asr_ci'])}" if r.get("asr") is not None else "-"
         fails = ", ".join(f"{k} {v}" for k, v in r["failures"].items() if v) or "-"
+        early = "-" if r.get("scr_attack_before_t_star") is None else \
+            f"{r['scr_attack_before_t_star']:.2f} {_fmt_ci(*r['scr_attack_before_t_star_ci'])} ({r['n_attack_before_t_star']})"
         lines.append(f"{name:<26}{r['n']:>4}{r['scr']:>6.2f} {_fmt_ci(*r['scr_ci']):>13}{asr:>20}"
                      f"{ms(r['trigger_delay_mean'], r['trigger_delay_std']):>18}"
-                     f"{ms(r['dt_brake_mean'], r['dt_brake_std']):>18}{r['n_latency']:>4}  {fails}")
+                     f"{ms(r['dt_brake_mean'], r['dt_brake_std']):>18}{r['n_latency']:>4}{early:>28}  {fails}")
     lines.append("trigger delay = t(brake) - t*; dt_brake = t* to braking within 0.60 m of the line (the paper's "
-                 "latency); both over successful stops (n). Paper (QCar 2, N = 30): clean SCR 1.00, dt 0.165 s; "
+                 "latency); both over successful stops (n). SCR, attack before t*: the trials whose attack began before t* (their count). Paper (QCar 2, N = 30): clean SCR 1.00, dt 0.165 s; "
                  "attack 0.17, 2.65 s; attack + ODCA 0.80, 0.190 s")
     return "\n".join(lines)
 

@@ -104,6 +104,15 @@ def summarize(results: pd.DataFrame, attack: bool | None = None) -> dict:
     summary["failures"] = {f: int((results["failure"] == f).sum()) for f in FAILURES} if n else {}
     if attack:
         summary["asr_ci"] = [1.0 - summary["scr_ci"][1], 1.0 - summary["scr_ci"][0]]
+        # Only an attack that starts before t* can change the outcome: on approaches where the
+        # sign comes into view inside the braking distance, braking starts before the protocol
+        # lets the attack begin.
+        early = results[pd.to_numeric(results["attack_start_s"], errors="coerce")
+                        < pd.to_numeric(results["t_star_s"], errors="coerce")] if n else results
+        k_early = int(early["success"].sum())
+        summary["n_attack_before_t_star"] = int(len(early))
+        summary["scr_attack_before_t_star"] = k_early / len(early) if len(early) else None
+        summary["scr_attack_before_t_star_ci"] = list(wilson_interval(k_early, len(early)))
         summary["lost_frames_mean"] = float(results["lost_frames"].mean()) if n else None
         summary["attacked_share"] = float(results["attack_start_s"].notna().mean()) if n else None
     return summary

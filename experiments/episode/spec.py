@@ -163,8 +163,9 @@ class TrialSpec:
         return f"{self.setting}_{self.target}{self.sign}_v{self.speed:.2f}_seed{self.seed}_{digest}"
 
 
-#: What "the code" is: the packages' source and the assets (map, shipped checkpoints).
-_CODE_ROOTS = ("sim", "controllers", "odca", "experiments", "assets")
+#: What "the code" of an episode is: the source that runs it and the assets (map, shipped
+#: checkpoints). Summaries, tables and the CLI are left out: changing them changes no episode.
+_CODE_ROOTS = ("sim", "controllers", "odca", "experiments/episode", "experiments/closed_loop.py", "assets")
 _CODE_SUFFIXES = (".py", ".xml", ".json", ".npz", ".safetensors", ".png", ".bin")
 
 
@@ -174,7 +175,8 @@ def code_version() -> str:
     root = Path(__file__).resolve().parents[2]
     h = hashlib.sha256()
     for top in _CODE_ROOTS:
-        for path in sorted((root / top).rglob("*")):
+        paths = [root / top] if (root / top).is_file() else sorted((root / top).rglob("*"))
+        for path in paths:
             if path.is_file() and path.suffix in _CODE_SUFFIXES and "__pycache__" not in path.parts:
                 h.update(str(path.relative_to(root)).encode())
                 h.update(path.read_bytes())
