@@ -68,14 +68,18 @@ def test_summary_has_the_protocol_keys_and_wilson_interval():
     rows = pd.DataFrame({"setting": "attack", "success": [True] * 9 + [False],
                          "trigger_delay_s": [0.02] * 9 + [math.nan], "dt_brake_s": [0.1] * 9 + [math.nan],
                          "failure": [None] * 9 + ["confirmed_lost"],
-                         "lost_frames": [0] * 9 + [30], "attack_start_s": [math.nan] * 9 + [1.2]})
+                         "lost_frames": [0] * 9 + [30], "attack_start_s": [math.nan] * 8 + [2.0, 1.2],
+                         "t_star_s": [1.5] * 10})
     s = summarize(rows, attack=True)
     assert set(s) == {"n", "scr", "scr_ci", "asr", "asr_ci", "trigger_delay_mean", "trigger_delay_std",
-                      "dt_brake_mean", "dt_brake_std", "n_latency", "failures", "lost_frames_mean", "attacked_share"}
+                      "dt_brake_mean", "dt_brake_std", "n_latency", "failures", "lost_frames_mean", "attacked_share",
+                      "n_attack_before_t_star", "scr_attack_before_t_star", "scr_attack_before_t_star_ci"}
+    # Only the last trial's attack began before t* (1.2 < 1.5 s), and it failed.
+    assert s["n_attack_before_t_star"] == 1 and s["scr_attack_before_t_star"] == 0.0
     assert s["dt_brake_mean"] == pytest.approx(0.1) and s["trigger_delay_mean"] == pytest.approx(0.02)
     assert s["failures"]["confirmed_lost"] == 1 and sum(s["failures"].values()) == 1
     json.dumps(s, allow_nan=False)  # strict JSON
-    assert s["lost_frames_mean"] == 3.0 and s["attacked_share"] == pytest.approx(0.1)
+    assert s["lost_frames_mean"] == 3.0 and s["attacked_share"] == pytest.approx(0.2)
     assert s["n"] == 10 and s["scr"] == 0.9 and s["asr"] == pytest.approx(0.1) and s["n_latency"] == 9
     assert s["scr_ci"] == pytest.approx(list(wilson_interval(9, 10)))
     lo, hi = wilson_interval(9, 10)
@@ -132,7 +136,8 @@ def test_cli_attack_trials_json_has_lost_frames(tmp_path, capsys):
     summary = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
     assert {"n", "scr", "scr_ci", "asr", "dt_brake_mean", "dt_brake_std", "n_latency", "lost_frames_mean"} <= set(summary)
     assert summary["asr"] == 1.0 - summary["scr"]
-    assert main(["trials", "--setting", "clean", "--rho", "0.5", "-n", "1"]) == 2
+    with pytest.raises(SystemExit, match="2"):
+        main(["trials", "--setting", "clean", "--rho", "0.5", "-n", "1"])
     with pytest.raises(SystemExit):
         main(["trials", "--setting", "attack", "--rho", "1.5"])
 
