@@ -221,13 +221,13 @@ def _fmt_ci(lo: float, hi: float, digits: int = 2) -> str:
 def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
     if args.command == "snapshot":
-        from experiments.snapshot import snapshot
+        from experiments.viz.snapshot import snapshot
 
         for path in snapshot(args.out, sign=args.sign, run_up_m=args.run_up, width=args.width,
                              height=args.height, seed=args.seed):
             print(path)
     elif args.command == "bench-sim":
-        from experiments.bench_sim import bench_sim
+        from experiments.bench.sim import bench_sim
 
         if args.steps < 10:
             print("racf bench-sim: --steps must be >= 10", file=sys.stderr)
@@ -242,7 +242,7 @@ def main(argv: list[str] | None = None) -> int:
                 print(f"{r.setting:<28}{r.steps_per_s:>10.1f}{r.real_time_factor:>18.2f}")
             print("real-time factor = simulated seconds per wall-clock second at the 50 Hz control rate")
     elif args.command == "demo":
-        from experiments.demo import run_demo
+        from experiments.viz.demo import run_demo
 
         summary = run_demo(args.out, sign=args.sign, speed=args.speed, seed=args.seed)
         print(json.dumps(summary, indent=2))
@@ -264,7 +264,7 @@ def main(argv: list[str] | None = None) -> int:
     elif args.command == "trials":
         return _trials(args)
     elif args.command == "collect":
-        from experiments.dataset import DEFAULT_DRIVES, collect, load_dataset, summarize_dataset
+        from experiments.data.dataset import DEFAULT_DRIVES, collect, load_dataset, summarize_dataset
 
         path = collect(args.out, drives=args.drives or DEFAULT_DRIVES, seed=args.seed, workers=args.workers,
                        progress=True)  # the bar is on stderr; --summary JSON stays alone on stdout
@@ -280,14 +280,14 @@ def main(argv: list[str] | None = None) -> int:
     elif args.command == "train":
         return _train(args)
     elif args.command == "evaluate":
-        from experiments.dataset import load_dataset
+        from experiments.data.dataset import load_dataset
         from odca.online import ODCA
         from odca.train import evaluate
 
         report = evaluate(ODCA.load(args.checkpoint), load_dataset(args.dataset, split=args.split))
         print(json.dumps(report) if args.json else _train_table(report))
     elif args.command == "odca-latency":
-        from experiments.odca_latency import odca_latency
+        from experiments.bench.odca_latency import odca_latency
 
         r = odca_latency(steps=args.steps, threads=args.threads)
         if args.json:
@@ -299,7 +299,7 @@ def main(argv: list[str] | None = None) -> int:
     elif args.command == "attack-study":
         return _attack_study(args)
     elif args.command == "bench-detector":
-        from experiments.bench_detector import bench_detector
+        from experiments.bench.detector import bench_detector
 
         r = bench_detector(seed=args.seed, progress=not args.json)
         if args.json:
@@ -388,7 +388,7 @@ def _pretrain_prior(args: argparse.Namespace) -> int:
     torch.manual_seed(args.seed)
     sim_series = None
     if (args.dataset / "dataset.parquet").exists():
-        from experiments.dataset import load_dataset
+        from experiments.data.dataset import load_dataset
 
         test = load_dataset(args.dataset).clean("test")
         sim_series = [g["d_clean"].to_numpy(np.float32) for _, g in test.groupby("series_id", sort=False)]
@@ -403,7 +403,7 @@ def _pretrain_prior(args: argparse.Namespace) -> int:
 
 
 def _train(args: argparse.Namespace) -> int:
-    from experiments.dataset import load_dataset
+    from experiments.data.dataset import load_dataset
     from odca.online import SHIPPED_HEAD
     from odca.prior import Chronos2Prior
     from odca.train import train_odca

@@ -7,7 +7,7 @@ import pytest
 
 import sim
 from controllers import DetectorConfig, StopSignDetector
-from experiments.bench_detector import occlude
+from experiments.bench.detector import occlude
 
 DET = StopSignDetector()
 

@@ -31,7 +31,7 @@ def test_snapshot_writes_the_four_pictures(tmp_path):
 
 
 def test_demo_stops_in_the_success_band(tmp_path):
-    from experiments.demo import run_demo
+    from experiments.viz.demo import run_demo
 
     summary = run_demo(tmp_path, sign=3, speed=1.0)
     assert summary["stopped"] and 0.0 <= summary["stop_distance_m"] <= 0.60

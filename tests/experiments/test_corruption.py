@@ -5,7 +5,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from experiments.corruption import PRESETS, SEGMENT_KINDS, CorruptionPreset, corrupt_series, series_seed
+from experiments.data.corruption import PRESETS, SEGMENT_KINDS, CorruptionPreset, corrupt_series, series_seed
 
 DT = 0.02
 

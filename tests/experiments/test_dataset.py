@@ -8,7 +8,7 @@ import pandas as pd
 import pytest
 
 from experiments.cli import main
-from experiments.dataset import (COLUMNS, SPLIT_SHARES, collect, collection_specs, load_dataset, make_split,
+from experiments.data.dataset import (COLUMNS, SPLIT_SHARES, collect, collection_specs, load_dataset, make_split,
                                  make_target_split)
 
 #: Short drives keep the test collection small (the default drives last 20-60 s).
@@ -126,7 +126,7 @@ def test_specs_cycle_speeds_and_differ_by_seed():
 
 
 def test_cli_summary_json_and_missing_dataset_error(small, capsys, tmp_path, monkeypatch):
-    import experiments.dataset as dataset_module
+    import experiments.data.dataset as dataset_module
 
     # The CLI resumes the module's collection (its drives are the short ones).
     monkeypatch.setattr(dataset_module, "DRIVE_S", SHORT)

@@ -3,7 +3,7 @@
 import numpy as np
 import pandas as pd
 
-from experiments.dataset import QCarDataset
+from experiments.data.dataset import QCarDataset
 from odca import LastValuePrior
 from odca.synthetic import approach_curve
 from odca.train import train_odca

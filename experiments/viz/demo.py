@@ -29,7 +29,7 @@ def run_demo(out_dir: Path, sign: int = 2, speed: float = 1.0, seed: int = 0) ->
     import matplotlib.pyplot as plt
     from tqdm import tqdm
 
-    from experiments.figures import camera_views, top_view
+    from experiments.viz.figures import camera_views, top_view
 
     out_dir.mkdir(parents=True, exist_ok=True)
     frames: list[tuple] = []

@@ -27,7 +27,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from experiments.corruption import corrupt_series, series_seed
+from experiments.data.corruption import corrupt_series, series_seed
 from experiments.episode import DRIVE_S, TrialSpec
 from experiments.episode.runner import SCAN_FOV_HALF_BEAMS
 from experiments.trials import SPEEDS_MPS, run_batch
@@ -265,7 +265,7 @@ of the reported values are more than 0.15 m off.
 |---|---|---|
 {rows}
 
-**Corruption.** `experiments.dataset.load_dataset(path).corrupted("weak" | "mid" | "strong")`
+**Corruption.** `experiments.data.dataset.load_dataset(path).corrupted("weak" | "mid" | "strong")`
 adds the protocol's offline corruption (`d_meas`, `c_meas`, `label`, `kind`) with a fixed
 seed per series.
 """)

@@ -7,7 +7,7 @@ from pathlib import Path
 import gymnasium as gym
 
 import sim  # noqa: F401  (registers the env)
-from experiments.figures import camera_views, top_view
+from experiments.viz.figures import camera_views, top_view
 
 __all__ = ["snapshot"]
 

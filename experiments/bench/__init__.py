@@ -1,0 +1,1 @@
+"""Speed benchmarks: simulator, detector, ODCA latency."""

@@ -1,0 +1,1 @@
+"""Collection of drives, the dataset loader and card, offline corruption."""

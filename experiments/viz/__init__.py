@@ -1,0 +1,1 @@
+"""Figures, the demo and the snapshot."""
