@@ -7,7 +7,7 @@ controller's (``ideal_brake``, which defines t*), pose and speed. The result row
 from :func:`experiments.episode.scoring.score_log` on that log, so a stored log can be
 rescored without running anything.
 
-Timing: the controller runs every ``50 / control_hz`` steps and holds its action between;
+Timing: the controller runs every ``round(50 / control_hz)`` steps and holds its action between;
 with ``delay_ms`` its actions reach the car that much later (a FIFO of whole 20 ms steps).
 Both are off by default. The reference controller runs every step without delay.
 """

@@ -42,6 +42,8 @@ STRONG_T_ATK_S = (0.5, 3.0)
 EXTRA_ATTACKS = ("lidar_spoof", "lidar_dropout")
 #: The fake range of the LiDAR spoof, m: far enough that the repair would not brake in time.
 LIDAR_SPOOF_RANGE_M = (2.5, 3.5)
+#: The env's step rate, Hz (attack timing is counted in its steps).
+ENV_HZ = 50.0
 #: The paper's closed-loop table, plus the LiDAR spoof under ODCA.
 TABLE_SETTINGS = ("clean", "clean+odca", "attack", "attack+odca", "attack+ekf", "attack+chronos",
                   "attack+lidar_spoof+odca")
@@ -91,9 +93,10 @@ class TrialSpec:
         rho, t_atk: the patch's coverage share and duration, s: (low, high) uniform ranges.
         target: ``sign``, ``obstacle`` or ``drive``.
         drive_s: how long a drive is drawn to last, s.
-        stable_steps: steps the sign must be visible before an attack may start; None:
-            ``confirm_frames + 3`` of the braking config, so that the controller has a
-            confirmed track (the detector may lag the ground-truth visibility by a step or two).
+        stable_steps: env steps the sign must be visible before an attack may start; None:
+            ``confirm_frames + 3`` controller steps (and the delay), so that the controller
+            has a confirmed track (the detector may lag the ground-truth visibility by a step
+            or two).
         delay_ms: perception-to-actuation delay (0: off). The paper's offboard loop: 49 ms.
         control_hz: the controller's rate (None: every 50 Hz step); the action is held between.
         braking: the braking controller's parameters.
@@ -141,7 +144,13 @@ class TrialSpec:
 
     @property
     def attack_stable_steps(self) -> int:
-        return self.stable_steps if self.stable_steps is not None else self.braking.confirm_frames + 3
+        """Env steps (50 Hz) the sign must be visible before an attack may start: by default the
+        controller's confirm_frames + 3 of its own steps (slower at a lower ``control_hz``), plus
+        the actuation delay, so that a slower or delayed controller still has its track first."""
+        if self.stable_steps is not None:
+            return self.stable_steps
+        every = max(1, round(ENV_HZ / self.control_hz)) if self.control_hz else 1
+        return (self.braking.confirm_frames + 3) * every + round(self.delay_ms / 1000.0 * ENV_HZ)
 
     @property
     def drive(self) -> DriveSpec | None:

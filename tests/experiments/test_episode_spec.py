@@ -37,6 +37,9 @@ def test_attack_waits_for_more_steps_than_confirmation_needs():
     spec = TrialSpec("attack", 0, 1.0, 0)
     assert spec.attack_stable_steps > spec.braking.confirm_frames
     assert dataclasses.replace(spec, stable_steps=4).attack_stable_steps == 4
+    # A 20 Hz controller with the paper's 49 ms delay needs longer: 6 of its steps + the delay.
+    slow = dataclasses.replace(spec, control_hz=20.0, delay_ms=49.0)
+    assert slow.attack_stable_steps == 6 * 2 + 2
 
 
 @pytest.mark.parametrize("argv, message", [
