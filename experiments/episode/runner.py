@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import math
 from collections import deque
-from dataclasses import asdict, dataclass, fields
+from dataclasses import asdict, dataclass
 from typing import Callable
 
 import gymnasium as gym
@@ -93,12 +93,6 @@ class TrialResult:
     def to_dict(self) -> dict:
         """Strict-JSON-ready: NaN becomes None."""
         return {k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in asdict(self).items()}
-
-    @classmethod
-    def from_dict(cls, raw: dict) -> "TrialResult":
-        names = {f.name for f in fields(cls)}
-        return cls(**{k: (math.nan if v is None and k not in ("failure",) else v)
-                      for k, v in raw.items() if k in names})
 
 
 def run_trial(spec: TrialSpec, estimator=None, make_env: Callable[[TrialSpec], gym.Env] | None = None,
