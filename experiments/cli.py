@@ -149,8 +149,9 @@ def _episode_flags(p: argparse.ArgumentParser) -> None:
                         "controller's confirm_frames + 3 = 6)")
 
 
-def _episode_params(args: argparse.Namespace, command: str) -> tuple[str, dict]:
-    """The setting and the spec fields the episode flags give; SystemExit(2) naming what is wrong."""
+def _episode_params(args: argparse.Namespace, command: str, table: bool = False) -> tuple[str | None, dict]:
+    """The setting and the spec fields the episode flags give; SystemExit(2) naming what is wrong.
+    With ``table`` the settings are the table's own: none may be given, and the setting is None."""
     from experiments.episode import STRONG_RHO, STRONG_T_ATK_S, parse_setting, setting_name
 
     def fail(msg: str):
@@ -158,15 +159,19 @@ def _episode_params(args: argparse.Namespace, command: str) -> tuple[str, dict]:
         raise SystemExit(2)
 
     try:
+        if table and (args.setting is not None or args.attack is not None or args.estimator is not None):
+            fail("--table runs its own settings; drop --setting/--attack/--estimator")
         if args.setting is not None and (args.attack is not None or args.estimator is not None):
             fail("give --setting, or --attack/--estimator, not both")
-        if args.setting is not None:
+        if table:
+            setting = None
+        elif args.setting is not None:
             setting = args.setting
             parse_setting(setting)
         else:
             attacks = [a.strip() for a in args.attack.split(",") if a.strip()] if args.attack else []
             setting = setting_name(attacks, args.estimator or "raw")
-        if not parse_setting(setting)[0] and (args.rho is not None or args.t_atk is not None):
+        if setting is not None and not parse_setting(setting)[0] and (args.rho is not None or args.t_atk is not None):
             fail("--rho and --t-atk apply to settings with an attack")
         params = {"rho": _pair("--rho", args.rho, STRONG_RHO), "t_atk": _pair("--t-atk", args.t_atk, STRONG_T_ATK_S),
                   "delay_ms": args.delay_ms, "control_hz": args.control_hz, "stable_steps": args.stable_steps}
@@ -319,11 +324,7 @@ def _trials(args: argparse.Namespace) -> int:
     from experiments.trials import batch_specs, run_batch, run_table, summarize
 
     if args.table:
-        if args.setting is not None or args.attack is not None or args.estimator is not None:
-            print("racf trials: --table runs its own settings; drop --setting/--attack/--estimator", file=sys.stderr)
-            return 2
-        args.setting = "attack"  # only to validate the shared flags
-        _, params = _episode_params(args, "trials")
+        _, params = _episode_params(args, "trials", table=True)
         try:
             table = run_table(args.n, args.out or Path("outputs/table"), seed=args.seed, workers=args.workers,
                               progress=not args.json, **params)

@@ -77,11 +77,8 @@ def score_target(steps: pd.DataFrame) -> TargetOutcome:
     success = SUCCESS_BAND_M[0] <= rest <= SUCCESS_BAND_M[1]
     failure = None
     if not success:
-        before_line = dist >= 0
-        if not confirmed[before_line].any() and math.isnan(t_brake):
-            failure = "never_confirmed"
-        elif math.isnan(t_brake):
-            failure = "confirmed_lost" if confirmed.any() else "never_confirmed"
+        if math.isnan(t_brake):
+            failure = "confirmed_lost" if confirmed[dist >= 0].any() else "never_confirmed"
         elif rest > SUCCESS_BAND_M[1]:
             failure = "braked_early"
         elif rest < SUCCESS_BAND_M[0] or dist.min() < 0:

@@ -49,6 +49,7 @@ def test_attack_waits_for_more_steps_than_confirmation_needs():
     (["--setting", "attack", "--estimator", "odca"], "not both"),
     (["--setting", "clean", "--rho", "0.5"], "apply to settings with an attack"),
     (["--setting", "attack", "--control-hz", "200"], "control_hz"),
+    (["--table", "--estimator", "odca"], "--table runs its own settings"),
 ])
 def test_bad_flags_are_rejected_before_any_episode_runs(argv, message, monkeypatch, capsys, tmp_path):
     import experiments.trials as trials_module
