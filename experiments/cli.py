@@ -123,6 +123,21 @@ def _parser() -> argparse.ArgumentParser:
     ol.add_argument("--threads", type=_count, default=1, help="torch threads (default 1)")
     ol.add_argument("--json", action="store_true", help="print one JSON object")
 
+    ob = sub.add_parser("bench", help="the offline repair benchmark: raw, LiDAR, EKF, Chronos-2, SOFTS, NHITS, DLinear, "
+                                      "NLinear and ODCA on both splits and presets (tables, figures, results.json)")
+    ob.add_argument("--dataset", type=Path, default=Path("data/qcar2"), help="dataset folder (racf collect)")
+    ob.add_argument("--out", type=Path, default=Path("outputs/bench"), help="results folder (default outputs/bench)")
+    ob.add_argument("--split", choices=("by_series", "leave_target_out", "both"), default="both",
+                    help="split scheme(s) to run (default both)")
+    ob.add_argument("--seed", type=int, default=0, help="training and bootstrap seed (default 0)")
+    ob.add_argument("--quick", action="store_true",
+                    help="a few series per split and short training (about a minute; not a result to quote)")
+    ob.add_argument("--no-ablation", action="store_true", help="skip the loss ablation (five head trainings)")
+    ob.add_argument("--max-steps", type=_count, default=None,
+                    help="optimiser steps of the neuralforecast baselines (default 600; --quick 15)")
+    ob.add_argument("--epochs", type=_count, default=None, help="ODCA head epochs (default 800; --quick 40)")
+    ob.add_argument("--json", action="store_true", help="print the results as one JSON object instead of the table")
+
     bd = sub.add_parser("bench-detector", help="stop-sign detector recall and false-positive frames on rendered drives")
     bd.add_argument("--seed", type=int, default=0)
     bd.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
@@ -223,6 +238,41 @@ def _fmt_ci(lo: float, hi: float, digits: int = 2) -> str:
     return f"[{lo:.{digits}f}, {hi:.{digits}f}]"
 
 
+def _bench(args) -> int:
+    from dataclasses import replace
+
+    from experiments.offline.benchmark import BenchConfig, load_splits, run_benchmark
+    from experiments.offline.report import main_table, strict, write_report
+
+    if not (args.dataset / "dataset.parquet").exists():
+        print(f"racf bench: no dataset at {args.dataset} (make one with `racf collect --out {args.dataset}`)",
+              file=sys.stderr)
+        return 2
+    splits = ("by_series", "leave_target_out") if args.split == "both" else (args.split,)
+    common = dict(data=args.dataset, out=args.out, splits=splits, seed=args.seed, ablation=not args.no_ablation)
+    cfg = BenchConfig.quick_config(**common) if args.quick else BenchConfig(**common)
+    if args.max_steps is not None:
+        cfg = replace(cfg, nf=replace(cfg.nf, max_steps=args.max_steps))
+    if args.epochs is not None:
+        cfg = replace(cfg, odca_epochs=args.epochs)
+    try:
+        datasets = load_splits(cfg)
+    except (ValueError, FileNotFoundError) as err:
+        print(f"racf bench: {err}", file=sys.stderr)
+        return 2
+    results = run_benchmark(cfg, progress=True, datasets=datasets)
+    paths = write_report(results, args.out)
+    if args.json:
+        print(json.dumps(strict({k: v for k, v in results.items() if k != "_traces"}), allow_nan=False))
+    else:
+        print(main_table(results))
+        print(f"ODCA on clean input: RMSE against its input {results['clean']['odca_rmse_vs_input']:.4f} m")
+        print(f"wall time {results['wall_s']:.0f} s; results in {args.out} (README.md, results.json, tables/, "
+              f"figures/: {len([k for k in paths if k not in ('results', 'summary') and not k.startswith('table')])} "
+              "PNGs)")
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
     if args.command == "snapshot":
@@ -291,6 +341,8 @@ def main(argv: list[str] | None = None) -> int:
 
         report = evaluate(ODCA.load(args.checkpoint), load_dataset(args.dataset, split=args.split))
         print(json.dumps(report) if args.json else _train_table(report))
+    elif args.command == "bench":
+        return _bench(args)
     elif args.command == "odca-latency":
         from experiments.bench.odca_latency import odca_latency
 

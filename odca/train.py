@@ -27,7 +27,8 @@ from odca.head import HeadWeights, head_parameters, make_head
 from odca.losses import LossWeights, odca_losses
 from odca.online import ODCA, ODCAConfig
 
-__all__ = ["prepare", "train_head", "calibrate_gate", "score", "pass_through", "evaluate", "train_odca"]
+__all__ = ["prepare", "prepare_split", "initial_model", "fit", "train_head", "calibrate_gate", "score", "pass_through",
+           "evaluate", "train_odca"]
 
 
 def prepare(model: ODCA, frame: pd.DataFrame) -> dict[str, np.ndarray]:
@@ -154,31 +155,48 @@ def calibrate_gate(model: ODCA, val: dict[str, np.ndarray]) -> GateConfig:
     return best[1]
 
 
-def train_odca(dataset, prior, epochs: int = 800, seed: int = 0, presets=("weak", "mid", "strong"),
-               progress: bool = True) -> tuple[ODCA, dict]:
-    """The whole recipe on a ``QCarDataset``; returns the trained ODCA and a report."""
+def initial_model(dataset, prior) -> ODCA:
+    """An untrained ODCA with the LiDAR alignment fitted on the train split's clean series."""
     train_clean = dataset.clean("train")
     ok = np.isfinite(train_clean["d_clean"]) & np.isfinite(train_clean["lidar"])
     alignment = fit_alignment(train_clean.loc[ok, "d_clean"].to_numpy(), train_clean.loc[ok, "lidar"].to_numpy(),
                               train_clean.loc[ok, "c_clean"].to_numpy())
-    config = ODCAConfig(alignment=alignment)
-    placeholder = HeadWeights.from_module(make_head())
-    model = ODCA(config, placeholder, prior)
+    return ODCA(ODCAConfig(alignment=alignment), HeadWeights.from_module(make_head()), prior)
 
-    def frames(split):
-        return pd.concat([dataset.corrupted(p, split).assign(series_id=lambda f, p=p: f["series_id"] + "|" + p)
-                          for p in presets], ignore_index=True)
 
-    train = prepare(model, frames("train"))
-    val = prepare(model, frames("val"))
+def prepare_split(model: ODCA, dataset, split: str, presets=("weak", "mid", "strong")) -> dict[str, np.ndarray]:
+    """``prepare`` over one split corrupted with every preset (each series with its fixed seed)."""
+    frame = pd.concat([dataset.corrupted(p, split).assign(series_id=lambda f, p=p: f["series_id"] + "|" + p)
+                       for p in presets], ignore_index=True)
+    return prepare(model, frame)
+
+
+def fit(model: ODCA, train: dict[str, np.ndarray], val: dict[str, np.ndarray], epochs: int = 800, seed: int = 0,
+        weights: LossWeights | None = None, progress: bool = True) -> dict:
+    """Trains the head on prepared train data and calibrates the gate on validation data (in place).
+
+    Returns the training part of the report.
+    """
     clean_r = np.abs(train["d"] - train["l_al"])[(train["label"] == 0) & np.isfinite(train["d"] - train["l_al"])]
-    tau_low = float(np.percentile(clean_r, 95))
-    head, history = train_head(train, tau_low, config.dt, epochs=epochs, seed=seed, progress=progress)
+    tau_low = float(np.percentile(clean_r, 95)) if clean_r.size else 0.1
+    head, history = train_head(train, tau_low, model.config.dt, epochs=epochs, seed=seed, weights=weights,
+                               progress=progress)
     model.head = head
     gate = calibrate_gate(model, val)
-    report = {"alignment": asdict(alignment), "gate": asdict(gate), "head_parameters": head.n_parameters,
-              "final_losses": history[-1], "epochs": epochs, "seed": seed, "train_steps": int(len(train["d"])),
-              **evaluate(model, dataset, presets)}
+    return {"alignment": asdict(model.config.alignment), "gate": asdict(gate), "head_parameters": head.n_parameters,
+            "loss_weights": asdict(weights or LossWeights()), "final_losses": history[-1], "epochs": epochs,
+            "seed": seed, "train_steps": int(len(train["d"]))}
+
+
+def train_odca(dataset, prior, epochs: int = 800, seed: int = 0, presets=("weak", "mid", "strong"),
+               progress: bool = True, weights: LossWeights | None = None, evaluate_test: bool = True
+               ) -> tuple[ODCA, dict]:
+    """The whole recipe on a ``QCarDataset``; returns the trained ODCA and a report."""
+    model = initial_model(dataset, prior)
+    train, val = (prepare_split(model, dataset, split, presets) for split in ("train", "val"))
+    report = fit(model, train, val, epochs=epochs, seed=seed, weights=weights, progress=progress)
+    if evaluate_test:
+        report.update(evaluate(model, dataset, presets))
     return model, report
 
 

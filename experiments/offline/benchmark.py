@@ -1,0 +1,320 @@
+"""The offline repair benchmark: every method on both splits under every preset (``racf bench``).
+
+Per split (by series; leave one target out) the benchmark trains what needs training on
+that split's train series (ODCA's head and gate, the four neuralforecast models; cached by
+what made them, so a rerun only rescores), corrupts the test series with each preset
+(fixed seeds per series), runs every method causally and scores it (``reference/protocol.md``).
+It adds the loss ablation (ODCA's head retrained per objective), BD / RGR, the complexity
+figures and the clean pass-through, and writes ``results.json``, Markdown / CSV tables and
+PNG figures (:mod:`experiments.offline.report`).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import time
+from dataclasses import asdict, dataclass, field, replace
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from experiments.data.dataset import SPLITS, QCarDataset, load_dataset
+from experiments.offline.forecasters import NF_MODELS, ChronosForecaster, NFSettings, train_nf, training_frame
+from experiments.offline.methods import (FORECASTERS, METHODS, SplitArrays, ekf_estimate, forecast_at,
+                                         lidar_estimate, raw_estimate, split_arrays)
+from experiments.offline.metrics import bounded_degradation, resilience_gain
+from experiments.offline.scoring import bootstrap_rmse, diagnostic_scores, horizon_scores, recovery_scores
+
+__all__ = ["BenchConfig", "ABLATION", "load_splits", "run_benchmark", "PRESETS"]
+
+PRESETS = ("weak", "mid", "strong")
+_ROOT = Path(__file__).resolve().parents[2]
+
+
+def _ablation_rows() -> dict[str, dict[str, float]]:
+    from odca.losses import LossWeights
+
+    full = LossWeights()
+    off = {"minimal_change": 0.0, "consistency": 0.0, "kinematics": 0.0}
+    return {
+        "L_ID": asdict(replace(full, **off)),
+        "L_ID + L_Delta0": asdict(replace(full, consistency=0.0, kinematics=0.0)),
+        "L_ID + L_Delta0 + L_cons": asdict(replace(full, kinematics=0.0)),
+        "L_ID + L_Delta0 + L_kin": asdict(replace(full, consistency=0.0)),
+        "full": asdict(full),
+    }
+
+
+#: The loss-ablation rows under the strong preset: objective -> LossWeights fields.
+ABLATION = _ablation_rows()
+
+
+@dataclass(frozen=True)
+class BenchConfig:
+    """What ``racf bench`` runs.
+
+    Attributes:
+        data: the dataset folder (``racf collect``).
+        out: results folder.
+        splits: split schemes to run.
+        presets: corruption presets.
+        seed: training seeds (ODCA head, neuralforecast models) and the bootstrap's.
+        odca_epochs: full-batch epochs of ODCA's head.
+        nf: the neuralforecast baselines' settings.
+        ablation: run the loss ablation (five head trainings on the first split).
+        bootstrap: resamples of test series for the RMSE intervals.
+        quick: a few series per split and short training (what the tests run).
+        cache: trained-model cache (default ``out/cache``).
+    """
+
+    data: Path = Path("data/qcar2")
+    out: Path = Path("outputs/bench")
+    splits: tuple[str, ...] = SPLITS
+    presets: tuple[str, ...] = PRESETS
+    seed: int = 0
+    odca_epochs: int = 800
+    nf: NFSettings = field(default_factory=NFSettings)
+    ablation: bool = True
+    bootstrap: int = 1000
+    quick: bool = False
+    cache: Path | None = None
+
+    def __post_init__(self) -> None:
+        bad = [s for s in self.splits if s not in SPLITS]
+        if not self.splits or bad:
+            raise ValueError(f"splits must be a non-empty subset of {SPLITS}, got {list(self.splits)}")
+        bad = [p for p in self.presets if p not in PRESETS]
+        if not self.presets or bad:
+            raise ValueError(f"presets must be a non-empty subset of {PRESETS}, got {list(self.presets)}")
+        if self.odca_epochs < 1 or self.bootstrap < 0:
+            raise ValueError(f"odca_epochs must be >= 1 and bootstrap >= 0, got {self.odca_epochs}, {self.bootstrap}")
+
+    @classmethod
+    def quick_config(cls, **overrides) -> "BenchConfig":
+        """A few series, short training: minutes, not a result to quote."""
+        base = dict(odca_epochs=40, nf=NFSettings(max_steps=15), bootstrap=100, quick=True)
+        return cls(**{**base, **overrides})
+
+    @property
+    def cache_dir(self) -> Path:
+        return Path(self.cache) if self.cache is not None else Path(self.out) / "cache"
+
+    def to_json(self) -> dict:
+        raw = asdict(self)
+        return {**raw, "data": str(self.data), "out": str(self.out), "cache": str(self.cache_dir)}
+
+
+#: Test / train / val series per split in quick mode.
+_QUICK = {"train": 4, "val": 1, "test": 2}
+
+
+def _quick(ds: QCarDataset) -> QCarDataset:
+    split = {k: ds.split[k][:_QUICK[k]] for k in ("train", "val", "test")}
+    keep = ds.frame["series_id"].isin(sum(split.values(), []))
+    return QCarDataset(ds.frame[keep].reset_index(drop=True), split, ds.path, ds.scheme, ds.splits)
+
+
+def _source_version(*folders: str) -> str:
+    digest = hashlib.sha256()
+    for folder in folders:
+        for path in sorted((_ROOT / folder).glob("*.py")):
+            digest.update(path.name.encode())
+            digest.update(path.read_bytes())
+    return digest.hexdigest()[:12]
+
+
+#: The dataset columns a method or a training reads (the hash of a split covers these).
+_USED = ["series_id", "t", "d_clean", "c_clean", "d_true", "lidar", "speed"]
+
+
+def _frame_hash(*frames: pd.DataFrame) -> str:
+    digest = hashlib.sha256()
+    for frame in frames:
+        digest.update(pd.util.hash_pandas_object(frame[_USED], index=False).to_numpy().tobytes())
+    return digest.hexdigest()[:16]
+
+
+def _trained_odca(ds: QCarDataset, prior, cfg: BenchConfig, weights: dict, tag: str):
+    """ODCA trained on the split's train series with these loss weights; cached by what made it."""
+    from odca import ODCA
+    from odca.losses import LossWeights
+    from odca.train import fit, initial_model, prepare_split
+
+    key = hashlib.sha256(json.dumps({"data": _frame_hash(ds.clean("train"), ds.clean("val")), "weights": weights,
+                                     "epochs": cfg.odca_epochs, "seed": cfg.seed, "code": _source_version("odca")},
+                                    sort_keys=True).encode()).hexdigest()[:16]
+    folder = cfg.cache_dir / f"odca-{tag}-{key}"
+    if (folder / "report.json").exists():
+        return ODCA.load(folder, prior=prior), json.loads((folder / "report.json").read_text())
+    model = initial_model(ds, prior)
+    cache = _trained_odca.prepared
+    data_key = (_frame_hash(ds.clean("train"), ds.clean("val")), id(prior))
+    if cache.get("key") != data_key:  # the prior's features on train/val, shared by the ablation's heads
+        cache.clear()
+        cache.update(key=data_key, train=prepare_split(model, ds, "train"), val=prepare_split(model, ds, "val"))
+    t0 = time.perf_counter()
+    report = fit(model, cache["train"], cache["val"], epochs=cfg.odca_epochs, seed=cfg.seed,
+                 weights=LossWeights(**weights), progress=False)
+    report["train_s"] = time.perf_counter() - t0
+    model.save(folder)
+    (folder / "report.json").write_text(json.dumps(report, indent=1, allow_nan=False))
+    return model, report
+
+
+_trained_odca.prepared = {}
+
+
+def _score_split(ds: QCarDataset, preset: str, odca_model, forecasters: dict, cfg: BenchConfig
+                 ) -> tuple[dict, dict]:
+    """All methods on one split's test series under one preset: (scores per method, traces for figures)."""
+    frame = ds.corrupted(preset, "test")
+    a = split_arrays(frame, odca_model.config.alignment)
+    origins = np.flatnonzero(a.scored)
+    estimates = {"raw": raw_estimate(a), "lidar": lidar_estimate(a), "ekf": ekf_estimate(a),
+                 "odca": odca_model.run(frame)["d_fused"].to_numpy()}
+    horizon = {}
+    for name, forecaster in forecasters.items():
+        one_step, paths = forecast_at(forecaster, a, origins, odca_model.config.context_length,
+                                      odca_model.config.horizon)
+        est = np.full(len(a), np.nan)
+        est[origins] = one_step
+        estimates[name] = est
+        horizon[name] = horizon_scores(origins, paths, a)
+    scores = {}
+    for name in (m for m in METHODS if m in estimates):
+        est = estimates[name]
+        row = recovery_scores(est, a)
+        row["rmse_ci"] = bootstrap_rmse(est, a, cfg.bootstrap, cfg.seed)
+        row.update(horizon.get(name, {}))
+        row.update(diagnostic_scores(est, a))
+        scores[name] = row
+    traces = {"frame": frame[["series_id", "t", "d_clean", "d_meas", "label"]].assign(
+        **{f"est_{k}": v for k, v in estimates.items()})}
+    return scores, traces
+
+
+def _complexity(odca_report: dict, forecasters: dict, prior_params: int) -> dict:
+    out = {"raw": {"trainable": 0, "total": 0}, "lidar": {"trainable": 0, "total": 2},
+           "ekf": {"trainable": 0, "total": 6},
+           "odca": {"trainable": int(odca_report["head_parameters"]),
+                    "total": int(odca_report["head_parameters"]) + prior_params + 2 + 4}}
+    for name, f in forecasters.items():
+        n = f.n_parameters
+        out[name] = {"trainable": 0 if name == "chronos" else n, "total": n}
+    return out
+
+
+def load_splits(cfg: BenchConfig) -> dict[str, QCarDataset]:
+    """The dataset under each split scheme (a quick subset with ``cfg.quick``); a clear error if one cannot serve."""
+    datasets = {}
+    for split in cfg.splits:
+        ds = load_dataset(cfg.data, split=split)
+        ds = _quick(ds) if cfg.quick else ds
+        empty = [part for part in ("train", "val", "test") if not ds.split[part]]
+        if empty:
+            raise ValueError(f"the {split} split of {cfg.data} has no {' or '.join(empty)} series; "
+                             "the benchmark needs all three (collect more drives)")
+        datasets[split] = ds
+    return datasets
+
+
+def run_benchmark(cfg: BenchConfig, progress: bool = True, datasets: dict[str, QCarDataset] | None = None) -> dict:
+    """Runs the benchmark and returns the results object (also written by :func:`report.write_report`)."""
+    from tqdm import tqdm
+
+    from odca.prior import Chronos2Prior
+    from odca.train import pass_through
+
+    t0 = time.perf_counter()
+    datasets = datasets or load_splits(cfg)
+    n_stages = len(cfg.splits) * (2 + len(NF_MODELS) + len(cfg.presets)) + (len(ABLATION) - 1 if cfg.ablation else 0)
+    bar = tqdm(total=n_stages, desc="bench", unit="stage", disable=not progress)
+
+    def stage(text: str) -> None:
+        bar.set_postfix_str(text)
+
+    prior = Chronos2Prior()
+    chronos = ChronosForecaster(horizon=cfg.nf.horizon)
+    results: dict = {"config": cfg.to_json()}
+    traces: dict = {}
+    complexity: dict = {}
+    ablation: list = []
+    for split in cfg.splits:
+        ds = datasets[split]
+        stage(f"{split}: ODCA head")
+        odca_model, odca_report = _trained_odca(ds, prior, cfg, ABLATION["full"], split)
+        bar.update()
+        forecasters = {"chronos": chronos}
+        train = training_frame(ds.clean("train"))
+        for name in NF_MODELS:
+            stage(f"{split}: train {name}")
+            forecasters[name] = train_nf(name, train, cfg.nf, cfg.cache_dir)
+            bar.update()
+        forecasters = {k: forecasters[k] for k in FORECASTERS}
+        per_preset = {}
+        for preset in cfg.presets:
+            stage(f"{split}: score {preset}")
+            per_preset[preset], traces[(split, preset)] = _score_split(ds, preset, odca_model, forecasters, cfg)
+            bar.update()
+        stage(f"{split}: clean pass-through")
+        clean = pass_through(odca_model, ds.clean("test"))
+        bar.update()
+        results[split] = per_preset
+        results.setdefault("clean", {})[split] = clean
+        results.setdefault("training", {})[split] = {
+            "odca": odca_report, "n_series": {k: len(v) for k, v in ds.split.items()},
+            "nf": {k: {"cache_key": f.key, "train_s": f.train_s} for k, f in forecasters.items() if k != "chronos"}}
+        if split == cfg.splits[0]:
+            complexity = _complexity(odca_report, forecasters, chronos.n_parameters)
+            if cfg.ablation and "strong" in cfg.presets:
+                ablation = _run_ablation(ds, prior, cfg, per_preset["strong"]["odca"], odca_report, stage, bar)
+    bar.close()
+    first = cfg.splits[0]
+    results["clean"]["odca_rmse_vs_input"] = results["clean"][first]["rmse_vs_input"]
+    results["derived"] = {split: _derived(results[split]) for split in cfg.splits}
+    if "strong" in cfg.presets:
+        for name, row in complexity.items():
+            row["rmse_strong"] = results[first]["strong"][name]["rmse"]
+    results["complexity"] = complexity
+    results["ablation"] = ablation
+    results["dataset"] = {"path": str(cfg.data), "quick": cfg.quick}
+    results["wall_s"] = time.perf_counter() - t0
+    results["_traces"] = traces  # for the figures; not written to results.json
+    return results
+
+
+def _run_ablation(ds, prior, cfg: BenchConfig, full_scores: dict, full_report: dict, stage, bar) -> list[dict]:
+    """Each objective retrains the head (and recalibrates the gate); scored on the strong preset's test series."""
+    from experiments.offline.methods import split_arrays as arrays
+
+    frame = ds.corrupted("strong", "test")
+    rows = []
+    base = None
+    for objective, weights in ABLATION.items():
+        if objective == "full":
+            scores, report = full_scores, full_report
+        else:
+            stage(f"ablation: {objective}")
+            model, report = _trained_odca(ds, prior, cfg, weights, "ablation")
+            a = arrays(frame, model.config.alignment)
+            est = model.run(frame)["d_fused"].to_numpy()
+            scores = {**recovery_scores(est, a), **diagnostic_scores(est, a)}
+            bar.update()
+        base = scores["rmse"] if base is None else base
+        rows.append({"objective": objective, "loss_weights": weights, "rmse": scores["rmse"],
+                     "delta_rmse": None if objective == "L_ID" else scores["rmse"] - base,
+                     "mae": scores["mae"], "auroc_chg": scores["auroc_chg"], "auprc_chg": scores["auprc_chg"],
+                     "n": scores["n"], "gate": report["gate"]})
+    return rows
+
+
+def _derived(per_preset: dict) -> dict:
+    methods = next(iter(per_preset.values())).keys()
+    chronos = {p: per_preset[p]["chronos"]["rmse"] for p in per_preset}
+    out = {}
+    for m in methods:
+        rm = {p: per_preset[p][m]["rmse"] for p in per_preset}
+        out[m] = {"bd": bounded_degradation(rm.get("weak"), rm.get("strong")), "rgr": resilience_gain(rm, chronos)}
+    return out

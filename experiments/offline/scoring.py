@@ -1,0 +1,73 @@
+"""Scores of one method on one corrupted split: recovery, horizon, diagnostics, intervals."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from experiments.offline.methods import SplitArrays
+from experiments.offline.metrics import auprc, auroc, mae, rmse
+
+__all__ = ["MOVING_MPS", "recovery_scores", "horizon_scores", "diagnostic_scores", "bootstrap_rmse"]
+
+#: A sample is moving above this speed, m/s (the protocol's standstill bound).
+MOVING_MPS = 0.05
+
+
+def recovery_scores(estimate: np.ndarray, a: SplitArrays) -> dict:
+    """RMSE / MAE against d_clean and d_true, over all scored and over moving scored samples."""
+    scored = a.scored
+    moving = scored & (np.abs(a.v) > MOVING_MPS)
+    out = {"n": int(scored.sum()), "n_moving": int(moving.sum())}
+    for suffix, mask in (("", scored), ("_moving", moving)):
+        out[f"rmse{suffix}"] = rmse(estimate, a.d_clean, mask)
+        out[f"mae{suffix}"] = mae(estimate, a.d_clean, mask)
+        out[f"rmse_true{suffix}"] = rmse(estimate, a.d_true, mask)
+        out[f"mae_true{suffix}"] = mae(estimate, a.d_true, mask)
+    out["n_true"] = int((scored & np.isfinite(a.d_true)).sum())
+    return out
+
+
+def horizon_scores(origins: np.ndarray, paths: np.ndarray, a: SplitArrays) -> dict:
+    """The H-step score: errors of the forecasts from each origin over its next H steps (same series, scored)."""
+    horizon = paths.shape[1]
+    idx = origins[:, None] + np.arange(horizon)[None, :]
+    inside = idx < len(a)
+    idx_c = np.minimum(idx, len(a) - 1)
+    same = inside & (a.series_id[idx_c] == a.series_id[origins][:, None]) & a.scored[idx_c]
+    err = (paths - a.d_clean[idx_c])[same & np.isfinite(paths)]
+    return {f"rmse_h{horizon}": float(np.sqrt(np.mean(err**2))) if err.size else None,
+            f"mae_h{horizon}": float(np.mean(np.abs(err))) if err.size else None,
+            f"n_h{horizon}": int(err.size)}
+
+
+def diagnostic_scores(estimate: np.ndarray, a: SplitArrays) -> dict:
+    """AUROC / AUPRC of XS = |estimate - aligned LiDAR| and Chg = |estimate - d~| as detectors of attacked steps.
+
+    For raw depth XS is the paper's r_XS = |d~ - l|; for a repairing method it is what is
+    left of the disagreement after repair. d~ is the held raw depth (a blackout has none).
+    Steps without a LiDAR value have no XS and are left out of its score.
+    """
+    scored = a.scored
+    xs = np.abs(estimate - a.l_al)[scored]
+    chg = np.abs(estimate - a.raw)[scored]
+    label = a.label[scored]
+    return {"auroc_xs": auroc(xs, label), "auprc_xs": auprc(xs, label),
+            "auroc_chg": auroc(chg, label), "auprc_chg": auprc(chg, label),
+            "attacked_share": float(label.mean()) if label.size else None}
+
+
+def bootstrap_rmse(estimate: np.ndarray, a: SplitArrays, n_boot: int, seed: int, level: float = 0.95
+                   ) -> list[float] | None:
+    """Percentile interval of the RMSE against d_clean, resampling whole test series (they are the units)."""
+    scored = a.scored
+    if not scored.any() or n_boot < 1:
+        return None
+    sq = (estimate - a.d_clean) ** 2
+    ids, inverse = np.unique(a.series_id[scored], return_inverse=True)
+    sse = np.bincount(inverse, weights=sq[scored], minlength=len(ids))
+    count = np.bincount(inverse, minlength=len(ids)).astype(float)
+    rng = np.random.default_rng(seed)
+    draws = rng.integers(0, len(ids), size=(n_boot, len(ids)))
+    values = np.sqrt(sse[draws].sum(1) / np.maximum(count[draws].sum(1), 1.0))
+    tail = (1 - level) / 2 * 100
+    return [float(np.percentile(values, tail)), float(np.percentile(values, 100 - tail))]

@@ -1,0 +1,119 @@
+"""`racf bench --quick` end to end on a small synthetic dataset folder: outputs, JSON shape,
+strict JSON, same numbers on a rerun (trained models reused), clear errors."""
+
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from experiments.cli import main
+from experiments.data.dataset import COLUMNS, make_splits
+from experiments.offline.benchmark import BenchConfig
+from experiments.offline.methods import METHODS
+from odca.synthetic import approach_curve
+
+
+def _write_dataset(folder, n_series=12, seed=0):
+    rng = np.random.default_rng(seed)
+    frames = []
+    for i in range(n_series):
+        parts = []
+        for slot, target in enumerate((f"sign{i % 5}", f"sign{(i + 1) % 5}")):
+            d = approach_curve(rng, 220)
+            lidar = d + rng.normal(0, 0.01, d.size)
+            speed = np.clip(-np.gradient(pd.Series(d).ffill().bfill().to_numpy(), 0.02), 0, 3)
+            parts.append(pd.DataFrame({"slot": slot, "target": target, "d_clean": d, "d_true": d + 0.005,
+                                       "c_clean": np.where(np.isfinite(d), 0.9, 0.0), "lidar": lidar,
+                                       "speed": speed}))
+        s = pd.concat(parts, ignore_index=True)
+        n = len(s)
+        s = s.assign(series_id=f"drive{i}", t=np.arange(n) * 0.02, speed_set=1.0,
+                     sign_in_view=np.isfinite(s["d_clean"]), detected=np.isfinite(s["d_clean"]),
+                     scan_new=np.arange(n) % 5 == 0, scan_fov_mm=[np.zeros(4, np.uint16)] * n, steering=0.0,
+                     yaw_rate=0.0, accel=0.0, x=0.0, y=0.0, yaw=0.0, dist_to_stop_line=s["d_clean"], brake=False)
+        frames.append(s[list(COLUMNS)])
+    data = pd.concat(frames, ignore_index=True)
+    folder.mkdir(parents=True, exist_ok=True)
+    data.to_parquet(folder / "dataset.parquet", index=False)
+    (folder / "split.json").write_text(json.dumps({"seed": 0, "shares": [0.7, 0.1, 0.2],
+                                                   **make_splits(data, seed=0)}))
+    return folder
+
+
+@pytest.fixture(scope="module")
+def bench_runs(tmp_path_factory):
+    root = tmp_path_factory.mktemp("bench")
+    data = _write_dataset(root / "data")
+    out = root / "out"
+    runs = []
+    for _ in range(2):
+        import io
+        from contextlib import redirect_stdout
+
+        buf = io.StringIO()
+        with redirect_stdout(buf):
+            code = main(["bench", "--quick", "--dataset", str(data), "--out", str(out), "--json"])
+        assert code == 0
+        runs.append(json.loads(buf.getvalue()))
+    return out, runs
+
+
+def test_json_has_every_split_preset_and_method(bench_runs):
+    _, (results, _) = bench_runs
+    for split in ("by_series", "leave_target_out"):
+        for preset in ("weak", "mid", "strong"):
+            for method in METHODS:
+                row = results[split][preset][method]
+                for key in ("rmse", "mae", "rmse_true"):
+                    assert isinstance(row[key], float) and row[key] >= 0, (split, preset, method, key)
+            for method in ("chronos", "softs", "nhits", "dlinear", "nlinear"):
+                assert results[split][preset][method]["rmse_h16"] is not None
+            n = {results[split][preset][m]["n"] for m in METHODS}
+            assert len(n) == 1  # every method is scored on the same steps
+    assert 0 <= results["clean"]["odca_rmse_vs_input"] < 0.5
+    assert results["wall_s"] > 0
+    assert [r["objective"] for r in results["ablation"]] == ["L_ID", "L_ID + L_Delta0", "L_ID + L_Delta0 + L_cons",
+                                                             "L_ID + L_Delta0 + L_kin", "full"]
+    assert results["complexity"]["odca"]["trainable"] == 917
+
+
+def test_results_folder_holds_strict_json_tables_and_figures(bench_runs):
+    out, (results, _) = bench_runs
+
+    def reject(token):
+        raise AssertionError(f"non-strict JSON constant {token}")
+
+    stored = json.loads((out / "results.json").read_text(), parse_constant=reject)
+    assert stored["by_series"]["strong"]["odca"]["rmse"] == results["by_series"]["strong"]["odca"]["rmse"]
+    for name in ("recovery", "recovery_true", "recovery_moving", "sensors_strong", "bd_rgr", "ablation", "complexity",
+                 "horizon"):
+        assert (out / "tables" / f"{name}.md").stat().st_size > 0, name
+    csv = pd.read_csv(out / "tables" / "recovery.csv")
+    assert len(csv) == 2 * 3 * len(METHODS)
+    pngs = sorted(p.name for p in (out / "figures").glob("*.png"))
+    assert pngs == sorted(["recovery_by_series.png", "recovery_leave_target_out.png", "diagnostics_by_series.png",
+                           "diagnostics_leave_target_out.png", "resilience_radar.png", "complexity.png",
+                           "qualitative_strong.png"])
+    assert "Recovery" in (out / "README.md").read_text()
+
+
+def test_rerun_reuses_trained_models_and_gives_the_same_numbers(bench_runs):
+    _, (first, second) = bench_runs
+    for split in ("by_series", "leave_target_out"):
+        assert all(v["train_s"] is not None for v in first["training"][split]["nf"].values())
+        assert all(v["train_s"] is None for v in second["training"][split]["nf"].values())
+        assert first[split] == second[split]
+    assert first["ablation"] == second["ablation"]
+
+
+def test_bad_input_is_rejected_before_any_work(tmp_path, capsys):
+    assert main(["bench", "--dataset", str(tmp_path / "missing"), "--out", str(tmp_path / "o")]) == 2
+    assert "racf collect" in capsys.readouterr().err
+    assert not (tmp_path / "o").exists()
+    with pytest.raises(ValueError, match="presets"):
+        BenchConfig(presets=("extreme",))
+    with pytest.raises(ValueError, match="splits"):
+        BenchConfig(splits=())
+    with pytest.raises(SystemExit):
+        main(["bench", "--split", "random"])
