@@ -120,20 +120,23 @@ def training_frame(frame: pd.DataFrame) -> pd.DataFrame:
 
 
 def _quiet_lightning() -> None:
+    """Lightning's banners and per-fit warnings off (it sets its loggers' levels on import, so after it)."""
     os.environ.setdefault("RAY_USAGE_STATS_ENABLED", "0")
+    import neuralforecast  # noqa: F401  (imports Lightning)
+
     for name in ("pytorch_lightning", "lightning", "lightning.pytorch", "lightning_fabric"):
         logging.getLogger(name).setLevel(logging.ERROR)
     import warnings
 
-    warnings.filterwarnings("ignore", module="pytorch_lightning")
-    warnings.filterwarnings("ignore", module="lightning")
+    for module in ("pytorch_lightning", "lightning", "neuralforecast"):
+        warnings.filterwarnings("ignore", module=module)
 
 
 def _build(name: str, s: NFSettings):
     from neuralforecast.models import DLinear, NHITS, NLinear, SOFTS
 
     common = dict(h=s.horizon, input_size=s.input_size, max_steps=s.max_steps, learning_rate=s.learning_rate,
-                  random_seed=s.seed, scaler_type="identity", batch_size=s.batch_size, val_check_steps=10**9,
+                  random_seed=s.seed, scaler_type="identity", batch_size=s.batch_size, val_check_steps=s.max_steps,
                   enable_progress_bar=False, enable_model_summary=False, logger=False, enable_checkpointing=False,
                   accelerator="cpu", devices=1)
     if name == "dlinear":

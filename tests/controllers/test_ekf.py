@@ -54,3 +54,23 @@ def test_changing_the_future_does_not_change_the_past(depths, cut):
         return np.array([f.step(d, 0.9, d + 0.01, 1.0, 0.02) for d in ds])
     future = list(depths[:cut]) + [9.0] * (len(depths) - cut)
     np.testing.assert_array_equal(run(depths)[:cut], run(future)[:cut])
+
+
+def test_without_process_noise_the_filter_is_the_batch_least_squares_estimate():
+    # With (almost) no process noise and the car at rest, the state [d, r] is constant but for
+    # d drifting by r per second, so the filter's estimate must equal the closed-form
+    # regularised least-squares fit of d0 + r t to the measurements, with the filter's prior
+    # on r (N(0, init_rate_std^2)) as the regulariser.
+    cfg = EKFConfig(depth_std_m=0.05, accel_std_mps2=1e-9, init_rate_std_mps=0.3)
+    rng = np.random.default_rng(4)
+    dt, n = 0.02, 40
+    t = np.arange(n) * dt
+    z = 2.0 - 0.4 * t + rng.normal(0, 0.05, n)
+    f = DistanceEKF(cfg)
+    out = [f.step(zk, 1.0, math.nan, speed=0.0, dt=dt) for zk in z]
+    # Prior: d0 ~ N(z0, R) (the first measurement initialises), r ~ N(0, s^2); then z1..z_{n-1}.
+    R, s2 = cfg.depth_std_m ** 2, cfg.init_rate_std_mps ** 2
+    A = np.column_stack([np.ones(n), t])
+    prior_precision = np.diag([0.0, 1.0 / s2])
+    theta = np.linalg.solve(A.T @ A / R + prior_precision, A.T @ z / R)
+    assert out[-1] == pytest.approx(theta[0] + theta[1] * t[-1], abs=1e-6)
