@@ -9,7 +9,7 @@ STAMP := $(VENV)/.racf-installed
 TORCH := torch==2.13.0
 export MUJOCO_GL ?= egl
 
-.PHONY: demo test test-all bench-sim snapshot clean
+.PHONY: demo test test-all bench bench-sim snapshot clean
 
 $(PY):
 	$(PYTHON) -m venv $(VENV)
@@ -30,6 +30,11 @@ test: $(STAMP)
 
 test-all: $(STAMP)
 	$(PY) -m pytest -q -m ""
+
+# The offline repair benchmark on the default dataset (collected first if missing).
+bench: $(STAMP)
+	test -f data/qcar2/dataset.parquet || $(VENV)/bin/racf collect
+	$(VENV)/bin/racf bench
 
 bench-sim: $(STAMP)
 	$(VENV)/bin/racf bench-sim

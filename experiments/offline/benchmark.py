@@ -25,7 +25,8 @@ from experiments.offline.forecasters import NF_MODELS, ChronosForecaster, NFSett
 from experiments.offline.methods import (FORECASTERS, METHODS, SplitArrays, ekf_estimate, forecast_at,
                                          lidar_estimate, raw_estimate, split_arrays)
 from experiments.offline.metrics import bounded_degradation, resilience_gain
-from experiments.offline.scoring import bootstrap_rmse, diagnostic_scores, horizon_scores, recovery_scores
+from experiments.offline.scoring import (bootstrap_rmse, diagnostic_scores, error_sources, horizon_scores,
+                                         recovery_scores)
 
 __all__ = ["BenchConfig", "ABLATION", "load_splits", "run_benchmark", "PRESETS"]
 
@@ -189,6 +190,7 @@ def _score_split(ds: QCarDataset, preset: str, odca_model, forecasters: dict, cf
         row["rmse_ci"] = bootstrap_rmse(est, a, cfg.bootstrap, cfg.seed)
         row.update(horizon.get(name, {}))
         row.update(diagnostic_scores(est, a))
+        row["error_sources"] = error_sources(est, a)
         scores[name] = row
     traces = {"frame": frame[["series_id", "t", "d_clean", "d_meas", "label"]].assign(
         **{f"est_{k}": v for k, v in estimates.items()})}

@@ -51,6 +51,7 @@ class SplitArrays:
     d_clean: np.ndarray
     d_true: np.ndarray
     raw: np.ndarray  # d held over its gaps
+    kind: np.ndarray  # corruption segment kind (index into SEGMENT_KINDS; 0 = none)
 
     def __len__(self) -> int:
         return len(self.d)
@@ -68,8 +69,10 @@ def split_arrays(frame: pd.DataFrame, alignment: Alignment) -> SplitArrays:
     d, c, l, v = sanitize(frame["d_meas"].to_numpy(float), frame["c_meas"].to_numpy(float),
                           frame["lidar"].to_numpy(float), frame["speed"].to_numpy(float))
     d_true = frame["d_true"].to_numpy(float) if "d_true" in frame else np.full(len(frame), np.nan)
-    return SplitArrays(sid, first, d, c, alignment(l), v, frame["label"].to_numpy(int),
-                       frame["d_clean"].to_numpy(float), d_true, _hold(d, first))
+    label = frame["label"].to_numpy(int)
+    kind = frame["kind"].to_numpy(int) if "kind" in frame else label
+    return SplitArrays(sid, first, d, c, alignment(l), v, label, frame["d_clean"].to_numpy(float), d_true,
+                       _hold(d, first), kind)
 
 
 def _hold(values: np.ndarray, first: np.ndarray) -> np.ndarray:

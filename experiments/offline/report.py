@@ -54,7 +54,7 @@ def recovery_frame(results: dict) -> pd.DataFrame:
             for method, scores in methods.items():
                 ci = scores.get("rmse_ci") or [None, None]
                 rows.append({"split": split, "preset": preset, "method": method,
-                             **{k: v for k, v in scores.items() if k != "rmse_ci"},
+                             **{k: v for k, v in scores.items() if k not in ("rmse_ci", "error_sources")},
                              "rmse_ci_low": ci[0], "rmse_ci_high": ci[1]})
     return pd.DataFrame(rows)
 
@@ -112,6 +112,28 @@ def sensor_table(results: dict) -> str:
     return "\n".join(lines)
 
 
+def error_source_table(results: dict, preset: str = "strong") -> str:
+    """Share of each method's squared error by corruption kind and LiDAR presence (what drives the RMSE)."""
+    lines = []
+    for split in (s for s in ("by_series", "leave_target_out") if s in results and preset in results[s]):
+        rows = results[split][preset]
+        methods = [m for m in ("raw", "lidar", "ekf", "chronos", "odca") if m in rows]
+        cells = rows[methods[0]]["error_sources"]
+        lines += [f"**{SPLIT_TITLES[split]}**, {preset} preset: RMSE (share of the method's squared error) "
+                  "by segment kind and LiDAR presence\n",
+                  "| segment | LiDAR | N | " + " | ".join(methods) + " |", "|---|---|---|" + "---|" * len(methods)]
+        totals = {m: sum(v["sse"] for v in rows[m]["error_sources"].values()) or 1.0 for m in methods}
+        for key, cell in cells.items():
+            if not cell["n"]:
+                continue
+            kind, lidar = key.split("|")
+            vals = [rows[m]["error_sources"][key] for m in methods]
+            lines.append(f"| {kind} | {'yes' if lidar == 'lidar' else 'no'} | {cell['n']} | " + " | ".join(
+                f"{_f(v['rmse'])} ({100 * v['sse'] / totals[m]:.0f} %)" for v, m in zip(vals, methods)) + " |")
+        lines.append("")
+    return "\n".join(lines)
+
+
 def derived_table(results: dict) -> str:
     lines = []
     for split, rows in results.get("derived", {}).items():
@@ -162,6 +184,7 @@ def write_report(results: dict, out: Path) -> dict[str, Path]:
               "recovery_true": main_table(results, reference="_true"),
               "recovery_true_moving": main_table(results, reference="_true", block="_moving"),
               "horizon": horizon_table(results), "sensors_strong": sensor_table(results),
+              "error_sources_strong": error_source_table(results),
               "bd_rgr": derived_table(results), "ablation": ablation_table(results),
               "complexity": complexity_table(results)}
     for name, text in tables.items():
@@ -178,6 +201,7 @@ def write_report(results: dict, out: Path) -> dict[str, Path]:
                "95 % intervals from resampling test series.", "",
                "## Recovery (against d_clean, all samples)", "", tables["recovery"],
                "## Sensor-level baselines (strong)", "", tables["sensors_strong"],
+               "## Where the error comes from (strong)", "", tables["error_sources_strong"],
                "## Forecast horizon", "", tables["horizon"],
                "## BD and RGR", "", tables["bd_rgr"], "## Loss ablation (strong)", "", tables["ablation"],
                "## Complexity", "", tables["complexity"],

@@ -7,7 +7,8 @@ import numpy as np
 from experiments.offline.methods import SplitArrays
 from experiments.offline.metrics import auprc, auroc, mae, rmse
 
-__all__ = ["MOVING_MPS", "recovery_scores", "horizon_scores", "diagnostic_scores", "bootstrap_rmse"]
+__all__ = ["MOVING_MPS", "recovery_scores", "horizon_scores", "diagnostic_scores", "bootstrap_rmse",
+           "error_sources"]
 
 #: A sample is moving above this speed, m/s (the protocol's standstill bound).
 MOVING_MPS = 0.05
@@ -71,3 +72,19 @@ def bootstrap_rmse(estimate: np.ndarray, a: SplitArrays, n_boot: int, seed: int,
     values = np.sqrt(sse[draws].sum(1) / np.maximum(count[draws].sum(1), 1.0))
     tail = (1 - level) / 2 * 100
     return [float(np.percentile(values, tail)), float(np.percentile(values, 100 - tail))]
+
+
+def error_sources(estimate: np.ndarray, a: SplitArrays) -> dict:
+    """Where the error comes from: RMSE and sum of squared errors per (segment kind, LiDAR present)."""
+    from experiments.data.corruption import SEGMENT_KINDS
+
+    scored = a.scored
+    sq = (estimate - a.d_clean) ** 2
+    lidar = np.isfinite(a.l_al)
+    out = {}
+    for k, kind in enumerate(SEGMENT_KINDS):
+        for has, name in ((True, "lidar"), (False, "no_lidar")):
+            mask = scored & (a.kind == k) & (lidar == has)
+            out[f"{kind}|{name}"] = {"n": int(mask.sum()), "sse": float(sq[mask].sum()),
+                                     "rmse": float(np.sqrt(sq[mask].mean())) if mask.any() else None}
+    return out

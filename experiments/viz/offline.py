@@ -137,13 +137,17 @@ def qualitative(frame, path: Path) -> Path:
     """One test drive under the strong preset: the clean reference, the attacked input, Chronos-only and ODCA."""
     plt = _plt()
     scored = np.isfinite(frame["d_clean"].to_numpy()) & np.isfinite(frame["est_raw"].to_numpy())
-    attacked = frame.assign(hit=scored & (frame["label"].to_numpy() == 1)).groupby("series_id", sort=False)["hit"].sum()
-    sid = attacked.idxmax()
-    s = frame[frame["series_id"] == sid]
-    ok = np.isfinite(s["d_clean"].to_numpy())
-    idx = np.flatnonzero(ok)
-    lo, hi = (s["t"].iloc[idx[0]] - 0.5, s["t"].iloc[idx[-1]] + 0.5) if idx.size else (s["t"].min(), s["t"].max())
-    s = s[(s["t"] >= lo) & (s["t"] <= hi)]
+    hit = scored & (frame["label"].to_numpy() == 1)
+    # The approach (a run of scored steps, gaps under 0.5 s bridged) with the most corrupted steps.
+    sid = frame["series_id"].to_numpy()
+    run = np.cumsum(np.r_[True, sid[1:] != sid[:-1]] | _gap_starts(scored, 25))
+    counts = np.bincount(run, weights=hit)
+    best = int(np.argmax(counts)) if counts.size else 0
+    rows = np.flatnonzero((run == best) & scored)
+    rows = rows if rows.size else np.arange(len(frame))
+    s = frame.iloc[max(rows[0] - 25, 0):rows[-1] + 26]
+    s = s[s["series_id"] == sid[rows[0]]]
+    sid = sid[rows[0]]
     fig, ax = plt.subplots(figsize=(9, 3.4))
     t = s["t"].to_numpy()
     label = s["label"].to_numpy()
@@ -160,6 +164,19 @@ def qualitative(frame, path: Path) -> Path:
     ax.legend(fontsize=7, ncol=3, loc="upper right")
     ax.grid(alpha=0.3)
     return _save(fig, path)
+
+
+def _gap_starts(scored: np.ndarray, min_gap: int) -> np.ndarray:
+    """True at the first scored step after at least ``min_gap`` unscored steps (a new approach)."""
+    out = np.zeros(len(scored), bool)
+    gap = min_gap
+    for i, ok in enumerate(scored):
+        if ok:
+            out[i] = gap >= min_gap
+            gap = 0
+        else:
+            gap += 1
+    return out
 
 
 def _save(fig, path: Path) -> Path:

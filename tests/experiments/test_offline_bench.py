@@ -87,7 +87,7 @@ def test_results_folder_holds_strict_json_tables_and_figures(bench_runs):
     stored = json.loads((out / "results.json").read_text(), parse_constant=reject)
     assert stored["by_series"]["strong"]["odca"]["rmse"] == results["by_series"]["strong"]["odca"]["rmse"]
     for name in ("recovery", "recovery_true", "recovery_moving", "sensors_strong", "bd_rgr", "ablation", "complexity",
-                 "horizon"):
+                 "horizon", "error_sources_strong"):
         assert (out / "tables" / f"{name}.md").stat().st_size > 0, name
     csv = pd.read_csv(out / "tables" / "recovery.csv")
     assert len(csv) == 2 * 3 * len(METHODS)

@@ -9,7 +9,8 @@ from hypothesis import given, settings, strategies as st
 
 from experiments.offline.methods import split_arrays
 from experiments.offline.metrics import auprc, auroc, bounded_degradation, hold_last, mae, resilience_gain, rmse
-from experiments.offline.scoring import bootstrap_rmse, diagnostic_scores, horizon_scores, recovery_scores
+from experiments.offline.scoring import (bootstrap_rmse, diagnostic_scores, error_sources, horizon_scores,
+                                         recovery_scores)
 from odca.align import Alignment
 
 
@@ -117,3 +118,17 @@ def test_hold_last_is_causal_and_only_repeats_past_values(values, cut):
     np.testing.assert_array_equal(hold_last(changed)[:cut], held[:cut])
     for i, h in enumerate(held):
         assert math.isnan(h) or h in values[:i + 1]
+
+
+def test_error_sources_split_the_squared_error_by_segment_kind_and_lidar():
+    d_clean = np.array([2.0, 1.9, 1.8, 1.7])
+    frame = pd.DataFrame({"series_id": "a", "d_meas": [2.0, 2.9, np.nan, 1.7], "c_meas": 1.0,
+                          "lidar": [2.0, 1.9, np.nan, np.nan], "speed": 1.0, "label": [0, 1, 1, 0],
+                          "kind": [0, 1, 2, 0], "d_clean": d_clean, "d_true": d_clean})
+    a = split_arrays(frame, Alignment())
+    out = error_sources(a.raw, a)  # errors 0, +1.0 (bias, LiDAR on), +1.1 (blackout held, no LiDAR), 0
+    assert out["bias|lidar"] == {"n": 1, "sse": pytest.approx(1.0), "rmse": pytest.approx(1.0)}
+    assert out["blackout|no_lidar"]["rmse"] == pytest.approx(1.1)
+    assert out["none|lidar"]["n"] == 1 and out["none|no_lidar"]["n"] == 1
+    assert out["degradation|lidar"] == {"n": 0, "sse": 0.0, "rmse": None}
+    assert sum(v["n"] for v in out.values()) == int(a.scored.sum())
