@@ -137,6 +137,17 @@ def _frame_hash(*frames: pd.DataFrame) -> str:
     return digest.hexdigest()[:16]
 
 
+def _prior_version() -> str:
+    """The shipped prior's weights and config (a retrained prior invalidates heads trained on its features)."""
+    from odca.prior import SHIPPED_PRIOR
+
+    digest = hashlib.sha256()
+    for path in sorted(SHIPPED_PRIOR.glob("*")):
+        digest.update(path.name.encode())
+        digest.update(path.read_bytes())
+    return digest.hexdigest()[:12]
+
+
 def _trained_odca(ds: QCarDataset, prior, cfg: BenchConfig, weights: dict, tag: str):
     """ODCA trained on the split's train series with these loss weights; cached by what made it."""
     from odca import ODCA
@@ -144,7 +155,8 @@ def _trained_odca(ds: QCarDataset, prior, cfg: BenchConfig, weights: dict, tag: 
     from odca.train import fit, initial_model, prepare_split
 
     key = hashlib.sha256(json.dumps({"data": _frame_hash(ds.clean("train"), ds.clean("val")), "weights": weights,
-                                     "epochs": cfg.odca_epochs, "seed": cfg.seed, "code": _source_version("odca")},
+                                     "epochs": cfg.odca_epochs, "seed": cfg.seed, "code": _source_version("odca"),
+                                     "prior": _prior_version()},
                                     sort_keys=True).encode()).hexdigest()[:16]
     folder = cfg.cache_dir / f"odca-{tag}-{key}"
     if (folder / "report.json").exists():
@@ -281,7 +293,9 @@ def run_benchmark(cfg: BenchConfig, progress: bool = True, datasets: dict[str, Q
             row["rmse_strong"] = results[first]["strong"][name]["rmse"]
     results["complexity"] = complexity
     results["ablation"] = ablation
-    results["dataset"] = {"path": str(cfg.data), "quick": cfg.quick}
+    frames = [datasets[s].frame for s in cfg.splits[:1]]
+    results["dataset"] = {"path": str(cfg.data), "quick": cfg.quick, "sha": _frame_hash(*frames),
+                          "code": _source_version("odca", "experiments/offline"), "prior": _prior_version()}
     results["wall_s"] = time.perf_counter() - t0
     results["_traces"] = traces  # for the figures; not written to results.json
     return results
