@@ -27,6 +27,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from experiments.offline.metrics import hold_last
+
 __all__ = ["NF_MODELS", "NFSettings", "context_windows", "train_nf", "NFForecaster", "ChronosForecaster",
            "training_frame"]
 
@@ -81,7 +83,7 @@ def context_windows(values: np.ndarray, first: np.ndarray, origins: np.ndarray, 
     """
     values = np.asarray(values, float)
     first = np.asarray(first, bool)
-    held = pd.Series(np.where(np.isfinite(values), values, np.nan)).groupby(np.cumsum(first)).ffill().to_numpy()
+    held = hold_last(values, first)
     measured = np.isfinite(values).astype(float)
     series_start = np.maximum.accumulate(np.where(first, np.arange(len(values)), 0))
     windows = np.full((len(origins), width), np.nan)

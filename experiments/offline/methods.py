@@ -26,6 +26,7 @@ import pandas as pd
 
 from controllers.ekf import DistanceEKF, EKFConfig
 from odca.align import Alignment
+from experiments.offline.metrics import hold_last
 from odca.features import sanitize
 
 __all__ = ["METHODS", "FORECASTERS", "SplitArrays", "split_arrays", "raw_estimate", "lidar_estimate", "ekf_estimate",
@@ -72,12 +73,7 @@ def split_arrays(frame: pd.DataFrame, alignment: Alignment) -> SplitArrays:
     label = frame["label"].to_numpy(int)
     kind = frame["kind"].to_numpy(int) if "kind" in frame else label
     return SplitArrays(sid, first, d, c, alignment(l), v, label, frame["d_clean"].to_numpy(float), d_true,
-                       _hold(d, first), kind)
-
-
-def _hold(values: np.ndarray, first: np.ndarray) -> np.ndarray:
-    v = np.where(np.isfinite(values), values, np.nan)
-    return pd.Series(v).groupby(np.cumsum(first)).ffill().to_numpy()
+                       hold_last(d, first), kind)
 
 
 def with_fallback(estimate: np.ndarray, a: SplitArrays) -> np.ndarray:

@@ -6,12 +6,11 @@ import numpy as np
 
 from experiments.offline.methods import SplitArrays
 from experiments.offline.metrics import auprc, auroc, mae, rmse
+from odca.train import MOVING_MPS  # the protocol's standstill bound, m/s
 
 __all__ = ["MOVING_MPS", "recovery_scores", "horizon_scores", "diagnostic_scores", "bootstrap_rmse",
            "error_sources"]
 
-#: A sample is moving above this speed, m/s (the protocol's standstill bound).
-MOVING_MPS = 0.05
 
 
 def recovery_scores(estimate: np.ndarray, a: SplitArrays) -> dict:
