@@ -72,10 +72,7 @@ def camera_views(out_dir: Path, rgb: np.ndarray, depth: np.ndarray, lidar: np.nd
         ax.contour(sign_mask, levels=[0.5], colors="cyan", linewidths=1)
     ax.set_title("D435 colour (cyan: ground-truth sign mask)")
     ax.axis("off")
-    fig.tight_layout()
-    paths.append(out_dir / f"{prefix}camera_rgb.png")
-    fig.savefig(paths[-1], dpi=100)
-    plt.close(fig)
+    paths.append(_save(fig, out_dir / f"{prefix}camera_rgb.png"))
 
     fig, ax = plt.subplots(figsize=(6.8, 4.8))
     shown = np.where(depth > 0, depth, np.nan)
@@ -83,10 +80,7 @@ def camera_views(out_dir: Path, rgb: np.ndarray, depth: np.ndarray, lidar: np.nd
     fig.colorbar(im, ax=ax, label="depth (m), white = no return")
     ax.set_title("D435 aligned depth")
     ax.axis("off")
-    fig.tight_layout()
-    paths.append(out_dir / f"{prefix}camera_depth.png")
-    fig.savefig(paths[-1], dpi=100)
-    plt.close(fig)
+    paths.append(_save(fig, out_dir / f"{prefix}camera_depth.png"))
 
     angles = np.arange(len(lidar)) * (2 * np.pi / len(lidar))
     ok = np.isfinite(lidar)
@@ -98,8 +92,12 @@ def camera_views(out_dir: Path, rgb: np.ndarray, depth: np.ndarray, lidar: np.nd
     ax.set_ylabel("y left (m)")
     ax.set_title(f"RPLIDAR A2M12 scan ({ok.sum()}/{len(lidar)} returns), body frame")
     ax.grid(alpha=0.3)
-    fig.tight_layout()
-    paths.append(out_dir / f"{prefix}lidar.png")
-    fig.savefig(paths[-1], dpi=100)
-    plt.close(fig)
+    paths.append(_save(fig, out_dir / f"{prefix}lidar.png"))
     return paths
+
+
+def _save(fig, path: Path, dpi: int = 100) -> Path:
+    fig.tight_layout()
+    fig.savefig(path, dpi=dpi)
+    plt.close(fig)
+    return path
