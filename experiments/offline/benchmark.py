@@ -137,6 +137,10 @@ def _frame_hash(*frames: pd.DataFrame) -> str:
     return digest.hexdigest()[:16]
 
 
+#: The prior's features on the current split's train/val series, shared by the ablation's heads.
+_PREPARED: dict = {}
+
+
 def _prior_version() -> str:
     """The shipped prior's weights and config (a retrained prior invalidates heads trained on its features)."""
     from odca.prior import SHIPPED_PRIOR
@@ -162,7 +166,7 @@ def _trained_odca(ds: QCarDataset, prior, cfg: BenchConfig, weights: dict, tag: 
     if (folder / "report.json").exists():
         return ODCA.load(folder, prior=prior), json.loads((folder / "report.json").read_text())
     model = initial_model(ds, prior)
-    cache = _trained_odca.prepared
+    cache = _PREPARED
     data_key = (_frame_hash(ds.clean("train"), ds.clean("val")), id(prior))
     if cache.get("key") != data_key:  # the prior's features on train/val, shared by the ablation's heads
         cache.clear()
@@ -174,9 +178,6 @@ def _trained_odca(ds: QCarDataset, prior, cfg: BenchConfig, weights: dict, tag: 
     model.save(folder)
     (folder / "report.json").write_text(json.dumps(report, indent=1, allow_nan=False))
     return model, report
-
-
-_trained_odca.prepared = {}
 
 
 def _score_split(ds: QCarDataset, preset: str, odca_model, forecasters: dict, cfg: BenchConfig
