@@ -43,7 +43,7 @@ def run_demo(out_dir: Path, sign: int = 2, speed: float = 1.0, seed: int = 0) ->
             if row["detected"]:
                 cv2.rectangle(rgb, (row["det_x0"] - 2, row["det_y0"] - 2), (row["det_x1"] + 1, row["det_y1"] + 1),
                               (0, 255, 0), 1)
-            frames.append((row["t"], rgb, obs["depth"], env.render(), row["brake"]))
+            frames.append((row["t"], rgb, obs["depth"][..., 0], env.render(), row["brake"]))
         bar.update()
 
     spec = TrialSpec("clean", sign, speed, seed)
@@ -53,7 +53,7 @@ def run_demo(out_dir: Path, sign: int = 2, speed: float = 1.0, seed: int = 0) ->
 
     top_view(out_dir / "demo_top.png", pose=tuple(last["info"]["pose"]),
              trajectory=log[["x", "y"]].to_numpy(), title=f"Approach to stop sign {sign} at {speed} m/s")
-    camera_views(out_dir, last["obs"]["rgb"], last["obs"]["depth"], last["obs"]["lidar"], last["info"]["sign_mask"],
+    camera_views(out_dir, last["obs"]["rgb"], last["obs"]["depth"][..., 0], last["obs"]["lidar"], last["info"]["sign_mask"],
                  prefix="demo_final_")
 
     picks = np.linspace(0, len(frames) - 1, min(6, len(frames))).astype(int)

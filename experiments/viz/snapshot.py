@@ -21,7 +21,7 @@ def snapshot(out_dir: Path, sign: int = 2, run_up_m: float = 1.2, width: int = 3
         obs, info = env.reset(seed=seed, options={"sign": sign, "cruise_speed": 0.0, "run_up_m": run_up_m})
         paths = [top_view(out_dir / "map_top.png", pose=tuple(info["pose"]),
                           title=f"QCar 2 indoor map: car {run_up_m} m before stop sign {sign}")]
-        paths += camera_views(out_dir, obs["rgb"], obs["depth"], obs["lidar"], info["sign_mask"])
+        paths += camera_views(out_dir, obs["rgb"], obs["depth"][..., 0], obs["lidar"], info["sign_mask"])
         return paths
     finally:
         env.close()

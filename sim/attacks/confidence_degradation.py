@@ -44,10 +44,11 @@ class ConfidenceDegradation(AttackWrapper):
 
     def _attack(self, obs: dict, info: dict) -> dict:
         depth = obs["depth"].copy()
-        rows, cols = np.nonzero(self.sign_region(info, 1) & (depth > 0))
+        plane = depth[..., 0]  # (H, W) view of the (H, W, 1) image, like the sign's region
+        rows, cols = np.nonzero(self.sign_region(info, 1) & (plane > 0))
         if rows.size:
             drop = self.rng.random(rows.size) >= self.confidence_multiplier
-            noisy = depth[rows, cols] + self.rng.normal(0.0, self.noise_std_m, rows.size)
-            depth[rows, cols] = np.where(drop | (noisy <= 0), 0.0, noisy).astype(depth.dtype)
+            noisy = plane[rows, cols] + self.rng.normal(0.0, self.noise_std_m, rows.size)
+            plane[rows, cols] = np.where(drop | (noisy <= 0), 0.0, noisy).astype(depth.dtype)
         obs["depth"] = depth
         return obs

@@ -47,8 +47,9 @@ class DepthBias(AttackWrapper):
 
     def _attack(self, obs: dict, info: dict) -> dict:
         depth = obs["depth"].copy()
-        where = (depth > 0) & (self.sign_region(info, 1) if self.region == "sign" else True)
-        shifted = depth[where] + self.bias
-        depth[where] = np.where(shifted > 0, shifted, 0.0).astype(depth.dtype)
+        plane = depth[..., 0]  # (H, W) view of the (H, W, 1) image, like the sign's region
+        where = (plane > 0) & (self.sign_region(info, 1) if self.region == "sign" else True)
+        shifted = plane[where] + self.bias
+        plane[where] = np.where(shifted > 0, shifted, 0.0).astype(depth.dtype)
         obs["depth"] = depth
         return obs

@@ -19,7 +19,7 @@ RESET_OPTIONS = ("sign", "obstacle", "cruise_speed", "run_up_m", "route", "start
 
 @dataclass(frozen=True)
 class EnvConfig:
-    """Settings of ``RACF/QCar2-v0``.
+    """Settings of ``RACF/QCar2-v1``.
 
     Attributes:
         control_hz: control (and default sensor) rate.

@@ -1,4 +1,4 @@
-"""``RACF/QCar2-v0``: the QCar 2 on the indoor map, approaching a stop sign.
+"""``RACF/QCar2-v1``: the QCar 2 on the indoor map, approaching a stop sign.
 
 Plumbing only: step order, seeding, spaces, sensor scheduling and the reward and
 termination hooks. The world, the car and the sensors are built by their own modules.
@@ -42,7 +42,7 @@ _DRIVE_OPTIONS = ("route", "start_s_m", "lateral_offset_m", "heading_error_rad",
 class QCar2Env(gym.Env):
     """The QCar 2 driving a road-graph route towards one of the four stop signs.
 
-    Observation (``Dict``): ``rgb`` (H, W, 3) uint8; ``depth`` (H, W) float32 m, 0 = no
+    Observation (``Dict``): ``rgb`` (H, W, 3) uint8; ``depth`` (H, W, 1) float32 m, 0 = no
     return; ``lidar`` (N,) float32 m, inf = no return; ``state`` (5,) float32, see
     ``sim.sensors.STATE_FIELDS``. Action (``Box``): [speed command m/s, steering rad].
 
@@ -71,7 +71,7 @@ class QCar2Env(gym.Env):
 
     Example:
         >>> import gymnasium as gym, sim
-        >>> env = gym.make("RACF/QCar2-v0", camera_width=160, camera_height=120)
+        >>> env = gym.make("RACF/QCar2-v1", camera_width=160, camera_height=120)
         >>> obs, info = env.reset(seed=0, options={"sign": 2, "cruise_speed": 1.0})
         >>> obs["rgb"].shape, obs["lidar"].shape
         ((120, 160, 3), (360,))

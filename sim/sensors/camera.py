@@ -213,7 +213,10 @@ class RGBCamera(Sensor):
 
 
 class DepthCamera(Sensor):
-    """Aligned depth of the rig with sensor noise: (H, W) float32 metres, 0 = no return."""
+    """Aligned depth of the rig with sensor noise: (H, W, 1) float32 metres, 0 = no return.
+
+    The channel axis makes it an image to RL libraries (stable-baselines3's checker).
+    """
 
     name = "depth"
     dtype = np.float32
@@ -221,10 +224,10 @@ class DepthCamera(Sensor):
 
     def __init__(self, rig: RGBDCameraRig) -> None:
         self.rig = rig
-        self.shape = (rig.config.height, rig.config.width)
+        self.shape = (rig.config.height, rig.config.width, 1)
 
     def read(self, model, data, rng: np.random.Generator) -> np.ndarray:
-        return self.rig.noisy_depth(self.rig.render(model, data)[1], rng)
+        return self.rig.noisy_depth(self.rig.render(model, data)[1], rng)[..., None]
 
     def close(self) -> None:
         self.rig.close()

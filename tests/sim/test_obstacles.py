@@ -33,7 +33,7 @@ def test_obstacle_episode_ground_truth_and_detection(env, index):
     obs, info = env.reset(seed=0, options={"obstacle": index, "cruise_speed": 0.0, "run_up_m": 1.0})
     assert info["target_kind"] == "obstacle" and info["sign_in_view"]
     mask = info["sign_mask"]
-    depth = obs["depth"][mask & (obs["depth"] > 0)]
+    depth = obs["depth"][..., 0][mask & (obs["depth"][..., 0] > 0)]
     # d_true is the near face's centre depth; the crate's visible pixels lie at or a little behind it.
     assert np.median(depth) == pytest.approx(info["d_true"], abs=0.05)
     assert info["d_true"] == pytest.approx(1.0 + STANDOFF_M + 0.1175, abs=0.05)

@@ -97,7 +97,7 @@ def test_blackout_invalidates_depth_only_inside_its_window_and_region():
 def test_bias_shifts_the_sign_depth_by_the_drawn_offset():
     env = DepthBias(_env(), bias_m=0.7, direction=1, duration_s=5.0, trigger="always")
     for obs, clean, info in _run(env, 10):
-        region = env.sign_region(info, 1) & (clean["depth"] > 0)
+        region = env.sign_region(info, 1) & (clean["depth"][..., 0] > 0)
         np.testing.assert_allclose(obs["depth"][region], clean["depth"][region] + 0.7, atol=1e-5)
         np.testing.assert_array_equal(obs["depth"][~region], clean["depth"][~region])
     env.close()
@@ -107,7 +107,7 @@ def test_confidence_degradation_removes_the_share_and_adds_noise():
     env = ConfidenceDegradation(_env(), confidence_multiplier=0.3, noise_std_m=0.1, duration_s=5.0, trigger="always")
     kept = []
     for obs, clean, info in _run(env, 20):
-        region = env.sign_region(info, 1) & (clean["depth"] > 0)
+        region = env.sign_region(info, 1) & (clean["depth"][..., 0] > 0)
         if region.sum() > 50:
             kept.append((obs["depth"][region] > 0).mean())
     assert kept and abs(np.mean(kept) - 0.3) < 0.08
