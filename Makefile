@@ -20,10 +20,9 @@ $(STAMP): pyproject.toml | $(PY)
 	$(PY) -m pip install --quiet -e ".[test]"
 	touch $(STAMP)
 
+# The story at one stop sign: clean, patch attack, attack + ODCA (table, three .rrd, one PNG).
 demo: $(STAMP)
 	$(VENV)/bin/racf demo --out outputs/demo
-	$(VENV)/bin/racf snapshot --out outputs/snapshot
-	$(VENV)/bin/racf trial --setting clean --sign 2 --speed 1.5 --out outputs/trial
 
 test: $(STAMP)
 	$(PY) -m pytest -q

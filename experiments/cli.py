@@ -46,9 +46,10 @@ def _parser() -> argparse.ArgumentParser:
     b.add_argument("--steps", type=int, default=250, help="control steps per setting (default 250)")
     b.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
 
-    d = sub.add_parser("demo", help="drive one stop-sign approach and write pictures")
-    d.add_argument("--sign", type=_sign, default=2, help="stop sign 0-3 (default 2)")
-    d.add_argument("--speed", type=_positive, default=1.0, help="cruise speed m/s (default 1.0)")
+    d = sub.add_parser("demo", help="the story at one stop sign: clean, patch attack, attack + ODCA; a table, "
+                                     "three rerun recordings and a PNG of the distance traces")
+    d.add_argument("--sign", type=_sign, default=1, help="stop sign 0-3 (default 1)")
+    d.add_argument("--speed", type=_speed, default=1.5, help="cruise speed m/s, 0.1-3.0 (default 1.5)")
     d.add_argument("--seed", type=int, default=0)
     d.add_argument("--out", type=Path, default=Path("outputs/demo"), help="output folder")
     t = sub.add_parser("trial", help="one closed-loop stop-sign trial: per-step log (Parquet) and result row")
@@ -59,6 +60,11 @@ def _parser() -> argparse.ArgumentParser:
     t.add_argument("--speed", type=_speed, default=1.0, help="cruise speed m/s, 0.1-3.0 (default 1.0)")
     t.add_argument("--seed", type=int, default=0)
     t.add_argument("--out", type=Path, default=Path("outputs/trial"), help="output folder")
+    t.add_argument("--rerun", type=Path, default=None, metavar="PATH",
+                   help="also record the episode to a rerun file (.rrd; open it with `racf view PATH`)")
+
+    vw = sub.add_parser("view", help="open a rerun recording (.rrd) in the rerun viewer")
+    vw.add_argument("path", type=Path, help="the .rrd file (racf demo, racf trial --rerun)")
 
     ts = sub.add_parser("trials", help="a batch of trials over the four signs and speeds 1.0/1.5/2.0 m/s: SCR, latency")
     _episode_flags(ts)
@@ -238,6 +244,24 @@ def _fmt_ci(lo: float, hi: float, digits: int = 2) -> str:
     return f"[{lo:.{digits}f}, {hi:.{digits}f}]"
 
 
+def _view(path: Path) -> int:
+    """Opens the rerun viewer on ``path``, or says how to where there is no display."""
+    import shutil
+    import subprocess
+
+    if path.suffix != ".rrd" or not path.is_file():
+        print(f"racf view: {path} is not a rerun recording (.rrd); `racf demo` and `racf trial --rerun PATH` "
+              "write them", file=sys.stderr)
+        return 2
+    viewer = shutil.which("rerun") or str(Path(sys.executable).with_name("rerun"))
+    if not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
+        print(f"no display here. Open the recording where there is one: `rerun {path}` (pip install "
+              f"rerun-sdk==0.41.*), or serve it to a browser: `{viewer} --serve-web {path}` and open the "
+              "address it prints (forward its ports over ssh if the machine is remote).")
+        return 0
+    return subprocess.call([viewer, str(path)])
+
+
 def _bench(args) -> int:
     from dataclasses import replace
 
@@ -299,8 +323,14 @@ def main(argv: list[str] | None = None) -> int:
     elif args.command == "demo":
         from experiments.viz.demo import run_demo
 
+        from experiments.viz.demo import demo_table
+
         summary = run_demo(args.out, sign=args.sign, speed=args.speed, seed=args.seed)
-        print(json.dumps(summary, indent=2))
+        print(demo_table(summary))
+        print("\nrerun recordings (open with `racf view PATH`):")
+        for run in summary["runs"]:
+            print(f"  {run['rrd']}")
+        print(f"distance traces: {summary['png']}")
     elif args.command == "trial":
         from experiments.episode import TrialSpec, run_trial
 
@@ -310,7 +340,16 @@ def main(argv: list[str] | None = None) -> int:
         except ValueError as err:
             print(f"racf trial: {err}", file=sys.stderr)
             return 2
-        result, log = run_trial(spec)
+        recorder = None
+        if args.rerun is not None:
+            from experiments.viz.rerun_log import FrameRecorder
+
+            recorder = FrameRecorder()
+        result, log = run_trial(spec, on_step=recorder)
+        if recorder is not None:
+            from experiments.viz.rerun_log import write_rrd
+
+            write_rrd(args.rerun, log, recorder, title=f"racf trial {spec.trial_id}")
         args.out.mkdir(parents=True, exist_ok=True)
         log.to_parquet(args.out / f"{spec.trial_id}.parquet", index=False)
         (args.out / f"{spec.trial_id}.json").write_text(json.dumps(result.to_dict(), indent=2, allow_nan=False))
@@ -343,6 +382,8 @@ def main(argv: list[str] | None = None) -> int:
         print(json.dumps(report) if args.json else _train_table(report))
     elif args.command == "bench":
         return _bench(args)
+    elif args.command == "view":
+        return _view(args.path)
     elif args.command == "odca-latency":
         from experiments.bench.odca_latency import odca_latency
 

@@ -169,6 +169,8 @@ def _run(env: gym.Env, spec: TrialSpec, stack: Stack, on_step: StepHook | None) 
         pending.append(action)
         applied = pending.popleft() if len(pending) > delay_steps else pending[0]
         fused = getattr(estimator, "last", None)
+        track = perception.lidar.state.position  # camera-relative; + the camera's body position
+        cam_xy = perception.lidar.config.camera_position_m
         rows.append({
             "t": info["time"], "slot": slot, "target": targets[slot].name, "control": control,
             "d_true": info["d_true"], "d_clean": d_clean, "d_meas": sample.d_meas,
@@ -186,6 +188,8 @@ def _run(env: gym.Env, spec: TrialSpec, stack: Stack, on_step: StepHook | None) 
             # The vehicle state as the car measures it, and the LiDAR's forward sector (compact scan).
             **{f"state_{name}": float(v) for name, v in zip(STATE_FIELDS, obs["state"])},
             "scan_new": scan_new, "scan_fov": scan_fov(obs["lidar"]),
+            # The LiDAR reference's tracked point in the body frame (NaN without a track), for viewers.
+            "track_x": track[0] + cam_xy[0], "track_y": track[1] + cam_xy[1],
         })
         if on_step is not None:
             on_step(env, obs, info, rows[-1])

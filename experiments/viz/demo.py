@@ -1,98 +1,106 @@
-"""``racf demo``: one clean stop-sign trial, driven by the perception pipeline and filmed.
+"""``racf demo``: the whole story at one stop sign, in three closed-loop runs.
 
-The car follows the approach route (Stanley, curve speed limit, PI speed loop); the
-detector finds the sign in the RGB image, the depth distance feeds the braking
-controller, and the car stops for the line. Writes a top view with the trajectory, a
-strip of chase / camera (with the detection box) / depth frames, and traces of speed,
-brake command, d_true, d_meas and the LiDAR reference.
+1. **Clean**: the car sees the sign, measures its distance with the depth camera and stops
+   in the band before the line.
+2. **Attack**: after the detection is stable, an adversarial patch covers the sign
+   (strong regime); the detector loses it and the car, with no defence, runs the line.
+3. **Attack + ODCA**: the same attack (same seed), with ODCA repairing the distance from
+   the LiDAR reference and the temporal prior; the car stops.
+
+Each run is recorded to rerun (``<setting>.rrd``: camera, depth, LiDAR, map, distances,
+gate and brake); one PNG puts the three distance traces side by side with the attack
+window shaded, and a small table gives stopped?, stop distance, trigger delay and dt_brake.
+Every number comes from the runs.
 """
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
-import cv2
 import numpy as np
 
-from experiments.episode import TrialSpec, default_env, run_trial
+__all__ = ["DEMO_SETTINGS", "run_demo", "demo_table"]
 
-__all__ = ["run_demo"]
+#: The three runs, in the order the story tells them.
+DEMO_SETTINGS = ("clean", "attack", "attack+odca")
 
-_FRAME_EVERY = 15
+
+def run_demo(out_dir: Path, sign: int = 1, speed: float = 1.5, seed: int = 0,
+             settings: tuple[str, ...] = DEMO_SETTINGS, progress: bool = True) -> dict:
+    """Runs the settings at one sign and writes ``<setting>.rrd``, ``<setting>.parquet`` and ``demo_traces.png``."""
+    from tqdm import tqdm
+
+    from experiments.episode import TrialSpec, run_trial
+    from experiments.viz.rerun_log import FrameRecorder, write_rrd
+
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    rows, logs = [], {}
+    for setting in tqdm(settings, desc=f"demo: stop sign {sign} at {speed} m/s", unit="run", disable=not progress):
+        spec = TrialSpec(setting, sign, speed, seed)
+        recorder = FrameRecorder()
+        result, log = run_trial(spec, on_step=recorder)
+        name = setting.replace("+", "_")
+        log.to_parquet(out_dir / f"{name}.parquet", index=False)
+        rrd = write_rrd(out_dir / f"{name}.rrd", log, recorder, title=f"racf demo: {setting}")
+        logs[setting] = log
+        r = result.to_dict()
+        rows.append({"setting": setting, "stopped": r["stopped"], "success": r["success"],
+                     "stop_distance_m": r["stop_distance_m"], "trigger_delay_s": r["trigger_delay_s"],
+                     "dt_brake_s": r["dt_brake_s"], "failure": r["failure"], "rrd": str(rrd)})
+    png = traces_figure(logs, out_dir / "demo_traces.png", sign, speed)
+    return {"sign": sign, "speed": speed, "seed": seed, "runs": rows, "png": str(png)}
 
 
-def run_demo(out_dir: Path, sign: int = 2, speed: float = 1.0, seed: int = 0) -> dict:
-    """Runs one clean trial and writes pictures; returns a summary dict."""
+def demo_table(summary: dict) -> str:
+    """The demo's result table (plain text)."""
+    def f(x, unit=""):
+        return "—" if x is None or (isinstance(x, float) and math.isnan(x)) else f"{x:.2f}{unit}"
+
+    lines = [f"stop sign {summary['sign']} at {summary['speed']} m/s, seed {summary['seed']}",
+             f"{'setting':<14}{'stopped?':>9}{'stop dist':>11}{'trigger delay':>15}{'dt_brake':>10}  outcome"]
+    for r in summary["runs"]:
+        outcome = "stopped in the band" if r["success"] else f"failed: {r['failure']}"
+        lines.append(f"{r['setting']:<14}{'yes' if r['stopped'] else 'no':>9}{f(r['stop_distance_m'], ' m'):>11}"
+                     f"{f(r['trigger_delay_s'], ' s'):>15}{f(r['dt_brake_s'], ' s'):>10}  {outcome}")
+    lines.append("stop dist: front bumper to the line at rest (success band 0-0.60 m); trigger delay: brake "
+                 "command - t*; dt_brake: t* to braking within 0.60 m of the line")
+    return "\n".join(lines)
+
+
+def traces_figure(logs: dict, path: Path, sign: int, speed: float) -> Path:
+    """One panel per run: d_true, the distance the controller used, the brake, the attack window shaded."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    from tqdm import tqdm
 
-    from experiments.viz.figures import camera_views, top_view
-
-    out_dir.mkdir(parents=True, exist_ok=True)
-    frames: list[tuple] = []
-    last: dict = {}
-    bar = tqdm(desc=f"demo: stop sign {sign} at {speed} m/s", unit="step")
-
-    def on_step(env, obs, info, row):
-        last.update(obs=obs, info=info)
-        if bar.n % _FRAME_EVERY == 0:
-            rgb = obs["rgb"].copy()
-            if row["detected"]:
-                cv2.rectangle(rgb, (row["det_x0"] - 2, row["det_y0"] - 2), (row["det_x1"] + 1, row["det_y1"] + 1),
-                              (0, 255, 0), 1)
-            frames.append((row["t"], rgb, obs["depth"][..., 0], env.render(), row["brake"]))
-        bar.update()
-
-    spec = TrialSpec("clean", sign, speed, seed)
-    result, log = run_trial(spec, make_env=lambda s: default_env(s, render_mode="rgb_array"), on_step=on_step)
-    bar.close()
-    log.to_parquet(out_dir / "demo_log.parquet", index=False)
-
-    top_view(out_dir / "demo_top.png", pose=tuple(last["info"]["pose"]),
-             trajectory=log[["x", "y"]].to_numpy(), title=f"Approach to stop sign {sign} at {speed} m/s")
-    camera_views(out_dir, last["obs"]["rgb"], last["obs"]["depth"][..., 0], last["obs"]["lidar"], last["info"]["sign_mask"],
-                 prefix="demo_final_")
-
-    picks = np.linspace(0, len(frames) - 1, min(6, len(frames))).astype(int)
-    fig, axes = plt.subplots(3, len(picks), figsize=(3.2 * len(picks), 7.2), squeeze=False)
-    for col, i in enumerate(picks):
-        t, rgb, depth, chase, brake = frames[i]
-        axes[0, col].imshow(chase)
-        axes[0, col].set_title(f"t = {t:.2f} s" + (" (braking)" if brake else ""), fontsize=9)
-        axes[1, col].imshow(rgb)
-        axes[2, col].imshow(np.where(depth > 0, depth, np.nan), cmap="turbo", vmin=0, vmax=3)
-        for row in range(3):
-            axes[row, col].axis("off")
-    axes[0, 0].text(-0.05, 0.5, "chase view", transform=axes[0, 0].transAxes, rotation=90, va="center", ha="right")
-    axes[1, 0].text(-0.05, 0.5, "D435 colour + detection", transform=axes[1, 0].transAxes, rotation=90,
-                    va="center", ha="right")
-    axes[2, 0].text(-0.05, 0.5, "depth (0-3 m)", transform=axes[2, 0].transAxes, rotation=90, va="center", ha="right")
+    fig, axes = plt.subplots(1, len(logs), figsize=(4.6 * len(logs), 3.6), sharey=True, squeeze=False)
+    for ax, (setting, log) in zip(axes[0], logs.items()):
+        t = log["t"].to_numpy()
+        active = log["attack_active"].to_numpy(bool)
+        edges = np.flatnonzero(np.diff(np.r_[0, active.astype(int), 0]))
+        for k, (a, b) in enumerate(zip(edges[::2], edges[1::2])):
+            ax.axvspan(t[a], t[min(b, len(t) - 1)], color="red", alpha=0.12, label="attack active" if k == 0 else None)
+        ax.plot(t, log["d_true"].where(log["sign_in_view"]), color="black", lw=1.8, label="d_true (sign in view)")
+        ax.plot(t, log["d_meas"], ".", color="gray", ms=3, label="d~ (depth in the detection)")
+        ax.plot(t, log["lidar"], "x", color="#17becf", ms=3, label="LiDAR reference")
+        if "odca" in setting:  # from the first measurement on (before it ODCA reports its 0 m fallback)
+            started = np.cumsum(np.isfinite(log["d_meas"].to_numpy())) > 0
+            ax.plot(t, log["d_fused"].where(started), color="#1f77b4", lw=1.6, label="ODCA d_fused")
+        ax.plot(t, log["dist_to_stop_line"], color="#2ca02c", lw=1.0, ls="--", label="bumper to stop line")
+        brake = log["brake"].to_numpy(bool)
+        if brake.any():
+            ax.axvline(t[np.argmax(brake)], color="#d62728", lw=1.2, label="brake command")
+        ax.axhspan(0, 0.6, color="g", alpha=0.08)
+        ax.set_title(setting, fontsize=10)
+        ax.set_xlabel("t (s)")
+        ax.grid(alpha=0.3)
+    axes[0, 0].set_ylabel("distance (m)")
+    axes[0, -1].legend(fontsize=7, loc="upper right")
+    fig.suptitle(f"Stop sign {sign} at {speed} m/s: clean, patch attack, patch attack + ODCA", fontsize=11)
     fig.tight_layout()
-    fig.savefig(out_dir / "demo_frames.png", dpi=90)
+    fig.savefig(path, dpi=110)
     plt.close(fig)
-
-    fig, (a1, a2) = plt.subplots(2, 1, figsize=(7, 5.5), sharex=True)
-    a1.plot(log["t"], log["speed"], label="speed")
-    a1.fill_between(log["t"], 0, log["brake"].astype(float) * max(speed, 0.1), alpha=0.2, color="r", label="brake command")
-    a1.set_ylabel("m/s")
-    a1.legend()
-    a2.plot(log["t"], log["dist_to_stop_line"], label="front bumper to stop line")
-    a2.plot(log["t"], log["d_true"].where(log["sign_in_view"]), lw=2.5, alpha=0.6, label="d_true (camera to sign; in view)")
-    a2.plot(log["t"], log["d_meas"], ".", ms=3, label="d_meas (median depth in the detection)")
-    a2.plot(log["t"], log["lidar"], "x", ms=3, label="LiDAR cluster range")
-    a2.axhspan(0, 0.6, color="g", alpha=0.12, label="success band 0-0.60 m")
-    a2.set_ylabel("m")
-    a2.set_xlabel("time (s)")
-    a2.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(out_dir / "demo_traces.png", dpi=100)
-    plt.close(fig)
-
-    return {"sign": sign, "speed": speed, "steps": len(log), "stopped": result.stopped,
-            "stop_distance_m": result.stop_distance_m, "success": result.success,
-            "trigger_delay_s": result.to_dict()["trigger_delay_s"], "dt_brake_s": result.to_dict()["dt_brake_s"],
-            "failure": result.failure, "outputs": sorted(str(p) for p in out_dir.glob("*.png"))}
-
+    return Path(path)

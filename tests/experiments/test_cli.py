@@ -30,12 +30,19 @@ def test_snapshot_writes_the_four_pictures(tmp_path):
     assert all(p.stat().st_size > 5000 for p in tmp_path.glob("*.png"))
 
 
-def test_demo_stops_in_the_success_band(tmp_path):
-    from experiments.viz.demo import run_demo
+def test_demo_tells_the_story_and_writes_three_recordings(tmp_path, capsys):
+    assert main(["demo", "--out", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    for setting in ("clean", "attack", "attack+odca"):
+        assert setting in out
+    assert "stopped in the band" in out and "failed: confirmed_lost" in out  # clean / attack+odca stop; attack does not
+    assert sorted(p.name for p in tmp_path.glob("*.rrd")) == ["attack.rrd", "attack_odca.rrd", "clean.rrd"]
+    assert (tmp_path / "demo_traces.png").stat().st_size > 20000
 
-    summary = run_demo(tmp_path, sign=3, speed=1.0)
-    assert summary["stopped"] and 0.0 <= summary["stop_distance_m"] <= 0.60
-    assert (tmp_path / "demo_frames.png").exists() and (tmp_path / "demo_traces.png").exists()
+
+def test_view_rejects_what_is_not_a_recording(tmp_path, capsys):
+    assert main(["view", str(tmp_path / "missing.rrd")]) == 2
+    assert ".rrd" in capsys.readouterr().err
 
 
 def test_odca_commands_are_listed_and_latency_prints_json(capsys):

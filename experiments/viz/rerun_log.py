@@ -1,0 +1,195 @@
+"""Episodes as rerun recordings (``.rrd``), replayed from the per-step log, off the hot path.
+
+:class:`FrameRecorder` is a step hook for :func:`experiments.episode.run_trial`: it keeps
+what the per-step log does not hold (camera and depth frames, the full LiDAR scan, the
+camera pose, the patch's box) every ``every`` steps and nothing else. :func:`write_rrd`
+then replays the log and those frames into a recording on the ``sim_time`` timeline:
+
+- ``world/camera``: the D435 at its pose (``Pinhole``) with ``image`` (plus the detection box
+  and, while active, the patch) and ``depth`` (``DepthImage``);
+- ``world/car/lidar``: the LiDAR returns in the car's frame, the tracked reference's
+  cluster in red, and ``world/car/lidar/track`` the tracked point;
+- ``map``: a top view of the mat with the car's trajectory and its current position;
+- ``series/*`` (d_true, d_clean, d_meas, lidar, d_fused) and ``control/*`` (gate w, brake,
+  attack active), every step, sent with ``send_columns``.
+
+A default blueprint lays these out so the story reads at a glance.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+__all__ = ["FrameRecorder", "write_rrd", "SERIES", "CONTROL"]
+
+#: Distance series (metres) and control series, as logged (entity name -> log column).
+SERIES = {"d_true": "d_true", "d_clean": "d_clean", "d_meas": "d_meas", "lidar": "lidar", "d_fused": "d_fused"}
+CONTROL = {"gate_w": "w", "brake": "brake", "attack_active": "attack_active"}
+_MAP_PX_PER_M = 60
+#: A LiDAR return belongs to the tracked cluster within this distance of the tracked point, m.
+_CLUSTER_RADIUS_M = 0.12
+
+
+@dataclass(frozen=True)
+class Frame:
+    t: float
+    rgb: np.ndarray  # (H, W, 3) uint8, as the controller saw it
+    depth_mm: np.ndarray  # (H, W) uint16, 0 = no return
+    lidar: np.ndarray  # (N,) float32 ranges, inf = no return
+    cam_pos: np.ndarray  # (3,) map frame
+    cam_mat: np.ndarray  # (3, 3) camera-to-map (MuJoCo camera axes: x right, y up, z backward)
+    patch_box: tuple[int, int, int, int] | None  # x0, y0, x1, y1 of the patched pixels
+
+
+class FrameRecorder:
+    """Step hook keeping one frame every ``every`` steps (default 5: 10 Hz at 50 Hz control)."""
+
+    def __init__(self, every: int = 5) -> None:
+        if not (isinstance(every, int) and every >= 1):
+            raise ValueError(f"every must be an int >= 1, got {every!r}")
+        self.every = every
+        self.frames: list[Frame] = []
+        self.intrinsics = None
+        self._step = 0
+
+    def __call__(self, env, obs: dict, info: dict, row: dict) -> None:
+        u = env.unwrapped
+        if self.intrinsics is None:
+            self.intrinsics = u.rig.intrinsics
+        if self._step % self.every == 0:
+            cam_pos, cam_mat = u.car.camera_pose(u.model, u.data)
+            patch = None
+            if row["attack_active"]:
+                changed = np.any(obs["rgb"] != u.sensor_observation()["rgb"], axis=-1)
+                if changed.any():
+                    rows, cols = np.nonzero(changed)
+                    patch = (int(cols.min()), int(rows.min()), int(cols.max()) + 1, int(rows.max()) + 1)
+            depth = obs["depth"][..., 0]
+            self.frames.append(Frame(float(row["t"]), obs["rgb"].copy(),
+                                     np.clip(np.rint(depth * 1000.0), 0, 65535).astype(np.uint16),
+                                     np.asarray(obs["lidar"], np.float32).copy(), cam_pos, cam_mat, patch))
+        self._step += 1
+
+
+def _blueprint():
+    import rerun.blueprint as rrb
+
+    return rrb.Blueprint(
+        rrb.Horizontal(
+            rrb.Vertical(
+                rrb.Spatial2DView(origin="world/camera", contents=["world/camera/image", "world/camera/image/**"],
+                                  name="camera (detection green, patch magenta)"),
+                rrb.Spatial2DView(origin="world/camera", contents=["world/camera/depth"], name="depth"),
+            ),
+            rrb.Vertical(
+                rrb.TimeSeriesView(origin="series", name="distances (m)"),
+                rrb.TimeSeriesView(origin="control", name="gate w, brake, attack"),
+            ),
+            rrb.Vertical(
+                rrb.Spatial2DView(origin="map", name="map (top view)"),
+                rrb.Spatial3DView(origin="world", name="car, camera and LiDAR"),
+            ),
+            column_shares=[2, 2, 2],
+        ),
+        collapse_panels=True,
+    )
+
+
+def _map_px(xy: np.ndarray) -> np.ndarray:
+    from sim.world import map_facts
+
+    x0, _, _, y1 = map_facts.WALL_BOUNDS_M
+    xy = np.atleast_2d(np.asarray(xy, float))
+    return np.column_stack([(xy[:, 0] - x0) * _MAP_PX_PER_M, (y1 - xy[:, 1]) * _MAP_PX_PER_M])
+
+
+def write_rrd(path: str | Path, log: pd.DataFrame, recorder: FrameRecorder | None = None,
+              title: str = "racf episode") -> Path:
+    """Writes the episode (``log`` from ``run_trial``, frames from ``recorder``) to ``path``; returns it."""
+    import rerun as rr
+
+    from controllers.lidar_target import LidarTargetConfig
+    from sim.world.mat_texture import render_mat
+    from sim.world.stop_signs import stop_signs
+
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    if log.empty:
+        raise ValueError("the episode log is empty: nothing to record")
+    rec = rr.RecordingStream("racf", recording_id=title)
+    rec.save(str(path), default_blueprint=_blueprint())
+
+    # Static: the map's top view, the stop signs, the whole trajectory; the 3D world is z up.
+    rec.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
+    rec.log("map/mat", rr.Image(render_mat(px_per_m=_MAP_PX_PER_M)), static=True)
+    signs = stop_signs()
+    rec.log("map/stop_signs", rr.Points2D(_map_px([s.position for s in signs]), radii=4, colors=[200, 20, 20],
+                                          labels=[f"stop {s.index}" for s in signs]), static=True)
+    xy = log[["x", "y"]].to_numpy(float)
+    rec.log("map/trajectory", rr.LineStrips2D([_map_px(xy)], colors=[30, 120, 230], radii=1.5), static=True)
+
+    # Every step: the signals, as columns.
+    times = rr.TimeColumn("sim_time", duration=log["t"].to_numpy(float))
+    for name, column in {**{f"series/{k}": v for k, v in SERIES.items()},
+                         **{f"control/{k}": v for k, v in CONTROL.items()}}.items():
+        if column in log:
+            values = log[column].to_numpy(float)
+            rec.send_columns(name, indexes=[times], columns=rr.Scalars.columns(scalars=values))
+
+    if recorder is not None and recorder.frames:
+        k = recorder.intrinsics
+        rec.log("world/camera", rr.Pinhole(focal_length=[k.fx, k.fy], principal_point=[k.cx, k.cy], width=k.width,
+                                           height=k.height, camera_xyz=rr.ViewCoordinates.RUB,
+                                           image_plane_distance=0.3), static=True)
+        lidar_cfg = LidarTargetConfig()
+        by_t = log.set_index("t")
+        for frame in recorder.frames:
+            row = by_t.loc[frame.t]
+            rec.set_time("sim_time", duration=frame.t)
+            rec.log("world/camera", rr.Transform3D(translation=frame.cam_pos, mat3x3=frame.cam_mat))
+            rec.log("world/camera/image", rr.Image(frame.rgb).compress(jpeg_quality=80))
+            rec.log("world/camera/depth", rr.DepthImage(frame.depth_mm, meter=1000.0, colormap="turbo"))
+            if row["detected"]:
+                rec.log("world/camera/image/detection", rr.Boxes2D(
+                    array=[[row["det_x0"], row["det_y0"], row["det_x1"], row["det_y1"]]],
+                    array_format=rr.Box2DFormat.XYXY, colors=[0, 230, 0], labels=["detection"]))
+            else:
+                rec.log("world/camera/image/detection", rr.Clear(recursive=False))
+            if frame.patch_box is not None:
+                rec.log("world/camera/image/patch", rr.Boxes2D(array=[frame.patch_box],
+                                                               array_format=rr.Box2DFormat.XYXY,
+                                                               colors=[230, 0, 230], labels=["patch"]))
+            else:
+                rec.log("world/camera/image/patch", rr.Clear(recursive=False))
+            x, y, yaw = float(row["x"]), float(row["y"]), float(row["yaw"])
+            rec.log("world/car", rr.Transform3D(translation=[x, y, 0.0],
+                                                rotation=rr.RotationAxisAngle(axis=[0, 0, 1], radians=yaw)))
+            rec.log("map/car", rr.Points2D(_map_px([x, y]), radii=5, colors=[255, 160, 0]))
+            _log_lidar(rec, frame.lidar, row, lidar_cfg)
+    rec.flush()
+    rec.disconnect()
+    return path
+
+
+def _log_lidar(rec, ranges: np.ndarray, row, cfg) -> None:
+    """Returns in the car's body frame; the tracked reference's cluster in red."""
+    import rerun as rr
+
+    angles = np.arange(len(ranges)) * (2 * np.pi / len(ranges))
+    ok = np.isfinite(ranges)
+    pts = np.column_stack([cfg.lidar_position_m[0] + ranges[ok] * np.cos(angles[ok]),
+                           cfg.lidar_position_m[1] + ranges[ok] * np.sin(angles[ok]), np.full(ok.sum(), 0.2)])
+    colors = np.tile(np.array([[150, 150, 150]], np.uint8), (len(pts), 1))
+    track = np.array([row.get("track_x", np.nan), row.get("track_y", np.nan)], float)
+    if np.isfinite(track).all():
+        near = np.hypot(pts[:, 0] - track[0], pts[:, 1] - track[1]) <= _CLUSTER_RADIUS_M
+        colors[near] = (230, 30, 30)
+        rec.log("world/car/lidar/track", rr.Points3D([[track[0], track[1], 0.2]], radii=0.03, colors=[230, 30, 30],
+                                                     labels=["LiDAR reference"]))
+    else:
+        rec.log("world/car/lidar/track", rr.Clear(recursive=False))
+    rec.log("world/car/lidar", rr.Points3D(pts, radii=0.01, colors=colors))

@@ -1,0 +1,58 @@
+"""An episode written to rerun reads back with rerun's own reader: entities and timeline length."""
+
+import numpy as np
+import pytest
+
+from experiments.episode import TrialSpec, run_trial
+from experiments.viz.rerun_log import CONTROL, SERIES, FrameRecorder, write_rrd
+
+
+@pytest.fixture(scope="module")
+def recorded(tmp_path_factory):
+    recorder = FrameRecorder(every=5)
+    _, log = run_trial(TrialSpec("attack+odca", 1, 1.5, 0), on_step=recorder)
+    path = write_rrd(tmp_path_factory.mktemp("rrd") / "episode.rrd", log, recorder)
+    return path, log, recorder
+
+
+def _chunks(path):
+    from rerun.chunk import RrdReader
+
+    return list(RrdReader(str(path)).stream())
+
+
+def test_entities_and_timeline_length_match_the_episode(recorded):
+    path, log, recorder = recorded
+    rows: dict[str, int] = {}
+    times: dict[str, list] = {}
+    for chunk in _chunks(path):
+        name = str(chunk.entity_path)
+        rows[name] = rows.get(name, 0) + chunk.num_rows
+        if "sim_time" in chunk.timeline_names:
+            batch = chunk.to_record_batch()
+            times.setdefault(name, []).extend(batch.column("sim_time").to_pylist())
+    for name in [f"/series/{k}" for k in SERIES] + [f"/control/{k}" for k in CONTROL]:
+        assert rows[name] == len(log), name  # one sample per step on the sim_time timeline
+        assert len(set(times[name])) == len(log)
+    for name in ("/world/camera/image", "/world/camera/depth", "/world/car/lidar", "/world/car", "/map/car"):
+        assert rows[name] == len(recorder.frames) == int(np.ceil(len(log) / 5)), name
+    for name in ("/world/camera", "/map/mat", "/map/trajectory", "/map/stop_signs", "/world/camera/image/detection",
+                 "/world/camera/image/patch", "/world/car/lidar/track"):
+        assert name in rows, name
+
+
+def test_the_patch_is_boxed_only_while_the_attack_is_active(recorded):
+    _, log, recorder = recorded
+    active = log.set_index("t")["attack_active"]
+    boxed = [f.patch_box is not None for f in recorder.frames]
+    assert any(boxed)
+    assert all(active.loc[f.t] for f, b in zip(recorder.frames, boxed) if b)
+
+
+def test_bad_input_is_refused(tmp_path):
+    with pytest.raises(ValueError, match="every"):
+        FrameRecorder(every=0)
+    import pandas as pd
+
+    with pytest.raises(ValueError, match="empty"):
+        write_rrd(tmp_path / "x.rrd", pd.DataFrame())
