@@ -78,6 +78,8 @@ def _parser() -> argparse.ArgumentParser:
                     help="output folder (default outputs/trials/<setting>, outputs/table with --table); finished "
                          "trials there are reused (their ids hash the spec, configs and code version)")
     ts.add_argument("--json", action="store_true", help="print one JSON summary object instead of tables")
+    ts.add_argument("--rerun", action="store_true",
+                    help="also record every trial that runs to rerun: <out>/trials/<trial_id>.rrd (`racf view`)")
 
     st = sub.add_parser("attack-study", help="no-defence patch attack tables: persistence, coverage, strong regime")
     st.add_argument("studies", nargs="*", default=None, metavar="STUDY",
@@ -420,7 +422,7 @@ def _trials(args: argparse.Namespace) -> int:
         _, params = _episode_params(args, "trials", table=True)
         try:
             table = run_table(args.n, args.out or Path("outputs/table"), seed=args.seed, workers=args.workers,
-                              progress=not args.json, **params)
+                              progress=not args.json, rerun=args.rerun, **params)
         except ValueError as err:
             print(f"racf trials: {err}", file=sys.stderr)
             return 2
@@ -436,7 +438,7 @@ def _trials(args: argparse.Namespace) -> int:
         print(f"racf trials: {err}", file=sys.stderr)
         return 2
     out = args.out or Path("outputs/trials") / setting
-    results = run_batch(specs, out, workers=args.workers, progress=not args.json)
+    results = run_batch(specs, out, workers=args.workers, progress=not args.json, rerun=args.rerun)
     summary = summarize(results)
     if args.json:
         print(json.dumps(summary, allow_nan=False))

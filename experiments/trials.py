@@ -40,9 +40,18 @@ def batch_specs(setting: str, n: int, seed: int = 0, signs: tuple[int, ...] = SI
             for i in range(n)]
 
 
-def _run_and_save(spec: TrialSpec, out_dir: str) -> dict:
-    result, log = run_trial(spec)
+def _run_and_save(spec: TrialSpec, out_dir: str, rerun: bool = False) -> dict:
+    recorder = None
+    if rerun:
+        from experiments.viz.rerun_log import FrameRecorder
+
+        recorder = FrameRecorder()
+    result, log = run_trial(spec, on_step=recorder)
     folder = Path(out_dir)
+    if recorder is not None:
+        from experiments.viz.rerun_log import write_rrd
+
+        write_rrd(folder / f"{spec.trial_id}.rrd", log, recorder, title=f"racf trial {spec.trial_id}")
     # Log first, result last: a result file marks a finished trial.
     log.to_parquet(folder / f"{spec.trial_id}.parquet", index=False)
     tmp = folder / f"{spec.trial_id}.json.tmp"
@@ -51,8 +60,13 @@ def _run_and_save(spec: TrialSpec, out_dir: str) -> dict:
     return result.to_dict()
 
 
-def run_batch(specs: list[TrialSpec], out_dir: Path, workers: int = 2, progress: bool = True) -> pd.DataFrame:
-    """Runs (or resumes) the trials; returns one result row per spec, in spec order."""
+def run_batch(specs: list[TrialSpec], out_dir: Path, workers: int = 2, progress: bool = True,
+              rerun: bool = False) -> pd.DataFrame:
+    """Runs (or resumes) the trials; returns one result row per spec, in spec order.
+
+    With ``rerun`` each trial that runs is also recorded to ``<trial_id>.rrd`` beside its log
+    (trials reused from an earlier run are not recorded again).
+    """
     from tqdm import tqdm
 
     folder = Path(out_dir) / "trials"
@@ -66,11 +80,11 @@ def run_batch(specs: list[TrialSpec], out_dir: Path, workers: int = 2, progress:
     bar = tqdm(total=len(specs), initial=len(specs) - len(todo), desc="trials", unit="trial", disable=not progress)
     if workers <= 1:
         for spec in todo:
-            done[spec.trial_id] = _run_and_save(spec, str(folder))
+            done[spec.trial_id] = _run_and_save(spec, str(folder), rerun)
             bar.update()
     elif todo:
         with ProcessPoolExecutor(max_workers=workers, mp_context=mp.get_context("spawn")) as pool:
-            futures = [pool.submit(_run_and_save, spec, str(folder)) for spec in todo]
+            futures = [pool.submit(_run_and_save, spec, str(folder), rerun) for spec in todo]
             for future in as_completed(futures):
                 row = future.result()
                 done[row["trial_id"]] = row
@@ -119,11 +133,12 @@ def summarize(results: pd.DataFrame, attack: bool | None = None) -> dict:
 
 
 def run_table(n: int, out_dir: Path, seed: int = 0, settings: tuple[str, ...] = TABLE_SETTINGS, workers: int = 2,
-              progress: bool = True, **params) -> dict[str, dict]:
+              progress: bool = True, rerun: bool = False, **params) -> dict[str, dict]:
     """The paper's closed-loop table: ``n`` trials per setting (the same signs, speeds and
     seeds in each), one summary per setting. All specs are built, and so checked, first."""
     specs = {s: batch_specs(s, n, seed, **params) for s in settings}
     table = {}
     for setting, batch in specs.items():
-        table[setting] = summarize(run_batch(batch, Path(out_dir) / setting, workers=workers, progress=progress))
+        table[setting] = summarize(run_batch(batch, Path(out_dir) / setting, workers=workers, progress=progress,
+                                             rerun=rerun))
     return table

@@ -56,3 +56,11 @@ def test_bad_input_is_refused(tmp_path):
 
     with pytest.raises(ValueError, match="empty"):
         write_rrd(tmp_path / "x.rrd", pd.DataFrame())
+
+
+def test_trials_record_every_trial_they_run(tmp_path):
+    from experiments.trials import batch_specs, run_batch
+
+    specs = batch_specs("clean", 2, signs=(1,), speeds=(1.5,))
+    run_batch(specs, tmp_path, workers=1, progress=False, rerun=True)
+    assert sorted(p.stem for p in (tmp_path / "trials").glob("*.rrd")) == sorted(s.trial_id for s in specs)
