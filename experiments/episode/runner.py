@@ -149,12 +149,13 @@ def _run(env: gym.Env, spec: TrialSpec, stack: Stack, on_step: StepHook | None) 
         control = decision is None or step % every == 0
         if control:
             bearing = map_bearing(env, targets[slot], info["pose"])
-            sample = perception.process(obs["rgb"], obs["depth"][..., 0], obs["lidar"] if scan_new else None, speed=speed,
-                                        yaw_rate=float(obs["state"][2]), lateral_speed=float(obs["state"][4]),
-                                        dt=dt * every, map_bearing=bearing)
+            sample = perception.process(obs["rgb"], obs["depth"][..., 0], obs["lidar"] if scan_new else None,
+                                        speed=speed, yaw_rate=float(obs["state"][2]),
+                                        lateral_speed=float(obs["state"][4]), dt=dt * every, map_bearing=bearing)
             if attacked:  # d_clean: the same pipeline on the env's own, unattacked readings
                 clean = u.sensor_observation()
-                d_clean = perception.depth.estimate(clean["depth"][..., 0], perception.detector.detect(clean["rgb"]))[0]
+                d_clean = perception.depth.estimate(clean["depth"][..., 0],
+                                                    perception.detector.detect(clean["rgb"]))[0]
             else:
                 d_clean = sample.d_meas
             d_fused = float(estimator.estimate(sample, speed, dt * every))

@@ -195,8 +195,9 @@ def write_report(results: dict, out: Path) -> dict[str, Path]:
     pd.DataFrame(results.get("ablation") or []).drop(columns=["loss_weights", "gate"], errors="ignore").to_csv(
         out / "tables" / "ablation.csv", index=False)
     paths.update(figures.write_all(clean, traces, out / "figures"))
+    quick = " (--quick: not a result to quote)" if clean["dataset"]["quick"] else ""
     summary = ["# Offline repair benchmark", "",
-               f"`racf bench` on `{clean['dataset']['path']}`{' (--quick: not a result to quote)' if clean['dataset']['quick'] else ''}; "
+               f"`racf bench` on `{clean['dataset']['path']}`{quick}; "
                f"{clean['wall_s']:.0f} s. Scored per `reference/protocol.md`: causal methods, RMSE/MAE in metres, "
                "95 % intervals from resampling test series.", "",
                "## Recovery (against d_clean, all samples)", "", tables["recovery"],
