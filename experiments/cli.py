@@ -63,6 +63,21 @@ def _parser() -> argparse.ArgumentParser:
     t.add_argument("--rerun", type=Path, default=None, metavar="PATH",
                    help="also record the episode to a rerun file (.rrd; open it with `racf view PATH`)")
 
+    sw = sub.add_parser("sweep", help="a Monte Carlo attack sweep from a TOML spec (grid or random draws) on a "
+                                      "local process pool or Ray; resumes; summary and SCR plots")
+    sw.add_argument("spec", nargs="?", type=Path, default=None,
+                    help="the sweep spec (TOML); shipped: smoke.toml, attack-types.toml, strong-1000.toml")
+    sw.add_argument("--out", type=Path, default=None, help="results folder (default outputs/sweeps/<spec name>)")
+    sw.add_argument("--backend", choices=("local", "ray"), default="local",
+                    help="local spawned processes (default) or Ray")
+    sw.add_argument("--address", default=None, help="with --backend ray: the cluster to join (default: start a "
+                                                   "local Ray)")
+    sw.add_argument("--workers", type=_count, default=min(2, os.cpu_count() or 1),
+                    help="parallel episodes (local processes, or a local Ray's CPUs)")
+    sw.add_argument("--json", action="store_true", help='print {"n", "done", "reused", "wall_s", "scr"} as JSON')
+    sw.add_argument("--report", type=Path, default=None, metavar="DIR",
+                    help="redraw the summary and plots of a stored sweep, running nothing")
+
     vw = sub.add_parser("view", help="open a rerun recording (.rrd) in the rerun viewer")
     vw.add_argument("path", type=Path, help="the .rrd file (racf demo, racf trial --rerun)")
 
@@ -246,6 +261,40 @@ def _fmt_ci(lo: float, hi: float, digits: int = 2) -> str:
     return f"[{lo:.{digits}f}, {hi:.{digits}f}]"
 
 
+def _sweep(args) -> int:
+    from experiments.sweeps.report import report_from_store
+
+    if args.report is not None:
+        try:
+            paths = report_from_store(args.report)
+        except ValueError as err:
+            print(f"racf sweep: {err}", file=sys.stderr)
+            return 2
+        print("\n".join(str(p) for p in paths.values()))
+        return 0
+    if args.spec is None:
+        print("racf sweep: give a spec (e.g. smoke.toml) or --report DIR", file=sys.stderr)
+        return 2
+    from experiments.sweeps.run import run_sweep
+    from experiments.sweeps.spec import load_spec, spec_path
+
+    try:
+        spec = load_spec(args.spec)
+        out = args.out or Path("outputs/sweeps") / spec.name
+        summary = run_sweep(spec, spec_path(args.spec).read_text(), out, backend=args.backend, workers=args.workers,
+                            address=args.address, progress=not args.json)
+    except ValueError as err:
+        print(f"racf sweep: {err}", file=sys.stderr)
+        return 2
+    if args.json:
+        print(json.dumps(summary, allow_nan=False))
+    else:
+        print((out / "summary.md").read_text())
+        print(f"{summary['n']} episodes ({summary['done']} run, {summary['reused']} reused) in "
+              f"{summary['wall_s']:.0f} s; results in {out}")
+    return 0
+
+
 def _view(path: Path) -> int:
     """Opens the rerun viewer on ``path``, or says how to where there is no display."""
     import shutil
@@ -384,6 +433,8 @@ def main(argv: list[str] | None = None) -> int:
         print(json.dumps(report) if args.json else _train_table(report))
     elif args.command == "bench":
         return _bench(args)
+    elif args.command == "sweep":
+        return _sweep(args)
     elif args.command == "view":
         return _view(args.path)
     elif args.command == "odca-latency":

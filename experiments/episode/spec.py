@@ -2,7 +2,8 @@
 parameters and timing, and the id that names its result.
 
 A setting is a ``+``-joined name: ``clean`` or ``attack`` (the patch attack), then any
-extra attacks (``lidar_spoof``, ``lidar_dropout``), then the estimator when it is not raw
+extra attacks (``lidar_spoof``, ``lidar_dropout``, ``depth_blackout``, ``depth_bias``,
+``confidence_degradation``; ``clean+depth_bias`` is the bias alone), then the estimator when it is not raw
 depth (``odca``, ``ekf``, ``chronos``). The paper's table uses ``clean``, ``clean+odca``,
 ``attack``, ``attack+odca``, ``attack+ekf``, ``attack+chronos`` and, beyond the paper,
 ``attack+lidar_spoof+odca``.
@@ -38,8 +39,9 @@ DRIVE_S = (20.0, 60.0)
 #: The protocol's strong regime.
 STRONG_RHO = (0.9, 1.0)
 STRONG_T_ATK_S = (0.5, 3.0)
-#: Attacks that may join the patch in a setting (LiDAR faults, since ODCA's gate trusts the LiDAR).
-EXTRA_ATTACKS = ("lidar_spoof", "lidar_dropout")
+#: Attacks that may join (or replace) the patch in a setting: LiDAR faults (ODCA's gate trusts
+#: the LiDAR) and the depth camera's own faults, each on the protocol's schedule.
+EXTRA_ATTACKS = ("lidar_spoof", "lidar_dropout", "depth_blackout", "depth_bias", "confidence_degradation")
 #: The fake range of the LiDAR spoof, m: far enough that the repair would not brake in time.
 LIDAR_SPOOF_RANGE_M = (2.5, 3.5)
 #: The env's step rate, Hz (attack timing is counted in its steps).

@@ -10,7 +10,8 @@ from controllers import ObstacleDetector, Perception, StopSignBraker
 from experiments.closed_loop import camera_model, sign_depth_at_line
 from experiments.episode.estimators import make_estimator
 from experiments.episode.spec import LIDAR_SPOOF_RANGE_M, TrialSpec
-from sim.attacks import LidarDropout, LidarSpoof, PatchAttack
+from sim.attacks import (ConfidenceDegradation, DepthBias, DepthBlackout, LidarDropout, LidarSpoof,
+                         PatchAttack)
 from sim.world.drives import RouteTarget
 
 __all__ = ["default_env", "Stack", "DRIVE_MAX_EPISODE_S"]
@@ -33,6 +34,12 @@ def default_env(spec: TrialSpec, **env_kwargs) -> gym.Env:
             env = LidarSpoof(env, range_m=LIDAR_SPOOF_RANGE_M, **schedule)
         elif attack == "lidar_dropout":
             env = LidarDropout(env, **schedule)
+        elif attack == "depth_blackout":
+            env = DepthBlackout(env, **schedule)
+        elif attack == "depth_bias":  # the sign looks farther: the stealthy case for a braker
+            env = DepthBias(env, **schedule)
+        elif attack == "confidence_degradation":
+            env = ConfidenceDegradation(env, **schedule)
     return env
 
 

@@ -1,0 +1,71 @@
+"""Where a sweep's episodes run: a local pool of spawned processes, or Ray.
+
+Both call :func:`run_episode` in the worker, which writes the episode's part itself, so a
+finished episode is stored even if the driver dies. Workers are spawned, never forked (a
+process that has made a GL context must not fork renderers), and Ray workers get
+``MUJOCO_GL`` through their runtime env.
+"""
+
+from __future__ import annotations
+
+import multiprocessing as mp
+import os
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from typing import Callable, Iterator
+
+from experiments.episode import TrialSpec
+
+__all__ = ["run_episode", "local_executor", "ray_executor", "BACKENDS"]
+
+BACKENDS = ("local", "ray")
+
+
+def run_episode(spec: TrialSpec, out: str, log_steps: bool = False) -> dict:
+    """Runs one episode and stores it; returns its row."""
+    import math
+
+    from experiments.episode import run_trial
+    from experiments.sweeps.store import ResultStore
+
+    result, log = run_trial(spec)
+    row = {**result.to_dict(), "attack": "+".join(spec.attacks) or "none", "rho_set": spec.rho[0],
+           "t_atk_set": spec.t_atk[0]}
+    row = {k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in row.items()}
+    ResultStore(out).write(spec.trial_id, row, log if log_steps else None)
+    return row
+
+
+def local_executor(specs: list[TrialSpec], out: str, workers: int, log_steps: bool) -> Iterator[dict]:
+    """Rows as episodes finish, from ``workers`` spawned processes (in-process for 1)."""
+    if workers <= 1:
+        for spec in specs:
+            yield run_episode(spec, out, log_steps)
+        return
+    with ProcessPoolExecutor(max_workers=workers, mp_context=mp.get_context("spawn")) as pool:
+        futures = [pool.submit(run_episode, spec, out, log_steps) for spec in specs]
+        for future in as_completed(futures):
+            yield future.result()
+
+
+def ray_executor(specs: list[TrialSpec], out: str, workers: int, log_steps: bool,
+                 address: str | None = None) -> Iterator[dict]:
+    """Rows as episodes finish on Ray: a cluster at ``address``, or a local Ray with ``workers`` CPUs."""
+    os.environ.setdefault("RAY_USAGE_STATS_ENABLED", "0")
+    os.environ.setdefault("RAY_AUTH_MODE", "disabled")
+    import ray
+
+    env_vars = {"MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl"), "RAY_USAGE_STATS_ENABLED": "0"}
+    started = False
+    if not ray.is_initialized():
+        kwargs = {"address": address} if address else {"num_cpus": workers, "include_dashboard": False}
+        ray.init(runtime_env={"env_vars": env_vars}, log_to_driver=False, **kwargs)
+        started = True
+    try:
+        remote: Callable = ray.remote(num_cpus=1)(run_episode)
+        pending = [remote.remote(spec, out, log_steps) for spec in specs]
+        while pending:
+            ready, pending = ray.wait(pending, num_returns=1)
+            yield ray.get(ready[0])
+    finally:
+        if started:
+            ray.shutdown()

@@ -1,0 +1,126 @@
+"""The sweep's report: a Markdown summary (N, SCR and ASR with Wilson intervals per setting and
+per attack x estimator) and plots of SCR against rho and against T_atk with Wilson bands.
+``racf sweep --report DIR`` redraws it from the stored parts without running anything."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from experiments.stats import wilson_interval
+
+__all__ = ["summarize", "write_report", "report_from_store"]
+
+
+def _rate(success: pd.Series) -> dict:
+    n, k = int(len(success)), int(success.sum())
+    lo, hi = wilson_interval(k, n)
+    return {"n": n, "scr": k / n if n else None, "scr_ci": [lo, hi]}
+
+
+def summarize(frame: pd.DataFrame) -> dict[str, dict]:
+    """Per setting: N, SCR and its Wilson interval, ASR (under an attack), mean dt_brake over successes."""
+    out = {}
+    if frame.empty:
+        return out
+    for setting, rows in frame.groupby("setting", sort=True):
+        rate = _rate(rows["success"].astype(bool))
+        dt = pd.to_numeric(rows.loc[rows["success"].astype(bool), "dt_brake_s"], errors="coerce").dropna()
+        attacked = rows["attack"].iloc[0] != "none"
+        out[str(setting)] = {**rate, "asr": (1 - rate["scr"]) if attacked and rate["scr"] is not None else None,
+                             "dt_brake_mean": float(dt.mean()) if len(dt) else None, "n_latency": int(len(dt))}
+    return out
+
+
+def _bins(values: pd.Series, max_bins: int = 6) -> pd.Series:
+    """Grid values as they are; many distinct values (random sweeps) into quantile bins labelled by their mean."""
+    if values.nunique() <= max_bins:
+        return values.astype(float)
+    codes = pd.qcut(values, max_bins, labels=False, duplicates="drop")
+    return values.groupby(codes).transform("mean")
+
+
+def _plot(frame: pd.DataFrame, column: str, label: str, path: Path) -> Path:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(6.4, 4.0))
+    x = _bins(frame[column])
+    for (attack, estimator), rows in frame.assign(_x=x).groupby(["attack", "estimator"], sort=True):
+        pts = []
+        for xv, g in rows.groupby("_x", sort=True):
+            r = _rate(g["success"].astype(bool))
+            pts.append((xv, r["scr"], *r["scr_ci"], r["n"]))
+        if not pts:
+            continue
+        xs, ys, lo, hi, ns = map(np.array, zip(*pts))
+        line, = ax.plot(xs, ys, marker="o", label=f"{attack} / {estimator}")
+        ax.fill_between(xs, lo, hi, color=line.get_color(), alpha=0.15)
+    ax.set_xlabel(label)
+    ax.set_ylabel("stop compliance (SCR)")
+    ax.set_ylim(-0.02, 1.02)
+    ax.grid(alpha=0.3)
+    ax.set_title(f"SCR against {label} (95 % Wilson bands)", fontsize=9)
+    ax.legend(fontsize=7, title="attack / estimator", title_fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
+def _fmt(x, digits: int = 2) -> str:
+    return "—" if x is None or (isinstance(x, float) and math.isnan(x)) else f"{x:.{digits}f}"
+
+
+def write_report(frame: pd.DataFrame, out: Path, name: str = "sweep") -> dict[str, Path]:
+    """Writes ``summary.md``, ``summary.json`` and the two plots under ``out``."""
+    out = Path(out)
+    paths = {}
+    summary = summarize(frame)
+    (out / "summary.json").write_text(json.dumps(summary, indent=1, allow_nan=False))
+    lines = [f"# Sweep `{name}`", "", f"{len(frame)} episodes. SCR with its 95 % Wilson interval; ASR = 1 - SCR "
+             "under an attack; dt_brake over successful stops.", "",
+             "| setting | N | SCR [95 % CI] | ASR | dt_brake s (n) |", "|---|---|---|---|---|"]
+    for setting, r in summary.items():
+        lines.append(f"| {setting} | {r['n']} | {_fmt(r['scr'])} [{_fmt(r['scr_ci'][0])}, {_fmt(r['scr_ci'][1])}] | "
+                     f"{_fmt(r['asr'])} | {_fmt(r['dt_brake_mean'], 3)} ({r['n_latency']}) |")
+    if not frame.empty:
+        frame = frame.assign(estimator=frame["estimator"].astype(str))
+        lines += ["", "By attack and estimator (columns):", ""]
+        estimators = sorted(frame["estimator"].unique())
+        lines += ["| attack | " + " | ".join(estimators) + " |", "|---|" + "---|" * len(estimators)]
+        for attack, rows in frame.groupby("attack", sort=True):
+            cells = []
+            for e in estimators:
+                g = rows[rows["estimator"] == e]
+                r = _rate(g["success"].astype(bool)) if len(g) else None
+                cells.append(f"{_fmt(r['scr'])} (N {r['n']})" if r else "—")
+            lines.append(f"| {attack} | " + " | ".join(cells) + " |")
+        paths["scr_vs_rho"] = _plot(frame, "rho_set", "patch coverage rho", out / "scr_vs_rho.png")
+        paths["scr_vs_t_atk"] = _plot(frame, "t_atk_set", "attack duration T_atk (s)", out / "scr_vs_t_atk.png")
+        lines += ["", "![SCR vs rho](scr_vs_rho.png) ![SCR vs T_atk](scr_vs_t_atk.png)"]
+    paths["summary"] = out / "summary.md"
+    paths["summary"].write_text("\n".join(lines) + "\n")
+    return paths
+
+
+def report_from_store(out: str | Path) -> dict[str, Path]:
+    """Redraws the report of a stored sweep (no episode runs)."""
+    from experiments.sweeps.store import ResultStore
+
+    out = Path(out)
+    if not (out / "sweep.json").exists():
+        raise ValueError(f"{out} is not a sweep folder (no sweep.json; `racf sweep SPEC --out {out}` makes one)")
+    name = out.name
+    spec_file = out / "spec.toml"
+    if spec_file.exists():
+        import tomllib
+
+        name = tomllib.loads(spec_file.read_text()).get("name", name)
+    return write_report(ResultStore(out).rows(), out, name)

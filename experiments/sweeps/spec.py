@@ -1,0 +1,183 @@
+"""Sweep specs: a grid or random draws over the attack and the defence, read from TOML.
+
+Example (``experiments/sweeps/specs/smoke.toml``)::
+
+    name = "smoke"
+    mode = "grid"            # every combination, `repeats` seeds each; or "random": `n` draws
+    repeats = 1
+    seed = 0
+
+    [space]
+    attack = ["patch", "none"]       # "none", an attack, or attacks joined by "+"
+    estimator = ["raw", "odca"]
+    rho = [1.0]                      # grid: values; random: [low, high] drawn uniformly
+    t_atk = [2.0]
+    speed = [1.5]
+    sign = [1, 0]
+
+Attacks: ``patch``, ``lidar_spoof``, ``lidar_dropout``, ``depth_blackout``, ``depth_bias``,
+``confidence_degradation`` and ``+``-combinations of them; estimators: ``raw``, ``odca``,
+``ekf``, ``chronos``. An episode's seed depends on its cell and repeat but not on the
+estimator, so estimators meet identical episodes (paired comparisons). Everything is
+checked, with an error naming the field and what is allowed, before any episode runs.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import itertools
+import json
+import tomllib
+import zlib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from experiments.episode import TrialSpec
+from experiments.episode.estimators import ESTIMATORS
+from experiments.episode.spec import EXTRA_ATTACKS, setting_name
+
+__all__ = ["SweepSpec", "load_spec", "spec_path", "ATTACKS", "SPACE_KEYS", "SPECS_DIR"]
+
+#: Attack names a sweep may combine ("none": no attack).
+ATTACKS = ("patch",) + EXTRA_ATTACKS
+#: The axes a sweep may vary, and their allowed ranges (None: a list of names).
+SPACE_KEYS = {"attack": None, "estimator": None, "rho": (0.0, 1.0), "t_atk": (0.0, 60.0), "speed": (0.1, 3.0),
+              "sign": (0, 3)}
+_DEFAULTS = {"attack": ["patch"], "estimator": ["raw"], "rho": [0.95], "t_atk": [1.75], "speed": [1.5],
+             "sign": [0, 1, 2, 3]}
+_TOP_KEYS = {"name", "mode", "repeats", "n", "seed", "space", "log_steps"}
+#: The example specs shipped with the project.
+SPECS_DIR = Path(__file__).resolve().parent / "specs"
+
+
+@dataclass(frozen=True)
+class SweepSpec:
+    """A validated sweep (see the module docstring for the fields)."""
+
+    name: str
+    mode: str = "grid"
+    repeats: int = 1
+    n: int = 0
+    seed: int = 0
+    space: dict = field(default_factory=dict)
+    log_steps: bool = False
+
+    def __post_init__(self) -> None:
+        if self.mode not in ("grid", "random"):
+            raise ValueError(f"mode must be 'grid' or 'random', got {self.mode!r}")
+        if not (isinstance(self.repeats, int) and self.repeats >= 1):
+            raise ValueError(f"repeats must be an int >= 1, got {self.repeats!r}")
+        if self.mode == "random" and not (isinstance(self.n, int) and self.n >= 1):
+            raise ValueError(f"n (the number of random draws) must be an int >= 1 in random mode, got {self.n!r}")
+        if not isinstance(self.seed, int):
+            raise ValueError(f"seed must be an int, got {self.seed!r}")
+        space = {**_DEFAULTS, **self.space}
+        unknown = sorted(set(self.space) - set(SPACE_KEYS))
+        if unknown:
+            raise ValueError(f"unknown parameter(s) {unknown} in [space]; allowed: {sorted(SPACE_KEYS)}")
+        for key, values in space.items():
+            if not isinstance(values, list) or not values:
+                raise ValueError(f"space.{key} must be a non-empty list, got {values!r}")
+        for value in space["attack"]:
+            _attacks(value)
+        bad = [e for e in space["estimator"] if e not in ESTIMATORS]
+        if bad:
+            raise ValueError(f"space.estimator has {bad}; allowed: {ESTIMATORS}")
+        for key in ("rho", "t_atk", "speed", "sign"):
+            lo, hi = SPACE_KEYS[key]
+            vals = space[key]
+            if not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in vals):
+                raise ValueError(f"space.{key} must hold numbers, got {vals!r}")
+            if not all(lo <= v <= hi for v in vals):
+                raise ValueError(f"space.{key} must lie in [{lo}, {hi}], got {vals!r}")
+            if key == "sign" and not all(float(v).is_integer() for v in vals):
+                raise ValueError(f"space.sign must hold stop-sign indices 0-3, got {vals!r}")
+            if self.mode == "random" and key in ("rho", "t_atk", "speed") and len(vals) != 2:
+                raise ValueError(f"space.{key} must be [low, high] in random mode, got {vals!r}")
+        object.__setattr__(self, "space", space)
+
+    @property
+    def spec_hash(self) -> str:
+        raw = json.dumps({k: getattr(self, k) for k in ("name", "mode", "repeats", "n", "seed", "space")},
+                         sort_keys=True)
+        return hashlib.sha256(raw.encode()).hexdigest()[:12]
+
+    def episodes(self) -> list[TrialSpec]:
+        """The sweep's episodes, in a fixed order."""
+        s = self.space
+        out = []
+        if self.mode == "grid":
+            cells = itertools.product(s["attack"], s["rho"], s["t_atk"], s["speed"], s["sign"])
+            for cell in cells:
+                for repeat in range(self.repeats):
+                    seed = self._episode_seed(cell, repeat)
+                    for estimator in s["estimator"]:
+                        out.append(_trial(cell, estimator, seed))
+        else:
+            rng = np.random.default_rng(self.seed)
+            for i in range(self.n):
+                cell = (s["attack"][rng.integers(len(s["attack"]))], round(float(rng.uniform(*s["rho"])), 4),
+                        round(float(rng.uniform(*s["t_atk"])), 3), round(float(rng.uniform(*s["speed"])), 3),
+                        int(s["sign"][rng.integers(len(s["sign"]))]))
+                seed = self._episode_seed(cell, i)
+                for estimator in s["estimator"]:
+                    out.append(_trial(cell, estimator, seed))
+        return out
+
+    def _episode_seed(self, cell: tuple, repeat: int) -> int:
+        return int(self.seed * 1_000_003 + zlib.crc32(json.dumps([*cell, repeat]).encode()) % 1_000_000)
+
+
+def _attacks(value) -> tuple[str, ...]:
+    if not isinstance(value, str) or not value:
+        raise ValueError(f"space.attack entries must be strings like 'patch' or 'patch+lidar_spoof', got {value!r}")
+    if value == "none":
+        return ()
+    parts = tuple(value.split("+"))
+    bad = [p for p in parts if p not in ATTACKS]
+    if bad:
+        raise ValueError(f"space.attack {value!r} has unknown attack(s) {bad}; allowed: 'none' or "
+                         f"'+'-joined {ATTACKS}")
+    return parts
+
+
+def _trial(cell: tuple, estimator: str, seed: int) -> TrialSpec:
+    attack, rho, t_atk, speed, sign = cell
+    return TrialSpec(setting_name(_attacks(attack), estimator), int(sign), float(speed), seed,
+                     rho=(float(rho), float(rho)), t_atk=(float(t_atk), float(t_atk)))
+
+
+def spec_path(path: str | Path) -> Path:
+    """The spec file: ``path`` itself, or a shipped spec of that name."""
+    path = Path(path)
+    if path.is_file():
+        return path
+    if (SPECS_DIR / path.name).is_file():
+        return SPECS_DIR / path.name
+    raise ValueError(f"no sweep spec at {path} (shipped specs: {sorted(p.name for p in SPECS_DIR.glob('*.toml'))})")
+
+
+def load_spec(path: str | Path) -> SweepSpec:
+    """Reads and validates a TOML spec; a ValueError names the file, the field and what is allowed."""
+    path = spec_path(path)
+    try:
+        raw = tomllib.loads(path.read_text())
+    except tomllib.TOMLDecodeError as err:
+        raise ValueError(f"{path}: not valid TOML: {err}") from None
+    unknown = sorted(set(raw) - _TOP_KEYS)
+    if unknown:
+        raise ValueError(f"{path}: unknown field(s) {unknown}; allowed: {sorted(_TOP_KEYS)}")
+    if "space" in raw and not isinstance(raw["space"], dict):
+        raise ValueError(f"{path}: space must be a table ([space])")
+    try:
+        spec = SweepSpec(name=str(raw.get("name", path.stem)), mode=raw.get("mode", "grid"),
+                         repeats=raw.get("repeats", 1), n=raw.get("n", 0), seed=raw.get("seed", 0),
+                         space=raw.get("space", {}), log_steps=bool(raw.get("log_steps", False)))
+        episodes = spec.episodes()
+    except ValueError as err:
+        raise ValueError(f"{path}: {err}") from None
+    if not episodes:
+        raise ValueError(f"{path}: the sweep has no episodes")
+    return spec

@@ -1,0 +1,128 @@
+"""Sweeps: bad specs refused before any work, a SIGKILLed sweep resumes to exactly the rows of
+an uninterrupted one, Ray gives the local pool's rows, and the report redraws from the store."""
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+from experiments.cli import main
+from experiments.sweeps.run import run_sweep
+from experiments.sweeps.spec import SweepSpec, load_spec
+from experiments.sweeps.store import ResultStore
+
+ROOT = Path(__file__).resolve().parents[2]
+TINY = """name = "tiny"
+mode = "grid"
+repeats = 2
+seed = 3
+
+[space]
+attack = ["patch", "none"]
+estimator = ["raw"]
+rho = [1.0]
+t_atk = [2.0]
+speed = [1.5]
+sign = [1]
+"""
+
+
+def _spec_file(tmp_path, text=TINY, name="tiny.toml"):
+    path = tmp_path / name
+    path.write_text(text)
+    return path
+
+
+@pytest.fixture(scope="module")
+def uninterrupted(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("sweep")
+    path = _spec_file(folder)
+    summary = run_sweep(load_spec(path), TINY, folder / "a", workers=2, progress=False)
+    return folder, summary, ResultStore(folder / "a").rows()
+
+
+def test_sweep_runs_every_episode_and_reports(uninterrupted):
+    folder, summary, rows = uninterrupted
+    assert summary["n"] == summary["done"] == len(rows) == 4 and summary["reused"] == 0
+    assert set(summary["scr"]) == {"attack", "clean"}
+    for name in ("summary.md", "summary.json", "scr_vs_rho.png", "scr_vs_t_atk.png"):
+        assert (folder / "a" / name).stat().st_size > 0
+    again = run_sweep(load_spec(folder / "tiny.toml"), TINY, folder / "a", workers=2, progress=False)
+    assert again["done"] == 0 and again["reused"] == 4
+
+
+def test_sigkilled_sweep_resumes_to_the_same_rows(uninterrupted, tmp_path):
+    folder, _, reference = uninterrupted
+    out = tmp_path / "b"
+    cmd = [sys.executable, "-m", "experiments.cli", "sweep", str(folder / "tiny.toml"), "--out", str(out),
+           "--workers", "1", "--json"]
+    proc = subprocess.Popen(cmd, cwd=ROOT, start_new_session=True, stdout=subprocess.DEVNULL,
+                            stderr=subprocess.DEVNULL)
+    deadline = time.time() + 240
+    while time.time() < deadline and len(list((out / "parts").glob("*.parquet"))) < 1:
+        time.sleep(0.2)
+    os.killpg(proc.pid, signal.SIGKILL)
+    proc.wait()
+    finished = len(list((out / "parts").glob("*.parquet")))
+    assert 1 <= finished < 4, "the kill should land mid-sweep"
+    summary = run_sweep(load_spec(folder / "tiny.toml"), TINY, out, workers=2, progress=False)
+    assert summary["reused"] == finished and summary["done"] == 4 - finished
+    assert not list((out / "parts").glob("*.tmp"))
+    pd.testing.assert_frame_equal(ResultStore(out).rows(), reference)
+
+
+def test_ray_backend_gives_the_local_pool_rows(uninterrupted, tmp_path):
+    folder, _, reference = uninterrupted
+    run_sweep(load_spec(folder / "tiny.toml"), TINY, tmp_path / "ray", backend="ray", workers=2, progress=False)
+    pd.testing.assert_frame_equal(ResultStore(tmp_path / "ray").rows(), reference)
+
+
+def test_report_redraws_from_the_store_without_running(uninterrupted, capsys):
+    folder, _, _ = uninterrupted
+    (folder / "a" / "summary.md").unlink()
+    assert main(["sweep", "--report", str(folder / "a")]) == 0
+    assert "| attack | 2 |" in (folder / "a" / "summary.md").read_text()
+    assert main(["sweep", "--report", str(folder)]) == 2
+
+
+@pytest.mark.parametrize("text, message", [
+    (TINY.replace("speed = [1.5]", "speed = [1.5]\nwind = [1]"), "unknown parameter"),
+    (TINY.replace('estimator = ["raw"]', "estimator = []"), "non-empty list"),
+    (TINY.replace("rho = [1.0]", "rho = [1.5]"), r"rho must lie in \[0.0, 1.0\]"),
+    (TINY.replace('"patch", "none"', '"laser"'), "unknown attack"),
+    (TINY.replace('["raw"]', '["kalman"]'), "estimator"),
+    (TINY.replace('mode = "grid"', 'mode = "random"'), "n \\(the number of random draws\\)"),
+    ("budget = 3\n" + TINY, "unknown field"),
+])
+def test_bad_specs_are_refused_before_any_work(tmp_path, capsys, text, message):
+    path = _spec_file(tmp_path, text, "bad.toml")
+    with pytest.raises(ValueError, match=message):
+        load_spec(path)
+    assert main(["sweep", str(path), "--out", str(tmp_path / "out")]) == 2
+    assert "bad.toml" in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()
+
+
+def test_shipped_specs_load_and_the_big_one_has_1000_paired_episodes():
+    assert len(load_spec("smoke.toml").episodes()) == 8
+    big = load_spec("strong-1000.toml").episodes()
+    assert len(big) == len({e.trial_id for e in big}) == 1000
+    # Estimators meet the same episode: four settings per seed.
+    assert pd.Series([e.seed for e in big]).value_counts().eq(4).all()
+    assert len(load_spec("attack-types.toml").episodes()) == 144
+    with pytest.raises(ValueError, match="mode"):
+        SweepSpec(name="x", mode="sobol")
+
+
+def test_a_folder_of_another_sweep_is_refused(uninterrupted):
+    folder, _, _ = uninterrupted
+    other = load_spec(folder / "tiny.toml")
+    other = SweepSpec(name="other", mode=other.mode, repeats=1, seed=9, space=other.space)
+    with pytest.raises(ValueError, match="another sweep"):
+        run_sweep(other, "x", folder / "a", progress=False)
