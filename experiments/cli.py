@@ -161,6 +161,13 @@ def _parser() -> argparse.ArgumentParser:
     ob.add_argument("--epochs", type=_count, default=None, help="ODCA head epochs (default 800; --quick 40)")
     ob.add_argument("--json", action="store_true", help="print the results as one JSON object instead of the table")
 
+    bl = sub.add_parser("bench-loop", help="closed-loop throughput: real-time factor on one core (clean, attack + "
+                                           "ODCA), sweep episodes per minute with 1 / 2 workers and on Ray")
+    bl.add_argument("-n", type=_count, default=8, help="episodes per real-time-factor setting (default 8)")
+    bl.add_argument("--rate-episodes", type=_count, default=12, help="episodes per throughput run (default 12)")
+    bl.add_argument("--no-ray", action="store_true", help="skip the Ray measurement")
+    bl.add_argument("--json", action="store_true", help="print one JSON object")
+
     bd = sub.add_parser("bench-detector", help="stop-sign detector recall and false-positive frames on rendered drives")
     bd.add_argument("--seed", type=int, default=0)
     bd.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
@@ -433,6 +440,15 @@ def main(argv: list[str] | None = None) -> int:
         print(json.dumps(report) if args.json else _train_table(report))
     elif args.command == "bench":
         return _bench(args)
+    elif args.command == "bench-loop":
+        from experiments.bench.loop import bench_loop
+
+        r = bench_loop(n_rtf=args.n, n_rate=args.rate_episodes, ray=not args.no_ray, progress=not args.json)
+        if args.json:
+            print(json.dumps(r, allow_nan=False))
+        else:
+            for key, value in r.items():
+                print(f"{key:<22}{value:.2f}" if isinstance(value, float) else f"{key:<22}{value}")
     elif args.command == "sweep":
         return _sweep(args)
     elif args.command == "view":

@@ -12,9 +12,8 @@ from __future__ import annotations
 
 import json
 import math
-import multiprocessing as mp
 import os
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures import as_completed
 from pathlib import Path
 
 import numpy as np
@@ -23,6 +22,7 @@ import pandas as pd
 from experiments.episode import TABLE_SETTINGS, TrialSpec, parse_setting, run_trial
 from experiments.episode.scoring import FAILURES
 from experiments.stats import wilson_interval
+from experiments.workers import spawn_pool
 
 __all__ = ["SIGNS", "SPEEDS_MPS", "batch_specs", "run_batch", "run_table", "summarize"]
 
@@ -83,7 +83,7 @@ def run_batch(specs: list[TrialSpec], out_dir: Path, workers: int = 2, progress:
             done[spec.trial_id] = _run_and_save(spec, str(folder), rerun)
             bar.update()
     elif todo:
-        with ProcessPoolExecutor(max_workers=workers, mp_context=mp.get_context("spawn")) as pool:
+        with spawn_pool(workers) as pool:
             futures = [pool.submit(_run_and_save, spec, str(folder), rerun) for spec in todo]
             for future in as_completed(futures):
                 row = future.result()

@@ -8,12 +8,12 @@ process that has made a GL context must not fork renderers), and Ray workers get
 
 from __future__ import annotations
 
-import multiprocessing as mp
 import os
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures import as_completed
 from typing import Callable, Iterator
 
 from experiments.episode import TrialSpec
+from experiments.workers import SINGLE_THREAD_ENV, spawn_pool
 
 __all__ = ["run_episode", "local_executor", "ray_executor", "BACKENDS"]
 
@@ -41,7 +41,7 @@ def local_executor(specs: list[TrialSpec], out: str, workers: int, log_steps: bo
         for spec in specs:
             yield run_episode(spec, out, log_steps)
         return
-    with ProcessPoolExecutor(max_workers=workers, mp_context=mp.get_context("spawn")) as pool:
+    with spawn_pool(workers) as pool:
         futures = [pool.submit(run_episode, spec, out, log_steps) for spec in specs]
         for future in as_completed(futures):
             yield future.result()
@@ -54,7 +54,8 @@ def ray_executor(specs: list[TrialSpec], out: str, workers: int, log_steps: bool
     os.environ.setdefault("RAY_AUTH_MODE", "disabled")
     import ray
 
-    env_vars = {"MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl"), "RAY_USAGE_STATS_ENABLED": "0"}
+    env_vars = {"MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl"), "RAY_USAGE_STATS_ENABLED": "0",
+                **SINGLE_THREAD_ENV}
     started = False
     if not ray.is_initialized():
         kwargs = {"address": address} if address else {"num_cpus": workers, "include_dashboard": False}

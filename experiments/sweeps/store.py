@@ -45,6 +45,7 @@ class ResultStore:
         if log is not None:
             self.logs.mkdir(parents=True, exist_ok=True)
             _atomic_parquet(log, self.logs / f"{episode_id}.parquet")
+        self.parts.mkdir(parents=True, exist_ok=True)
         _atomic_parquet(pd.DataFrame([row]), self.parts / f"{episode_id}.parquet")
 
     def rows(self) -> pd.DataFrame:
