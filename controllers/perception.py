@@ -65,6 +65,8 @@ class Perception:
         self.lidar = lidar or LidarTargetTracker()
         self.target = target
         self.map_margin_rad = float(map_margin_rad)
+        #: The detector's output on the last image, before the map check (for evaluation).
+        self.last_raw_detection: Detection | None = None
 
     def reset(self) -> None:
         """Forget the tracked target (a new target or episode)."""
@@ -86,7 +88,7 @@ class Perception:
                 route passes stop signs that serve other lanes: this keeps perception on
                 the one the car must stop at, as a map-aided stack does.
         """
-        detection = self.detector.detect(rgb)
+        detection = self.last_raw_detection = self.detector.detect(rgb)
         if detection is not None and map_bearing is not None and not (
                 math.isfinite(map_bearing) and self._on_map(detection, map_bearing)):
             detection = None

@@ -154,8 +154,10 @@ def _run(env: gym.Env, spec: TrialSpec, stack: Stack, on_step: StepHook | None) 
                                         lateral_speed=float(obs["state"][4]), dt=dt * every, map_bearing=bearing)
             if attacked:  # d_clean: the same pipeline on the env's own, unattacked readings
                 clean = u.sensor_observation()
-                d_clean = perception.depth.estimate(clean["depth"][..., 0],
-                                                    perception.detector.detect(clean["rgb"]))[0]
+                # An image the attack left alone has the detection perception just made.
+                unchanged = np.array_equal(clean["rgb"], obs["rgb"])
+                detection = perception.last_raw_detection if unchanged else perception.detector.detect(clean["rgb"])
+                d_clean = perception.depth.estimate(clean["depth"][..., 0], detection)[0]
             else:
                 d_clean = sample.d_meas
             d_fused = float(estimator.estimate(sample, speed, dt * every))

@@ -60,3 +60,22 @@ def test_missing_or_corrupt_checkpoint_is_a_clear_error(tmp_path):
 def test_last_value_prior_holds_the_last_finite_value():
     mean, std = LastValuePrior().forecast(np.array([[1.0, 2.0, np.nan]]), 4)
     np.testing.assert_array_equal(mean, [[2.0] * 4])
+
+
+def test_traced_forecasts_are_bit_identical_to_the_eager_model():
+    import torch
+
+    from odca.prior import Chronos2Prior
+
+    prior = Chronos2Prior(batch_size=8)
+    rng = np.random.default_rng(3)
+    ctx = rng.uniform(0.3, 4.0, (8, 64)).astype(np.float32)
+    ctx[1, :40] = np.nan  # a series that starts late
+    ctx[2, rng.random(64) < 0.3] = np.nan  # dropouts
+    ctx[3, :-1] = np.nan  # one value
+    ctx[4] = 0.0  # the padding rows' content
+    x = torch.from_numpy(ctx)
+    with torch.no_grad():
+        eager = prior.model(x, group_ids=torch.arange(8), num_output_patches=1).quantile_preds
+        traced = prior._forward(x, 1)
+    assert torch.equal(eager, traced)
