@@ -142,10 +142,11 @@ class StopSignDetector(BlobDetector):
         rgb = check_rgb(rgb)
         c = self.config
         hsv = cv2.cvtColor(rgb, cv2.COLOR_RGB2HSV)
-        h, s, v = hsv[..., 0], hsv[..., 1], hsv[..., 2]
-        red = ((h <= c.red_hue_max) | (h >= 180 - c.red_hue_max)) & (s >= c.red_min_saturation) & (v >= c.red_min_value)
-        light = (s <= c.light_max_saturation) & (v >= c.light_min_value)
-        n, labels, stats, centroids = cv2.connectedComponentsWithStats(red.view(np.uint8), connectivity=8)
+        # Red wraps around hue 0: two inclusive HSV boxes (OpenCV's inRange is one pass each).
+        red = cv2.bitwise_or(
+            cv2.inRange(hsv, (0, c.red_min_saturation, c.red_min_value), (c.red_hue_max, 255, 255)),
+            cv2.inRange(hsv, (180 - c.red_hue_max, c.red_min_saturation, c.red_min_value), (255, 255, 255)))
+        n, labels, stats, centroids = cv2.connectedComponentsWithStats(red, connectivity=8)
         out = []
         for i in range(1, n):
             x, y, w, hgt, area = (int(q) for q in stats[i])
@@ -163,7 +164,9 @@ class StopSignDetector(BlobDetector):
             if solidity < c.min_solidity:
                 continue
             ring = cv2.dilate(comp, self._ring_kernel).astype(bool) & ~comp.astype(bool)
-            ring_score = float(light[y0:y1, x0:x1][ring].mean()) if ring.any() else 0.0
+            crop = hsv[y0:y1, x0:x1]
+            light = (crop[..., 1] <= c.light_max_saturation) & (crop[..., 2] >= c.light_min_value)
+            ring_score = float(light[ring].mean()) if ring.any() else 0.0
             aspect = min(1.0, (hgt / w) / c.full_aspect) * min(1.0, (w / hgt) / c.thin_aspect)
             rows = np.nonzero(comp)[0] + y0
             middle = y + (hgt - 1) / 2

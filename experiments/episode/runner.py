@@ -96,7 +96,7 @@ class TrialResult:
 
 
 def run_trial(spec: TrialSpec, estimator=None, make_env: Callable[[TrialSpec], gym.Env] | None = None,
-              on_step: StepHook | None = None) -> tuple[TrialResult, pd.DataFrame]:
+              on_step: StepHook | None = None, clean_pass: bool = True) -> tuple[TrialResult, pd.DataFrame]:
     """Runs one episode; returns its result row and per-step log.
 
     Args:
@@ -105,16 +105,20 @@ def run_trial(spec: TrialSpec, estimator=None, make_env: Callable[[TrialSpec], g
         make_env: builds the env (default :func:`~experiments.episode.stack.default_env`).
         on_step: called as ``on_step(env, obs, info, row)`` after each step's decision
             (figures, viewers); it must not change anything.
+        clean_pass: under attack, also run perception on the env's own unattacked readings
+            to log ``d_clean``. It is a diagnostic the car never sees: without it the log's
+            ``d_clean`` is NaN under attack and everything else, the result row included, is
+            the same. Sweeps that keep no per-step log skip it.
     """
     env = make_env(spec) if make_env is not None else default_env(spec)
     try:
-        log = _run(env, spec, Stack(env, spec, estimator), on_step)
+        log = _run(env, spec, Stack(env, spec, estimator), on_step, clean_pass)
         return _result(spec, env, log), log
     finally:
         env.close()
 
 
-def _run(env: gym.Env, spec: TrialSpec, stack: Stack, on_step: StepHook | None) -> pd.DataFrame:
+def _run(env: gym.Env, spec: TrialSpec, stack: Stack, on_step: StepHook | None, clean_pass: bool) -> pd.DataFrame:
     obs, info = env.reset(seed=spec.seed, options=reset_options(spec))
     u = env.unwrapped
     dt = 1.0 / u.config.control_hz
@@ -152,14 +156,14 @@ def _run(env: gym.Env, spec: TrialSpec, stack: Stack, on_step: StepHook | None) 
             sample = perception.process(obs["rgb"], obs["depth"][..., 0], obs["lidar"] if scan_new else None,
                                         speed=speed, yaw_rate=float(obs["state"][2]),
                                         lateral_speed=float(obs["state"][4]), dt=dt * every, map_bearing=bearing)
-            if attacked:  # d_clean: the same pipeline on the env's own, unattacked readings
+            if not attacked:
+                d_clean = sample.d_meas
+            elif clean_pass:  # d_clean: the same pipeline on the env's own, unattacked readings
                 clean = u.sensor_observation()
                 # An image the attack left alone has the detection perception just made.
                 unchanged = np.array_equal(clean["rgb"], obs["rgb"])
                 detection = perception.last_raw_detection if unchanged else perception.detector.detect(clean["rgb"])
                 d_clean = perception.depth.estimate(clean["depth"][..., 0], detection)[0]
-            else:
-                d_clean = sample.d_meas
             d_fused = float(estimator.estimate(sample, speed, dt * every))
             in_fov = math.isfinite(bearing) and abs(bearing) <= half_fov
             decision = braker.step(sample.detected, d_fused, speed, dt * every, expected_in_view=in_fov)

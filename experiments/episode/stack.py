@@ -14,18 +14,39 @@ from sim.attacks import (ConfidenceDegradation, DepthBias, DepthBlackout, LidarD
                          PatchAttack)
 from sim.world.drives import RouteTarget
 
-__all__ = ["default_env", "Stack", "DRIVE_MAX_EPISODE_S"]
+__all__ = ["default_env", "plain_env", "Stack", "DRIVE_MAX_EPISODE_S"]
 
 #: A drive's episode time limit, s.
 DRIVE_MAX_EPISODE_S = 120.0
 
+#: This process's plain envs by their settings. Building one (the model, the renderer's GL
+#: context) costs about as much as 20 steps; ``reset(seed=...)`` restores all an episode sees.
+_PLAIN_ENVS: dict[tuple, gym.Env] = {}
+
+
+class _Shared(gym.Wrapper):
+    """A process's shared plain env: closing an episode's wrappers leaves it open for the next."""
+
+    def close(self) -> None:
+        pass
+
+
+def plain_env(**env_kwargs) -> gym.Env:
+    """The env ``gym.make(sim.ENV_ID, **env_kwargs)``, built once per process and settings and
+    handed to one episode at a time (episodes in a process run one after another)."""
+    key = tuple(sorted(env_kwargs.items()))
+    if key not in _PLAIN_ENVS:
+        _PLAIN_ENVS[key] = gym.make(sim.ENV_ID, **env_kwargs)
+    return _Shared(_PLAIN_ENVS[key])
+
 
 def default_env(spec: TrialSpec, **env_kwargs) -> gym.Env:
-    """The env of a spec: the plain env wrapped in its attacks, all on the protocol's schedule
-    (after a stable detection, inside the braking window; each draws its own duration)."""
+    """The env of a spec: the process's plain env (:func:`plain_env`) wrapped in the spec's
+    attacks, all on the protocol's schedule (after a stable detection, inside the braking
+    window; each draws its own duration)."""
     if spec.target == "drive":
         env_kwargs.setdefault("max_episode_s", DRIVE_MAX_EPISODE_S)
-    env = gym.make(sim.ENV_ID, **env_kwargs)
+    env = plain_env(**env_kwargs)
     schedule = {"duration_s": spec.t_atk, "stable_steps": spec.attack_stable_steps}
     for attack in spec.attacks:
         if attack == "patch":

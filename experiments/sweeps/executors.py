@@ -27,7 +27,8 @@ def run_episode(spec: TrialSpec, out: str, log_steps: bool = False) -> dict:
     from experiments.episode import run_trial
     from experiments.sweeps.store import ResultStore
 
-    result, log = run_trial(spec)
+    # The d_clean diagnostic pass is for per-step logs; the row is the same without it.
+    result, log = run_trial(spec, clean_pass=log_steps)
     row = {**result.to_dict(), "attack": "+".join(spec.attacks) or "none", "rho_set": spec.rho[0],
            "t_atk_set": spec.t_atk[0]}
     row = {k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in row.items()}

@@ -69,11 +69,16 @@ def sign_view(sign: StopSign, cam_pos: np.ndarray, cam_mat: np.ndarray,
         return behind
     facing = float(np.dot(cam_pos - sign.centre, [math.cos(sign.face_yaw), math.sin(sign.face_yaw), 0.0])) > 0
     if facing and (corners[:, 2] > 0.05).all():
-        _fill(mask, intrinsics.project(corners))
-        if mask.any():
+        uv = intrinsics.project(corners)
+        _fill(mask, uv)
+        # The polygon's bounding box (a pixel of margin): the only part of the frame to search.
+        (u0, v0), (u1, v1) = np.floor(uv.min(axis=0)).astype(int) - 1, np.ceil(uv.max(axis=0)).astype(int) + 2
+        u0, v0, u1, v1 = max(u0, 0), max(v0, 0), min(u1, mask.shape[1]), min(v1, mask.shape[0])
+        rows, cols = np.nonzero(mask[v0:v1, u0:u1]) if u0 < u1 and v0 < v1 else (np.empty(0, int),) * 2
+        if len(rows):
+            rows, cols = rows + v0, cols + u0
             # Depth of the sign's plane at each masked pixel: intersect the pixel's ray with it.
             normal_opt = world_to_opt @ np.array([math.cos(sign.face_yaw), math.sin(sign.face_yaw), 0.0])
-            rows, cols = np.nonzero(mask)
             rays = np.column_stack([(cols - intrinsics.cx) / intrinsics.fx,
                                     (rows - intrinsics.cy) / intrinsics.fy, np.ones(len(rows))])
             plane_z = float(normal_opt @ centre) / (rays @ normal_opt)

@@ -142,6 +142,7 @@ class QCar2Env(gym.Env):
         for i, (body, home) in enumerate(self._crates):
             self.model.body_pos[body] = home if crate == i else home + np.array([0.0, 0.0, -5.0])
         mujoco.mj_resetData(self.model, self.data)
+        self.rig.invalidate()  # the crates may have moved; the car may start where it started before
         self._route_s = start_s
         self.car.place(self.data, *pose, speed=float(speed))
         mujoco.mj_forward(self.model, self.data)

@@ -16,6 +16,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.special import ndtri
 
 from sim._gl import ensure_gl_backend, gl_context_class
 from sim.sensors.base import Sensor
@@ -27,6 +28,14 @@ __all__ = ["CameraConfig", "CameraIntrinsics", "RGBDCameraRig", "RGBCamera", "De
 
 _REF_W, _REF_H = 640, 480
 _REF_FX, _REF_FY, _REF_CX, _REF_CY = 455.2, 459.4, 308.5, 213.6
+
+#: Standard-normal draws for the depth noise by table lookup: a uniform 16-bit index picks one
+#: of 2**16 equally likely quantiles (the midpoints of equal-probability bins). Three times
+#: faster than numpy's ziggurat for a frame. The discretisation (steps under 0.004 sigma
+#: within 3 sigma; tails cut at 4.3 sigma, which a frame of 76,800 pixels would pass about
+#: once) is far below the 1 mm quantisation that follows.
+_NORMAL_LEVELS = 2**16
+_NORMAL_QUANTILES = ndtri((np.arange(_NORMAL_LEVELS) + 0.5) / _NORMAL_LEVELS).astype(np.float32)
 
 
 @dataclass(frozen=True)
@@ -166,10 +175,15 @@ class RGBDCameraRig:
         self._frame_key = key
         return self._rgb, self._depth
 
+    def invalidate(self) -> None:
+        """Forgets the cached frame: the scene changed in a way the state does not show
+        (bodies moved in the model), so the next read renders again."""
+        self._frame_key = None
+
     def noisy_depth(self, depth: np.ndarray, rng: np.random.Generator) -> np.ndarray:
         """Applies the stereo noise model to a noise-free depth image (a new array)."""
         c = self.config
-        z = rng.standard_normal(depth.shape, dtype=np.float32)
+        z = _NORMAL_QUANTILES[rng.integers(0, _NORMAL_LEVELS, depth.shape, dtype=np.uint16)]
         z *= np.float32(c.depth_noise_k_per_m)
         z *= depth
         z *= depth

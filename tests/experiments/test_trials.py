@@ -49,6 +49,30 @@ def test_same_seed_same_log(sign0_trial):
     pd.testing.assert_frame_equal(again_log, log)
 
 
+def test_the_shared_env_gives_the_log_of_a_fresh_one(sign0_trial):
+    import gymnasium as gym
+
+    import sim
+
+    # The process's env has meanwhile run another episode, with a crate placed on the map.
+    run_trial(TrialSpec("clean", 1, 2.0, 0, target="obstacle"))
+    result, log = run_trial(TrialSpec("clean", 0, 1.5, 3))
+    fresh_result, fresh_log = run_trial(TrialSpec("clean", 0, 1.5, 3), make_env=lambda spec: gym.make(sim.ENV_ID))
+    assert result == fresh_result == sign0_trial[0]
+    pd.testing.assert_frame_equal(log, fresh_log)
+
+
+def test_skipping_the_clean_pass_changes_only_the_d_clean_diagnostic():
+    spec = TrialSpec("attack", 2, 1.5, 4)
+    result, log = run_trial(spec)
+    fast_result, fast_log = run_trial(spec, clean_pass=False)
+    assert fast_result == result
+    attacked = log["attack_active"].to_numpy()
+    assert attacked.any() and log.loc[attacked, "d_clean"].notna().any()
+    assert fast_log.loc[attacked, "d_clean"].isna().all()
+    pd.testing.assert_frame_equal(fast_log.drop(columns="d_clean"), log.drop(columns="d_clean"))
+
+
 def test_batch_covers_every_sign_and_speed_and_resumes(tmp_path, monkeypatch):
     specs = batch_specs("clean", 12)
     assert {(s.sign, s.speed) for s in specs} == {(g, v) for g in range(4) for v in (1.0, 1.5, 2.0)}

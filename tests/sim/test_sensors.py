@@ -261,6 +261,21 @@ def test_depth_noise_std_scales_with_z_squared():
     assert one.std() == pytest.approx(0.01, rel=0.10)
 
 
+def test_depth_noise_is_normal_and_fresh_every_frame():
+    from scipy import stats
+
+    # No quantisation, so the draws themselves are visible: (noisy - z) / (k z^2).
+    rig = RGBDCameraRig(CameraConfig(depth_dropout=0.0, depth_noise_k_per_m=0.01, depth_quantum_m=0.0))
+    flat = np.full((240, 320), 3.0, np.float32)
+    rng = np.random.default_rng(7)
+    frames = [(rig.noisy_depth(flat, rng) - 3.0) / np.float32(0.01 * 9.0) for _ in range(4)]
+    draws = np.concatenate([f.ravel() for f in frames]).astype(np.float64)
+    assert stats.kstest(draws, "norm").pvalue > 0.01
+    assert abs(stats.kurtosis(draws)) < 0.05
+    # Consecutive frames do not repeat a pattern.
+    assert abs(np.corrcoef(frames[0].ravel(), frames[1].ravel())[0, 1]) < 0.02
+
+
 def test_depth_out_of_range_is_zero():
     cfg = CameraConfig(depth_dropout=0.0)
     rig = RGBDCameraRig(cfg)
