@@ -1,22 +1,27 @@
 """``racf bench-loop``: closed-loop throughput, as ratios a user can compare across machines.
 
-- ``rtf_clean``, ``rtf_attack_odca``: simulated seconds per wall second of whole episodes on
-  one core (torch on one thread), with the default sensors; clean, and under the strong
-  patch attack with ODCA.
+- ``rtf_clean``, ``rtf_attack_odca``: simulated seconds per wall second of whole episodes
+  (reset included) on one core (torch on one thread, the rasteriser on the calling thread),
+  with the default sensors; clean, and under the strong patch attack with ODCA. Episodes run
+  as a sweep runs them: without the d_clean diagnostic pass (``run_trial(clean_pass=False)``).
 - ``episodes_per_min_1``, ``episodes_per_min_2``: sweep episodes per minute with 1 and 2
-  spawned local workers on the same episodes; ``scaling_efficiency`` = rate with 2 /
-  (2 x rate with 1).
-- ``episodes_per_min_ray``: the Ray backend's rate with 2 CPUs.
-Wall times include each backend's start-up (spawning workers, loading ODCA, starting Ray):
-what a user waits for.
+  spawned local workers, once the workers are up, over the same episodes run twice in
+  alternation (1, 2, 1, 2 workers); ``scaling_efficiency`` = rate with 2 / (2 x rate with 1).
+- ``episodes_per_min_ray``: the same on the Ray backend with 2 CPUs.
+- ``ready_s_*``: what each backend takes to be ready (spawning, imports, the env, ODCA; one
+  warm-up episode per worker), reported apart because a sweep pays it once, not per episode.
 """
 
 from __future__ import annotations
 
+import os
 import tempfile
 import time
 
 __all__ = ["bench_loop"]
+
+#: The rate runs' episodes: attack + ODCA on every sign at every speed.
+_RATE_SETTING = "attack+odca"
 
 
 def _episodes(setting: str, n: int, seed: int):
@@ -28,7 +33,7 @@ def _episodes(setting: str, n: int, seed: int):
 def _rtf(setting: str, n: int, seed: int) -> dict:
     from experiments.episode import run_trial
 
-    run_trial(_episodes(setting, 1, seed + 1000)[0])  # warm up: renderer, ODCA checkpoint, caches
+    run_trial(_episodes(setting, 1, seed + 1000)[0])  # warm up: the env, ODCA checkpoint, caches
     sim_s = wall_s = 0.0
     for spec in _episodes(setting, n, seed):
         t0 = time.perf_counter()
@@ -38,24 +43,70 @@ def _rtf(setting: str, n: int, seed: int) -> dict:
     return {"rtf": sim_s / wall_s, "sim_s": sim_s, "wall_s": wall_s}
 
 
-def _rate(backend: str, workers: int, specs) -> float:
-    from experiments.sweeps.executors import ray_executor, run_episode
+def _warm(barrier=None) -> int:
+    """Readies a worker with one episode (imports, the env, ODCA), then waits for the others,
+    so that every worker takes one; returns the worker's pid."""
+    from experiments.episode import run_trial
 
-    with tempfile.TemporaryDirectory() as out:
+    run_trial(_episodes(_RATE_SETTING, 1, 10_000)[0], clean_pass=False)
+    if barrier is not None:
+        barrier.wait(timeout=600)
+    return os.getpid()
+
+
+def _slowest_first(specs):
+    # Slow approaches are the long episodes: started first, they leave no worker idle at the end.
+    return sorted(specs, key=lambda spec: spec.speed)
+
+
+def _local_rates(specs, rounds: int = 2) -> tuple[dict[int, float], dict[int, float]]:
+    """Episodes per minute once ready, and seconds to ready, with 1 and 2 spawned workers.
+
+    Both pools are up at once (an idle worker sleeps) and run ``specs`` in turn, ``rounds``
+    times, so a machine whose speed drifts slows both alike.
+    """
+    import multiprocessing as mp
+    from contextlib import ExitStack
+
+    from experiments.sweeps.executors import run_episode
+    from experiments.workers import spawn_pool
+
+    counts = (1, 2)
+    elapsed, ready = dict.fromkeys(counts, 0.0), {}
+    with tempfile.TemporaryDirectory() as out, ExitStack() as stack:
+        manager = stack.enter_context(mp.get_context("spawn").Manager())
+        pools = {}
+        for workers in counts:
+            t0 = time.perf_counter()
+            pools[workers] = stack.enter_context(spawn_pool(workers))
+            pids = list(pools[workers].map(_warm, [manager.Barrier(workers)] * workers))
+            assert len(set(pids)) == workers, "every worker must be warmed"
+            ready[workers] = time.perf_counter() - t0
+        for _ in range(rounds):
+            for workers in counts:
+                t0 = time.perf_counter()
+                list(pools[workers].map(run_episode, specs, [out] * len(specs)))
+                elapsed[workers] += time.perf_counter() - t0
+    return {w: rounds * len(specs) / elapsed[w] * 60.0 for w in counts}, ready
+
+
+def _ray_rate(workers: int, specs) -> tuple[float, float]:
+    import ray
+
+    from experiments.sweeps.executors import ray_executor, ray_session
+
+    with tempfile.TemporaryDirectory() as out, ray_session(workers):
         t0 = time.perf_counter()
-        if backend == "ray":
-            for _ in ray_executor(specs, out, workers, False):
-                pass
-        else:
-            from experiments.workers import spawn_pool
-
-            # Spawned workers for 1 and 2 alike, so the ratio compares like with like.
-            with spawn_pool(workers) as pool:
-                list(pool.map(run_episode, specs, [out] * len(specs)))
-        return len(specs) / (time.perf_counter() - t0) * 60.0
+        # Tasks that outlast a worker's start-up each get their own worker; Ray keeps them.
+        ray.get([ray.remote(num_cpus=1)(_warm).remote() for _ in range(workers)])
+        t1 = time.perf_counter()
+        for _ in ray_executor(specs, out, workers, False):
+            pass
+        t2 = time.perf_counter()
+    return len(specs) / (t2 - t1) * 60.0, t1 - t0
 
 
-def bench_loop(n_rtf: int = 8, n_rate: int = 12, seed: int = 0, ray: bool = True, progress: bool = True) -> dict:
+def bench_loop(n_rtf: int = 8, n_rate: int = 24, seed: int = 0, ray: bool = True, progress: bool = True) -> dict:
     """Measures everything above; ``n_rtf`` episodes per RTF setting, ``n_rate`` per rate."""
     from tqdm import tqdm
 
@@ -69,21 +120,21 @@ def bench_loop(n_rtf: int = 8, n_rate: int = 12, seed: int = 0, ray: bool = True
     clean = _rtf("clean", n_rtf, seed)
     bar.update()
     bar.set_postfix_str(steps[1])
-    attack = _rtf("attack+odca", n_rtf, seed)
+    attack = _rtf(_RATE_SETTING, n_rtf, seed)
     bar.update()
-    specs = _episodes("attack+odca", n_rate, seed + 100)
-    rates = {}
-    for workers in (1, 2):
-        bar.set_postfix_str(f"{workers} worker(s)")
-        rates[workers] = _rate("local", workers, specs)
-        bar.update()
+    specs = _slowest_first(_episodes(_RATE_SETTING, n_rate, seed + 100))
+    bar.set_postfix_str("1 and 2 workers")
+    rates, ready = _local_rates(specs)
+    bar.update(2)
     out.update(rtf_clean=clean["rtf"], rtf_attack_odca=attack["rtf"], episodes_per_min_1=rates[1],
                episodes_per_min_2=rates[2], scaling_efficiency=rates[2] / (2 * rates[1]))
     if ray:
         bar.set_postfix_str("ray")
-        out["episodes_per_min_ray"] = _rate("ray", 2, specs)
+        out["episodes_per_min_ray"], ready["ray"] = _ray_rate(2, specs)
         bar.update()
     bar.close()
     out.update(n_rtf=n_rtf, n_rate=n_rate, sim_s_clean=clean["sim_s"], sim_s_attack_odca=attack["sim_s"],
-               torch_threads=1)
+               ready_s_1=ready[1], ready_s_2=ready[2], torch_threads=1)
+    if ray:
+        out["ready_s_ray"] = ready["ray"]
     return out

@@ -10,12 +10,13 @@ from __future__ import annotations
 
 import os
 from concurrent.futures import as_completed
+from contextlib import contextmanager
 from typing import Callable, Iterator
 
 from experiments.episode import TrialSpec
 from experiments.workers import SINGLE_THREAD_ENV, spawn_pool
 
-__all__ = ["run_episode", "local_executor", "ray_executor", "BACKENDS"]
+__all__ = ["run_episode", "local_executor", "ray_executor", "ray_session", "BACKENDS"]
 
 BACKENDS = ("local", "ray")
 
@@ -48,9 +49,11 @@ def local_executor(specs: list[TrialSpec], out: str, workers: int, log_steps: bo
             yield future.result()
 
 
-def ray_executor(specs: list[TrialSpec], out: str, workers: int, log_steps: bool,
-                 address: str | None = None) -> Iterator[dict]:
-    """Rows as episodes finish on Ray: a cluster at ``address``, or a local Ray with ``workers`` CPUs."""
+@contextmanager
+def ray_session(workers: int, address: str | None = None) -> Iterator[None]:
+    """Ray for the episodes: joins the cluster at ``address``, or starts a local Ray with
+    ``workers`` CPUs and the dashboard, usage stats and token auth off (and stops it after).
+    An already initialised Ray is used as it is."""
     os.environ.setdefault("RAY_USAGE_STATS_ENABLED", "0")
     os.environ.setdefault("RAY_AUTH_MODE", "disabled")
     import ray
@@ -63,11 +66,20 @@ def ray_executor(specs: list[TrialSpec], out: str, workers: int, log_steps: bool
         ray.init(runtime_env={"env_vars": env_vars}, log_to_driver=False, **kwargs)
         started = True
     try:
+        yield
+    finally:
+        if started:
+            ray.shutdown()
+
+
+def ray_executor(specs: list[TrialSpec], out: str, workers: int, log_steps: bool,
+                 address: str | None = None) -> Iterator[dict]:
+    """Rows as episodes finish on Ray: a cluster at ``address``, or a local Ray with ``workers`` CPUs."""
+    import ray
+
+    with ray_session(workers, address):
         remote: Callable = ray.remote(num_cpus=1)(run_episode)
         pending = [remote.remote(spec, out, log_steps) for spec in specs]
         while pending:
             ready, pending = ray.wait(pending, num_returns=1)
             yield ray.get(ready[0])
-    finally:
-        if started:
-            ray.shutdown()
