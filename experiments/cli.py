@@ -63,10 +63,11 @@ def _parser() -> argparse.ArgumentParser:
     t.add_argument("--rerun", type=Path, default=None, metavar="PATH",
                    help="also record the episode to a rerun file (.rrd; open it with `racf view PATH`)")
 
-    sw = sub.add_parser("sweep", help="a Monte Carlo attack sweep from a TOML spec (grid or random draws) on a "
-                                      "local process pool or Ray; resumes; summary and SCR plots")
+    sw = sub.add_parser("sweep", help="a Monte Carlo attack sweep from a TOML spec or flags (grid or random draws) "
+                                      "on a local process pool or Ray; resumes; summary and SCR plots")
     sw.add_argument("spec", nargs="?", type=Path, default=None,
-                    help="the sweep spec (TOML); shipped: smoke.toml, attack-types.toml, strong-1000.toml")
+                    help="the sweep spec (TOML); shipped: smoke.toml, attack-types.toml, strong-1000.toml. "
+                         "Without one, the flags below make the sweep")
     sw.add_argument("--out", type=Path, default=None, help="results folder (default outputs/sweeps/<spec name>)")
     sw.add_argument("--backend", choices=("local", "ray"), default="local",
                     help="local spawned processes (default) or Ray")
@@ -77,6 +78,23 @@ def _parser() -> argparse.ArgumentParser:
     sw.add_argument("--json", action="store_true", help='print {"n", "done", "reused", "wall_s", "scr"} as JSON')
     sw.add_argument("--report", type=Path, default=None, metavar="DIR",
                     help="redraw the summary and plots of a stored sweep, running nothing")
+    fl = sw.add_argument_group("a sweep from flags (alone, or replacing the spec's fields)")
+    fl.add_argument("--name", default=None, help="the sweep's name (default: the spec's, or one made from its content)")
+    fl.add_argument("--mode", choices=("grid", "random"), default=None,
+                    help="grid: every combination, --repeats seeds each; random: --n draws")
+    fl.add_argument("--n", type=_count, default=None, help="random mode: draws (each run with every estimator)")
+    fl.add_argument("--repeats", type=_count, default=None, help="grid mode: seeds per cell")
+    fl.add_argument("--seed", type=int, default=None, help="the sweep's seed")
+    fl.add_argument("--log-steps", action="store_true", default=None, help="also keep every episode's per-step log")
+    fl.add_argument("--attack", nargs="+", default=None, metavar="A",
+                    help="'none', an attack or '+'-joined attacks: patch, depth_blackout, depth_bias, "
+                         "confidence_degradation, lidar_dropout, lidar_spoof")
+    fl.add_argument("--estimator", nargs="+", default=None, metavar="E", help="raw, odca, ekf, chronos")
+    for flag, what in (("--rho", "patch coverage in [0, 1]"), ("--t-atk", "attack duration s"),
+                       ("--speed", "cruise speed m/s")):
+        fl.add_argument(flag, nargs="+", type=float, default=None, metavar="X",
+                        help=f"{what}: values (grid) or LOW HIGH (random)")
+    fl.add_argument("--sign", nargs="+", type=int, default=None, metavar="K", help="stop signs 0-3")
 
     vw = sub.add_parser("view", help="open a rerun recording (.rrd) in the rerun viewer")
     vw.add_argument("path", type=Path, help="the .rrd file (racf demo, racf trial --rerun)")
@@ -280,16 +298,25 @@ def _sweep(args) -> int:
             return 2
         print("\n".join(str(p) for p in paths.values()))
         return 0
-    if args.spec is None:
-        print("racf sweep: give a spec (e.g. smoke.toml) or --report DIR", file=sys.stderr)
+    fields = {key: value for key, value in (("name", args.name), ("mode", args.mode), ("n", args.n),
+                                             ("repeats", args.repeats), ("seed", args.seed),
+                                             ("log_steps", args.log_steps)) if value is not None}
+    space = {key: value for key, value in (("attack", args.attack), ("estimator", args.estimator),
+                                           ("rho", args.rho), ("t_atk", args.t_atk), ("speed", args.speed),
+                                           ("sign", args.sign)) if value is not None}
+    if args.spec is None and not (space or fields):
+        print("racf sweep: give a spec (e.g. smoke.toml), axis flags (--attack, --estimator, --rho, ...) "
+              "or --report DIR", file=sys.stderr)
         return 2
     from experiments.sweeps.run import run_sweep
-    from experiments.sweeps.spec import load_spec, spec_path
+    from experiments.sweeps.spec import parse_spec, spec_text
 
     try:
-        spec = load_spec(args.spec)
+        text = spec_text(args.spec, fields, space)
+        spec = parse_spec(text, str(args.spec) if args.spec is not None and not (fields or space) else "flags",
+                          default_name=args.spec.stem if args.spec is not None else "sweep")
         out = args.out or Path("outputs/sweeps") / spec.name
-        summary = run_sweep(spec, spec_path(args.spec).read_text(), out, backend=args.backend, workers=args.workers,
+        summary = run_sweep(spec, text, out, backend=args.backend, workers=args.workers,
                             address=args.address, progress=not args.json)
     except ValueError as err:
         print(f"racf sweep: {err}", file=sys.stderr)

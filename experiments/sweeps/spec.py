@@ -20,6 +20,9 @@ Attacks: ``patch``, ``lidar_spoof``, ``lidar_dropout``, ``depth_blackout``, ``de
 ``ekf``, ``chronos``. An episode's seed depends on its cell and repeat but not on the
 estimator, so estimators meet identical episodes (paired comparisons). Everything is
 checked, with an error naming the field and what is allowed, before any episode runs.
+
+The same fields come as command-line flags (``racf sweep --mode random --n 50 --attack patch
+--estimator raw odca --rho 0.9 1``), alone or replacing a spec's (:func:`spec_text`).
 """
 
 from __future__ import annotations
@@ -38,7 +41,7 @@ from experiments.episode import TrialSpec
 from experiments.episode.estimators import ESTIMATORS
 from experiments.episode.spec import EXTRA_ATTACKS, setting_name
 
-__all__ = ["SweepSpec", "load_spec", "spec_path", "ATTACKS", "SPACE_KEYS", "SPECS_DIR"]
+__all__ = ["SweepSpec", "load_spec", "parse_spec", "spec_text", "spec_path", "ATTACKS", "SPACE_KEYS", "SPECS_DIR"]
 
 #: Attack names a sweep may combine ("none": no attack).
 ATTACKS = ("patch",) + EXTRA_ATTACKS
@@ -162,22 +165,58 @@ def spec_path(path: str | Path) -> Path:
 def load_spec(path: str | Path) -> SweepSpec:
     """Reads and validates a TOML spec; a ValueError names the file, the field and what is allowed."""
     path = spec_path(path)
+    return parse_spec(path.read_text(), str(path), default_name=path.stem)
+
+
+def parse_spec(text: str, source: str = "spec", default_name: str = "sweep") -> SweepSpec:
+    """Validates a spec given as TOML text; errors start with ``source``."""
     try:
-        raw = tomllib.loads(path.read_text())
+        raw = tomllib.loads(text)
     except tomllib.TOMLDecodeError as err:
-        raise ValueError(f"{path}: not valid TOML: {err}") from None
+        raise ValueError(f"{source}: not valid TOML: {err}") from None
     unknown = sorted(set(raw) - _TOP_KEYS)
     if unknown:
-        raise ValueError(f"{path}: unknown field(s) {unknown}; allowed: {sorted(_TOP_KEYS)}")
+        raise ValueError(f"{source}: unknown field(s) {unknown}; allowed: {sorted(_TOP_KEYS)}")
     if "space" in raw and not isinstance(raw["space"], dict):
-        raise ValueError(f"{path}: space must be a table ([space])")
+        raise ValueError(f"{source}: space must be a table ([space])")
     try:
-        spec = SweepSpec(name=str(raw.get("name", path.stem)), mode=raw.get("mode", "grid"),
+        spec = SweepSpec(name=str(raw.get("name", default_name)), mode=raw.get("mode", "grid"),
                          repeats=raw.get("repeats", 1), n=raw.get("n", 0), seed=raw.get("seed", 0),
                          space=raw.get("space", {}), log_steps=bool(raw.get("log_steps", False)))
         episodes = spec.episodes()
     except ValueError as err:
-        raise ValueError(f"{path}: {err}") from None
+        raise ValueError(f"{source}: {err}") from None
     if not episodes:
-        raise ValueError(f"{path}: the sweep has no episodes")
+        raise ValueError(f"{source}: the sweep has no episodes")
     return spec
+
+
+def spec_text(path: str | Path | None = None, fields: dict | None = None, space: dict | None = None) -> str:
+    """The TOML text of a sweep: the spec at ``path`` (or an empty one) with top-level
+    ``fields`` and ``[space]`` axes replaced by the given ones (command-line flags).
+
+    Unless ``fields`` names it, a changed sweep is named after its content (``smoke-1a2b3c4d``),
+    so that it does not share a results folder with the spec it came from. The text is what
+    the results folder keeps.
+    """
+    import tomli_w
+
+    if path is not None:
+        path = spec_path(path)
+        try:
+            raw = tomllib.loads(path.read_text())
+        except tomllib.TOMLDecodeError as err:
+            raise ValueError(f"{path}: not valid TOML: {err}") from None
+    else:
+        raw = {}
+    fields, space = fields or {}, space or {}
+    if not (fields or space):
+        return path.read_text() if path is not None else tomli_w.dumps(raw)
+    raw.update(fields)
+    if space:
+        raw["space"] = {**raw.get("space", {}), **space}
+    if "name" not in fields:
+        digest = hashlib.sha256(json.dumps(raw, sort_keys=True).encode()).hexdigest()[:8]
+        base = raw.get("name", path.stem if path is not None else "sweep")
+        raw = {**raw, "name": f"{base}-{digest}"}
+    return tomli_w.dumps(raw)

@@ -109,6 +109,39 @@ def test_bad_specs_are_refused_before_any_work(tmp_path, capsys, text, message):
     assert not (tmp_path / "out").exists()
 
 
+def test_flags_make_the_same_sweep_as_the_spec(uninterrupted, tmp_path, capsys):
+    _, summary, rows = uninterrupted
+    flags = ["--repeats", "2", "--seed", "3", "--attack", "patch", "none", "--estimator", "raw", "--rho", "1",
+             "--t-atk", "2", "--speed", "1.5", "--sign", "1"]
+    assert main(["sweep", *flags, "--out", str(tmp_path / "flags"), "--workers", "1", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    assert out["scr"] == summary["scr"]
+    flag_rows = ResultStore(tmp_path / "flags").rows()
+    key = ["trial_id", "success", "failure", "stop_distance_m"]
+    pd.testing.assert_frame_equal(flag_rows[key].sort_values("trial_id").reset_index(drop=True),
+                                  rows[key].sort_values("trial_id").reset_index(drop=True))
+    # The results folder keeps the sweep as TOML.
+    assert load_spec(next((tmp_path / "flags").glob("spec.toml"))).episodes() == load_spec(
+        _spec_file(tmp_path, TINY)).episodes()
+
+
+def test_bad_flags_are_refused_before_any_work(tmp_path, capsys):
+    assert main(["sweep", "--attack", "patch", "--rho", "1.5", "--out", str(tmp_path / "out")]) == 2
+    assert "rho must lie in [0.0, 1.0]" in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()
+    assert main(["sweep", "smoke.toml", "--mode", "random", "--out", str(tmp_path / "out")]) == 2
+    assert "n (the number of random draws)" in capsys.readouterr().err
+
+
+def test_flags_replace_a_specs_fields_under_a_new_name():
+    from experiments.sweeps.spec import parse_spec, spec_text
+
+    spec = parse_spec(spec_text("smoke.toml", {}, {"estimator": ["ekf"]}))
+    assert spec.name.startswith("smoke-") and spec.space["estimator"] == ["ekf"]
+    assert len(spec.episodes()) == 4
+    assert parse_spec(spec_text("smoke.toml", {"name": "mine", "seed": 5})).name == "mine"
+
+
 def test_shipped_specs_load_and_the_big_one_has_1000_paired_episodes():
     assert len(load_spec("smoke.toml").episodes()) == 8
     big = load_spec("strong-1000.toml").episodes()
