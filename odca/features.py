@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["FEATURE_NAMES", "MAX_RANGE_M", "sanitize", "features", "base_distance"]
+__all__ = ["FEATURE_NAMES", "MAX_RANGE_M", "sanitize", "usable_forecast", "features", "base_distance"]
 
 MAX_RANGE_M = 50.0
 FEATURE_NAMES = ("base_minus_mu", "sigma", "confidence", "depth_missing", "lidar_available",
@@ -27,6 +27,19 @@ def sanitize(depth, confidence, lidar, speed):
     c = np.clip(np.nan_to_num(np.asarray(confidence, float), nan=0.0, posinf=1.0, neginf=0.0), 0.0, 1.0)
     v = np.clip(np.nan_to_num(np.asarray(speed, float), nan=0.0, posinf=10.0, neginf=-10.0), -10.0, 10.0)
     return d, c, l, v
+
+
+def usable_forecast(mean, std):
+    """The prior's (mean, std) where they can describe a distance, NaN elsewhere.
+
+    A mean outside (0, ``MAX_RANGE_M``] or a std that is not finite is a forecast the prior
+    got wrong: the shipped tiny prior can blow up on a context unlike its training series
+    (a -15 m mean with a 25 m std was seen on a test drive). The head then treats the prior
+    as missing, as it does before the first context, and repairs from the LiDAR or the hold.
+    """
+    mean, std = np.asarray(mean, float), np.asarray(std, float)
+    ok = np.isfinite(mean) & (mean > 0) & (mean <= MAX_RANGE_M) & np.isfinite(std)
+    return np.where(ok, mean, np.nan), np.where(ok, std, np.nan)
 
 
 def base_distance(d, mu, l_al, hold):

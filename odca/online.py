@@ -20,7 +20,7 @@ import numpy as np
 import pandas as pd
 
 from odca.align import Alignment, fit_alignment
-from odca.features import base_distance, features, sanitize
+from odca.features import MAX_RANGE_M, base_distance, features, sanitize, usable_forecast
 from odca.gate import GateConfig, fuse, gate_weight
 from odca.head import HeadWeights
 from odca.prior import SHIPPED_PRIOR, Chronos2Prior, CheckpointError, TemporalPrior
@@ -165,7 +165,7 @@ class ODCA:
             raise ValueError(f"dt must be a positive finite number of seconds, got {dt}")
         k = self._t % self.config.refresh_steps
         if k == 0:
-            mean, std = self.prior.forecast(self._context[None], self.config.horizon)
+            mean, std = usable_forecast(*self.prior.forecast(self._context[None], self.config.horizon))
             self._mean, self._std = mean[0], std[0]
         d, c, l, v = sanitize(depth, confidence, lidar, speed)
         out = self._compute(d[None], c[None], l[None], v[None], self._mean[k:k + 1], self._std[k:k + 1],
@@ -205,7 +205,7 @@ class ODCA:
         padded = np.concatenate([np.full(cfg.context_length, np.nan), d])
         starts = np.arange(0, n, cfg.refresh_steps)
         windows = np.stack([padded[s:s + cfg.context_length] for s in starts]) if n else np.empty((0, cfg.context_length))
-        mean, std = self.prior.forecast(windows, cfg.horizon) if n else (windows, windows)
+        mean, std = usable_forecast(*self.prior.forecast(windows, cfg.horizon)) if n else (windows, windows)
         offset = np.arange(n) % cfg.refresh_steps
         mu, sigma = mean[np.arange(n) // cfg.refresh_steps, offset], std[np.arange(n) // cfg.refresh_steps, offset]
         d_prev = np.concatenate([[np.nan], d[:-1]])
@@ -230,9 +230,10 @@ class ODCA:
         r_xs = np.abs(d - l_al)  # NaN when either is missing -> w = 1
         w = gate_weight(r_xs, self.config.gate, d, c)
         d_fused = fuse(d, d_rep, w)
-        # Never NaN or inf out: an unusable repair falls back to the hold value.
-        d_fused = np.where(np.isfinite(d_fused), d_fused, hold)
-        d_rep = np.where(np.isfinite(d_rep), d_rep, hold)
+        # Never NaN or inf out: an unusable repair falls back to the hold value; and a distance
+        # is never negative nor beyond the sensors' range.
+        d_fused = np.clip(np.where(np.isfinite(d_fused), d_fused, hold), 0.0, MAX_RANGE_M)
+        d_rep = np.clip(np.where(np.isfinite(d_rep), d_rep, hold), 0.0, MAX_RANGE_M)
         r_post = np.abs(d_fused - l_al)
         n = len(d_fused)
         return (d_fused, w, d_rep, r_xs, np.abs(delta), r_post, np.broadcast_to(mu, n), np.broadcast_to(sigma, n))

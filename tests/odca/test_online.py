@@ -10,6 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from odca import ODCA, Alignment, CheckpointError, GateConfig, LastValuePrior, ODCAConfig
+from odca.features import MAX_RANGE_M
 from odca.head import head_parameters, make_head
 from odca.online import SHIPPED_HEAD
 
@@ -33,7 +34,34 @@ def test_no_nan_or_inf_out_for_any_input_sequence(rows):
     for depth, conf, lidar, speed in rows:
         out = m.step(depth=depth, confidence=conf, lidar=lidar, speed=speed)
         assert math.isfinite(out.d_fused) and math.isfinite(out.d_rep) and math.isfinite(out.r_delta)
+        assert 0.0 <= out.d_fused <= MAX_RANGE_M and 0.0 <= out.d_rep <= MAX_RANGE_M
         assert 0.0 <= out.w <= 1.0
+
+
+class _BlownUpPrior(LastValuePrior):
+    """Forecasts no distance can have (as the tiny prior did on one test drive)."""
+
+    def forecast(self, context, horizon):
+        mean, std = super().forecast(context, horizon)
+        return np.where(np.isfinite(mean), -15.0, mean), np.where(np.isfinite(std), 25.0, std)
+
+
+class _NoPrior(LastValuePrior):
+    def forecast(self, context, horizon):
+        mean, std = super().forecast(context, horizon)
+        return np.full_like(mean, np.nan), np.full_like(std, np.nan)
+
+
+def test_a_forecast_that_is_no_distance_counts_as_no_forecast():
+    shipped = _stub()
+    blown, none = (ODCA(shipped.config, shipped.head, prior) for prior in (_BlownUpPrior(), _NoPrior()))
+    frame = pd.DataFrame({"d_meas": [2.0 - 0.02 * t if t < 40 else np.nan for t in range(60)],
+                          "c_meas": [0.9 if t < 40 else 0.0 for t in range(60)],
+                          "lidar": [2.0 - 0.02 * t for t in range(60)], "speed": 1.0})
+    pd.testing.assert_frame_equal(blown.run(frame), none.run(frame))
+    # In the blackout the repair follows the LiDAR instead of the broken forecast.
+    repaired = blown.run(frame)["d_fused"].to_numpy()[40:]
+    assert np.abs(repaired - frame["lidar"].to_numpy()[40:]).max() < 0.3
 
 
 @settings(max_examples=60, deadline=None)
