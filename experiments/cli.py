@@ -313,8 +313,9 @@ def _sweep(args) -> int:
 
     try:
         text = spec_text(args.spec, fields, space)
-        spec = parse_spec(text, str(args.spec) if args.spec is not None and not (fields or space) else "flags",
-                          default_name=args.spec.stem if args.spec is not None else "sweep")
+        source = " with ".join(x for x in (str(args.spec) if args.spec is not None else "",
+                                           "flags" if fields or space else "") if x)
+        spec = parse_spec(text, source, default_name=args.spec.stem if args.spec is not None else "sweep")
         out = args.out or Path("outputs/sweeps") / spec.name
         summary = run_sweep(spec, text, out, backend=args.backend, workers=args.workers,
                             address=args.address, progress=not args.json)

@@ -212,6 +212,8 @@ def spec_text(path: str | Path | None = None, fields: dict | None = None, space:
     fields, space = fields or {}, space or {}
     if not (fields or space):
         return path.read_text() if path is not None else tomli_w.dumps(raw)
+    if not isinstance(raw.get("space", {}), dict):
+        raise ValueError(f"{path}: space must be a table ([space])")
     raw.update(fields)
     if space:
         raw["space"] = {**raw.get("space", {}), **space}
