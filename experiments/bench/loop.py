@@ -80,7 +80,8 @@ def _local_rates(specs, rounds: int = 2) -> tuple[dict[int, float], dict[int, fl
             t0 = time.perf_counter()
             pools[workers] = stack.enter_context(spawn_pool(workers))
             pids = list(pools[workers].map(_warm, [manager.Barrier(workers)] * workers))
-            assert len(set(pids)) == workers, "every worker must be warmed"
+            if len(set(pids)) != workers:
+                raise RuntimeError(f"warm-up reached {len(set(pids))} of {workers} workers")
             ready[workers] = time.perf_counter() - t0
         for _ in range(rounds):
             for workers in counts:
