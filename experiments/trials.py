@@ -11,12 +11,10 @@ process that has made a GL context must not fork renderers).
 from __future__ import annotations
 
 import json
-import math
 import os
 from concurrent.futures import as_completed
 from pathlib import Path
 
-import numpy as np
 import pandas as pd
 
 from experiments.episode import TABLE_SETTINGS, TrialSpec, parse_setting, run_trial

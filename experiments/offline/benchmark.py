@@ -22,7 +22,7 @@ import pandas as pd
 
 from experiments.data.dataset import SPLITS, QCarDataset, load_dataset
 from experiments.offline.forecasters import NF_MODELS, ChronosForecaster, NFSettings, train_nf, training_frame
-from experiments.offline.methods import (FORECASTERS, METHODS, SplitArrays, ekf_estimate, forecast_at,
+from experiments.offline.methods import (FORECASTERS, METHODS, ekf_estimate, forecast_at,
                                          lidar_estimate, raw_estimate, split_arrays)
 from experiments.offline.metrics import bounded_degradation, resilience_gain
 from experiments.offline.scoring import (bootstrap_rmse, diagnostic_scores, error_sources, horizon_scores,
