@@ -17,7 +17,10 @@ __all__ = ["DistanceEstimator", "RawDepthEstimator", "EKFEstimator"]
 
 @runtime_checkable
 class DistanceEstimator(Protocol):
-    """Causal distance source: one call per control step, in order."""
+    """Causal distance source: one call per control step, in order.
+
+    ``name`` is the estimator's key in the episode's registry (``raw``, ``ekf``, ...).
+    """
 
     name: str
 
@@ -27,17 +30,24 @@ class DistanceEstimator(Protocol):
     def estimate(self, sample: PerceptionSample, speed_mps: float, dt: float) -> float:
         """Camera-to-sign distance in metres for this step; NaN when there is none."""
 
+    def diagnostics(self) -> dict[str, float]:
+        """What the last ``estimate`` call leaves to log beside the distance, by column name
+        (ODCA: its gate ``w``); empty when the estimator has nothing to add."""
+
 
 class RawDepthEstimator:
     """d~ as perception measured it: no defence."""
 
-    name = "raw_depth"
+    name = "raw"
 
     def reset(self) -> None:
         pass
 
     def estimate(self, sample: PerceptionSample, speed_mps: float, dt: float) -> float:
         return sample.d_meas
+
+    def diagnostics(self) -> dict[str, float]:
+        return {}
 
 
 class EKFEstimator:
@@ -53,3 +63,6 @@ class EKFEstimator:
 
     def estimate(self, sample: PerceptionSample, speed_mps: float, dt: float) -> float:
         return self.filter.step(sample.d_meas, sample.c_meas, sample.lidar_m, speed_mps, dt)
+
+    def diagnostics(self) -> dict[str, float]:
+        return {}

@@ -15,8 +15,9 @@ that want throughput pass a larger ``batch_size``.
 
 from __future__ import annotations
 
+from contextlib import contextmanager
 from pathlib import Path
-from typing import Protocol, runtime_checkable
+from typing import Iterator, Protocol, runtime_checkable
 
 import numpy as np
 
@@ -78,7 +79,8 @@ class Chronos2Prior:
             raise CheckpointError(f"no Chronos-2 checkpoint at {path} (need config.json and model weights; "
                                   "`racf pretrain-prior` makes one)")
         try:
-            pipeline = Chronos2Pipeline.from_pretrained(str(checkpoint))
+            with _quiet_transformers():
+                pipeline = Chronos2Pipeline.from_pretrained(str(checkpoint))
         except Exception as err:  # transformers raises many kinds; the user needs one message
             raise CheckpointError(f"could not load the Chronos-2 checkpoint {checkpoint}: "
                                   f"{type(err).__name__}: {err}") from None
@@ -149,6 +151,24 @@ class Chronos2Prior:
         empty = ~np.isfinite(ctx).any(axis=1)
         mean[empty], std[empty] = np.nan, np.nan
         return mean, std
+
+
+@contextmanager
+def _quiet_transformers() -> Iterator[None]:
+    """Loads without transformers' info and warnings (``loss_type=None ...``) or its "Loading
+    weights" bar, which every worker of a sweep would print around the sweep's own bar; errors
+    still show. The library's settings are restored after."""
+    from transformers.utils import logging as hf_logging
+
+    verbosity, bar = hf_logging.get_verbosity(), hf_logging.is_progress_bar_enabled()
+    hf_logging.set_verbosity_error()
+    hf_logging.disable_progress_bar()
+    try:
+        yield
+    finally:
+        hf_logging.set_verbosity(verbosity)
+        if bar:
+            hf_logging.enable_progress_bar()
 
 
 def _check_context(context: np.ndarray) -> np.ndarray:

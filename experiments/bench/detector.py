@@ -26,8 +26,8 @@ import numpy as np
 
 import sim
 from controllers import StopSignDetector
-from experiments.closed_loop import all_sign_masks, route_follower
-from experiments.stats import wilson_interval
+from experiments.episode.car import route_follower
+from experiments.sweeps.summary import wilson_interval
 
 __all__ = ["DetectorBenchResult", "bench_detector", "occlude"]
 
@@ -51,6 +51,17 @@ class DetectorBenchResult:
 
     def to_dict(self) -> dict:
         return asdict(self)
+
+
+def all_sign_masks(env: gym.Env) -> list[np.ndarray]:
+    """Ground-truth face masks of all four stop signs in the current frame (evaluation only)."""
+    from sim.env.ground_truth import sign_view
+    from sim.world.stop_signs import stop_signs
+
+    u = env.unwrapped
+    cam_pos, cam_mat = u.car.camera_pose(u.model, u.data)
+    _, clean_depth = u.rig.render(u.model, u.data)
+    return [sign_view(s, cam_pos, cam_mat, u.rig.intrinsics, clean_depth).mask for s in stop_signs()]
 
 
 def occlude(rgb: np.ndarray, box: tuple[int, int, int, int], share: float, side: str,

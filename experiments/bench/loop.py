@@ -69,7 +69,7 @@ def _local_rates(specs, rounds: int = 2) -> tuple[dict[int, float], dict[int, fl
     from contextlib import ExitStack
 
     from experiments.sweeps.executors import run_episode
-    from experiments.workers import spawn_pool
+    from experiments.sweeps.executors import spawn_pool
 
     counts = (1, 2)
     elapsed, ready = dict.fromkeys(counts, 0.0), {}
@@ -101,7 +101,7 @@ def _ray_rate(workers: int, specs) -> tuple[float, float]:
         # Tasks that outlast a worker's start-up each get their own worker; Ray keeps them.
         ray.get([ray.remote(num_cpus=1)(_warm).remote() for _ in range(workers)])
         t1 = time.perf_counter()
-        for _ in ray_executor(specs, out, workers, False):
+        for _ in ray_executor(specs, out, workers):
             pass
         t2 = time.perf_counter()
     return len(specs) / (t2 - t1) * 60.0, t1 - t0
@@ -111,7 +111,7 @@ def bench_loop(n_rtf: int = 8, n_rate: int = 24, seed: int = 0, ray: bool = True
     """Measures everything above; ``n_rtf`` episodes per RTF setting, ``n_rate`` per rate."""
     from tqdm import tqdm
 
-    from experiments.workers import single_thread
+    from experiments.sweeps.executors import single_thread
 
     single_thread()  # one core: torch, OpenMP and the software rasteriser on one thread
     steps = ["rtf clean", "rtf attack+odca", "1 worker", "2 workers"] + (["ray"] if ray else [])

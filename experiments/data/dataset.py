@@ -30,7 +30,8 @@ import pandas as pd
 from experiments.data.corruption import corrupt_series, series_seed
 from experiments.episode import DRIVE_S, TrialSpec
 from experiments.episode.runner import SCAN_FOV_HALF_BEAMS
-from experiments.trials import SPEEDS_MPS, run_batch
+from experiments.sweeps.batches import SPEEDS_MPS, TRIALS_LOGS, run_batch
+from experiments.sweeps.store import atomic_write
 
 __all__ = ["COLUMNS", "DEFAULT_DRIVES", "SPLITS", "collection_specs", "collect", "summarize_dataset",
            "reference_quality", "load_dataset", "QCarDataset", "SPLIT_SHARES", "make_split",
@@ -86,24 +87,29 @@ def collection_specs(drives: int = DEFAULT_DRIVES, seed: int = 0, speeds: tuple[
 
 
 def collect(out_dir: Path, drives: int = DEFAULT_DRIVES, seed: int = 0, workers: int = 2, progress: bool = True,
-            speeds: tuple[float, ...] = SPEEDS_MPS, duration_s: tuple[float, float] = DRIVE_S) -> Path:
-    """Records (or resumes) the collection and writes the dataset files; returns ``dataset.parquet``."""
+            speeds: tuple[float, ...] = SPEEDS_MPS, duration_s: tuple[float, float] = DRIVE_S, backend: str = "local",
+            address: str | None = None) -> Path:
+    """Records (or resumes) the collection on ``backend`` and writes the dataset files; returns ``dataset.parquet``.
+
+    The drives run on the one batch path (``experiments.sweeps``); their per-step logs stay in
+    ``<out_dir>/_runs/trials/``, so an interrupted collection resumes where it stopped.
+    """
     out_dir = Path(out_dir)
     specs = collection_specs(drives, seed, speeds, duration_s)
-    run_batch(specs, out_dir / "_runs", workers=workers, progress=progress)
+    runs = out_dir / "_runs"
+    run_batch(specs, runs, workers=workers, progress=progress, backend=backend, address=address, desc="drives")
     frames = []
     for spec in specs:
-        log = pd.read_parquet(out_dir / "_runs" / "trials" / f"{spec.trial_id}.parquet")
+        log = pd.read_parquet(runs / TRIALS_LOGS / f"{spec.trial_id}.parquet")
         log = log.drop(columns=["speed"]).rename(columns=_RENAME)  # speed: the measured one
         log["series_id"] = spec.trial_id
         log["speed_set"] = spec.speed
         log["scan_fov_mm"] = [_scan_mm(r) for r in log["scan_fov"]]
         frames.append(log[list(COLUMNS)])
     data = pd.concat(frames, ignore_index=True)
-    path = out_dir / "dataset.parquet"
-    data.to_parquet(path, index=False)
+    path = atomic_write(out_dir / "dataset.parquet", data)
     splits = make_splits(data, seed)
-    (out_dir / "split.json").write_text(json.dumps({"seed": seed, "shares": SPLIT_SHARES, **splits}, indent=1))
+    atomic_write(out_dir / "split.json", json.dumps({"seed": seed, "shares": SPLIT_SHARES, **splits}, indent=1))
     summary = summarize_dataset(data, splits)
     _write_card(out_dir / "dataset_card.md", summary, drives, seed)
     plot_series(data, out_dir / "series.png")
@@ -326,6 +332,12 @@ class QCarDataset:
         if split is None:
             return self.frame
         return self.frame[self.frame["series_id"].isin(self.series_ids(split))].reset_index(drop=True)
+
+    def series(self, column: str = "d_clean", split: str | None = None) -> list[np.ndarray]:
+        """One float32 array of ``column`` per series (all, or one split's), in order."""
+        if column not in self.frame.columns:
+            raise ValueError(f"column must be one of {list(self.frame.columns)}, got {column!r}")
+        return [g[column].to_numpy(np.float32) for _, g in self.clean(split).groupby("series_id", sort=False)]
 
     def corrupted(self, preset: str, split: str | None = None, base_seed: int = 0) -> pd.DataFrame:
         """Clean series plus the preset's corruption: ``d_meas``, ``c_meas``, ``label`` (0/1), ``kind``.

@@ -1,4 +1,4 @@
-"""The distance estimators a closed-loop episode can run, by name.
+"""The distance estimators a closed-loop episode can run, found by name in ``ESTIMATORS``.
 
 Each is causal and sees, per 50 Hz step, the live depth distance and its confidence, the
 LiDAR reference and the car's speed (the ``DistanceEstimator`` protocol):
@@ -17,15 +17,13 @@ from __future__ import annotations
 
 import math
 from functools import lru_cache
+from typing import Callable
 
 import numpy as np
 
-from controllers import EKFEstimator, PerceptionSample, RawDepthEstimator
+from controllers import DistanceEstimator, EKFEstimator, PerceptionSample, RawDepthEstimator
 
 __all__ = ["ESTIMATORS", "make_estimator", "ODCAEstimator", "ChronosEstimator"]
-
-#: The names ``make_estimator`` knows.
-ESTIMATORS = ("raw", "odca", "ekf", "chronos")
 
 
 @lru_cache(maxsize=None)
@@ -36,7 +34,8 @@ def _odca(checkpoint: str | None):
 
 
 class ODCAEstimator:
-    """ODCA's fused distance, d_fused; ``last`` holds the step's full output (gate w, residuals)."""
+    """ODCA's fused distance, d_fused; ``last`` holds the step's full output (gate w, residuals)
+    and ``diagnostics()`` logs the gate."""
 
     name = "odca"
 
@@ -52,6 +51,9 @@ class ODCAEstimator:
         self.last = self.model.step(depth=sample.d_meas, confidence=sample.c_meas, lidar=sample.lidar_m,
                                     speed=speed_mps, dt=dt)
         return self.last.d_fused
+
+    def diagnostics(self) -> dict[str, float]:
+        return {"w": self.last.w} if self.last is not None else {}
 
 
 class ChronosEstimator:
@@ -82,15 +84,17 @@ class ChronosEstimator:
         self._t += 1
         return float(self._mean[k])
 
+    def diagnostics(self) -> dict[str, float]:
+        return {}
 
-def make_estimator(name: str):
-    """A fresh estimator by name (one of ``ESTIMATORS``)."""
-    if name == "raw":
-        return RawDepthEstimator()
-    if name == "odca":
-        return ODCAEstimator()
-    if name == "ekf":
-        return EKFEstimator()
-    if name == "chronos":
-        return ChronosEstimator()
-    raise ValueError(f"estimator must be one of {ESTIMATORS}, got {name!r}")
+
+#: Every estimator by name (each one's ``name``): a new one is a class and a line here.
+ESTIMATORS: dict[str, Callable[[], DistanceEstimator]] = {cls.name: cls for cls in (
+    RawDepthEstimator, ODCAEstimator, EKFEstimator, ChronosEstimator)}
+
+
+def make_estimator(name: str) -> DistanceEstimator:
+    """A fresh estimator by name (a key of ``ESTIMATORS``)."""
+    if name not in ESTIMATORS:
+        raise ValueError(f"estimator must be one of {tuple(ESTIMATORS)}, got {name!r}")
+    return ESTIMATORS[name]()

@@ -24,7 +24,7 @@ import numpy as np
 import pandas as pd
 
 from controllers import Phase
-from experiments.closed_loop import camera_model, map_bearing, route_follower
+from experiments.episode.car import camera_model, map_bearing, route_follower
 from experiments.episode.scoring import score_log
 from experiments.episode.spec import TrialSpec
 from experiments.episode.stack import Stack, default_env
@@ -175,14 +175,13 @@ def _run(env: gym.Env, spec: TrialSpec, stack: Stack, on_step: StepHook | None, 
             action = np.array(follower.act(x, y, yaw, speed, dt * every, decision.speed_cap_mps), np.float32)
         pending.append(action)
         applied = pending.popleft() if len(pending) > delay_steps else pending[0]
-        fused = getattr(estimator, "last", None)
         track = perception.lidar.state.position  # camera-relative; + the camera's body position
         cam_xy = perception.lidar.config.camera_position_m
         rows.append({
             "t": info["time"], "slot": slot, "target": targets[slot].name, "control": control,
             "d_true": info["d_true"], "d_clean": d_clean, "d_meas": sample.d_meas,
             "c_meas": sample.c_meas, "lidar": sample.lidar_m, "d_fused": d_fused,
-            "w": fused.w if fused is not None else math.nan, "detected": sample.detected,
+            "w": math.nan, **estimator.diagnostics(), "detected": sample.detected,
             "det_confidence": sample.detection_confidence, "bearing": sample.bearing_rad,
             **dict(zip(("det_x0", "det_y0", "det_x1", "det_y1"),
                        sample.detection.box if sample.detection is not None else (-1, -1, -1, -1))),
@@ -214,7 +213,7 @@ def _result(spec: TrialSpec, env: gym.Env, log: pd.DataFrame) -> TrialResult:
     outcomes = score_log(log)
     first = outcomes[0]
     patch = _find_wrapper(env, PatchAttack)
-    windows = patch.schedule.windows if patch is not None else []
+    windows = _first_attack_windows(env)
     lost = int((log["attack_active"] & log["sign_in_view"] & ~log["detected"]).sum())
     n_targets = len(env.unwrapped.route_targets)
     served = sum(o.success for o in outcomes)
@@ -225,6 +224,18 @@ def _result(spec: TrialSpec, env: gym.Env, log: pd.DataFrame) -> TrialResult:
         bool(served == n_targets), not math.isnan(first.rest_distance_m), first.rest_distance_m,
         first.t_star_s, first.t_brake_s, first.trigger_delay_s, first.dt_brake_s, first.failure,
         float(log["t"].iloc[-1]), n_targets, served)
+
+
+def _first_attack_windows(env: gym.Env) -> list[tuple[float, float]]:
+    """The attack windows (start, end s) of the attack that began first (the patch on a tie)."""
+    attacks = []
+    while isinstance(env, gym.Wrapper):
+        if isinstance(env, AttackWrapper) and env.schedule.windows:
+            attacks.append(env)
+        env = env.env
+    if not attacks:
+        return []
+    return min(attacks, key=lambda a: (a.schedule.windows[0][0], not isinstance(a, PatchAttack))).schedule.windows
 
 
 def _find_wrapper(env: gym.Env, kind: type) -> gym.Env | None:

@@ -18,18 +18,18 @@ from __future__ import annotations
 import hashlib
 import json
 from dataclasses import asdict, dataclass, field
-from functools import lru_cache
-from pathlib import Path
 
 import numpy as np
 
 from controllers import BrakingConfig
 from experiments.episode.estimators import ESTIMATORS
+from experiments.sweeps.store import code_version
+from sim.attacks import ATTACKS
 from sim.attacks.schedule import as_range
 from sim.world.drives import DriveSpec, draw_drive
 
 __all__ = ["TrialSpec", "parse_setting", "setting_name", "code_version", "TARGETS", "DRIVE_S", "STRONG_RHO",
-           "STRONG_T_ATK_S", "EXTRA_ATTACKS", "TABLE_SETTINGS", "LIDAR_SPOOF_RANGE_M"]
+           "STRONG_T_ATK_S", "EXTRA_ATTACKS", "TABLE_SETTINGS"]
 
 #: What a trial approaches (``TrialSpec.sign`` is the index): the four stop signs or the two
 #: crates; or a ``drive`` (index 0), a random route drawn from the seed that meets >= 2 targets.
@@ -39,11 +39,10 @@ DRIVE_S = (20.0, 60.0)
 #: The protocol's strong regime.
 STRONG_RHO = (0.9, 1.0)
 STRONG_T_ATK_S = (0.5, 3.0)
-#: Attacks that may join (or replace) the patch in a setting: LiDAR faults (ODCA's gate trusts
-#: the LiDAR) and the depth camera's own faults, each on the protocol's schedule.
-EXTRA_ATTACKS = ("lidar_spoof", "lidar_dropout", "depth_blackout", "depth_bias", "confidence_degradation")
-#: The fake range of the LiDAR spoof, m: far enough that the repair would not brake in time.
-LIDAR_SPOOF_RANGE_M = (2.5, 3.5)
+#: Attacks that may join (or replace) the patch in a setting (every registered attack but the
+#: patch, in the registry's order): LiDAR faults (ODCA's gate trusts the LiDAR) and the depth
+#: camera's own faults, each on the protocol's schedule.
+EXTRA_ATTACKS = tuple(name for name in ATTACKS if name != "patch")
 #: The env's step rate, Hz (attack timing is counted in its steps).
 ENV_HZ = 50.0
 #: The paper's closed-loop table, plus the LiDAR spoof under ODCA.
@@ -64,7 +63,7 @@ def parse_setting(setting: str) -> tuple[tuple[str, ...], str]:
     unknown = [r for r in rest if r not in EXTRA_ATTACKS]
     if unknown:
         raise ValueError(f"unknown part(s) {unknown} of setting {setting!r}: after 'clean'/'attack' come extra "
-                         f"attacks {EXTRA_ATTACKS}, then an estimator {ESTIMATORS}")
+                         f"attacks {EXTRA_ATTACKS}, then an estimator {tuple(ESTIMATORS)}")
     attacks = (("patch",) if base == "attack" else ()) + tuple(rest)
     return attacks, estimator
 
@@ -74,9 +73,9 @@ def setting_name(attacks: tuple[str, ...] | list[str], estimator: str = "raw") -
     attacks = tuple(attacks)
     unknown = [a for a in attacks if a != "patch" and a not in EXTRA_ATTACKS]
     if unknown:
-        raise ValueError(f"unknown attack(s) {unknown}; choose from {('patch',) + EXTRA_ATTACKS}")
+        raise ValueError(f"unknown attack(s) {unknown}; choose from {tuple(ATTACKS)}")
     if estimator not in ESTIMATORS:
-        raise ValueError(f"estimator must be one of {ESTIMATORS}, got {estimator!r}")
+        raise ValueError(f"estimator must be one of {tuple(ESTIMATORS)}, got {estimator!r}")
     parts = ["attack" if "patch" in attacks else "clean"] + [a for a in EXTRA_ATTACKS if a in attacks]
     name = "+".join(parts + ([estimator] if estimator != "raw" else []))
     parse_setting(name)
@@ -169,26 +168,11 @@ class TrialSpec:
         """Readable prefix + a hash of the spec, its configs and the code version."""
         from sim.env.config import EnvConfig
 
-        payload = {"spec": self.to_dict(), "env": asdict(EnvConfig()), "code": code_version()}
+        payload = {"spec": self.to_dict(), "env": asdict(EnvConfig()), "code": code_version(*EPISODE_CODE)}
         digest = hashlib.sha256(json.dumps(payload, sort_keys=True, default=str).encode()).hexdigest()[:12]
         return f"{self.setting}_{self.target}{self.sign}_v{self.speed:.2f}_seed{self.seed}_{digest}"
 
 
 #: What "the code" of an episode is: the source that runs it and the assets (map, shipped
 #: checkpoints). Summaries, tables and the CLI are left out: changing them changes no episode.
-_CODE_ROOTS = ("sim", "controllers", "odca", "experiments/episode", "experiments/closed_loop.py", "assets")
-_CODE_SUFFIXES = (".py", ".xml", ".json", ".npz", ".safetensors", ".png", ".bin")
-
-
-@lru_cache(maxsize=1)
-def code_version() -> str:
-    """A hash of the source and assets that produce results (changes with any edit, committed or not)."""
-    root = Path(__file__).resolve().parents[2]
-    h = hashlib.sha256()
-    for top in _CODE_ROOTS:
-        paths = [root / top] if (root / top).is_file() else sorted((root / top).rglob("*"))
-        for path in paths:
-            if path.is_file() and path.suffix in _CODE_SUFFIXES and "__pycache__" not in path.parts:
-                h.update(str(path.relative_to(root)).encode())
-                h.update(path.read_bytes())
-    return h.hexdigest()[:16]
+EPISODE_CODE = ("sim", "controllers", "odca", "experiments/episode", "assets")

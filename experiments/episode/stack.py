@@ -7,11 +7,10 @@ import gymnasium as gym
 
 import sim
 from controllers import ObstacleDetector, Perception, StopSignBraker
-from experiments.closed_loop import camera_model, sign_depth_at_line
+from experiments.episode.car import camera_model, sign_depth_at_line
 from experiments.episode.estimators import make_estimator
-from experiments.episode.spec import LIDAR_SPOOF_RANGE_M, TrialSpec
-from sim.attacks import (ConfidenceDegradation, DepthBias, DepthBlackout, LidarDropout, LidarSpoof,
-                         PatchAttack)
+from experiments.episode.spec import TrialSpec
+from sim.attacks import ATTACKS
 from sim.world.drives import RouteTarget
 
 __all__ = ["default_env", "plain_env", "Stack", "DRIVE_MAX_EPISODE_S"]
@@ -42,25 +41,16 @@ def plain_env(**env_kwargs) -> gym.Env:
 
 def default_env(spec: TrialSpec, **env_kwargs) -> gym.Env:
     """The env of a spec: the process's plain env (:func:`plain_env`) wrapped in the spec's
-    attacks, all on the protocol's schedule (after a stable detection, inside the braking
-    window; each draws its own duration)."""
+    attacks (found in ``sim.attacks.ATTACKS``), all on the protocol's schedule (after a stable
+    detection, inside the braking window; each draws its own duration). An attack's
+    ``episode_params`` come from the spec's fields of those names (the patch's ``rho``)."""
     if spec.target == "drive":
         env_kwargs.setdefault("max_episode_s", DRIVE_MAX_EPISODE_S)
     env = plain_env(**env_kwargs)
     schedule = {"duration_s": spec.t_atk, "stable_steps": spec.attack_stable_steps}
-    for attack in spec.attacks:
-        if attack == "patch":
-            env = PatchAttack(env, rho=spec.rho, **schedule)
-        elif attack == "lidar_spoof":
-            env = LidarSpoof(env, range_m=LIDAR_SPOOF_RANGE_M, **schedule)
-        elif attack == "lidar_dropout":
-            env = LidarDropout(env, **schedule)
-        elif attack == "depth_blackout":
-            env = DepthBlackout(env, **schedule)
-        elif attack == "depth_bias":  # the sign looks farther: the stealthy case for a braker
-            env = DepthBias(env, **schedule)
-        elif attack == "confidence_degradation":
-            env = ConfidenceDegradation(env, **schedule)
+    for name in spec.attacks:
+        attack = ATTACKS[name]
+        env = attack(env, **schedule, **{param: getattr(spec, param) for param in attack.episode_params})
     return env
 
 

@@ -25,13 +25,13 @@ from experiments.offline.forecasters import NF_MODELS, ChronosForecaster, NFSett
 from experiments.offline.methods import (FORECASTERS, METHODS, ekf_estimate, forecast_at,
                                          lidar_estimate, raw_estimate, split_arrays)
 from experiments.offline.metrics import bounded_degradation, resilience_gain
+from experiments.sweeps.store import code_version
 from experiments.offline.scoring import (bootstrap_rmse, diagnostic_scores, error_sources, horizon_scores,
                                          recovery_scores)
 
 __all__ = ["BenchConfig", "ABLATION", "load_splits", "run_benchmark", "PRESETS"]
 
 PRESETS = ("weak", "mid", "strong")
-_ROOT = Path(__file__).resolve().parents[2]
 
 
 def _ablation_rows() -> dict[str, dict[str, float]]:
@@ -98,6 +98,18 @@ class BenchConfig:
         base = dict(odca_epochs=40, nf=NFSettings(max_steps=15), bootstrap=100, quick=True)
         return cls(**{**base, **overrides})
 
+    @classmethod
+    def from_options(cls, quick: bool = False, max_steps: int | None = None, epochs: int | None = None,
+                     **fields) -> "BenchConfig":
+        """The full (or ``quick``) configuration with the command line's overrides: the
+        neuralforecast baselines' optimiser steps and ODCA's epochs, where given."""
+        cfg = cls.quick_config(**fields) if quick else cls(**fields)
+        if max_steps is not None:
+            cfg = replace(cfg, nf=replace(cfg.nf, max_steps=max_steps))
+        if epochs is not None:
+            cfg = replace(cfg, odca_epochs=epochs)
+        return cfg
+
     @property
     def cache_dir(self) -> Path:
         return Path(self.cache) if self.cache is not None else Path(self.out) / "cache"
@@ -117,15 +129,6 @@ def _quick(ds: QCarDataset) -> QCarDataset:
     return QCarDataset(ds.frame[keep].reset_index(drop=True), split, ds.path, ds.scheme, ds.splits)
 
 
-def _source_version(*folders: str) -> str:
-    digest = hashlib.sha256()
-    for folder in folders:
-        for path in sorted((_ROOT / folder).glob("*.py")):
-            digest.update(path.name.encode())
-            digest.update(path.read_bytes())
-    return digest.hexdigest()[:12]
-
-
 #: The dataset columns a method or a training reads (the hash of a split covers these).
 _USED = ["series_id", "t", "d_clean", "c_clean", "d_true", "lidar", "speed"]
 
@@ -141,26 +144,16 @@ def _frame_hash(*frames: pd.DataFrame) -> str:
 _PREPARED: dict = {}
 
 
-def _prior_version() -> str:
-    """The shipped prior's weights and config (a retrained prior invalidates heads trained on its features)."""
-    from odca.prior import SHIPPED_PRIOR
-
-    digest = hashlib.sha256()
-    for path in sorted(SHIPPED_PRIOR.glob("*")):
-        digest.update(path.name.encode())
-        digest.update(path.read_bytes())
-    return digest.hexdigest()[:12]
-
-
 def _trained_odca(ds: QCarDataset, prior, cfg: BenchConfig, weights: dict, tag: str):
     """ODCA trained on the split's train series with these loss weights; cached by what made it."""
     from odca import ODCA
     from odca.losses import LossWeights
+    from odca.prior import SHIPPED_PRIOR
     from odca.train import fit, initial_model, prepare_split
 
     key = hashlib.sha256(json.dumps({"data": _frame_hash(ds.clean("train"), ds.clean("val")), "weights": weights,
-                                     "epochs": cfg.odca_epochs, "seed": cfg.seed, "code": _source_version("odca"),
-                                     "prior": _prior_version()},
+                                     "epochs": cfg.odca_epochs, "seed": cfg.seed, "code": code_version("odca"),
+                                     "prior": code_version(str(SHIPPED_PRIOR))},
                                     sort_keys=True).encode()).hexdigest()[:16]
     folder = cfg.cache_dir / f"odca-{tag}-{key}"
     if (folder / "report.json").exists():
@@ -239,7 +232,7 @@ def run_benchmark(cfg: BenchConfig, progress: bool = True, datasets: dict[str, Q
     """Runs the benchmark and returns the results object (also written by :func:`report.write_report`)."""
     from tqdm import tqdm
 
-    from odca.prior import Chronos2Prior
+    from odca.prior import SHIPPED_PRIOR, Chronos2Prior
     from odca.train import pass_through
 
     t0 = time.perf_counter()
@@ -296,7 +289,7 @@ def run_benchmark(cfg: BenchConfig, progress: bool = True, datasets: dict[str, Q
     results["ablation"] = ablation
     frames = [datasets[s].frame for s in cfg.splits[:1]]
     results["dataset"] = {"path": str(cfg.data), "quick": cfg.quick, "sha": _frame_hash(*frames),
-                          "code": _source_version("odca", "experiments/offline"), "prior": _prior_version()}
+                          "code": code_version("odca", "experiments/offline"), "prior": code_version(str(SHIPPED_PRIOR))}
     results["wall_s"] = time.perf_counter() - t0
     results["_traces"] = traces  # for the figures; not written to results.json
     return results

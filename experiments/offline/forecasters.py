@@ -28,6 +28,7 @@ import numpy as np
 import pandas as pd
 
 from experiments.offline.metrics import hold_last
+from experiments.sweeps.store import atomic_write, code_version
 
 __all__ = ["NF_MODELS", "NFSettings", "context_windows", "train_nf", "NFForecaster", "ChronosForecaster",
            "training_frame"]
@@ -161,13 +162,9 @@ def _cache_key(name: str, settings: NFSettings, train: pd.DataFrame) -> str:
 
     digest = hashlib.sha256()
     digest.update(json.dumps({"model": name, "settings": asdict(settings), "nf": neuralforecast.__version__,
-                              "torch": torch.__version__, "code": _code_version()}, sort_keys=True).encode())
+                              "torch": torch.__version__, "code": code_version("experiments/offline/forecasters.py")}, sort_keys=True).encode())
     digest.update(pd.util.hash_pandas_object(train, index=False).to_numpy().tobytes())
     return digest.hexdigest()[:16]
-
-
-def _code_version() -> str:
-    return hashlib.sha256(Path(__file__).read_bytes()).hexdigest()[:12]
 
 
 def train_nf(name: str, train: pd.DataFrame, settings: NFSettings, cache_dir: Path | None = None) -> "NFForecaster":
@@ -195,9 +192,8 @@ def train_nf(name: str, train: pd.DataFrame, settings: NFSettings, cache_dir: Pa
     train_s = time.perf_counter() - t0
     if cached is not None:
         cached.parent.mkdir(parents=True, exist_ok=True)
-        tmp = cached.with_suffix(".tmp")
-        torch.save(model.state_dict(), tmp)
-        tmp.replace(cached)
+        state = model.state_dict()
+        atomic_write(cached, lambda path: torch.save(state, path))
     return NFForecaster(name, model.eval(), settings, key, train_s=train_s)
 
 

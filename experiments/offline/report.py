@@ -9,6 +9,7 @@ from pathlib import Path
 import pandas as pd
 
 from experiments.offline.methods import FORECASTERS, METHODS
+from experiments.sweeps.store import atomic_write
 
 __all__ = ["write_report", "main_table", "strict", "PAPER_RECOVERY"]
 
@@ -179,7 +180,7 @@ def write_report(results: dict, out: Path) -> dict[str, Path]:
     traces = results.get("_traces", {})
     clean = strict({k: v for k, v in results.items() if k != "_traces"})
     paths = {"results": out / "results.json"}
-    _atomic(paths["results"], json.dumps(clean, indent=1, allow_nan=False))
+    atomic_write(paths["results"], json.dumps(clean, indent=1, allow_nan=False))
     tables = {"recovery": main_table(results), "recovery_moving": main_table(results, block="_moving"),
               "recovery_true": main_table(results, reference="_true"),
               "recovery_true_moving": main_table(results, reference="_true", block="_moving"),
@@ -189,7 +190,7 @@ def write_report(results: dict, out: Path) -> dict[str, Path]:
               "complexity": complexity_table(results)}
     for name, text in tables.items():
         paths[f"table_{name}"] = out / "tables" / f"{name}.md"
-        _atomic(paths[f"table_{name}"], text)
+        atomic_write(paths[f"table_{name}"], text)
     recovery_frame(results).to_csv(out / "tables" / "recovery.csv", index=False)
     diagnostics_frame(results).to_csv(out / "tables" / "diagnostics.csv", index=False)
     pd.DataFrame(results.get("ablation") or []).drop(columns=["loss_weights", "gate"], errors="ignore").to_csv(
@@ -209,11 +210,5 @@ def write_report(results: dict, out: Path) -> dict[str, Path]:
                f"Clean input (no corruption): ODCA's RMSE against its input "
                f"{_f(clean['clean']['odca_rmse_vs_input'], 4)} m.", ""]
     paths["summary"] = out / "README.md"
-    _atomic(paths["summary"], "\n".join(summary))
+    atomic_write(paths["summary"], "\n".join(summary))
     return paths
-
-
-def _atomic(path: Path, text: str) -> None:
-    tmp = path.with_suffix(path.suffix + ".tmp")
-    tmp.write_text(text)
-    tmp.replace(path)

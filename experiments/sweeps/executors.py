@@ -1,68 +1,117 @@
-"""Where a sweep's episodes run: a local pool of spawned processes, or Ray.
+"""Where episodes run: in this process, a local pool of spawned processes, or Ray.
 
-Both call :func:`run_episode` in the worker, which writes the episode's part itself, so a
-finished episode is stored even if the driver dies. Workers are spawned, never forked (a
-process that has made a GL context must not fork renderers), and Ray workers get
-``MUJOCO_GL`` through their runtime env.
+Every executor calls :func:`run_episode` in the worker, which writes the episode's part
+itself, so a finished episode is stored even if the driver dies.
+
+Workers are spawned, never forked: a process that has made a GL context must not fork
+renderers. Each worker runs one episode at a time on one core: torch and OpenMP on one
+thread, and Mesa's software rasteriser (llvmpipe) on the calling thread
+(``LP_NUM_THREADS=0``; with one rasteriser thread, handing it each frame made a frame about
+20 % slower). Left at their defaults, every worker would start as many threads as the
+machine has cores, and two workers on two cores ran slower together than one alone
+(``racf bench-loop`` measured 0.25 scaling efficiency). Ray workers get ``MUJOCO_GL`` and the
+same settings through their runtime env.
 """
 
 from __future__ import annotations
 
+import math
+import multiprocessing as mp
 import os
-from concurrent.futures import as_completed
-from contextlib import contextmanager
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from contextlib import contextmanager, nullcontext
 from typing import Callable, Iterator
 
 from experiments.episode import TrialSpec
-from experiments.workers import SINGLE_THREAD_ENV, spawn_pool
 
-__all__ = ["run_episode", "local_executor", "ray_executor", "ray_session", "BACKENDS"]
+__all__ = ["BACKENDS", "SINGLE_THREAD_ENV", "single_thread", "spawn_pool", "run_episode", "local_executor",
+           "ray_executor", "ray_session", "backend_session", "executor"]
 
+#: Where episodes can run.
 BACKENDS = ("local", "ray")
+#: Environment variables that keep a worker's libraries on one thread (read when they start).
+SINGLE_THREAD_ENV = {"OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "LP_NUM_THREADS": "0"}
 
 
-def run_episode(spec: TrialSpec, out: str, log_steps: bool = False) -> dict:
-    """Runs one episode and stores it; returns its row."""
-    import math
+def single_thread() -> None:
+    """Pins this process's numeric and rendering libraries to one thread (call before rendering)."""
+    os.environ.update(SINGLE_THREAD_ENV)
+    import torch
 
+    torch.set_num_threads(1)
+
+
+def spawn_pool(workers: int) -> ProcessPoolExecutor:
+    """A pool of ``workers`` spawned, single-threaded processes."""
+    return ProcessPoolExecutor(max_workers=workers, mp_context=mp.get_context("spawn"), initializer=single_thread)
+
+
+def run_episode(spec: TrialSpec, out: str, log_steps: bool = False, logs_dir: str = "logs",
+                rerun: bool = False) -> dict:
+    """Runs one episode and stores it in the :class:`ResultStore` at ``out``; returns its row.
+
+    Args:
+        spec: the episode.
+        out: the store's folder.
+        log_steps: also keep the per-step log (and run the ``d_clean`` diagnostic pass it
+            carries; the row is the same without it).
+        logs_dir: the store's log folder.
+        rerun: also record the episode to ``<logs_dir>/<id>.rrd`` (implies ``log_steps``).
+    """
     from experiments.episode import run_trial
     from experiments.sweeps.store import ResultStore
 
-    # The d_clean diagnostic pass is for per-step logs; the row is the same without it.
-    result, log = run_trial(spec, clean_pass=log_steps)
+    store = ResultStore(out, logs_dir)
+    recorder = None
+    if rerun:
+        from experiments.viz.rerun_log import FrameRecorder
+
+        recorder, log_steps = FrameRecorder(), True
+    result, log = run_trial(spec, on_step=recorder, clean_pass=log_steps)
+    if recorder is not None:
+        from experiments.viz.rerun_log import write_rrd
+
+        store.logs.mkdir(parents=True, exist_ok=True)
+        write_rrd(store.log_path(spec.trial_id, ".rrd"), log, recorder, title=f"racf trial {spec.trial_id}")
     row = {**result.to_dict(), "attack": "+".join(spec.attacks) or "none", "rho_set": spec.rho[0],
            "t_atk_set": spec.t_atk[0]}
     row = {k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in row.items()}
-    ResultStore(out).write(spec.trial_id, row, log if log_steps else None)
+    store.write(spec.trial_id, row, log if log_steps else None)
     return row
 
 
-def local_executor(specs: list[TrialSpec], out: str, workers: int, log_steps: bool) -> Iterator[dict]:
-    """Rows as episodes finish, from ``workers`` spawned processes (in-process for 1)."""
+def local_executor(specs: list[TrialSpec], out: str, workers: int, **episode) -> Iterator[dict]:
+    """Rows as episodes finish, from ``workers`` spawned processes (in this process for 1).
+    ``episode`` holds :func:`run_episode`'s keywords."""
     if workers <= 1:
         for spec in specs:
-            yield run_episode(spec, out, log_steps)
+            yield run_episode(spec, out, **episode)
         return
     with spawn_pool(workers) as pool:
-        futures = [pool.submit(run_episode, spec, out, log_steps) for spec in specs]
+        futures = [pool.submit(run_episode, spec, out, **episode) for spec in specs]
         for future in as_completed(futures):
             yield future.result()
 
 
 @contextmanager
 def ray_session(workers: int, address: str | None = None) -> Iterator[None]:
-    """Ray for the episodes: joins the cluster at ``address``, or starts a local Ray with
-    ``workers`` CPUs and the dashboard, usage stats and token auth off (and stops it after).
-    An already initialised Ray is used as it is."""
+    """Ray for the episodes, shut down after if this call started it.
+
+    With ``address``, joins that cluster. Without, always starts a local Ray of its own with
+    ``workers`` CPUs (``address="local"``), the dashboard, usage stats and token auth off: it
+    never joins a cluster that happens to run on the machine, or one that died and left its
+    address file behind. An already initialised Ray is used as it is.
+    """
     os.environ.setdefault("RAY_USAGE_STATS_ENABLED", "0")
     os.environ.setdefault("RAY_AUTH_MODE", "disabled")
     import ray
 
     env_vars = {"MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl"), "RAY_USAGE_STATS_ENABLED": "0",
-                **SINGLE_THREAD_ENV}
+                "RAY_AUTH_MODE": "disabled", **SINGLE_THREAD_ENV}
     started = False
     if not ray.is_initialized():
-        kwargs = {"address": address} if address else {"num_cpus": workers, "include_dashboard": False}
+        kwargs = ({"address": address} if address else
+                  {"address": "local", "num_cpus": workers, "include_dashboard": False})
         ray.init(runtime_env={"env_vars": env_vars}, log_to_driver=False, **kwargs)
         started = True
     try:
@@ -72,14 +121,29 @@ def ray_session(workers: int, address: str | None = None) -> Iterator[None]:
             ray.shutdown()
 
 
-def ray_executor(specs: list[TrialSpec], out: str, workers: int, log_steps: bool,
-                 address: str | None = None) -> Iterator[dict]:
+def backend_session(backend: str, workers: int, address: str | None = None):
+    """One Ray for several batches (``backend == "ray"``): their executors use it as it is."""
+    return ray_session(workers, address) if backend == "ray" else nullcontext()
+
+
+def ray_executor(specs: list[TrialSpec], out: str, workers: int, address: str | None = None,
+                 **episode) -> Iterator[dict]:
     """Rows as episodes finish on Ray: a cluster at ``address``, or a local Ray with ``workers`` CPUs."""
     import ray
 
     with ray_session(workers, address):
         remote: Callable = ray.remote(num_cpus=1)(run_episode)
-        pending = [remote.remote(spec, out, log_steps) for spec in specs]
+        pending = [remote.remote(spec, out, **episode) for spec in specs]
         while pending:
             ready, pending = ray.wait(pending, num_returns=1)
             yield ray.get(ready[0])
+
+
+def executor(backend: str, specs: list[TrialSpec], out: str, workers: int, address: str | None = None,
+             **episode) -> Iterator[dict]:
+    """The rows of ``specs`` run on ``backend`` (one of ``BACKENDS``), as they finish."""
+    if backend == "ray":
+        return ray_executor(specs, out, workers, address, **episode)
+    if address is not None:
+        raise ValueError("--address joins a Ray cluster: it needs --backend ray")
+    return local_executor(specs, out, workers, **episode)

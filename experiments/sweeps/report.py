@@ -1,5 +1,5 @@
-"""The sweep's report: a Markdown summary (N, SCR and ASR with Wilson intervals per setting and
-per attack x estimator) and plots of SCR against rho and against T_atk with Wilson bands.
+"""The sweep's report: a Markdown summary (N, SCR and ASR with Wilson intervals per setting, the SCR
+over the episodes whose attack began before t*, and SCR per attack x estimator) and plots of SCR against rho and against T_atk with Wilson bands.
 ``racf sweep --report DIR`` redraws it from the stored parts without running anything."""
 
 from __future__ import annotations
@@ -11,29 +11,16 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from experiments.stats import wilson_interval
+from experiments.sweeps.store import ResultStore, atomic_write
+from experiments.sweeps.summary import summarize_settings, wilson_interval
 
-__all__ = ["summarize", "write_report", "report_from_store"]
+__all__ = ["write_report", "report_from_store"]
 
 
 def _rate(success: pd.Series) -> dict:
     n, k = int(len(success)), int(success.sum())
     lo, hi = wilson_interval(k, n)
     return {"n": n, "scr": k / n if n else None, "scr_ci": [lo, hi]}
-
-
-def summarize(frame: pd.DataFrame) -> dict[str, dict]:
-    """Per setting: N, SCR and its Wilson interval, ASR (under an attack), mean dt_brake over successes."""
-    out = {}
-    if frame.empty:
-        return out
-    for setting, rows in frame.groupby("setting", sort=True):
-        rate = _rate(rows["success"].astype(bool))
-        dt = pd.to_numeric(rows.loc[rows["success"].astype(bool), "dt_brake_s"], errors="coerce").dropna()
-        attacked = rows["attack"].iloc[0] != "none"
-        out[str(setting)] = {**rate, "asr": (1 - rate["scr"]) if attacked and rate["scr"] is not None else None,
-                             "dt_brake_mean": float(dt.mean()) if len(dt) else None, "n_latency": int(len(dt))}
-    return out
 
 
 def _bins(values: pd.Series, max_bins: int = 6) -> pd.Series:
@@ -78,18 +65,27 @@ def _fmt(x, digits: int = 2) -> str:
     return "—" if x is None or (isinstance(x, float) and math.isnan(x)) else f"{x:.{digits}f}"
 
 
+def _ci(ci: list[float]) -> str:
+    return f"[{_fmt(ci[0])}, {_fmt(ci[1])}]"
+
+
 def write_report(frame: pd.DataFrame, out: Path, name: str = "sweep") -> dict[str, Path]:
     """Writes ``summary.md``, ``summary.json`` and the two plots under ``out``."""
     out = Path(out)
     paths = {}
-    summary = summarize(frame)
-    (out / "summary.json").write_text(json.dumps(summary, indent=1, allow_nan=False))
+    summary = summarize_settings(frame)
+    atomic_write(out / "summary.json", json.dumps(summary, indent=1, allow_nan=False))
     lines = [f"# Sweep `{name}`", "", f"{len(frame)} episodes. SCR with its 95 % Wilson interval; ASR = 1 - SCR "
-             "under an attack; dt_brake over successful stops.", "",
-             "| setting | N | SCR [95 % CI] | ASR | dt_brake s (n) |", "|---|---|---|---|---|"]
+             "under an attack; SCR, attack before t*: over the episodes whose attack began before t* (only "
+             "those can test a defence), with their count; dt_brake over successful stops.", "",
+             "| setting | N | SCR [95 % CI] | ASR | SCR, attack before t* (N) | dt_brake s (n) |",
+             "|---|---|---|---|---|---|"]
     for setting, r in summary.items():
-        lines.append(f"| {setting} | {r['n']} | {_fmt(r['scr'])} [{_fmt(r['scr_ci'][0])}, {_fmt(r['scr_ci'][1])}] | "
-                     f"{_fmt(r['asr'])} | {_fmt(r['dt_brake_mean'], 3)} ({r['n_latency']}) |")
+        early = "—" if r.get("n_attack_before_t_star") is None else (
+            f"{_fmt(r['scr_attack_before_t_star'])} {_ci(r['scr_attack_before_t_star_ci'])} "
+            f"({r['n_attack_before_t_star']})")
+        lines.append(f"| {setting} | {r['n']} | {_fmt(r['scr'])} {_ci(r['scr_ci'])} | {_fmt(r['asr'])} | {early} | "
+                     f"{_fmt(r['dt_brake_mean'], 3)} ({r['n_latency']}) |")
     if not frame.empty:
         frame = frame.assign(estimator=frame["estimator"].astype(str))
         lines += ["", "By attack and estimator (columns):", ""]
@@ -105,15 +101,12 @@ def write_report(frame: pd.DataFrame, out: Path, name: str = "sweep") -> dict[st
         paths["scr_vs_rho"] = _plot(frame, "rho_set", "patch coverage rho", out / "scr_vs_rho.png")
         paths["scr_vs_t_atk"] = _plot(frame, "t_atk_set", "attack duration T_atk (s)", out / "scr_vs_t_atk.png")
         lines += ["", "![SCR vs rho](scr_vs_rho.png) ![SCR vs T_atk](scr_vs_t_atk.png)"]
-    paths["summary"] = out / "summary.md"
-    paths["summary"].write_text("\n".join(lines) + "\n")
+    paths["summary"] = atomic_write(out / "summary.md", "\n".join(lines) + "\n")
     return paths
 
 
 def report_from_store(out: str | Path) -> dict[str, Path]:
     """Redraws the report of a stored sweep (no episode runs)."""
-    from experiments.sweeps.store import ResultStore
-
     out = Path(out)
     if not (out / "sweep.json").exists():
         raise ValueError(f"{out} is not a sweep folder (no sweep.json; `racf sweep SPEC --out {out}` makes one)")

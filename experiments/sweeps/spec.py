@@ -15,9 +15,9 @@ Example (``experiments/sweeps/specs/smoke.toml``)::
     speed = [1.5]
     sign = [1, 0]
 
-Attacks: ``patch``, ``lidar_spoof``, ``lidar_dropout``, ``depth_blackout``, ``depth_bias``,
-``confidence_degradation`` and ``+``-combinations of them; estimators: ``raw``, ``odca``,
-``ekf``, ``chronos``. An episode's seed depends on its cell and repeat but not on the
+Attacks: any in ``sim.attacks.ATTACKS`` (``patch``, ``lidar_spoof``, ...) and
+``+``-combinations of them; estimators: any in ``experiments.episode.estimators.ESTIMATORS``
+(``raw``, ``odca``, ``ekf``, ``chronos``). An episode's seed depends on its cell and repeat but not on the
 estimator, so estimators meet identical episodes (paired comparisons). Everything is
 checked, with an error naming the field and what is allowed, before any episode runs.
 
@@ -39,12 +39,11 @@ import numpy as np
 
 from experiments.episode import TrialSpec
 from experiments.episode.estimators import ESTIMATORS
-from experiments.episode.spec import EXTRA_ATTACKS, setting_name
+from experiments.episode.spec import setting_name
+from sim.attacks import ATTACKS
 
-__all__ = ["SweepSpec", "load_spec", "parse_spec", "spec_text", "spec_path", "ATTACKS", "SPACE_KEYS", "SPECS_DIR"]
+__all__ = ["SweepSpec", "load_spec", "parse_spec", "spec_text", "spec_path", "SPACE_KEYS", "SPECS_DIR"]
 
-#: Attack names a sweep may combine ("none": no attack).
-ATTACKS = ("patch",) + EXTRA_ATTACKS
 #: The axes a sweep may vary, and their allowed ranges (None: a list of names).
 SPACE_KEYS = {"attack": None, "estimator": None, "rho": (0.0, 1.0), "t_atk": (0.0, 60.0), "speed": (0.1, 3.0),
               "sign": (0, 3)}
@@ -87,7 +86,7 @@ class SweepSpec:
             _attacks(value)
         bad = [e for e in space["estimator"] if e not in ESTIMATORS]
         if bad:
-            raise ValueError(f"space.estimator has {bad}; allowed: {ESTIMATORS}")
+            raise ValueError(f"space.estimator has {bad}; allowed: {tuple(ESTIMATORS)}")
         for key in ("rho", "t_atk", "speed", "sign"):
             lo, hi = SPACE_KEYS[key]
             vals = space[key]
@@ -142,7 +141,7 @@ def _attacks(value) -> tuple[str, ...]:
     bad = [p for p in parts if p not in ATTACKS]
     if bad:
         raise ValueError(f"space.attack {value!r} has unknown attack(s) {bad}; allowed: 'none' or "
-                         f"'+'-joined {ATTACKS}")
+                         f"'+'-joined {tuple(ATTACKS)}")
     return parts
 
 

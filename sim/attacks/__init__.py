@@ -4,8 +4,12 @@
 - :class:`DepthBlackout`, :class:`DepthBias`, :class:`ConfidenceDegradation`: depth attacks.
 - :class:`LidarDropout`, :class:`LidarSpoof`: LiDAR faults (beyond the paper).
 Each marks ``info["attack"]`` (active attacks) and ``info["attack_active"]``.
+
+``ATTACKS`` finds them by name (each wrapper's ``name``): a new attack is one module and one
+line there. The order is the order attacks take in a setting's name.
 """
 
+from sim.attacks.base import AttackWrapper
 from sim.attacks.confidence_degradation import ConfidenceDegradation
 from sim.attacks.depth_bias import DepthBias
 from sim.attacks.depth_blackout import DepthBlackout
@@ -14,5 +18,9 @@ from sim.attacks.lidar_spoof import LidarSpoof
 from sim.attacks.patch import PatchAttack, patch_rows
 from sim.attacks.schedule import AttackSchedule
 
-__all__ = ["AttackSchedule", "ConfidenceDegradation", "DepthBias", "DepthBlackout", "LidarDropout", "LidarSpoof",
-           "PatchAttack", "patch_rows"]
+#: Every attack wrapper by name.
+ATTACKS: dict[str, type[AttackWrapper]] = {cls.name: cls for cls in (
+    PatchAttack, LidarSpoof, LidarDropout, DepthBlackout, DepthBias, ConfidenceDegradation)}
+
+__all__ = ["ATTACKS", "AttackSchedule", "AttackWrapper", "ConfidenceDegradation", "DepthBias", "DepthBlackout",
+           "LidarDropout", "LidarSpoof", "PatchAttack", "patch_rows"]

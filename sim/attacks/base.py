@@ -15,13 +15,16 @@ __all__ = ["AttackWrapper"]
 class AttackWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
     """Applies ``_attack`` to the observation on the steps its schedule makes active.
 
-    Subclasses set ``name`` and implement ``_attack(obs, info) -> obs`` (and, for
+    Subclasses set ``name`` (their key in ``sim.attacks.ATTACKS``) and implement ``_attack(obs, info) -> obs`` (and, for
     per-episode draws, ``_on_reset()``). Wrappers compose: ``info["attack"]`` is the tuple
     of the attacks active this step, ``info["attack_active"]`` whether there is any.
     Randomness comes from a generator drawn from the env's seeded one at each reset.
     """
 
     name = "attack"
+    #: Constructor arguments an experiment sets per episode (e.g. the patch's ``rho``); the
+    #: others keep their defaults.
+    episode_params: tuple[str, ...] = ()
 
     def __init__(self, env: gym.Env, schedule: AttackSchedule | None) -> None:
         gym.Wrapper.__init__(self, env)

@@ -9,7 +9,10 @@ import gymnasium as gym
 from sim.attacks.base import AttackWrapper
 from sim.attacks.schedule import AttackSchedule, as_range
 
-__all__ = ["LidarSpoof"]
+__all__ = ["LidarSpoof", "SPOOF_RANGE_M"]
+
+#: The fake range drawn per episode, m: far enough that a repair trusting it would not brake in time.
+SPOOF_RANGE_M = (2.5, 3.5)
 
 
 class LidarSpoof(AttackWrapper):
@@ -20,14 +23,15 @@ class LidarSpoof(AttackWrapper):
 
     Args:
         env: the racf env.
-        range_m: the fake range, metres: a value or a (low, high) range drawn per episode.
+        range_m: the fake range, metres: a value or a (low, high) range drawn per episode
+            (default ``SPOOF_RANGE_M``).
         **schedule: ``AttackSchedule`` fields (duration_s, cooldown_s, window_s, stable_steps,
             trigger, ...); its defaults are the protocol's.
     """
 
     name = "lidar_spoof"
 
-    def __init__(self, env: gym.Env, range_m: Any = 3.0, **schedule: Any) -> None:
+    def __init__(self, env: gym.Env, range_m: Any = SPOOF_RANGE_M, **schedule: Any) -> None:
         gym.utils.RecordConstructorArgs.__init__(self, range_m=range_m, **schedule)
         self.range_bounds = as_range("range_m", range_m, 0.15, 12.0)
         super().__init__(env, AttackSchedule(**schedule))

@@ -56,6 +56,7 @@ class PatchAttack(AttackWrapper):
     """
 
     name = "patch"
+    episode_params = ("rho",)
 
     def __init__(self, env: gym.Env, rho: Any = (0.9, 1.0), **schedule: Any) -> None:
         gym.utils.RecordConstructorArgs.__init__(self, rho=rho, **schedule)

@@ -1,7 +1,5 @@
-"""Closed-loop trials: one episode end to end, batch resume and the summary."""
+"""The step loop: one closed-loop episode end to end, its log, determinism and its outcome."""
 
-import json
-import math
 
 import numpy as np
 
@@ -9,9 +7,7 @@ import pandas as pd
 import pytest
 
 from experiments.cli import main
-from experiments.stats import wilson_interval
 from experiments.episode import TrialSpec, run_trial
-from experiments.trials import batch_specs, run_batch, summarize
 
 PROTOCOL_SIGNALS = ("d_true", "d_clean", "d_meas", "c_meas", "lidar", "d_fused")
 
@@ -73,71 +69,6 @@ def test_skipping_the_clean_pass_changes_only_the_d_clean_diagnostic():
     pd.testing.assert_frame_equal(fast_log.drop(columns="d_clean"), log.drop(columns="d_clean"))
 
 
-def test_batch_covers_every_sign_and_speed_and_resumes(tmp_path, monkeypatch):
-    specs = batch_specs("clean", 12)
-    assert {(s.sign, s.speed) for s in specs} == {(g, v) for g in range(4) for v in (1.0, 1.5, 2.0)}
-    assert len({s.seed for s in specs}) == 12
-    two = batch_specs("clean", 2, seed=5)
-    first = run_batch(two, tmp_path, workers=1, progress=False)
-    assert len(first) == 2 and (tmp_path / "results.parquet").exists()
-    # A rerun finds both trials finished and runs nothing.
-    import experiments.trials as trials_module
-
-    monkeypatch.setattr(trials_module, "_run_and_save", lambda *a: pytest.fail("re-ran a finished trial"))
-    again = run_batch(two, tmp_path, workers=1, progress=False)
-    pd.testing.assert_frame_equal(first, again)
-
-
-def test_summary_has_the_protocol_keys_and_wilson_interval():
-    rows = pd.DataFrame({"setting": "attack", "success": [True] * 9 + [False],
-                         "trigger_delay_s": [0.02] * 9 + [math.nan], "dt_brake_s": [0.1] * 9 + [math.nan],
-                         "failure": [None] * 9 + ["confirmed_lost"],
-                         "lost_frames": [0] * 9 + [30], "attack_start_s": [math.nan] * 8 + [2.0, 1.2],
-                         "t_star_s": [1.5] * 10})
-    s = summarize(rows, attack=True)
-    assert set(s) == {"n", "scr", "scr_ci", "asr", "asr_ci", "trigger_delay_mean", "trigger_delay_std",
-                      "dt_brake_mean", "dt_brake_std", "n_latency", "failures", "lost_frames_mean", "attacked_share",
-                      "n_attack_before_t_star", "scr_attack_before_t_star", "scr_attack_before_t_star_ci"}
-    # Only the last trial's attack began before t* (1.2 < 1.5 s), and it failed.
-    assert s["n_attack_before_t_star"] == 1 and s["scr_attack_before_t_star"] == 0.0
-    assert s["dt_brake_mean"] == pytest.approx(0.1) and s["trigger_delay_mean"] == pytest.approx(0.02)
-    assert s["failures"]["confirmed_lost"] == 1 and sum(s["failures"].values()) == 1
-    json.dumps(s, allow_nan=False)  # strict JSON
-    assert s["lost_frames_mean"] == 3.0 and s["attacked_share"] == pytest.approx(0.2)
-    assert s["n"] == 10 and s["scr"] == 0.9 and s["asr"] == pytest.approx(0.1) and s["n_latency"] == 9
-    assert s["scr_ci"] == pytest.approx(list(wilson_interval(9, 10)))
-    lo, hi = wilson_interval(9, 10)
-    assert lo == pytest.approx(0.596, abs=1e-3) and hi == pytest.approx(0.982, abs=1e-3)
-    assert summarize(rows.assign(setting="clean"))["asr"] is None
-
-
-def test_cli_trials_json(tmp_path, capsys):
-    assert main(["trials", "-n", "1", "--seed", "11", "--workers", "1", "--json", "--out", str(tmp_path)]) == 0
-    summary = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
-    assert summary["n"] == 1 and summary["scr"] == 1.0
-    assert list((tmp_path / "trials").glob("*.parquet"))
-
-
-def test_cli_trial_writes_log_and_result(tmp_path, capsys):
-    assert main(["trial", "--sign", "2", "--speed", "1.0", "--seed", "0", "--out", str(tmp_path)]) == 0
-    out = json.loads(capsys.readouterr().out)
-    assert out["success"] is True
-    log = pd.read_parquet(out["log"])
-    assert set(PROTOCOL_SIGNALS) <= set(log.columns)
-
-
-def test_bad_trial_inputs_are_clear_errors(capsys):
-    with pytest.raises(ValueError, match="starts with 'clean' or 'attack'"):
-        TrialSpec("nope", 0, 1.0, 0)
-    with pytest.raises(ValueError, match="unknown part"):
-        TrialSpec("attack+kalman", 0, 1.0, 0)
-    with pytest.raises(ValueError, match="speed"):
-        TrialSpec("clean", 0, 9.0, 0)
-    with pytest.raises(SystemExit):
-        main(["trials", "-n", "0"])
-    assert "must be >= 1" in capsys.readouterr().err
-
-
 def test_strong_patch_attack_hides_the_sign_and_the_car_runs_the_line():
     result, log = run_trial(TrialSpec("attack", 0, 1.0, 0, rho=1.0, t_atk=3.0))
     assert not result.success and result.failure == "confirmed_lost"
@@ -152,18 +83,6 @@ def test_strong_patch_attack_hides_the_sign_and_the_car_runs_the_line():
     first = attacked.index[0]
     assert log.loc[first - 5:first, "sign_in_view"].all() and log.loc[first - 1, "confirmed"]
     assert log.loc[first, "dist_to_stop_line"] <= 1.0 * log.loc[first, "speed"] + 0.05
-
-
-def test_cli_attack_trials_json_has_lost_frames(tmp_path, capsys):
-    assert main(["trials", "--setting", "attack", "--rho", "1.0", "--t-atk", "3.0", "-n", "1", "--seed", "2",
-                 "--workers", "1", "--json", "--out", str(tmp_path)]) == 0
-    summary = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
-    assert {"n", "scr", "scr_ci", "asr", "dt_brake_mean", "dt_brake_std", "n_latency", "lost_frames_mean"} <= set(summary)
-    assert summary["asr"] == 1.0 - summary["scr"]
-    with pytest.raises(SystemExit, match="2"):
-        main(["trials", "--setting", "clean", "--rho", "0.5", "-n", "1"])
-    with pytest.raises(SystemExit):
-        main(["trials", "--setting", "attack", "--rho", "1.5"])
 
 
 def test_clean_obstacle_trial_stops_before_the_crate():
@@ -188,3 +107,15 @@ def test_clean_drive_serves_every_target_in_turn():
     assert len(ref) > 100 and np.abs(ref["lidar"] - ref["d_true"]).max() < 0.15
     assert log["scan_new"].mean() == pytest.approx(0.2, abs=0.01)
     assert spec.trial_id != TrialSpec("clean", 0, 1.5, 4, target="drive").trial_id
+
+
+def test_bad_trial_inputs_are_clear_errors(capsys):
+    with pytest.raises(ValueError, match="starts with 'clean' or 'attack'"):
+        TrialSpec("nope", 0, 1.0, 0)
+    with pytest.raises(ValueError, match="unknown part"):
+        TrialSpec("attack+kalman", 0, 1.0, 0)
+    with pytest.raises(ValueError, match="speed"):
+        TrialSpec("clean", 0, 9.0, 0)
+    with pytest.raises(SystemExit):
+        main(["trials", "-n", "0"])
+    assert "must be >= 1" in capsys.readouterr().err

@@ -17,7 +17,7 @@ from experiments.sweeps.run import run_sweep
 from experiments.sweeps.spec import SweepSpec, load_spec
 from experiments.sweeps.store import ResultStore
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 TINY = """name = "tiny"
 mode = "grid"
 repeats = 2

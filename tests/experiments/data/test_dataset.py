@@ -101,12 +101,12 @@ def test_loader_gives_both_splits_and_labelled_corruption(small):
 
 
 def test_same_seed_same_bytes_and_resume_redoes_nothing(tmp_path, small, monkeypatch):
-    import experiments.trials as trials_module
+    import experiments.sweeps.executors as executors_module
 
     a = tmp_path / "a"
     # Copy the finished runs of the module's collection, then "resume": nothing may be re-run.
     shutil.copytree(small / "_runs", a / "_runs")
-    monkeypatch.setattr(trials_module, "_run_and_save", lambda *args: pytest.fail("re-ran a finished series"))
+    monkeypatch.setattr(executors_module, "run_episode", lambda *a, **k: pytest.fail("re-ran a finished series"))
     collect(a, drives=3, seed=3, workers=1, progress=False, duration_s=SHORT)
     assert (a / "dataset.parquet").read_bytes() == (small / "dataset.parquet").read_bytes()
     assert (a / "split.json").read_bytes() == (small / "split.json").read_bytes()

@@ -29,7 +29,7 @@ def test_the_id_changes_with_the_spec_the_configs_and_the_code(monkeypatch):
               TrialSpec("attack+odca", 1, 1.5, 7, braking=BrakingConfig(confirm_frames=4))]
     assert len({base.trial_id, *(o.trial_id for o in others)}) == 1 + len(others)
     base_id = base.trial_id  # the id is computed on access: keep the one from before the edit
-    monkeypatch.setattr(spec_module, "code_version", lambda: "edited")
+    monkeypatch.setattr(spec_module, "code_version", lambda *roots: "edited")
     assert TrialSpec("attack+odca", 1, 1.5, 7).trial_id != base_id
 
 
@@ -52,9 +52,9 @@ def test_attack_waits_for_more_steps_than_confirmation_needs():
     (["--table", "--estimator", "odca"], "--table runs its own settings"),
 ])
 def test_bad_flags_are_rejected_before_any_episode_runs(argv, message, monkeypatch, capsys, tmp_path):
-    import experiments.trials as trials_module
+    import experiments.sweeps.batches as batches_module
 
-    monkeypatch.setattr(trials_module, "run_batch", lambda *a, **k: pytest.fail("ran an episode"))
+    monkeypatch.setattr(batches_module, "run_batch", lambda *a, **k: pytest.fail("ran an episode"))
     with pytest.raises(SystemExit) as exit_info:
         code = main(["trials", "-n", "2", "--out", str(tmp_path), *argv])
         raise SystemExit(code)

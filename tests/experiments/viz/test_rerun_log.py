@@ -59,7 +59,7 @@ def test_bad_input_is_refused(tmp_path):
 
 
 def test_trials_record_every_trial_they_run(tmp_path):
-    from experiments.trials import batch_specs, run_batch
+    from experiments.sweeps.batches import batch_specs, run_batch
 
     specs = batch_specs("clean", 2, signs=(1,), speeds=(1.5,))
     run_batch(specs, tmp_path, workers=1, progress=False, rerun=True)

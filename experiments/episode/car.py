@@ -1,7 +1,8 @@
-"""Glue between the simulator and the controllers: what a real car's software is told.
+"""The car's side of an episode: what a real car's software is told.
 
 The controllers see observations; this module hands them the map knowledge a real stack
-has (the route, where the stop line is relative to the sign) and the camera intrinsics.
+has (the route, where the stop line is relative to the sign), the camera intrinsics and
+the car's own geometry. Ground truth is the referee's (``info``), never read here.
 """
 
 from __future__ import annotations
@@ -13,7 +14,7 @@ from controllers import CameraModel, RouteFollower
 from sim.world.drives import RouteTarget
 from sim.world.road_graph import Path
 
-__all__ = ["camera_model", "sign_depth_at_line", "route_follower", "map_bearing", "all_sign_masks"]
+__all__ = ["camera_model", "sign_depth_at_line", "route_follower", "map_bearing"]
 
 
 def camera_model(env: gym.Env) -> CameraModel:
@@ -52,14 +53,3 @@ def map_bearing(env: gym.Env, target: RouteTarget, pose: np.ndarray) -> float:
     if face is not None and -(dx * np.cos(face) + dy * np.sin(face)) < 0.0:
         return float("nan")
     return float(np.arctan2(-s * dx + c * dy, c * dx + s * dy))
-
-
-def all_sign_masks(env: gym.Env) -> list[np.ndarray]:
-    """Ground-truth face masks of all four stop signs in the current frame (evaluation only)."""
-    from sim.env.ground_truth import sign_view
-    from sim.world.stop_signs import stop_signs
-
-    u = env.unwrapped
-    cam_pos, cam_mat = u.car.camera_pose(u.model, u.data)
-    _, clean_depth = u.rig.render(u.model, u.data)
-    return [sign_view(s, cam_pos, cam_mat, u.rig.intrinsics, clean_depth).mask for s in stop_signs()]

@@ -6,7 +6,7 @@ import pytest
 
 from experiments.cli import main
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 
 
 def test_help_lists_the_commands():

@@ -1,0 +1,27 @@
+"""The ``racf`` command line: one module per command group, each registering its subcommands
+and their handlers. Parsing and printing only; the work lives in the packages beside this one."""
+
+from __future__ import annotations
+
+import argparse
+
+from experiments.cli import bench, data, odca, sweep, trials, view
+
+__all__ = ["main", "build_parser", "GROUPS"]
+
+#: The command groups, in the order ``racf --help`` lists their commands.
+GROUPS = (view, trials, sweep, data, odca, bench)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="racf", description="RACF testbed: QCar 2 simulation, attacks and ODCA.")
+    sub = p.add_subparsers(dest="command", required=True)
+    for group in GROUPS:
+        group.register(sub)
+    return p
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Runs one command; returns its exit code (2: bad input, nothing run)."""
+    args = build_parser().parse_args(argv)
+    return args.handler(args)

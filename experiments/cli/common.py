@@ -1,0 +1,153 @@
+"""What the command groups share: argument types, the episode and backend flags, and formatting."""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+from typing import NoReturn
+
+from experiments.episode.estimators import ESTIMATORS
+from sim.attacks import ATTACKS
+
+__all__ = ["sign", "positive", "speed", "share", "duration", "count", "pair", "fail", "fmt_ci", "DEFAULT_WORKERS",
+           "episode_flags", "episode_params", "backend_flags", "attack_help", "estimator_help"]
+
+#: Parallel episodes by default: two, or one on a single-core machine.
+DEFAULT_WORKERS = min(2, os.cpu_count() or 1)
+
+
+def sign(value: str) -> int:
+    try:
+        index = int(value)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"sign must be an integer 0..3, got {value!r}") from None
+    if index not in range(4):
+        raise argparse.ArgumentTypeError(f"sign must be 0, 1, 2 or 3, got {index}")
+    return index
+
+
+def positive(value: str) -> float:
+    v = float(value)
+    if not v > 0:
+        raise argparse.ArgumentTypeError(f"must be > 0, got {value}")
+    return v
+
+
+def speed(value: str) -> float:
+    v = float(value)
+    if not 0.1 <= v <= 3.0:
+        raise argparse.ArgumentTypeError(f"speed must be in [0.1, 3.0] m/s, got {value}")
+    return v
+
+
+def share(value: str) -> float:
+    v = float(value)
+    if not 0.0 <= v <= 1.0:
+        raise argparse.ArgumentTypeError(f"rho must be in [0, 1], got {value}")
+    return v
+
+
+def duration(value: str) -> float:
+    v = float(value)
+    if not 0.0 <= v <= 60.0:
+        raise argparse.ArgumentTypeError(f"t-atk must be in [0, 60] s, got {value}")
+    return v
+
+
+def count(value: str) -> int:
+    try:
+        n = int(value)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a positive integer, got {value!r}") from None
+    if n < 1:
+        raise argparse.ArgumentTypeError(f"must be >= 1, got {n}")
+    return n
+
+
+def pair(name: str, values: list[float] | None, default: tuple[float, float]) -> tuple[float, float]:
+    """A value or LOW HIGH as (low, high)."""
+    if values is None:
+        return default
+    if len(values) > 2 or (len(values) == 2 and values[0] > values[1]):
+        raise SystemExit(f"racf trials: {name} takes a value or LOW HIGH with LOW <= HIGH, got {values}")
+    return (values[0], values[-1])
+
+
+def fail(command: str, message: str) -> NoReturn:
+    """Exit 2 with ``racf COMMAND: MESSAGE`` on stderr (bad input, before any work)."""
+    print(f"racf {command}: {message}", file=sys.stderr)
+    raise SystemExit(2)
+
+
+def fmt_ci(lo: float, hi: float, digits: int = 2) -> str:
+    return f"[{lo:.{digits}f}, {hi:.{digits}f}]"
+
+
+def attack_help() -> str:
+    """The registered attacks, for a flag's help."""
+    return ", ".join(ATTACKS)
+
+
+def estimator_help() -> str:
+    """The registered estimators, for a flag's help."""
+    return ", ".join(ESTIMATORS)
+
+
+def backend_flags(p: argparse.ArgumentParser, workers_help: str = "parallel processes") -> None:
+    """``--backend``, ``--address`` and ``--workers``: where a command's episodes run."""
+    from experiments.sweeps.executors import BACKENDS
+
+    p.add_argument("--backend", choices=BACKENDS, default="local",
+                   help="local spawned processes (default) or Ray")
+    p.add_argument("--address", default=None,
+                   help="with --backend ray: the cluster to join (default: start a local Ray of its own)")
+    p.add_argument("--workers", type=count, default=DEFAULT_WORKERS, help=workers_help)
+
+
+def episode_flags(p: argparse.ArgumentParser) -> None:
+    """The flags ``racf trial`` and ``racf trials`` share: what runs and how."""
+    p.add_argument("--setting", default=None,
+                   help="clean or attack, then extra attacks and an estimator joined by '+', e.g. attack+odca, "
+                        "attack+lidar_spoof+odca (default clean; --attack/--estimator compose one instead)")
+    p.add_argument("--attack", default=None, metavar="A[,B]",
+                   help=f"attacks, comma-separated: {attack_help()} (default none)")
+    p.add_argument("--estimator", default=None,
+                   help=f"distance estimator: {estimator_help()} (default raw)")
+    p.add_argument("--rho", type=share, nargs="+", default=None, metavar="R",
+                   help="patch coverage, a value or LOW HIGH (uniform), in [0, 1] (default 0.9 1.0)")
+    p.add_argument("--t-atk", type=duration, nargs="+", default=None, metavar="S",
+                   help="attack duration s, a value or LOW HIGH (uniform) (default 0.5 3.0)")
+    p.add_argument("--delay-ms", type=float, default=0.0,
+                   help="perception-to-actuation delay, ms (default 0; the paper's offboard loop: 49)")
+    p.add_argument("--control-hz", type=float, default=None, help="controller rate, Hz (default: every 50 Hz step)")
+    p.add_argument("--stable-steps", type=int, default=None,
+                   help="steps the sign must be visible before an attack may start (default: the braking "
+                        "controller's confirm_frames + 3 = 6)")
+
+
+def episode_params(args: argparse.Namespace, command: str, table: bool = False) -> tuple[str | None, dict]:
+    """The setting and the spec fields the episode flags give; SystemExit(2) naming what is wrong.
+    With ``table`` the settings are the table's own: none may be given, and the setting is None."""
+    from experiments.episode import STRONG_RHO, STRONG_T_ATK_S, parse_setting, setting_name
+
+    try:
+        if table and (args.setting is not None or args.attack is not None or args.estimator is not None):
+            fail(command, "--table runs its own settings; drop --setting/--attack/--estimator")
+        if args.setting is not None and (args.attack is not None or args.estimator is not None):
+            fail(command, "give --setting, or --attack/--estimator, not both")
+        if table:
+            setting = None
+        elif args.setting is not None:
+            setting = args.setting
+            parse_setting(setting)
+        else:
+            attacks = [a.strip() for a in args.attack.split(",") if a.strip()] if args.attack else []
+            setting = setting_name(attacks, args.estimator or "raw")
+        if setting is not None and not parse_setting(setting)[0] and (args.rho is not None or args.t_atk is not None):
+            fail(command, "--rho and --t-atk apply to settings with an attack")
+        params = {"rho": pair("--rho", args.rho, STRONG_RHO), "t_atk": pair("--t-atk", args.t_atk, STRONG_T_ATK_S),
+                  "delay_ms": args.delay_ms, "control_hz": args.control_hz, "stable_steps": args.stable_steps}
+    except ValueError as err:
+        fail(command, str(err))
+    return setting, params

@@ -1,0 +1,166 @@
+"""``racf trial``, ``racf trials`` (and ``--table``) and ``racf attack-study``: closed-loop episodes."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+from experiments.cli.common import (backend_flags, count, episode_flags, episode_params, fail, fmt_ci, sign,
+                                        speed)
+
+__all__ = ["register"]
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    t = sub.add_parser("trial", help="one closed-loop stop-sign trial: per-step log (Parquet) and result row")
+    episode_flags(t)
+    t.add_argument("--sign", type=sign, default=2, help="stop sign 0-3, or crate 0-1 with --target obstacle (default 2)")
+    t.add_argument("--target", choices=("sign", "obstacle", "drive"), default="sign",
+                   help="approach a stop sign (default) or an obstacle crate, or a random 20-60 s drive (--sign 0)")
+    t.add_argument("--speed", type=speed, default=1.0, help="cruise speed m/s, 0.1-3.0 (default 1.0)")
+    t.add_argument("--seed", type=int, default=0)
+    t.add_argument("--out", type=Path, default=Path("outputs/trial"), help="output folder")
+    t.add_argument("--rerun", type=Path, default=None, metavar="PATH",
+                   help="also record the episode to a rerun file (.rrd; open it with `racf view PATH`)")
+    t.set_defaults(handler=_trial)
+
+    ts = sub.add_parser("trials", help="a batch of trials over the four signs and speeds 1.0/1.5/2.0 m/s: SCR, latency")
+    episode_flags(ts)
+    ts.add_argument("--table", action="store_true",
+                    help="the paper's table: every setting of TABLE_SETTINGS (clean, clean+odca, attack, attack+odca, "
+                         "attack+ekf, attack+chronos, attack+lidar_spoof+odca), N per setting")
+    ts.add_argument("-n", type=count, default=30, help="number of trials (default 30; 12 cover every sign x speed)")
+    ts.add_argument("--seed", type=int, default=0, help="seed of the first trial; trial i uses seed + i")
+    backend_flags(ts)
+    ts.add_argument("--out", type=Path, default=None,
+                    help="output folder (default outputs/trials/<setting>, outputs/table with --table); finished "
+                         "trials there are reused (their ids hash the spec, configs and code version)")
+    ts.add_argument("--json", action="store_true", help="print one JSON summary object instead of tables")
+    ts.add_argument("--rerun", action="store_true",
+                    help="also record every trial that runs to rerun: <out>/trials/<trial_id>.rrd (`racf view`)")
+    ts.set_defaults(handler=_trials)
+
+    st = sub.add_parser("attack-study", help="no-defence patch attack tables: persistence, coverage, strong regime")
+    st.add_argument("studies", nargs="*", default=None, metavar="STUDY",
+                    help="persistence, coverage and/or strong (default all three)")
+    st.add_argument("-n", type=count, default=24,
+                    help="trials per table row (default 24; the strong row uses max(n, 30))")
+    st.add_argument("--seed", type=int, default=0)
+    backend_flags(st)
+    st.add_argument("--out", type=Path, default=Path("outputs/attack_study"), help="output folder (trials are reused)")
+    st.add_argument("--json", action="store_true", help="print one JSON object instead of tables")
+    st.set_defaults(handler=_attack_study)
+
+
+def _trial(args: argparse.Namespace) -> int:
+    from experiments.episode import TrialSpec, run_trial
+    from experiments.sweeps.store import atomic_write
+
+    setting, params = episode_params(args, "trial")
+    try:
+        spec = TrialSpec(setting, args.sign, args.speed, args.seed, target=args.target, **params)
+    except ValueError as err:
+        fail("trial", str(err))
+    recorder = None
+    if args.rerun is not None:
+        from experiments.viz.rerun_log import FrameRecorder
+
+        recorder = FrameRecorder()
+    result, log = run_trial(spec, on_step=recorder)
+    if recorder is not None:
+        from experiments.viz.rerun_log import write_rrd
+
+        write_rrd(args.rerun, log, recorder, title=f"racf trial {spec.trial_id}")
+    args.out.mkdir(parents=True, exist_ok=True)
+    log_path = atomic_write(args.out / f"{spec.trial_id}.parquet", log)
+    atomic_write(args.out / f"{spec.trial_id}.json", json.dumps(result.to_dict(), indent=2, allow_nan=False))
+    print(json.dumps({**result.to_dict(), "log": str(log_path)}, indent=2, allow_nan=False))
+    return 0
+
+
+def _trials(args: argparse.Namespace) -> int:
+    from experiments.sweeps.batches import batch_specs, run_batch, run_table
+    from experiments.sweeps.summary import summarize
+
+    where = {"workers": args.workers, "backend": args.backend, "address": args.address}
+    if args.address is not None and args.backend != "ray":
+        fail("trials", "--address joins a Ray cluster: it needs --backend ray")
+    if args.table:
+        _, params = episode_params(args, "trials", table=True)
+        try:
+            table = run_table(args.n, args.out or Path("outputs/table"), seed=args.seed, progress=not args.json,
+                              rerun=args.rerun, **where, **params)
+        except ValueError as err:
+            fail("trials", str(err))
+        print(json.dumps(table, allow_nan=False) if args.json else table_text(table))
+        return 0
+    setting, params = episode_params(args, "trials")
+    try:
+        specs = batch_specs(setting, args.n, args.seed, **params)
+    except ValueError as err:
+        fail("trials", str(err))
+    out = args.out or Path("outputs/trials") / setting
+    results = run_batch(specs, out, progress=not args.json, rerun=args.rerun, **where)
+    summary = summarize(results)
+    if args.json:
+        print(json.dumps(summary, allow_nan=False))
+        return 0
+    print(f"{'sign':>4} {'speed':>6} {'N':>3} {'SCR':>5} {'dt_brake s (mean +- std)':>26}  failures")
+    for (sign_, speed_), group in results.groupby(["sign", "speed"]):
+        lat = group.loc[group["success"], "dt_brake_s"].astype(float).dropna()
+        lat_text = f"{lat.mean():.3f} +- {lat.std(ddof=1) if len(lat) > 1 else 0:.3f}" if len(lat) else "-"
+        failures = ", ".join(f"{k} {v}" for k, v in group["failure"].dropna().value_counts().items()) or "-"
+        print(f"{sign_:>4} {speed_:>6.1f} {len(group):>3} {group['success'].mean():>5.2f} {lat_text:>26}  {failures}")
+    print(table_text({setting: summary}))
+    print(f"results: {out / 'results.parquet'}; per-step logs: {out / 'trials'}")
+    return 0
+
+
+def table_text(table: dict[str, dict]) -> str:
+    """SCR / ASR with Wilson intervals, trigger delay and dt_brake over successes, failures by cause."""
+    from experiments.sweeps.batches import PAPER_TABLE
+
+    def ms(mean, std):
+        return "-" if mean is None else f"{mean:.3f} +- {std or 0:.3f}"
+
+    lines = [f"{'setting':<26}{'N':>4}{'SCR [95% Wilson]':>20}{'ASR [95% Wilson]':>20}{'trigger delay s':>18}"
+             f"{'dt_brake s':>18}{'n':>4}{'SCR, attack before t*':>28}  failures"]
+    for name, r in table.items():
+        asr = f"{r['asr']:.2f} {fmt_ci(*r['asr_ci'])}" if r.get("asr") is not None else "-"
+        fails = ", ".join(f"{k} {v}" for k, v in r["failures"].items() if v) or "-"
+        early = "-" if r.get("scr_attack_before_t_star") is None else \
+            f"{r['scr_attack_before_t_star']:.2f} {fmt_ci(*r['scr_attack_before_t_star_ci'])} ({r['n_attack_before_t_star']})"
+        lines.append(f"{name:<26}{r['n']:>4}{r['scr']:>6.2f} {fmt_ci(*r['scr_ci']):>13}{asr:>20}"
+                     f"{ms(r['trigger_delay_mean'], r['trigger_delay_std']):>18}"
+                     f"{ms(r['dt_brake_mean'], r['dt_brake_std']):>18}{r['n_latency']:>4}{early:>28}  {fails}")
+    paper = "; ".join(f"{name} SCR {p['scr']:.2f}, dt {p['dt_brake_s']:.3f} s" for name, p in PAPER_TABLE["rows"].items())
+    lines.append("trigger delay = t(brake) - t*; dt_brake = t* to braking within 0.60 m of the line (the paper's "
+                 "latency); both over successful stops (n). SCR, attack before t*: the trials whose attack began "
+                 f"before t* (their count). Paper ({PAPER_TABLE['platform']}, N = {PAPER_TABLE['n']}): {paper}")
+    return "\n".join(lines)
+
+
+def _attack_study(args: argparse.Namespace) -> int:
+    from experiments.sweeps.studies import STUDIES, run_study
+
+    names = list(dict.fromkeys(args.studies or STUDIES))
+    unknown = [n for n in names if n not in STUDIES]
+    if unknown:
+        fail("attack-study", f"unknown study {unknown}; choose from {', '.join(STUDIES)}")
+    if args.address is not None and args.backend != "ray":
+        fail("attack-study", "--address joins a Ray cluster: it needs --backend ray")
+    tables = {name: run_study(name, args.n, args.out, seed=args.seed, workers=args.workers, progress=not args.json,
+                              backend=args.backend, address=args.address) for name in names}
+    if args.json:
+        print(json.dumps(tables))
+        return 0
+    for name, rows in tables.items():
+        print(f"\n{name} (no defence)")
+        print(f"{'setting':<42}{'N':>4}{'lost frames':>13}{'ASR [95% Wilson]':>22}{'SCR':>6}{'dt_brake s':>18}")
+        for r in rows:
+            lat = f"{r['dt_brake_mean']:.2f} +- {r['dt_brake_std'] or 0:.2f} ({r['n_latency']})" if r["n_latency"] else "-"
+            print(f"{r['label']:<42}{r['n']:>4}{r['lost_frames_mean']:>13.1f}"
+                  f"{r['asr']:>8.2f} {fmt_ci(*r['asr_ci']):>13}{r['scr']:>6.2f}{lat:>18}")
+    print(f"\ntrials and logs under {args.out}")
+    return 0

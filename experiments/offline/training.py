@@ -1,0 +1,37 @@
+"""ODCA checkpoints from a collected dataset: ``racf train`` and ``racf pretrain-prior``."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from experiments.data.dataset import load_dataset
+from experiments.sweeps.store import atomic_write
+
+__all__ = ["train_checkpoint", "pretrain_checkpoint"]
+
+
+def train_checkpoint(dataset: Path, out: Path, split: str = "by_series", epochs: int = 800, seed: int = 0) -> dict:
+    """Fits the alignment, the delta head and the gate on ``dataset``'s train split (the shipped
+    prior frozen), saves the checkpoint and ``train_report.json`` to ``out``; returns the report."""
+    from odca.prior import Chronos2Prior
+    from odca.train import train_odca
+
+    model, report = train_odca(load_dataset(dataset, split=split), Chronos2Prior(), epochs=epochs, seed=seed)
+    model.save(out)
+    atomic_write(Path(out) / "train_report.json", json.dumps(report, indent=1, allow_nan=False))
+    return report
+
+
+def pretrain_checkpoint(out: Path, steps: int, series: int, seed: int, dataset: Path | None = None) -> dict:
+    """Pretrains the small Chronos-2 prior on synthetic series and writes it to ``out``. Where
+    ``dataset`` holds a collected dataset, its test split's d_clean series are scored too."""
+    import torch
+
+    from odca.pretrain import pretrain_prior
+
+    torch.manual_seed(seed)
+    sim_series = None
+    if dataset is not None and (Path(dataset) / "dataset.parquet").exists():
+        sim_series = load_dataset(dataset).series("d_clean", "test")
+    return pretrain_prior(out, steps=steps, n_series=series, seed=seed, sim_series=sim_series)

@@ -1,0 +1,74 @@
+"""The one summary of a batch of episodes (``docs/protocol.md``), for trials, tables, studies and sweeps.
+
+Per setting: N; SCR with its 95 % Wilson interval; under an attack, ASR = 1 - SCR and the
+SCR over the episodes whose attack began before t* (only those can test a defence: where the
+sign comes into view inside the braking distance, braking starts before the protocol lets an
+attack begin); the trigger delay and the paper's dt_brake over successful stops; failures by
+cause. Strict JSON: None, never NaN.
+"""
+
+from __future__ import annotations
+
+import pandas as pd
+from scipy.stats import binomtest
+
+from experiments.episode.scoring import FAILURES
+from experiments.episode.spec import parse_setting
+
+__all__ = ["wilson_interval", "summarize", "summarize_settings"]
+
+
+def wilson_interval(successes: int, n: int, confidence: float = 0.95) -> tuple[float, float]:
+    """Wilson score interval of ``successes`` out of ``n``; (0, 1) when n = 0."""
+    if n < 0 or not 0 <= successes <= max(n, 0):
+        raise ValueError(f"need 0 <= successes <= n, got successes={successes}, n={n}")
+    if n == 0:
+        return 0.0, 1.0
+    ci = binomtest(int(successes), int(n)).proportion_ci(confidence_level=confidence, method="wilson")
+    return float(ci.low), float(ci.high)
+
+
+def _mean_std(values: pd.Series) -> tuple[float | None, float | None]:
+    values = pd.to_numeric(values, errors="coerce").dropna()
+    return (float(values.mean()) if len(values) else None,
+            float(values.std(ddof=1)) if len(values) > 1 else None)
+
+
+def summarize(results: pd.DataFrame, attack: bool | None = None) -> dict:
+    """The summary of one setting's result rows.
+
+    Args:
+        results: result rows (``TrialResult.to_dict()`` and the store's extra columns).
+        attack: whether the setting attacks; None reads it from the first row's setting.
+    """
+    n = int(len(results))
+    if attack is None:
+        attack = bool(n) and bool(parse_setting(str(results["setting"].iloc[0]))[0])
+    success = results["success"].astype(bool) if n else pd.Series(dtype=bool)
+    k = int(success.sum())
+    scr = k / n if n else None
+    ok = results[success] if n else results
+    summary = {"n": n, "scr": scr, "scr_ci": list(wilson_interval(k, n)), "asr": (1.0 - scr) if attack and n else None}
+    summary["trigger_delay_mean"], summary["trigger_delay_std"] = _mean_std(ok["trigger_delay_s"]) if n else (None,
+                                                                                                              None)
+    summary["dt_brake_mean"], summary["dt_brake_std"] = _mean_std(ok["dt_brake_s"]) if n else (None, None)
+    summary["n_latency"] = int(pd.to_numeric(ok["dt_brake_s"], errors="coerce").notna().sum()) if n else 0
+    summary["failures"] = {f: int((results["failure"] == f).sum()) for f in FAILURES} if n else {}
+    if attack:
+        summary["asr_ci"] = [1.0 - summary["scr_ci"][1], 1.0 - summary["scr_ci"][0]]
+        early = results[pd.to_numeric(results["attack_start_s"], errors="coerce")
+                        < pd.to_numeric(results["t_star_s"], errors="coerce")] if n else results
+        k_early = int(early["success"].astype(bool).sum()) if len(early) else 0
+        summary["n_attack_before_t_star"] = int(len(early))
+        summary["scr_attack_before_t_star"] = k_early / len(early) if len(early) else None
+        summary["scr_attack_before_t_star_ci"] = list(wilson_interval(k_early, len(early)))
+        summary["lost_frames_mean"] = float(results["lost_frames"].mean()) if n else None
+        summary["attacked_share"] = float(results["attack_start_s"].notna().mean()) if n else None
+    return summary
+
+
+def summarize_settings(frame: pd.DataFrame) -> dict[str, dict]:
+    """:func:`summarize` per setting, settings in sorted order."""
+    if frame.empty:
+        return {}
+    return {str(setting): summarize(rows) for setting, rows in frame.groupby("setting", sort=True)}

@@ -1,0 +1,37 @@
+"""``racf trial`` and ``racf trials``: what they print and write."""
+
+import json
+
+import pandas as pd
+import pytest
+
+from experiments.cli import main
+
+PROTOCOL_SIGNALS = ("d_true", "d_clean", "d_meas", "c_meas", "lidar", "d_fused")
+
+
+def test_cli_trials_json(tmp_path, capsys):
+    assert main(["trials", "-n", "1", "--seed", "11", "--workers", "1", "--json", "--out", str(tmp_path)]) == 0
+    summary = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    assert summary["n"] == 1 and summary["scr"] == 1.0
+    assert list((tmp_path / "trials").glob("*.parquet"))
+
+
+def test_cli_trial_writes_log_and_result(tmp_path, capsys):
+    assert main(["trial", "--sign", "2", "--speed", "1.0", "--seed", "0", "--out", str(tmp_path)]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["success"] is True
+    log = pd.read_parquet(out["log"])
+    assert set(PROTOCOL_SIGNALS) <= set(log.columns)
+
+
+def test_cli_attack_trials_json_has_lost_frames(tmp_path, capsys):
+    assert main(["trials", "--setting", "attack", "--rho", "1.0", "--t-atk", "3.0", "-n", "1", "--seed", "2",
+                 "--workers", "1", "--json", "--out", str(tmp_path)]) == 0
+    summary = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    assert {"n", "scr", "scr_ci", "asr", "dt_brake_mean", "dt_brake_std", "n_latency", "lost_frames_mean"} <= set(summary)
+    assert summary["asr"] == 1.0 - summary["scr"]
+    with pytest.raises(SystemExit, match="2"):
+        main(["trials", "--setting", "clean", "--rho", "0.5", "-n", "1"])
+    with pytest.raises(SystemExit):
+        main(["trials", "--setting", "attack", "--rho", "1.5"])

@@ -1,0 +1,48 @@
+"""Batches of trials on the one batch path: every sign and speed, resume, and the one summary."""
+
+import json
+import math
+
+import pandas as pd
+import pytest
+
+from experiments.sweeps.batches import batch_specs, run_batch
+from experiments.sweeps.summary import summarize, wilson_interval
+
+
+def test_batch_covers_every_sign_and_speed_and_resumes(tmp_path, monkeypatch):
+    specs = batch_specs("clean", 12)
+    assert {(s.sign, s.speed) for s in specs} == {(g, v) for g in range(4) for v in (1.0, 1.5, 2.0)}
+    assert len({s.seed for s in specs}) == 12
+    two = batch_specs("clean", 2, seed=5)
+    first = run_batch(two, tmp_path, workers=1, progress=False)
+    assert len(first) == 2 and (tmp_path / "results.parquet").exists()
+    # A rerun finds both trials finished and runs nothing.
+    import experiments.sweeps.executors as executors_module
+
+    monkeypatch.setattr(executors_module, "run_episode", lambda *a, **k: pytest.fail("re-ran a finished trial"))
+    again = run_batch(two, tmp_path, workers=1, progress=False)
+    pd.testing.assert_frame_equal(first, again)
+
+
+def test_summary_has_the_protocol_keys_and_wilson_interval():
+    rows = pd.DataFrame({"setting": "attack", "success": [True] * 9 + [False],
+                         "trigger_delay_s": [0.02] * 9 + [math.nan], "dt_brake_s": [0.1] * 9 + [math.nan],
+                         "failure": [None] * 9 + ["confirmed_lost"],
+                         "lost_frames": [0] * 9 + [30], "attack_start_s": [math.nan] * 8 + [2.0, 1.2],
+                         "t_star_s": [1.5] * 10})
+    s = summarize(rows, attack=True)
+    assert set(s) == {"n", "scr", "scr_ci", "asr", "asr_ci", "trigger_delay_mean", "trigger_delay_std",
+                      "dt_brake_mean", "dt_brake_std", "n_latency", "failures", "lost_frames_mean", "attacked_share",
+                      "n_attack_before_t_star", "scr_attack_before_t_star", "scr_attack_before_t_star_ci"}
+    # Only the last trial's attack began before t* (1.2 < 1.5 s), and it failed.
+    assert s["n_attack_before_t_star"] == 1 and s["scr_attack_before_t_star"] == 0.0
+    assert s["dt_brake_mean"] == pytest.approx(0.1) and s["trigger_delay_mean"] == pytest.approx(0.02)
+    assert s["failures"]["confirmed_lost"] == 1 and sum(s["failures"].values()) == 1
+    json.dumps(s, allow_nan=False)  # strict JSON
+    assert s["lost_frames_mean"] == 3.0 and s["attacked_share"] == pytest.approx(0.2)
+    assert s["n"] == 10 and s["scr"] == 0.9 and s["asr"] == pytest.approx(0.1) and s["n_latency"] == 9
+    assert s["scr_ci"] == pytest.approx(list(wilson_interval(9, 10)))
+    lo, hi = wilson_interval(9, 10)
+    assert lo == pytest.approx(0.596, abs=1e-3) and hi == pytest.approx(0.982, abs=1e-3)
+    assert summarize(rows.assign(setting="clean"))["asr"] is None
