@@ -9,7 +9,7 @@ STAMP := $(VENV)/.racf-installed
 TORCH := torch==2.13.0
 export MUJOCO_GL ?= egl
 
-.PHONY: demo test test-all bench bench-sim snapshot clean
+.PHONY: demo test test-all check-slow bench bench-sim snapshot trials bench-detector clean
 
 $(PY):
 	$(PYTHON) -m venv $(VENV)
@@ -24,11 +24,16 @@ $(STAMP): pyproject.toml | $(PY)
 demo: $(STAMP)
 	$(VENV)/bin/racf demo --out outputs/demo
 
+# The default run leaves out the checks marked slow (Ray, kill-and-resume, bench-loop, full
+# collection, PPO); `make test-all` runs everything, `make check-slow` only those.
 test: $(STAMP)
-	$(PY) -m pytest -q
+	$(PY) -m pytest -q --durations=10
 
 test-all: $(STAMP)
-	$(PY) -m pytest -q -m ""
+	$(PY) -m pytest -q -m "" --durations=10
+
+check-slow: $(STAMP)
+	$(PY) -m pytest -q -m slow --durations=10
 
 # The offline repair benchmark on the default dataset (collected first if missing).
 bench: $(STAMP)

@@ -36,7 +36,7 @@ class DistanceEstimator(Protocol):
 
 
 class RawDepthEstimator:
-    """d~ as perception measured it: no defence."""
+    """d~ as perception measured it: no defence (NaN without a detection)."""
 
     name = "raw"
 
@@ -51,7 +51,7 @@ class RawDepthEstimator:
 
 
 class EKFEstimator:
-    """The EKF baseline (:mod:`controllers.ekf`): depth and LiDAR fused with odometry."""
+    """The EKF baseline: depth and LiDAR fused with odometry (:mod:`controllers.ekf`)."""
 
     name = "ekf"
 

@@ -4,8 +4,10 @@ and their handlers. Parsing and printing only; the work lives in the packages be
 from __future__ import annotations
 
 import argparse
+import sys
 
 from experiments.cli import bench, data, odca, sweep, trials, view
+from experiments.cli.common import UsageError
 
 __all__ = ["main", "build_parser", "GROUPS"]
 
@@ -24,4 +26,8 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     """Runs one command; returns its exit code (2: bad input, nothing run)."""
     args = build_parser().parse_args(argv)
-    return args.handler(args)
+    try:
+        return args.handler(args)
+    except UsageError as err:
+        print(err, file=sys.stderr)
+        return 2

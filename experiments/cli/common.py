@@ -10,8 +10,9 @@ from typing import NoReturn
 from experiments.episode.estimators import ESTIMATORS
 from sim.attacks import ATTACKS
 
-__all__ = ["sign", "positive", "speed", "share", "duration", "count", "pair", "fail", "fmt_ci", "DEFAULT_WORKERS",
-           "episode_flags", "episode_params", "backend_flags", "attack_help", "estimator_help"]
+__all__ = ["UsageError", "sign", "positive", "speed", "share", "duration", "count", "pair", "fail", "fmt_ci", "DEFAULT_WORKERS",
+           "episode_flags", "episode_params", "backend_flags", "attack_help", "estimator_help", "registry_rows",
+           "registry_markdown"]
 
 #: Parallel episodes by default: two, or one on a single-core machine.
 DEFAULT_WORKERS = min(2, os.cpu_count() or 1)
@@ -74,8 +75,17 @@ def pair(name: str, values: list[float] | None, default: tuple[float, float]) ->
     return (values[0], values[-1])
 
 
+class UsageError(Exception):
+    """Bad input a handler found before any work: ``main`` prints it and returns 2."""
+
+
 def fail(command: str, message: str) -> NoReturn:
-    """Exit 2 with ``racf COMMAND: MESSAGE`` on stderr (bad input, before any work)."""
+    """Stops the command: ``racf COMMAND: MESSAGE`` on stderr, and exit code 2."""
+    raise UsageError(f"racf {command}: {message}")
+
+
+def flag_error(command: str, message: str) -> NoReturn:
+    """Exits with code 2 as argparse does for a bad flag (the episode flags are checked together)."""
     print(f"racf {command}: {message}", file=sys.stderr)
     raise SystemExit(2)
 
@@ -92,6 +102,26 @@ def attack_help() -> str:
 def estimator_help() -> str:
     """The registered estimators, for a flag's help."""
     return ", ".join(ESTIMATORS)
+
+
+def registry_rows(registry: dict) -> list[tuple[str, str]]:
+    """(name, one-line description) of each registered class, from its docstring's first sentence."""
+    rows = []
+    for name, cls in registry.items():
+        doc = " ".join((cls.__doc__ or "").strip().split("\n\n")[0].split())
+        first = doc.replace("``", "`").split(". ")[0].split(" (:mod:")[0].rstrip(".")
+        rows.append((name, first))
+    return rows
+
+
+def registry_markdown() -> str:
+    """The README's tables of attacks and estimators, made from the registries."""
+    lines = []
+    for title, registry in (("attack", ATTACKS), ("estimator", ESTIMATORS)):
+        lines += [f"| {title} | what it does |", "|---|---|"]
+        lines += [f"| `{name}` | {text} |" for name, text in registry_rows(registry)]
+        lines.append("")
+    return "\n".join(lines)
 
 
 def backend_flags(p: argparse.ArgumentParser, workers_help: str = "parallel processes") -> None:
@@ -133,9 +163,9 @@ def episode_params(args: argparse.Namespace, command: str, table: bool = False) 
 
     try:
         if table and (args.setting is not None or args.attack is not None or args.estimator is not None):
-            fail(command, "--table runs its own settings; drop --setting/--attack/--estimator")
+            flag_error(command, "--table runs its own settings; drop --setting/--attack/--estimator")
         if args.setting is not None and (args.attack is not None or args.estimator is not None):
-            fail(command, "give --setting, or --attack/--estimator, not both")
+            flag_error(command, "give --setting, or --attack/--estimator, not both")
         if table:
             setting = None
         elif args.setting is not None:
@@ -145,9 +175,9 @@ def episode_params(args: argparse.Namespace, command: str, table: bool = False) 
             attacks = [a.strip() for a in args.attack.split(",") if a.strip()] if args.attack else []
             setting = setting_name(attacks, args.estimator or "raw")
         if setting is not None and not parse_setting(setting)[0] and (args.rho is not None or args.t_atk is not None):
-            fail(command, "--rho and --t-atk apply to settings with an attack")
+            flag_error(command, "--rho and --t-atk apply to settings with an attack")
         params = {"rho": pair("--rho", args.rho, STRONG_RHO), "t_atk": pair("--t-atk", args.t_atk, STRONG_T_ATK_S),
                   "delay_ms": args.delay_ms, "control_hz": args.control_hz, "stable_steps": args.stable_steps}
     except ValueError as err:
-        fail(command, str(err))
+        flag_error(command, str(err))
     return setting, params

@@ -6,8 +6,8 @@ import argparse
 import json
 from pathlib import Path
 
-from experiments.cli.common import (backend_flags, count, episode_flags, episode_params, fail, fmt_ci, sign,
-                                        speed)
+from experiments.cli.common import (backend_flags, count, episode_flags, episode_params, fail, fmt_ci,
+                                    registry_markdown, registry_rows, sign, speed)
 
 __all__ = ["register"]
 
@@ -51,6 +51,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     st.add_argument("--out", type=Path, default=Path("outputs/attack_study"), help="output folder (trials are reused)")
     st.add_argument("--json", action="store_true", help="print one JSON object instead of tables")
     st.set_defaults(handler=_attack_study)
+
+    ls = sub.add_parser("list", help="the registered attacks and distance estimators, with what each does")
+    ls.add_argument("--markdown", action="store_true", help="print the README's Markdown tables")
+    ls.set_defaults(handler=_list)
 
 
 def _trial(args: argparse.Namespace) -> int:
@@ -163,4 +167,19 @@ def _attack_study(args: argparse.Namespace) -> int:
             print(f"{r['label']:<42}{r['n']:>4}{r['lost_frames_mean']:>13.1f}"
                   f"{r['asr']:>8.2f} {fmt_ci(*r['asr_ci']):>13}{r['scr']:>6.2f}{lat:>18}")
     print(f"\ntrials and logs under {args.out}")
+    return 0
+
+
+def _list(args: argparse.Namespace) -> int:
+    from experiments.episode.estimators import ESTIMATORS
+    from sim.attacks import ATTACKS
+
+    if args.markdown:
+        print(registry_markdown())
+        return 0
+    for title, registry in (("attacks (--attack, joined by ',' or '+')", ATTACKS),
+                            ("estimators (--estimator)", ESTIMATORS)):
+        print(title)
+        for name, text in registry_rows(registry):
+            print(f"  {name:<24}{text}")
     return 0

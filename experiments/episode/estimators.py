@@ -34,8 +34,11 @@ def _odca(checkpoint: str | None):
 
 
 class ODCAEstimator:
-    """ODCA's fused distance, d_fused; ``last`` holds the step's full output (gate w, residuals)
-    and ``diagnostics()`` logs the gate."""
+    """ODCA's d_fused: depth passed through while depth and LiDAR agree, repaired from the
+    Chronos-2 prior, the delta head and the LiDAR when the gate opens.
+
+    ``last`` holds the step's full output (gate w, residuals); ``diagnostics()`` logs the gate.
+    """
 
     name = "odca"
 

@@ -112,6 +112,7 @@ def test_same_seed_same_bytes_and_resume_redoes_nothing(tmp_path, small, monkeyp
     assert (a / "split.json").read_bytes() == (small / "split.json").read_bytes()
 
 
+@pytest.mark.slow
 def test_fresh_recording_gives_identical_bytes(tmp_path, small):
     collect(tmp_path / "x", drives=3, seed=3, workers=2, progress=False, duration_s=SHORT)
     assert (tmp_path / "x" / "dataset.parquet").read_bytes() == (small / "dataset.parquet").read_bytes()

@@ -42,3 +42,23 @@ def test_raw_depth_has_nothing_without_a_detection_and_unknown_names_fail():
     assert out[0] == 1.0 and math.isnan(out[1])
     with pytest.raises(ValueError, match="estimator must be one of"):
         make_estimator("kalman")
+
+
+@pytest.mark.parametrize("name", ESTIMATORS)
+def test_each_estimator_is_found_by_its_own_name_and_follows_the_protocol(name):
+    from controllers import DistanceEstimator
+
+    est = make_estimator(name)
+    assert est.name == name and isinstance(est, DistanceEstimator)
+    est.reset()
+    est.estimate(_samples([1.5])[0], 1.0, 0.02)
+    diagnostics = est.diagnostics()
+    assert all(isinstance(k, str) and isinstance(v, float) for k, v in diagnostics.items())
+
+
+def test_odca_logs_its_gate_through_diagnostics():
+    est = make_estimator("odca")
+    est.reset()
+    assert est.diagnostics() == {}
+    est.estimate(_samples([1.5])[0], 1.0, 0.02)
+    assert set(est.diagnostics()) == {"w"} and 0.0 <= est.diagnostics()["w"] <= 1.0

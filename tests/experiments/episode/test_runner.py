@@ -1,8 +1,8 @@
 """The step loop: one closed-loop episode end to end, its log, determinism and its outcome."""
 
+import math
 
 import numpy as np
-
 import pandas as pd
 import pytest
 
@@ -119,3 +119,10 @@ def test_bad_trial_inputs_are_clear_errors(capsys):
     with pytest.raises(SystemExit):
         main(["trials", "-n", "0"])
     assert "must be >= 1" in capsys.readouterr().err
+
+
+def test_an_attack_without_the_patch_has_its_own_start_and_duration():
+    result, log = run_trial(TrialSpec("clean+depth_blackout", 0, 1.0, 0, t_atk=2.0))
+    assert log["attack_active"].any() and math.isnan(result.rho)
+    assert result.attack_start_s == pytest.approx(log.loc[log["attack_active"], "t"].iloc[0], abs=0.021)
+    assert result.t_atk_s == pytest.approx(2.0, abs=0.021)

@@ -46,3 +46,19 @@ def test_summary_has_the_protocol_keys_and_wilson_interval():
     lo, hi = wilson_interval(9, 10)
     assert lo == pytest.approx(0.596, abs=1e-3) and hi == pytest.approx(0.982, abs=1e-3)
     assert summarize(rows.assign(setting="clean"))["asr"] is None
+
+
+def test_a_sweeps_report_gives_the_scr_of_episodes_attacked_before_t_star(tmp_path):
+    from experiments.sweeps.report import write_report
+
+    rows = pd.DataFrame({"trial_id": [f"t{i}" for i in range(4)], "setting": "attack", "attack": "patch",
+                         "estimator": "raw", "success": [True, True, False, True],
+                         "trigger_delay_s": [0.0, 0.0, math.nan, 0.0], "dt_brake_s": [0.1, 0.1, math.nan, 0.1],
+                         "failure": [None, None, "confirmed_lost", None], "lost_frames": [0, 0, 30, 5],
+                         "attack_start_s": [3.0, 3.0, 1.0, 1.1], "t_star_s": [2.0] * 4,
+                         "rho_set": 1.0, "t_atk_set": 2.0})
+    write_report(rows, tmp_path, "t")
+    summary = json.loads((tmp_path / "summary.json").read_text())["attack"]
+    assert summary["n_attack_before_t_star"] == 2 and summary["scr_attack_before_t_star"] == 0.5
+    assert "| attack | 4 | 0.75 [" in (tmp_path / "summary.md").read_text()
+    assert "0.50 [" in (tmp_path / "summary.md").read_text()

@@ -57,6 +57,7 @@ def test_sweep_runs_every_episode_and_reports(uninterrupted):
     assert again["done"] == 0 and again["reused"] == 4
 
 
+@pytest.mark.slow
 def test_sigkilled_sweep_resumes_to_the_same_rows(uninterrupted, tmp_path):
     folder, _, reference = uninterrupted
     out = tmp_path / "b"
@@ -77,6 +78,7 @@ def test_sigkilled_sweep_resumes_to_the_same_rows(uninterrupted, tmp_path):
     pd.testing.assert_frame_equal(ResultStore(out).rows(), reference)
 
 
+@pytest.mark.slow
 def test_ray_backend_gives_the_local_pool_rows(uninterrupted, tmp_path):
     folder, _, reference = uninterrupted
     run_sweep(load_spec(folder / "tiny.toml"), TINY, tmp_path / "ray", backend="ray", workers=2, progress=False)
@@ -161,6 +163,7 @@ def test_a_folder_of_another_sweep_is_refused(uninterrupted):
         run_sweep(other, "x", folder / "a", progress=False)
 
 
+@pytest.mark.slow
 def test_bench_loop_prints_its_ratios(capsys):
     assert main(["bench-loop", "-n", "1", "--rate-episodes", "1", "--no-ray", "--json"]) == 0
     r = json.loads(capsys.readouterr().out.strip().splitlines()[-1])

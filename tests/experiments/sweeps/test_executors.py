@@ -1,0 +1,41 @@
+"""Executors: where episodes run. A local Ray run starts its own Ray, never a stranger's."""
+
+import os
+from pathlib import Path
+
+import pytest
+
+from experiments.cli import main
+from experiments.episode import TrialSpec
+from experiments.sweeps.executors import executor
+from experiments.sweeps.run import run_episodes
+from experiments.sweeps.store import ResultStore
+
+
+def test_an_address_without_ray_is_refused_before_any_work(tmp_path, capsys):
+    with pytest.raises(ValueError, match="--backend ray"):
+        next(executor("local", [TrialSpec("clean", 1, 1.5, 0)], str(tmp_path), 1, address="10.0.0.1:6379"))
+    for argv in (["trials", "-n", "1"], ["sweep", "smoke.toml"], ["attack-study", "strong"], ["collect"]):
+        assert main([*argv, "--address", "10.0.0.1:6379", "--out", str(tmp_path / "out")]) == 2
+        assert "needs --backend ray" in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.slow
+def test_a_local_ray_run_ignores_a_stale_cluster_address(tmp_path, monkeypatch):
+    # A dead cluster's address, as `ray start --head` leaves behind when it dies: in the
+    # environment and, where no real cluster's file is there, in Ray's address file.
+    monkeypatch.setenv("RAY_ADDRESS", "127.0.0.1:6399")
+    address_file = Path("/tmp/ray/ray_current_cluster")
+    made = not address_file.exists()
+    if made:
+        address_file.parent.mkdir(parents=True, exist_ok=True)
+        address_file.write_text("127.0.0.1:6399")
+    try:
+        specs = [TrialSpec("clean", 1, 1.5, 0)]
+        rows, ran = run_episodes(specs, ResultStore(tmp_path), backend="ray", workers=1, progress=False)
+    finally:
+        if made:
+            address_file.unlink()
+    assert ran == 1 and bool(rows["success"].iloc[0])
+    assert os.environ["RAY_ADDRESS"] == "127.0.0.1:6399"

@@ -1,0 +1,61 @@
+"""The store's writer and the code version: whole files or none, and an id that follows the code."""
+
+import os
+
+import pandas as pd
+import pytest
+
+import experiments.sweeps.store as store_module
+from experiments.sweeps.store import ResultStore, atomic_write, code_version
+
+
+def test_atomic_write_writes_every_kind_and_leaves_no_temporary(tmp_path):
+    atomic_write(tmp_path / "a.txt", "text")
+    atomic_write(tmp_path / "b.bin", b"\x00\x01")
+    atomic_write(tmp_path / "c.parquet", pd.DataFrame({"x": [1, 2]}))
+    atomic_write(tmp_path / "d.txt", lambda path: path.write_text("by a writer"))
+    assert (tmp_path / "a.txt").read_text() == "text" and (tmp_path / "b.bin").read_bytes() == b"\x00\x01"
+    assert pd.read_parquet(tmp_path / "c.parquet")["x"].tolist() == [1, 2]
+    assert (tmp_path / "d.txt").read_text() == "by a writer"
+    assert not list(tmp_path.glob("*.tmp"))
+
+
+def test_a_failed_write_keeps_the_old_file_whole(tmp_path):
+    target = tmp_path / "result.json"
+    atomic_write(target, "old")
+
+    def crash(path):
+        path.write_text("half")
+        raise RuntimeError("killed mid-write")
+
+    with pytest.raises(RuntimeError):
+        atomic_write(target, crash)
+    assert target.read_text() == "old" and os.listdir(tmp_path) == ["result.json"]
+    with pytest.raises(TypeError, match="str, bytes"):
+        atomic_write(target, 3)
+
+
+def test_code_version_follows_content_and_names(tmp_path, monkeypatch):
+    monkeypatch.setattr(store_module, "ROOT", tmp_path)
+    (tmp_path / "pkg").mkdir()
+    (tmp_path / "pkg" / "a.py").write_text("x = 1\n")
+    (tmp_path / "pkg" / "notes.md").write_text("not code")
+    first = code_version.__wrapped__("pkg")
+    (tmp_path / "pkg" / "notes.md").write_text("still not code")
+    assert code_version.__wrapped__("pkg") == first
+    (tmp_path / "pkg" / "a.py").write_text("x = 2\n")
+    assert code_version.__wrapped__("pkg") != first
+    (tmp_path / "pkg" / "a.py").rename(tmp_path / "pkg" / "b.py")
+    assert code_version.__wrapped__("pkg") != first
+    with pytest.raises(ValueError, match="no 'missing'"):
+        code_version.__wrapped__("missing")
+
+
+def test_rows_come_back_in_the_order_asked_and_a_missing_one_is_named(tmp_path):
+    store = ResultStore(tmp_path)
+    for i in ("b", "a"):
+        store.write(i, {"trial_id": i, "success": True})
+    assert store.rows()["trial_id"].tolist() == ["a", "b"]
+    assert store.rows(["b", "a"])["trial_id"].tolist() == ["b", "a"]
+    with pytest.raises(KeyError, match="'c'"):
+        store.rows(["a", "c"])
