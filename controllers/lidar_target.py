@@ -1,7 +1,7 @@
 """The LiDAR reference l(t): the detected target's depth along the camera's optical axis,
 measured by the 2D LiDAR and tracked with odometry.
 
-:class:`LidarTargetTracker` implements the protocol's ``l`` (reference/protocol.md):
+:class:`LidarTargetTracker` implements the protocol's ``l`` (docs/protocol.md):
 
 1. **Predict** (every control step). The tracked target is a point in the body frame (x
    forward, y left, origin at the car's reference point). Each step moves it by the car's

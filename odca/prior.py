@@ -118,7 +118,7 @@ class Chronos2Prior:
                 def forward(self, context, group_ids):
                     return self.model(context, group_ids=group_ids, num_output_patches=n_patches).quantile_preds
 
-            with warnings.catch_warnings():
+            with warnings.catch_warnings(), _quiet_transformers():
                 warnings.simplefilter("ignore")  # tracer warnings about Python values
                 self._traced[key] = torch.jit.trace(_Quantiles().eval(), (batch, self._group_ids), check_trace=False)
         return self._traced[key](batch, self._group_ids)

@@ -35,25 +35,19 @@ def positive(value: str) -> float:
     return v
 
 
-def speed(value: str) -> float:
-    v = float(value)
-    if not 0.1 <= v <= 3.0:
-        raise argparse.ArgumentTypeError(f"speed must be in [0.1, 3.0] m/s, got {value}")
-    return v
+def _within(name: str, low: float, high: float, unit: str = ""):
+    """An argparse type: a float in [low, high]; the error names the flag's quantity and range."""
+    def parse(value: str) -> float:
+        v = float(value)
+        if not low <= v <= high:
+            raise argparse.ArgumentTypeError(f"{name} must be in [{low:g}, {high:g}]{unit}, got {value}")
+        return v
+    return parse
 
 
-def share(value: str) -> float:
-    v = float(value)
-    if not 0.0 <= v <= 1.0:
-        raise argparse.ArgumentTypeError(f"rho must be in [0, 1], got {value}")
-    return v
-
-
-def duration(value: str) -> float:
-    v = float(value)
-    if not 0.0 <= v <= 60.0:
-        raise argparse.ArgumentTypeError(f"t-atk must be in [0, 60] s, got {value}")
-    return v
+speed = _within("speed", 0.1, 3.0, " m/s")
+share = _within("rho", 0.0, 1.0)
+duration = _within("t-atk", 0.0, 60.0, " s")
 
 
 def count(value: str) -> int:

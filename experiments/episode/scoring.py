@@ -1,6 +1,6 @@
 """Scoring: a pure function from an episode's per-step log to each target's outcome.
 
-Definitions (``shared/reference/protocol.md``):
+Definitions (``docs/protocol.md``):
 
 - success: the car comes to rest (speed < 0.05 m/s) with its front bumper 0 to 0.60 m
   before the stop line;

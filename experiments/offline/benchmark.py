@@ -3,7 +3,7 @@
 Per split (by series; leave one target out) the benchmark trains what needs training on
 that split's train series (ODCA's head and gate, the four neuralforecast models; cached by
 what made them, so a rerun only rescores), corrupts the test series with each preset
-(fixed seeds per series), runs every method causally and scores it (``reference/protocol.md``).
+(fixed seeds per series), runs every method causally and scores it (``docs/protocol.md``).
 It adds the loss ablation (ODCA's head retrained per objective), BD / RGR, the complexity
 figures and the clean pass-through, and writes ``results.json``, Markdown / CSV tables and
 PNG figures (:mod:`experiments.offline.report`).
@@ -32,6 +32,8 @@ from experiments.offline.scoring import (bootstrap_rmse, diagnostic_scores, erro
 __all__ = ["BenchConfig", "ABLATION", "load_splits", "run_benchmark", "PRESETS"]
 
 PRESETS = ("weak", "mid", "strong")
+#: The source a benchmark result depends on: the methods (ODCA, the EKF), the corruption and the scoring.
+BENCH_CODE = ("odca", "controllers", "experiments/data", "experiments/offline")
 
 
 def _ablation_rows() -> dict[str, dict[str, float]]:
@@ -151,8 +153,9 @@ def _trained_odca(ds: QCarDataset, prior, cfg: BenchConfig, weights: dict, tag: 
     from odca.prior import SHIPPED_PRIOR
     from odca.train import fit, initial_model, prepare_split
 
+    code = code_version("odca", "experiments/data")
     key = hashlib.sha256(json.dumps({"data": _frame_hash(ds.clean("train"), ds.clean("val")), "weights": weights,
-                                     "epochs": cfg.odca_epochs, "seed": cfg.seed, "code": code_version("odca"),
+                                     "epochs": cfg.odca_epochs, "seed": cfg.seed, "code": code,
                                      "prior": code_version(str(SHIPPED_PRIOR))},
                                     sort_keys=True).encode()).hexdigest()[:16]
     folder = cfg.cache_dir / f"odca-{tag}-{key}"
@@ -289,7 +292,7 @@ def run_benchmark(cfg: BenchConfig, progress: bool = True, datasets: dict[str, Q
     results["ablation"] = ablation
     frames = [datasets[s].frame for s in cfg.splits[:1]]
     results["dataset"] = {"path": str(cfg.data), "quick": cfg.quick, "sha": _frame_hash(*frames),
-                          "code": code_version("odca", "experiments/offline"), "prior": code_version(str(SHIPPED_PRIOR))}
+                          "code": code_version(*BENCH_CODE), "prior": code_version(str(SHIPPED_PRIOR))}
     results["wall_s"] = time.perf_counter() - t0
     results["_traces"] = traces  # for the figures; not written to results.json
     return results

@@ -1,4 +1,4 @@
-"""Scoring rules of the offline benchmark (``reference/protocol.md``), pure numpy + scikit-learn.
+"""Scoring rules of the offline benchmark (``docs/protocol.md``), pure numpy + scikit-learn.
 
 Every function takes aligned per-step arrays and returns plain floats, or ``None`` where the
 metric is undefined (no samples, one class only), so results serialise as strict JSON.

@@ -199,7 +199,7 @@ def write_report(results: dict, out: Path) -> dict[str, Path]:
     quick = " (--quick: not a result to quote)" if clean["dataset"]["quick"] else ""
     summary = ["# Offline repair benchmark", "",
                f"`racf bench` on `{clean['dataset']['path']}`{quick}; "
-               f"{clean['wall_s']:.0f} s. Scored per `reference/protocol.md`: causal methods, RMSE/MAE in metres, "
+               f"{clean['wall_s']:.0f} s. Scored per `docs/protocol.md`: causal methods, RMSE/MAE in metres, "
                "95 % intervals from resampling test series.", "",
                "## Recovery (against d_clean, all samples)", "", tables["recovery"],
                "## Sensor-level baselines (strong)", "", tables["sensors_strong"],

@@ -7,7 +7,6 @@ import pytest
 
 import sim
 from controllers import DetectorConfig, StopSignDetector
-from experiments.bench.detector import occlude
 
 DET = StopSignDetector()
 
@@ -23,6 +22,20 @@ def frames():
             assert info["sign_mask"].sum() >= 12, (sign, run_up)
             out.append((sign, obs["rgb"], info["sign_mask"], info["d_true"]))
     env.close()
+    return out
+
+
+def _occlude(rgb: np.ndarray, box: tuple[int, int, int, int], share: float, side: str,
+             rng: np.random.Generator) -> np.ndarray:
+    """Covers ``share`` of a box's rows (``side='top'``) or columns (``'left'``) with coloured noise."""
+    x0, y0, x1, y1 = box
+    out = rgb.copy()
+    if side == "top":
+        region = (slice(y0, y0 + round(share * (y1 - y0))), slice(x0, x1))
+    else:
+        region = (slice(y0, y1), slice(x0, x0 + round(share * (x1 - x0))))
+    base = rng.uniform(40, 200, size=3)
+    out[region] = np.clip(base + rng.normal(0, 35, size=out[region].shape), 0, 255).astype(np.uint8)
     return out
 
 
@@ -54,7 +67,7 @@ def test_confidence_falls_as_more_of_the_sign_is_occluded(frames):
             base = DET.detect(rgb)
             confs = []
             for share in (0.0, 0.3, 0.6, 0.9):
-                img = occlude(rgb, base.box, share, side, rng)
+                img = _occlude(rgb, base.box, share, side, rng)
                 cands = [c.confidence for c in DET.candidates(img) if (c.mask & base.mask).any()]
                 confs.append(max(cands, default=0.0))
             # Falls with the share; once below the threshold the last two may trade places by noise.

@@ -79,3 +79,16 @@ def test_traced_forecasts_are_bit_identical_to_the_eager_model():
         eager = prior.model(x, group_ids=torch.arange(8), num_output_patches=1).quantile_preds
         traced = prior._forward(x, 1)
     assert torch.equal(eager, traced)
+
+
+def test_loading_and_forecasting_print_nothing_and_leave_transformers_as_it_was():
+    import subprocess
+    import sys
+
+    code = ("import numpy as np; from transformers.utils import logging as l; from odca import Chronos2Prior; "
+            "before = (l.get_verbosity(), l.is_progress_bar_enabled()); p = Chronos2Prior(); "
+            "p.forecast(np.linspace(2, 1, 64)[None], 16); "
+            "assert (l.get_verbosity(), l.is_progress_bar_enabled()) == before, 'settings changed'")
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    assert "Loading weights" not in run.stderr and "loss_type" not in run.stderr, run.stderr

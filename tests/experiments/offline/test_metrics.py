@@ -1,4 +1,4 @@
-"""Offline scoring rules against hand-computed cases (reference/protocol.md)."""
+"""Offline scoring rules against hand-computed cases (docs/protocol.md)."""
 
 import math
 
