@@ -179,17 +179,20 @@ def test_route_path_rejects_non_edges():
         GRAPH.route_path([0])
 
 
+def _assert_projects_back(path, s, offset):
+    """A point ``offset`` m left of the path at ``s`` projects to ``s`` with that lateral offset."""
+    x, y, h = path.pose_at(s)
+    s_proj, lateral = path.project(np.array([x, y]) + offset * np.array([-math.sin(h), math.cos(h)]))
+    assert lateral == pytest.approx(offset, abs=2e-3)
+    assert s_proj == pytest.approx(s, abs=0.01)
+
+
 @pytest.mark.parametrize("edge", [(0, 2), (6, 8), (17, 16), (13, 19)])
 @pytest.mark.parametrize("offset", [0.1, -0.1])
 def test_project_offset_point(edge, offset):
     path = GRAPH.paths[edge]
     for frac in (0.25, 0.5, 0.75):
-        s = frac * path.length
-        x, y, h = path.pose_at(s)
-        p = np.array([x, y]) + offset * np.array([-math.sin(h), math.cos(h)])
-        s_proj, lateral = path.project(p)
-        assert lateral == pytest.approx(offset, abs=2e-3)
-        assert s_proj == pytest.approx(s, abs=0.01)
+        _assert_projects_back(path, frac * path.length, offset)
 
 
 def test_project_with_hint_stays_on_branch():
@@ -228,12 +231,8 @@ def test_project_inverts_pose_at(edge, frac):
 @given(frac=st.floats(0.0, 1.0), offset=st.floats(-0.12, 0.12))
 def test_project_lateral_offset_property(frac, offset):
     path = GRAPH.paths[(8, 10)]
-    s = frac * (path.length - 0.3) + 0.15  # away from the ends, where the nearest point is the foot
-    x, y, h = path.pose_at(s)
-    p = np.array([x, y]) + offset * np.array([-math.sin(h), math.cos(h)])
-    s_proj, lateral = path.project(p)
-    assert lateral == pytest.approx(offset, abs=2e-3)
-    assert s_proj == pytest.approx(s, abs=0.01)
+    # Away from the ends, where the nearest point is the foot.
+    _assert_projects_back(path, frac * (path.length - 0.3) + 0.15, offset)
 
 
 def test_path_validation():

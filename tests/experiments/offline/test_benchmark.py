@@ -41,26 +41,27 @@ def _write_dataset(folder, n_series=12, seed=0):
     return folder
 
 
+def _bench_json(data, out) -> dict:
+    import io
+    from contextlib import redirect_stdout
+
+    buf = io.StringIO()
+    with redirect_stdout(buf):
+        code = main(["bench", "--quick", "--dataset", str(data), "--out", str(out), "--json"])
+    assert code == 0
+    return json.loads(buf.getvalue())
+
+
 @pytest.fixture(scope="module")
 def bench_runs(tmp_path_factory):
     root = tmp_path_factory.mktemp("bench")
     data = _write_dataset(root / "data")
     out = root / "out"
-    runs = []
-    for _ in range(2):
-        import io
-        from contextlib import redirect_stdout
-
-        buf = io.StringIO()
-        with redirect_stdout(buf):
-            code = main(["bench", "--quick", "--dataset", str(data), "--out", str(out), "--json"])
-        assert code == 0
-        runs.append(json.loads(buf.getvalue()))
-    return out, runs
+    return out, [_bench_json(data, out)], data
 
 
 def test_json_has_every_split_preset_and_method(bench_runs):
-    _, (results, _) = bench_runs
+    _, (results,), _ = bench_runs
     for split in ("by_series", "leave_target_out"):
         for preset in ("weak", "mid", "strong"):
             for method in METHODS:
@@ -79,7 +80,7 @@ def test_json_has_every_split_preset_and_method(bench_runs):
 
 
 def test_results_folder_holds_strict_json_tables_and_figures(bench_runs):
-    out, (results, _) = bench_runs
+    out, (results,), _ = bench_runs
 
     def reject(token):
         raise AssertionError(f"non-strict JSON constant {token}")
@@ -98,8 +99,10 @@ def test_results_folder_holds_strict_json_tables_and_figures(bench_runs):
     assert "Recovery" in (out / "README.md").read_text()
 
 
+@pytest.mark.slow
 def test_rerun_reuses_trained_models_and_gives_the_same_numbers(bench_runs):
-    _, (first, second) = bench_runs
+    out, (first,), data = bench_runs
+    second = _bench_json(data, out)
     for split in ("by_series", "leave_target_out"):
         assert all(v["train_s"] is not None for v in first["training"][split]["nf"].values())
         assert all(v["train_s"] is None for v in second["training"][split]["nf"].values())
