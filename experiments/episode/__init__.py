@@ -1,5 +1,6 @@
-"""One closed-loop episode: spec (what to run), stack (perception + estimator + brakers),
-runner (the one step loop) and scoring (pure: per-step log -> outcome)."""
+"""One closed-loop episode: spec (what to run), car (the map and camera knowledge the car is
+given), stack (perception + estimator + brakers), runner (the one step loop) and scoring
+(pure: per-step log -> outcome). Batches of episodes run in :mod:`experiments.sweeps`."""
 
 from experiments.episode.estimators import ESTIMATORS, make_estimator
 from experiments.episode.runner import TrialResult, reset_options, run_trial

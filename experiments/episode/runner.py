@@ -65,6 +65,8 @@ class TrialResult:
 
     ``trigger_delay_s`` = t(brake) - t*; ``dt_brake_s``: t* to braking within 0.60 m of
     the line (the paper's latency); ``failure``: where a failed first target went wrong.
+    ``attack_start_s`` and ``t_atk_s`` are the first window of the attack that began first
+    (the patch on a tie; NaN: no attack began); ``rho`` is the patch's (NaN: no patch).
     """
 
     trial_id: str

@@ -28,7 +28,7 @@ from sim.attacks import ATTACKS
 from sim.attacks.schedule import as_range
 from sim.world.drives import DriveSpec, draw_drive
 
-__all__ = ["TrialSpec", "parse_setting", "setting_name", "code_version", "TARGETS", "DRIVE_S", "STRONG_RHO",
+__all__ = ["TrialSpec", "parse_setting", "setting_name", "EPISODE_CODE", "TARGETS", "DRIVE_S", "STRONG_RHO",
            "STRONG_T_ATK_S", "EXTRA_ATTACKS", "TABLE_SETTINGS"]
 
 #: What a trial approaches (``TrialSpec.sign`` is the index): the four stop signs or the two

@@ -1,2 +1,4 @@
-"""Monte Carlo attack sweeps: specs (grid / random), the result store (content-hashed ids,
-resume), executors (a local spawn pool or Ray) and the report."""
+"""Every batch of episodes, on one path: specs (grid / random), the result store (content-hashed
+ids, parts written whole, resume), executors (in-process, a spawned pool or Ray), the one
+summary and the report. Sweeps, ``racf trials`` and its table (``batches``), the attack study
+(``studies``) and dataset collection all run through :func:`experiments.sweeps.run.run_episodes`."""
