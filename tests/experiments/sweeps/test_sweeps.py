@@ -161,14 +161,3 @@ def test_a_folder_of_another_sweep_is_refused(uninterrupted):
     other = SweepSpec(name="other", mode=other.mode, repeats=1, seed=9, space=other.space)
     with pytest.raises(ValueError, match="another sweep"):
         run_sweep(other, "x", folder / "a", progress=False)
-
-
-@pytest.mark.slow
-def test_bench_loop_prints_its_ratios(capsys):
-    assert main(["bench-loop", "-n", "1", "--rate-episodes", "1", "--no-ray", "--json"]) == 0
-    r = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
-    for key in ("rtf_clean", "rtf_attack_odca", "episodes_per_min_1", "episodes_per_min_2", "scaling_efficiency"):
-        assert r[key] > 0, key
-    assert r["scaling_efficiency"] == pytest.approx(r["episodes_per_min_2"] / (2 * r["episodes_per_min_1"]))
-    # Start-up is reported apart from the rates.
-    assert r["ready_s_1"] > 0 and r["ready_s_2"] > 0 and "ready_s_ray" not in r
