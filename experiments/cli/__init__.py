@@ -7,7 +7,7 @@ import argparse
 import sys
 
 from experiments.cli import bench, data, odca, sweep, trials, view
-from experiments.cli.common import UsageError
+from experiments.cli.common import UsageError, fail
 
 __all__ = ["main", "build_parser", "GROUPS"]
 
@@ -27,6 +27,8 @@ def main(argv: list[str] | None = None) -> int:
     """Runs one command; returns its exit code (2: bad input, nothing run)."""
     args = build_parser().parse_args(argv)
     try:
+        if getattr(args, "address", None) is not None and args.backend != "ray":
+            fail(args.command, "--address joins a Ray cluster: it needs --backend ray")
         return args.handler(args)
     except UsageError as err:
         print(err, file=sys.stderr)

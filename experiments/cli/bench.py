@@ -18,8 +18,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     b.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
     b.set_defaults(handler=_bench_sim)
 
-    ob = sub.add_parser("bench", help="the offline repair benchmark: raw, LiDAR, EKF, Chronos-2, SOFTS, NHITS, DLinear, "
-                                      "NLinear and ODCA on both splits and presets (tables, figures, results.json)")
+    ob = sub.add_parser("bench", help="the offline repair benchmark: raw, LiDAR, EKF, Chronos-2, SOFTS, NHITS, "
+                                      "DLinear, NLinear and ODCA on both splits and presets (tables, figures, "
+                                      "results.json)")
     ob.add_argument("--dataset", type=Path, default=Path("data/qcar2"), help="dataset folder (racf collect)")
     ob.add_argument("--out", type=Path, default=Path("outputs/bench"), help="results folder (default outputs/bench)")
     ob.add_argument("--split", choices=("by_series", "leave_target_out", "both"), default="both",

@@ -10,7 +10,8 @@ from typing import NoReturn
 from experiments.episode.estimators import ESTIMATORS
 from sim.attacks import ATTACKS
 
-__all__ = ["UsageError", "sign", "positive", "speed", "share", "duration", "count", "pair", "fail", "fmt_ci", "DEFAULT_WORKERS",
+__all__ = ["UsageError", "sign", "positive", "speed", "share", "duration", "count", "pair", "fail", "flag_error",
+           "fmt_ci", "DEFAULT_WORKERS",
            "episode_flags", "episode_params", "backend_flags", "attack_help", "estimator_help", "registry_rows",
            "registry_markdown"]
 
@@ -60,12 +61,12 @@ def count(value: str) -> int:
     return n
 
 
-def pair(name: str, values: list[float] | None, default: tuple[float, float]) -> tuple[float, float]:
-    """A value or LOW HIGH as (low, high)."""
+def pair(command: str, name: str, values: list[float] | None, default: tuple[float, float]) -> tuple[float, float]:
+    """A value or LOW HIGH as (low, high); a bad one exits 2 like any bad flag."""
     if values is None:
         return default
     if len(values) > 2 or (len(values) == 2 and values[0] > values[1]):
-        raise SystemExit(f"racf trials: {name} takes a value or LOW HIGH with LOW <= HIGH, got {values}")
+        flag_error(command, f"{name} takes a value or LOW HIGH with LOW <= HIGH, got {values}")
     return (values[0], values[-1])
 
 
@@ -170,7 +171,8 @@ def episode_params(args: argparse.Namespace, command: str, table: bool = False) 
             setting = setting_name(attacks, args.estimator or "raw")
         if setting is not None and not parse_setting(setting)[0] and (args.rho is not None or args.t_atk is not None):
             flag_error(command, "--rho and --t-atk apply to settings with an attack")
-        params = {"rho": pair("--rho", args.rho, STRONG_RHO), "t_atk": pair("--t-atk", args.t_atk, STRONG_T_ATK_S),
+        params = {"rho": pair(command, "--rho", args.rho, STRONG_RHO),
+                  "t_atk": pair(command, "--t-atk", args.t_atk, STRONG_T_ATK_S),
                   "delay_ms": args.delay_ms, "control_hz": args.control_hz, "stable_steps": args.stable_steps}
     except ValueError as err:
         flag_error(command, str(err))

@@ -6,7 +6,7 @@ import argparse
 import json
 from pathlib import Path
 
-from experiments.cli.common import backend_flags, count, fail
+from experiments.cli.common import backend_flags, count
 
 __all__ = ["register"]
 
@@ -25,8 +25,6 @@ def register(sub: argparse._SubParsersAction) -> None:
 def _collect(args: argparse.Namespace) -> int:
     from experiments.data.dataset import DEFAULT_DRIVES, collect, load_dataset, summarize_dataset
 
-    if args.address is not None and args.backend != "ray":
-        fail("collect", "--address joins a Ray cluster: it needs --backend ray")
     # The bar is on stderr; --summary JSON stays alone on stdout.
     path = collect(args.out, drives=args.drives or DEFAULT_DRIVES, seed=args.seed, workers=args.workers,
                    progress=True, backend=args.backend, address=args.address)

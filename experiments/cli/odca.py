@@ -15,10 +15,11 @@ _SPLITS = ("by_series", "leave_target_out")
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    pp = sub.add_parser("pretrain-prior", help="pretrain the small Chronos-2 prior on synthetic series (writes a model card)")
+    pp = sub.add_parser("pretrain-prior",
+                        help="pretrain the small Chronos-2 prior on synthetic series (writes a model card)")
     pp.add_argument("--out", type=Path, default=Path("outputs/chronos2-prior"),
-                    help="checkpoint folder (default outputs/chronos2-prior; name assets/checkpoints/chronos2-racf-tiny "
-                         "to replace the shipped prior)")
+                    help="checkpoint folder (default outputs/chronos2-prior; name "
+                         "assets/checkpoints/chronos2-racf-tiny to replace the shipped prior)")
     pp.add_argument("--steps", type=count, default=3000, help="training steps (default 3000)")
     pp.add_argument("--series", type=count, default=6000, help="synthetic training series (default 6000)")
     pp.add_argument("--seed", type=int, default=0)

@@ -63,8 +63,6 @@ def _sweep(args: argparse.Namespace) -> int:
     from experiments.sweeps.spec import parse_spec, spec_text
 
     try:
-        if args.address is not None and args.backend != "ray":
-            raise ValueError("--address joins a Ray cluster: it needs --backend ray")
         text = spec_text(args.spec, fields, space)
         source = " with ".join(x for x in (str(args.spec) if args.spec is not None else "",
                                            "flags" if fields or space else "") if x)

@@ -15,7 +15,8 @@ __all__ = ["register"]
 def register(sub: argparse._SubParsersAction) -> None:
     t = sub.add_parser("trial", help="one closed-loop stop-sign trial: per-step log (Parquet) and result row")
     episode_flags(t)
-    t.add_argument("--sign", type=sign, default=2, help="stop sign 0-3, or crate 0-1 with --target obstacle (default 2)")
+    t.add_argument("--sign", type=sign, default=2,
+                   help="stop sign 0-3, or crate 0-1 with --target obstacle (default 2)")
     t.add_argument("--target", choices=("sign", "obstacle", "drive"), default="sign",
                    help="approach a stop sign (default) or an obstacle crate, or a random 20-60 s drive (--sign 0)")
     t.add_argument("--speed", type=speed, default=1.0, help="cruise speed m/s, 0.1-3.0 (default 1.0)")
@@ -88,8 +89,6 @@ def _trials(args: argparse.Namespace) -> int:
     from experiments.sweeps.summary import summarize
 
     where = {"workers": args.workers, "backend": args.backend, "address": args.address}
-    if args.address is not None and args.backend != "ray":
-        fail("trials", "--address joins a Ray cluster: it needs --backend ray")
     if args.table:
         _, params = episode_params(args, "trials", table=True)
         try:
@@ -133,12 +132,14 @@ def table_text(table: dict[str, dict]) -> str:
     for name, r in table.items():
         asr = f"{r['asr']:.2f} {fmt_ci(*r['asr_ci'])}" if r.get("asr") is not None else "-"
         fails = ", ".join(f"{k} {v}" for k, v in r["failures"].items() if v) or "-"
-        early = "-" if r.get("scr_attack_before_t_star") is None else \
-            f"{r['scr_attack_before_t_star']:.2f} {fmt_ci(*r['scr_attack_before_t_star_ci'])} ({r['n_attack_before_t_star']})"
+        early = "-" if r.get("scr_attack_before_t_star") is None else (
+            f"{r['scr_attack_before_t_star']:.2f} {fmt_ci(*r['scr_attack_before_t_star_ci'])} "
+            f"({r['n_attack_before_t_star']})")
         lines.append(f"{name:<26}{r['n']:>4}{r['scr']:>6.2f} {fmt_ci(*r['scr_ci']):>13}{asr:>20}"
                      f"{ms(r['trigger_delay_mean'], r['trigger_delay_std']):>18}"
                      f"{ms(r['dt_brake_mean'], r['dt_brake_std']):>18}{r['n_latency']:>4}{early:>28}  {fails}")
-    paper = "; ".join(f"{name} SCR {p['scr']:.2f}, dt {p['dt_brake_s']:.3f} s" for name, p in PAPER_TABLE["rows"].items())
+    paper = "; ".join(f"{name} SCR {p['scr']:.2f}, dt {p['dt_brake_s']:.3f} s"
+                      for name, p in PAPER_TABLE["rows"].items())
     lines.append("trigger delay = t(brake) - t*; dt_brake = t* to braking within 0.60 m of the line (the paper's "
                  "latency); both over successful stops (n). SCR, attack before t*: the trials whose attack began "
                  f"before t* (their count). Paper ({PAPER_TABLE['platform']}, N = {PAPER_TABLE['n']}): {paper}")
@@ -152,8 +153,6 @@ def _attack_study(args: argparse.Namespace) -> int:
     unknown = [n for n in names if n not in STUDIES]
     if unknown:
         fail("attack-study", f"unknown study {unknown}; choose from {', '.join(STUDIES)}")
-    if args.address is not None and args.backend != "ray":
-        fail("attack-study", "--address joins a Ray cluster: it needs --backend ray")
     tables = {name: run_study(name, args.n, args.out, seed=args.seed, workers=args.workers, progress=not args.json,
                               backend=args.backend, address=args.address) for name in names}
     if args.json:
@@ -163,7 +162,8 @@ def _attack_study(args: argparse.Namespace) -> int:
         print(f"\n{name} (no defence)")
         print(f"{'setting':<42}{'N':>4}{'lost frames':>13}{'ASR [95% Wilson]':>22}{'SCR':>6}{'dt_brake s':>18}")
         for r in rows:
-            lat = f"{r['dt_brake_mean']:.2f} +- {r['dt_brake_std'] or 0:.2f} ({r['n_latency']})" if r["n_latency"] else "-"
+            lat = (f"{r['dt_brake_mean']:.2f} +- {r['dt_brake_std'] or 0:.2f} ({r['n_latency']})"
+                   if r["n_latency"] else "-")
             print(f"{r['label']:<42}{r['n']:>4}{r['lost_frames_mean']:>13.1f}"
                   f"{r['asr']:>8.2f} {fmt_ci(*r['asr_ci']):>13}{r['scr']:>6.2f}{lat:>18}")
     print(f"\ntrials and logs under {args.out}")

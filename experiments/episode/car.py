@@ -1,32 +1,44 @@
-"""The car's side of an episode: what a real car's software is told.
+"""The car's side of an episode: what a real car's software is told, and what it works out from it.
 
-The controllers see observations; this module hands them the map knowledge a real stack
-has (the route, where the stop line is relative to the sign), the camera intrinsics and
-the car's own geometry. Ground truth is the referee's (``info``), never read here.
+The car's software knows its own build (:class:`CarCalibration`: the camera's intrinsics and
+where the camera and the front bumper sit on the body) and the map (the route, the targets
+and their stop lines). Nothing here reads the simulator: the runner builds the calibration
+once from the car's model (:func:`experiments.episode.stack.calibration`) and hands it in.
+Ground truth is the referee's. (The pose the runner passes to :func:`map_bearing` is still
+the simulator's; the car's own localisation replaces it in env v2.)
 """
 
 from __future__ import annotations
 
-import gymnasium as gym
+from dataclasses import dataclass
+
 import numpy as np
 
 from controllers import CameraModel, RouteFollower
 from sim.world.drives import RouteTarget
 from sim.world.road_graph import Path
 
-__all__ = ["camera_model", "sign_depth_at_line", "route_follower", "map_bearing"]
+__all__ = ["CarCalibration", "sign_depth_at_line", "route_follower", "map_bearing"]
 
 
-def camera_model(env: gym.Env) -> CameraModel:
-    """The perception stack's camera model from the env's camera intrinsics."""
-    k = env.unwrapped.rig.intrinsics
-    return CameraModel(width=k.width, fx=k.fx, cx=k.cx)
+@dataclass(frozen=True)
+class CarCalibration:
+    """The car's build as its software knows it (body frame: x forward, y left).
+
+    Attributes:
+        camera: the camera's horizontal intrinsics.
+        camera_xy_m: the camera's position on the body, m.
+        bumper_x_m: the front bumper's position ahead of the body origin, m.
+    """
+
+    camera: CameraModel
+    camera_xy_m: tuple[float, float]
+    bumper_x_m: float
 
 
-def sign_depth_at_line(env: gym.Env, target: RouteTarget) -> float:
-    """The target's camera depth when the front bumper is on its stop line, m (from the map and the car's geometry)."""
-    model = env.unwrapped.model
-    camera_to_bumper = float(model.site("front_bumper").pos[0] - model.camera("d435").pos[0])
+def sign_depth_at_line(calibration: CarCalibration, target: RouteTarget) -> float:
+    """The target's camera depth when the front bumper is on its stop line, m (from the map and the car's build)."""
+    camera_to_bumper = float(calibration.bumper_x_m - calibration.camera_xy_m[0])
     return camera_to_bumper + (target.target_s - target.stop_s)
 
 
@@ -37,14 +49,13 @@ def route_follower(path: Path, cruise_mps: float, start_s: float = 0.0) -> Route
     return follower
 
 
-def map_bearing(env: gym.Env, target: RouteTarget, pose: np.ndarray) -> float:
+def map_bearing(calibration: CarCalibration, target: RouteTarget, pose: np.ndarray) -> float:
     """Bearing of ``target`` from the camera's optical axis (rad, left positive), from the map and the car's pose.
 
     NaN when the map says the camera cannot see the target's face (a stop sign showing
     the car its back): no detection is its then.
     """
-    model = env.unwrapped.model
-    cx, cy = (float(v) for v in model.camera("d435").pos[:2])
+    cx, cy = calibration.camera_xy_m
     x, y, yaw = (float(v) for v in pose)
     c, s = np.cos(yaw), np.sin(yaw)
     tx, ty = target.target.centre[:2]

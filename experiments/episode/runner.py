@@ -24,7 +24,7 @@ import numpy as np
 import pandas as pd
 
 from controllers import Phase
-from experiments.episode.car import camera_model, map_bearing, route_follower
+from experiments.episode.car import map_bearing, route_follower
 from experiments.episode.scoring import score_log
 from experiments.episode.spec import TrialSpec
 from experiments.episode.stack import Stack, default_env
@@ -128,10 +128,11 @@ def _run(env: gym.Env, spec: TrialSpec, stack: Stack, on_step: StepHook | None, 
     delay_steps = int(round(spec.delay_ms / 1000.0 / dt))
     targets = u.route_targets
     follower = route_follower(u.route_path, info["cruise_speed"], info["route_s"])
-    bumper_ahead_of_axle = float(u.model.site("front_bumper").pos[0]) - follower.steering.config.front_axle_m
+    car = stack.calibration
+    bumper_ahead_of_axle = car.bumper_x_m - follower.steering.config.front_axle_m
     attacked = _find_wrapper(env, AttackWrapper) is not None
     estimator = stack.estimator
-    half_fov = camera_model(env).half_hfov_rad
+    half_fov = car.camera.half_hfov_rad
 
     slot = 0
     perception, braker, ideal = stack.begin(targets[slot])
@@ -154,7 +155,7 @@ def _run(env: gym.Env, spec: TrialSpec, stack: Stack, on_step: StepHook | None, 
         scan_time = info["lidar_time"]
         control = decision is None or step % every == 0
         if control:
-            bearing = map_bearing(env, targets[slot], info["pose"])
+            bearing = map_bearing(car, targets[slot], info["pose"])
             sample = perception.process(obs["rgb"], obs["depth"][..., 0], obs["lidar"] if scan_new else None,
                                         speed=speed, yaw_rate=float(obs["state"][2]),
                                         lateral_speed=float(obs["state"][4]), dt=dt * every, map_bearing=bearing)

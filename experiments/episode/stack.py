@@ -6,14 +6,14 @@ from __future__ import annotations
 import gymnasium as gym
 
 import sim
-from controllers import ObstacleDetector, Perception, StopSignBraker
-from experiments.episode.car import camera_model, sign_depth_at_line
+from controllers import CameraModel, ObstacleDetector, Perception, StopSignBraker
+from experiments.episode.car import CarCalibration, sign_depth_at_line
 from experiments.episode.estimators import make_estimator
 from experiments.episode.spec import TrialSpec
 from sim.attacks import ATTACKS
 from sim.world.drives import RouteTarget
 
-__all__ = ["default_env", "plain_env", "Stack", "DRIVE_MAX_EPISODE_S"]
+__all__ = ["default_env", "plain_env", "calibration", "Stack", "DRIVE_MAX_EPISODE_S"]
 
 #: A drive's episode time limit, s.
 DRIVE_MAX_EPISODE_S = 120.0
@@ -54,21 +54,31 @@ def default_env(spec: TrialSpec, **env_kwargs) -> gym.Env:
     return env
 
 
+def calibration(env: gym.Env) -> CarCalibration:
+    """The car's build read once from its model: what the car's software is configured with."""
+    u = env.unwrapped
+    k = u.rig.intrinsics
+    camera = u.model.camera("d435").pos
+    return CarCalibration(CameraModel(width=k.width, fx=k.fx, cx=k.cx), (float(camera[0]), float(camera[1])),
+                          float(u.model.site("front_bumper").pos[0]))
+
+
 class Stack:
     """Perception (one pipeline per target kind), the estimator and, per target, two brakers:
     the one under test (fed the estimator) and the reference that defines t* (fed d_true
-    while the target is in view)."""
+    while the target is in view). ``calibration`` is the car's build (:func:`calibration`)."""
 
     def __init__(self, env: gym.Env, spec: TrialSpec, estimator=None) -> None:
-        camera = camera_model(env)
-        self.env, self.spec = env, spec
+        self.calibration = calibration(env)
+        camera = self.calibration.camera
+        self.spec = spec
         self.perceptions = {"sign": Perception(camera),
                             "obstacle": Perception(camera, detector=ObstacleDetector(), target="obstacle")}
         self.estimator = estimator if estimator is not None else make_estimator(spec.estimator)
 
     def begin(self, target: RouteTarget) -> tuple[Perception, StopSignBraker, StopSignBraker]:
         """Fresh state for the next target of the route."""
-        depth_at_line = sign_depth_at_line(self.env, target)
+        depth_at_line = sign_depth_at_line(self.calibration, target)
         self.estimator.reset()
         perception = self.perceptions[target.kind]
         perception.reset()

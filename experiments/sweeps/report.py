@@ -1,5 +1,6 @@
 """The sweep's report: a Markdown summary (N, SCR and ASR with Wilson intervals per setting, the SCR
-over the episodes whose attack began before t*, and SCR per attack x estimator) and plots of SCR against rho and against T_atk with Wilson bands.
+over the episodes whose attack began before t*, and SCR per attack x estimator) and plots of SCR
+against rho and against T_atk with Wilson bands.
 ``racf sweep --report DIR`` redraws it from the stored parts without running anything."""
 
 from __future__ import annotations

@@ -54,7 +54,8 @@ def run_study(name: str, n: int, out_dir: Path, seed: int = 0, workers: int = 2,
     with backend_session(backend, workers, address):
         for row in STUDIES[name]:
             specs = batch_specs("attack", n, seed, rho=row.rho, t_atk=row.t_atk)
-            folder = Path(out_dir) / name / f"rho{row.rho[0]:.2f}-{row.rho[1]:.2f}_t{row.t_atk[0]:.2f}-{row.t_atk[1]:.2f}"
+            folder = Path(out_dir) / name / (f"rho{row.rho[0]:.2f}-{row.rho[1]:.2f}"
+                                             f"_t{row.t_atk[0]:.2f}-{row.t_atk[1]:.2f}")
             results = run_batch(specs, folder, workers=workers, progress=progress, backend=backend, address=address,
                                 desc=f"{name}: {row.label}")
             rows.append({"label": row.label, **summarize(results, attack=True)})
