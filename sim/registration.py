@@ -5,11 +5,14 @@ import gymnasium as gym
 __all__ = ["ENV_ID", "register_envs"]
 
 #: Bump the version when dynamics, reward or spaces change. v1: depth is (H, W, 1), not (H, W).
-ENV_ID = "RACF/QCar2-v1"
+#: v2: the localiser's fix (``gps``) and the sensors' timestamps; the state as the encoder and
+#: the IMU measure it. Only the newest version is registered: asking for an older one fails
+#: with Gymnasium's error, which names this one.
+ENV_ID = "RACF/QCar2-v2"
 
 
 def register_envs() -> None:
-    """Registers ``RACF/QCar2-v1``; calling it again does nothing."""
+    """Registers ``RACF/QCar2-v2``; calling it again does nothing."""
     if ENV_ID in gym.registry:
         return
     gym.register(id=ENV_ID, entry_point="sim.env.qcar2_env:QCar2Env", max_episode_steps=None,

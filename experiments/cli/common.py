@@ -12,7 +12,7 @@ from sim.attacks import ATTACKS
 
 __all__ = ["UsageError", "sign", "positive", "speed", "share", "duration", "count", "pair", "fail", "flag_error",
            "fmt_ci", "DEFAULT_WORKERS",
-           "episode_flags", "episode_params", "backend_flags", "attack_help", "estimator_help", "registry_rows",
+           "episode_flags", "episode_params", "backend_flags", "localisation_flag", "attack_help", "estimator_help", "registry_rows",
            "registry_markdown"]
 
 #: Parallel episodes by default: two, or one on a single-core machine.
@@ -130,6 +130,15 @@ def backend_flags(p: argparse.ArgumentParser, workers_help: str = "parallel proc
     p.add_argument("--workers", type=count, default=DEFAULT_WORKERS, help=workers_help)
 
 
+def localisation_flag(p, default: str | None = "qcar2") -> None:
+    """``--localisation``: the car's own (``qcar2``) or the true pose (``true``, an ablation)."""
+    from sim.env.config import LOCALISATIONS
+
+    p.add_argument("--localisation", choices=LOCALISATIONS, default=default,
+                   help="where the car's pose comes from: qcar2, its own filter on the localiser's drifting fixes "
+                        "(default), or true, the simulator's true pose (an ablation)")
+
+
 def episode_flags(p: argparse.ArgumentParser) -> None:
     """The flags ``racf trial`` and ``racf trials`` share: what runs and how."""
     p.add_argument("--setting", default=None,
@@ -149,6 +158,7 @@ def episode_flags(p: argparse.ArgumentParser) -> None:
     p.add_argument("--stable-steps", type=int, default=None,
                    help="steps the sign must be visible before an attack may start (default: the braking "
                         "controller's confirm_frames + 3 = 6)")
+    localisation_flag(p)
 
 
 def episode_params(args: argparse.Namespace, command: str, table: bool = False) -> tuple[str | None, dict]:
@@ -173,7 +183,8 @@ def episode_params(args: argparse.Namespace, command: str, table: bool = False) 
             flag_error(command, "--rho and --t-atk apply to settings with an attack")
         params = {"rho": pair(command, "--rho", args.rho, STRONG_RHO),
                   "t_atk": pair(command, "--t-atk", args.t_atk, STRONG_T_ATK_S),
-                  "delay_ms": args.delay_ms, "control_hz": args.control_hz, "stable_steps": args.stable_steps}
+                  "delay_ms": args.delay_ms, "control_hz": args.control_hz, "stable_steps": args.stable_steps,
+                  "localisation": args.localisation}
     except ValueError as err:
         flag_error(command, str(err))
     return setting, params

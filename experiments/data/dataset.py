@@ -66,9 +66,15 @@ COLUMNS: dict[str, tuple[str, str]] = {
     "steering": ("rad", "measured steering angle, left positive"),
     "yaw_rate": ("rad/s", "IMU yaw rate"),
     "accel": ("m/s^2", "IMU longitudinal acceleration"),
-    "x": ("m", "pose in the map frame"),
-    "y": ("m", "pose in the map frame"),
-    "yaw": ("rad", "heading in the map frame"),
+    "x": ("m", "ground truth: pose in the map frame"),
+    "y": ("m", "ground truth: pose in the map frame"),
+    "yaw": ("rad", "ground truth: heading in the map frame"),
+    "x_est": ("m", "the car's own pose estimate (its filter on odometry, gyro and the localiser's fixes)"),
+    "y_est": ("m", "the car's own pose estimate"),
+    "yaw_est": ("rad", "the car's own heading estimate"),
+    "fix_x": ("m", "the localiser's last fix (as Quanser's LiDAR scan matcher gives it: drift + noise, 10 Hz)"),
+    "fix_y": ("m", "the localiser's last fix"),
+    "fix_yaw": ("rad", "the localiser's last fix, heading"),
     "dist_to_stop_line": ("m", "ground truth: front bumper to the current target's stop line along the route"),
     "brake": ("bool", "the braking controller's command"),
 }
@@ -181,6 +187,19 @@ def reference_quality(frame: pd.DataFrame, outlier_m: float = 0.15, within_m: fl
     }
 
 
+def localisation_error(frame: pd.DataFrame) -> dict:
+    """The car's pose estimate against the truth, and the raw fix's (the drift bounds the filter):
+    position error (m) and heading error (deg) as RMSE, p95 and max over every step."""
+    out: dict = {"n": int(len(frame))}
+    for name, (x, y, yaw) in {"filter": ("x_est", "y_est", "yaw_est"), "fix": ("fix_x", "fix_y", "fix_yaw")}.items():
+        pos = np.hypot(frame[x] - frame["x"], frame[y] - frame["y"]).to_numpy()
+        head = np.degrees(np.abs(np.angle(np.exp(1j * (frame[yaw] - frame["yaw"]).to_numpy()))))
+        out[name] = {f"{what}_{stat}": value for what, err in (("position_m", pos), ("heading_deg", head))
+                     for stat, value in (("rmse", _rmse(err)), ("p95", float(np.percentile(err, 95))),
+                                         ("max", float(err.max())))}
+    return out
+
+
 def _rmse(err: np.ndarray) -> float | None:
     return float(np.sqrt(np.mean(err**2))) if len(err) else None
 
@@ -215,6 +234,7 @@ def summarize_dataset(data: pd.DataFrame, splits: dict[str, dict] | None = None)
         "steering_deg": [float(np.degrees(data["steering"].min())), float(np.degrees(data["steering"].max()))],
         "targets": sorted(str(s) for s in data["target"].unique()),
         "lidar_reference": reference_quality(data),
+        "localisation": localisation_error(data),
     }
     if splits is not None:
         summary["split"] = {scheme: {k: (len(v) if isinstance(v, list) else v) for k, v in split.items()}
@@ -226,7 +246,7 @@ def summarize_dataset(data: pd.DataFrame, splits: dict[str, dict] | None = None)
 
 def _write_card(path: Path, summary: dict, drives: int, seed: int) -> None:
     rows = "\n".join(f"| `{name}` | {unit} | {meaning} |" for name, (unit, meaning) in COLUMNS.items())
-    ref = summary["lidar_reference"]
+    ref, loc = summary["lidar_reference"], summary["localisation"]
     path.write_text(f"""# RACF QCar 2 simulated driving dataset
 
 **What.** Synchronized 50 Hz series from the racf MuJoCo simulation of the Quanser QCar 2 on
@@ -245,8 +265,9 @@ speed (nominal 1.0 / 1.5 / 2.0 m/s in turn, x U(0.9, 1.1)). The car follows the 
 drives on; a blue crate (0.12 x 0.16 x 0.22 m) on the lane, with a virtual stop line
 0.25 m before it, ends the drive. The detector (stop sign, or crate by colour), the depth
 distance, the LiDAR target tracker and the braking controller run as in
-`racf trial --setting clean`. Sensor noise is the simulator's (depth 0.0037 z^2 m, LiDAR
-1 %, scans at 10 Hz).
+`racf trial --setting clean`, on the car's own localisation. Sensor noise is the simulator's
+(depth 0.0037 z^2 m, LiDAR 1 %, scans at 10 Hz; the encoder's counts, the gyro's noise and
+bias; the localiser's drift and noise).
 
 **Counts.** {summary['n_series']} series, {summary['n_samples']} samples
 ({summary['n_moving_samples']} moving, standstill share {summary['standstill_share']:.2f});
@@ -264,6 +285,12 @@ and detected: RMSE {summary['rmse_clean_vs_true']:.4f} m, MAE {summary['mae_clea
 LiDAR reference vs d_true over {ref['n_reported']} reported steps: RMSE {ref['rmse_vs_true']:.4f} m;
 it reports on {ref['coverage']:.1%} of the steps with the target in view within 3 m; {ref['outlier_share']:.2%}
 of the reported values are more than 0.15 m off.
+The car's own pose (its filter on odometry, the gyro and the localiser's fixes) against the truth
+over all {loc['n']} steps: position RMSE {loc['filter']['position_m_rmse']:.4f} m (p95
+{loc['filter']['position_m_p95']:.4f}, max {loc['filter']['position_m_max']:.4f}), heading RMSE
+{loc['filter']['heading_deg_rmse']:.2f} deg (p95 {loc['filter']['heading_deg_p95']:.2f}, max
+{loc['filter']['heading_deg_max']:.2f}); the raw fixes: {loc['fix']['position_m_rmse']:.4f} m and
+{loc['fix']['heading_deg_rmse']:.2f} deg RMSE.
 
 **Columns** (long format, one row per 50 Hz step):
 

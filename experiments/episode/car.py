@@ -1,24 +1,39 @@
 """The car's side of an episode: what a real car's software is told, and what it works out from it.
 
-The car's software knows its own build (:class:`CarCalibration`: the camera's intrinsics and
-where the camera and the front bumper sit on the body) and the map (the route, the targets
-and their stop lines). Nothing here reads the simulator: the runner builds the calibration
-once from the car's model (:func:`experiments.episode.stack.calibration`) and hands it in.
-Ground truth is the referee's. (The pose the runner passes to :func:`map_bearing` is still
-the simulator's; the car's own localisation replaces it in env v2.)
+The car knows its own build (:class:`CarCalibration`), its mission (:class:`Mission`: the
+route on the map, its targets and their stop lines, the cruise speed) and its own clock. Each
+step it reads the observation and nothing else: its pose comes from its own localisation
+filter (odometry and the gyro predict, the localiser's fixes correct), and that pose places
+the map's targets in view, drives the lane follower and says which target is next. It never
+sees ``info`` or the env; the runner builds the calibration and the mission once, before the
+episode (:mod:`experiments.episode.stack`). Ground truth is the referee's
+(:mod:`experiments.episode.referee`).
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
-from controllers import CameraModel, RouteFollower
+from controllers import (BrakeDecision, BrakingConfig, CameraModel, Perception, PerceptionSample, PoseFilter,
+                         RouteFollower, StopSignBraker)
+from sim.sensors import TIMESTAMP_FIELDS
 from sim.world.drives import RouteTarget
 from sim.world.road_graph import Path
 
-__all__ = ["CarCalibration", "sign_depth_at_line", "route_follower", "map_bearing"]
+__all__ = ["CarCalibration", "Mission", "CarStep", "Car", "sign_depth_at_line", "route_follower", "map_bearing",
+           "PASS_LINE_M", "LOCALISERS"]
+
+#: The next target becomes current once the front bumper is this far past the current one's
+#: stop line (the car has served it and driven on); the env's own rule, on the car's pose.
+PASS_LINE_M = 0.3
+#: How the car knows its pose: ``filter`` (its own EKF on odometry, gyro and the localiser's
+#: fixes) or ``fix`` (the fix as it is; for the ``true`` localisation ablation, where the fix
+#: is the true pose at every step).
+LOCALISERS = ("filter", "fix")
+_FIX_TIME, _SCAN_TIME = TIMESTAMP_FIELDS.index("gps"), TIMESTAMP_FIELDS.index("lidar")
 
 
 @dataclass(frozen=True)
@@ -29,11 +44,40 @@ class CarCalibration:
         camera: the camera's horizontal intrinsics.
         camera_xy_m: the camera's position on the body, m.
         bumper_x_m: the front bumper's position ahead of the body origin, m.
+        rear_axle_x_m: the rear axle's position on the body, m (negative: behind the origin).
     """
 
     camera: CameraModel
     camera_xy_m: tuple[float, float]
     bumper_x_m: float
+    rear_axle_x_m: float
+
+
+@dataclass(frozen=True)
+class Mission:
+    """What the car is told before it starts: the route's path, its targets in order (the map's
+    stop signs the route meets, and a crate's place when the operator put one on the route), the
+    cruise speed, and roughly where along the route it starts (None: anywhere)."""
+
+    path: Path
+    targets: tuple[RouteTarget, ...]
+    cruise_mps: float
+    start_hint_m: float | None = None
+
+
+@dataclass(frozen=True)
+class CarStep:
+    """What the car did on one step (for the log): its action and how it got there."""
+
+    action: np.ndarray
+    control: bool
+    slot: int
+    sample: PerceptionSample
+    d_fused: float
+    decision: BrakeDecision
+    pose: np.ndarray
+    scan_new: bool
+    tracked_xy: tuple[float, float]
 
 
 def sign_depth_at_line(calibration: CarCalibration, target: RouteTarget) -> float:
@@ -64,3 +108,119 @@ def map_bearing(calibration: CarCalibration, target: RouteTarget, pose: np.ndarr
     if face is not None and -(dx * np.cos(face) + dy * np.sin(face)) < 0.0:
         return float("nan")
     return float(np.arctan2(-s * dx + c * dy, c * dx + s * dy))
+
+
+class Car:
+    """The car's software for one episode: localisation, perception, estimator, braker, lane follower.
+
+    Args:
+        calibration: the car's build.
+        mission: the route and its targets.
+        perceptions: one perception pipeline per target kind (``sign``, ``obstacle``).
+        estimator: the distance estimator (``DistanceEstimator`` protocol).
+        braking: the braking controller's parameters.
+        dt: the car's loop period, s (one observation per call of :meth:`step`).
+        control_every: the controller runs every this many steps and holds its action between;
+            the localisation filter runs every step.
+        localiser: one of ``LOCALISERS``.
+    """
+
+    def __init__(self, calibration: CarCalibration, mission: Mission, perceptions: dict[str, Perception],
+                 estimator, braking: BrakingConfig, dt: float, control_every: int = 1,
+                 localiser: str = "filter") -> None:
+        if localiser not in LOCALISERS:
+            raise ValueError(f"localiser must be one of {LOCALISERS}, got {localiser!r}")
+        if not mission.targets:
+            raise ValueError("a mission needs at least one target")
+        self.calibration = calibration
+        self.mission = mission
+        self.perceptions = perceptions
+        self.estimator = estimator
+        self.braking = braking
+        self.dt = float(dt)
+        self.every = int(control_every)
+        self.pose_filter = PoseFilter() if localiser == "filter" else None
+        self._step = 0
+        self._fix_time = -math.inf
+        self._scan_time = -math.inf
+        self._pose = np.zeros(3)
+        self.slot = 0
+        self.follower: RouteFollower | None = None
+        self.perception = self.braker = None
+        self._decision: BrakeDecision | None = None
+        self._sample: PerceptionSample | None = None
+        self._action = np.zeros(2, np.float32)
+        self._d_fused = math.nan
+
+    @property
+    def target(self) -> RouteTarget:
+        return self.mission.targets[self.slot]
+
+    @property
+    def pose(self) -> np.ndarray:
+        """The car's own pose estimate (x, y m, yaw rad, map frame)."""
+        return self._pose.copy()
+
+    def _begin(self, slot: int) -> None:
+        self.slot = slot
+        self.estimator.reset()
+        self.perception = self.perceptions[self.target.kind]
+        self.perception.reset()
+        self.braker = StopSignBraker(self.braking, sign_depth_at_line(self.calibration, self.target))
+        self._decision = None
+
+    def _localise(self, obs: dict, first: bool) -> float:
+        """Updates the pose from this step's odometry and any new fix; returns the gyro's yaw rate
+        less the filter's bias estimate, rad/s."""
+        speed, yaw_rate = float(obs["state"][0]), float(obs["state"][2])
+        fix, fix_time = np.asarray(obs["gps"], np.float64), float(obs["timestamps"][_FIX_TIME])
+        new_fix, self._fix_time = fix_time != self._fix_time, fix_time
+        if self.pose_filter is None:
+            self._pose = fix.copy()
+            return yaw_rate
+        if first:
+            self.pose_filter.reset(fix)
+        else:
+            self.pose_filter.predict(speed, yaw_rate, self.dt)
+            if new_fix:
+                self.pose_filter.correct(fix)
+        self._pose = self.pose_filter.pose
+        return yaw_rate - self.pose_filter.gyro_bias
+
+    def step(self, obs: dict) -> CarStep:
+        """One 50 Hz step of the car's software on one observation; returns its action and why."""
+        first = self._step == 0
+        yaw_rate = self._localise(obs, first)
+        x, y, yaw = self._pose
+        if first:
+            start_s, _ = self.mission.path.project(np.array([x, y]), s_hint=self.mission.start_hint_m)
+            self.follower = route_follower(self.mission.path, self.mission.cruise_mps, start_s)
+            self._begin(0)
+        # The car's own localisation and the map say which target is next.
+        bumper_ahead_of_axle = self.calibration.bumper_x_m - self.follower.steering.config.front_axle_m
+        targets = self.mission.targets
+        while (self.slot + 1 < len(targets)
+               and self.follower.progress_m + bumper_ahead_of_axle - targets[self.slot].stop_s > PASS_LINE_M):
+            self._begin(self.slot + 1)
+        speed = float(obs["state"][0])
+        # A scan is handed to the tracker once, on the step it arrives (the LiDAR runs at 10 Hz).
+        scan_time = float(obs["timestamps"][_SCAN_TIME])
+        scan_new, self._scan_time = scan_time != self._scan_time, scan_time
+        control = self._decision is None or self._step % self.every == 0
+        if control:
+            dt = self.dt * self.every
+            bearing = map_bearing(self.calibration, self.target, self._pose)
+            # No slip at the rear axle: the camera moves sideways at yaw rate x its lever arm.
+            lateral = yaw_rate * (self.calibration.camera_xy_m[0] - self.calibration.rear_axle_x_m)
+            self._sample = self.perception.process(obs["rgb"], obs["depth"][..., 0], obs["lidar"] if scan_new else None,
+                                                   speed=speed, yaw_rate=yaw_rate, lateral_speed=lateral, dt=dt,
+                                                   map_bearing=bearing)
+            self._d_fused = float(self.estimator.estimate(self._sample, speed, dt))
+            in_fov = math.isfinite(bearing) and abs(bearing) <= self.calibration.camera.half_hfov_rad
+            self._decision = self.braker.step(self._sample.detected, self._d_fused, speed, dt, expected_in_view=in_fov)
+            self._action = np.array(self.follower.act(x, y, yaw, speed, dt, self._decision.speed_cap_mps), np.float32)
+        self._step += 1
+        track = self.perception.lidar.state.position  # camera-relative; + the camera's body position
+        cam_x, cam_y = self.calibration.camera_xy_m
+        return CarStep(self._action.copy(), control, self.slot, self._sample, self._d_fused, self._decision,
+                       self._pose.copy(), scan_new, (track[0] + cam_x, track[1] + cam_y))

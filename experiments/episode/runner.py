@@ -1,9 +1,12 @@
-"""The one step loop: env -> perception -> estimator -> braking -> lane follower.
+"""The one step loop: env -> the car (:mod:`~experiments.episode.car`) -> env, with the referee
+(:mod:`~experiments.episode.referee`) watching.
 
-Trials, dataset collection and the demo all run episodes through :func:`run_trial`. Per
-step it records every signal of the protocol (d_true, d_clean, d_meas, c_meas, l,
-d_fused, the gate w under ODCA), the controller's state and brake command, the reference
-controller's (``ideal_brake``, which defines t*), pose and speed. The result row comes
+Trials, dataset collection and the demo all run episodes through :func:`run_trial`. The car
+gets the observation only; the referee gets everything and feeds nothing back. Per step the
+log records every signal of the protocol (d_true, d_clean, d_meas, c_meas, l, d_fused, the
+gate w under ODCA), the controller's state and brake command, the reference controller's
+(``ideal_brake``, which defines t*), the car's pose estimate (``x_est``, ``y_est``,
+``yaw_est``) beside the true pose (``x``, ``y``, ``yaw``) and speed. The result row comes
 from :func:`experiments.episode.scoring.score_log` on that log, so a stored log can be
 rescored without running anything.
 
@@ -24,13 +27,12 @@ import numpy as np
 import pandas as pd
 
 from controllers import Phase
-from experiments.episode.car import map_bearing, route_follower
+from experiments.episode.referee import Referee
 from experiments.episode.scoring import score_log
 from experiments.episode.spec import TrialSpec
-from experiments.episode.stack import Stack, default_env
+from experiments.episode.stack import build_car, default_env, mission
 from sim.attacks import PatchAttack
 from sim.attacks.base import AttackWrapper
-from sim.env.qcar2_env import PASS_LINE_M
 from sim.sensors import STATE_FIELDS
 
 __all__ = ["TrialResult", "StepHook", "run_trial", "reset_options", "scan_fov", "SCAN_FOV_HALF_BEAMS",
@@ -114,95 +116,55 @@ def run_trial(spec: TrialSpec, estimator=None, make_env: Callable[[TrialSpec], g
     """
     env = make_env(spec) if make_env is not None else default_env(spec)
     try:
-        log = _run(env, spec, Stack(env, spec, estimator), on_step, clean_pass)
+        log = _run(env, spec, estimator, on_step, clean_pass)
         return _result(spec, env, log), log
     finally:
         env.close()
 
 
-def _run(env: gym.Env, spec: TrialSpec, stack: Stack, on_step: StepHook | None, clean_pass: bool) -> pd.DataFrame:
-    obs, info = env.reset(seed=spec.seed, options=reset_options(spec))
+def _run(env: gym.Env, spec: TrialSpec, estimator, on_step: StepHook | None, clean_pass: bool) -> pd.DataFrame:
+    options = reset_options(spec)
+    obs, info = env.reset(seed=spec.seed, options=options)
     u = env.unwrapped
     dt = 1.0 / u.config.control_hz
-    every = max(1, int(round(u.config.control_hz / spec.control_hz))) if spec.control_hz else 1
     delay_steps = int(round(spec.delay_ms / 1000.0 / dt))
-    targets = u.route_targets
-    follower = route_follower(u.route_path, info["cruise_speed"], info["route_s"])
-    car = stack.calibration
-    bumper_ahead_of_axle = car.bumper_x_m - follower.steering.config.front_axle_m
-    attacked = _find_wrapper(env, AttackWrapper) is not None
-    estimator = stack.estimator
-    half_fov = car.camera.half_hfov_rad
-
-    slot = 0
-    perception, braker, ideal = stack.begin(targets[slot])
-    scan_time = -math.inf
+    # The car gets its build and its mission before it starts, then only observations.
+    car = build_car(env, spec, mission(env, options), estimator)
+    targets = car.mission.targets
+    referee = Referee(car.calibration, spec.braking, dt, _find_wrapper(env, AttackWrapper) is not None, clean_pass)
     pending: deque = deque()
-    action = None
-    decision = sample = None
-    d_fused = d_clean = math.nan
     rows: list[dict] = []
-    for step in range(int(round(u.config.max_episode_s / dt))):
-        # The car's own localisation and the map say which target is next (as the env's rule does).
-        while (slot + 1 < len(targets)
-               and follower.progress_m + bumper_ahead_of_axle - targets[slot].stop_s > PASS_LINE_M):
-            slot += 1
-            perception, braker, ideal = stack.begin(targets[slot])
-            decision = None
-        speed = float(obs["state"][0])
-        # A scan is handed to the tracker once, on the step it arrives (the LiDAR runs at 10 Hz).
-        scan_new = info["lidar_time"] != scan_time
-        scan_time = info["lidar_time"]
-        control = decision is None or step % every == 0
-        if control:
-            bearing = map_bearing(car, targets[slot], info["pose"])
-            sample = perception.process(obs["rgb"], obs["depth"][..., 0], obs["lidar"] if scan_new else None,
-                                        speed=speed, yaw_rate=float(obs["state"][2]),
-                                        lateral_speed=float(obs["state"][4]), dt=dt * every, map_bearing=bearing)
-            if not attacked:
-                d_clean = sample.d_meas
-            elif clean_pass:  # d_clean: the same pipeline on the env's own, unattacked readings
-                clean = u.sensor_observation()
-                # An image the attack left alone has the detection perception just made.
-                unchanged = np.array_equal(clean["rgb"], obs["rgb"])
-                detection = perception.last_raw_detection if unchanged else perception.detector.detect(clean["rgb"])
-                d_clean = perception.depth.estimate(clean["depth"][..., 0], detection)[0]
-            d_fused = float(estimator.estimate(sample, speed, dt * every))
-            in_fov = math.isfinite(bearing) and abs(bearing) <= half_fov
-            decision = braker.step(sample.detected, d_fused, speed, dt * every, expected_in_view=in_fov)
-        # The reference: perfect perception (d_true while the target is in view) at every step.
-        in_view = bool(info["sign_in_view"])
-        ideal_decision = ideal.step(in_view, float(info["d_true"]) if in_view else math.nan, speed, dt)
-        x, y, yaw = info["pose"]
-        if control:
-            action = np.array(follower.act(x, y, yaw, speed, dt * every, decision.speed_cap_mps), np.float32)
-        pending.append(action)
+    for _ in range(int(round(u.config.max_episode_s / dt))):
+        step = car.step(obs)
+        pending.append(step.action)
         applied = pending.popleft() if len(pending) > delay_steps else pending[0]
-        track = perception.lidar.state.position  # camera-relative; + the camera's body position
-        cam_xy = perception.lidar.config.camera_position_m
+        sample, decision = step.sample, step.decision
+        truth = referee.observe(env, obs, info, step, car.target, car.perception)
         rows.append({
-            "t": info["time"], "slot": slot, "target": targets[slot].name, "control": control,
-            "d_true": info["d_true"], "d_clean": d_clean, "d_meas": sample.d_meas,
-            "c_meas": sample.c_meas, "lidar": sample.lidar_m, "d_fused": d_fused,
-            "w": math.nan, **estimator.diagnostics(), "detected": sample.detected,
+            "t": info["time"], "slot": step.slot, "target": car.target.name, "control": step.control,
+            "d_true": truth.pop("d_true"), "d_clean": truth.pop("d_clean"), "d_meas": sample.d_meas,
+            "c_meas": sample.c_meas, "lidar": sample.lidar_m, "d_fused": step.d_fused,
+            "w": math.nan, **car.estimator.diagnostics(), "detected": sample.detected,
             "det_confidence": sample.detection_confidence, "bearing": sample.bearing_rad,
             **dict(zip(("det_x0", "det_y0", "det_x1", "det_y1"),
                        sample.detection.box if sample.detection is not None else (-1, -1, -1, -1))),
-            "sign_in_view": in_view, "confirmed": decision.confirmed, "phase": decision.phase.value,
-            "brake": decision.brake, "ideal_brake": ideal_decision.brake, "speed_cap": decision.speed_cap_mps,
-            "speed_cmd": float(applied[0]), "steer_cmd": float(applied[1]), "x": x, "y": y, "yaw": yaw,
-            "speed": info["speed"], "dist_to_stop_line": info["dist_to_stop_line"],
-            "lateral_error": info["lateral_error"],
-            "attack_active": bool(info.get("attack_active", False)), "attack": "+".join(info.get("attack", ())),
+            "confirmed": decision.confirmed, "phase": decision.phase.value,
+            "brake": decision.brake, "speed_cap": decision.speed_cap_mps,
+            "speed_cmd": float(applied[0]), "steer_cmd": float(applied[1]),
+            # The car's own pose estimate beside the referee's truth (x, y, yaw).
+            "x_est": float(step.pose[0]), "y_est": float(step.pose[1]), "yaw_est": float(step.pose[2]),
+            # The localiser's fix as the car received it (held between fixes).
+            **{f"fix_{k}": float(v) for k, v in zip(("x", "y", "yaw"), obs["gps"])},
+            **truth,
             # The vehicle state as the car measures it, and the LiDAR's forward sector (compact scan).
             **{f"state_{name}": float(v) for name, v in zip(STATE_FIELDS, obs["state"])},
-            "scan_new": scan_new, "scan_fov": scan_fov(obs["lidar"]),
+            "scan_new": step.scan_new, "scan_fov": scan_fov(obs["lidar"]),
             # The LiDAR reference's tracked point in the body frame (NaN without a track), for viewers.
-            "track_x": track[0] + cam_xy[0], "track_y": track[1] + cam_xy[1],
+            "track_x": step.tracked_xy[0], "track_y": step.tracked_xy[1],
         })
         if on_step is not None:
             on_step(env, obs, info, rows[-1])
-        if slot == len(targets) - 1 and (decision.phase is Phase.DONE or info["dist_to_stop_line"] < -RUN_THROUGH_M):
+        if step.slot == len(targets) - 1 and (decision.phase is Phase.DONE or info["dist_to_stop_line"] < -RUN_THROUGH_M):
             break
         obs, _, terminated, truncated, info = env.step(applied)
         if terminated or truncated:

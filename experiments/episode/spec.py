@@ -26,6 +26,7 @@ from experiments.episode.estimators import ESTIMATORS
 from experiments.sweeps.store import code_version
 from sim.attacks import ATTACKS
 from sim.attacks.schedule import as_range
+from sim.env.config import LOCALISATIONS
 from sim.world.drives import DriveSpec, draw_drive
 
 __all__ = ["TrialSpec", "parse_setting", "setting_name", "EPISODE_CODE", "TARGETS", "DRIVE_S", "STRONG_RHO",
@@ -101,6 +102,9 @@ class TrialSpec:
         delay_ms: perception-to-actuation delay (0: off). The paper's offboard loop: 49 ms.
         control_hz: the controller's rate (None: every 50 Hz step); the action is held between.
         braking: the braking controller's parameters.
+        localisation: where the car's pose comes from: ``qcar2`` (its own filter on the
+            localiser's fixes, the default) or ``true`` (the true pose, an ablation); see
+            ``sim.env.config.LOCALISATIONS``.
     """
 
     setting: str
@@ -115,9 +119,12 @@ class TrialSpec:
     delay_ms: float = 0.0
     control_hz: float | None = None
     braking: BrakingConfig = field(default_factory=BrakingConfig)
+    localisation: str = "qcar2"
 
     def __post_init__(self) -> None:
         parse_setting(self.setting)
+        if self.localisation not in LOCALISATIONS:
+            raise ValueError(f"localisation must be one of {LOCALISATIONS}, got {self.localisation!r}")
         if self.target not in TARGETS:
             raise ValueError(f"target must be one of {tuple(TARGETS)}, got {self.target!r}")
         if self.sign not in range(TARGETS[self.target]):

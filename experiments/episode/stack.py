@@ -1,19 +1,19 @@
-"""The parts an episode wires together: the env under the spec's attacks, the perception
-pipelines, the distance estimator and the brakers (the one under test and the reference)."""
+"""The parts an episode wires together: the env under the spec's attacks, and what the car's
+software is configured with before it starts (its build, its mission, its perception pipelines
+and estimator). The car itself is :class:`experiments.episode.car.Car`."""
 
 from __future__ import annotations
 
 import gymnasium as gym
 
 import sim
-from controllers import CameraModel, ObstacleDetector, Perception, StopSignBraker
-from experiments.episode.car import CarCalibration, sign_depth_at_line
+from controllers import CameraModel, ObstacleDetector, Perception
+from experiments.episode.car import Car, CarCalibration, Mission
 from experiments.episode.estimators import make_estimator
 from experiments.episode.spec import TrialSpec
 from sim.attacks import ATTACKS
-from sim.world.drives import RouteTarget
 
-__all__ = ["default_env", "plain_env", "calibration", "Stack", "DRIVE_MAX_EPISODE_S"]
+__all__ = ["default_env", "plain_env", "calibration", "mission", "build_car", "DRIVE_MAX_EPISODE_S"]
 
 #: A drive's episode time limit, s.
 DRIVE_MAX_EPISODE_S = 120.0
@@ -46,6 +46,7 @@ def default_env(spec: TrialSpec, **env_kwargs) -> gym.Env:
     ``episode_params`` come from the spec's fields of those names (the patch's ``rho``)."""
     if spec.target == "drive":
         env_kwargs.setdefault("max_episode_s", DRIVE_MAX_EPISODE_S)
+    env_kwargs.setdefault("localisation", spec.localisation)
     env = plain_env(**env_kwargs)
     schedule = {"duration_s": spec.t_atk, "stable_steps": spec.attack_stable_steps}
     for name in spec.attacks:
@@ -60,27 +61,25 @@ def calibration(env: gym.Env) -> CarCalibration:
     k = u.rig.intrinsics
     camera = u.model.camera("d435").pos
     return CarCalibration(CameraModel(width=k.width, fx=k.fx, cx=k.cx), (float(camera[0]), float(camera[1])),
-                          float(u.model.site("front_bumper").pos[0]))
+                          float(u.model.site("front_bumper").pos[0]), float(u.model.body("wheel_rl").pos[0]))
 
 
-class Stack:
-    """Perception (one pipeline per target kind), the estimator and, per target, two brakers:
-    the one under test (fed the estimator) and the reference that defines t* (fed d_true
-    while the target is in view). ``calibration`` is the car's build (:func:`calibration`)."""
+def mission(env: gym.Env, options: dict) -> Mission:
+    """The car's briefing for the episode ``env`` was just reset to with ``options``: the route's
+    path and targets from the map (stop signs; and the crate's place, which the operator tells
+    the car: it is not found by the car's sensors), the cruise speed and the start along the route."""
+    u = env.unwrapped
+    return Mission(u.route_path, u.route_targets, float(options["cruise_speed"]), options.get("start_s_m"))
 
-    def __init__(self, env: gym.Env, spec: TrialSpec, estimator=None) -> None:
-        self.calibration = calibration(env)
-        camera = self.calibration.camera
-        self.spec = spec
-        self.perceptions = {"sign": Perception(camera),
-                            "obstacle": Perception(camera, detector=ObstacleDetector(), target="obstacle")}
-        self.estimator = estimator if estimator is not None else make_estimator(spec.estimator)
 
-    def begin(self, target: RouteTarget) -> tuple[Perception, StopSignBraker, StopSignBraker]:
-        """Fresh state for the next target of the route."""
-        depth_at_line = sign_depth_at_line(self.calibration, target)
-        self.estimator.reset()
-        perception = self.perceptions[target.kind]
-        perception.reset()
-        return (perception, StopSignBraker(self.spec.braking, depth_at_line),
-                StopSignBraker(self.spec.braking, depth_at_line))
+def build_car(env: gym.Env, spec: TrialSpec, brief: Mission, estimator=None) -> Car:
+    """The car's software for one episode of ``spec`` (its build read from the model, its loop at
+    the env's rate, the controller at ``spec.control_hz``)."""
+    calib = calibration(env)
+    config = env.unwrapped.config
+    every = max(1, int(round(config.control_hz / spec.control_hz))) if spec.control_hz else 1
+    perceptions = {"sign": Perception(calib.camera),
+                   "obstacle": Perception(calib.camera, detector=ObstacleDetector(), target="obstacle")}
+    return Car(calib, brief, perceptions, estimator if estimator is not None else make_estimator(spec.estimator),
+               spec.braking, 1.0 / config.control_hz, every,
+               localiser="fix" if config.localisation == "true" else "filter")

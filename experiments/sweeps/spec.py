@@ -6,6 +6,7 @@ Example (``experiments/sweeps/specs/smoke.toml``)::
     mode = "grid"            # every combination, `repeats` seeds each; or "random": `n` draws
     repeats = 1
     seed = 0
+    localisation = "qcar2"   # the car's own localisation (default), or "true" (the true pose)
 
     [space]
     attack = ["patch", "none"]       # "none", an attack, or attacks joined by "+"
@@ -41,6 +42,7 @@ from experiments.episode import TrialSpec
 from experiments.episode.estimators import ESTIMATORS
 from experiments.episode.spec import setting_name
 from sim.attacks import ATTACKS
+from sim.env.config import LOCALISATIONS
 
 __all__ = ["SweepSpec", "load_spec", "parse_spec", "spec_text", "spec_path", "SPACE_KEYS", "SPECS_DIR"]
 
@@ -49,7 +51,7 @@ SPACE_KEYS = {"attack": None, "estimator": None, "rho": (0.0, 1.0), "t_atk": (0.
               "sign": (0, 3)}
 _DEFAULTS = {"attack": ["patch"], "estimator": ["raw"], "rho": [0.95], "t_atk": [1.75], "speed": [1.5],
              "sign": [0, 1, 2, 3]}
-_TOP_KEYS = {"name", "mode", "repeats", "n", "seed", "space", "log_steps"}
+_TOP_KEYS = {"name", "mode", "repeats", "n", "seed", "space", "log_steps", "localisation"}
 #: The example specs shipped with the project.
 SPECS_DIR = Path(__file__).resolve().parent / "specs"
 
@@ -65,8 +67,11 @@ class SweepSpec:
     seed: int = 0
     space: dict = field(default_factory=dict)
     log_steps: bool = False
+    localisation: str = "qcar2"
 
     def __post_init__(self) -> None:
+        if self.localisation not in LOCALISATIONS:
+            raise ValueError(f"localisation must be one of {LOCALISATIONS}, got {self.localisation!r}")
         if self.mode not in ("grid", "random"):
             raise ValueError(f"mode must be 'grid' or 'random', got {self.mode!r}")
         if not (isinstance(self.repeats, int) and self.repeats >= 1):
@@ -102,8 +107,8 @@ class SweepSpec:
 
     @property
     def spec_hash(self) -> str:
-        raw = json.dumps({k: getattr(self, k) for k in ("name", "mode", "repeats", "n", "seed", "space")},
-                         sort_keys=True)
+        raw = json.dumps({k: getattr(self, k) for k in ("name", "mode", "repeats", "n", "seed", "space",
+                                                        "localisation")}, sort_keys=True)
         return hashlib.sha256(raw.encode()).hexdigest()[:12]
 
     def episodes(self) -> list[TrialSpec]:
@@ -116,7 +121,7 @@ class SweepSpec:
                 for repeat in range(self.repeats):
                     seed = self._episode_seed(cell, repeat)
                     for estimator in s["estimator"]:
-                        out.append(_trial(cell, estimator, seed))
+                        out.append(_trial(cell, estimator, seed, self.localisation))
         else:
             rng = np.random.default_rng(self.seed)
             for i in range(self.n):
@@ -125,7 +130,7 @@ class SweepSpec:
                         int(s["sign"][rng.integers(len(s["sign"]))]))
                 seed = self._episode_seed(cell, i)
                 for estimator in s["estimator"]:
-                    out.append(_trial(cell, estimator, seed))
+                    out.append(_trial(cell, estimator, seed, self.localisation))
         return out
 
     def _episode_seed(self, cell: tuple, repeat: int) -> int:
@@ -145,10 +150,10 @@ def _attacks(value) -> tuple[str, ...]:
     return parts
 
 
-def _trial(cell: tuple, estimator: str, seed: int) -> TrialSpec:
+def _trial(cell: tuple, estimator: str, seed: int, localisation: str) -> TrialSpec:
     attack, rho, t_atk, speed, sign = cell
     return TrialSpec(setting_name(_attacks(attack), estimator), int(sign), float(speed), seed,
-                     rho=(float(rho), float(rho)), t_atk=(float(t_atk), float(t_atk)))
+                     rho=(float(rho), float(rho)), t_atk=(float(t_atk), float(t_atk)), localisation=localisation)
 
 
 def spec_path(path: str | Path) -> Path:
@@ -181,7 +186,8 @@ def parse_spec(text: str, source: str = "spec", default_name: str = "sweep") -> 
     try:
         spec = SweepSpec(name=str(raw.get("name", default_name)), mode=raw.get("mode", "grid"),
                          repeats=raw.get("repeats", 1), n=raw.get("n", 0), seed=raw.get("seed", 0),
-                         space=raw.get("space", {}), log_steps=bool(raw.get("log_steps", False)))
+                         space=raw.get("space", {}), log_steps=bool(raw.get("log_steps", False)),
+                         localisation=raw.get("localisation", "qcar2"))
         episodes = spec.episodes()
     except ValueError as err:
         raise ValueError(f"{source}: {err}") from None

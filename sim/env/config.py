@@ -8,9 +8,16 @@ from typing import Any
 
 from sim.sensors.camera import CameraConfig
 from sim.sensors.lidar import LidarConfig
+from sim.sensors.localiser import LocaliserConfig
+from sim.sensors.state import OdometryConfig
 from sim.vehicle.qcar2 import VehicleConfig
 
-__all__ = ["EnvConfig", "RESET_OPTIONS"]
+__all__ = ["EnvConfig", "RESET_OPTIONS", "LOCALISATIONS"]
+
+#: Where the ``gps`` observation comes from: ``qcar2``, fixes shaped like Quanser's LiDAR
+#: scan-matching localiser (drift and noise, one per LiDAR scan); ``true``, the true pose at
+#: every step (for ablations).
+LOCALISATIONS = ("qcar2", "true")
 
 #: Keys ``reset(options=...)`` accepts.
 RESET_OPTIONS = ("sign", "obstacle", "cruise_speed", "run_up_m", "route", "start_s_m", "lateral_offset_m",
@@ -19,12 +26,15 @@ RESET_OPTIONS = ("sign", "obstacle", "cruise_speed", "run_up_m", "route", "start
 
 @dataclass(frozen=True)
 class EnvConfig:
-    """Settings of ``RACF/QCar2-v1``.
+    """Settings of ``RACF/QCar2-v2``.
 
     Attributes:
         control_hz: control (and default sensor) rate.
         physics_dt_s: MuJoCo time step; ``1/control_hz`` must be a whole number of steps.
         camera, lidar, vehicle: component configs.
+        localisation: where the ``gps`` fix comes from, one of ``LOCALISATIONS``.
+        localiser: the ``qcar2`` fix's drift and noise.
+        odometry: the encoder's and the IMU's quantisation, noise and biases.
         camera_hz, lidar_hz, state_hz: sensor rates; a sensor between readings holds its
             last one. Each must divide ``control_hz`` into whole steps. The LiDAR scans at
             the A2M12's 10 Hz by default.
@@ -39,6 +49,9 @@ class EnvConfig:
     camera: CameraConfig = field(default_factory=CameraConfig)
     lidar: LidarConfig = field(default_factory=LidarConfig)
     vehicle: VehicleConfig = field(default_factory=VehicleConfig)
+    localisation: str = "qcar2"
+    localiser: LocaliserConfig = field(default_factory=LocaliserConfig)
+    odometry: OdometryConfig = field(default_factory=OdometryConfig)
     camera_hz: float = 50.0
     lidar_hz: float = 10.0
     state_hz: float = 50.0
@@ -55,6 +68,8 @@ class EnvConfig:
             raise ValueError(f"physics_dt_s must be in [0.0001, 0.01] s, got {self.physics_dt_s}")
         if abs(self.substeps * self.physics_dt_s * self.control_hz - 1.0) > 1e-6:
             raise ValueError(f"1/control_hz = {1 / self.control_hz} s must be a whole number of physics_dt_s = {self.physics_dt_s} s")
+        if self.localisation not in LOCALISATIONS:
+            raise ValueError(f"localisation must be one of {LOCALISATIONS}, got {self.localisation!r}")
         for name in ("camera_hz", "lidar_hz", "state_hz"):
             rate = getattr(self, name)
             if not (0 < rate <= self.control_hz) or abs(self.control_hz / rate - round(self.control_hz / rate)) > 1e-6:
@@ -82,14 +97,16 @@ class EnvConfig:
         """Builds a config from flat keyword arguments.
 
         Top-level fields by name; component fields with a prefix: ``camera_width=160``,
-        ``lidar_n_beams=720``, ``vehicle_max_speed_mps=2.0``.
+        ``lidar_n_beams=720``, ``vehicle_max_speed_mps=2.0``, ``localiser_noise_xy_m=0.02``,
+        ``odometry_exact=True``.
 
         Raises:
             ValueError: for an unknown key (naming it and listing the allowed ones) or an
                 out-of-range value.
         """
         top = {f.name for f in dataclasses.fields(cls)}
-        parts = {"camera": CameraConfig, "lidar": LidarConfig, "vehicle": VehicleConfig}
+        parts = {"camera": CameraConfig, "lidar": LidarConfig, "vehicle": VehicleConfig,
+                 "localiser": LocaliserConfig, "odometry": OdometryConfig}
         values: dict[str, Any] = {}
         nested: dict[str, dict[str, Any]] = {p: {} for p in parts}
         for key, value in kwargs.items():

@@ -1,10 +1,15 @@
-"""``RACF/QCar2-v1``: the QCar 2 on the indoor map, approaching a stop sign.
+"""``RACF/QCar2-v2``: the QCar 2 on the indoor map, approaching a stop sign.
 
 Plumbing only: step order, seeding, spaces, sensor scheduling and the reward and
 termination hooks. The world, the car and the sensors are built by their own modules.
 
 Step order: validate action -> write controls -> ``substeps`` physics steps -> read the
-sensors that are due (others hold their last reading) -> ground truth -> reward and flags.
+sensors that are due (others hold their last reading and its timestamp) -> ground truth ->
+reward and flags.
+
+v2 (from v1): the observation gains ``gps`` (the localiser's fix) and ``timestamps``;
+``state`` is what the encoder and the IMU measure (quantised, noisy, biased) and loses the
+lateral speed, which no sensor on the car measures.
 """
 
 from __future__ import annotations
@@ -19,7 +24,8 @@ from gymnasium import spaces
 from sim._gl import ensure_gl_backend, gl_context_class
 from sim.env.config import RESET_OPTIONS, EnvConfig
 from sim.env.ground_truth import obstacle_view, sign_view
-from sim.sensors import DepthCamera, Lidar2D, RGBCamera, RGBDCameraRig, Sensor, VehicleStateSensor
+from sim.sensors import (TIMESTAMP_FIELDS, DepthCamera, Lidar2D, LocalisationFix, RGBCamera, RGBDCameraRig, Sensor,
+                         VehicleStateSensor)
 from sim.vehicle import QCar2
 from sim.world.drives import RouteTarget, start_pose, targets_on_path
 from sim.world.road_graph import Path, qcar2_road_graph
@@ -30,7 +36,11 @@ from sim.world.stop_signs import StopSign, stop_signs
 ensure_gl_backend()
 import mujoco  # noqa: E402
 
-__all__ = ["QCar2Env"]
+__all__ = ["QCar2Env", "TIMESTAMP_FIELDS"]
+
+#: Sensors whose noise comes from the navigation generator (apart from the cameras' and the
+#: LiDAR's, so that adding them left those draws as they were).
+_NAV_SENSORS = ("gps", "state")
 
 _BUMPER_AHEAD_M = 0.2125  # body origin to front bumper
 #: On a drive, the next target becomes current once the front bumper is this far past
@@ -43,8 +53,14 @@ class QCar2Env(gym.Env):
     """The QCar 2 driving a road-graph route towards one of the four stop signs.
 
     Observation (``Dict``): ``rgb`` (H, W, 3) uint8; ``depth`` (H, W, 1) float32 m, 0 = no
-    return; ``lidar`` (N,) float32 m, inf = no return; ``state`` (5,) float32, see
-    ``sim.sensors.STATE_FIELDS``. Action (``Box``): [speed command m/s, steering rad].
+    return; ``lidar`` (N,) float32 m, inf = no return; ``gps`` (3,) float32, the localiser's
+    fix (x, y m, yaw rad, map frame): with ``localisation="qcar2"`` (the default) one per
+    LiDAR scan, with Quanser's drift and noise (``sim.sensors.localiser``), with
+    ``localisation="true"`` the true pose at every step; ``state`` (4,) float32, the
+    encoder's speed, the steering servo's angle and the IMU's yaw rate and acceleration (see
+    ``sim.sensors.STATE_FIELDS``); ``timestamps`` (5,) float64, the time (s) each held
+    reading was taken, in the order of ``TIMESTAMP_FIELDS``. Action (``Box``): [speed
+    command m/s, steering rad].
 
     ``reset(options=...)`` sets up one of two kinds of episode:
 
@@ -63,18 +79,18 @@ class QCar2Env(gym.Env):
     ``d_true_euclid``, ``sign_bearing``, ``sign_mask``, ``sign_in_view``, ``pose``,
     ``speed``, ``route_s``, ``lateral_error``, ``dist_to_stop_line`` (front bumper to the
     stop line along the route, m; negative once past it), ``collision``, ``off_road``.
-    ``info["lidar_time"]`` is sensor metadata, not ground truth: the time (s) the held
-    LiDAR scan was taken (the LiDAR scans at ``lidar_hz``, 10 Hz by default, like the A2M12).
+    ``info["lidar_time"]`` repeats the LiDAR's timestamp (the LiDAR scans at ``lidar_hz``,
+    10 Hz by default, like the A2M12). The car's side reads the observation only.
 
     Reward per step: metres of route progress, minus 0.1 x lateral error (m), minus 10
     on leaving the road or colliding (both end the episode).
 
     Example:
         >>> import gymnasium as gym, sim
-        >>> env = gym.make("RACF/QCar2-v1", camera_width=160, camera_height=120)
+        >>> env = gym.make("RACF/QCar2-v2", camera_width=160, camera_height=120)
         >>> obs, info = env.reset(seed=0, options={"sign": 2, "cruise_speed": 1.0})
-        >>> obs["rgb"].shape, obs["lidar"].shape
-        ((120, 160, 3), (360,))
+        >>> obs["rgb"].shape, obs["lidar"].shape, obs["gps"].shape
+        ((120, 160, 3), (360,), (3,))
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 50}
@@ -94,14 +110,20 @@ class QCar2Env(gym.Env):
         self.car = QCar2(self.model, self.config.vehicle)
         self.rig = RGBDCameraRig(self.config.camera)
         self.rig.configure_model(self.model)
-        self.sensors: tuple[Sensor, ...] = (RGBCamera(self.rig), DepthCamera(self.rig),
-                                            Lidar2D(self.config.lidar), VehicleStateSensor(self.car))
+        true_pose = self.config.localisation == "true"
+        self.sensors: tuple[Sensor, ...] = (
+            RGBCamera(self.rig), DepthCamera(self.rig), Lidar2D(self.config.lidar),
+            LocalisationFix(self.car, self.config.localiser, fix_period_s=1.0 / self.config.lidar_hz, exact=true_pose),
+            VehicleStateSensor(self.car, self.config.odometry, rate_hz=self.config.state_hz))
+        lidar_every = self.config.decimation(self.config.lidar_hz)
         self._decimation = {"rgb": self.config.decimation(self.config.camera_hz),
                             "depth": self.config.decimation(self.config.camera_hz),
-                            "lidar": self.config.decimation(self.config.lidar_hz),
+                            "lidar": lidar_every,
+                            "gps": 1 if true_pose else lidar_every,  # a fix per matched scan
                             "state": self.config.decimation(self.config.state_hz)}
         self.observation_space = spaces.Dict({
-            s.name: spaces.Box(low=s.low, high=s.high, shape=s.shape, dtype=s.dtype) for s in self.sensors})
+            **{s.name: spaces.Box(low=s.low, high=s.high, shape=s.shape, dtype=s.dtype) for s in self.sensors},
+            "timestamps": spaces.Box(low=0.0, high=np.inf, shape=(len(TIMESTAMP_FIELDS),), dtype=np.float64)})
         v = self.config.vehicle
         self.action_space = spaces.Box(low=np.array([-v.max_reverse_mps, -v.max_steer_rad], np.float32),
                                        high=np.array([v.max_speed_mps, v.max_steer_rad], np.float32),
@@ -117,11 +139,12 @@ class QCar2Env(gym.Env):
         self._path: Path = first.path
         self._targets: tuple[RouteTarget, ...] = (RouteTarget(first, first.stop_s, first.stop_s),)
         self._slot = 0
-        self._lidar_time = 0.0
+        self._stamps = np.zeros(len(TIMESTAMP_FIELDS))
         self._obs: dict[str, np.ndarray] = {}
         self._step = 0
         self._route_s = 0.0
         self._sensor_rng = np.random.default_rng()
+        self._nav_rng = np.random.default_rng()
 
     # -- gymnasium API --------------------------------------------------------------------
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
@@ -135,8 +158,10 @@ class QCar2Env(gym.Env):
         else:
             path, targets, crate, start_s, pose, speed = self._approach_from_options(options)
 
-        # One generator for all sensor noise, derived from the env's seeded generator.
+        # One generator for the cameras' and the LiDAR's noise and one for the fix's and the
+        # odometry's, both derived from the env's seeded generator.
         self._sensor_rng = np.random.default_rng(self.np_random.integers(2**63))
+        self._nav_rng = np.random.default_rng(self.np_random.integers(2**63))
         self._path, self._targets, self._slot = path, targets, 0
         self._cruise_speed = float(speed)
         for i, (body, home) in enumerate(self._crates):
@@ -148,6 +173,8 @@ class QCar2Env(gym.Env):
         mujoco.mj_forward(self.model, self.data)
         self._step = 0
         self._obs = {}
+        for sensor in self.sensors:
+            sensor.reset(self._rng_of(sensor))
         self._read_sensors(force=True)
         return self._observation(), self._info(collision=False, off_road=False)
 
@@ -257,15 +284,18 @@ class QCar2Env(gym.Env):
         return False
 
     # -- internals ------------------------------------------------------------------------
+    def _rng_of(self, sensor: Sensor) -> np.random.Generator:
+        return self._nav_rng if sensor.name in _NAV_SENSORS else self._sensor_rng
+
     def _read_sensors(self, force: bool) -> None:
+        now = self._step / self.config.control_hz
         for sensor in self.sensors:
             if force or self._step % self._decimation[sensor.name] == 0:
-                self._obs[sensor.name] = sensor.read(self.model, self.data, self._sensor_rng)
-                if sensor.name == "lidar":
-                    self._lidar_time = self._step / self.config.control_hz
+                self._obs[sensor.name] = sensor.read(self.model, self.data, self._rng_of(sensor))
+                self._stamps[TIMESTAMP_FIELDS.index(sensor.name)] = now
 
     def _observation(self) -> dict[str, np.ndarray]:
-        return {k: v.copy() for k, v in self._obs.items()}
+        return {**{k: v.copy() for k, v in self._obs.items()}, "timestamps": self._stamps.copy()}
 
     def _update_route_progress(self) -> None:
         x, y = self.data.qpos[self.car.root_qpos : self.car.root_qpos + 2]
@@ -287,7 +317,7 @@ class QCar2Env(gym.Env):
             "target_kind": "obstacle" if isinstance(self._sign, Obstacle) else "stop_sign",
             "target_sign": self._sign.index,
             "target_slot": self._slot,
-            "lidar_time": self._lidar_time,
+            "lidar_time": float(self._stamps[TIMESTAMP_FIELDS.index("lidar")]),
             "cruise_speed": self._cruise_speed,
             "d_true": view.d_true,
             "d_true_euclid": view.d_euclid,

@@ -1,11 +1,13 @@
-"""The car's sensors, one per module, all with ``space`` metadata and ``read(model, data, rng)``."""
+"""The car's sensors, one per module, all with ``space`` metadata, ``reset(rng)`` and ``read(model, data, rng)``."""
 
-from sim.sensors.base import Sensor, SensorRate
+from sim.sensors.base import TIMESTAMP_FIELDS, Sensor, SensorRate
 from sim.sensors.camera import CameraConfig, CameraIntrinsics, DepthCamera, RGBCamera, RGBDCameraRig
 from sim.sensors.lidar import Lidar2D, LidarConfig
-from sim.sensors.state import STATE_FIELDS, VehicleStateSensor
+from sim.sensors.localiser import LocalisationFix, LocaliserConfig
+from sim.sensors.state import STATE_FIELDS, OdometryConfig, VehicleStateSensor
 
 __all__ = [
-    "Sensor", "SensorRate", "CameraConfig", "CameraIntrinsics", "DepthCamera", "RGBCamera",
-    "RGBDCameraRig", "Lidar2D", "LidarConfig", "STATE_FIELDS", "VehicleStateSensor",
+    "Sensor", "SensorRate", "TIMESTAMP_FIELDS", "CameraConfig", "CameraIntrinsics", "DepthCamera", "RGBCamera",
+    "RGBDCameraRig", "Lidar2D", "LidarConfig", "LocaliserConfig", "LocalisationFix",
+    "STATE_FIELDS", "OdometryConfig", "VehicleStateSensor",
 ]

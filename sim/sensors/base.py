@@ -1,4 +1,4 @@
-"""The one contract every sensor follows: a space and ``read(model, data, rng)``."""
+"""The one contract every sensor follows: a space, ``reset(rng)`` per episode and ``read(model, data, rng)``."""
 
 from __future__ import annotations
 
@@ -7,7 +7,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["Sensor", "SensorRate"]
+__all__ = ["Sensor", "SensorRate", "TIMESTAMP_FIELDS"]
+
+#: The entries of the env's ``timestamps`` observation: when each sensor's held reading was
+#: taken, s (a sensor between readings holds its last one and its time).
+TIMESTAMP_FIELDS = ("rgb", "depth", "lidar", "gps", "state")
 
 
 @dataclass(frozen=True)
@@ -48,6 +52,9 @@ class Sensor(ABC):
             data: ``mujoco.MjData`` after ``mj_forward``/``mj_step``.
             rng: the generator all the sensor's noise is drawn from.
         """
+
+    def reset(self, rng: np.random.Generator) -> None:
+        """Per-episode draws (biases, drift); the default draws nothing."""
 
     def close(self) -> None:
         """Releases resources (GL contexts); reading after close re-creates them."""

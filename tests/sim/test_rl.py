@@ -29,12 +29,13 @@ def test_sb3_check_env_has_nothing_to_say_and_ppo_learns_a_few_steps():
     env.close()
 
 
-def test_plain_env_depth_is_an_image_shaped_float_and_v0_points_to_v1():
+def test_plain_env_depth_is_an_image_shaped_float_and_older_versions_point_to_v2():
     env = gym.make(sim.ENV_ID, **SMALL)
     assert env.observation_space["depth"].shape == (120, 160, 1)
     env.close()
-    with pytest.raises(gym.error.Error, match="v1"):
-        gym.make("RACF/QCar2-v0")
+    for old in ("RACF/QCar2-v0", "RACF/QCar2-v1"):
+        with pytest.raises(gym.error.Error, match="RACF/QCar2-v2"):
+            gym.make(old)
 
 
 def test_depth_as_image_maps_metres_to_uint8_and_keeps_no_return_at_zero():

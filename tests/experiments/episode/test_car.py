@@ -12,7 +12,8 @@ from controllers import CameraModel
 from experiments.episode import car
 from experiments.episode.car import CarCalibration, map_bearing, sign_depth_at_line
 
-CAL = CarCalibration(CameraModel(width=320, fx=230.0, cx=160.0), camera_xy_m=(0.2, 0.0), bumper_x_m=0.25)
+CAL = CarCalibration(CameraModel(width=320, fx=230.0, cx=160.0), camera_xy_m=(0.2, 0.0), bumper_x_m=0.25,
+                     rear_axle_x_m=-0.128)
 
 
 def _sign(x, y, face_yaw=math.pi):

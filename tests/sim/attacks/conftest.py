@@ -1,6 +1,6 @@
 """Shared by the attack wrapper tests: a stub of the racf env, a driver, and the real env where geometry matters.
 
-The stub stands in for ``RACF/QCar2-v1`` wherever the wrapper, not the simulator, is under
+The stub stands in for ``RACF/QCar2-v2`` wherever the wrapper, not the simulator, is under
 test: it has the env's Dict observation space, returns readings that are plain functions
 of the distance to the sign and the step, and puts in ``info`` the ground truth the
 attacks read. It isolates the wrapper and needs no MuJoCo.
@@ -69,7 +69,7 @@ class StubData:
 
 
 class StubEnv(gym.Env):
-    """A stand-in for ``RACF/QCar2-v1`` with its observation space (at 64 x 48 px).
+    """A stand-in for ``RACF/QCar2-v2`` with its observation space (at 64 x 48 px).
 
     The car moves at the commanded speed (``action[0]``, m/s, clipped to [0, 2]; no dynamics)
     towards a stop line ``run_up_m`` ahead (reset option, default 1.5 m); the sign stands
@@ -83,7 +83,8 @@ class StubEnv(gym.Env):
       sign's pixels at ``d_true`` except a lattice of holes (0) on a fifth of them;
     - ``lidar``: the wall at ``WALL_RANGE_M``, inf on ``NO_RETURN_BEAMS``, the sign's distance
       on beam ``SIGN_BEAM``;
-    - ``state``: the speed, then zeros.
+    - ``gps``: the car on the x axis, ``dist`` short of the line; ``state``: the speed, then
+      zeros; ``timestamps``: every reading taken now.
 
     ``info`` has ``time``, ``sign_mask``, ``sign_in_view``, ``d_true``, ``dist_to_stop_line``
     and ``speed``; ``target_sign.position`` and ``data.site("lidar")`` give the geometry the
@@ -98,7 +99,9 @@ class StubEnv(gym.Env):
             "rgb": spaces.Box(0, 255, (H, W, 3), np.uint8),
             "depth": spaces.Box(0.0, np.inf, (H, W, 1), np.float32),
             "lidar": spaces.Box(0.0, np.inf, (N_BEAMS,), np.float32),
-            "state": spaces.Box(-np.inf, np.inf, (5,), np.float32),
+            "gps": spaces.Box(-np.inf, np.inf, (3,), np.float32),
+            "state": spaces.Box(-np.inf, np.inf, (4,), np.float32),
+            "timestamps": spaces.Box(0.0, np.inf, (5,), np.float64),
         })
         self.action_space = spaces.Box(np.array([-1.0, -0.5], np.float32), np.array([2.0, 0.5], np.float32),
                                        dtype=np.float32)
@@ -148,8 +151,11 @@ class StubEnv(gym.Env):
         lidar = np.full(N_BEAMS, WALL_RANGE_M, np.float32)
         lidar[NO_RETURN_BEAMS] = np.inf
         lidar[SIGN_BEAM] = self.sign_distance_m
-        state = np.array([self._speed, 0.0, 0.0, 0.0, 0.0], np.float32)
-        return {"rgb": rgb, "depth": depth[..., None], "lidar": lidar, "state": state}
+        state = np.array([self._speed, 0.0, 0.0, 0.0], np.float32)
+        gps = np.array([-self._dist, 0.0, 0.0], np.float32)
+        stamps = np.full(5, self._step / CONTROL_HZ)
+        return {"rgb": rgb, "depth": depth[..., None], "lidar": lidar, "gps": gps, "state": state,
+                "timestamps": stamps}
 
     def _info(self) -> dict[str, Any]:
         mask = self.sign_mask()

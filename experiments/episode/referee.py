@@ -1,0 +1,83 @@
+"""The referee's side of an episode: everything the log knows that the car must not.
+
+The referee reads everything (``info``, the env's unattacked readings, the car's outputs) and
+feeds nothing back. Per step it runs:
+- the reference braker that defines t*: the same braking controller fed d_true while the
+  target is in view, on every step, without delay;
+- the ``d_clean`` pass: the protocol's pseudo ground truth, the car's detector and depth
+  pipeline on the env's own readings before any attack;
+- the ground-truth log columns (pose, speed, distance to the line, d_true, visibility).
+"""
+
+from __future__ import annotations
+
+import math
+
+import gymnasium as gym
+import numpy as np
+
+from controllers import BrakingConfig, Perception, StopSignBraker
+from experiments.episode.car import CarCalibration, CarStep, sign_depth_at_line
+from sim.world.drives import RouteTarget
+
+__all__ = ["Referee"]
+
+
+class Referee:
+    """Grades the car on the target the car is serving.
+
+    Args:
+        calibration: the car's build (where its line is, for the reference braker).
+        braking: the braking controller's parameters (the reference uses the car's).
+        dt: the env's step, s.
+        attacked: whether an attack wrapper sits between the env and the car.
+        clean_pass: under attack, run the ``d_clean`` pass (a diagnostic: without it the
+            log's ``d_clean`` is NaN under attack and nothing else changes).
+    """
+
+    def __init__(self, calibration: CarCalibration, braking: BrakingConfig, dt: float, attacked: bool,
+                 clean_pass: bool = True) -> None:
+        self.calibration = calibration
+        self.braking = braking
+        self.dt = dt
+        self.attacked = attacked
+        self.clean_pass = clean_pass
+        self._slot = -1
+        self._ideal: StopSignBraker | None = None
+        self._d_clean = math.nan
+
+    def _begin(self, target: RouteTarget) -> None:
+        self._ideal = StopSignBraker(self.braking, sign_depth_at_line(self.calibration, target))
+
+    def observe(self, env: gym.Env, obs: dict, info: dict, car: CarStep, target: RouteTarget,
+                perception: Perception) -> dict:
+        """The referee's columns for one step, after the car has decided.
+
+        ``perception`` is the car's pipeline for the target: the clean pass uses its detector
+        and depth estimator (both stateless) and, where the attack left the image alone,
+        the detection it just made.
+        """
+        if car.slot != self._slot:
+            self._slot = car.slot
+            self._begin(target)
+        if car.control:
+            self._d_clean = self._clean_distance(env, obs, car, perception)
+        in_view = bool(info["sign_in_view"])
+        ideal = self._ideal.step(in_view, float(info["d_true"]) if in_view else math.nan, float(info["speed"]), self.dt)
+        x, y, yaw = (float(v) for v in info["pose"])
+        return {
+            "d_true": info["d_true"], "d_clean": self._d_clean, "sign_in_view": in_view,
+            "ideal_brake": ideal.brake, "x": x, "y": y, "yaw": yaw, "speed": info["speed"],
+            "dist_to_stop_line": info["dist_to_stop_line"], "lateral_error": info["lateral_error"],
+            "attack_active": bool(info.get("attack_active", False)), "attack": "+".join(info.get("attack", ())),
+        }
+
+    def _clean_distance(self, env: gym.Env, obs: dict, car: CarStep, perception: Perception) -> float:
+        if not self.attacked:
+            return car.sample.d_meas
+        if not self.clean_pass:
+            return math.nan
+        clean = env.unwrapped.sensor_observation()
+        unchanged = np.array_equal(clean["rgb"], obs["rgb"])
+        detection = perception.last_raw_detection if unchanged else perception.detector.detect(clean["rgb"])
+        return perception.depth.estimate(clean["depth"][..., 0], detection)[0]

@@ -1,0 +1,63 @@
+"""The car drives on what it senses: scrambling the ground truth in ``info`` changes nothing it does.
+
+The scrambler sits outside the attack wrappers (an attacker may see the world; the car may
+not) and replaces every ground-truth value the runner receives, with its own generator. The
+car's actions, its distance estimate and its pose estimate must come out bit-identical; the
+referee's columns (d_true, the reference braker) are the only ones allowed to change.
+"""
+
+import gymnasium as gym
+import numpy as np
+import pandas as pd
+
+from experiments.episode import TrialSpec, run_trial
+from experiments.episode.stack import default_env
+
+#: What the car does and works out; none of it may depend on ``info``.
+CAR_COLUMNS = ["speed_cmd", "steer_cmd", "d_fused", "d_meas", "lidar", "detected", "brake", "phase", "slot",
+               "x_est", "y_est", "yaw_est"]
+#: ``time`` and ``dist_to_stop_line`` stay: the runner (the experimenter, not the car) ends
+#: the episode on them, and both runs must last the same number of steps to be compared.
+KEPT = {"time", "dist_to_stop_line", "collision", "off_road", "attack", "attack_active"}
+
+
+class ScrambledInfo(gym.Wrapper):
+    """Passes observations and actions through; every ground-truth entry of ``info`` is junk."""
+
+    def __init__(self, env: gym.Env) -> None:
+        super().__init__(env)
+        self._rng = np.random.default_rng(12345)
+
+    def _scramble(self, info: dict) -> dict:
+        out = dict(info)
+        for key, value in info.items():
+            if key in KEPT:
+                continue
+            if isinstance(value, (bool, np.bool_)):
+                out[key] = not value
+            elif isinstance(value, np.ndarray) and value.dtype == bool:
+                out[key] = ~value
+            elif isinstance(value, np.ndarray):
+                out[key] = value + self._rng.normal(0.0, 0.3, value.shape)
+            elif isinstance(value, (int, float, np.floating, np.integer)):
+                out[key] = value + self._rng.uniform(0.2, 0.5)
+        return out
+
+    def reset(self, **kwargs):
+        obs, info = self.env.reset(**kwargs)
+        return obs, self._scramble(info)
+
+    def step(self, action):
+        obs, reward, terminated, truncated, info = self.env.step(action)
+        return obs, reward, terminated, truncated, self._scramble(info)
+
+
+def test_the_car_does_the_same_with_info_scrambled():
+    spec = TrialSpec("attack+odca", 0, 1.5, 1)
+    result, log = run_trial(spec, clean_pass=False)
+    _, blind = run_trial(spec, make_env=lambda s: ScrambledInfo(default_env(s)), clean_pass=False)
+    assert len(log) > 50 and log["attack_active"].any()
+    pd.testing.assert_frame_equal(blind[CAR_COLUMNS], log[CAR_COLUMNS])
+    # The scrambler did reach the runner: the referee's ground truth differs.
+    assert not np.allclose(blind["d_true"].fillna(-1), log["d_true"].fillna(-1))
+    assert not np.allclose(blind["x"], log["x"])
