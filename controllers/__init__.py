@@ -15,8 +15,9 @@ from controllers.speed import SpeedPI, SpeedPIConfig, SpeedProfile
 
 __all__ = [
     "BrakeDecision", "BrakingConfig", "CameraModel", "DepthDistance", "Detection", "DetectorConfig",
-    "DistanceEKF", "DistanceEstimator", "EKFConfig", "EKFEstimator", "LidarTargetConfig", "LidarTargetState", "LidarTargetTracker", "ObstacleDetector", "ObstacleDetectorConfig", "Perception", "PerceptionSample", "Phase",
-    "PoseFilter", "PoseFilterConfig",
-    "RawDepthEstimator", "RouteFollower", "scan_points", "segment_scan", "SpeedPI", "SpeedPIConfig", "SpeedProfile", "StanleyConfig",
-    "StanleyController", "StopSignBraker", "StopSignDetector", "wrap_angle",
+    "DistanceEKF", "DistanceEstimator", "EKFConfig", "EKFEstimator", "LidarTargetConfig", "LidarTargetState",
+    "LidarTargetTracker", "ObstacleDetector", "ObstacleDetectorConfig", "Perception", "PerceptionSample",
+    "Phase", "PoseFilter", "PoseFilterConfig", "RawDepthEstimator", "RouteFollower", "scan_points",
+    "segment_scan", "SpeedPI", "SpeedPIConfig", "SpeedProfile", "StanleyConfig", "StanleyController",
+    "StopSignBraker", "StopSignDetector", "wrap_angle",
 ]

@@ -12,8 +12,8 @@ from sim.attacks import ATTACKS
 
 __all__ = ["UsageError", "sign", "positive", "speed", "share", "duration", "count", "pair", "fail", "flag_error",
            "fmt_ci", "DEFAULT_WORKERS",
-           "episode_flags", "episode_params", "backend_flags", "localisation_flag", "attack_help", "estimator_help", "registry_rows",
-           "registry_markdown"]
+           "episode_flags", "episode_params", "backend_flags", "localisation_flag", "attack_help", "estimator_help",
+           "registry_rows", "registry_markdown"]
 
 #: Parallel episodes by default: two, or one on a single-core machine.
 DEFAULT_WORKERS = min(2, os.cpu_count() or 1)

@@ -164,7 +164,8 @@ def _run(env: gym.Env, spec: TrialSpec, estimator, on_step: StepHook | None, cle
         })
         if on_step is not None:
             on_step(env, obs, info, rows[-1])
-        if step.slot == len(targets) - 1 and (decision.phase is Phase.DONE or info["dist_to_stop_line"] < -RUN_THROUGH_M):
+        last = step.slot == len(targets) - 1
+        if last and (decision.phase is Phase.DONE or info["dist_to_stop_line"] < -RUN_THROUGH_M):
             break
         obs, _, terminated, truncated, info = env.step(applied)
         if terminated or truncated:
