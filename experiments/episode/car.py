@@ -181,7 +181,9 @@ class Car:
         if first:
             self.pose_filter.reset(fix)
         else:
-            self.pose_filter.predict(speed, yaw_rate, self.dt)
+            # No slip at the rear axle: the body origin moves sideways at the yaw rate x its lever arm.
+            lateral = (yaw_rate - self.pose_filter.gyro_bias) * -self.calibration.rear_axle_x_m
+            self.pose_filter.predict(speed, yaw_rate, self.dt, lateral_speed=lateral)
             if new_fix:
                 self.pose_filter.correct(fix)
         self._pose = self.pose_filter.pose

@@ -148,6 +148,9 @@ def test_unknown_constructor_kwarg_is_named(kwargs, name):
     ({"max_episode_s": 0.0}, "max_episode_s"),
     ({"lidar_hz": 7}, "lidar_hz"),
     ({"vehicle_max_speed_mps": 10.0}, "max_speed_mps"),
+    ({"localisation": "perfect"}, r"localisation must be one of \('qcar2', 'true'\)"),
+    ({"localiser_noise_xy_m": -1.0}, "noise_xy_m"),
+    ({"odometry_m_per_count": 0.0}, "m_per_count"),
 ])
 def test_out_of_range_config_value_is_named(kwargs, name):
     with pytest.raises(ValueError, match=name):

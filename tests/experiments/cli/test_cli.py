@@ -23,6 +23,16 @@ def test_bad_sign_is_a_clear_error(capsys):
     assert "sign must be 0, 1, 2 or 3" in capsys.readouterr().err
 
 
+@pytest.mark.parametrize("argv", [["trial", "--localisation", "gps"], ["trials", "--table", "--localisation", "gps"],
+                                  ["sweep", "smoke.toml", "--localisation", "gps"]])
+def test_bad_localisation_fails_before_any_work_naming_the_choices(argv, capsys, tmp_path):
+    with pytest.raises(SystemExit) as err:
+        main(argv + ["--out", str(tmp_path / "out")])
+    assert err.value.code == 2
+    assert "--localisation: invalid choice: 'gps' (choose from 'qcar2', 'true')" in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()
+
+
 def test_snapshot_writes_the_four_pictures(tmp_path):
     assert main(["snapshot", "--sign", "3", "--width", "160", "--height", "120", "--out", str(tmp_path)]) == 0
     names = {p.name for p in tmp_path.glob("*.png")}
