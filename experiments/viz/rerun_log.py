@@ -130,7 +130,12 @@ def write_rrd(path: str | Path, log: pd.DataFrame, recorder: FrameRecorder | Non
     rec.log("map/stop_signs", rr.Points2D(_map_px([s.position for s in signs]), radii=4, colors=[200, 20, 20],
                                           labels=[f"stop {s.index}" for s in signs]), static=True)
     xy = log[["x", "y"]].to_numpy(float)
-    rec.log("map/trajectory", rr.LineStrips2D([_map_px(xy)], colors=[30, 120, 230], radii=1.5), static=True)
+    rec.log("map/trajectory", rr.LineStrips2D([_map_px(xy)], colors=[30, 120, 230], radii=1.5,
+                                              labels=["true pose"]), static=True)
+    if {"x_est", "y_est"} <= set(log.columns):  # the car's own pose estimate, beside the truth
+        est = log[["x_est", "y_est"]].to_numpy(float)
+        rec.log("map/trajectory_estimate", rr.LineStrips2D([_map_px(est)], colors=[240, 120, 20], radii=1.0,
+                                                           labels=["car's estimate"]), static=True)
 
     # Every step: the signals, as columns.
     times = rr.TimeColumn("sim_time", duration=log["t"].to_numpy(float))

@@ -36,7 +36,8 @@ def test_entities_and_timeline_length_match_the_episode(recorded):
         assert len(set(times[name])) == len(log)
     for name in ("/world/camera/image", "/world/camera/depth", "/world/car/lidar", "/world/car", "/map/car"):
         assert rows[name] == len(recorder.frames) == int(np.ceil(len(log) / 5)), name
-    for name in ("/world/camera", "/map/mat", "/map/trajectory", "/map/stop_signs", "/world/camera/image/detection",
+    for name in ("/world/camera", "/map/mat", "/map/trajectory", "/map/trajectory_estimate", "/map/stop_signs",
+                 "/world/camera/image/detection",
                  "/world/camera/image/patch", "/world/car/lidar/track"):
         assert name in rows, name
 
