@@ -29,6 +29,9 @@ __all__ = ["CarCalibration", "Mission", "CarStep", "Car", "sign_depth_at_line", 
 #: The next target becomes current once the front bumper is this far past the current one's
 #: stop line (the car has served it and driven on); the env's own rule, on the car's pose.
 PASS_LINE_M = 0.3
+#: The tyres' grip bounds the body's acceleration (friction 0.75 x g): a faster change of the
+#: encoder's speed is the wheels spinning up or locking, not the car (m/s^2).
+MAX_ACCEL_MPS2 = 0.75 * 9.81
 #: How the car knows its pose: ``filter`` (its own EKF on odometry, gyro and the localiser's
 #: fixes) or ``fix`` (the fix as it is; for the ``true`` localisation ablation, where the fix
 #: is the true pose at every step).
@@ -144,6 +147,7 @@ class Car:
         self._fix_time = -math.inf
         self._scan_time = -math.inf
         self._pose = np.zeros(3)
+        self._odometry_mps = math.nan
         self.slot = 0
         self.follower: RouteFollower | None = None
         self.perception = self.braker = None
@@ -173,6 +177,10 @@ class Car:
         """Updates the pose from this step's odometry and any new fix; returns the gyro's yaw rate
         less the filter's bias estimate, rad/s."""
         speed, yaw_rate = float(obs["state"][0]), float(obs["state"][2])
+        # Odometry for the pose: the encoder's speed, changing no faster than the tyres allow
+        # (a launch from the stop line spins the wheels up well before the body follows).
+        step = MAX_ACCEL_MPS2 * self.dt
+        self._odometry_mps = speed if first else min(max(speed, self._odometry_mps - step), self._odometry_mps + step)
         fix, fix_time = np.asarray(obs["gps"], np.float64), float(obs["timestamps"][_FIX_TIME])
         new_fix, self._fix_time = fix_time != self._fix_time, fix_time
         if self.pose_filter is None:
@@ -183,7 +191,7 @@ class Car:
         else:
             # No slip at the rear axle: the body origin moves sideways at the yaw rate x its lever arm.
             lateral = (yaw_rate - self.pose_filter.gyro_bias) * -self.calibration.rear_axle_x_m
-            self.pose_filter.predict(speed, yaw_rate, self.dt, lateral_speed=lateral)
+            self.pose_filter.predict(self._odometry_mps, yaw_rate, self.dt, lateral_speed=lateral)
             if new_fix:
                 self.pose_filter.correct(fix)
         self._pose = self.pose_filter.pose
