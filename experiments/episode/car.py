@@ -20,11 +20,12 @@ import numpy as np
 from controllers import (BrakeDecision, BrakingConfig, CameraModel, Perception, PerceptionSample, PoseFilter,
                          RouteFollower, StopSignBraker)
 from sim.sensors import TIMESTAMP_FIELDS
+from sim.sensors.localiser import LOCALISATIONS
 from sim.world.drives import RouteTarget
 from sim.world.road_graph import Path
 
 __all__ = ["CarCalibration", "Mission", "CarStep", "Car", "sign_depth_at_line", "route_follower", "map_bearing",
-           "PASS_LINE_M", "LOCALISERS"]
+           "PASS_LINE_M"]
 
 #: The next target becomes current once the front bumper is this far past the current one's
 #: stop line (the car has served it and driven on); the env's own rule, on the car's pose.
@@ -32,10 +33,6 @@ PASS_LINE_M = 0.3
 #: The tyres' grip bounds the body's acceleration (friction 0.75 x g): a faster change of the
 #: encoder's speed is the wheels spinning up or locking, not the car (m/s^2).
 MAX_ACCEL_MPS2 = 0.75 * 9.81
-#: How the car knows its pose: ``filter`` (its own EKF on odometry, gyro and the localiser's
-#: fixes) or ``fix`` (the fix as it is; for the ``true`` localisation ablation, where the fix
-#: is the true pose at every step).
-LOCALISERS = ("filter", "fix")
 _FIX_TIME, _SCAN_TIME = TIMESTAMP_FIELDS.index("gps"), TIMESTAMP_FIELDS.index("lidar")
 
 
@@ -125,14 +122,16 @@ class Car:
         dt: the car's loop period, s (one observation per call of :meth:`step`).
         control_every: the controller runs every this many steps and holds its action between;
             the localisation filter runs every step.
-        localiser: one of ``LOCALISERS``.
+        localisation: the env's (``sim.sensors.localiser.LOCALISATIONS``): ``qcar2``, the car runs its
+            own filter on odometry, the gyro and the localiser's fixes; ``true``, the fix is the
+            true pose at every step and the car takes it as it is (the ablation).
     """
 
     def __init__(self, calibration: CarCalibration, mission: Mission, perceptions: dict[str, Perception],
                  estimator, braking: BrakingConfig, dt: float, control_every: int = 1,
-                 localiser: str = "filter") -> None:
-        if localiser not in LOCALISERS:
-            raise ValueError(f"localiser must be one of {LOCALISERS}, got {localiser!r}")
+                 localisation: str = "qcar2") -> None:
+        if localisation not in LOCALISATIONS:
+            raise ValueError(f"localisation must be one of {LOCALISATIONS}, got {localisation!r}")
         if not mission.targets:
             raise ValueError("a mission needs at least one target")
         self.calibration = calibration
@@ -142,7 +141,7 @@ class Car:
         self.braking = braking
         self.dt = float(dt)
         self.every = int(control_every)
-        self.pose_filter = PoseFilter() if localiser == "filter" else None
+        self.pose_filter = PoseFilter() if localisation == "qcar2" else None
         self._step = 0
         self._fix_time = -math.inf
         self._scan_time = -math.inf
@@ -205,12 +204,12 @@ class Car:
         if first:
             start_s, _ = self.mission.path.project(np.array([x, y]), s_hint=self.mission.start_hint_m)
             self.follower = route_follower(self.mission.path, self.mission.cruise_mps, start_s)
+            self._bumper_ahead_of_axle = self.calibration.bumper_x_m - self.follower.steering.config.front_axle_m
             self._begin(0)
         # The car's own localisation and the map say which target is next.
-        bumper_ahead_of_axle = self.calibration.bumper_x_m - self.follower.steering.config.front_axle_m
         targets = self.mission.targets
         while (self.slot + 1 < len(targets)
-               and self.follower.progress_m + bumper_ahead_of_axle - targets[self.slot].stop_s > PASS_LINE_M):
+               and self.follower.progress_m + self._bumper_ahead_of_axle - targets[self.slot].stop_s > PASS_LINE_M):
             self._begin(self.slot + 1)
         speed = float(obs["state"][0])
         # A scan is handed to the tracker once, on the step it arrives (the LiDAR runs at 10 Hz).

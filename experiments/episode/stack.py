@@ -81,5 +81,4 @@ def build_car(env: gym.Env, spec: TrialSpec, brief: Mission, estimator=None) -> 
     perceptions = {"sign": Perception(calib.camera),
                    "obstacle": Perception(calib.camera, detector=ObstacleDetector(), target="obstacle")}
     return Car(calib, brief, perceptions, estimator if estimator is not None else make_estimator(spec.estimator),
-               spec.braking, 1.0 / config.control_hz, every,
-               localiser="fix" if config.localisation == "true" else "filter")
+               spec.braking, 1.0 / config.control_hz, every, config.localisation)

@@ -8,16 +8,12 @@ from typing import Any
 
 from sim.sensors.camera import CameraConfig
 from sim.sensors.lidar import LidarConfig
-from sim.sensors.localiser import LocaliserConfig
+from sim.sensors.localiser import LOCALISATIONS, LocaliserConfig
 from sim.sensors.state import OdometryConfig
 from sim.vehicle.qcar2 import VehicleConfig
 
 __all__ = ["EnvConfig", "RESET_OPTIONS", "LOCALISATIONS"]
 
-#: Where the ``gps`` observation comes from: ``qcar2``, fixes shaped like Quanser's LiDAR
-#: scan-matching localiser (drift and noise, one per LiDAR scan); ``true``, the true pose at
-#: every step (for ablations).
-LOCALISATIONS = ("qcar2", "true")
 
 #: Keys ``reset(options=...)`` accepts.
 RESET_OPTIONS = ("sign", "obstacle", "cruise_speed", "run_up_m", "route", "start_s_m", "lateral_offset_m",

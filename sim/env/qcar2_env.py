@@ -41,6 +41,8 @@ __all__ = ["QCar2Env", "TIMESTAMP_FIELDS"]
 #: Sensors whose noise comes from the navigation generator (apart from the cameras' and the
 #: LiDAR's, so that adding them left those draws as they were).
 _NAV_SENSORS = ("gps", "state")
+#: Each sensor's entry in the ``timestamps`` observation.
+_STAMP_SLOT = {name: i for i, name in enumerate(TIMESTAMP_FIELDS)}
 
 _BUMPER_AHEAD_M = 0.2125  # body origin to front bumper
 #: On a drive, the next target becomes current once the front bumper is this far past
@@ -292,7 +294,7 @@ class QCar2Env(gym.Env):
         for sensor in self.sensors:
             if force or self._step % self._decimation[sensor.name] == 0:
                 self._obs[sensor.name] = sensor.read(self.model, self.data, self._rng_of(sensor))
-                self._stamps[TIMESTAMP_FIELDS.index(sensor.name)] = now
+                self._stamps[_STAMP_SLOT[sensor.name]] = now
 
     def _observation(self) -> dict[str, np.ndarray]:
         return {**{k: v.copy() for k, v in self._obs.items()}, "timestamps": self._stamps.copy()}
@@ -317,7 +319,7 @@ class QCar2Env(gym.Env):
             "target_kind": "obstacle" if isinstance(self._sign, Obstacle) else "stop_sign",
             "target_sign": self._sign.index,
             "target_slot": self._slot,
-            "lidar_time": float(self._stamps[TIMESTAMP_FIELDS.index("lidar")]),
+            "lidar_time": float(self._stamps[_STAMP_SLOT["lidar"]]),
             "cruise_speed": self._cruise_speed,
             "d_true": view.d_true,
             "d_true_euclid": view.d_euclid,

@@ -2,16 +2,26 @@
 
 from __future__ import annotations
 
+import math
+import numbers
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["Sensor", "SensorRate", "TIMESTAMP_FIELDS"]
+__all__ = ["Sensor", "SensorRate", "TIMESTAMP_FIELDS", "check_range"]
 
 #: The entries of the env's ``timestamps`` observation: when each sensor's held reading was
 #: taken, s (a sensor between readings holds its last one and its time).
 TIMESTAMP_FIELDS = ("rgb", "depth", "lidar", "gps", "state")
+
+
+def check_range(name: str, value: float, low: float, high: float, low_open: bool = False) -> None:
+    """ValueError naming ``name`` and its interval unless ``value`` is a finite real number in it."""
+    ok = isinstance(value, numbers.Real) and not isinstance(value, bool) and math.isfinite(value)
+    if not ok or value > high or value < low or (low_open and value == low):
+        interval = f"{'(' if low_open else '['}{low}, {high}]"
+        raise ValueError(f"{name} must be in {interval}, got {value!r}")
 
 
 @dataclass(frozen=True)

@@ -19,10 +19,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from sim.sensors.base import Sensor
+from sim.sensors.base import Sensor, check_range
 from sim.vehicle.qcar2 import QCar2
 
-__all__ = ["LocaliserConfig", "LocalisationFix"]
+__all__ = ["LocaliserConfig", "LocalisationFix", "LOCALISATIONS"]
+
+#: Where the ``gps`` observation comes from: ``qcar2``, fixes shaped like Quanser's LiDAR
+#: scan-matching localiser (drift and noise, one per LiDAR scan); ``true``, the true pose at
+#: every step (for ablations). The env's ``localisation`` setting takes one of them.
+LOCALISATIONS = ("qcar2", "true")
 
 
 @dataclass(frozen=True)
@@ -53,26 +58,19 @@ class LocaliserConfig:
     noise_yaw_rad: float = 0.01
 
     def __post_init__(self) -> None:
-        _check_range("drift_period_s", self.drift_period_s, 0.0, 3600.0, low_open=True)
-        _check_range("drift_noise_power", self.drift_noise_power, 0.0, 1.0)
-        _check_range("drift_sample_s", self.drift_sample_s, 0.0, 3600.0, low_open=True)
-        _check_range("drift_rate_limit", self.drift_rate_limit, 0.0, 10.0, low_open=True)
-        _check_range("drift_max_m", self.drift_max_m, 0.0, 1.0)
-        _check_range("noise_xy_m", self.noise_xy_m, 0.0, 1.0)
-        _check_range("noise_yaw_rad", self.noise_yaw_rad, 0.0, math.pi)
+        check_range("drift_period_s", self.drift_period_s, 0.0, 3600.0, low_open=True)
+        check_range("drift_noise_power", self.drift_noise_power, 0.0, 1.0)
+        check_range("drift_sample_s", self.drift_sample_s, 0.0, 3600.0, low_open=True)
+        check_range("drift_rate_limit", self.drift_rate_limit, 0.0, 10.0, low_open=True)
+        check_range("drift_max_m", self.drift_max_m, 0.0, 1.0)
+        check_range("noise_xy_m", self.noise_xy_m, 0.0, 1.0)
+        check_range("noise_yaw_rad", self.noise_yaw_rad, 0.0, math.pi)
         delay = self.y_delay_samples
         if (not isinstance(delay, tuple) or len(delay) != 2
                 or not all(isinstance(n, numbers.Integral) and not isinstance(n, bool) for n in delay)
                 or not 0 <= delay[0] <= delay[1] <= 10_000):
             raise ValueError(f"y_delay_samples must be a tuple (low, high) of ints with 0 <= low <= high <= 10000, "
                              f"got {delay!r}")
-
-
-def _check_range(name: str, value: float, low: float, high: float, low_open: bool = False) -> None:
-    ok = isinstance(value, numbers.Real) and not isinstance(value, bool) and math.isfinite(value)
-    if not ok or value > high or value < low or (low_open and value == low):
-        interval = f"{'(' if low_open else '['}{low}, {high}]"
-        raise ValueError(f"{name} must be in {interval}, got {value!r}")
 
 
 class _Amplitude:
@@ -139,7 +137,7 @@ class LocalisationFix(Sensor):
 
     def __init__(self, car: QCar2, config: LocaliserConfig | None = None, fix_period_s: float = 0.1,
                  exact: bool = False) -> None:
-        _check_range("fix_period_s", fix_period_s, 0.0, 10.0, low_open=True)
+        check_range("fix_period_s", fix_period_s, 0.0, 10.0, low_open=True)
         self.car = car
         self.config = config or LocaliserConfig()
         self.fix_period_s = float(fix_period_s)

@@ -9,12 +9,11 @@ densities (TDK IIM-42652). No sensor on the car measures lateral speed, so there
 from __future__ import annotations
 
 import math
-import numbers
 from dataclasses import dataclass
 
 import numpy as np
 
-from sim.sensors.base import Sensor, SensorRate
+from sim.sensors.base import Sensor, SensorRate, check_range
 from sim.vehicle.qcar2 import QCar2
 
 __all__ = ["OdometryConfig", "VehicleStateSensor", "STATE_FIELDS"]
@@ -47,15 +46,10 @@ class OdometryConfig:
     exact: bool = False
 
     def __post_init__(self) -> None:
-        for name, low, high, low_open in (("m_per_count", 0.0, 0.01, True),
-                                          ("gyro_noise_density", 0.0, 0.1, False),
-                                          ("gyro_bias_max", 0.0, 1.0, False),
-                                          ("accel_noise_density", 0.0, 1.0, False),
-                                          ("accel_bias_max", 0.0, 10.0, False)):
-            value = getattr(self, name)
-            ok = isinstance(value, numbers.Real) and not isinstance(value, bool) and math.isfinite(value)
-            if not ok or value > high or value < low or (low_open and value == low):
-                raise ValueError(f"{name} must be in {'(' if low_open else '['}{low}, {high}], got {value!r}")
+        check_range("m_per_count", self.m_per_count, 0.0, 0.01, low_open=True)
+        for name, high in (("gyro_noise_density", 0.1), ("gyro_bias_max", 1.0), ("accel_noise_density", 1.0),
+                           ("accel_bias_max", 10.0)):
+            check_range(name, getattr(self, name), 0.0, high)
         if not isinstance(self.exact, bool):
             raise ValueError(f"exact must be True or False, got {self.exact!r}")
 
