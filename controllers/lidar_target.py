@@ -22,6 +22,11 @@ measured by the 2D LiDAR and tracked with odometry.
    (min and max bearing of its points, widened by half a beam step at its range) and width
    across the line of sight to the centroid (extent of its points, with one to two beam
    spacings of sampling tolerance). Clusters behind the camera (depth <= 0) never count.
+   The beams' ages are compensated: the LiDAR sweeps, so each beam was taken at its own time,
+   up to a revolution (0.1 s) before the step the scan is handed over on
+   (``step(beam_age_s=...)``). A cluster counts as seen at the mean age of its beams, and its
+   centroid and bearing span are carried forward to this step by odometry over that age
+   (as in the prediction), so association and update use positions valid now.
 3. **Associate.** With a detection, a candidate's widened span (plus
    ``bearing_margin_rad``) must hold the detection's centre bearing and its width must fit
    the target kind. With a track, a candidate must also lie within the gate around the
@@ -52,7 +57,7 @@ import numpy as np
 
 from controllers.lidar_segmentation import segment_scan
 
-__all__ = ["LidarTargetConfig", "LidarTargetState", "LidarTargetTracker", "TARGET_KINDS"]
+__all__ = ["TARGET_KINDS", "LidarTargetConfig", "LidarTargetState", "LidarTargetTracker"]
 
 #: Target kinds the tracker knows (``step(target=...)``).
 TARGET_KINDS = ("sign", "obstacle")
@@ -237,7 +242,8 @@ class LidarTargetTracker:
 
     def step(self, *, scan: np.ndarray | None, detection_bearing: float,
              detection_span: tuple[float, float] | None, target: str, speed: float, yaw_rate: float,
-             dt: float, lateral_speed: float = 0.0, detection_depth: float = math.nan) -> float:
+             dt: float, lateral_speed: float = 0.0, detection_depth: float = math.nan,
+             beam_age_s: np.ndarray | float | None = None) -> float:
         """Advances one control step and returns l.
 
         Args:
@@ -256,6 +262,10 @@ class LidarTargetTracker:
                 Used only to start a track: the first cluster must agree with it within
                 ``start_depth_tolerance_m``. When a sign is seen so obliquely that no beam
                 hits its plate, the cluster inside its box is whatever stands behind it.
+            beam_age_s: how long before this step each beam of ``scan`` was taken, s (>= 0):
+                an (N,) array (a sweeping LiDAR: one age per beam), one float for all beams,
+                or None (all taken now). Each cluster is carried forward by the odometry
+                (``speed``, ``lateral_speed``, ``yaw_rate``) over its beams' mean age.
 
         Returns:
             Depth of the tracked target along the camera's optical axis, metres; NaN before
@@ -266,6 +276,7 @@ class LidarTargetTracker:
             raise ValueError(f"target must be one of {TARGET_KINDS}, got {target!r}")
         if not (dt >= 0 and math.isfinite(dt)):
             raise ValueError(f"dt must be a finite number >= 0 s, got {dt!r}")
+        ages = _beam_ages(beam_age_s, scan)
         if self._pos is not None and target != self._kind:
             self.reset()
         c = self.config
@@ -275,7 +286,7 @@ class LidarTargetTracker:
         if scan is not None:
             det = detection_bearing is not None and math.isfinite(detection_bearing)
             self._measure(scan, detection_bearing if det else None, detection_span if det else None, target,
-                          detection_depth if det else math.nan)
+                          detection_depth if det else math.nan, ages, (speed, lateral_speed, yaw_rate))
         if self._pos is not None and self._age > c.drop_after_s:
             self.reset_track()
         if self._pos is not None and self._reporting and self._age <= c.report_max_age_s:
@@ -295,17 +306,35 @@ class LidarTargetTracker:
         return self.config.gate_radius_m + self.config.gate_growth_mps * self._age
 
     def _measure(self, scan: np.ndarray, bearing: float | None, span: tuple[float, float] | None,
-                 target: str, depth: float) -> None:
-        """Associates one scan with the track (or starts one) and updates it."""
+                 target: str, depth: float, ages: np.ndarray | float | None,
+                 odometry: tuple[float, float, float]) -> None:
+        """Associates one scan with the track (or starts one) and updates it.
+
+        Args:
+            ages: the beams' ages (see ``step(beam_age_s=...)``), checked; None = all now.
+            odometry: (speed m/s, lateral speed m/s, yaw rate rad/s) to carry clusters forward.
+        """
         c = self.config
-        cl = self._clusters(scan)
+        cl = self._clusters(scan, ages)
         self._n_clusters = 0 if cl is None else cl[0].shape[1]
         tracked = self._pos is not None
         if cl is None or (not tracked and bearing is None):
             self._reporting = False
             return
-        mean, lo, hi, half, counts, starts, pts = cl
-        mx, my = mean[0], mean[1]
+        mean, lo, hi, half, counts, starts, pts, age = cl
+        ox, oy = mean[0], mean[1]  # as measured: the width check's line of sight
+        mx, my = ox, oy
+        if age is not None:
+            # Carry each centroid forward from when its beams were taken to now, as the
+            # prediction carries the track; the span turns with the centroid's bearing.
+            speed, lateral, yaw_rate = odometry
+            cx, cy = c.camera_position_m
+            moved = np.array([_move((x + cx, y + cy), speed * a, lateral * a, yaw_rate * a)
+                              for x, y, a in zip(ox.tolist(), oy.tolist(), age.tolist())]).T
+            mx, my = moved[0] - cx, moved[1] - cy
+            turn = np.arctan2(my, mx) - np.arctan2(oy, ox)
+            turn = (turn + math.pi) % (2 * math.pi) - math.pi
+            lo, hi = lo + turn, hi + turn
         # Vectorised pre-selection; the width check below runs on the few survivors.
         if bearing is not None:
             pad = half + c.bearing_margin_rad
@@ -324,10 +353,14 @@ class LidarTargetTracker:
             tan_span = math.tan(left) - math.tan(right)
         for k in np.flatnonzero(ok).tolist():
             x, y = float(mx[k]), float(my[k])
-            rho = math.hypot(x, y)
+            # The width across the line of sight, from the points as measured and the centroid
+            # as measured: carrying them forward (a small translation and turn) would not
+            # change it, so only the centroid is moved.
+            x0, y0 = float(ox[k]), float(oy[k])
+            rho = math.hypot(x0, y0)
             spacing = 2.0 * float(half[k]) * rho  # beam spacing at the cluster's range, m
             s, e = int(starts[k]), int(starts[k] + counts[k])
-            sin_b, cos_b = y / rho, x / rho
+            sin_b, cos_b = y0 / rho, x0 / rho
             across = (cos_b * pts[1, s:e] - sin_b * pts[0, s:e]).tolist()
             extent = max(across) - min(across)
             if extent > w_hi + spacing or extent + 2.0 * spacing < w_lo:
@@ -361,15 +394,20 @@ class LidarTargetTracker:
         self._reporting = True
         self._n_points = int(counts[picked])
 
-    def _clusters(self, scan: np.ndarray):
+    def _clusters(self, scan: np.ndarray, ages: np.ndarray | float | None = None):
         """Clusters of the forward sector's returns, camera frame; None without returns.
 
+        Args:
+            scan: (N,) ranges, m.
+            ages: (N,) ages of the beams, s, one age for all, or None.
+
         Returns:
-            ``(mean, lo, hi, half, counts, starts, points)``: (2, K) centroids (x, y), m;
-            (K,) min and max bearing of the points, rad; (K,) half a beam step at the
+            ``(mean, lo, hi, half, counts, starts, points, age)``: (2, K) centroids (x, y),
+            m; (K,) min and max bearing of the points, rad; (K,) half a beam step at the
             cluster's range, as a bearing, rad; (K,) point counts; (K,) offsets of each
             cluster's points in ``points``; (3, M) the points grouped by cluster: camera
-            frame x, y and LiDAR range, m.
+            frame x, y and LiDAR range, m; (K,) mean age of each cluster's beams, s (None
+            when ``ages`` is None).
         """
         c = self.config
         scan = np.asarray(scan)
@@ -397,7 +435,13 @@ class LidarTargetTracker:
         lo = np.minimum.reduceat(bearing, starts)
         hi = np.maximum.reduceat(bearing, starts)
         half = (0.5 * self._beam_step) * sums[2] / np.hypot(sums[0], sums[1])
-        return sums[:2], lo, hi, half, counts, starts, pts
+        if ages is None:
+            age = None
+        elif isinstance(ages, float):
+            age = np.full(counts.size, ages)
+        else:
+            age = np.add.reduceat(ages[self._sector_idx][ok][order], starts) / counts
+        return sums[:2], lo, hi, half, counts, starts, pts, age
 
     def _set_beams(self, n: int) -> None:
         """Caches the beams of the forward sector, in increasing angle (-sector..+sector)."""
@@ -414,6 +458,27 @@ class LidarTargetTracker:
         self._sector_idx = idx
         self._cos_sin = np.stack([np.cos(angles), np.sin(angles)])
         self._beam_step = step
+
+
+def _beam_ages(value, scan) -> np.ndarray | float | None:
+    """``step``'s ``beam_age_s`` checked: None, a float, or a float64 array shaped like ``scan``."""
+    if value is None:
+        return None
+    try:
+        ages = None if isinstance(value, bool) else np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        ages = None
+    if ages is not None and ages.ndim == 0:
+        a = float(ages)
+        if math.isfinite(a) and a >= 0:
+            return a
+    elif (ages is not None and ages.ndim == 1 and (scan is None or ages.shape == np.shape(scan))
+          and np.isfinite(ages).all() and (ages >= 0).all()):
+        return ages
+    shape = "" if scan is None else f" of shape {np.shape(scan)} like scan"
+    got = f"an array of shape {ages.shape}" if ages is not None and ages.ndim else repr(value)
+    raise ValueError(f"beam_age_s must be None, a float >= 0 or an array{shape} of finite ages >= 0 s, "
+                     f"got {got}")
 
 
 def _move(pos: tuple[float, float], forward: float, sideways: float, turn: float) -> tuple[float, float]:

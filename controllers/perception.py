@@ -1,4 +1,9 @@
-"""One frame of perception: detector -> depth distance d~, confidence c~; LiDAR target reference l."""
+"""One control step of perception: detector -> depth distance d~, confidence c~; LiDAR target reference l.
+
+The camera runs slower than the control loop (30 Hz on 50 Hz): the detector and the depth
+stage run on new frames only, and between frames their sample is held while the LiDAR
+tracker steps every control step.
+"""
 
 from __future__ import annotations
 
@@ -11,15 +16,18 @@ from controllers.detector import BlobDetector, Detection, StopSignDetector
 from controllers.distance import CameraModel, DepthDistance
 from controllers.lidar_target import TARGET_KINDS, LidarTargetTracker
 
-__all__ = ["PerceptionSample", "Perception"]
+__all__ = ["Perception", "PerceptionSample"]
 
 
 @dataclass(frozen=True)
 class PerceptionSample:
-    """What perception makes of one frame (the protocol's per-step signals).
+    """What perception makes of one control step (the protocol's per-step signals).
+
+    The camera's part (``detection``, ``d_meas``, ``c_meas``, ``bearing_rad``) is that of the
+    last frame, held between frames; ``lidar_m`` is this step's.
 
     Attributes:
-        detection: the detector's output, or None.
+        detection: the detector's output after the map check, or None.
         d_meas: median valid depth inside the detection's mask, m (NaN: none).
         c_meas: its confidence in [0, 1].
         lidar_m: the LiDAR target reference: the tracked target's depth along the
@@ -45,6 +53,10 @@ class PerceptionSample:
 class Perception:
     """The perception pipeline of the paper for one camera, one LiDAR and one kind of target.
 
+    The camera runs slower than the control loop, so :meth:`process` runs the (costly)
+    detector and depth stages only on a new frame and holds their sample in between; the
+    LiDAR tracker steps on every call.
+
     Args:
         camera: the camera's intrinsics.
         detector, depth, lidar: the stages; defaults are built when omitted.
@@ -65,20 +77,25 @@ class Perception:
         self.lidar = lidar or LidarTargetTracker()
         self.target = target
         self.map_margin_rad = float(map_margin_rad)
-        #: The detector's output on the last image, before the map check (for evaluation).
+        #: The detector's output on the last image processed (the last new frame), before the
+        #: map check (for evaluation).
         self.last_raw_detection: Detection | None = None
+        self._held: _Held | None = None  # the last frame's camera part; None: no frame since reset
 
     def reset(self) -> None:
-        """Forget the tracked target (a new target or episode)."""
+        """Forget the tracked target and the held frame (a new target or episode)."""
         self.lidar.reset()
+        self._held = None
 
-    def process(self, rgb: np.ndarray, depth: np.ndarray, scan: np.ndarray | None, *, speed: float = 0.0,
-                yaw_rate: float = 0.0, dt: float = 0.02, lateral_speed: float = 0.0,
-                map_bearing: float | None = None) -> PerceptionSample:
+    def process(self, rgb: np.ndarray | None, depth: np.ndarray | None, scan: np.ndarray | None, *,
+                speed: float = 0.0, yaw_rate: float = 0.0, dt: float = 0.02, lateral_speed: float = 0.0,
+                map_bearing: float | None = None, new_frame: bool = True,
+                beam_age_s: np.ndarray | float | None = None) -> PerceptionSample:
         """Runs the pipeline on one control step.
 
         Args:
-            rgb: (H, W, 3) uint8 image. depth: (H, W) metres.
+            rgb: (H, W, 3) uint8 image. depth: (H, W) metres. Both unused (may be None) when
+                ``new_frame`` is False.
             scan: (N,) LiDAR ranges, m, on the step a new scan arrived; None otherwise (the
                 tracker carries the reference forward with odometry).
             speed, yaw_rate, lateral_speed: odometry (m/s, rad/s, m/s) over the last ``dt`` s.
@@ -86,25 +103,50 @@ class Perception:
                 axis (left positive), from the car's localisation; NaN = the map says the
                 target's face cannot be seen from here; None = no map. A real
                 route passes stop signs that serve other lanes: this keeps perception on
-                the one the car must stop at, as a map-aided stack does.
+                the one the car must stop at, as a map-aided stack does. Checked on new
+                frames only (a held detection keeps its frame's verdict).
+            new_frame: whether ``rgb``/``depth`` are a frame not processed yet. False (the
+                camera is slower than the loop): the detector and depth stage do not run and
+                the last frame's detection, d~, c~ and bearings are held (no detection
+                before any frame since :meth:`reset`); the LiDAR tracker still steps, with
+                the held detection.
+            beam_age_s: how long before this step each beam of ``scan`` was taken, s (see
+                :meth:`LidarTargetTracker.step`); None = all now.
         """
-        detection = self.last_raw_detection = self.detector.detect(rgb)
-        if detection is not None and map_bearing is not None and not (
-                math.isfinite(map_bearing) and self._on_map(detection, map_bearing)):
-            detection = None
-        d_meas, c_meas = self.depth.estimate(depth, detection)
-        if detection is not None:
-            x0, _, x1, _ = detection.box
-            bearing = self.camera.bearing(detection.centroid[0])
-            span = (self.camera.bearing(x0 - 0.5), self.camera.bearing(x1 - 0.5))
-        else:
-            bearing, span = math.nan, None
-        lidar_m = self.lidar.step(scan=scan, detection_bearing=bearing, detection_span=span, target=self.target,
-                                  speed=speed, yaw_rate=yaw_rate, dt=dt, lateral_speed=lateral_speed,
-                                  detection_depth=d_meas)
-        return PerceptionSample(detection, d_meas, c_meas, lidar_m, bearing)
+        if new_frame:
+            detection = self.last_raw_detection = self.detector.detect(rgb)
+            if detection is not None and map_bearing is not None and not (
+                    math.isfinite(map_bearing) and self._on_map(detection, map_bearing)):
+                detection = None
+            d_meas, c_meas = self.depth.estimate(depth, detection)
+            if detection is not None:
+                x0, _, x1, _ = detection.box
+                bearing = self.camera.bearing(detection.centroid[0])
+                span = (self.camera.bearing(x0 - 0.5), self.camera.bearing(x1 - 0.5))
+            else:
+                bearing, span = math.nan, None
+            self._held = _Held(detection, d_meas, c_meas, bearing, span)
+        held = self._held or _NO_FRAME
+        lidar_m = self.lidar.step(scan=scan, detection_bearing=held.bearing, detection_span=held.span,
+                                  target=self.target, speed=speed, yaw_rate=yaw_rate, dt=dt,
+                                  lateral_speed=lateral_speed, detection_depth=held.d_meas, beam_age_s=beam_age_s)
+        return PerceptionSample(held.detection, held.d_meas, held.c_meas, lidar_m, held.bearing)
 
     def _on_map(self, detection: Detection, map_bearing: float) -> bool:
         x0, _, x1, _ = detection.box
         left, right = self.camera.bearing(x0 - 0.5), self.camera.bearing(x1 - 0.5)
         return right - self.map_margin_rad <= map_bearing <= left + self.map_margin_rad
+
+
+@dataclass(frozen=True)
+class _Held:
+    """The camera's part of a sample, from the last frame (held until the next)."""
+
+    detection: Detection | None
+    d_meas: float
+    c_meas: float
+    bearing: float
+    span: tuple[float, float] | None
+
+
+_NO_FRAME = _Held(None, math.nan, 0.0, math.nan, None)

@@ -24,10 +24,17 @@ __all__ = ["bench_loop"]
 _RATE_SETTING = "attack+odca"
 
 
-def _episodes(setting: str, n: int, seed: int):
+#: The sensor profile the episodes run on (``bench_loop(sensor_profile=...)``; a module
+#: global so that spawned workers, which import this module afresh, get it from their argument).
+_PROFILE = {"sensor_profile": "qcar2"}  # rtf runs here; the workers get theirs from the specs
+
+
+def _episodes(setting: str, n: int, seed: int, profile: str | None = None):
     from experiments.episode import TrialSpec
 
-    return [TrialSpec(setting, i % 4, (1.0, 1.5, 2.0)[(i // 4) % 3], seed + i) for i in range(n)]
+    profile = profile or _PROFILE["sensor_profile"]
+    return [TrialSpec(setting, i % 4, (1.0, 1.5, 2.0)[(i // 4) % 3], seed + i, sensor_profile=profile)
+            for i in range(n)]
 
 
 def _rtf(setting: str, n: int, seed: int) -> dict:
@@ -43,12 +50,12 @@ def _rtf(setting: str, n: int, seed: int) -> dict:
     return {"rtf": sim_s / wall_s, "sim_s": sim_s, "wall_s": wall_s}
 
 
-def _warm(barrier=None) -> int:
+def _warm(barrier=None, profile: str | None = None) -> int:
     """Readies a worker with one episode (imports, the env, ODCA), then waits for the others,
     so that every worker takes one; returns the worker's pid."""
     from experiments.episode import run_trial
 
-    run_trial(_episodes(_RATE_SETTING, 1, 10_000)[0], clean_pass=False)
+    run_trial(_episodes(_RATE_SETTING, 1, 10_000, profile)[0], clean_pass=False)
     if barrier is not None:
         barrier.wait(timeout=600)
     return os.getpid()
@@ -79,7 +86,8 @@ def _local_rates(specs, rounds: int = 2) -> tuple[dict[int, float], dict[int, fl
         for workers in counts:
             t0 = time.perf_counter()
             pools[workers] = stack.enter_context(spawn_pool(workers))
-            pids = list(pools[workers].map(_warm, [manager.Barrier(workers)] * workers))
+            profiles = [specs[0].sensor_profile] * workers
+            pids = list(pools[workers].map(_warm, [manager.Barrier(workers)] * workers, profiles))
             if len(set(pids)) != workers:
                 raise RuntimeError(f"warm-up reached {len(set(pids))} of {workers} workers")
             ready[workers] = time.perf_counter() - t0
@@ -99,7 +107,7 @@ def _ray_rate(workers: int, specs) -> tuple[float, float]:
     with tempfile.TemporaryDirectory() as out, ray_session(workers):
         t0 = time.perf_counter()
         # Tasks that outlast a worker's start-up each get their own worker; Ray keeps them.
-        ray.get([ray.remote(num_cpus=1)(_warm).remote() for _ in range(workers)])
+        ray.get([ray.remote(num_cpus=1)(_warm).remote(None, specs[0].sensor_profile) for _ in range(workers)])
         t1 = time.perf_counter()
         for _ in ray_executor(specs, out, workers):
             pass
@@ -107,12 +115,14 @@ def _ray_rate(workers: int, specs) -> tuple[float, float]:
     return len(specs) / (t2 - t1) * 60.0, t1 - t0
 
 
-def bench_loop(n_rtf: int = 8, n_rate: int = 24, seed: int = 0, ray: bool = True, progress: bool = True) -> dict:
-    """Measures everything above; ``n_rtf`` episodes per RTF setting, ``n_rate`` per rate."""
+def bench_loop(n_rtf: int = 8, n_rate: int = 24, seed: int = 0, ray: bool = True, progress: bool = True,
+               sensor_profile: str = "qcar2") -> dict:
+    """Measures everything above on ``sensor_profile``; ``n_rtf`` episodes per RTF setting, ``n_rate`` per rate."""
     from tqdm import tqdm
 
     from experiments.sweeps.executors import single_thread
 
+    _PROFILE["sensor_profile"] = sensor_profile
     single_thread()  # one core: torch, OpenMP and the software rasteriser on one thread
     steps = ["rtf clean", "rtf attack+odca", "1 worker", "2 workers"] + (["ray"] if ray else [])
     bar = tqdm(steps, desc="bench-loop", disable=not progress)
@@ -134,7 +144,7 @@ def bench_loop(n_rtf: int = 8, n_rate: int = 24, seed: int = 0, ray: bool = True
         out["episodes_per_min_ray"], ready["ray"] = _ray_rate(2, specs)
         bar.update()
     bar.close()
-    out.update(n_rtf=n_rtf, n_rate=n_rate, sim_s_clean=clean["sim_s"], sim_s_attack_odca=attack["sim_s"],
+    out.update(sensor_profile=sensor_profile, n_rtf=n_rtf, n_rate=n_rate, sim_s_clean=clean["sim_s"], sim_s_attack_odca=attack["sim_s"],
                ready_s_1=ready[1], ready_s_2=ready[2], torch_threads=1)
     if ray:
         out["ready_s_ray"] = ready["ray"]

@@ -7,7 +7,7 @@ import argparse
 import json
 from pathlib import Path
 
-from experiments.cli.common import count, fail, fmt_ci
+from experiments.cli.common import count, fail, fmt_ci, sensor_flags
 
 __all__ = ["register"]
 
@@ -42,6 +42,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                     help="episodes per throughput run, timed once the workers are up (default 24)")
     bl.add_argument("--no-ray", action="store_true", help="skip the Ray measurement")
     bl.add_argument("--json", action="store_true", help="print one JSON object")
+    sensor_flags(bl, geometry_default=None)
     bl.set_defaults(handler=_bench_loop)
 
     bd = sub.add_parser("bench-detector", help="stop-sign detector recall and false-positive frames on rendered drives")
@@ -96,13 +97,16 @@ def _bench(args: argparse.Namespace) -> int:
 def _bench_loop(args: argparse.Namespace) -> int:
     from experiments.bench.loop import bench_loop
 
-    r = bench_loop(n_rtf=args.n, n_rate=args.rate_episodes, ray=not args.no_ray, progress=not args.json)
+    if args.sign_geometry is not None:
+        fail("bench-loop", "--sign-geometry does not apply here: the benchmark times the default signs")
+    r = bench_loop(n_rtf=args.n, n_rate=args.rate_episodes, ray=not args.no_ray, progress=not args.json,
+                   sensor_profile=args.sensor_profile)
     if args.json:
         print(json.dumps(r, allow_nan=False))
         return 0
     for key, value in r.items():
         print(f"{key:<22}{value:.2f}" if isinstance(value, float) else f"{key:<22}{value}")
-    print(f"against the goals: rtf_attack_odca / 3 = {r['rtf_attack_odca'] / 3:.2f}, "
+    print(f"against the goals: rtf_attack_odca / 5 = {r['rtf_attack_odca'] / 5:.2f}, "
           f"scaling_efficiency / 0.9 = {r['scaling_efficiency'] / 0.9:.2f} (>= 1 meets each)")
     return 0
 

@@ -12,7 +12,7 @@ from sim.attacks import ATTACKS
 
 __all__ = ["UsageError", "sign", "positive", "speed", "share", "duration", "count", "pair", "fail", "flag_error",
            "fmt_ci", "DEFAULT_WORKERS",
-           "episode_flags", "episode_params", "backend_flags", "localisation_flag", "attack_help", "estimator_help",
+           "episode_flags", "episode_params", "backend_flags", "sensor_flags", "attack_help", "estimator_help",
            "registry_rows", "registry_markdown"]
 
 #: Parallel episodes by default: two, or one on a single-core machine.
@@ -130,13 +130,18 @@ def backend_flags(p: argparse.ArgumentParser, workers_help: str = "parallel proc
     p.add_argument("--workers", type=count, default=DEFAULT_WORKERS, help=workers_help)
 
 
-def localisation_flag(p, default: str | None = "qcar2") -> None:
-    """``--localisation``: the car's own (``qcar2``) or the true pose (``true``, an ablation)."""
-    from sim.env.config import LOCALISATIONS
+def sensor_flags(p, default: str | None = "qcar2", geometry_default: str | None = "plate") -> None:
+    """``--sensor-profile`` (the car's sensors) and ``--sign-geometry`` (the stop signs' build)."""
+    from sim.env.config import SENSOR_PROFILES
+    from sim.world.stop_signs import SIGN_GEOMETRIES
 
-    p.add_argument("--localisation", choices=LOCALISATIONS, default=default,
-                   help="where the car's pose comes from: qcar2, its own filter on the localiser's drifting fixes "
-                        "(default), or true, the simulator's true pose (an ablation)")
+    p.add_argument("--sensor-profile", choices=tuple(SENSOR_PROFILES), default=default,
+                   help="the car's sensors: qcar2, as the QCar 2 delivers them (the A2M12 swept over its "
+                        "revolution through Quanser's driver, the camera at 30 Hz, the car's own localisation; "
+                        "default), or ideal (a one-instant 360-beam LiDAR, 50 Hz camera, the true pose: an ablation)")
+    p.add_argument("--sign-geometry", choices=tuple(SIGN_GEOMETRIES), default=geometry_default,
+                   help="the stop signs' build: plate, the LiDAR's scan plane meets the plate (default), or pole, "
+                        "it meets only the 6 mm pole")
 
 
 def episode_flags(p: argparse.ArgumentParser) -> None:
@@ -158,7 +163,7 @@ def episode_flags(p: argparse.ArgumentParser) -> None:
     p.add_argument("--stable-steps", type=int, default=None,
                    help="steps the sign must be visible before an attack may start (default: the braking "
                         "controller's confirm_frames + 3 = 6)")
-    localisation_flag(p)
+    sensor_flags(p)
 
 
 def episode_params(args: argparse.Namespace, command: str, table: bool = False) -> tuple[str | None, dict]:
@@ -184,7 +189,7 @@ def episode_params(args: argparse.Namespace, command: str, table: bool = False) 
         params = {"rho": pair(command, "--rho", args.rho, STRONG_RHO),
                   "t_atk": pair(command, "--t-atk", args.t_atk, STRONG_T_ATK_S),
                   "delay_ms": args.delay_ms, "control_hz": args.control_hz, "stable_steps": args.stable_steps,
-                  "localisation": args.localisation}
+                  "sensor_profile": args.sensor_profile, "sign_geometry": args.sign_geometry}
     except ValueError as err:
         flag_error(command, str(err))
     return setting, params

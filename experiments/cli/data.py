@@ -6,7 +6,7 @@ import argparse
 import json
 from pathlib import Path
 
-from experiments.cli.common import backend_flags, count
+from experiments.cli.common import backend_flags, count, sensor_flags
 
 __all__ = ["register"]
 
@@ -17,6 +17,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     co.add_argument("--drives", type=count, default=None,
                     help="drives of 20-60 s, each meeting >= 2 targets (default 36: > 67,821 samples)")
     co.add_argument("--seed", type=int, default=0, help="collection seed (drive seeds and the splits)")
+    sensor_flags(co)
     backend_flags(co)
     co.add_argument("--summary", action="store_true", help="print the summary as one JSON object")
     co.set_defaults(handler=_collect)
@@ -27,7 +28,8 @@ def _collect(args: argparse.Namespace) -> int:
 
     # The bar is on stderr; --summary JSON stays alone on stdout.
     path = collect(args.out, drives=args.drives or DEFAULT_DRIVES, seed=args.seed, workers=args.workers,
-                   progress=True, backend=args.backend, address=args.address)
+                   progress=True, backend=args.backend, address=args.address, sensor_profile=args.sensor_profile,
+                   sign_geometry=args.sign_geometry)
     ds = load_dataset(args.out)
     summary = summarize_dataset(ds.frame, ds.splits)
     if args.summary:

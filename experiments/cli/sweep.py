@@ -6,7 +6,7 @@ import argparse
 import json
 from pathlib import Path
 
-from experiments.cli.common import attack_help, backend_flags, count, estimator_help, fail, localisation_flag
+from experiments.cli.common import attack_help, backend_flags, count, estimator_help, fail, sensor_flags
 
 __all__ = ["register"]
 
@@ -30,7 +30,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     fl.add_argument("--repeats", type=count, default=None, help="grid mode: seeds per cell")
     fl.add_argument("--seed", type=int, default=None, help="the sweep's seed")
     fl.add_argument("--log-steps", action="store_true", default=None, help="also keep every episode's per-step log")
-    localisation_flag(fl, default=None)
+    sensor_flags(fl, default=None, geometry_default=None)
     fl.add_argument("--attack", nargs="+", default=None, metavar="A",
                     help=f"'none', an attack or '+'-joined attacks: {attack_help()}")
     fl.add_argument("--estimator", nargs="+", default=None, metavar="E", help=estimator_help())
@@ -55,7 +55,8 @@ def _sweep(args: argparse.Namespace) -> int:
     fields = {key: value for key, value in (("name", args.name), ("mode", args.mode), ("n", args.n),
                                              ("repeats", args.repeats), ("seed", args.seed),
                                              ("log_steps", args.log_steps),
-                                             ("localisation", args.localisation)) if value is not None}
+                                             ("sensor_profile", args.sensor_profile),
+                                             ("sign_geometry", args.sign_geometry)) if value is not None}
     space = {key: value for key, value in (("attack", args.attack), ("estimator", args.estimator),
                                            ("rho", args.rho), ("t_atk", args.t_atk), ("speed", args.speed),
                                            ("sign", args.sign)) if value is not None}

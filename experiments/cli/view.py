@@ -7,7 +7,7 @@ import os
 import sys
 from pathlib import Path
 
-from experiments.cli.common import positive, sign, speed
+from experiments.cli.common import positive, sensor_flags, sign, speed
 
 __all__ = ["register"]
 
@@ -28,6 +28,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     d.add_argument("--speed", type=speed, default=1.5, help="cruise speed m/s, 0.1-3.0 (default 1.5)")
     d.add_argument("--seed", type=int, default=0)
     d.add_argument("--out", type=Path, default=Path("outputs/demo"), help="output folder")
+    sensor_flags(d)
     d.set_defaults(handler=_demo)
 
     vw = sub.add_parser("view", help="open a rerun recording (.rrd) in the rerun viewer")
@@ -47,7 +48,8 @@ def _snapshot(args: argparse.Namespace) -> int:
 def _demo(args: argparse.Namespace) -> int:
     from experiments.viz.demo import demo_table, run_demo
 
-    summary = run_demo(args.out, sign=args.sign, speed=args.speed, seed=args.seed)
+    summary = run_demo(args.out, sign=args.sign, speed=args.speed, seed=args.seed, sensor_profile=args.sensor_profile,
+                       sign_geometry=args.sign_geometry)
     print(demo_table(summary))
     print("\nrerun recordings (open with `racf view PATH`):")
     for run in summary["runs"]:

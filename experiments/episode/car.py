@@ -34,6 +34,7 @@ PASS_LINE_M = 0.3
 #: encoder's speed is the wheels spinning up or locking, not the car (m/s^2).
 MAX_ACCEL_MPS2 = 0.75 * 9.81
 _FIX_TIME, _SCAN_TIME = TIMESTAMP_FIELDS.index("gps"), TIMESTAMP_FIELDS.index("lidar")
+_FRAME_TIME = TIMESTAMP_FIELDS.index("rgb")
 
 
 @dataclass(frozen=True)
@@ -78,6 +79,7 @@ class CarStep:
     pose: np.ndarray
     scan_new: bool
     tracked_xy: tuple[float, float]
+    frame_new: bool = True
 
 
 def sign_depth_at_line(calibration: CarCalibration, target: RouteTarget) -> float:
@@ -145,6 +147,7 @@ class Car:
         self._step = 0
         self._fix_time = -math.inf
         self._scan_time = -math.inf
+        self._frame_time = -math.inf
         self._pose = np.zeros(3)
         self._odometry_mps = math.nan
         self.slot = 0
@@ -216,14 +219,20 @@ class Car:
         scan_time = float(obs["timestamps"][_SCAN_TIME])
         scan_new, self._scan_time = scan_time != self._scan_time, scan_time
         control = self._decision is None or self._step % self.every == 0
+        frame_new = False
         if control:
             dt = self.dt * self.every
+            # The camera runs slower than the loop: its detector and depth stages run on new frames only.
+            frame_time = float(obs["timestamps"][_FRAME_TIME])
+            frame_new, self._frame_time = frame_time != self._frame_time, frame_time
             bearing = map_bearing(self.calibration, self.target, self._pose)
             # No slip at the rear axle: the camera moves sideways at yaw rate x its lever arm.
             lateral = yaw_rate * (self.calibration.camera_xy_m[0] - self.calibration.rear_axle_x_m)
+            # The scan's beams were taken over its revolution: the tracker moves each cluster on by its age.
+            ages = np.maximum(self._step * self.dt - obs["lidar_beam_times"], 0.0) if scan_new else None
             self._sample = self.perception.process(obs["rgb"], obs["depth"][..., 0], obs["lidar"] if scan_new else None,
                                                    speed=speed, yaw_rate=yaw_rate, lateral_speed=lateral, dt=dt,
-                                                   map_bearing=bearing)
+                                                   map_bearing=bearing, new_frame=frame_new, beam_age_s=ages)
             self._d_fused = float(self.estimator.estimate(self._sample, speed, dt))
             in_fov = math.isfinite(bearing) and abs(bearing) <= self.calibration.camera.half_hfov_rad
             self._decision = self.braker.step(self._sample.detected, self._d_fused, speed, dt, expected_in_view=in_fov)
@@ -232,4 +241,4 @@ class Car:
         track = self.perception.lidar.state.position  # camera-relative; + the camera's body position
         cam_x, cam_y = self.calibration.camera_xy_m
         return CarStep(self._action.copy(), control, self.slot, self._sample, self._d_fused, self._decision,
-                       self._pose.copy(), scan_new, (track[0] + cam_x, track[1] + cam_y))
+                       self._pose.copy(), scan_new, (track[0] + cam_x, track[1] + cam_y), frame_new)

@@ -60,7 +60,7 @@ class Referee:
         if car.slot != self._slot:
             self._slot = car.slot
             self._begin(target)
-        if car.control:
+        if car.control and car.frame_new:  # d_clean is of the frame, like the car's d_meas
             self._d_clean = self._clean_distance(env, obs, car, perception)
         in_view = bool(info["sign_in_view"])
         ideal = self._ideal.step(in_view, float(info["d_true"]) if in_view else math.nan, float(info["speed"]), self.dt)

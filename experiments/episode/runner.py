@@ -158,7 +158,7 @@ def _run(env: gym.Env, spec: TrialSpec, estimator, on_step: StepHook | None, cle
             **truth,
             # The vehicle state as the car measures it, and the LiDAR's forward sector (compact scan).
             **{f"state_{name}": float(v) for name, v in zip(STATE_FIELDS, obs["state"])},
-            "scan_new": step.scan_new, "scan_fov": scan_fov(obs["lidar"]),
+            "frame_new": step.frame_new, "scan_new": step.scan_new, "scan_fov": scan_fov(obs["lidar"]),
             # The LiDAR reference's tracked point in the body frame (NaN without a track), for viewers.
             "track_x": step.tracked_xy[0], "track_y": step.tracked_xy[1],
         })

@@ -26,7 +26,8 @@ from experiments.episode.estimators import ESTIMATORS
 from experiments.sweeps.store import code_version
 from sim.attacks import ATTACKS
 from sim.attacks.schedule import as_range
-from sim.env.config import LOCALISATIONS
+from sim.env.config import SENSOR_PROFILES
+from sim.world.stop_signs import SIGN_GEOMETRIES
 from sim.world.drives import DriveSpec, draw_drive
 
 __all__ = ["TrialSpec", "parse_setting", "setting_name", "EPISODE_CODE", "TARGETS", "DRIVE_S", "STRONG_RHO",
@@ -102,9 +103,12 @@ class TrialSpec:
         delay_ms: perception-to-actuation delay (0: off). The paper's offboard loop: 49 ms.
         control_hz: the controller's rate (None: every 50 Hz step); the action is held between.
         braking: the braking controller's parameters.
-        localisation: where the car's pose comes from: ``qcar2`` (its own filter on the
-            localiser's fixes, the default) or ``true`` (the true pose, an ablation); see
-            ``sim.env.config.LOCALISATIONS``.
+        sensor_profile: the env's sensors (``sim.env.config.SENSOR_PROFILES``): ``qcar2``
+            (the default: the A2M12 through Quanser's driver, the camera at 30 Hz, the car's
+            own localisation) or ``ideal`` (env v2's sensors and the true pose, an ablation).
+        sign_geometry: the stop signs' build (``sim.world.stop_signs.SIGN_GEOMETRIES``):
+            ``plate`` (the default: the LiDAR's scan plane meets the plate) or ``pole`` (it
+            meets only the pole).
     """
 
     setting: str
@@ -119,12 +123,15 @@ class TrialSpec:
     delay_ms: float = 0.0
     control_hz: float | None = None
     braking: BrakingConfig = field(default_factory=BrakingConfig)
-    localisation: str = "qcar2"
+    sensor_profile: str = "qcar2"
+    sign_geometry: str = "plate"
 
     def __post_init__(self) -> None:
         parse_setting(self.setting)
-        if self.localisation not in LOCALISATIONS:
-            raise ValueError(f"localisation must be one of {LOCALISATIONS}, got {self.localisation!r}")
+        if self.sensor_profile not in SENSOR_PROFILES:
+            raise ValueError(f"sensor_profile must be one of {tuple(SENSOR_PROFILES)}, got {self.sensor_profile!r}")
+        if self.sign_geometry not in SIGN_GEOMETRIES:
+            raise ValueError(f"sign_geometry must be one of {tuple(SIGN_GEOMETRIES)}, got {self.sign_geometry!r}")
         if self.target not in TARGETS:
             raise ValueError(f"target must be one of {tuple(TARGETS)}, got {self.target!r}")
         if self.sign not in range(TARGETS[self.target]):

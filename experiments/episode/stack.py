@@ -12,6 +12,7 @@ from experiments.episode.car import Car, CarCalibration, Mission
 from experiments.episode.estimators import make_estimator
 from experiments.episode.spec import TrialSpec
 from sim.attacks import ATTACKS
+from sim.world.stop_signs import SIGN_GEOMETRIES
 
 __all__ = ["default_env", "plain_env", "calibration", "mission", "build_car", "DRIVE_MAX_EPISODE_S"]
 
@@ -46,7 +47,8 @@ def default_env(spec: TrialSpec, **env_kwargs) -> gym.Env:
     ``episode_params`` come from the spec's fields of those names (the patch's ``rho``)."""
     if spec.target == "drive":
         env_kwargs.setdefault("max_episode_s", DRIVE_MAX_EPISODE_S)
-    env_kwargs.setdefault("localisation", spec.localisation)
+    env_kwargs.setdefault("sensor_profile", spec.sensor_profile)
+    env_kwargs.setdefault("sign", SIGN_GEOMETRIES[spec.sign_geometry])
     env = plain_env(**env_kwargs)
     schedule = {"duration_s": spec.t_atk, "stable_steps": spec.attack_stable_steps}
     for name in spec.attacks:

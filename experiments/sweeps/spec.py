@@ -6,7 +6,8 @@ Example (``experiments/sweeps/specs/smoke.toml``)::
     mode = "grid"            # every combination, `repeats` seeds each; or "random": `n` draws
     repeats = 1
     seed = 0
-    localisation = "qcar2"   # the car's own localisation (default), or "true" (the true pose)
+    sensor_profile = "qcar2" # the car's sensors as delivered (default), or "ideal" (an ablation)
+    sign_geometry = "plate"  # the LiDAR's scan plane meets the sign's plate (default), or "pole"
 
     [space]
     attack = ["patch", "none"]       # "none", an attack, or attacks joined by "+"
@@ -42,7 +43,8 @@ from experiments.episode import TrialSpec
 from experiments.episode.estimators import ESTIMATORS
 from experiments.episode.spec import setting_name
 from sim.attacks import ATTACKS
-from sim.env.config import LOCALISATIONS
+from sim.env.config import SENSOR_PROFILES
+from sim.world.stop_signs import SIGN_GEOMETRIES
 
 __all__ = ["SweepSpec", "load_spec", "parse_spec", "spec_text", "spec_path", "SPACE_KEYS", "SPECS_DIR"]
 
@@ -51,7 +53,7 @@ SPACE_KEYS = {"attack": None, "estimator": None, "rho": (0.0, 1.0), "t_atk": (0.
               "sign": (0, 3)}
 _DEFAULTS = {"attack": ["patch"], "estimator": ["raw"], "rho": [0.95], "t_atk": [1.75], "speed": [1.5],
              "sign": [0, 1, 2, 3]}
-_TOP_KEYS = {"name", "mode", "repeats", "n", "seed", "space", "log_steps", "localisation"}
+_TOP_KEYS = {"name", "mode", "repeats", "n", "seed", "space", "log_steps", "sensor_profile", "sign_geometry"}
 #: The example specs shipped with the project.
 SPECS_DIR = Path(__file__).resolve().parent / "specs"
 
@@ -67,11 +69,14 @@ class SweepSpec:
     seed: int = 0
     space: dict = field(default_factory=dict)
     log_steps: bool = False
-    localisation: str = "qcar2"
+    sensor_profile: str = "qcar2"
+    sign_geometry: str = "plate"
 
     def __post_init__(self) -> None:
-        if self.localisation not in LOCALISATIONS:
-            raise ValueError(f"localisation must be one of {LOCALISATIONS}, got {self.localisation!r}")
+        if self.sensor_profile not in SENSOR_PROFILES:
+            raise ValueError(f"sensor_profile must be one of {tuple(SENSOR_PROFILES)}, got {self.sensor_profile!r}")
+        if self.sign_geometry not in SIGN_GEOMETRIES:
+            raise ValueError(f"sign_geometry must be one of {tuple(SIGN_GEOMETRIES)}, got {self.sign_geometry!r}")
         if self.mode not in ("grid", "random"):
             raise ValueError(f"mode must be 'grid' or 'random', got {self.mode!r}")
         if not (isinstance(self.repeats, int) and self.repeats >= 1):
@@ -108,7 +113,7 @@ class SweepSpec:
     @property
     def spec_hash(self) -> str:
         raw = json.dumps({k: getattr(self, k) for k in ("name", "mode", "repeats", "n", "seed", "space",
-                                                        "localisation")}, sort_keys=True)
+                                                        "sensor_profile", "sign_geometry")}, sort_keys=True)
         return hashlib.sha256(raw.encode()).hexdigest()[:12]
 
     def episodes(self) -> list[TrialSpec]:
@@ -121,7 +126,7 @@ class SweepSpec:
                 for repeat in range(self.repeats):
                     seed = self._episode_seed(cell, repeat)
                     for estimator in s["estimator"]:
-                        out.append(_trial(cell, estimator, seed, self.localisation))
+                        out.append(_trial(cell, estimator, seed, self.sensor_profile, self.sign_geometry))
         else:
             rng = np.random.default_rng(self.seed)
             for i in range(self.n):
@@ -130,7 +135,7 @@ class SweepSpec:
                         int(s["sign"][rng.integers(len(s["sign"]))]))
                 seed = self._episode_seed(cell, i)
                 for estimator in s["estimator"]:
-                    out.append(_trial(cell, estimator, seed, self.localisation))
+                    out.append(_trial(cell, estimator, seed, self.sensor_profile, self.sign_geometry))
         return out
 
     def _episode_seed(self, cell: tuple, repeat: int) -> int:
@@ -150,10 +155,11 @@ def _attacks(value) -> tuple[str, ...]:
     return parts
 
 
-def _trial(cell: tuple, estimator: str, seed: int, localisation: str) -> TrialSpec:
+def _trial(cell: tuple, estimator: str, seed: int, sensor_profile: str, sign_geometry: str) -> TrialSpec:
     attack, rho, t_atk, speed, sign = cell
     return TrialSpec(setting_name(_attacks(attack), estimator), int(sign), float(speed), seed,
-                     rho=(float(rho), float(rho)), t_atk=(float(t_atk), float(t_atk)), localisation=localisation)
+                     rho=(float(rho), float(rho)), t_atk=(float(t_atk), float(t_atk)),
+                     sensor_profile=sensor_profile, sign_geometry=sign_geometry)
 
 
 def spec_path(path: str | Path) -> Path:
@@ -187,7 +193,8 @@ def parse_spec(text: str, source: str = "spec", default_name: str = "sweep") -> 
         spec = SweepSpec(name=str(raw.get("name", default_name)), mode=raw.get("mode", "grid"),
                          repeats=raw.get("repeats", 1), n=raw.get("n", 0), seed=raw.get("seed", 0),
                          space=raw.get("space", {}), log_steps=bool(raw.get("log_steps", False)),
-                         localisation=raw.get("localisation", "qcar2"))
+                         sensor_profile=raw.get("sensor_profile", "qcar2"),
+                         sign_geometry=raw.get("sign_geometry", "plate"))
         episodes = spec.episodes()
     except ValueError as err:
         raise ValueError(f"{source}: {err}") from None

@@ -27,7 +27,8 @@ DEMO_SETTINGS = ("clean", "attack", "attack+odca")
 
 
 def run_demo(out_dir: Path, sign: int = 1, speed: float = 1.5, seed: int = 0,
-             settings: tuple[str, ...] = DEMO_SETTINGS, progress: bool = True) -> dict:
+             settings: tuple[str, ...] = DEMO_SETTINGS, progress: bool = True, sensor_profile: str = "qcar2",
+             sign_geometry: str = "plate") -> dict:
     """Runs the settings at one sign and writes ``<setting>.rrd``, ``<setting>.parquet`` and ``demo_traces.png``."""
     from tqdm import tqdm
 
@@ -38,7 +39,7 @@ def run_demo(out_dir: Path, sign: int = 1, speed: float = 1.5, seed: int = 0,
     out_dir.mkdir(parents=True, exist_ok=True)
     rows, logs = [], {}
     for setting in tqdm(settings, desc=f"demo: stop sign {sign} at {speed} m/s", unit="run", disable=not progress):
-        spec = TrialSpec(setting, sign, speed, seed)
+        spec = TrialSpec(setting, sign, speed, seed, sensor_profile=sensor_profile, sign_geometry=sign_geometry)
         recorder = FrameRecorder()
         result, log = run_trial(spec, on_step=recorder)
         name = setting.replace("+", "_")
@@ -50,7 +51,8 @@ def run_demo(out_dir: Path, sign: int = 1, speed: float = 1.5, seed: int = 0,
                      "stop_distance_m": r["stop_distance_m"], "trigger_delay_s": r["trigger_delay_s"],
                      "dt_brake_s": r["dt_brake_s"], "failure": r["failure"], "rrd": str(rrd)})
     png = traces_figure(logs, out_dir / "demo_traces.png", sign, speed)
-    return {"sign": sign, "speed": speed, "seed": seed, "runs": rows, "png": str(png)}
+    return {"sign": sign, "speed": speed, "seed": seed, "sensor_profile": sensor_profile,
+            "sign_geometry": sign_geometry, "runs": rows, "png": str(png)}
 
 
 def demo_table(summary: dict) -> str:

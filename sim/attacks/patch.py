@@ -49,7 +49,7 @@ class PatchAttack(AttackWrapper):
     Example:
         >>> import gymnasium as gym, sim
         >>> from sim.attacks import PatchAttack
-        >>> env = PatchAttack(gym.make("RACF/QCar2-v2", camera_width=160, camera_height=120), rho=1.0, duration_s=1.0)
+        >>> env = PatchAttack(gym.make("RACF/QCar2-v3", camera_width=160, camera_height=120), rho=1.0, duration_s=1.0)
         >>> obs, info = env.reset(seed=0, options={"sign": 2})
         >>> info["attack_active"]
         False

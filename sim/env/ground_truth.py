@@ -16,7 +16,7 @@ import numpy as np
 from sim.sensors.camera import CameraIntrinsics
 from sim.world.stop_signs import SIGN_FACE_ACROSS_FLATS_M, StopSign
 
-__all__ = ["SignView", "sign_view", "obstacle_view"]
+__all__ = ["SignView", "sign_view", "obstacle_view", "with_centre_from"]
 
 #: Converts MuJoCo's camera frame (x right, y up, looking along -z) to the optical frame.
 _MJ_TO_OPTICAL = np.diag([1.0, -1.0, -1.0])
@@ -103,6 +103,19 @@ def obstacle_view(obstacle, cam_pos: np.ndarray, cam_mat: np.ndarray,
         z_lo, z_hi = corners[:, 2].min() - _DEPTH_TOLERANCE_M, corners[:, 2].max() + _DEPTH_TOLERANCE_M
         mask &= (clean_depth >= z_lo) & (clean_depth <= z_hi)
     return _result(centre, mask)
+
+
+def with_centre_from(view: SignView, centre_world: np.ndarray, cam_pos: np.ndarray, cam_mat: np.ndarray) -> SignView:
+    """``view`` (a frame's mask) with the target's centre seen from another camera pose.
+
+    The camera's frame is older than the step when it runs slower than the loop: its mask
+    belongs to the frame, but the target's depth and bearing to the car's pose now.
+    """
+    centre = _MJ_TO_OPTICAL @ cam_mat.T @ (centre_world - cam_pos)
+    if centre[2] <= 0.05:
+        return SignView(float("nan"), float(np.linalg.norm(centre)), float("nan"), view.mask, view.in_view)
+    return SignView(float(centre[2]), float(np.linalg.norm(centre)), float(math.atan2(-centre[0], centre[2])),
+                    view.mask, view.in_view)
 
 
 def _project(centre_world, points_world, cam_pos, cam_mat, intrinsics):

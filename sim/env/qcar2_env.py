@@ -1,11 +1,16 @@
-"""``RACF/QCar2-v2``: the QCar 2 on the indoor map, approaching a stop sign.
+"""``RACF/QCar2-v3``: the QCar 2 on the indoor map, approaching a stop sign.
 
 Plumbing only: step order, seeding, spaces, sensor scheduling and the reward and
 termination hooks. The world, the car and the sensors are built by their own modules.
 
-Step order: validate action -> write controls -> ``substeps`` physics steps -> read the
-sensors that are due (others hold their last reading and its timestamp) -> ground truth ->
-reward and flags.
+Step order: validate action -> write controls -> ``substeps`` physics steps, after each of
+which the swept LiDAR casts the samples whose time has come and the camera takes a frame
+if one falls due -> read the other sensors that are due (each holds its last reading and
+its timestamp between readings) -> ground truth -> reward and flags.
+
+v3 (from v2): sensor profiles (``qcar2``, the default: the A2M12 swept over its revolution
+and delivered through Quanser's driver, the camera at 30 Hz; ``ideal``: v2's sensors and
+the true pose); the observation gains ``lidar_beam_times``.
 
 v2 (from v1): the observation gains ``gps`` (the localiser's fix) and ``timestamps``;
 ``state`` is what the encoder and the IMU measure (quantised, noisy, biased) and loses the
@@ -23,9 +28,10 @@ from gymnasium import spaces
 
 from sim._gl import ensure_gl_backend, gl_context_class
 from sim.env.config import RESET_OPTIONS, EnvConfig
-from sim.env.ground_truth import obstacle_view, sign_view
+from sim.env.ground_truth import SignView, obstacle_view, sign_view, with_centre_from
 from sim.sensors import (TIMESTAMP_FIELDS, DepthCamera, Lidar2D, LocalisationFix, RGBCamera, RGBDCameraRig, Sensor,
                          VehicleStateSensor)
+from sim.sensors.a2m12 import A2M12Lidar
 from sim.vehicle import QCar2
 from sim.world.drives import RouteTarget, start_pose, targets_on_path
 from sim.world.road_graph import Path, qcar2_road_graph
@@ -55,7 +61,11 @@ class QCar2Env(gym.Env):
     """The QCar 2 driving a road-graph route towards one of the four stop signs.
 
     Observation (``Dict``): ``rgb`` (H, W, 3) uint8; ``depth`` (H, W, 1) float32 m, 0 = no
-    return; ``lidar`` (N,) float32 m, inf = no return; ``gps`` (3,) float32, the localiser's
+    return (both the last frame, taken at ``camera_hz``: 30 Hz on the ``qcar2`` profile);
+    ``lidar`` (360,) float32 m, inf = no return, bin i at i deg counter-clockwise from the
+    car's forward (the last complete revolution: on ``qcar2`` swept over 0.1 s and delivered
+    through Quanser's driver, see ``sim.sensors.a2m12``); ``lidar_beam_times`` (360,)
+    float64, when each bin was measured, s; ``gps`` (3,) float32, the localiser's
     fix (x, y m, yaw rad, map frame): with ``localisation="qcar2"`` (the default) one per
     LiDAR scan, with Quanser's drift and noise (``sim.sensors.localiser``), with
     ``localisation="true"`` the true pose at every step; ``state`` (4,) float32, the
@@ -82,14 +92,16 @@ class QCar2Env(gym.Env):
     ``speed``, ``route_s``, ``lateral_error``, ``dist_to_stop_line`` (front bumper to the
     stop line along the route, m; negative once past it), ``collision``, ``off_road``.
     ``info["lidar_time"]`` repeats the LiDAR's timestamp (the LiDAR scans at ``lidar_hz``,
-    10 Hz by default, like the A2M12). The car's side reads the observation only.
+    10 Hz by default, like the A2M12). ``sign_mask`` and ``sign_in_view`` describe the
+    held camera frame, ``d_true`` and ``sign_bearing`` the car's pose now. The car's side
+    reads the observation only.
 
     Reward per step: metres of route progress, minus 0.1 x lateral error (m), minus 10
     on leaving the road or colliding (both end the episode).
 
     Example:
         >>> import gymnasium as gym, sim
-        >>> env = gym.make("RACF/QCar2-v2", camera_width=160, camera_height=120)
+        >>> env = gym.make("RACF/QCar2-v3", camera_width=160, camera_height=120)
         >>> obs, info = env.reset(seed=0, options={"sign": 2, "cruise_speed": 1.0})
         >>> obs["rgb"].shape, obs["lidar"].shape, obs["gps"].shape
         ((120, 160, 3), (360,), (3,))
@@ -106,25 +118,28 @@ class QCar2Env(gym.Env):
         self.render_mode = render_mode
         self.metadata = {**self.metadata, "render_fps": self.config.control_hz}
 
-        self.model = load_model()
+        self.model = load_model(sign_geometry=self.config.sign)
         self.model.opt.timestep = self.config.physics_dt_s
         self.data = mujoco.MjData(self.model)
         self.car = QCar2(self.model, self.config.vehicle)
         self.rig = RGBDCameraRig(self.config.camera)
         self.rig.configure_model(self.model)
         true_pose = self.config.localisation == "true"
+        cfg = self.config
+        self.lidar: Sensor = (A2M12Lidar(cfg.a2m12, cfg.lidar_hz, cfg.physics_dt_s) if cfg.lidar_model == "a2m12"
+                              else Lidar2D(cfg.lidar))
+        self._sweeping = isinstance(self.lidar, A2M12Lidar)
         self.sensors: tuple[Sensor, ...] = (
-            RGBCamera(self.rig), DepthCamera(self.rig), Lidar2D(self.config.lidar),
+            RGBCamera(self.rig), DepthCamera(self.rig), self.lidar,
             LocalisationFix(self.car, self.config.localiser, fix_period_s=1.0 / self.config.lidar_hz, exact=true_pose),
             VehicleStateSensor(self.car, self.config.odometry, rate_hz=self.config.state_hz))
         lidar_every = self.config.decimation(self.config.lidar_hz)
-        self._decimation = {"rgb": self.config.decimation(self.config.camera_hz),
-                            "depth": self.config.decimation(self.config.camera_hz),
-                            "lidar": lidar_every,
+        self._decimation = {"lidar": lidar_every,
                             "gps": 1 if true_pose else lidar_every,  # a fix per matched scan
                             "state": self.config.decimation(self.config.state_hz)}
         self.observation_space = spaces.Dict({
             **{s.name: spaces.Box(low=s.low, high=s.high, shape=s.shape, dtype=s.dtype) for s in self.sensors},
+            "lidar_beam_times": spaces.Box(low=0.0, high=np.inf, shape=self.lidar.shape, dtype=np.float64),
             "timestamps": spaces.Box(low=0.0, high=np.inf, shape=(len(TIMESTAMP_FIELDS),), dtype=np.float64)})
         v = self.config.vehicle
         self.action_space = spaces.Box(low=np.array([-v.max_reverse_mps, -v.max_steer_rad], np.float32),
@@ -137,13 +152,19 @@ class QCar2Env(gym.Env):
         # Crates stand on the map only in their own episodes (as a test operator would place one).
         self._crates = [(self.model.body(f"obstacle_{o.index}").id, self.model.body(f"obstacle_{o.index}").pos.copy())
                         for o in obstacles()]
-        first = stop_signs()[0]
+        first = stop_signs(self.config.sign)[0]
         self._path: Path = first.path
         self._targets: tuple[RouteTarget, ...] = (RouteTarget(first, first.stop_s, first.stop_s),)
         self._slot = 0
         self._stamps = np.zeros(len(TIMESTAMP_FIELDS))
+        self._beam_times = np.zeros(self.lidar.shape)
         self._obs: dict[str, np.ndarray] = {}
         self._step = 0
+        self._substep = 0  # physics steps since the reset
+        self._frames = 0  # camera frames taken since the reset
+        self._frame_depth = np.zeros((self.config.camera.height, self.config.camera.width), np.float32)
+        self._frame_cam = (np.zeros(3), np.eye(3))
+        self._view: tuple[tuple[int, int], SignView] | None = None
         self._route_s = 0.0
         self._sensor_rng = np.random.default_rng()
         self._nav_rng = np.random.default_rng()
@@ -173,8 +194,9 @@ class QCar2Env(gym.Env):
         self._route_s = start_s
         self.car.place(self.data, *pose, speed=float(speed))
         mujoco.mj_forward(self.model, self.data)
-        self._step = 0
+        self._step = self._substep = self._frames = 0
         self._obs = {}
+        self._view = None
         for sensor in self.sensors:
             sensor.reset(self._rng_of(sensor))
         self._read_sensors(force=True)
@@ -186,7 +208,7 @@ class QCar2Env(gym.Env):
             raise ValueError(f"reset option(s) {extra} need options['route'] (a drive)")
         if "sign" in options and "obstacle" in options:
             raise ValueError("pass options['sign'] (a stop sign) or options['obstacle'] (a crate), not both")
-        key, targets = ("obstacle", obstacles()) if "obstacle" in options else ("sign", stop_signs())
+        key, targets = ("obstacle", obstacles()) if "obstacle" in options else ("sign", stop_signs(self.config.sign))
         index = options.get(key, int(self.np_random.integers(len(targets))))
         if not _is_int(index) or int(index) not in range(len(targets)):
             raise ValueError(f"options[{key!r}] must be an int in 0..{len(targets) - 1}, got {index!r}")
@@ -222,7 +244,7 @@ class QCar2Env(gym.Env):
         heading_err = options.get("heading_error_rad", 0.0)
         if not (_is_real(heading_err) and abs(heading_err) <= 0.5):
             raise ValueError(f"options['heading_error_rad'] must be in [-0.5, 0.5] rad, got {heading_err!r}")
-        targets = targets_on_path(path, crate, float(start_s))
+        targets = targets_on_path(path, crate, float(start_s), geometry=self.config.sign)
         if not targets:
             raise ValueError(f"route {list(route)} meets no target after start_s_m={start_s}: no stop sign "
                              "faces its lanes (and no crate is placed on it)")
@@ -244,7 +266,7 @@ class QCar2Env(gym.Env):
             raise ValueError(f"action must be finite (speed m/s, steering rad), got {action.tolist()}")
         s_before = self._route_s
         self.car.apply(self.data, float(action[0]), float(action[1]))
-        mujoco.mj_step(self.model, self.data, nstep=self.config.substeps)
+        self._advance_physics()
         self._step += 1
         self._read_sensors(force=False)
         self._update_route_progress()
@@ -289,15 +311,57 @@ class QCar2Env(gym.Env):
     def _rng_of(self, sensor: Sensor) -> np.random.Generator:
         return self._nav_rng if sensor.name in _NAV_SENSORS else self._sensor_rng
 
+    def _frames_due(self, substep: int) -> int:
+        """Camera frames due by the end of physics step ``substep`` (frame 0 at the reset)."""
+        return int(np.floor(substep * self.config.physics_dt_s * self.config.camera_hz + 1e-6)) + 1
+
+    def _advance_physics(self) -> None:
+        """One control step of physics; the swept LiDAR and the camera act between physics steps."""
+        end = self._substep + self.config.substeps
+        while self._substep < end:
+            # Step to the next physics step where a sensor acts (every one while the LiDAR sweeps).
+            nxt = self._substep + 1
+            if not self._sweeping:
+                while nxt < end and self._frames_due(nxt) == self._frames:
+                    nxt += 1
+            mujoco.mj_step(self.model, self.data, nstep=nxt - self._substep)
+            self._substep = nxt
+            if self._sweeping:
+                self.lidar.sweep(self.model, self.data, self._substep)
+            if self._frames_due(self._substep) > self._frames:
+                self._take_frame(self._substep * self.config.physics_dt_s)
+
+    def _take_frame(self, now: float) -> None:
+        for sensor in self.sensors[:2]:  # rgb, depth: one render
+            self._obs[sensor.name] = sensor.read(self.model, self.data, self._sensor_rng)
+            self._stamps[_STAMP_SLOT[sensor.name]] = now
+        # The ground truth of the frame (its mask) needs the frame's clean depth and camera pose.
+        self._frame_depth[:] = self.rig.render(self.model, self.data)[1]
+        pos, mat = self.car.camera_pose(self.model, self.data)
+        self._frame_cam = (np.array(pos, dtype=np.float64), np.array(mat, dtype=np.float64).reshape(3, 3))
+        self._frames = self._frames_due(self._substep)
+
     def _read_sensors(self, force: bool) -> None:
         now = self._step / self.config.control_hz
-        for sensor in self.sensors:
-            if force or self._step % self._decimation[sensor.name] == 0:
+        if force:
+            self._take_frame(now)
+            if self._sweeping:
+                self.lidar.begin(self.model, self.data, now)
+        for sensor in self.sensors[2:]:
+            if self._sweeping and sensor is self.lidar:
+                if self.lidar.has_new_scan():
+                    self._obs["lidar"] = self.lidar.read(self.model, self.data, self._sensor_rng)
+                    self._stamps[_STAMP_SLOT["lidar"]] = self.lidar.scan_time
+                    self._beam_times = self.lidar.beam_times
+            elif force or self._step % self._decimation[sensor.name] == 0:
                 self._obs[sensor.name] = sensor.read(self.model, self.data, self._rng_of(sensor))
                 self._stamps[_STAMP_SLOT[sensor.name]] = now
+                if sensor is self.lidar:
+                    self._beam_times = np.full(self.lidar.shape, now)
 
     def _observation(self) -> dict[str, np.ndarray]:
-        return {**{k: v.copy() for k, v in self._obs.items()}, "timestamps": self._stamps.copy()}
+        return {**{k: v.copy() for k, v in self._obs.items()}, "lidar_beam_times": self._beam_times.copy(),
+                "timestamps": self._stamps.copy()}
 
     def _update_route_progress(self) -> None:
         x, y = self.data.qpos[self.car.root_qpos : self.car.root_qpos + 2]
@@ -311,10 +375,15 @@ class QCar2Env(gym.Env):
         if self._step == 0:
             self._update_route_progress()
         state = self.car.state(self.data)
+        # The target's mask as the held frame shows it (computed once per frame and target) ...
+        if self._view is None or self._view[0] != (self._frames, self._slot):
+            view_of = obstacle_view if isinstance(self._sign, Obstacle) else sign_view
+            self._view = ((self._frames, self._slot),
+                          view_of(self._sign, *self._frame_cam, self.rig.intrinsics, self._frame_depth))
+        # ... and its depth and bearing from where the camera is now.
         cam_pos, cam_mat = self.car.camera_pose(self.model, self.data)
-        _, clean_depth = self.rig.render(self.model, self.data)
-        view_of = obstacle_view if isinstance(self._sign, Obstacle) else sign_view
-        view = view_of(self._sign, cam_pos, cam_mat, self.rig.intrinsics, clean_depth)
+        view = with_centre_from(self._view[1], self._sign.centre, np.asarray(cam_pos, np.float64),
+                                np.asarray(cam_mat, np.float64).reshape(3, 3))
         return {
             "target_kind": "obstacle" if isinstance(self._sign, Obstacle) else "stop_sign",
             "target_sign": self._sign.index,
@@ -324,7 +393,7 @@ class QCar2Env(gym.Env):
             "d_true": view.d_true,
             "d_true_euclid": view.d_euclid,
             "sign_bearing": view.bearing,
-            "sign_mask": view.mask,
+            "sign_mask": view.mask.copy(),  # the frame's, held: each info gets its own
             "sign_in_view": view.in_view,
             "pose": np.array([state.x, state.y, state.yaw]),
             "speed": state.speed,

@@ -18,7 +18,7 @@ import numpy as np
 from gymnasium import spaces
 from gymnasium.wrappers import RescaleAction
 
-__all__ = ["DepthAsImage", "rl_env"]
+__all__ = ["DepthAsImage", "FiniteLidar", "rl_env"]
 
 
 class DepthAsImage(gym.ObservationWrapper):
@@ -46,10 +46,29 @@ class DepthAsImage(gym.ObservationWrapper):
         return {**observation, "depth": np.where(depth > 0, scaled, 0).astype(np.uint8)}
 
 
+class FiniteLidar(gym.ObservationWrapper):
+    """LiDAR ranges with no return as 0 (the A2M12 driver's own convention) instead of inf,
+    which a network cannot take."""
+
+    def __init__(self, env: gym.Env) -> None:
+        super().__init__(env)
+        space = env.observation_space
+        if not isinstance(space, spaces.Dict) or "lidar" not in space.spaces:
+            raise ValueError("FiniteLidar needs a Dict observation space with lidar")
+        lidar = space["lidar"]
+        high = np.float32(np.finfo(np.float32).max)
+        self.observation_space = spaces.Dict({**space.spaces, "lidar": spaces.Box(0.0, high, lidar.shape, np.float32)})
+
+    def observation(self, observation: dict) -> dict:
+        lidar = observation["lidar"]
+        return {**observation, "lidar": np.where(np.isfinite(lidar), lidar, 0.0).astype(np.float32)}
+
+
 def rl_env(env_id: str | None = None, max_depth_m: float = 5.0, **kwargs) -> gym.Env:
-    """``gym.make(env_id, **kwargs)`` with a [-1, 1] action box (``RescaleAction``) and uint8 depth."""
+    """``gym.make(env_id, **kwargs)`` with a [-1, 1] action box (``RescaleAction``), uint8 depth and
+    finite LiDAR ranges (``FiniteLidar``)."""
     from sim.registration import ENV_ID
 
-    env = DepthAsImage(gym.make(env_id or ENV_ID, **kwargs), max_depth_m)
+    env = FiniteLidar(DepthAsImage(gym.make(env_id or ENV_ID, **kwargs), max_depth_m))
     one = np.ones(env.action_space.shape, np.float32)
     return RescaleAction(env, -one, one)

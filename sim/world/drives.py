@@ -17,7 +17,7 @@ import numpy as np
 
 from sim.world.obstacles import Obstacle, obstacles
 from sim.world.road_graph import Path, qcar2_road_graph
-from sim.world.stop_signs import StopSign, stop_signs
+from sim.world.stop_signs import PLATE_IN_SCAN, SignGeometry, StopSign, stop_signs
 
 __all__ = ["RouteTarget", "DriveSpec", "targets_on_path", "draw_drive", "start_pose", "estimate_duration_s", "NOMINAL_SPEEDS_MPS",
            "MIN_TARGET_AHEAD_M"]
@@ -101,8 +101,12 @@ def _crossings(path: Path, point: np.ndarray, heading: float) -> list[float]:
     return out
 
 
-def targets_on_path(path: Path, crate: int | None = None, start_s: float = 0.0) -> tuple[RouteTarget, ...]:
+def targets_on_path(path: Path, crate: int | None = None, start_s: float = 0.0,
+                    geometry: SignGeometry = PLATE_IN_SCAN) -> tuple[RouteTarget, ...]:
     """The stop signs (and the crate, if placed) the path meets after ``start_s``, in order.
+
+    The signs are ``stop_signs(geometry)``: which signs are met and where does not depend on
+    the geometry, only the ``StopSign`` objects (their ``centre``) do.
 
     A stop sign counts where the path crosses its stop line in the direction of the sign's
     own approach; a crate where the path reaches its virtual stop line. Targets whose stop
@@ -114,7 +118,7 @@ def targets_on_path(path: Path, crate: int | None = None, start_s: float = 0.0) 
             the path runs into it without crossing its stop line first.
     """
     found: list[RouteTarget] = []
-    candidates: list[StopSign | Obstacle] = list(stop_signs())
+    candidates: list[StopSign | Obstacle] = list(stop_signs(geometry))
     if crate is not None:
         candidates.append(obstacles()[crate])
     for target in candidates:

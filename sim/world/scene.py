@@ -1,8 +1,9 @@
 """Builds the MuJoCo model of the indoor map with the QCar 2 on it.
 
 The map is generated from the official facts (``map_facts``): the floor mat texture from
-the road graph, the walls, the four stop signs (red octagon with a white border on a pole),
-the traffic lights and yield signs as static props. The car comes from
+the road graph, the walls, the four stop signs (red octagon with a white border on a pole,
+built to a ``SignGeometry``: the plate's height and the pole's diameter), the traffic lights
+and yield signs as static props. The car comes from
 ``assets/qcar2_map/qcar2.xml`` through an ``<include>``. Nothing here knows gymnasium.
 """
 
@@ -13,7 +14,6 @@ import os
 from functools import lru_cache
 from pathlib import Path
 
-
 from sim._gl import ensure_gl_backend
 
 ensure_gl_backend()
@@ -22,7 +22,13 @@ import mujoco  # noqa: E402  (the GL backend must be chosen before mujoco is imp
 from sim.world import map_facts  # noqa: E402
 from sim.world.mat_texture import mat_png_bytes  # noqa: E402
 from sim.world.obstacles import OBSTACLE_SIZE_M, obstacles  # noqa: E402
-from sim.world.stop_signs import SIGN_CENTRE_HEIGHT_M, SIGN_FACE_ACROSS_FLATS_M, stop_signs  # noqa: E402
+from sim.world.stop_signs import (  # noqa: E402
+    PLATE_IN_SCAN,
+    SIGN_CENTRE_HEIGHT_M,
+    SIGN_FACE_ACROSS_FLATS_M,
+    SignGeometry,
+    stop_signs,
+)
 
 __all__ = ["ASSETS_DIR", "build_scene_xml", "load_model", "PROP_GEOM_GROUP", "CAR_GEOM_GROUP"]
 
@@ -34,6 +40,7 @@ CAR_GEOM_GROUP = 3
 MAX_IMAGE_SIZE = (1280, 960)
 
 _SIGN_THICKNESS_M = 0.003
+#: The yield signs' pole (their build is not a scenario parameter).
 _POLE_RADIUS_M = 0.004
 
 
@@ -56,12 +63,13 @@ def _triangle_mesh(name: str, side: float, thickness: float) -> str:
     return f'<mesh name="{name}" vertex="{" ".join(f"{v:.6f}" for v in verts)}"/>'
 
 
-def _stop_sign_xml(index: int, x: float, y: float, yaw: float) -> str:
-    z = SIGN_CENTRE_HEIGHT_M
+def _stop_sign_xml(index: int, x: float, y: float, yaw: float, geometry: SignGeometry) -> str:
+    # The pole stands just behind the plate and reaches up to the plate's centre.
+    z, r = geometry.centre_height_m, geometry.pole_radius_m
     return f"""
     <body name="stop_sign_{index}" pos="{x} {y} 0" euler="0 0 {math.degrees(yaw):.4f}">
-      <geom name="stop_sign_{index}_pole" type="cylinder" pos="{-_SIGN_THICKNESS_M - _POLE_RADIUS_M} 0 {z / 2}"
-            size="{_POLE_RADIUS_M} {z / 2}" rgba="0.55 0.55 0.58 1"/>
+      <geom name="stop_sign_{index}_pole" type="cylinder" pos="{-_SIGN_THICKNESS_M - r} 0 {z / 2}"
+            size="{r} {z / 2}" rgba="0.55 0.55 0.58 1"/>
       <geom name="stop_sign_{index}_border" type="mesh" mesh="stop_octagon_border" pos="0 0 {z}" rgba="0.97 0.97 0.97 1"/>
       <geom name="stop_sign_{index}_face" type="mesh" mesh="stop_octagon_face" pos="0.001 0 {z}"
             rgba="0.80 0.05 0.06 1" contype="0" conaffinity="0"/>
@@ -121,11 +129,12 @@ def _obstacle_xml(index: int, x: float, y: float, yaw: float) -> str:
     </body>"""
 
 
-def build_scene_xml() -> str:
-    """The full MJCF text of the map with the car (the car's file is an include)."""
+def build_scene_xml(sign_geometry: SignGeometry = PLATE_IN_SCAN) -> str:
+    """The full MJCF text of the map with the car (the car's file is an include), the stop
+    signs built to ``sign_geometry``."""
     x0, x1, y0, y1 = map_facts.WALL_BOUNDS_M
     cx, cy, sx, sy = (x0 + x1) / 2, (y0 + y1) / 2, (x1 - x0) / 2, (y1 - y0) / 2
-    props = "".join(_stop_sign_xml(s.index, *s.position, s.face_yaw) for s in stop_signs())
+    props = "".join(_stop_sign_xml(s.index, *s.position, s.face_yaw, s.geometry) for s in stop_signs(sign_geometry))
     props += "".join(_traffic_light_xml(i, *p) for i, p in enumerate(map_facts.TRAFFIC_LIGHTS))
     props += "".join(_yield_sign_xml(i, *p) for i, p in enumerate(map_facts.YIELD_SIGNS))
     props += "".join(_obstacle_xml(o.index, *o.body_centre, o.yaw) for o in obstacles())
@@ -166,13 +175,16 @@ def build_scene_xml() -> str:
 """
 
 
-@lru_cache(maxsize=1)
-def _compiled_xml_and_assets() -> tuple[str, tuple[tuple[str, bytes], ...]]:
+@lru_cache(maxsize=4)
+def _compiled_xml_and_assets(sign_geometry: SignGeometry) -> tuple[str, tuple[tuple[str, bytes], ...]]:
     car = (ASSETS_DIR / "qcar2.xml").read_bytes()
-    return build_scene_xml(), (("qcar2.xml", car), ("mat.png", mat_png_bytes()))
+    return build_scene_xml(sign_geometry), (("qcar2.xml", car), ("mat.png", mat_png_bytes()))
 
 
-def load_model() -> mujoco.MjModel:
-    """Compiles a fresh ``MjModel`` of the map with the car (each caller gets its own copy)."""
-    xml, assets = _compiled_xml_and_assets()
+def load_model(sign_geometry: SignGeometry = PLATE_IN_SCAN) -> mujoco.MjModel:
+    """Compiles a fresh ``MjModel`` of the map with the car (each caller gets its own copy),
+    the stop signs built to ``sign_geometry`` (the MJCF text is cached per geometry)."""
+    if not isinstance(sign_geometry, SignGeometry):
+        raise TypeError(f"sign_geometry must be a SignGeometry, got {type(sign_geometry).__name__}")
+    xml, assets = _compiled_xml_and_assets(sign_geometry)
     return mujoco.MjModel.from_xml_string(xml, assets=dict(assets))

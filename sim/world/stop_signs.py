@@ -10,12 +10,17 @@ where the sign projects onto the lane, the rule the two official stop lines foll
 Sign 1 once served the northbound lane with its face turned by 180 deg; that approach comes
 out of a right-hand curve beside the sign, so the camera never saw it. The southbound lane
 has a 1.4 m straight in the sign's view, as the published yaw suggests.
+
+How high the plate stands and how thick its pole is are a scenario parameter
+(``SignGeometry``): the car's 2D LiDAR scans at z = 0.193 m, so with ``PLATE_IN_SCAN`` (the
+default) it meets the plate, and with ``POLE_ONLY`` it meets only the thin pole.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+import numbers
+from dataclasses import dataclass, replace
 from functools import lru_cache
 
 import numpy as np
@@ -23,13 +28,86 @@ import numpy as np
 from sim.world import map_facts
 from sim.world.road_graph import Path, qcar2_road_graph
 
-__all__ = ["StopSign", "stop_signs", "SIGN_FACE_ACROSS_FLATS_M", "SIGN_CENTRE_HEIGHT_M"]
+__all__ = ["PLATE_IN_SCAN", "POLE_ONLY", "SIGN_CENTRE_HEIGHT_M", "SIGN_FACE_ACROSS_FLATS_M", "SIGN_GEOMETRIES",
+           "SignGeometry", "StopSign", "stop_signs"]
 
 #: Octagon size across flats. A 1/10-scale road sign would be ~0.075 m; Quanser's props
-#: are larger, and 0.10 m keeps the sign in the LiDAR's scan plane (z = 0.193 m).
+#: are larger, and 0.10 m keeps the sign in the LiDAR's scan plane (z = 0.193 m) with the
+#: default geometry. The same for every geometry.
 SIGN_FACE_ACROSS_FLATS_M = 0.10
-#: Height of the octagon's centre above the floor.
+#: Height of the octagon's centre above the floor with the default geometry
+#: (``PLATE_IN_SCAN.centre_height_m``); a sign's own is ``StopSign.centre``.
 SIGN_CENTRE_HEIGHT_M = 0.23
+
+_PLATE_BOTTOM_RANGE_M = (0.05, 0.6)
+_POLE_DIAMETER_RANGE_M = (0.002, 0.05)
+
+
+def _checked_length(name: str, value: object, low: float, high: float) -> float:
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        # A ValueError, not a TypeError: configs built from flags and files catch one kind.
+        message = (f"SignGeometry.{name} must be a number of metres in [{low}, {high}], "
+                   f"got {value!r} ({type(value).__name__})")
+        raise ValueError(message)  # noqa: TRY004
+    value = float(value)
+    if math.isnan(value) or not low <= value <= high:
+        raise ValueError(f"SignGeometry.{name} must be in [{low}, {high}] m, got {value!r}")
+    return value
+
+
+@dataclass(frozen=True)
+class SignGeometry:
+    """How a stop sign is built: where its plate starts and how thick its pole is.
+
+    The plate (``SIGN_FACE_ACROSS_FLATS_M`` across flats) sits on a round pole that stands
+    just behind it and reaches up to the plate's centre. Hashable: models and sign lists
+    are cached per geometry.
+
+    Attributes:
+        plate_bottom_m: height of the plate's lowest edge above the floor, in [0.05, 0.6] m.
+        pole_diameter_m: the pole's diameter, in [0.002, 0.05] m.
+
+    Raises:
+        ValueError: a value that is not a real number (bools included), NaN, or out of its
+            range; the message names the field and the range.
+    """
+
+    plate_bottom_m: float = 0.18
+    pole_diameter_m: float = 0.008
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "plate_bottom_m",
+                           _checked_length("plate_bottom_m", self.plate_bottom_m, *_PLATE_BOTTOM_RANGE_M))
+        object.__setattr__(self, "pole_diameter_m",
+                           _checked_length("pole_diameter_m", self.pole_diameter_m, *_POLE_DIAMETER_RANGE_M))
+
+    @property
+    def centre_height_m(self) -> float:
+        """Height of the plate's centre above the floor, m (rounded to the nanometre, so
+        the default's is exactly ``SIGN_CENTRE_HEIGHT_M``)."""
+        return round(self.plate_bottom_m + SIGN_FACE_ACROSS_FLATS_M / 2, 9)
+
+    @property
+    def plate_top_m(self) -> float:
+        """Height of the plate's top edge above the floor, m."""
+        return round(self.plate_bottom_m + SIGN_FACE_ACROSS_FLATS_M, 9)
+
+    @property
+    def pole_radius_m(self) -> float:
+        """The pole's radius, m."""
+        return self.pole_diameter_m / 2
+
+
+#: The default: plate 0.18-0.28 m on an 8 mm pole. The LiDAR's scan plane (z = 0.193 m)
+#: meets the plate, so the sign is a 0.10 m wide return.
+PLATE_IN_SCAN = SignGeometry()
+#: The US urban rule (MUTCD: plate bottom >= 7 ft = 2.13 m, a 30 in = 0.76 m plate) at
+#: 1/10 scale: plate bottom 0.21 m (we keep our 0.10 m plate, not the rule's 76 mm) on a
+#: 6 mm pole. The scan plane (z = 0.193 m) passes 17 mm under the plate: it meets only
+#: the pole.
+POLE_ONLY = SignGeometry(plate_bottom_m=0.21, pole_diameter_m=0.006)
+#: The named geometries, by the name scenarios use.
+SIGN_GEOMETRIES: dict[str, SignGeometry] = {"plate": PLATE_IN_SCAN, "pole": POLE_ONLY}
 
 # sign index -> (route through the road graph, official stop line index or None)
 _APPROACHES: dict[int, tuple[tuple[int, ...], int | None]] = {
@@ -54,6 +132,7 @@ class StopSign:
         stop_s: arclength of the stop line along ``path``, metres.
         earliest_start_s: the first arclength a trial may start at (after any other sign
             that faces the same lane, so the target is the first stop sign the car meets).
+        geometry: the plate's height and the pole's diameter.
     """
 
     index: int
@@ -64,16 +143,32 @@ class StopSign:
     stop_line: tuple[float, float]
     stop_s: float
     earliest_start_s: float
+    geometry: SignGeometry = PLATE_IN_SCAN
 
     @property
     def centre(self) -> np.ndarray:
         """(3,) centre of the octagon in the map frame, metres."""
-        return np.array([*self.position, SIGN_CENTRE_HEIGHT_M])
+        return np.array([*self.position, self.geometry.centre_height_m])
+
+
+def stop_signs(geometry: SignGeometry = PLATE_IN_SCAN) -> tuple[StopSign, ...]:
+    """The four stop signs of the map with their approaches, built to ``geometry``.
+
+    Cached per geometry: equal geometries give the same tuple. Only ``centre`` (and the
+    ``geometry`` field) depend on the geometry; positions, routes and stop lines do not.
+    """
+    if not isinstance(geometry, SignGeometry):
+        raise TypeError(f"geometry must be a SignGeometry, got {type(geometry).__name__}")
+    return _signs_built(geometry)
+
+
+@lru_cache(maxsize=8)
+def _signs_built(geometry: SignGeometry) -> tuple[StopSign, ...]:
+    return tuple(replace(sign, geometry=geometry) for sign in _signs())
 
 
 @lru_cache(maxsize=1)
-def stop_signs() -> tuple[StopSign, ...]:
-    """The four stop signs of the map with their approaches."""
+def _signs() -> tuple[StopSign, ...]:
     graph = qcar2_road_graph()
     signs = []
     for index, (x, y, yaw_deg) in enumerate(map_facts.STOP_SIGNS):

@@ -88,9 +88,12 @@ class World:
 
 
 def _run(world: World, tracker: LidarTargetTracker, centre, steps: int, *, speed=1.0, yaw_rate=0.0,
-         detect=lambda k: True, scan_ok=lambda k: True, target="sign", start=0, segments=None, det_width=0.10):
+         detect=lambda k: True, scan_ok=lambda k: True, target="sign", start=0, segments=None, det_width=0.10,
+         scan_age=0.0, beam_age_s=None):
     """Drives control steps ``start .. start + steps - 1`` (the car stands on step 0; a scan
     every 5th step, all-inf where ``scan_ok`` is false; the detection where ``detect``).
+    Each scan is taken ``scan_age`` s before its step (see :func:`_scan_taken`), and
+    ``beam_age_s`` is what the tracker is told.
 
     Returns:
         (values, truths, states) per step; truth = the target centre's optical-axis depth.
@@ -101,15 +104,32 @@ def _run(world: World, tracker: LidarTargetTracker, centre, steps: int, *, speed
             world.drive(speed, yaw_rate)
         scan = None
         if k % SCAN_EVERY == 0 and scan_ok(k):
-            scan = world.scan(segments(k) if segments else None)
+            scan = _scan_taken(world, segments(k) if segments else None, scan_age,
+                               speed if k > 0 else 0.0, yaw_rate if k > 0 else 0.0)
         elif k % SCAN_EVERY == 0:
             scan = np.full(N_BEAMS, np.inf, np.float32)
         bearing, span = world.detection(centre, det_width) if detect(k) else (math.nan, None)
         values.append(tracker.step(scan=scan, detection_bearing=bearing, detection_span=span, target=target,
-                                   speed=speed if k > 0 else 0.0, yaw_rate=yaw_rate if k > 0 else 0.0, dt=DT))
+                                   speed=speed if k > 0 else 0.0, yaw_rate=yaw_rate if k > 0 else 0.0, dt=DT,
+                                   beam_age_s=beam_age_s))
         truths.append(world.to_camera(centre)[0])
         states.append(tracker.state)
     return np.array(values), np.array(truths), states
+
+
+def _scan_taken(world: World, segments, age, speed: float, yaw_rate: float) -> np.ndarray:
+    """A scan whose beams were taken ``age`` s ago (a float, or (N,) per beam: a sweeping
+    LiDAR), the car on its arc at ``speed`` and ``yaw_rate`` back then."""
+    now = world.pose
+    ages = np.broadcast_to(np.asarray(age, float), (N_BEAMS,))
+    scan = np.empty(N_BEAMS, np.float32)
+    for a in np.unique(ages):
+        world.pose = now
+        world.drive(speed, yaw_rate, -a)  # back along the arc
+        beams = ages == a
+        scan[beams] = world.scan(segments)[beams]
+    world.pose = now
+    return scan
 
 
 SIGN = np.array([2.5, -0.35])  # world frame, m (ahead and to the right)
@@ -258,6 +278,62 @@ def test_a_sign_sized_cluster_is_not_a_crate_and_switching_target_drops_the_trac
     assert not tracker.state.has_track and math.isnan(tracker.state.depth)
 
 
+@pytest.mark.parametrize("yaw_rate", [0.0, -0.4])
+def test_old_beams_are_carried_forward_to_the_step(yaw_rate):
+    # A sweeping LiDAR: every scan was taken 0.08 s before the step it is handed over on,
+    # while the car drove at 1 m/s. Told the beams' age, the tracker is as good as with
+    # fresh scans; not told, it is about 8 cm too far.
+    age = 0.08
+    cfg = LidarTargetConfig(smoothing=1.0)
+    told, truths, _ = _run(World(_plate(SIGN, 0.07)), LidarTargetTracker(cfg), SIGN, 50, yaw_rate=yaw_rate,
+                           scan_age=age, beam_age_s=age)
+    assert np.isfinite(told).all()
+    np.testing.assert_allclose(told, truths, atol=0.01)
+    blind, _, _ = _run(World(_plate(SIGN, 0.07)), LidarTargetTracker(cfg), SIGN, 50, yaw_rate=yaw_rate,
+                       scan_age=age)
+    err = blind[5:] - truths[5:]
+    assert np.isfinite(err[:10]).all() and np.all(np.isnan(err) | (err > 0.06))  # or it loses the sign
+
+
+def test_a_scan_of_aged_beams_is_reported_speed_times_age_closer():
+    # The same scans, told they are `age` old while the car drives straight at v: the
+    # target was that much farther when the beams hit it.
+    v, age = 1.0, 0.06
+    cfg = LidarTargetConfig(smoothing=1.0)
+    fresh, _, _ = _run(World(_plate(SIGN, 0.07)), LidarTargetTracker(cfg), SIGN, 40, speed=v, beam_age_s=0.0)
+    aged, _, _ = _run(World(_plate(SIGN, 0.07)), LidarTargetTracker(cfg), SIGN, 40, speed=v,
+                      beam_age_s=np.full(N_BEAMS, age))
+    assert np.isfinite(fresh).all() and np.isfinite(aged).all()
+    np.testing.assert_allclose(fresh[5:] - aged[5:], v * age, atol=1e-9)  # on and after the first moving scan
+
+
+def test_a_sweeping_lidar_s_beams_each_keep_their_own_age():
+    # One 0.1 s revolution counter-clockwise from the right (beam 270) ends on this step: the
+    # sign ahead-right is seen ~0.075 s ago, a second sign ahead-left ~0.03 s ago. Each is
+    # carried forward by its own beams' age.
+    ages = 0.1 * (1.0 - ((np.arange(N_BEAMS) - 270) % N_BEAMS + 1) / N_BEAMS)
+    left = np.array([2.2, 0.6])
+    world = World(_plate(SIGN, 0.07) + _plate(left, 0.07))
+    for centre in (SIGN, left):
+        world.pose = np.zeros(3)
+        values, truths, _ = _run(world, LidarTargetTracker(LidarTargetConfig(smoothing=1.0)), centre, 40,
+                                 yaw_rate=-0.3, scan_age=ages, beam_age_s=ages)
+        assert np.isfinite(values).all()
+        np.testing.assert_allclose(values, truths, atol=0.01)
+
+
+def test_beam_age_none_and_zero_are_the_same():
+    world = World(_plate(SIGN, 0.07) + _plate(SIGN + [0.6, 0.0], 1.5), noise_rel=0.01)
+    runs = []
+    for beam_age_s in (None, 0.0, np.zeros(N_BEAMS)):
+        world.pose, world.rng = np.zeros(3), np.random.default_rng(3)
+        runs.append(_run(world, LidarTargetTracker(), SIGN, 40, yaw_rate=-0.2, beam_age_s=beam_age_s))
+    assert np.isfinite(runs[0][0]).all()
+    for values, _, states in runs[1:]:
+        np.testing.assert_array_equal(values, runs[0][0])
+        assert states == runs[0][2]
+
+
 def test_recorded_simulator_scans_match_d_true():
     d = dict(np.load(SCANS))
     scan_of = {int(s): i for i, s in enumerate(d["scan_step"])}
@@ -297,3 +373,14 @@ def test_bad_step_arguments_raise():
         tracker.step(scan=None, target="sign", dt=-1.0, **kw)
     with pytest.raises(ValueError, match="scan"):
         tracker.step(scan=np.ones((2, 360)), target="sign", dt=DT, **kw)
+
+
+@pytest.mark.parametrize("beam_age_s", [
+    -0.01, math.nan, math.inf, True, "old", np.zeros(359), np.zeros((2, 360)), np.full(360, -1e-3),
+    np.r_[np.zeros(359), np.nan],
+])
+def test_bad_beam_age_raises_naming_it(beam_age_s):
+    tracker = LidarTargetTracker()
+    with pytest.raises(ValueError, match="beam_age_s"):
+        tracker.step(scan=np.full(360, 1.0), detection_bearing=0.0, detection_span=None, target="sign", speed=0.0,
+                     yaw_rate=0.0, dt=DT, beam_age_s=beam_age_s)

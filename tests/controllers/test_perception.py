@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from controllers import CameraModel, StopSignDetector
+from controllers.detector import Detection
 from controllers.perception import Perception
 
 CAMERA = CameraModel(width=160, fx=100.0, cx=80.0)
@@ -106,3 +107,82 @@ def test_no_map_bearing_keeps_every_detection(frame):
         _assert_kept(sample, det)
     assert none.bearing_rad == default.bearing_rad and none.d_meas == default.d_meas
     assert none.c_meas == default.c_meas
+
+
+# -- the camera is slower than the loop: held frames ------------------------------------------
+LIDAR_XY = np.array([-0.012, 0.0])  # the tracker's default LiDAR and camera positions, body frame
+CAMERA_XY = np.array([0.095, 0.032])
+PLATE = np.array([2.0, -0.1])  # the sign's centre in the camera frame at the start, m
+
+
+class CountingDetector:
+    """Finds a 0.07 m sign at ``PLATE`` (box bearings as the camera sees it) and counts its calls."""
+
+    def __init__(self):
+        self.calls = 0
+
+    def detect(self, rgb):
+        self.calls += 1
+        u = CAMERA.cx - CAMERA.fx * PLATE[1] / PLATE[0]
+        mask = np.zeros((120, 160), bool)
+        mask[55:65, 83:87] = True
+        return Detection(mask, (83, 55, 87, 65), 0.9, int(mask.sum()), (u, 60.0))
+
+
+def _plate_scan(ahead: float) -> np.ndarray:
+    """Scan of a 0.07 m plate facing the car, its centre ``ahead`` m along the optical axis at PLATE's y."""
+    x = ahead + CAMERA_XY[0] - LIDAR_XY[0]  # LiDAR frame
+    y0 = PLATE[1] + CAMERA_XY[1] - LIDAR_XY[1]
+    angles = 2 * np.pi * np.arange(360) / 360
+    with np.errstate(divide="ignore"):
+        r = x / np.cos(angles)
+    hit = (np.cos(angles) > 0) & (np.abs(r * np.sin(angles) - y0) <= 0.035)
+    return np.where(hit, r, np.inf)
+
+
+def test_held_frames_do_not_run_the_detector_but_the_lidar_follows_odometry():
+    detector = CountingDetector()
+    perception = Perception(CAMERA, detector=detector)
+    first = perception.process(np.zeros((120, 160, 3), np.uint8), DEPTH, _plate_scan(PLATE[0]))
+    assert detector.calls == 1 and first.detected and first.d_meas == pytest.approx(2.0)
+    assert first.lidar_m == pytest.approx(PLATE[0], abs=0.01)
+    raw = perception.last_raw_detection
+    lidar = [first.lidar_m]
+    for k in range(1, 6):  # the car drives at 1 m/s; camera frames are held, a scan on step 5
+        scan = _plate_scan(PLATE[0] - 0.02 * k) if k == 5 else None
+        sample = perception.process(None, None, scan, speed=1.0, dt=0.02, new_frame=False)
+        assert detector.calls == 1 and perception.last_raw_detection is raw
+        assert sample.detection is first.detection and sample.bearing_rad == first.bearing_rad
+        assert sample.d_meas == first.d_meas and sample.c_meas == first.c_meas
+        lidar.append(sample.lidar_m)
+    # Carried by odometry, then measured with the held detection.
+    np.testing.assert_allclose(lidar, PLATE[0] - 0.02 * np.arange(6), atol=0.01)
+    assert perception.lidar.state.supported and perception.lidar.state.last_support_age_s == 0.0
+    # A new frame runs the detector again.
+    perception.process(np.zeros((120, 160, 3), np.uint8), DEPTH, None, speed=1.0, dt=0.02)
+    assert detector.calls == 2
+
+
+def test_a_held_frame_before_any_frame_has_no_detection():
+    detector = CountingDetector()
+    perception = Perception(CAMERA, detector=detector)
+    for reset in (False, True):
+        if reset:
+            perception.process(np.zeros((120, 160, 3), np.uint8), DEPTH, _plate_scan(PLATE[0]))
+            perception.reset()
+        calls = detector.calls
+        sample = perception.process(None, None, _plate_scan(PLATE[0]), new_frame=False)
+        assert detector.calls == calls
+        assert not sample.detected and math.isnan(sample.d_meas) and sample.c_meas == 0.0
+        assert math.isnan(sample.bearing_rad) and math.isnan(sample.lidar_m)  # no detection: no track starts
+
+
+def test_beam_ages_reach_the_tracker():
+    perception = Perception(CAMERA, detector=CountingDetector())
+    rgb = np.zeros((120, 160, 3), np.uint8)
+    fresh = perception.process(rgb, DEPTH, _plate_scan(PLATE[0]), speed=1.0, beam_age_s=0.0).lidar_m
+    perception.reset()
+    aged = perception.process(rgb, DEPTH, _plate_scan(PLATE[0]), speed=1.0, beam_age_s=0.05).lidar_m
+    assert fresh - aged == pytest.approx(0.05)
+    with pytest.raises(ValueError, match="beam_age_s"):
+        perception.process(rgb, DEPTH, _plate_scan(PLATE[0]), beam_age_s=-1.0)

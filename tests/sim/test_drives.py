@@ -10,7 +10,7 @@ from sim.env.qcar2_env import PASS_LINE_M
 from sim.world.drives import MIN_TARGET_AHEAD_M, draw_drive, estimate_duration_s, targets_on_path
 from sim.world.obstacles import obstacles
 from sim.world.road_graph import qcar2_road_graph
-from sim.world.stop_signs import stop_signs
+from sim.world.stop_signs import POLE_ONLY, stop_signs
 
 SMALL = {"camera_width": 80, "camera_height": 60}
 
@@ -24,6 +24,14 @@ def test_every_sign_and_crate_is_met_on_its_own_approach():
     found = targets_on_path(crate.path, crate=1)
     assert found[-1].name == "obstacle1" and found[-1].target_s - found[-1].stop_s == pytest.approx(0.25, abs=0.02)
     assert targets_on_path(crate.path) == ()  # not placed: not met
+
+
+def test_targets_carry_the_sign_geometry_and_are_met_where_they_were():
+    for sign in stop_signs():
+        default, pole = targets_on_path(sign.path), targets_on_path(sign.path, geometry=POLE_ONLY)
+        assert [(t.name, t.stop_s, t.target_s) for t in pole] == [(t.name, t.stop_s, t.target_s) for t in default]
+        assert pole[0].target is stop_signs(POLE_ONLY)[sign.index]
+        assert pole[0].target.centre[2] == POLE_ONLY.centre_height_m
 
 
 @pytest.mark.parametrize("seed", range(6))

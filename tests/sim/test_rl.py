@@ -33,8 +33,8 @@ def test_plain_env_depth_is_an_image_shaped_float_and_older_versions_point_to_v2
     env = gym.make(sim.ENV_ID, **SMALL)
     assert env.observation_space["depth"].shape == (120, 160, 1)
     env.close()
-    for old in ("RACF/QCar2-v0", "RACF/QCar2-v1"):
-        with pytest.raises(gym.error.Error, match="RACF/QCar2-v2"):
+    for old in ("RACF/QCar2-v0", "RACF/QCar2-v1", "RACF/QCar2-v2"):
+        with pytest.raises(gym.error.Error, match="RACF/QCar2-v3"):
             gym.make(old)
 
 

@@ -1,4 +1,5 @@
-"""The four stop signs: published poses, stop lines on the route, sign placement relative to the lane."""
+"""The four stop signs: published poses, stop lines on the route, sign placement relative to the lane,
+and their build (``SignGeometry``)."""
 
 from __future__ import annotations
 
@@ -9,7 +10,15 @@ import pytest
 
 from sim.world import map_facts
 from sim.world.road_graph import qcar2_road_graph
-from sim.world.stop_signs import SIGN_CENTRE_HEIGHT_M, SIGN_FACE_ACROSS_FLATS_M, stop_signs
+from sim.world.stop_signs import (
+    PLATE_IN_SCAN,
+    POLE_ONLY,
+    SIGN_CENTRE_HEIGHT_M,
+    SIGN_FACE_ACROSS_FLATS_M,
+    SIGN_GEOMETRIES,
+    SignGeometry,
+    stop_signs,
+)
 
 # Published facts (shared/reference/qcar2.md).
 PUBLISHED_SIGNS = [(-1.5, 3.6, -35.0), (-1.5, 2.2, 35.0), (2.410, 0.206, -90.0), (1.766, 1.697, 90.0)]
@@ -102,3 +111,65 @@ def test_no_other_sign_between_start_and_target():
             faces_lane = math.cos(other.face_yaw - sign.path.pose_at(s)[2]) < 0
             if abs(lateral) < 0.5 and faces_lane and s < sign.stop_s:
                 assert s < sign.earliest_start_s
+
+
+# -- SignGeometry: the plate's height and the pole's diameter, a scenario parameter ------
+
+
+def test_default_geometry_is_the_old_build():
+    assert SignGeometry() == PLATE_IN_SCAN == SIGN_GEOMETRIES["plate"]
+    assert PLATE_IN_SCAN.plate_bottom_m == 0.18 and PLATE_IN_SCAN.pole_diameter_m == 0.008
+    assert PLATE_IN_SCAN.centre_height_m == SIGN_CENTRE_HEIGHT_M == 0.23  # exactly: the MJCF text is unchanged
+    assert PLATE_IN_SCAN.pole_radius_m == 0.004
+    assert stop_signs() is stop_signs(PLATE_IN_SCAN) is stop_signs(SignGeometry(0.18, 0.008))
+    assert all(s.geometry == PLATE_IN_SCAN for s in SIGNS)
+
+
+def test_pole_only_preset_puts_the_plate_above_the_scan_plane():
+    lidar_z = 0.193
+    assert POLE_ONLY is SIGN_GEOMETRIES["pole"]
+    assert (POLE_ONLY.plate_bottom_m, POLE_ONLY.pole_diameter_m) == (0.21, 0.006)
+    assert POLE_ONLY.plate_bottom_m > lidar_z
+    assert POLE_ONLY.centre_height_m == 0.26 and POLE_ONLY.plate_top_m == pytest.approx(0.31)
+    assert PLATE_IN_SCAN.plate_bottom_m < lidar_z < PLATE_IN_SCAN.plate_top_m
+
+
+def test_stop_signs_carry_their_geometry():
+    signs = stop_signs(POLE_ONLY)
+    assert signs is stop_signs(POLE_ONLY)  # cached per geometry
+    for sign, default in zip(signs, SIGNS):
+        assert sign.geometry == POLE_ONLY
+        assert sign.centre == pytest.approx([*default.position, 0.26])
+        # Everything but the build is the default's.
+        assert (sign.index, sign.position, sign.face_yaw, sign.route, sign.stop_line, sign.stop_s,
+                sign.earliest_start_s) == (default.index, default.position, default.face_yaw, default.route,
+                                           default.stop_line, default.stop_s, default.earliest_start_s)
+    with pytest.raises(TypeError, match="SignGeometry"):
+        stop_signs(0.21)
+
+
+def test_geometry_is_hashable_and_keeps_numbers_as_floats():
+    g = SignGeometry(plate_bottom_m=np.float64(0.3), pole_diameter_m=0.01)
+    assert type(g.plate_bottom_m) is float
+    assert hash(g) == hash(SignGeometry(0.3, 0.01)) and g == SignGeometry(0.3, 0.01)
+    assert {PLATE_IN_SCAN: 1, POLE_ONLY: 2}[SignGeometry(0.21, 0.006)] == 2
+    # The ends of the ranges are allowed.
+    SignGeometry(0.05, 0.002)
+    SignGeometry(0.6, 0.05)
+
+
+@pytest.mark.parametrize("field, value", [
+    ("plate_bottom_m", 0.049), ("plate_bottom_m", 0.61), ("plate_bottom_m", -0.2), ("plate_bottom_m", math.nan),
+    ("plate_bottom_m", math.inf), ("plate_bottom_m", True), ("plate_bottom_m", "0.2"), ("plate_bottom_m", None),
+    ("pole_diameter_m", 0.0019), ("pole_diameter_m", 0.051), ("pole_diameter_m", 0.0), ("pole_diameter_m", math.nan),
+    ("pole_diameter_m", False), ("pole_diameter_m", [0.006]),
+])
+def test_bad_geometry_is_named_with_its_range(field, value):
+    low, high = {"plate_bottom_m": (0.05, 0.6), "pole_diameter_m": (0.002, 0.05)}[field]
+    with pytest.raises(ValueError, match=rf"SignGeometry\.{field} must be .*in \[{low}, {high}\]"):
+        SignGeometry(**{field: value})
+
+
+def test_geometry_is_frozen():
+    with pytest.raises(AttributeError):
+        PLATE_IN_SCAN.plate_bottom_m = 0.3  # type: ignore[misc]

@@ -23,13 +23,14 @@ def test_bad_sign_is_a_clear_error(capsys):
     assert "sign must be 0, 1, 2 or 3" in capsys.readouterr().err
 
 
-@pytest.mark.parametrize("argv", [["trial", "--localisation", "gps"], ["trials", "--table", "--localisation", "gps"],
-                                  ["sweep", "smoke.toml", "--localisation", "gps"]])
-def test_bad_localisation_fails_before_any_work_naming_the_choices(argv, capsys, tmp_path):
+@pytest.mark.parametrize("command", [["trial"], ["trials", "--table"], ["sweep", "smoke.toml"], ["collect"]])
+@pytest.mark.parametrize(("flag", "choices"), [("--sensor-profile", "'qcar2', 'ideal'"),
+                                               ("--sign-geometry", "'plate', 'pole'")])
+def test_bad_sensor_profile_or_sign_fails_before_any_work_naming_the_choices(command, flag, choices, capsys, tmp_path):
     with pytest.raises(SystemExit) as err:
-        main(argv + ["--out", str(tmp_path / "out")])
+        main(command + [flag, "real", "--out", str(tmp_path / "out")])
     assert err.value.code == 2
-    assert "--localisation: invalid choice: 'gps' (choose from 'qcar2', 'true')" in capsys.readouterr().err
+    assert f"{flag}: invalid choice: 'real' (choose from {choices})" in capsys.readouterr().err
     assert not (tmp_path / "out").exists()
 
 

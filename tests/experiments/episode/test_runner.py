@@ -29,13 +29,25 @@ def test_clean_trial_stops_in_the_band_and_logs_every_signal(sign0_trial):
     seen = log[log["detected"] & log["sign_in_view"]]
     assert len(seen) > 20
     assert (seen["d_meas"] - seen["d_true"]).abs().median() < 0.03
-    lidar = seen["lidar"].dropna()
-    assert len(lidar) > 0.8 * len(seen)
+    # The A2M12 through Quanser's driver sees a 7 cm plate in one or two bins, often mixed with
+    # the wall behind by the 1-degree interpolation: the reference is sparse, but right when it reports.
+    lidar = seen.dropna(subset=["lidar"])
+    assert len(lidar) >= 5
+    assert (lidar["lidar"] - lidar["d_true"]).abs().median() < 0.05
+    # The camera runs at 30 Hz: 3 new frames every 5 steps.
+    assert log["frame_new"].iloc[1:51].sum() == 30
     # Brake on from the trigger until the dwell is over (the last row), the car at rest at the end.
     first = log["brake"].idxmax()
     assert log["brake"].iloc[first:-1].all() and not log["brake"].iloc[:first].any()
     assert log["phase"].iloc[-1] == "done"
     assert log["speed"].iloc[-1] < 0.05
+
+
+def test_the_ideal_profile_has_the_dense_lidar_reference():
+    _, log = run_trial(TrialSpec("clean", 0, 1.5, 3, sensor_profile="ideal"))
+    seen = log[log["detected"] & log["sign_in_view"]]
+    assert seen["lidar"].notna().sum() > 0.8 * len(seen)
+    assert log["frame_new"].all()
 
 
 def test_same_seed_same_log(sign0_trial):

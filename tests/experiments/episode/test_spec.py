@@ -27,16 +27,19 @@ def test_the_id_changes_with_the_spec_the_configs_and_the_code(monkeypatch):
     others = [TrialSpec("attack+ekf", 1, 1.5, 7), TrialSpec("attack+odca", 1, 1.5, 7, rho=1.0),
               TrialSpec("attack+odca", 1, 1.5, 7, delay_ms=49.0),
               TrialSpec("attack+odca", 1, 1.5, 7, braking=BrakingConfig(confirm_frames=4)),
-              TrialSpec("attack+odca", 1, 1.5, 7, localisation="true")]
+              TrialSpec("attack+odca", 1, 1.5, 7, sensor_profile="ideal"),
+              TrialSpec("attack+odca", 1, 1.5, 7, sign_geometry="pole")]
     assert len({base.trial_id, *(o.trial_id for o in others)}) == 1 + len(others)
     base_id = base.trial_id  # the id is computed on access: keep the one from before the edit
     monkeypatch.setattr(spec_module, "code_version", lambda *roots: "edited")
     assert TrialSpec("attack+odca", 1, 1.5, 7).trial_id != base_id
 
 
-def test_bad_localisation_is_named_with_what_is_allowed():
-    with pytest.raises(ValueError, match=r"localisation must be one of \('qcar2', 'true'\), got 'ideal'"):
-        TrialSpec("clean", 0, 1.5, 0, localisation="ideal")
+def test_bad_sensor_profile_and_sign_geometry_are_named_with_what_is_allowed():
+    with pytest.raises(ValueError, match=r"sensor_profile must be one of \('qcar2', 'ideal'\), got 'true'"):
+        TrialSpec("clean", 0, 1.5, 0, sensor_profile="true")
+    with pytest.raises(ValueError, match=r"sign_geometry must be one of \('plate', 'pole'\), got 'post'"):
+        TrialSpec("clean", 0, 1.5, 0, sign_geometry="post")
 
 
 def test_attack_waits_for_more_steps_than_confirmation_needs():

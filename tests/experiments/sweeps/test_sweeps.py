@@ -101,7 +101,8 @@ def test_report_redraws_from_the_store_without_running(uninterrupted, capsys):
     (TINY.replace('["raw"]', '["kalman"]'), "estimator"),
     (TINY.replace('mode = "grid"', 'mode = "random"'), "n \\(the number of random draws\\)"),
     ("budget = 3\n" + TINY, "unknown field"),
-    ('localisation = "gps"\n' + TINY, r"localisation must be one of \('qcar2', 'true'\)"),
+    ('sensor_profile = "real"\n' + TINY, r"sensor_profile must be one of \('qcar2', 'ideal'\)"),
+    ('sign_geometry = "post"\n' + TINY, r"sign_geometry must be one of \('plate', 'pole'\)"),
 ])
 def test_bad_specs_are_refused_before_any_work(tmp_path, capsys, text, message):
     path = _spec_file(tmp_path, text, "bad.toml")
