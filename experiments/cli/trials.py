@@ -96,7 +96,12 @@ def _trials(args: argparse.Namespace) -> int:
                               rerun=args.rerun, **where, **params)
         except ValueError as err:
             fail("trials", str(err))
-        print(json.dumps(table, allow_nan=False) if args.json else table_text(table))
+        if args.json:
+            print(json.dumps({"sensor_profile": args.sensor_profile, "sign_geometry": args.sign_geometry,
+                              "settings": table}, allow_nan=False))
+        else:
+            print(f"sensor profile {args.sensor_profile}, stop signs {args.sign_geometry}")
+            print(table_text(table))
         return 0
     setting, params = episode_params(args, "trials")
     try:

@@ -2,16 +2,34 @@
 
 The A2M12 at 10 Hz sends about 1600 (angle, range) samples a revolution, range 0 meaning no
 return. Quanser's ``QCarLidar`` reads 384 of them and ``filter_rplidar_data`` resamples them
-onto a fixed grid of 360 one-degree bins: it drops the no-returns, interpolates linearly
-between the valid samples around each bin, and zero-fills a bin whose two valid neighbours
-are more than 1.1 deg apart. The interpolation makes "mixed" ranges between a near object
-and the background behind it; that is kept on purpose, because the real driver does it.
+onto a fixed grid of 360 one-degree bins. Its steps, as the real code (Quanser's ``pal``
+``QCarLidar.filter_rplidar_data``) does them, with angles counted in bins:
 
-Not wired into the env yet (the sensors issue does that, with sensor profiles). One finding
-for that work: 384 picks spread evenly over 1600 samples (0.225 deg apart) are 4 or 5 samples
-apart, so 64 of the 384 gaps are 1.125 deg, just over the 1.1 deg rule, and a clean wall loses
-80 of its 360 bins. Either the real read is not an even pick, or the real scan has such holes;
-the tests pin the behaviour as modelled.
+1. drop the no-returns and repeated angles, sort, and interpolate every bin linearly between
+   the valid samples, round the circle (``np.interp`` with a period);
+2. for each pair of consecutive valid samples a < b more than 1.1 bins apart, zero the bins
+   ``ceil(a) <= k < floor(b)``: a half-open slice, so a bin lying on a is zeroed but bin
+   ``floor(b)`` keeps its interpolated range when b is not whole. Put otherwise, a bin in a
+   too-wide gap reads 0 only if the next valid sample is at least one bin above it;
+3. zero the bins below ``round(first sample)`` and above ``round(last sample)`` (numpy's round,
+   half to even): the gap from the last sample round to the first is never bridged, however
+   narrow, but the one or two bins between a sample and its rounding keep the interpolation
+   across it. ``filter_rplidar_data(..., wrap=True)`` instead treats that gap as one like any
+   other (step 2 round the circle).
+
+The interpolation makes "mixed" ranges between a near object and the background behind it;
+that is kept on purpose, because the real driver does it.
+
+Finding: 384 picks spread evenly over 1600 samples (0.225 deg apart) are 4 or 5 samples
+apart, so 64 of the 384 gaps are 1.125 deg, just over the 1.1 deg rule. Under the half-open
+slice such a gap zeroes a bin only where it holds two consecutive whole degrees k, k + 1
+(its start a at most 0.125 deg below a whole degree, or on one), so a clean full-circle
+scan (every sample valid, one range) loses 16 of its 360 bins through :func:`deliver` with
+the default config: bins 14, 30, 59, 75, ... (14 and 30, then every 45 deg).
+
+One difference is not modelled: the real code interpolates at ``np.linspace(0, 2 pi, 360)``
+(bins 360/359 deg apart, the last on 360 = 0 deg) while it zeroes by whole-degree index;
+here bin j is at j * 360 / n_bins deg for both.
 
 Units: angles are in degrees, as the driver's own are (in whatever sense the caller's angles
 turn; nothing here depends on it); ranges are metres. Pure numpy: no simulator imports, so
@@ -24,27 +42,35 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["DriverConfig", "quanser_read", "filter_rplidar_data", "deliver"]
+__all__ = ["DriverConfig", "deliver", "filter_rplidar_data", "quanser_read"]
 
-#: Angular slack, degrees, under which a sample counts as lying exactly on a bin (float
-#: rounding from wrapping, not a physical width).
-_ON_BIN_TOL_DEG = 1e-9
+#: Slack, in bins, under which a sample is put exactly on a whole bin (float rounding from
+#: scaling and wrapping, e.g. 40 * 0.225 deg; not a physical width). The half-open slice turns
+#: on whole bins, so 9 - 2e-15 and 9 must not differ.
+_ON_BIN_TOL = 1e-9
 
 
 def _check_int(name: str, value: object, lo: int, hi: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+    """value as an int; ValueError (not TypeError, for callers' sake) unless an integer in [lo, hi]."""
+    is_int = isinstance(value, (int, np.integer)) and not isinstance(value, bool)
+    if not (is_int and lo <= value <= hi):
         raise ValueError(f"{name} must be an integer in [{lo}, {hi}], got {value!r}")
-    if not lo <= value <= hi:
-        raise ValueError(f"{name} must be in [{lo}, {hi}], got {value}")
     return int(value)
 
 
 def _check_max_gap(value: object) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+    """value as a float; ValueError unless a number in (0, 360) (NaN is not)."""
+    is_num = isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool)
+    if not (is_num and 0.0 < float(value) < 360.0):
         raise ValueError(f"max_gap_deg must be a number in (0, 360) degrees, got {value!r}")
-    if not 0.0 < float(value) < 360.0:
-        raise ValueError(f"max_gap_deg must be in (0, 360) degrees, got {value}")
     return float(value)
+
+
+def _check_bool(name: str, value: object) -> bool:
+    """value as a bool; ValueError unless a bool (or numpy bool): 0 and 1 are not."""
+    if type(value) not in (bool, np.bool_):
+        raise ValueError(f"{name} must be a bool, got {value!r}")
+    return bool(value)
 
 
 @dataclass(frozen=True)
@@ -58,8 +84,9 @@ class DriverConfig:
             (Quanser's ``QCarLidar``: 384).
         n_bins: bins of the output grid, in [1, 36000]; bin j is at j * 360 / n_bins deg
             (360: one degree).
-        max_gap_deg: degrees; bins inside a wider gap between valid samples read 0. In
-            (0, 360): a gap of the whole circle (one lone sample) is never bridged.
+        max_gap_deg: degrees, in (0, 360); a wider gap between consecutive valid samples
+            zeroes its bins that lie at least one bin below its far end (Quanser's half-open
+            slice, see :func:`filter_rplidar_data`).
     """
 
     samples_per_rev: int = 1600
@@ -90,10 +117,10 @@ def _as_scan(angles_deg: np.ndarray, ranges_m: np.ndarray) -> tuple[np.ndarray, 
     return angles, ranges
 
 
-def _wrap_deg(x: np.ndarray) -> np.ndarray:
-    """Angles into [0, 360): np.mod can round a tiny negative up to 360.0 itself."""
-    w = np.mod(x, 360.0)
-    w[w >= 360.0] = 0.0
+def _wrap(x: np.ndarray, period: float) -> np.ndarray:
+    """Values into [0, period): np.mod can round a tiny negative up to period itself."""
+    w = np.mod(x, period)
+    w[w >= period] = 0.0
     return w
 
 
@@ -119,28 +146,44 @@ def quanser_read(
 
 
 def filter_rplidar_data(
-    angles_deg: np.ndarray, ranges_m: np.ndarray, n_bins: int = 360, max_gap_deg: float = 1.1
+    angles_deg: np.ndarray,
+    ranges_m: np.ndarray,
+    n_bins: int = 360,
+    max_gap_deg: float = 1.1,
+    wrap: bool = False,
 ) -> np.ndarray:
     """(n_bins,) float ranges on the fixed grid (bin j at j * 360 / n_bins deg); 0 = no return.
 
-    Angles are degrees in any order and are wrapped into [0, 360); the grid wraps round, so
-    a gap across 359 -> 0 deg is a gap like any other. A range that is 0, negative, NaN or
-    infinite, or has a non-finite angle, is no return (so the simulator's ``inf`` can be fed
-    in as it is). Each bin then reads:
+    Angles are degrees in any order and are wrapped into [0, 360). A range that is 0,
+    negative, NaN or infinite, or has a non-finite angle, is no return (so the simulator's
+    ``inf`` can be fed in as it is). Of several valid samples at one angle (e.g. 0 and 360)
+    the first in the order given is kept, as the real driver's ``np.unique`` keeps.
 
-    - the range of a valid sample lying on it (several at one angle, e.g. 0 and 360: the
-      first in the order given, as the real driver's de-duplication keeps);
-    - else 0 if its two valid neighbours (the nearest below and above it, round the circle)
-      are more than ``max_gap_deg`` apart, the driver's "missed measurements" rule;
-    - else the linear interpolation between them, which may mix a near object with the
-      background behind it.
+    With the valid samples sorted, each bin k has a neighbour a at or below it and b above it
+    (round the circle: past the last sample, b is the first; below the first, a is the last).
+    The bin reads the linear interpolation between them (a's range if it lies on a; it may mix
+    a near object with the background behind it), except that it reads 0 when:
 
-    No valid sample gives all zeros. One valid sample fills only the bin it lies on: with no
-    second sample there is no pair to interpolate between, and the gap round it is the whole
-    circle, so the rule zero-fills every other bin rather than inventing a beam width.
+    - b - a is more than ``max_gap_deg`` and b is at least one bin above k: the driver's
+      "missed measurements" rule, a half-open slice ``ceil(a) <= k < floor(b)``. A bin lying
+      on a sample is zeroed if the gap after it is too wide; one less than a bin below the
+      next sample never is;
+    - ``wrap=False`` (the default, Quanser's code): k is below ``round(first)`` or above
+      ``round(last)`` (first and last valid sample, in bins; round half to even). The gap
+      from the last sample round 360 -> 0 deg to the first is not tested for width: the bins
+      beyond the rounded ends read 0 however narrow it is, the (at most two) bins between an
+      end sample and its rounding keep the interpolation across it however wide;
+    - ``wrap=True`` (a circular driver, not Quanser's): that gap is a gap like any other,
+      zeroed by the same test and half-open slice.
+
+    No valid sample gives all zeros. One valid sample: with ``wrap=False`` only the bin at its
+    rounded angle reads its range (the rounded ends coincide); with ``wrap=True`` the gap round
+    it is the whole circle, too wide, so only a bin less than one bin below it keeps the range
+    (none when it lies on a bin).
     """
     n_bins = _check_int("n_bins", n_bins, 1, 36_000)
     max_gap = _check_max_gap(max_gap_deg)
+    wrap = _check_bool("wrap", wrap)
     angles, ranges = _as_scan(angles_deg, ranges_m)
     out = np.zeros(n_bins)
 
@@ -148,37 +191,46 @@ def filter_rplidar_data(
         valid = np.isfinite(angles) & np.isfinite(ranges) & (ranges > 0.0)
     if not valid.any():
         return out
-    a = _wrap_deg(angles[valid])
+    # Everything below is in bins: bin k sits at k, the circle is n_bins long.
+    u = _wrap(angles[valid] * (n_bins / 360.0), float(n_bins))
+    whole = np.round(u)
+    u = np.where(np.abs(u - whole) <= _ON_BIN_TOL, whole, u)
+    u[u >= n_bins] = 0.0  # snapped up onto n_bins: that is bin 0
     r = ranges[valid]
     # Sort by angle; at a repeated angle keep the first in the order given (stable sort).
-    order = np.argsort(a, kind="stable")
-    a, r = a[order], r[order]
-    first = np.r_[True, np.diff(a) > 0.0]
-    a, r = a[first], r[first]
-    m = a.size
+    order = np.argsort(u, kind="stable")
+    u, r = u[order], r[order]
+    first = np.r_[True, np.diff(u) > 0.0]
+    u, r = u[first], r[first]
+    m = u.size
 
-    bins = np.arange(n_bins) * (360.0 / n_bins)
-    above = np.searchsorted(a, bins, side="right")  # samples at or below each bin
+    k = np.arange(n_bins, dtype=float)
+    above = np.searchsorted(u, k, side="right")  # samples at or below each bin
     prev = (above - 1) % m
     nxt = above % m
-    d_prev = _wrap_deg(bins - a[prev])  # degrees back to the neighbour below
-    d_next = _wrap_deg(a[nxt] - bins)  # degrees on to the neighbour above
-    gap = d_prev + d_next
-    on_prev = d_prev <= _ON_BIN_TOL_DEG
-    on_next = ~on_prev & (d_next <= _ON_BIN_TOL_DEG)
-    between = ~on_prev & ~on_next & (gap <= max_gap)
-
-    out[on_prev] = r[prev[on_prev]]
-    out[on_next] = r[nxt[on_next]]
-    r0, r1 = r[prev[between]], r[nxt[between]]
-    t = d_prev[between] / gap[between]
+    # Gap i runs from sample i to the next; the last one round the circle to the first.
+    gaps = np.append(np.diff(u), n_bins - (u[-1] - u[0]))
+    gap = gaps[prev]
+    d_prev = np.where(above == 0, k + n_bins, k) - u[prev]  # bins back to a, unwrapped
+    r0, r1 = r[prev], r[nxt]
     # Clip so float rounding never takes a mixed range outside its two neighbours.
-    out[between] = np.clip(r0 + (r1 - r0) * t, np.minimum(r0, r1), np.maximum(r0, r1))
+    out = np.clip(r0 + (r1 - r0) * (d_prev / gap), np.minimum(r0, r1), np.maximum(r0, r1))
+
+    # The half-open slice: zero k while floor(b) > k, b unwrapped past the last sample.
+    floor_b = np.floor(u[nxt]) + np.where(above == m, n_bins, 0)
+    zero = (gap > max_gap * (n_bins / 360.0)) & (k < floor_b)
+    if not wrap:
+        across = (above == 0) | (above == m)  # in the gap from the last sample to the first
+        zero = (zero & ~across) | (k < np.round(u[0])) | (k > np.round(u[-1]))
+    out[zero] = 0.0
     return out
 
 
 def deliver(angles_deg: np.ndarray, ranges_m: np.ndarray, config: DriverConfig | None = None) -> np.ndarray:
     """quanser_read then filter_rplidar_data: the (n_bins,) scan the car's software gets.
+
+    The filter runs as Quanser's does (``wrap=False``): no bridging from the last valid pick
+    round 360 -> 0 deg to the first.
 
     Takes one full revolution of ``config.samples_per_rev`` samples (angles in degrees,
     ranges in metres, no return = 0, NaN, negative or inf); a different count raises

@@ -29,7 +29,7 @@ def test_sb3_check_env_has_nothing_to_say_and_ppo_learns_a_few_steps():
     env.close()
 
 
-def test_plain_env_depth_is_an_image_shaped_float_and_older_versions_point_to_v2():
+def test_plain_env_depth_is_an_image_shaped_float_and_older_versions_point_to_v3():
     env = gym.make(sim.ENV_ID, **SMALL)
     assert env.observation_space["depth"].shape == (120, 160, 1)
     env.close()
