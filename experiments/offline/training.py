@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from experiments.data.dataset import load_dataset
+from experiments.data.dataset import COLLECTION_FILE, load_dataset
 from experiments.sweeps.store import atomic_write
 
 __all__ = ["train_checkpoint", "pretrain_checkpoint"]
@@ -18,6 +18,10 @@ def train_checkpoint(dataset: Path, out: Path, split: str = "by_series", epochs:
     from odca.train import train_odca
 
     model, report = train_odca(load_dataset(dataset, split=split), Chronos2Prior(), epochs=epochs, seed=seed)
+    # What it was trained on: the dataset's making (sensor profile, sign geometry, drives, seed) and the split.
+    made = Path(dataset) / COLLECTION_FILE
+    report = {"dataset": {"path": str(dataset), "split": split, "epochs": epochs, "seed": seed,
+                          **(json.loads(made.read_text()) if made.exists() else {})}, **report}
     model.save(out)
     atomic_write(Path(out) / "train_report.json", json.dumps(report, indent=1, allow_nan=False))
     return report
