@@ -44,12 +44,12 @@ def _drive(env, steps: int, step_fn) -> float:
     return time.perf_counter() - t0
 
 
-def bench_sim(steps: int = 250, sign: int = 3) -> list[BenchRow]:
-    """Measures each setting; returns one row per setting."""
+def bench_sim(steps: int = 250, sign: int = 3, sensor_profile: str = "qcar2") -> list[BenchRow]:
+    """Measures each setting on ``sensor_profile``'s sensors; returns one row per setting."""
     rows = []
     control_hz = 50.0
 
-    env = gym.make(sim.ENV_ID, camera_width=160, camera_height=120)
+    env = gym.make(sim.ENV_ID, camera_width=160, camera_height=120, sensor_profile=sensor_profile)
     env.reset(seed=0, options={"sign": sign, "cruise_speed": 1.0})
     base = env.unwrapped
     lidar = base.sensors[2]
@@ -60,8 +60,19 @@ def bench_sim(steps: int = 250, sign: int = 3) -> list[BenchRow]:
         base._update_route_progress()
 
     def physics_lidar(action):
-        physics(action)
-        lidar.read(base.model, base.data, base._sensor_rng)
+        if not hasattr(lidar, "sweep"):  # the ideal LiDAR: one scan, cast at once, every step
+            physics(action)
+            lidar.read(base.model, base.data, base._sensor_rng)
+            return
+        # The A2M12 casts its samples after every physics step and delivers each revolution.
+        base.car.apply(base.data, float(action[0]), float(action[1]))
+        for _ in range(base.config.substeps):
+            sim_mujoco.mj_step(base.model, base.data)
+            base._substep += 1
+            lidar.sweep(base.model, base.data, base._substep)
+        if lidar.has_new_scan():
+            lidar.read(base.model, base.data, base._sensor_rng)
+        base._update_route_progress()
 
     import mujoco as sim_mujoco
 
@@ -72,7 +83,7 @@ def bench_sim(steps: int = 250, sign: int = 3) -> list[BenchRow]:
     env.close()
 
     for width, height in RESOLUTIONS:
-        env = gym.make(sim.ENV_ID, camera_width=width, camera_height=height)
+        env = gym.make(sim.ENV_ID, camera_width=width, camera_height=height, sensor_profile=sensor_profile)
         env.reset(seed=0, options={"sign": sign, "cruise_speed": 1.0})
         env.step(np.zeros(2, np.float32))  # GL context creation is not part of the rate
         wall = _drive(env, steps, env.step)

@@ -16,6 +16,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     b = sub.add_parser("bench-sim", help="simulator steps per second and real-time factor at 50 Hz")
     b.add_argument("--steps", type=int, default=250, help="control steps per setting (default 250)")
     b.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
+    sensor_flags(b, geometry_default=None)
     b.set_defaults(handler=_bench_sim)
 
     ob = sub.add_parser("bench", help="the offline repair benchmark: raw, LiDAR, EKF, Chronos-2, SOFTS, NHITS, "
@@ -56,7 +57,9 @@ def _bench_sim(args: argparse.Namespace) -> int:
 
     if args.steps < 10:
         fail("bench-sim", "--steps must be >= 10")
-    rows = bench_sim(steps=args.steps)
+    if args.sign_geometry is not None:
+        fail("bench-sim", "--sign-geometry does not apply here: the benchmark times the default signs")
+    rows = bench_sim(steps=args.steps, sensor_profile=args.sensor_profile)
     if args.json:
         print(json.dumps({r.setting: {"steps_per_s": round(r.steps_per_s, 1),
                                       "real_time_factor": round(r.real_time_factor, 2)} for r in rows}))

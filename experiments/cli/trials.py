@@ -7,7 +7,7 @@ import json
 from pathlib import Path
 
 from experiments.cli.common import (backend_flags, count, episode_flags, episode_params, fail, fmt_ci,
-                                    registry_markdown, registry_rows, sign, speed)
+                                    registry_markdown, registry_rows, sensor_flags, sign, speed)
 
 __all__ = ["register"]
 
@@ -48,6 +48,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     st.add_argument("-n", type=count, default=24,
                     help="trials per table row (default 24; the strong row uses max(n, 30))")
     st.add_argument("--seed", type=int, default=0)
+    sensor_flags(st)
     backend_flags(st)
     st.add_argument("--out", type=Path, default=Path("outputs/attack_study"), help="output folder (trials are reused)")
     st.add_argument("--json", action="store_true", help="print one JSON object instead of tables")
@@ -159,7 +160,8 @@ def _attack_study(args: argparse.Namespace) -> int:
     if unknown:
         fail("attack-study", f"unknown study {unknown}; choose from {', '.join(STUDIES)}")
     tables = {name: run_study(name, args.n, args.out, seed=args.seed, workers=args.workers, progress=not args.json,
-                              backend=args.backend, address=args.address) for name in names}
+                              backend=args.backend, address=args.address, sensor_profile=args.sensor_profile,
+                              sign_geometry=args.sign_geometry) for name in names}
     if args.json:
         print(json.dumps(tables))
         return 0

@@ -44,16 +44,19 @@ STUDIES: dict[str, tuple[StudyRow, ...]] = {
 
 
 def run_study(name: str, n: int, out_dir: Path, seed: int = 0, workers: int = 2, progress: bool = True,
-              backend: str = "local", address: str | None = None) -> list[dict]:
-    """Runs one study, ``n`` trials a row (``max(n, STRONG_MIN_N)`` for the strong row); returns a
-    summary dict per row (``label`` added)."""
+              backend: str = "local", address: str | None = None, sensor_profile: str = "qcar2",
+              sign_geometry: str = "plate") -> list[dict]:
+    """Runs one study, ``n`` trials a row (``max(n, STRONG_MIN_N)`` for the strong row), on
+    ``sensor_profile``'s sensors and ``sign_geometry``'s signs; returns a summary dict per row
+    (``label`` added)."""
     if name not in STUDIES:
         raise ValueError(f"study must be one of {sorted(STUDIES)}, got {name!r}")
     n = max(n, STRONG_MIN_N) if name == "strong" else n
     rows = []
     with backend_session(backend, workers, address):
         for row in STUDIES[name]:
-            specs = batch_specs("attack", n, seed, rho=row.rho, t_atk=row.t_atk)
+            specs = batch_specs("attack", n, seed, rho=row.rho, t_atk=row.t_atk, sensor_profile=sensor_profile,
+                                sign_geometry=sign_geometry)
             folder = Path(out_dir) / name / (f"rho{row.rho[0]:.2f}-{row.rho[1]:.2f}"
                                              f"_t{row.t_atk[0]:.2f}-{row.t_atk[1]:.2f}")
             results = run_batch(specs, folder, workers=workers, progress=progress, backend=backend, address=address,

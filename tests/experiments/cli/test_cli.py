@@ -23,7 +23,8 @@ def test_bad_sign_is_a_clear_error(capsys):
     assert "sign must be 0, 1, 2 or 3" in capsys.readouterr().err
 
 
-@pytest.mark.parametrize("command", [["trial"], ["trials", "--table"], ["sweep", "smoke.toml"], ["collect"]])
+@pytest.mark.parametrize("command", [["trial"], ["trials", "--table"], ["sweep", "smoke.toml"], ["collect"],
+                                     ["attack-study"], ["demo"]])
 @pytest.mark.parametrize(("flag", "choices"), [("--sensor-profile", "'qcar2', 'ideal'"),
                                                ("--sign-geometry", "'plate', 'pole'")])
 def test_bad_sensor_profile_or_sign_fails_before_any_work_naming_the_choices(command, flag, choices, capsys, tmp_path):
