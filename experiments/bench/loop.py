@@ -115,7 +115,7 @@ def _ray_rate(workers: int, specs) -> tuple[float, float]:
     return len(specs) / (t2 - t1) * 60.0, t1 - t0
 
 
-def bench_loop(n_rtf: int = 8, n_rate: int = 24, seed: int = 0, ray: bool = True, progress: bool = True,
+def bench_loop(n_rtf: int = 8, n_rate: int = 48, seed: int = 0, ray: bool = True, progress: bool = True,
                sensor_profile: str = "qcar2") -> dict:
     """Measures everything above on ``sensor_profile``; ``n_rtf`` episodes per RTF setting, ``n_rate`` per rate."""
     from tqdm import tqdm

@@ -39,8 +39,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     bl = sub.add_parser("bench-loop", help="closed-loop throughput: real-time factor on one core (clean, attack + "
                                            "ODCA), sweep episodes per minute with 1 / 2 workers and on Ray")
     bl.add_argument("-n", type=count, default=8, help="episodes per real-time-factor setting (default 8)")
-    bl.add_argument("--rate-episodes", type=count, default=24,
-                    help="episodes per throughput run, timed once the workers are up (default 24)")
+    bl.add_argument("--rate-episodes", type=count, default=48,
+                    help="episodes per throughput run, timed once the workers are up (default 48: enough that "
+                         "the batch's last episode, which runs alone, does not weigh on the scaling)")
     bl.add_argument("--no-ray", action="store_true", help="skip the Ray measurement")
     bl.add_argument("--json", action="store_true", help="print one JSON object")
     sensor_flags(bl, geometry_default=None)
