@@ -115,16 +115,12 @@ class Perception:
         """
         if new_frame:
             detection = self.last_raw_detection = self.detector.detect(rgb)
-            if detection is not None and map_bearing is not None and not (
-                    math.isfinite(map_bearing) and self._on_map(detection, map_bearing)):
-                detection = None
+            span = self._span(detection) if detection is not None else None
+            if span is not None and map_bearing is not None and not (
+                    math.isfinite(map_bearing) and self._on_map(span, map_bearing)):
+                detection, span = None, None
             d_meas, c_meas = self.depth.estimate(depth, detection)
-            if detection is not None:
-                x0, _, x1, _ = detection.box
-                bearing = self.camera.bearing(detection.centroid[0])
-                span = (self.camera.bearing(x0 - 0.5), self.camera.bearing(x1 - 0.5))
-            else:
-                bearing, span = math.nan, None
+            bearing = self.camera.bearing(detection.centroid[0]) if detection is not None else math.nan
             self._held = _Held(detection, d_meas, c_meas, bearing, span)
         held = self._held or _NO_FRAME
         lidar_m = self.lidar.step(scan=scan, detection_bearing=held.bearing, detection_span=held.span,
@@ -132,9 +128,13 @@ class Perception:
                                   lateral_speed=lateral_speed, detection_depth=held.d_meas, beam_age_s=beam_age_s)
         return PerceptionSample(held.detection, held.d_meas, held.c_meas, lidar_m, held.bearing)
 
-    def _on_map(self, detection: Detection, map_bearing: float) -> bool:
+    def _span(self, detection: Detection) -> tuple[float, float]:
+        """(left, right) bearings of the detection box's outer edges, rad."""
         x0, _, x1, _ = detection.box
-        left, right = self.camera.bearing(x0 - 0.5), self.camera.bearing(x1 - 0.5)
+        return self.camera.bearing(x0 - 0.5), self.camera.bearing(x1 - 0.5)
+
+    def _on_map(self, span: tuple[float, float], map_bearing: float) -> bool:
+        left, right = span
         return right - self.map_margin_rad <= map_bearing <= left + self.map_margin_rad
 
 

@@ -24,25 +24,19 @@ __all__ = ["bench_loop"]
 _RATE_SETTING = "attack+odca"
 
 
-#: The sensor profile the episodes run on (``bench_loop(sensor_profile=...)``; a module
-#: global so that spawned workers, which import this module afresh, get it from their argument).
-_PROFILE = {"sensor_profile": "qcar2"}  # rtf runs here; the workers get theirs from the specs
-
-
-def _episodes(setting: str, n: int, seed: int, profile: str | None = None):
+def _episodes(setting: str, n: int, seed: int, profile: str):
     from experiments.episode import TrialSpec
 
-    profile = profile or _PROFILE["sensor_profile"]
     return [TrialSpec(setting, i % 4, (1.0, 1.5, 2.0)[(i // 4) % 3], seed + i, sensor_profile=profile)
             for i in range(n)]
 
 
-def _rtf(setting: str, n: int, seed: int) -> dict:
+def _rtf(setting: str, n: int, seed: int, profile: str) -> dict:
     from experiments.episode import run_trial
 
-    run_trial(_episodes(setting, 1, seed + 1000)[0])  # warm up: the env, ODCA checkpoint, caches
+    run_trial(_episodes(setting, 1, seed + 1000, profile)[0])  # warm up: the env, ODCA checkpoint, caches
     sim_s = wall_s = 0.0
-    for spec in _episodes(setting, n, seed):
+    for spec in _episodes(setting, n, seed, profile):
         t0 = time.perf_counter()
         _, log = run_trial(spec, clean_pass=False)
         wall_s += time.perf_counter() - t0
@@ -50,7 +44,7 @@ def _rtf(setting: str, n: int, seed: int) -> dict:
     return {"rtf": sim_s / wall_s, "sim_s": sim_s, "wall_s": wall_s}
 
 
-def _warm(barrier=None, profile: str | None = None) -> int:
+def _warm(barrier=None, profile: str = "qcar2") -> int:
     """Readies a worker with one episode (imports, the env, ODCA), then waits for the others,
     so that every worker takes one; returns the worker's pid."""
     from experiments.episode import run_trial
@@ -122,18 +116,17 @@ def bench_loop(n_rtf: int = 8, n_rate: int = 48, seed: int = 0, ray: bool = True
 
     from experiments.sweeps.executors import single_thread
 
-    _PROFILE["sensor_profile"] = sensor_profile
     single_thread()  # one core: torch, OpenMP and the software rasteriser on one thread
     steps = ["rtf clean", "rtf attack+odca", "1 worker", "2 workers"] + (["ray"] if ray else [])
     bar = tqdm(steps, desc="bench-loop", disable=not progress)
     out: dict = {}
     bar.set_postfix_str(steps[0])
-    clean = _rtf("clean", n_rtf, seed)
+    clean = _rtf("clean", n_rtf, seed, sensor_profile)
     bar.update()
     bar.set_postfix_str(steps[1])
-    attack = _rtf(_RATE_SETTING, n_rtf, seed)
+    attack = _rtf(_RATE_SETTING, n_rtf, seed, sensor_profile)
     bar.update()
-    specs = _slowest_first(_episodes(_RATE_SETTING, n_rate, seed + 100))
+    specs = _slowest_first(_episodes(_RATE_SETTING, n_rate, seed + 100, sensor_profile))
     bar.set_postfix_str("1 and 2 workers")
     rates, ready = _local_rates(specs)
     bar.update(2)
@@ -144,8 +137,8 @@ def bench_loop(n_rtf: int = 8, n_rate: int = 48, seed: int = 0, ray: bool = True
         out["episodes_per_min_ray"], ready["ray"] = _ray_rate(2, specs)
         bar.update()
     bar.close()
-    out.update(sensor_profile=sensor_profile, n_rtf=n_rtf, n_rate=n_rate, sim_s_clean=clean["sim_s"], sim_s_attack_odca=attack["sim_s"],
-               ready_s_1=ready[1], ready_s_2=ready[2], torch_threads=1)
+    out.update(sensor_profile=sensor_profile, n_rtf=n_rtf, n_rate=n_rate, sim_s_clean=clean["sim_s"],
+               sim_s_attack_odca=attack["sim_s"], ready_s_1=ready[1], ready_s_2=ready[2], torch_threads=1)
     if ray:
         out["ready_s_ray"] = ready["ray"]
     return out

@@ -52,7 +52,7 @@ def bench_sim(steps: int = 250, sign: int = 3, sensor_profile: str = "qcar2") ->
     env = gym.make(sim.ENV_ID, camera_width=160, camera_height=120, sensor_profile=sensor_profile)
     env.reset(seed=0, options={"sign": sign, "cruise_speed": 1.0})
     base = env.unwrapped
-    lidar = base.sensors[2]
+    lidar = base.lidar
 
     def physics(action):
         base.car.apply(base.data, float(action[0]), float(action[1]))
@@ -60,17 +60,11 @@ def bench_sim(steps: int = 250, sign: int = 3, sensor_profile: str = "qcar2") ->
         base._update_route_progress()
 
     def physics_lidar(action):
-        if not hasattr(lidar, "sweep"):  # the ideal LiDAR: one scan, cast at once, every step
-            physics(action)
-            lidar.read(base.model, base.data, base._sensor_rng)
-            return
-        # The A2M12 casts its samples after every physics step and delivers each revolution.
+        # The env's own physics step with the LiDAR (the A2M12 sweeps between physics steps)
+        # and no camera frames; the ideal LiDAR casts its whole scan every step.
         base.car.apply(base.data, float(action[0]), float(action[1]))
-        for _ in range(base.config.substeps):
-            sim_mujoco.mj_step(base.model, base.data)
-            base._substep += 1
-            lidar.sweep(base.model, base.data, base._substep)
-        if lidar.has_new_scan():
+        base._advance_physics(frames=False)
+        if not hasattr(lidar, "has_new_scan") or lidar.has_new_scan():
             lidar.read(base.model, base.data, base._sensor_rng)
         base._update_route_progress()
 

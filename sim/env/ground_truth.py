@@ -21,6 +21,8 @@ __all__ = ["SignView", "sign_view", "obstacle_view", "with_centre_from"]
 #: Converts MuJoCo's camera frame (x right, y up, looking along -z) to the optical frame.
 _MJ_TO_OPTICAL = np.diag([1.0, -1.0, -1.0])
 _DEPTH_TOLERANCE_M = 0.03
+#: A target centre nearer the camera plane than this (or behind it) has no depth or bearing, m.
+_BEHIND_M = 0.05
 
 
 @dataclass(frozen=True)
@@ -111,11 +113,16 @@ def with_centre_from(view: SignView, centre_world: np.ndarray, cam_pos: np.ndarr
     The camera's frame is older than the step when it runs slower than the loop: its mask
     belongs to the frame, but the target's depth and bearing to the car's pose now.
     """
-    centre = _MJ_TO_OPTICAL @ cam_mat.T @ (centre_world - cam_pos)
-    if centre[2] <= 0.05:
-        return SignView(float("nan"), float(np.linalg.norm(centre)), float("nan"), view.mask, view.in_view)
-    return SignView(float(centre[2]), float(np.linalg.norm(centre)), float(math.atan2(-centre[0], centre[2])),
-                    view.mask, view.in_view)
+    d_true, d_euclid, bearing = _centre_fields(_MJ_TO_OPTICAL @ cam_mat.T @ (centre_world - cam_pos))
+    return SignView(d_true, d_euclid, bearing, view.mask, view.in_view)
+
+
+def _centre_fields(centre: np.ndarray) -> tuple[float, float, float]:
+    """(d_true, d_euclid, bearing) of a target centre in the optical frame; depth and bearing
+    are NaN when it is behind the camera."""
+    if centre[2] <= _BEHIND_M:
+        return float("nan"), float(np.linalg.norm(centre)), float("nan")
+    return float(centre[2]), float(np.linalg.norm(centre)), float(math.atan2(-centre[0], centre[2]))
 
 
 def _project(centre_world, points_world, cam_pos, cam_mat, intrinsics):
@@ -125,8 +132,8 @@ def _project(centre_world, points_world, cam_pos, cam_mat, intrinsics):
     centre = world_to_opt @ (centre_world - cam_pos)
     mask = np.zeros((intrinsics.height, intrinsics.width), bool)
     behind = None
-    if centre[2] <= 0.05:
-        behind = SignView(float("nan"), float(np.linalg.norm(centre)), float("nan"), mask, False)
+    if centre[2] <= _BEHIND_M:
+        behind = SignView(*_centre_fields(centre), mask, False)
     return world_to_opt, centre, (world_to_opt @ (points_world - cam_pos).T).T, mask, behind
 
 
@@ -136,5 +143,4 @@ def _fill(mask: np.ndarray, uv: np.ndarray) -> None:
 
 
 def _result(centre: np.ndarray, mask: np.ndarray) -> SignView:
-    bearing = float(math.atan2(-centre[0], centre[2]))
-    return SignView(float(centre[2]), float(np.linalg.norm(centre)), bearing, mask, bool(mask.any()))
+    return SignView(*_centre_fields(centre), mask, bool(mask.any()))

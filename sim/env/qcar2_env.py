@@ -19,6 +19,7 @@ lateral speed, which no sensor on the car measures.
 
 from __future__ import annotations
 
+import math
 import numbers
 from typing import Any
 
@@ -313,22 +314,23 @@ class QCar2Env(gym.Env):
 
     def _frames_due(self, substep: int) -> int:
         """Camera frames due by the end of physics step ``substep`` (frame 0 at the reset)."""
-        return int(np.floor(substep * self.config.physics_dt_s * self.config.camera_hz + 1e-6)) + 1
+        return math.floor(substep * self.config.physics_dt_s * self.config.camera_hz + 1e-6) + 1
 
-    def _advance_physics(self) -> None:
-        """One control step of physics; the swept LiDAR and the camera act between physics steps."""
+    def _advance_physics(self, frames: bool = True) -> None:
+        """One control step of physics; the swept LiDAR and (unless ``frames`` is False, for the
+        speed bench) the camera act between physics steps."""
         end = self._substep + self.config.substeps
         while self._substep < end:
             # Step to the next physics step where a sensor acts (every one while the LiDAR sweeps).
             nxt = self._substep + 1
             if not self._sweeping:
-                while nxt < end and self._frames_due(nxt) == self._frames:
+                while nxt < end and (not frames or self._frames_due(nxt) == self._frames):
                     nxt += 1
             mujoco.mj_step(self.model, self.data, nstep=nxt - self._substep)
             self._substep = nxt
             if self._sweeping:
                 self.lidar.sweep(self.model, self.data, self._substep)
-            if self._frames_due(self._substep) > self._frames:
+            if frames and self._frames_due(self._substep) > self._frames:
                 self._take_frame(self._substep * self.config.physics_dt_s)
 
     def _take_frame(self, now: float) -> None:

@@ -99,7 +99,7 @@ class SignGeometry:
 
 
 #: The default: plate 0.18-0.28 m on an 8 mm pole. The LiDAR's scan plane (z = 0.193 m)
-#: meets the plate, so the sign is a 0.10 m wide return.
+#: meets the plate 13 mm above its bottom edge, where the octagon is 67 mm wide.
 PLATE_IN_SCAN = SignGeometry()
 #: The US urban rule (MUTCD: plate bottom >= 7 ft = 2.13 m, a 30 in = 0.76 m plate) at
 #: 1/10 scale: plate bottom 0.21 m (we keep our 0.10 m plate, not the rule's 76 mm) on a
