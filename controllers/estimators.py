@@ -27,8 +27,11 @@ class DistanceEstimator(Protocol):
     def reset(self) -> None:
         """Forget the past (a new episode)."""
 
-    def estimate(self, sample: PerceptionSample, speed_mps: float, dt: float) -> float:
-        """Camera-to-sign distance in metres for this step; NaN when there is none."""
+    def estimate(self, sample: PerceptionSample, speed_mps: float, dt: float, yaw_rate_radps: float = 0.0) -> float:
+        """Camera-to-sign distance in metres for this step; NaN when there is none (no target).
+
+        ``speed_mps`` and ``yaw_rate_radps`` are the car's odometry (wheel speed, gyro less
+        its bias estimate); an estimator may ignore what it has no use for."""
 
     def diagnostics(self) -> dict[str, float]:
         """What the last ``estimate`` call leaves to log beside the distance, by column name
@@ -43,7 +46,7 @@ class RawDepthEstimator:
     def reset(self) -> None:
         pass
 
-    def estimate(self, sample: PerceptionSample, speed_mps: float, dt: float) -> float:
+    def estimate(self, sample: PerceptionSample, speed_mps: float, dt: float, yaw_rate_radps: float = 0.0) -> float:
         return sample.d_meas
 
     def diagnostics(self) -> dict[str, float]:
@@ -61,7 +64,7 @@ class EKFEstimator:
     def reset(self) -> None:
         self.filter.reset()
 
-    def estimate(self, sample: PerceptionSample, speed_mps: float, dt: float) -> float:
+    def estimate(self, sample: PerceptionSample, speed_mps: float, dt: float, yaw_rate_radps: float = 0.0) -> float:
         return self.filter.step(sample.d_meas, sample.c_meas, sample.lidar_m, speed_mps, dt)
 
     def diagnostics(self) -> dict[str, float]:

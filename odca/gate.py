@@ -1,59 +1,88 @@
-"""The LiDAR consistency gate and the conservative fusion (the paper's Algorithm 1, Proposition 1)."""
+"""The gate that votes: depth, LiDAR and kinematics are three witnesses of one distance.
+
+Per step, with d~ the depth, l the aligned LiDAR reference and d_kin the kinematic branch
+(each may be missing):
+
+- Depth passes unchanged (w = 0) when it agrees with at least one other witness: with the
+  LiDAR within ``tau_m``, or with d_kin within ``tau_m + n_sigma * std_kin``. Clean depth
+  agrees with its witnesses, so it is never changed (the paper's Proposition 1).
+  With no other witness at all (the first sight of a target), a depth of confidence
+  >= ``trust_confidence`` passes: there is nothing to vote against it.
+- Otherwise the depth is outvoted or missing and the step is repaired (w = 1) from the
+  witnesses that agree, in this order: the LiDAR where it agrees with d_kin (or there is no
+  d_kin); d_kin; an unconfirmed depth; the temporal prior's forecast; else nothing (no
+  target: NaN). A LiDAR that disagrees with both the depth and d_kin (a spoof) is never
+  used.
+
+With ``kinematics_votes=False`` (the two-witness gate of the paper, an ablation) d_kin
+does not vote: only the LiDAR confirms the depth, and any LiDAR is trusted.
+"""
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
-import numpy as np
+__all__ = ["GateConfig", "SOURCES", "vote"]
 
-__all__ = ["GateConfig", "gate_weight", "fuse"]
+#: What a step's output rests on (the ``source`` code of a fused sample indexes this).
+SOURCES = ("depth", "lidar", "lidar+kinematics", "kinematics", "depth (unconfirmed)", "prior", "none")
+DEPTH, LIDAR, LIDAR_KIN, KIN, DEPTH_UNCONFIRMED, PRIOR, NONE = range(len(SOURCES))
 
 
 @dataclass(frozen=True)
 class GateConfig:
-    """w = clip((r_XS - tau_low) / (tau_high - tau_low), 0, 1) ** gamma.
-
-    Without a LiDAR reference there is no disagreement to measure: a depth with confidence
-    >= ``trust_confidence`` then passes unchanged (w = 0), anything less is repaired
-    (w = 1), and a missing depth is always repaired.
+    """The gate's tolerances.
 
     Attributes:
-        tau_low: residual (m) at and below which the measurement passes unchanged.
-        tau_high: residual (m) at and above which the repair is used fully.
-        gamma: shape exponent (> 0).
-        trust_confidence: with no LiDAR, the confidence at and above which the depth passes.
+        tau_m: depth and LiDAR agree within this residual, m (calibrated as a high
+            percentile of clean residuals). Also the measurement tolerance of the
+            kinematic witness and the bound on the head's correction.
+        trust_confidence: with no other witness at all, a depth of at least this
+            confidence passes (1.01: never).
     """
 
-    tau_low: float = 0.10
-    tau_high: float = 0.40
-    gamma: float = 1.0
+    tau_m: float = 0.10
     trust_confidence: float = 1.01
 
     def __post_init__(self) -> None:
-        if not (0.0 <= self.tau_low < self.tau_high <= 10.0):
-            raise ValueError(f"need 0 <= tau_low < tau_high <= 10 m, got {self.tau_low}, {self.tau_high}")
-        if not 0.05 <= self.gamma <= 20.0:
-            raise ValueError(f"gamma must be in [0.05, 20], got {self.gamma}")
+        if not (math.isfinite(self.tau_m) and 0.0 < self.tau_m <= 10.0):
+            raise ValueError(f"tau_m must be in (0, 10] m, got {self.tau_m}")
         if not 0.0 <= self.trust_confidence <= 1.01:
-            raise ValueError(f"trust_confidence must be in [0, 1.01] (1.01: never trust without LiDAR), "
+            raise ValueError(f"trust_confidence must be in [0, 1.01] (1.01: never trust an unconfirmed depth), "
                              f"got {self.trust_confidence}")
 
 
-def gate_weight(r_xs: np.ndarray | float, config: GateConfig, depth: np.ndarray | float = np.nan,
-                confidence: np.ndarray | float = 0.0) -> np.ndarray:
-    """Gate weight in [0, 1].
+def vote(d: float, c: float, l: float, k: float, k_tol: float, mu: float, gate: GateConfig,
+         kinematics_votes: bool = True) -> tuple[int, float, bool]:
+    """One step's verdict: (source, base, lidar_trusted).
 
-    A NaN residual (no LiDAR or no depth) gives 1 (repair only), except for a finite depth
-    whose confidence reaches ``config.trust_confidence``, which passes (0).
+    Args:
+        d, c: depth (NaN: missing) and its confidence. l: aligned LiDAR (NaN: none).
+        k, k_tol: d_kin (NaN: no branch) and how far a witness may lie from it.
+        mu: the prior's forecast (NaN: none).
+
+    Returns the source code (``SOURCES``), the value the output rests on (the depth itself
+    when it passes; NaN when there is no target) and whether the LiDAR counts as a trusted
+    measurement this step.
     """
-    r = np.asarray(r_xs, float)
-    w = np.clip((r - config.tau_low) / (config.tau_high - config.tau_low), 0.0, 1.0) ** config.gamma
-    trusted = np.isfinite(np.asarray(depth, float)) & (np.asarray(confidence, float) >= config.trust_confidence)
-    return np.where(np.isfinite(r), w, np.where(trusted, 0.0, 1.0))
-
-
-def fuse(d_meas: np.ndarray | float, d_rep: np.ndarray | float, w: np.ndarray | float) -> np.ndarray:
-    """(1 - w) d~ + w d_rep; where w == 0 the measurement passes through exactly, where w == 1 the repair."""
-    d, rep, w = (np.asarray(v, float) for v in (d_meas, d_rep, w))
-    mixed = (1.0 - w) * np.where(np.isfinite(d), d, 0.0) + w * rep
-    return np.where(w == 0.0, d, np.where(w == 1.0, rep, mixed))
+    d_ok, l_ok = d == d, l == l  # not NaN (inputs are sanitised: finite or NaN)
+    k_ok = k == k
+    k_votes = k_ok and kinematics_votes
+    agree_dl = d_ok and l_ok and abs(d - l) <= gate.tau_m
+    agree_dk = d_ok and k_votes and abs(d - k) <= k_tol
+    agree_lk = l_ok and k_ok and abs(l - k) <= k_tol
+    if agree_dl or agree_dk:
+        return DEPTH, d, agree_dl
+    if d_ok and not l_ok and not k_votes and c >= gate.trust_confidence:
+        return DEPTH, d, False
+    lidar_trusted = l_ok and (agree_lk or not k_votes)
+    if lidar_trusted:
+        return (LIDAR_KIN if agree_lk else LIDAR), l, True
+    if k_ok:
+        return KIN, k, False
+    if d_ok:
+        return DEPTH_UNCONFIRMED, d, False
+    if mu == mu:
+        return PRIOR, mu, False
+    return NONE, math.nan, False

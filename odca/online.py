@@ -1,34 +1,44 @@
-"""ODCA: the online, causal, per-step gated depth repair (the paper's Algorithm 1), and its batched twin.
+"""ODCA online: the causal, per-step repair of the depth distance (the paper's Algorithm 1 with
+the RACF framework's kinematic branch), and its batched twin.
 
-Per step t: sanitise the inputs; the frozen prior forecasts the next ``horizon`` steps from
-the last ``context_length`` depth measurements every ``refresh_steps`` steps (mu(t),
-sigma(t) are read off the current forecast); the delta head predicts Delta(t); the
-repaired distance is base + Delta with base = d~ (else mu, else the aligned LiDAR, else the
-last valid depth); the gate weighs repair against measurement by the depth-LiDAR residual.
-``run(df)`` computes the same numbers for whole series at once (the prior's windows batched
-in the same fixed-size batches, the head row by row), so it matches ``step`` exactly.
+Per step t:
+
+1. sanitise the inputs; the frozen prior forecasts the next ``horizon`` steps from the last
+   ``context_length`` depths every ``refresh_steps`` steps (mu(t), sigma(t) are read off the
+   current forecast);
+2. the kinematic branch advances the last trusted distance by the car's odometry
+   (:mod:`odca.kinematics`);
+3. the gate votes among depth, LiDAR and kinematics (:mod:`odca.gate`): depth that agrees
+   with a witness passes unchanged; otherwise the repair rests on the witnesses that agree,
+   and the delta head adds its correction, bounded by the gate's tolerance;
+4. a trusted measurement re-anchors the kinematic branch;
+5. the output moves no further per step than the car's motion plus the tolerance of a
+   fresh measurement (``step_bound_m``); it is NaN when there is no target at all.
+
+``run(df)`` computes the same numbers for whole series (the prior's windows batched in the
+same fixed-size batches, the head row by row), so it matches ``step`` exactly.
 """
 
 from __future__ import annotations
 
 import json
 import math
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
 from odca.align import Alignment, fit_alignment
-from odca.features import MAX_RANGE_M, base_distance, features, sanitize, usable_forecast
-from odca.gate import GateConfig, fuse, gate_weight
+from odca.features import MAX_RANGE_M, features, sanitize, usable_forecast
+from odca.gate import DEPTH, LIDAR, LIDAR_KIN, NONE, SOURCES, GateConfig, vote
 from odca.head import HeadWeights
+from odca.kinematics import KinematicBranch, KinematicsConfig
 from odca.prior import SHIPPED_PRIOR, Chronos2Prior, CheckpointError, TemporalPrior
 
-__all__ = ["ODCA", "ODCAConfig", "FusedSample", "SHIPPED_HEAD"]
+__all__ = ["ODCA", "ODCAConfig", "FusedSample", "SHIPPED_HEAD", "SOURCES"]
 
 SHIPPED_HEAD = Path(__file__).resolve().parents[1] / "assets" / "checkpoints" / "odca-head"
-_FALLBACK_M = 0.0  # nothing ever measured: report 0 m, the conservative (brake) answer
 
 
 @dataclass(frozen=True)
@@ -40,7 +50,8 @@ class ODCAConfig:
         horizon: prior horizon H, steps.
         refresh_steps: the prior forecasts every this many steps.
         dt: sample period, seconds.
-        gate: gate thresholds.
+        gate: the gate's tolerances.
+        kinematics: the kinematic branch.
         alignment: LiDAR -> depth map.
         prior: prior checkpoint: ``"shipped"`` (the project's own), a path (absolute or relative to
             the ODCA folder) or a hub id.
@@ -51,6 +62,7 @@ class ODCAConfig:
     refresh_steps: int = 4
     dt: float = 0.02
     gate: GateConfig = field(default_factory=GateConfig)
+    kinematics: KinematicsConfig = field(default_factory=KinematicsConfig)
     alignment: Alignment = field(default_factory=Alignment)
     prior: str = "shipped"
 
@@ -60,20 +72,42 @@ class ODCAConfig:
         if not 0 < self.dt <= 1.0:
             raise ValueError(f"dt must be in (0, 1] s, got {self.dt}")
 
+    @property
+    def step_bound_m(self) -> float:
+        """How far the output may move per step beyond the car's own motion: the tolerance a
+        witness has against a freshly anchored kinematic branch, m."""
+        k = self.kinematics
+        return self.gate.tau_m + k.n_sigma * k.anchor_std_m
+
     def to_json(self) -> dict:
-        return {**asdict(self), "gate": asdict(self.gate), "alignment": asdict(self.alignment)}
+        return {**asdict(self), "gate": asdict(self.gate), "kinematics": asdict(self.kinematics),
+                "alignment": asdict(self.alignment)}
 
     @classmethod
     def from_json(cls, raw: dict) -> "ODCAConfig":
         raw = dict(raw)
         raw["gate"] = GateConfig(**raw.get("gate", {}))
+        raw["kinematics"] = KinematicsConfig(**raw.get("kinematics", {}))
         raw["alignment"] = Alignment(**raw.get("alignment", {}))
         return cls(**raw)
 
 
 @dataclass(frozen=True)
 class FusedSample:
-    """One step's output: the fused distance, the gate, the repair and the residuals (metres)."""
+    """One step's output (distances in metres).
+
+    Attributes:
+        d_fused: the repaired distance; NaN when there is no target (nothing measured, no
+            branch to carry one): no distance, never 0 m.
+        w: 0 where the depth passed unchanged, 1 where the step was repaired (the attack flag).
+        d_rep: the repair (base + the head's correction; NaN without a target).
+        r_xs: |d~ - l|, the depth-LiDAR residual (NaN when either is missing).
+        r_delta: |Delta|, the head's correction.
+        r_post: |d_fused - l|.
+        mu, sigma: the prior's forecast for this step.
+        d_kin, kin_std: the kinematic branch and its std (NaN when it has none).
+        source: what the output rests on, an index into ``SOURCES``.
+    """
 
     d_fused: float
     w: float
@@ -83,6 +117,66 @@ class FusedSample:
     r_post: float
     mu: float
     sigma: float
+    d_kin: float
+    kin_std: float
+    source: float
+
+    @property
+    def has_target(self) -> bool:
+        return math.isfinite(self.d_fused)
+
+    @property
+    def source_name(self) -> str:
+        return SOURCES[int(self.source)]
+
+
+_COLUMNS = tuple(f.name for f in fields(FusedSample))
+
+
+class _Witnesses:
+    """The sequential part of a step: kinematic branch, vote and anchoring (no head: it does
+    not feed back, so a series' verdicts are known before the head runs)."""
+
+    def __init__(self, config: ODCAConfig) -> None:
+        self.config = config
+        self.branch = KinematicBranch(config.kinematics)
+
+    def reset(self) -> None:
+        self.branch.reset()
+
+    def step(self, d, c, l, v, yaw_rate, bearing, mu, dt):
+        """Returns (source, base, lidar_trusted, d_kin, kin_std, motion) for one sanitised step."""
+        cfg = self.config
+        branch = self.branch
+        on = cfg.kinematics.enabled
+        motion = branch.predict(v, yaw_rate, dt) if on else math.nan
+        if not motion == motion:
+            motion = -v * dt  # no branch: a straight approach's change
+        k, k_std = branch.distance, branch.std
+        source, base, lidar_trusted = vote(d, c, l, k, branch.tolerance(cfg.gate.tau_m) if k == k else math.nan, mu,
+                                           cfg.gate, cfg.kinematics.witness)
+        if on and source == DEPTH:
+            branch.anchor(d, bearing)
+        elif on and source in (LIDAR, LIDAR_KIN):
+            branch.anchor(l, bearing)
+        return source, base, lidar_trusted, k, k_std, motion
+
+
+def _bounded(values: np.ndarray, motion: np.ndarray, bound: float, prev: float, first: np.ndarray | None = None
+             ) -> np.ndarray:
+    """Each value kept within ``bound`` of (the previous output + the car's motion); a NaN
+    (no target) or a segment's ``first`` step starts afresh."""
+    out = values.copy()
+    for t in range(len(out)):
+        if first is not None and first[t]:
+            prev = math.nan
+        x = out[t]
+        if x == x and prev == prev:
+            centre = prev + motion[t]
+            x = min(max(x, centre - bound), centre + bound)
+            out[t] = min(max(x, 0.0), MAX_RANGE_M)
+        prev = out[t]
+    return out
 
 
 class ODCA:
@@ -91,9 +185,9 @@ class ODCA:
     Example:
         >>> from odca import ODCA
         >>> m = ODCA.load()
-        >>> out = m.step(depth=1.50, confidence=0.9, lidar=1.62, speed=1.0)
-        >>> round(out.d_fused, 3), out.w
-        (1.5, 0.0)
+        >>> out = m.step(depth=1.50, confidence=0.9, lidar=1.52, speed=1.0)
+        >>> round(out.d_fused, 3), out.w, out.source_name
+        (1.5, 0.0, 'depth')
     """
 
     def __init__(self, config: ODCAConfig, head: HeadWeights, prior: TemporalPrior) -> None:
@@ -115,7 +209,8 @@ class ODCA:
             with np.load(weights_file) as z:
                 head = HeadWeights({k: z[k] for k in z.files})
         except (ValueError, TypeError, KeyError, OSError, json.JSONDecodeError) as err:
-            raise CheckpointError(f"the ODCA checkpoint at {folder} is corrupt: {type(err).__name__}: {err}") from None
+            raise CheckpointError(f"the ODCA checkpoint at {folder} is corrupt or from an older racf "
+                                  f"({type(err).__name__}: {err}); retrain it with `racf train`") from None
         if prior is None:
             if config.prior == "shipped":
                 prior = Chronos2Prior(SHIPPED_PRIOR)
@@ -141,102 +236,140 @@ class ODCA:
 
     # -- online ----------------------------------------------------------------------------
     def reset(self) -> None:
-        """Forget the past (a new run)."""
+        """Forget the past (a new run, or the track changed target)."""
         self._context = np.full(self.config.context_length, np.nan)
         self._t = 0
         self._mean = np.full(self.config.horizon, np.nan)
         self._std = np.full(self.config.horizon, np.nan)
-        self._d_prev = math.nan
-        self._hold = _FALLBACK_M
+        self._witnesses = _Witnesses(self.config)
+        self._prev = math.nan
 
     def step(self, *, depth: float, confidence: float, lidar: float = math.nan, speed: float = 0.0,
-             dt: float | None = None) -> FusedSample:
+             yaw_rate: float = 0.0, bearing: float = math.nan, dt: float | None = None) -> FusedSample:
         """One causal step. Any input may be NaN, inf, zero or negative (treated as missing).
 
         Args:
             depth: d~(t), metres. confidence: c~(t) in [0, 1]. lidar: l(t), metres.
-            speed: vehicle speed, m/s. dt: sample period (default the config's).
+            speed: the car's speed, m/s. yaw_rate: its yaw rate, rad/s (left positive).
+            bearing: the detection's bearing, rad (left positive; NaN: none).
+            dt: time since the last step (default the config's).
         """
-        for name, value in (("depth", depth), ("confidence", confidence), ("lidar", lidar), ("speed", speed)):
+        for name, value in (("depth", depth), ("confidence", confidence), ("lidar", lidar), ("speed", speed),
+                            ("yaw_rate", yaw_rate), ("bearing", bearing)):
             if np.ndim(value) != 0:
                 raise ValueError(f"{name} must be a scalar per step, got shape {np.shape(value)}; use run(df) for series")
         dt = self.config.dt if dt is None else float(dt)
         if not (math.isfinite(dt) and dt > 0):
             raise ValueError(f"dt must be a positive finite number of seconds, got {dt}")
+        if self._witnesses.config is not self.config:  # the config was replaced (calibration)
+            self._witnesses = _Witnesses(self.config)
         k = self._t % self.config.refresh_steps
         if k == 0:
             mean, std = usable_forecast(*self.prior.forecast(self._context[None], self.config.horizon))
             self._mean, self._std = mean[0], std[0]
-        d, c, l, v = sanitize(depth, confidence, lidar, speed)
-        out = self._compute(d[None], c[None], l[None], v[None], self._mean[k:k + 1], self._std[k:k + 1],
-                            np.array([self._d_prev]), np.array([self._hold]), dt)
+        d, c, l, v, w, b = (float(x) for x in sanitize(depth, confidence, lidar, speed, yaw_rate, bearing))
+        l_al = float(self.config.alignment(l))
+        mu, sigma = float(self._mean[k]), float(self._std[k])
+        verdict = self._witnesses.step(d, c, l_al, v, w, b, mu, dt)
+        cols = self._finish(*(np.array([x], float) for x in (d, c, l_al, v, mu, sigma, *verdict)),
+                            prev=self._prev)
+        self._prev = float(cols[0][0])
         self._context = np.roll(self._context, -1)
-        self._context[-1] = float(d)
-        if np.isfinite(d):
-            self._hold = float(d)
-        self._d_prev = float(d)
+        self._context[-1] = d
         self._t += 1
-        return FusedSample(*(float(col[0]) for col in out))
+        return FusedSample(*(float(col[0]) for col in cols))
 
     # -- batched offline path ------------------------------------------------------------------
     def run(self, df: pd.DataFrame) -> pd.DataFrame:
-        """The same computation over whole series: returns d_fused, w, d_rep, r_xs, r_delta, r_post, mu, sigma.
+        """The same computation over whole series: one column per ``FusedSample`` field.
 
         ``df`` needs ``d_meas``, ``c_meas``, ``lidar`` and ``speed`` columns (or ``depth``/``confidence``),
-        optionally ``series_id`` (each series starts fresh). Rows keep their order and index.
+        optionally ``yaw_rate`` and ``bearing``, ``series_id`` (each series starts fresh) and ``slot``
+        (the car resets ODCA when its track changes target: so does a new slot). Rows keep their
+        order and index.
         """
         cols = {"depth": _pick(df, "d_meas", "depth"), "confidence": _pick(df, "c_meas", "confidence"),
-                "lidar": _pick(df, "lidar", None), "speed": _pick(df, "speed", None)}
-        groups = df.groupby("series_id", sort=False).indices.values() if "series_id" in df else [np.arange(len(df))]
-        out = np.full((len(df), 8), np.nan)
-        for idx in (g for g in groups if len(g)):
-            out[idx] = np.column_stack(self._run_series(*(cols[k][idx] for k in cols)))
-        return pd.DataFrame(out, index=df.index, columns=[f.name for f in FusedSample.__dataclass_fields__.values()])
+                "lidar": _pick(df, "lidar", None), "speed": _pick(df, "speed", None),
+                "yaw_rate": _optional(df, "yaw_rate", 0.0), "bearing": _optional(df, "bearing", np.nan)}
+        out = np.full((len(df), len(_COLUMNS)), np.nan)
+        for idx in segments(df):
+            out[idx] = np.column_stack(self.run_segment(*(cols[k][idx] for k in cols)))
+        return pd.DataFrame(out, index=df.index, columns=list(_COLUMNS))
 
-    def _run_series(self, depth, confidence, lidar, speed):
-        return self._compute(*self.series_inputs(depth, confidence, lidar, speed), self.config.dt)
+    def run_segment(self, depth, confidence, lidar, speed, yaw_rate, bearing):
+        """One fresh run over one segment's arrays; returns the ``FusedSample`` fields as arrays."""
+        inputs = self.segment_inputs(depth, confidence, lidar, speed, yaw_rate, bearing)
+        return self._finish(*inputs, prev=math.nan)
 
-    def series_inputs(self, depth, confidence, lidar, speed):
-        """Sanitised inputs of one series plus the prior's (mu, sigma), the previous depth and the hold value."""
+    def segment_inputs(self, depth, confidence, lidar, speed, yaw_rate, bearing):
+        """Sanitised inputs of one segment, the prior's (mu, sigma) and the gate's verdicts per step:
+        (d, c, l_al, v, mu, sigma, source, base, lidar_trusted, d_kin, kin_std, motion)."""
+        d, c, l, v, w, b = sanitize(depth, confidence, lidar, speed, yaw_rate, bearing)
+        l_al = np.asarray(self.config.alignment(l), float)
+        mu, sigma = self.prior_inputs(d)
+        return (d, c, l_al, v, mu, sigma, *self.verdicts(d, c, l_al, v, w, b, mu))
+
+    def prior_inputs(self, d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The prior's (mu, sigma) at every step of one segment's sanitised depths."""
         cfg = self.config
-        d, c, l, v = sanitize(depth, confidence, lidar, speed)
         n = len(d)
         # Prior windows at the refresh steps: the last W depths before each.
         padded = np.concatenate([np.full(cfg.context_length, np.nan), d])
         starts = np.arange(0, n, cfg.refresh_steps)
         windows = np.stack([padded[s:s + cfg.context_length] for s in starts]) if n else np.empty((0, cfg.context_length))
         mean, std = usable_forecast(*self.prior.forecast(windows, cfg.horizon)) if n else (windows, windows)
-        offset = np.arange(n) % cfg.refresh_steps
-        mu, sigma = mean[np.arange(n) // cfg.refresh_steps, offset], std[np.arange(n) // cfg.refresh_steps, offset]
-        d_prev = np.concatenate([[np.nan], d[:-1]])
-        # The last valid depth before each step (the hold value), _FALLBACK_M before any.
-        last = pd.Series(d).ffill().to_numpy()
-        hold = np.concatenate([[_FALLBACK_M], np.nan_to_num(last[:-1], nan=_FALLBACK_M)])
-        return d, c, l, v, mu, sigma, d_prev, hold
+        row, offset = np.arange(n) // cfg.refresh_steps, np.arange(n) % cfg.refresh_steps
+        return mean[row, offset], std[row, offset]
+
+    def verdicts(self, d, c, l_al, v, w, b, mu):
+        """The gate's verdicts over one segment (sanitised arrays), from a fresh kinematic branch:
+        (source, base, lidar_trusted, d_kin, kin_std, motion)."""
+        witnesses = _Witnesses(self.config)
+        n = len(d)
+        rows = [witnesses.step(*args, self.config.dt) for args in
+                zip(d.tolist(), c.tolist(), l_al.tolist(), v.tolist(), w.tolist(), b.tolist(), mu.tolist())]
+        source, base, trusted, k, k_std, motion = np.array(rows, float).reshape(n, 6).T
+        return source, base, trusted.astype(bool), k, k_std, motion
 
     # -- shared arithmetic ---------------------------------------------------------------------
-    def _compute(self, d, c, l, v, mu, sigma, d_prev, hold, dt):
-        l_al = self.config.alignment(l)
-        x = features(d, c, l_al, v, mu, sigma, d_prev, hold, dt)
-        return self.repair(x, d, c, l_al, base_distance(d, mu, l_al, hold), hold, mu, sigma)
+    def head_inputs(self, d, c, l_al, v, mu, sigma, source, base, trusted, k, k_std):
+        return features(base, d, c, l_al, trusted, v, mu, sigma, k, k_std)
 
-    def repair(self, x, d, c, l_al, base, hold, mu=np.nan, sigma=np.nan):
-        """Head, gate and fusion from precomputed features (training and scoring reuse it).
+    def _finish(self, d, c, l_al, v, mu, sigma, source, base, trusted, k, k_std, motion, prev):
+        x = self.head_inputs(d, c, l_al, v, mu, sigma, source, base, trusted, k, k_std)
+        return self.repair(x, d, l_al, source, base, k, k_std, motion, mu, sigma, prev)
 
-        Returns the ``FusedSample`` fields as arrays, in order.
+    def repair(self, x, d, l_al, source, base, k, k_std, motion, mu, sigma, prev=math.nan, first=None):
+        """The head's correction, the output and the step bound from the gate's verdicts.
+
+        ``prev`` is the output before the first row; ``first`` marks rows that start a fresh
+        run (concatenated segments). Returns the ``FusedSample`` fields as arrays, in order.
         """
-        delta = self.head(x)
-        d_rep = base + delta
-        r_xs = np.abs(d - l_al)  # NaN when either is missing -> w = 1
-        w = gate_weight(r_xs, self.config.gate, d, c)
-        d_fused = fuse(d, d_rep, w)
-        # Never NaN or inf out: an unusable repair falls back to the hold value; and a distance
-        # is never negative nor beyond the sensors' range.
-        d_fused = np.clip(np.where(np.isfinite(d_fused), d_fused, hold), 0.0, MAX_RANGE_M)
-        d_rep = np.clip(np.where(np.isfinite(d_rep), d_rep, hold), 0.0, MAX_RANGE_M)
-        r_post = np.abs(d_fused - l_al)
+        tau = self.config.gate.tau_m
+        delta = np.clip(self.head(x), -tau, tau) if len(x) else np.zeros(0)
+        passed = source == DEPTH
+        d_rep = np.clip(base + np.where(passed, 0.0, delta), 0.0, MAX_RANGE_M)  # NaN stays NaN: no target
+        d_fused = np.where(passed, d, d_rep)
+        d_fused = _bounded(d_fused, motion, self.config.step_bound_m, prev, first)
         n = len(d_fused)
-        return (d_fused, w, d_rep, r_xs, np.abs(delta), r_post, np.broadcast_to(mu, n), np.broadcast_to(sigma, n))
+        return (d_fused, (~passed).astype(float), d_rep, np.abs(d - l_al), np.abs(np.where(passed, 0.0, delta)),
+                np.abs(d_fused - l_al), np.broadcast_to(mu, n), np.broadcast_to(sigma, n), k, k_std,
+                np.asarray(source, float))
+
+
+def segments(df: pd.DataFrame) -> list[np.ndarray]:
+    """Row positions of each run ODCA makes afresh: a series, cut where ``slot`` changes."""
+    n = len(df)
+    if n == 0:
+        return []
+    new = np.zeros(n, bool)
+    new[0] = True
+    for name in ("series_id", "slot"):
+        if name in df:
+            values = df[name].to_numpy()
+            new[1:] |= values[1:] != values[:-1]
+    starts = np.flatnonzero(new)
+    return [np.arange(a, b) for a, b in zip(starts, np.r_[starts[1:], n])]
 
 
 def _pick(df: pd.DataFrame, name: str, alt: str | None) -> np.ndarray:
@@ -246,3 +379,7 @@ def _pick(df: pd.DataFrame, name: str, alt: str | None) -> np.ndarray:
         return df[alt].to_numpy(float)
     raise ValueError(f"run(df) needs a {name!r} column" + (f" (or {alt!r})" if alt else "") +
                      f"; got columns {list(df.columns)}")
+
+
+def _optional(df: pd.DataFrame, name: str, default: float) -> np.ndarray:
+    return df[name].to_numpy(float) if name in df else np.full(len(df), default)

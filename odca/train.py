@@ -1,16 +1,18 @@
 """Training the delta head, calibrating the alignment and the gate, and scoring the result.
 
 Data: long-format frames of corrupted series (``series_id``, ``d_meas``, ``c_meas``,
-``lidar``, ``speed``, ``label``, and ``d_clean`` for scoring only). The head never sees
-d_clean or d_true: the four losses use the measurement, the LiDAR and the speed.
+``lidar``, ``speed``, ``yaw_rate``, ``bearing``, ``slot``, ``label``, and ``d_clean`` for
+scoring only). The head never sees d_clean or d_true: the four losses use the measurement,
+the LiDAR and the speed.
 
 1. Alignment: Huber regression of d_clean on the LiDAR over confident clean samples of the
    training split (the paper's "initial clean calibration run").
-2. Head: full-batch Adam on the four losses over the train split corrupted with every
-   preset (each series with its fixed seed).
-3. Gate: tau_low among the 95th / 99th / 99.5th percentiles of the residual on
-   unattacked validation steps, tau_high and gamma by grid search for the lowest
-   validation RMSE against d_clean.
+2. Head: full-batch Adam on the four losses over the repaired steps of the train split
+   corrupted with every preset (the gate's tolerance at the 99th percentile of clean
+   depth-LiDAR residuals; the verdicts do not depend on the head).
+3. Gate: tau among the 99th / 99.5th percentiles of the residual on unattacked validation
+   steps and the kinematic branch's n_sigma, by grid search for the lowest validation RMSE
+   against d_clean.
 """
 
 from __future__ import annotations
@@ -21,32 +23,52 @@ import numpy as np
 import pandas as pd
 
 from odca.align import fit_alignment
-from odca.features import base_distance, features
-from odca.gate import GateConfig
+from odca.features import sanitize
+from odca.gate import DEPTH, GateConfig
 from odca.head import HeadWeights, head_parameters, make_head
 from odca.losses import LossWeights, odca_losses
-from odca.online import ODCA, ODCAConfig
+from odca.online import ODCA, ODCAConfig, segments
 
 __all__ = ["prepare", "prepare_split", "initial_model", "fit", "train_head", "calibrate_gate", "score", "pass_through",
            "evaluate", "train_odca"]
 
 
 def prepare(model: ODCA, frame: pd.DataFrame) -> dict[str, np.ndarray]:
-    """Per-step arrays for training/scoring: inputs, prior features, features X, base, flags."""
+    """Per-step arrays for training/scoring: inputs, the prior's forecast, the gate's verdicts,
+    features X and flags, over every run ODCA makes afresh (a series, cut at a new slot)."""
+    cols = {name: _column(frame, name, default) for name, default in
+            (("d_meas", None), ("c_meas", None), ("lidar", None), ("speed", None), ("yaw_rate", 0.0),
+             ("bearing", np.nan))}
     parts = []
-    for sid, s in frame.groupby("series_id", sort=False):
-        d, c, l, v, mu, sigma, d_prev, hold = model.series_inputs(s["d_meas"], s["c_meas"], s["lidar"], s["speed"])
-        l_al = model.config.alignment(l)
-        x = features(d, c, l_al, v, mu, sigma, d_prev, hold, model.config.dt)
-        # The LiDAR is trusted where it agrees with the prior (or there is no prior yet).
-        trusted = np.isfinite(l_al) & (~np.isfinite(mu) | (np.abs(l_al - mu) <= 0.3 + 2 * np.nan_to_num(sigma)))
-        parts.append({"x": x, "base": base_distance(d, mu, l_al, hold), "hold": hold, "d": d, "c": c,
-                      "l_al": l_al, "v": v,
-                      "trusted": trusted,
-                      "label": s["label"].to_numpy(), "d_clean": s["d_clean"].to_numpy(float),
-                      "d_true": s["d_true"].to_numpy(float) if "d_true" in s else np.full(len(d), np.nan),
-                      "first": np.arange(len(d)) == 0})
-    return {k: np.concatenate([p[k] for p in parts]) for k in parts[0]}
+    for idx in segments(frame):
+        d, c, l, v, w, b = sanitize(*(cols[k][idx] for k in cols))
+        mu, sigma = model.prior_inputs(d)
+        parts.append({"d": d, "c": c, "l_al": np.asarray(model.config.alignment(l), float), "v": v, "yaw_rate": w,
+                      "bearing": b, "mu": mu, "sigma": sigma,
+                      "label": frame["label"].to_numpy()[idx], "d_clean": frame["d_clean"].to_numpy(float)[idx],
+                      "d_true": _column(frame, "d_true", np.nan)[idx], "first": np.arange(len(idx)) == 0})
+    data = {k: np.concatenate([p[k] for p in parts]) for k in parts[0]}
+    return revote(model, data)
+
+
+def revote(model: ODCA, data: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """The gate's verdicts and the features under the model's current gate and kinematics (in place)."""
+    starts = np.flatnonzero(data["first"])
+    verdicts = [model.verdicts(*(data[k][a:b] for k in ("d", "c", "l_al", "v", "yaw_rate", "bearing", "mu")))
+                for a, b in zip(starts, np.r_[starts[1:], len(data["d"])])]
+    for i, name in enumerate(("source", "base", "trusted", "k", "k_std", "motion")):
+        data[name] = np.concatenate([v[i] for v in verdicts])
+    data["x"] = model.head_inputs(*(data[k] for k in ("d", "c", "l_al", "v", "mu", "sigma", "source", "base",
+                                                       "trusted", "k", "k_std")))
+    return data
+
+
+def _column(frame: pd.DataFrame, name: str, default: float | None) -> np.ndarray:
+    if name in frame:
+        return frame[name].to_numpy(float)
+    if default is None:
+        raise ValueError(f"ODCA's training data needs a {name!r} column; got {list(frame.columns)}")
+    return np.full(len(frame), default)
 
 
 def train_head(data: dict[str, np.ndarray], tau_low: float, dt: float = 0.02, epochs: int = 800, lr: float = 3e-3,
@@ -60,6 +82,8 @@ def train_head(data: dict[str, np.ndarray], tau_low: float, dt: float = 0.02, ep
     head = make_head()
     t = {k: torch.tensor(np.nan_to_num(v, nan=0.0), dtype=torch.float32) for k, v in data.items()
          if k in ("x", "base", "d", "c", "l_al", "v")}
+    # Only repaired steps with a target get a correction (a passed depth is output as it is).
+    repaired = torch.tensor((data["source"] != DEPTH) & np.isfinite(data["base"]))
     clean = torch.tensor((data["label"] == 0) & (data["c"] >= 0.5) & np.isfinite(data["d"]))
     valid_pair = torch.tensor(~data["first"])
     trusted = torch.tensor(data["trusted"])
@@ -68,7 +92,8 @@ def train_head(data: dict[str, np.ndarray], tau_low: float, dt: float = 0.02, ep
     for _ in tqdm(range(epochs), desc=f"train delta head ({head_parameters(head)} params)", unit="epoch",
                   disable=not progress):
         opt.zero_grad()
-        total, parts = odca_losses(head(t["x"]), t["base"], t["d"], t["c"], t["l_al"], t["v"], clean, valid_pair,
+        delta = torch.clamp(head(t["x"]), -tau_low, tau_low) * repaired
+        total, parts = odca_losses(delta, t["base"], t["d"], t["c"], t["l_al"], t["v"], clean, valid_pair,
                                    dt, tau_low, weights, trusted)
         total.backward()
         opt.step()
@@ -77,8 +102,9 @@ def train_head(data: dict[str, np.ndarray], tau_low: float, dt: float = 0.02, ep
 
 
 def _fused(model: ODCA, data: dict[str, np.ndarray]) -> np.ndarray:
-    """The module's own output from the prepared features (no second copy of the fusion)."""
-    return model.repair(data["x"], data["d"], data["c"], data["l_al"], data["base"], data["hold"])[0]
+    """The module's own output from the prepared verdicts (no second copy of the fusion)."""
+    return model.repair(*(data[k] for k in ("x", "d", "l_al", "source", "base", "k", "k_std", "motion", "mu",
+                                             "sigma")), first=data["first"])[0]
 
 
 #: A sample is moving above this speed, m/s (the protocol's standstill bound).
@@ -95,8 +121,9 @@ def score(model: ODCA, data: dict[str, np.ndarray]) -> dict[str, float]:
     Raw depth holds the last valid value of its series; the steps before a series' first
     valid measurement are scored for neither.
     """
-    fused = _fused(model, data)
     held = pd.Series(data["d"]).groupby(np.cumsum(data["first"])).ffill().to_numpy()
+    fused = _fused(model, data)
+    fused = np.where(np.isfinite(fused), fused, held)  # no target: scored as the held raw depth, as every method
     scored = np.isfinite(held)
     ok = scored & np.isfinite(data["d_clean"])
     moving = ok & (np.abs(data["v"]) > MOVING_MPS)
@@ -115,8 +142,9 @@ def score(model: ODCA, data: dict[str, np.ndarray]) -> dict[str, float]:
 def pass_through(model: ODCA, frame: pd.DataFrame, tolerance_m: float = 1e-9) -> dict[str, float]:
     """Clean pass-through: ODCA fed clean series (the input is d_clean itself).
 
-    Returns the share of steps with depth and LiDAR both present that come out unchanged,
-    and ODCA's RMSE against its input over every step with a depth.
+    Returns the share of steps with a depth that come out unchanged (all of them, and those
+    with the LiDAR present too), the share changed by more than 1 cm, and ODCA's RMSE
+    against its input over every step with a depth.
     """
     clean = frame.assign(d_meas=frame["d_clean"], c_meas=frame["c_clean"])
     fused = model.run(clean)["d_fused"].to_numpy()
@@ -124,35 +152,43 @@ def pass_through(model: ODCA, frame: pd.DataFrame, tolerance_m: float = 1e-9) ->
     has_d = np.isfinite(d)
     both = has_d & np.isfinite(clean["lidar"].to_numpy(float))
     change = np.abs(fused - d)
-    return {"unchanged_share_both_present": float(np.mean(change[both] <= tolerance_m)) if both.any() else None,
+    return {"unchanged_share": float(np.mean(change[has_d] <= tolerance_m)) if has_d.any() else None,
+            "unchanged_share_both_present": float(np.mean(change[both] <= tolerance_m)) if both.any() else None,
             "changed_over_1cm_share": float(np.mean(change[has_d] > 0.01)) if has_d.any() else None,
             "rmse_vs_input": _rmse((fused - d)[has_d]), "n_both_present": int(both.sum()), "n_depth": int(has_d.sum())}
 
 
 def calibrate_gate(model: ODCA, val: dict[str, np.ndarray]) -> GateConfig:
-    """The gate from validation data.
+    """The gate from validation data (the model's config is updated in place).
 
-    tau_low among the 99th / 99.5th percentiles of unattacked depth-LiDAR residuals (so
-    clean samples pass unchanged: Proposition 1); trust_confidence at the 1st percentile
-    of unattacked confidences (a clean depth with no LiDAR passes too); (tau_high, gamma)
-    by grid search for the lowest validation RMSE.
+    tau among the 99th / 99.5th percentiles of unattacked depth-LiDAR residuals (so clean
+    samples agree: Proposition 1); trust_confidence at the 1st percentile of unattacked
+    confidences (the first sight of a clean target passes); the kinematic branch's n_sigma
+    by grid search with tau for the lowest validation RMSE.
     """
-    r = np.abs(val["d"] - val["l_al"])
-    unattacked = (val["label"] == 0) & np.isfinite(val["d"])
-    clean_r = r[unattacked & np.isfinite(r)]
-    trust = float(np.percentile(val["c"][unattacked], 1.0)) if unattacked.any() else 1.01
+    tau_grid, trust = clean_tolerances(val, (99.0, 99.5))
     best = None
-    for pct in (99.0, 99.5):
-        tau_low = float(np.percentile(clean_r, pct)) if clean_r.size else 0.1
-        for span in (0.05, 0.1, 0.2, 0.3, 0.5):
-            for gamma in (0.5, 1.0, 2.0):
-                gate = GateConfig(tau_low, tau_low + span, gamma, trust)
-                model.config = replace(model.config, gate=gate)
-                rmse = score(model, val)["rmse"]
-                if best is None or rmse < best[0]:
-                    best = (rmse, gate)
-    model.config = replace(model.config, gate=best[1])
-    return best[1]
+    for tau in tau_grid:
+        for n_sigma in (2.0, 3.0, 4.0):
+            config = replace(model.config, gate=GateConfig(tau, trust),
+                             kinematics=replace(model.config.kinematics, n_sigma=n_sigma))
+            model.config = config
+            rmse = score(model, revote(model, val))["rmse"]
+            if best is None or rmse < best[0]:
+                best = (rmse, config)
+    model.config = best[1]
+    revote(model, val)
+    return best[1].gate
+
+
+def clean_tolerances(data: dict[str, np.ndarray], percentiles) -> tuple[list[float], float]:
+    """Percentiles of unattacked depth-LiDAR residuals, and the 1st percentile of unattacked confidences."""
+    r = np.abs(data["d"] - data["l_al"])
+    unattacked = (data["label"] == 0) & np.isfinite(data["d"])
+    clean_r = r[unattacked & np.isfinite(r)]
+    taus = [float(np.percentile(clean_r, p)) if clean_r.size else GateConfig().tau_m for p in percentiles]
+    trust = float(np.percentile(data["c"][unattacked], 1.0)) if unattacked.any() else 1.01
+    return taus, trust
 
 
 def initial_model(dataset, prior) -> ODCA:
@@ -177,13 +213,15 @@ def fit(model: ODCA, train: dict[str, np.ndarray], val: dict[str, np.ndarray], e
 
     Returns the training part of the report.
     """
-    clean_r = np.abs(train["d"] - train["l_al"])[(train["label"] == 0) & np.isfinite(train["d"] - train["l_al"])]
-    tau_low = float(np.percentile(clean_r, 95)) if clean_r.size else 0.1
-    head, history = train_head(train, tau_low, model.config.dt, epochs=epochs, seed=seed, weights=weights,
+    (tau,), trust = clean_tolerances(train, (99.0,))
+    model.config = replace(model.config, gate=GateConfig(tau, trust))
+    revote(model, train)
+    head, history = train_head(train, tau, model.config.dt, epochs=epochs, seed=seed, weights=weights,
                                progress=progress)
     model.head = head
     gate = calibrate_gate(model, val)
-    return {"alignment": asdict(model.config.alignment), "gate": asdict(gate), "head_parameters": head.n_parameters,
+    return {"alignment": asdict(model.config.alignment), "gate": asdict(gate),
+            "kinematics": asdict(model.config.kinematics), "head_parameters": head.n_parameters,
             "loss_weights": asdict(weights or LossWeights()), "final_losses": history[-1], "epochs": epochs,
             "seed": seed, "train_steps": int(len(train["d"]))}
 

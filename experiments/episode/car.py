@@ -233,7 +233,7 @@ class Car:
             self._sample = self.perception.process(obs["rgb"], obs["depth"][..., 0], obs["lidar"] if scan_new else None,
                                                    speed=speed, yaw_rate=yaw_rate, lateral_speed=lateral, dt=dt,
                                                    map_bearing=bearing, new_frame=frame_new, beam_age_s=ages)
-            self._d_fused = float(self.estimator.estimate(self._sample, speed, dt))
+            self._d_fused = float(self.estimator.estimate(self._sample, speed, dt, yaw_rate_radps=yaw_rate))
             in_fov = math.isfinite(bearing) and abs(bearing) <= self.calibration.camera.half_hfov_rad
             self._decision = self.braker.step(self._sample.detected, self._d_fused, speed, dt, expected_in_view=in_fov)
             self._action = np.array(self.follower.act(x, y, yaw, speed, dt, self._decision.speed_cap_mps), np.float32)

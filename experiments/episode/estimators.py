@@ -1,10 +1,11 @@
 """The distance estimators a closed-loop episode can run, found by name in ``ESTIMATORS``.
 
-Each is causal and sees, per 50 Hz step, the live depth distance and its confidence, the
-LiDAR reference and the car's speed (the ``DistanceEstimator`` protocol):
+Each is causal and sees, per 50 Hz step, the live depth distance, its confidence and
+bearing, the LiDAR reference and the car's odometry (the ``DistanceEstimator`` protocol):
 
 - ``raw``: d~ as perception measured it (no defence; NaN without a detection);
-- ``odca``: the shipped ODCA checkpoint (frozen Chronos-2 prior, delta head, gate);
+- ``odca``: the shipped ODCA checkpoint (frozen Chronos-2 prior, kinematic branch on the
+  car's speed and yaw rate, the gate that votes, delta head);
 - ``ekf``: the constant-velocity Kalman filter of depth and LiDAR with odometry;
 - ``chronos``: Chronos-2 forecast-only: the prior's one-step-ahead mean from the last 64
   depth distances, refreshed every 4 steps as ODCA's is (full replacement of d~).
@@ -34,10 +35,11 @@ def _odca(checkpoint: str | None):
 
 
 class ODCAEstimator:
-    """ODCA's d_fused: depth passed through while depth and LiDAR agree, repaired from the
-    Chronos-2 prior, the delta head and the LiDAR when the gate opens.
+    """ODCA's d_fused: depth passed through while it agrees with the LiDAR or the kinematic
+    branch, repaired from the witnesses that agree when it is outvoted; NaN with no target.
 
-    ``last`` holds the step's full output (gate w, residuals); ``diagnostics()`` logs the gate.
+    ``last`` holds the step's full output; ``diagnostics()`` logs the gate's verdict, its
+    source and the kinematic branch.
     """
 
     name = "odca"
@@ -50,13 +52,15 @@ class ODCAEstimator:
         self.model.reset()
         self.last = None
 
-    def estimate(self, sample: PerceptionSample, speed_mps: float, dt: float) -> float:
+    def estimate(self, sample: PerceptionSample, speed_mps: float, dt: float, yaw_rate_radps: float = 0.0) -> float:
         self.last = self.model.step(depth=sample.d_meas, confidence=sample.c_meas, lidar=sample.lidar_m,
-                                    speed=speed_mps, dt=dt)
+                                    speed=speed_mps, yaw_rate=yaw_rate_radps, bearing=sample.bearing_rad, dt=dt)
         return self.last.d_fused
 
     def diagnostics(self) -> dict[str, float]:
-        return {"w": self.last.w} if self.last is not None else {}
+        if self.last is None:
+            return {}
+        return {"w": self.last.w, "odca_source": self.last.source, "d_kin": self.last.d_kin}
 
 
 class ChronosEstimator:
@@ -74,7 +78,7 @@ class ChronosEstimator:
         self._mean = np.full(self.horizon, np.nan)
         self._t = 0
 
-    def estimate(self, sample: PerceptionSample, speed_mps: float, dt: float) -> float:
+    def estimate(self, sample: PerceptionSample, speed_mps: float, dt: float, yaw_rate_radps: float = 0.0) -> float:
         k = self._t % self.refresh_steps
         if k == 0:
             if np.isfinite(self._context).any():

@@ -1,60 +1,79 @@
-"""Gate and fusion: Proposition 1 and the convex combination, as properties."""
+"""The gate that votes: its truth table, Proposition 1, and a spoofed LiDAR that cannot move the output."""
 
-import numpy as np
+import math
+
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from odca import GateConfig, fuse, gate_weight
+from odca import SOURCES, GateConfig, vote
 
-finite = st.floats(-50, 50, allow_nan=False)
-gates = st.builds(lambda lo, span, g: GateConfig(lo, lo + span, g), st.floats(0, 1), st.floats(0.01, 2),
-                  st.floats(0.1, 5))
-
-
-@settings(max_examples=300, deadline=None)
-@given(st.floats(0.01, 40), finite, gates, st.floats(0, 1))
-def test_agreement_passes_the_measurement_through_exactly(d, rep, gate, share):
-    r = share * gate.tau_low  # r_XS <= tau_low
-    w = gate_weight(r, gate)
-    assert w == 0.0
-    assert fuse(d, rep, w) == d
+NAN = math.nan
+GATE = GateConfig(tau_m=0.1, trust_confidence=0.5)
+K_TOL = 0.2
 
 
-@settings(max_examples=300, deadline=None)
-@given(st.floats(0.01, 40), finite, gates, st.floats(0, 20))
-def test_output_is_a_convex_combination(d, rep, gate, r):
-    w = float(gate_weight(r, gate))
-    assert 0.0 <= w <= 1.0
-    out = float(fuse(d, rep, w))
-    assert min(d, rep) - 1e-9 <= out <= max(d, rep) + 1e-9
-    assert out == pytest.approx((1 - w) * d + w * rep, abs=1e-9)
+# (depth, confidence, lidar, d_kin, prior) -> (source, base): the README's truth table.
+TABLE = [
+    ((1.00, 0.9, 1.05, 1.02, NAN), ("depth", 1.00)),  # all agree
+    ((1.00, 0.9, 1.05, NAN, NAN), ("depth", 1.00)),  # depth + LiDAR
+    ((1.00, 0.9, NAN, 1.10, NAN), ("depth", 1.00)),  # depth + kinematics
+    ((1.00, 0.9, 1.80, 1.05, NAN), ("depth", 1.00)),  # LiDAR outvoted (a spoof)
+    ((1.00, 0.9, NAN, NAN, NAN), ("depth", 1.00)),  # first sight, confident: nothing to vote against
+    ((1.00, 0.2, NAN, NAN, 1.3), ("depth (unconfirmed)", 1.00)),  # first sight, unsure: repaired around it
+    ((1.60, 0.9, 1.02, 1.00, NAN), ("lidar+kinematics", 1.02)),  # depth outvoted (a bias)
+    ((NAN, 0.0, 1.02, 1.00, NAN), ("lidar+kinematics", 1.02)),  # blackout, LiDAR confirmed
+    ((1.60, 0.9, 1.02, NAN, NAN), ("lidar", 1.02)),  # depth against LiDAR, no kinematics yet
+    ((1.60, 0.9, NAN, 1.00, NAN), ("kinematics", 1.00)),  # depth against kinematics
+    ((NAN, 0.0, NAN, 1.00, NAN), ("kinematics", 1.00)),  # blackout, no LiDAR
+    ((NAN, 0.0, 1.80, 1.00, NAN), ("kinematics", 1.00)),  # blackout + spoofed LiDAR
+    ((1.60, 0.9, 2.20, 1.00, NAN), ("kinematics", 1.00)),  # patch + spoof: three different answers
+    ((NAN, 0.0, NAN, NAN, 1.30), ("prior", 1.30)),  # nothing but the forecast
+    ((NAN, 0.0, NAN, NAN, NAN), ("none", NAN)),  # no target: no distance
+]
 
 
-def test_gate_shape_and_missing_residual():
-    gate = GateConfig(0.1, 0.3, 2.0)
-    np.testing.assert_allclose(gate_weight([0.0, 0.1, 0.2, 0.3, 5.0], gate), [0, 0, 0.25, 1, 1])
-    assert gate_weight(np.nan, gate) == 1.0  # no LiDAR: repair only
-    assert fuse(np.nan, 1.2, 1.0) == 1.2  # missing depth: the repair
-    with pytest.raises(ValueError, match="tau_low < tau_high"):
-        GateConfig(0.3, 0.2)
-    with pytest.raises(ValueError, match="gamma"):
-        GateConfig(0.1, 0.2, 0.0)
+@pytest.mark.parametrize("inputs,expected", TABLE)
+def test_truth_table(inputs, expected):
+    d, c, l, k, mu = inputs
+    source, base, _ = vote(d, c, l, k, K_TOL, mu, GATE)
+    assert SOURCES[source] == expected[0]
+    assert (math.isnan(base) and math.isnan(expected[1])) or base == expected[1]
 
 
-@settings(max_examples=300, deadline=None)
-@given(st.floats(0.01, 40), finite, gates, st.floats(0, 1), st.floats(0, 1))
-def test_without_lidar_a_trusted_depth_passes_and_anything_less_is_repaired(d, rep, gate, trust, c):
-    gate = GateConfig(gate.tau_low, gate.tau_high, gate.gamma, trust)
-    w = float(gate_weight(np.nan, gate, depth=d, confidence=c))
-    if c >= trust:
-        assert w == 0.0 and fuse(d, rep, w) == d
-    else:
-        assert w == 1.0
-    assert gate_weight(np.nan, gate, depth=np.nan, confidence=1.0) == 1.0  # no depth: always the repair
+def test_the_two_witness_gate_lets_the_lidar_alone_overrule_the_depth():
+    source, base, trusted = vote(1.00, 0.9, 1.80, 1.05, K_TOL, NAN, GATE, kinematics_votes=False)
+    assert SOURCES[source] == "lidar" and base == 1.80 and trusted
+    source, base, _ = vote(1.60, 0.2, NAN, 1.00, K_TOL, NAN, GATE, kinematics_votes=False)
+    assert SOURCES[source] == "kinematics"  # unconfirmed depth: kinematics still bases the repair
 
 
-def test_default_gate_never_trusts_a_depth_without_lidar():
-    assert gate_weight(np.nan, GateConfig(), depth=1.0, confidence=1.0) == 1.0
+distance = st.floats(0.2, 10.0)
+maybe = st.one_of(st.just(NAN), distance)
+
+
+@settings(max_examples=400, deadline=None)
+@given(distance, st.floats(0, 1), maybe, maybe, st.floats(0, 1), maybe)
+def test_depth_that_agrees_with_a_witness_passes_unchanged(d, c, l, k, share, mu):
+    """Proposition 1: whatever the third witness says."""
+    source, base, _ = vote(d, c, d + 0.999 * share * GATE.tau_m, k, K_TOL, mu, GATE)
+    assert SOURCES[source] == "depth" and base == d
+    kin = d - 0.999 * share * K_TOL
+    source, base, _ = vote(d, c, l, kin, K_TOL, mu, GATE)
+    assert SOURCES[source] == "depth" and base == d
+
+
+@settings(max_examples=400, deadline=None)
+@given(maybe, st.floats(0, 1), distance, distance, maybe)
+def test_a_lidar_that_disagrees_with_depth_and_kinematics_is_never_used(d, c, l, k, mu):
+    if abs(l - k) <= K_TOL or (not math.isnan(d) and abs(l - d) <= GATE.tau_m):
+        return
+    source, base, trusted = vote(d, c, l, k, K_TOL, mu, GATE)
+    assert not trusted and "lidar" not in SOURCES[source] and base != l
+
+
+def test_bad_settings_are_clear_errors():
+    with pytest.raises(ValueError, match="tau_m"):
+        GateConfig(tau_m=0.0)
     with pytest.raises(ValueError, match="trust_confidence"):
-        GateConfig(0.1, 0.2, 1.0, 2.0)
+        GateConfig(trust_confidence=2.0)

@@ -1,0 +1,122 @@
+"""The kinematic branch: the last trusted distance, advanced by the car's own odometry.
+
+The target is static, so once a measurement is trusted its place in the camera frame only
+moves by the car's own motion. The branch keeps that place, (z forward along the optical
+axis, y to the left), and per step moves the camera by the wheel speed along its axis, by
+the yaw rate x the camera's lever arm sideways (no slip at the rear axle, the turning
+centre) and turns it by the yaw rate:
+
+    turn by -omega dt / 2;  z -= v dt,  y -= omega L dt;  turn by -omega dt / 2.
+
+d_kin is z: a depth along the optical axis, the quantity depth and LiDAR report. On a
+straight approach it falls by exactly v dt whatever the bearing; on a curve the bearing at
+the anchor (y = z tan(bearing)) sets how the turn moves it.
+
+Its standard deviation starts at ``anchor_std_m`` when the branch is anchored and grows
+with the distance travelled (encoder scale, slip) and with time (what the model leaves
+out). Past ``max_std_m``, or once the target would be behind the camera, the branch is
+lost and says nothing (NaN) until the next trusted measurement.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+__all__ = ["KinematicsConfig", "KinematicBranch"]
+
+#: The QCar 2's camera ahead of its rear axle, m (camera at +0.095 m, rear axle at -0.128 m on the body).
+QCAR2_CAMERA_LEVER_M = 0.223
+
+
+@dataclass(frozen=True)
+class KinematicsConfig:
+    """The kinematic branch's settings.
+
+    Attributes:
+        enabled: run the branch (False: ODCA without kinematics, the ablation).
+        witness: the branch votes in the gate (False: the paper's two-witness gate, where
+            only the LiDAR can confirm the depth; the branch still bases repairs).
+        camera_lever_m: the camera's distance ahead of the rear axle, m.
+        anchor_std_m: std of a trusted measurement, m.
+        travel_std: std growth per metre travelled (odometry scale error and slip).
+        time_std_mps: std growth per second.
+        max_std_m: beyond this std the branch is lost, m.
+        n_sigma: a witness agrees with the branch within ``tau + n_sigma * std``.
+    """
+
+    enabled: bool = True
+    witness: bool = True
+    camera_lever_m: float = QCAR2_CAMERA_LEVER_M
+    anchor_std_m: float = 0.03
+    travel_std: float = 0.04
+    time_std_mps: float = 0.01
+    max_std_m: float = 0.4
+    n_sigma: float = 3.0
+
+    def __post_init__(self) -> None:
+        for name, lo, hi in (("camera_lever_m", -2.0, 2.0), ("anchor_std_m", 0.0, 1.0), ("travel_std", 0.0, 1.0),
+                             ("time_std_mps", 0.0, 1.0), ("max_std_m", 0.01, 10.0), ("n_sigma", 0.0, 10.0)):
+            value = getattr(self, name)
+            if not (isinstance(value, (int, float)) and math.isfinite(value) and lo <= value <= hi):
+                raise ValueError(f"kinematics {name} must be in [{lo}, {hi}], got {value!r}")
+
+
+class KinematicBranch:
+    """One target's kinematic distance: :meth:`predict` each step, :meth:`anchor` on a trusted measurement."""
+
+    def __init__(self, config: KinematicsConfig) -> None:
+        self.config = config
+        self.reset()
+
+    def reset(self) -> None:
+        self.z = math.nan
+        self.y = 0.0
+        self.std = math.nan
+
+    @property
+    def alive(self) -> bool:
+        return math.isfinite(self.z)
+
+    @property
+    def distance(self) -> float:
+        """d_kin, m (NaN when the branch is lost or was never anchored)."""
+        return self.z
+
+    def tolerance(self, tau_m: float) -> float:
+        """How far a witness may lie from d_kin and still agree with it, m."""
+        return tau_m + self.config.n_sigma * self.std
+
+    def predict(self, speed: float, yaw_rate: float, dt: float) -> float:
+        """Moves the target by the car's motion over ``dt``; returns the change of d_kin (NaN when lost)."""
+        if not self.alive:
+            return math.nan
+        c = self.config
+        z, y = advance(self.z, self.y, speed, yaw_rate, dt, c.camera_lever_m)
+        change = z - self.z
+        self.z, self.y = z, y
+        self.std += c.travel_std * abs(speed) * dt + c.time_std_mps * dt
+        if self.std > c.max_std_m or self.z <= 0.0:
+            self.reset()
+        return change
+
+    def anchor(self, distance: float, bearing: float = math.nan) -> None:
+        """Restarts the branch at a trusted distance (m) and, if known, the target's bearing (rad, left positive)."""
+        if math.isfinite(bearing) and abs(bearing) < 1.5:
+            self.y = distance * math.tan(bearing)
+        elif self.alive and self.z > 0.0:
+            self.y = distance * self.y / self.z  # keep the bearing the branch had
+        else:
+            self.y = 0.0
+        self.z = distance
+        self.std = self.config.anchor_std_m
+
+
+def advance(z: float, y: float, speed: float, yaw_rate: float, dt: float, lever_m: float) -> tuple[float, float]:
+    """A static point (z forward, y left, camera frame) after the camera moves for ``dt``: half the
+    turn, the step's translation, the other half (second-order accurate on an arc)."""
+    half = 0.5 * yaw_rate * dt
+    c, s = math.cos(half), math.sin(half)
+    z, y = c * z + s * y, -s * z + c * y
+    z, y = z - speed * dt, y - yaw_rate * lever_m * dt
+    return c * z + s * y, -s * z + c * y
