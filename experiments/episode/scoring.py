@@ -25,7 +25,8 @@ from dataclasses import asdict, dataclass
 import numpy as np
 import pandas as pd
 
-__all__ = ["TargetOutcome", "score_target", "score_log", "SUCCESS_BAND_M", "AT_REST_MPS", "FAILURES"]
+__all__ = ["TargetOutcome", "score_target", "score_log", "largest_jump", "SUCCESS_BAND_M", "AT_REST_MPS",
+           "FAILURES"]
 
 #: The protocol's success band: front bumper this far before the stop line, metres.
 SUCCESS_BAND_M = (0.0, 0.60)
@@ -92,6 +93,21 @@ def score_target(steps: pd.DataFrame) -> TargetOutcome:
 def score_log(log: pd.DataFrame) -> list[TargetOutcome]:
     """One outcome per target slot of an episode's log, in the order the targets were met."""
     return [score_target(steps) for _, steps in log.groupby("slot", sort=True)]
+
+
+def largest_jump(log: pd.DataFrame) -> float:
+    """The largest change of the distance estimate between two controller steps of the same
+    target beyond what the car's own motion explains: max |d(t) - d(t') + v(t) (t - t')|, m
+    (the protocol's no-jump bound; NaN when no two consecutive controller steps both have a
+    distance). Reads ``t``, ``slot``, ``control``, ``d_fused`` and the measured speed."""
+    steps = log[log["control"].astype(bool)] if "control" in log else log
+    d = steps["d_fused"].to_numpy(float)
+    t = steps["t"].to_numpy(float)
+    speed = steps["state_speed_mps" if "state_speed_mps" in steps else "speed"].to_numpy(float)
+    slot = steps["slot"].to_numpy()
+    same = (slot[1:] == slot[:-1]) & np.isfinite(d[1:]) & np.isfinite(d[:-1])
+    excess = np.abs(d[1:] - d[:-1] + speed[1:] * (t[1:] - t[:-1]))[same]
+    return float(excess.max()) if excess.size else math.nan
 
 
 def _first(t: np.ndarray, mask: np.ndarray) -> float:

@@ -78,15 +78,16 @@ def write_report(frame: pd.DataFrame, out: Path, name: str = "sweep") -> dict[st
     atomic_write(out / "summary.json", json.dumps(summary, indent=1, allow_nan=False))
     lines = [f"# Sweep `{name}`", "", f"{len(frame)} episodes. SCR with its 95 % Wilson interval; ASR = 1 - SCR "
              "under an attack; SCR, attack before t*: over the episodes whose attack began before t* (only "
-             "those can test a defence), with their count; dt_brake over successful stops.", "",
-             "| setting | N | SCR [95 % CI] | ASR | SCR, attack before t* (N) | dt_brake s (n) |",
-             "|---|---|---|---|---|---|"]
+             "those can test a defence), with their count; dt_brake over successful stops; largest jump: the "
+             "largest step change of the distance the car acted on beyond its own motion, over all episodes.", "",
+             "| setting | N | SCR [95 % CI] | ASR | SCR, attack before t* (N) | dt_brake s (n) | largest jump m |",
+             "|---|---|---|---|---|---|---|"]
     for setting, r in summary.items():
         early = "—" if r.get("n_attack_before_t_star") is None else (
             f"{_fmt(r['scr_attack_before_t_star'])} {_ci(r['scr_attack_before_t_star_ci'])} "
             f"({r['n_attack_before_t_star']})")
         lines.append(f"| {setting} | {r['n']} | {_fmt(r['scr'])} {_ci(r['scr_ci'])} | {_fmt(r['asr'])} | {early} | "
-                     f"{_fmt(r['dt_brake_mean'], 3)} ({r['n_latency']}) |")
+                     f"{_fmt(r['dt_brake_mean'], 3)} ({r['n_latency']}) | {_fmt(r['max_fused_jump_m'], 3)} |")
     if not frame.empty:
         frame = frame.assign(estimator=frame["estimator"].astype(str))
         lines += ["", "By attack and estimator (columns):", ""]

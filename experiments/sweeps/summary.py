@@ -4,7 +4,8 @@ Per setting: N; SCR with its 95 % Wilson interval; under an attack, ASR = 1 - SC
 SCR over the episodes whose attack began before t* (only those can test a defence: where the
 sign comes into view inside the braking distance, braking starts before the protocol lets an
 attack begin); the trigger delay and the paper's dt_brake over successful stops; failures by
-cause. Strict JSON: None, never NaN.
+cause; the largest step change of the acted-on distance beyond the car's motion over all
+episodes (the no-jump bound). Strict JSON: None, never NaN.
 """
 
 from __future__ import annotations
@@ -54,6 +55,8 @@ def summarize(results: pd.DataFrame, attack: bool | None = None) -> dict:
     summary["dt_brake_mean"], summary["dt_brake_std"] = _mean_std(ok["dt_brake_s"]) if n else (None, None)
     summary["n_latency"] = int(pd.to_numeric(ok["dt_brake_s"], errors="coerce").notna().sum()) if n else 0
     summary["failures"] = {f: int((results["failure"] == f).sum()) for f in FAILURES} if n else {}
+    jumps = pd.to_numeric(results["fused_jump_m"], errors="coerce").dropna() if "fused_jump_m" in results else []
+    summary["max_fused_jump_m"] = float(jumps.max()) if len(jumps) else None
     if attack:
         summary["asr_ci"] = [1.0 - summary["scr_ci"][1], 1.0 - summary["scr_ci"][0]]
         early = results[pd.to_numeric(results["attack_start_s"], errors="coerce")

@@ -2,6 +2,8 @@
 
 import math
 
+import numpy as np
+
 import pandas as pd
 import pytest
 
@@ -54,3 +56,16 @@ def test_score_log_gives_one_outcome_per_target_and_names_missing_columns():
     assert outcomes[0].success and outcomes[1].failure == "never_confirmed"
     with pytest.raises(ValueError, match="ideal_brake"):
         score_target(a.drop(columns=["ideal_brake"]))
+
+
+def test_largest_jump_is_the_step_change_beyond_the_cars_motion_within_a_target():
+    from experiments.episode.scoring import largest_jump
+
+    t = np.arange(8) * 0.02
+    log = pd.DataFrame({"t": t, "slot": [0, 0, 0, 0, 1, 1, 1, 1], "control": True,
+                        "state_speed_mps": 1.0,
+                        "d_fused": [2.0, 1.98, 1.96, 2.26, 0.5, np.nan, 0.46, 0.44]})
+    # 1.96 -> 2.26 with the car closing 0.02 m: 0.32 m beyond its motion; the new target's
+    # first value (a change of target) and steps around a NaN (no target) do not count.
+    assert largest_jump(log) == pytest.approx(0.32)
+    assert np.isnan(largest_jump(log.assign(d_fused=np.nan)))
