@@ -9,8 +9,9 @@ segment is one of:
 - ``degradation``: confidence times the preset multiplier, plus Gaussian noise.
 
 A preset fixes the blackout share of segments; the rest split evenly between bias and
-degradation. Labels are 1 inside a segment, 0 elsewhere. The generator is seeded per
-series (:func:`series_seed`), so every method sees identical corrupted input.
+degradation. Labels are 1 inside a segment, 0 elsewhere. The generator is seeded by what a
+series is (:func:`draw_seed`: its drive's seed, the preset and the draw's index), so every
+method sees identical corrupted input and an edit to the code redraws nothing.
 """
 
 from __future__ import annotations
@@ -20,7 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["CorruptionPreset", "PRESETS", "SEGMENT_KINDS", "Corrupted", "corrupt_series", "series_seed"]
+__all__ = ["CorruptionPreset", "PRESETS", "SEGMENT_KINDS", "Corrupted", "corrupt_series", "draw_seed"]
 
 SEGMENT_KINDS = ("none", "bias", "blackout", "degradation")
 
@@ -87,9 +88,12 @@ class Corrupted:
     kind: np.ndarray
 
 
-def series_seed(series_id: str, preset: str, base_seed: int = 0) -> int:
-    """A fixed seed for one (series, preset): stable across runs, processes and machines."""
-    return int(np.random.SeedSequence([base_seed, zlib.crc32(series_id.encode()), zlib.crc32(preset.encode())])
+def draw_seed(drive_seed: int, preset: str, draw: int = 0) -> int:
+    """The seed of one corruption draw of a drive: a function of (the drive's seed, the preset's
+    name, the draw's index) only, stable across runs, processes, machines and code versions."""
+    if drive_seed < 0 or draw < 0:
+        raise ValueError(f"drive_seed and draw must be >= 0, got {drive_seed}, {draw}")
+    return int(np.random.SeedSequence([int(drive_seed), zlib.crc32(preset.encode()), int(draw)])
                .generate_state(1)[0])
 
 
@@ -101,7 +105,7 @@ def corrupt_series(depth: np.ndarray, confidence: np.ndarray, preset: str | Corr
         depth: (T,) clean distance, metres (NaN allowed: no measurement).
         confidence: (T,) clean confidence in [0, 1].
         preset: ``"weak"``, ``"mid"``, ``"strong"`` or a ``CorruptionPreset``.
-        seed: the series' seed (see :func:`series_seed`).
+        seed: the draw's seed (see :func:`draw_seed`).
         dt: sample period, seconds.
     """
     p = PRESETS.get(preset) if isinstance(preset, str) else preset

@@ -27,7 +27,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from experiments.data.corruption import corrupt_series, series_seed
+from experiments.data.corruption import corrupt_series, draw_seed
 from experiments.episode import DRIVE_S, TrialSpec
 from experiments.episode.runner import SCAN_FOV_HALF_BEAMS
 from experiments.sweeps.batches import SPEEDS_MPS, TRIALS_LOGS, run_batch
@@ -50,6 +50,7 @@ MOVING_MPS = 0.05
 #: Dataset columns: name -> (unit, meaning).
 COLUMNS: dict[str, tuple[str, str]] = {
     "series_id": ("", "one drive; the splits are by series"),
+    "drive_seed": ("", "the drive's seed: what the drive is (its corruption draws derive from it)"),
     "t": ("s", "time since the start of the series (50 Hz)"),
     "slot": ("", "which of the drive's targets is current (0, 1, ...: the order the route meets them)"),
     "target": ("", "the current target: sign0-sign3 (stop signs) or obstacle0-obstacle1 (blue crates)"),
@@ -59,6 +60,7 @@ COLUMNS: dict[str, tuple[str, str]] = {
     "d_true": ("m", "ground truth: depth of the target's centre (sign plate / crate's near face) along the camera axis"),
     "sign_in_view": ("bool", "ground truth: some of the target is visible"),
     "detected": ("bool", "the detector reported a target"),
+    "bearing": ("rad", "perception's bearing of the detection's centre from the optical axis, left positive (NaN: none)"),
     "lidar": ("m", "LiDAR target reference: the tracked cluster's depth along the camera axis, carried "
                    "forward by odometry between scans (NaN: nothing fits the track)"),
     "scan_new": ("bool", "a new LiDAR scan arrived this step (10 Hz)"),
@@ -114,6 +116,7 @@ def collect(out_dir: Path, drives: int = DEFAULT_DRIVES, seed: int = 0, workers:
         log = pd.read_parquet(runs / TRIALS_LOGS / f"{spec.trial_id}.parquet")
         log = log.drop(columns=["speed"]).rename(columns=_RENAME)  # speed: the measured one
         log["series_id"] = spec.trial_id
+        log["drive_seed"] = spec.seed
         log["speed_set"] = spec.speed
         log["scan_fov_mm"] = [_scan_mm(r) for r in log["scan_fov"]]
         frames.append(log[list(COLUMNS)])
@@ -322,9 +325,9 @@ over all {loc['n']} steps: position RMSE {loc['filter']['position_m_rmse']:.4f} 
 |---|---|---|
 {rows}
 
-**Corruption.** `experiments.data.dataset.load_dataset(path).corrupted("weak" | "mid" | "strong")`
-adds the protocol's offline corruption (`d_meas`, `c_meas`, `label`, `kind`) with a fixed
-seed per series.
+**Corruption.** `experiments.data.dataset.load_dataset(path).corrupted("weak" | "mid" | "strong", draw=k)`
+adds the protocol's offline corruption (`d_meas`, `c_meas`, `label`, `kind`); draw k of a series
+is seeded by (its `drive_seed`, the preset, k), so it does not change with the code.
 """)
 
 
@@ -390,17 +393,18 @@ class QCarDataset:
             raise ValueError(f"column must be one of {list(self.frame.columns)}, got {column!r}")
         return [g[column].to_numpy(np.float32) for _, g in self.clean(split).groupby("series_id", sort=False)]
 
-    def corrupted(self, preset: str, split: str | None = None, base_seed: int = 0) -> pd.DataFrame:
-        """Clean series plus the preset's corruption: ``d_meas``, ``c_meas``, ``label`` (0/1), ``kind``.
+    def corrupted(self, preset: str, split: str | None = None, draw: int = 0) -> pd.DataFrame:
+        """Clean series plus the preset's ``draw``-th corruption: ``d_meas``, ``c_meas``, ``label`` (0/1), ``kind``.
 
-        Every series has a fixed seed (``series_seed(series_id, preset, base_seed)``), so every
-        method sees identical corrupted input.
+        A series' draw is seeded by what the series is (``draw_seed(drive_seed, preset, draw)``),
+        so every method sees identical corrupted input, on every machine and whatever the code
+        version in the series id.
         """
         frame = self.clean(split).copy()
         parts = []
         for sid, s in frame.groupby("series_id", sort=False):
             c = corrupt_series(s["d_clean"].to_numpy(), s["c_clean"].to_numpy(), preset,
-                               seed=series_seed(str(sid), preset, base_seed))
+                               seed=draw_seed(int(s["drive_seed"].iloc[0]), preset, draw))
             parts.append(pd.DataFrame({"d_meas": c.depth, "c_meas": c.confidence, "label": c.label,
                                        "kind": c.kind}, index=s.index))
         return frame.join(pd.concat(parts)) if parts else frame

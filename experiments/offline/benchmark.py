@@ -23,11 +23,11 @@ import pandas as pd
 from experiments.data.dataset import SPLITS, QCarDataset, load_dataset
 from experiments.offline.forecasters import NF_MODELS, ChronosForecaster, NFSettings, train_nf, training_frame
 from experiments.offline.methods import (FORECASTERS, METHODS, ekf_estimate, forecast_at,
-                                         lidar_estimate, raw_estimate, split_arrays)
+                                         lidar_estimate, raw_estimate, split_arrays, with_fallback)
 from experiments.offline.metrics import bounded_degradation, resilience_gain
 from experiments.sweeps.store import code_version
-from experiments.offline.scoring import (bootstrap_rmse, diagnostic_scores, error_sources, horizon_scores,
-                                         recovery_scores)
+from experiments.offline.scoring import (bootstrap_rmse_draws, diagnostic_scores, error_sources, horizon_scores,
+                                         mean_over_draws, recovery_scores, series_sse)
 
 __all__ = ["BenchConfig", "ABLATION", "load_splits", "run_benchmark", "PRESETS"]
 
@@ -36,21 +36,28 @@ PRESETS = ("weak", "mid", "strong")
 BENCH_CODE = ("odca", "controllers", "experiments/data", "experiments/offline")
 
 
-def _ablation_rows() -> dict[str, dict[str, float]]:
+def _ablation_rows() -> dict[str, dict]:
     from odca.losses import LossWeights
 
     full = LossWeights()
     off = {"minimal_change": 0.0, "consistency": 0.0, "kinematics": 0.0}
-    return {
+    weights = {
         "L_ID": asdict(replace(full, **off)),
         "L_ID + L_Delta0": asdict(replace(full, consistency=0.0, kinematics=0.0)),
         "L_ID + L_Delta0 + L_cons": asdict(replace(full, kinematics=0.0)),
         "L_ID + L_Delta0 + L_kin": asdict(replace(full, consistency=0.0)),
         "full": asdict(full),
     }
+    rows = {name: {"loss_weights": w, "kinematics": {}} for name, w in weights.items()}
+    # The parts of the gate: the kinematic witness out of the vote (the paper's two-witness
+    # gate, kinematics only bases repairs), and no kinematic branch at all.
+    rows["full, two-witness gate"] = {"loss_weights": asdict(full), "kinematics": {"witness": False}}
+    rows["full, no kinematics"] = {"loss_weights": asdict(full), "kinematics": {"enabled": False}}
+    return rows
 
 
-#: The loss-ablation rows under the strong preset: objective -> LossWeights fields.
+#: The ablation rows under the strong preset: name -> the head's loss weights and the kinematic
+#: branch's settings (``KinematicsConfig`` fields changed from the default).
 ABLATION = _ablation_rows()
 
 
@@ -64,6 +71,8 @@ class BenchConfig:
         splits: split schemes to run.
         presets: corruption presets.
         seed: training seeds (ODCA head, neuralforecast models) and the bootstrap's.
+        draws: corruption draws per preset (each series' draw k is seeded by its drive's seed,
+            the preset and k); a score is the mean over them.
         odca_epochs: full-batch epochs of ODCA's head.
         nf: the neuralforecast baselines' settings.
         ablation: run the loss ablation (five head trainings on the first split).
@@ -77,6 +86,7 @@ class BenchConfig:
     splits: tuple[str, ...] = SPLITS
     presets: tuple[str, ...] = PRESETS
     seed: int = 0
+    draws: int = 5
     odca_epochs: int = 800
     nf: NFSettings = field(default_factory=NFSettings)
     ablation: bool = True
@@ -91,13 +101,15 @@ class BenchConfig:
         bad = [p for p in self.presets if p not in PRESETS]
         if not self.presets or bad:
             raise ValueError(f"presets must be a non-empty subset of {PRESETS}, got {list(self.presets)}")
+        if not (isinstance(self.draws, int) and 1 <= self.draws <= 100):
+            raise ValueError(f"draws must be an integer in [1, 100] (the protocol asks for >= 5), got {self.draws!r}")
         if self.odca_epochs < 1 or self.bootstrap < 0:
             raise ValueError(f"odca_epochs must be >= 1 and bootstrap >= 0, got {self.odca_epochs}, {self.bootstrap}")
 
     @classmethod
     def quick_config(cls, **overrides) -> "BenchConfig":
         """A few series, short training: minutes, not a result to quote."""
-        base = dict(odca_epochs=40, nf=NFSettings(max_steps=15), bootstrap=100, quick=True)
+        base = dict(odca_epochs=40, nf=NFSettings(max_steps=15), bootstrap=100, quick=True, draws=2)
         return cls(**{**base, **overrides})
 
     @classmethod
@@ -132,7 +144,8 @@ def _quick(ds: QCarDataset) -> QCarDataset:
 
 
 #: The dataset columns a method or a training reads (the hash of a split covers these).
-_USED = ["series_id", "t", "d_clean", "c_clean", "d_true", "lidar", "speed"]
+_USED = ["series_id", "drive_seed", "t", "slot", "d_clean", "c_clean", "d_true", "lidar", "speed", "yaw_rate",
+         "bearing"]
 
 
 def _frame_hash(*frames: pd.DataFrame) -> str:
@@ -146,8 +159,9 @@ def _frame_hash(*frames: pd.DataFrame) -> str:
 _PREPARED: dict = {}
 
 
-def _trained_odca(ds: QCarDataset, prior, cfg: BenchConfig, weights: dict, tag: str):
-    """ODCA trained on the split's train series with these loss weights; cached by what made it."""
+def _trained_odca(ds: QCarDataset, prior, cfg: BenchConfig, weights: dict, tag: str, kinematics: dict | None = None):
+    """ODCA trained on the split's train series with these loss weights (and kinematic branch
+    settings); cached by what made it."""
     from odca import ODCA
     from odca.losses import LossWeights
     from odca.prior import SHIPPED_PRIOR
@@ -155,6 +169,7 @@ def _trained_odca(ds: QCarDataset, prior, cfg: BenchConfig, weights: dict, tag: 
 
     code = code_version("odca", "experiments/data")
     key = hashlib.sha256(json.dumps({"data": _frame_hash(ds.clean("train"), ds.clean("val")), "weights": weights,
+                                     "kinematics": kinematics or {},
                                      "epochs": cfg.odca_epochs, "seed": cfg.seed, "code": code,
                                      "prior": code_version(str(SHIPPED_PRIOR))},
                                     sort_keys=True).encode()).hexdigest()[:16]
@@ -162,6 +177,7 @@ def _trained_odca(ds: QCarDataset, prior, cfg: BenchConfig, weights: dict, tag: 
     if (folder / "report.json").exists():
         return ODCA.load(folder, prior=prior), json.loads((folder / "report.json").read_text())
     model = initial_model(ds, prior)
+    model.config = replace(model.config, kinematics=replace(model.config.kinematics, **(kinematics or {})))
     cache = _PREPARED
     data_key = (_frame_hash(ds.clean("train"), ds.clean("val")), id(prior))
     if cache.get("key") != data_key:  # the prior's features on train/val, shared by the ablation's heads
@@ -178,12 +194,47 @@ def _trained_odca(ds: QCarDataset, prior, cfg: BenchConfig, weights: dict, tag: 
 
 def _score_split(ds: QCarDataset, preset: str, odca_model, forecasters: dict, cfg: BenchConfig
                  ) -> tuple[dict, dict]:
-    """All methods on one split's test series under one preset: (scores per method, traces for figures)."""
-    frame = ds.corrupted(preset, "test")
-    a = split_arrays(frame, odca_model.config.alignment)
+    """All methods on one split's test series under one preset, over ``cfg.draws`` corruption draws:
+    (scores per method, traces of draw 0 for figures).
+
+    A score is the mean over draws (counts are summed); ``rmse_draws`` lists each draw's RMSE
+    and ``rmse_ci`` resamples test drives and draws together.
+    """
+    series = list(ds.split["test"])
+    per_draw: dict[str, list] = {}
+    sse: dict[str, list] = {}
+    sources: dict[str, list] = {}
+    traces = {}
+    for draw in range(cfg.draws):
+        frame = ds.corrupted(preset, "test", draw)
+        a = split_arrays(frame, odca_model.config.alignment)
+        estimates, horizon = _estimates(frame, a, odca_model, forecasters)
+        for name in (m for m in METHODS if m in estimates):
+            est = estimates[name]
+            per_draw.setdefault(name, []).append({**recovery_scores(est, a), **horizon.get(name, {}),
+                                                  **diagnostic_scores(est, a)})
+            sse.setdefault(name, []).append(series_sse(est, a, series))
+            sources.setdefault(name, []).append(error_sources(est, a))
+        if draw == 0:
+            traces = {"frame": frame[["series_id", "t", "d_clean", "d_meas", "label"]].assign(
+                **{f"est_{k}": v for k, v in estimates.items()})}
+    scores = {}
+    for name, rows in per_draw.items():
+        row = mean_over_draws(rows)
+        row["n_draws"], row["n_series"] = cfg.draws, len(series)
+        row["rmse_draws"] = [r["rmse"] for r in rows]
+        errors, counts = (np.stack([pair[i] for pair in sse[name]], axis=1) for i in (0, 1))
+        row["rmse_ci"] = bootstrap_rmse_draws(errors, counts, cfg.bootstrap, cfg.seed)
+        row["error_sources"] = _pooled_sources(sources[name])
+        scores[name] = row
+    return scores, traces
+
+
+def _estimates(frame: pd.DataFrame, a, odca_model, forecasters: dict) -> tuple[dict, dict]:
+    """Every method's estimate on one corrupted frame, and the forecasters' horizon scores."""
     origins = np.flatnonzero(a.scored)
     estimates = {"raw": raw_estimate(a), "lidar": lidar_estimate(a), "ekf": ekf_estimate(a),
-                 "odca": odca_model.run(frame)["d_fused"].to_numpy()}
+                 "odca": with_fallback(odca_model.run(frame)["d_fused"].to_numpy(), a)}
     horizon = {}
     for name, forecaster in forecasters.items():
         one_step, paths = forecast_at(forecaster, a, origins, odca_model.config.context_length,
@@ -192,18 +243,17 @@ def _score_split(ds: QCarDataset, preset: str, odca_model, forecasters: dict, cf
         est[origins] = one_step
         estimates[name] = est
         horizon[name] = horizon_scores(origins, paths, a)
-    scores = {}
-    for name in (m for m in METHODS if m in estimates):
-        est = estimates[name]
-        row = recovery_scores(est, a)
-        row["rmse_ci"] = bootstrap_rmse(est, a, cfg.bootstrap, cfg.seed)
-        row.update(horizon.get(name, {}))
-        row.update(diagnostic_scores(est, a))
-        row["error_sources"] = error_sources(est, a)
-        scores[name] = row
-    traces = {"frame": frame[["series_id", "t", "d_clean", "d_meas", "label"]].assign(
-        **{f"est_{k}": v for k, v in estimates.items()})}
-    return scores, traces
+    return estimates, horizon
+
+
+def _pooled_sources(per_draw: list[dict]) -> dict:
+    """Error sources summed over draws (N and SSE), with the pooled RMSE."""
+    out = {}
+    for key in per_draw[0]:
+        n = sum(d[key]["n"] for d in per_draw)
+        total = sum(d[key]["sse"] for d in per_draw)
+        out[key] = {"n": n, "sse": total, "rmse": float(np.sqrt(total / n)) if n else None}
+    return out
 
 
 def _complexity(odca_report: dict, forecasters: dict, prior_params: int) -> dict:
@@ -255,7 +305,7 @@ def run_benchmark(cfg: BenchConfig, progress: bool = True, datasets: dict[str, Q
     for split in cfg.splits:
         ds = datasets[split]
         stage(f"{split}: ODCA head")
-        odca_model, odca_report = _trained_odca(ds, prior, cfg, ABLATION["full"], split)
+        odca_model, odca_report = _trained_odca(ds, prior, cfg, ABLATION["full"]["loss_weights"], split)
         bar.update()
         forecasters = {"chronos": chronos}
         train = training_frame(ds.clean("train"))
@@ -299,27 +349,30 @@ def run_benchmark(cfg: BenchConfig, progress: bool = True, datasets: dict[str, Q
 
 
 def _run_ablation(ds, prior, cfg: BenchConfig, full_scores: dict, full_report: dict, stage, bar) -> list[dict]:
-    """Each objective retrains the head (and recalibrates the gate); scored on the strong preset's test series."""
-    from experiments.offline.methods import split_arrays as arrays
-
-    frame = ds.corrupted("strong", "test")
+    """Each row retrains the head (and recalibrates the gate); scored on the strong preset's test
+    series over every draw (the mean, as the main table)."""
+    frames = [ds.corrupted("strong", "test", draw) for draw in range(cfg.draws)]
     rows = []
-    base = None
-    for objective, weights in ABLATION.items():
+    for objective, spec in ABLATION.items():
         if objective == "full":
             scores, report = full_scores, full_report
         else:
             stage(f"ablation: {objective}")
-            model, report = _trained_odca(ds, prior, cfg, weights, "ablation")
-            a = arrays(frame, model.config.alignment)
-            est = model.run(frame)["d_fused"].to_numpy()
-            scores = {**recovery_scores(est, a), **diagnostic_scores(est, a)}
+            model, report = _trained_odca(ds, prior, cfg, spec["loss_weights"], "ablation", spec["kinematics"])
+            per_draw = []
+            for frame in frames:
+                a = split_arrays(frame, model.config.alignment)
+                est = with_fallback(model.run(frame)["d_fused"].to_numpy(), a)
+                per_draw.append({**recovery_scores(est, a), **diagnostic_scores(est, a)})
+            scores = mean_over_draws(per_draw)
             bar.update()
-        base = scores["rmse"] if base is None else base
-        rows.append({"objective": objective, "loss_weights": weights, "rmse": scores["rmse"],
-                     "delta_rmse": None if objective == "L_ID" else scores["rmse"] - base,
-                     "mae": scores["mae"], "auroc_chg": scores["auroc_chg"], "auprc_chg": scores["auprc_chg"],
-                     "n": scores["n"], "gate": report["gate"]})
+        rows.append({"objective": objective, "loss_weights": spec["loss_weights"], "kinematics": spec["kinematics"],
+                     "rmse": scores["rmse"], "mae": scores["mae"], "auroc_chg": scores["auroc_chg"],
+                     "auprc_chg": scores["auprc_chg"], "n": scores["n"], "n_draws": cfg.draws, "gate": report["gate"]})
+    base, full = rows[0]["rmse"], next(r["rmse"] for r in rows if r["objective"] == "full")
+    for r in rows:
+        r["delta_rmse"] = None if r is rows[0] else r["rmse"] - base
+        r["delta_vs_full"] = r["rmse"] - full
     return rows
 
 

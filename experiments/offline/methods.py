@@ -12,9 +12,11 @@ per step of a long-format corrupted frame:
   computed at the scored steps only, with the next-H forecast kept for the horizon score;
 - ``odca``: the online module's fused output (its batched path, identical to ``step``).
 
-A method with no estimate yet at a step (no LiDAR so far, a filter not yet started, a
-forecaster with an empty context) falls back to the held raw depth there, so every method
-is scored on the same steps.
+Every method starts afresh at each target (a new ``slot`` of a drive), as the car resets
+its estimator when its track changes target. A method with no estimate at a step (no LiDAR
+report, a filter not yet started, a forecaster with an empty context, ODCA with no target)
+falls back to the held raw depth there, so every method is scored on the same steps: those
+after the target's first valid depth measurement where d_clean exists.
 """
 
 from __future__ import annotations
@@ -43,7 +45,7 @@ class SplitArrays:
     """One corrupted split as aligned per-step arrays (series after series, in time order)."""
 
     series_id: np.ndarray
-    first: np.ndarray  # True at each series' first step
+    first: np.ndarray  # True at each target's first step (a series' first, or a new slot)
     d: np.ndarray  # corrupted depth, NaN = missing
     c: np.ndarray
     l_al: np.ndarray  # aligned LiDAR reference, NaN = none
@@ -51,7 +53,7 @@ class SplitArrays:
     label: np.ndarray  # 1 inside a corruption segment
     d_clean: np.ndarray
     d_true: np.ndarray
-    raw: np.ndarray  # d held over its gaps
+    raw: np.ndarray  # d held over its gaps, within the target
     kind: np.ndarray  # corruption segment kind (index into SEGMENT_KINDS; 0 = none)
 
     def __len__(self) -> int:
@@ -59,7 +61,9 @@ class SplitArrays:
 
     @property
     def scored(self) -> np.ndarray:
-        """The steps every method is scored on: a raw value exists and so does the reference."""
+        """The steps every method is scored on: the target has been measured (a held raw value
+        exists) and so does the reference. Before a target's first measurement no causal
+        method can know it is there, and the held value would be another target's."""
         return np.isfinite(self.raw) & np.isfinite(self.d_clean)
 
 
@@ -67,7 +71,10 @@ def split_arrays(frame: pd.DataFrame, alignment: Alignment) -> SplitArrays:
     """Arrays of a corrupted frame (``dataset.corrupted(...)``: d_meas, c_meas, lidar, speed, label, ...)."""
     sid = frame["series_id"].to_numpy()
     first = np.r_[True, sid[1:] != sid[:-1]] if len(sid) else np.zeros(0, bool)
-    d, c, l, v = sanitize(frame["d_meas"].to_numpy(float), frame["c_meas"].to_numpy(float),
+    if "slot" in frame and len(sid):
+        slot = frame["slot"].to_numpy()
+        first[1:] |= slot[1:] != slot[:-1]
+    d, c, l, v, _, _ = sanitize(frame["d_meas"].to_numpy(float), frame["c_meas"].to_numpy(float),
                           frame["lidar"].to_numpy(float), frame["speed"].to_numpy(float))
     d_true = frame["d_true"].to_numpy(float) if "d_true" in frame else np.full(len(frame), np.nan)
     label = frame["label"].to_numpy(int)

@@ -60,8 +60,13 @@ def recovery_frame(results: dict) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
+def _sample(row: dict) -> str:
+    """What N is: scored steps summed over the draws, and the drives and draws behind them."""
+    return f"{row.get('n_series', '?')} test drives x {row.get('n_draws', 1)} corruption draws"
+
+
 def main_table(results: dict, reference: str = "", block: str = "") -> str:
-    """Markdown: RMSE [95 % CI over series] and MAE per preset, one block per split.
+    """Markdown: RMSE [95 % CI over drives and draws] and MAE per preset (means over the draws), one block per split.
 
     ``reference`` is ``""`` (d_clean) or ``"_true"``; ``block`` is ``""`` (all) or ``"_moving"``.
     """
@@ -69,9 +74,10 @@ def main_table(results: dict, reference: str = "", block: str = "") -> str:
     for split in (s for s in ("by_series", "leave_target_out") if s in results):
         presets = list(results[split])
         n = {p: next(iter(results[split][p].values()))[f"n{block}" if block else "n"] for p in presets}
+        first = next(iter(results[split][presets[0]].values()))
         lines.append(f"**{SPLIT_TITLES[split]}**, against d_{'true' if reference else 'clean'}, "
-                     f"{'moving samples' if block else 'all samples'} "
-                     f"(N = {', '.join(f'{p} {n[p]}' for p in presets)} steps)\n")
+                     f"{'moving samples' if block else 'all samples'}; {_sample(first)}, mean over the draws "
+                     f"(N = {', '.join(f'{p} {n[p]}' for p in presets)} scored steps over all draws)\n")
         head = "| method | " + " | ".join(f"{p} RMSE | {p} MAE" for p in presets) + " |"
         lines += [head, "|" + "---|" * (1 + 2 * len(presets))]
         for method in (m for m in METHODS if m in results[split][presets[0]]):
@@ -104,7 +110,8 @@ def sensor_table(results: dict) -> str:
     lines = []
     for split in (s for s in ("by_series", "leave_target_out") if s in results and "strong" in results[s]):
         rows = results[split]["strong"]
-        lines += [f"**{SPLIT_TITLES[split]}**, strong preset (N = {rows['odca']['n']} steps)\n",
+        lines += [f"**{SPLIT_TITLES[split]}**, strong preset ({_sample(rows['odca'])}, N = {rows['odca']['n']} "
+                  "scored steps over all draws)\n",
                   "| method | RMSE [95 % CI] | MAE | RMSE moving | RMSE vs d_true |", "|---|---|---|---|---|"]
         for m in ("raw", "lidar", "ekf", "chronos", "odca"):
             r = rows[m]
@@ -121,7 +128,7 @@ def error_source_table(results: dict, preset: str = "strong") -> str:
         methods = [m for m in ("raw", "lidar", "ekf", "chronos", "odca") if m in rows]
         cells = rows[methods[0]]["error_sources"]
         lines += [f"**{SPLIT_TITLES[split]}**, {preset} preset: RMSE (share of the method's squared error) "
-                  "by segment kind and LiDAR presence\n",
+                  f"by segment kind and LiDAR presence, pooled over {rows['odca'].get('n_draws', 1)} draws\n",
                   "| segment | LiDAR | N | " + " | ".join(methods) + " |", "|---|---|---|" + "---|" * len(methods)]
         totals = {m: sum(v["sse"] for v in rows[m]["error_sources"].values()) or 1.0 for m in methods}
         for key, cell in cells.items():
@@ -149,12 +156,14 @@ def ablation_table(results: dict) -> str:
     rows = results.get("ablation") or []
     if not rows:
         return ""
-    lines = [f"Strong preset, {SPLIT_TITLES[results['config']['splits'][0]]} test series (N = {rows[0]['n']} steps); "
-             "each row retrains the head and recalibrates the gate.\n",
-             "| objective | RMSE | ΔRMSE | AUROC_chg | AUPRC_chg |", "|---|---|---|---|---|"]
+    lines = [f"Strong preset, {SPLIT_TITLES[results['config']['splits'][0]]} test series, mean over "
+             f"{rows[0].get('n_draws', 1)} corruption draws (N = {rows[0]['n']} scored steps over all draws); each "
+             "row retrains the head and recalibrates the gate. ΔRMSE is against L_ID alone, Δ full against the "
+             "full ODCA; the last two rows take a part of the gate away.\n",
+             "| row | RMSE | ΔRMSE | Δ full | AUROC_chg | AUPRC_chg |", "|---|---|---|---|---|---|"]
     for r in rows:
-        lines.append(f"| {r['objective']} | {_f(r['rmse'])} | {_f(r['delta_rmse'])} | {_f(r['auroc_chg'])} | "
-                     f"{_f(r['auprc_chg'])} |")
+        lines.append(f"| {r['objective']} | {_f(r['rmse'])} | {_f(r['delta_rmse'])} | {_f(r.get('delta_vs_full'))} | "
+                     f"{_f(r['auroc_chg'])} | {_f(r['auprc_chg'])} |")
     return "\n".join(lines) + "\n"
 
 
@@ -193,14 +202,15 @@ def write_report(results: dict, out: Path) -> dict[str, Path]:
         atomic_write(paths[f"table_{name}"], text)
     recovery_frame(results).to_csv(out / "tables" / "recovery.csv", index=False)
     diagnostics_frame(results).to_csv(out / "tables" / "diagnostics.csv", index=False)
-    pd.DataFrame(results.get("ablation") or []).drop(columns=["loss_weights", "gate"], errors="ignore").to_csv(
+    pd.DataFrame(results.get("ablation") or []).drop(columns=["loss_weights", "gate", "kinematics"], errors="ignore").to_csv(
         out / "tables" / "ablation.csv", index=False)
     paths.update(figures.write_all(clean, traces, out / "figures"))
     quick = " (--quick: not a result to quote)" if clean["dataset"]["quick"] else ""
     summary = ["# Offline repair benchmark", "",
                f"`racf bench` on `{clean['dataset']['path']}`{quick}; "
                f"{clean['wall_s']:.0f} s. Scored per `docs/protocol.md`: causal methods, RMSE/MAE in metres, "
-               "95 % intervals from resampling test series.", "",
+               "scores are means over the corruption draws, 95 % intervals resample test drives and draws "
+               "together.", "",
                "## Recovery (against d_clean, all samples)", "", tables["recovery"],
                "## Sensor-level baselines (strong)", "", tables["sensors_strong"],
                "## Where the error comes from (strong)", "", tables["error_sources_strong"],

@@ -9,7 +9,7 @@ from experiments.offline.metrics import auprc, auroc, mae, rmse
 from odca.train import MOVING_MPS  # the protocol's standstill bound, m/s
 
 __all__ = ["MOVING_MPS", "recovery_scores", "horizon_scores", "diagnostic_scores", "bootstrap_rmse",
-           "error_sources"]
+           "series_sse", "bootstrap_rmse_draws", "error_sources", "mean_over_draws"]
 
 
 
@@ -71,6 +71,53 @@ def bootstrap_rmse(estimate: np.ndarray, a: SplitArrays, n_boot: int, seed: int,
     values = np.sqrt(sse[draws].sum(1) / np.maximum(count[draws].sum(1), 1.0))
     tail = (1 - level) / 2 * 100
     return [float(np.percentile(values, tail)), float(np.percentile(values, 100 - tail))]
+
+
+def series_sse(estimate: np.ndarray, a: SplitArrays, series: list[str]) -> tuple[np.ndarray, np.ndarray]:
+    """Sum of squared errors against d_clean and scored-step count per test series (in ``series`` order)."""
+    scored = a.scored
+    index = {sid: k for k, sid in enumerate(series)}
+    rows = np.array([index[sid] for sid in a.series_id[scored]], int)
+    sq = ((estimate - a.d_clean) ** 2)[scored]
+    return (np.bincount(rows, weights=sq, minlength=len(series)),
+            np.bincount(rows, minlength=len(series)).astype(float))
+
+
+def bootstrap_rmse_draws(sse: np.ndarray, count: np.ndarray, n_boot: int, seed: int, level: float = 0.95
+                         ) -> list[float] | None:
+    """Percentile interval of the mean-over-draws RMSE, resampling test drives and corruption draws together.
+
+    ``sse`` and ``count`` are (series, draws). Each resample picks the series and the draws
+    with replacement; its value is the mean over the picked draws of the RMSE over the picked
+    series, as the reported RMSE is the mean over draws.
+    """
+    n_series, n_draws = sse.shape
+    if n_boot < 1 or not count.sum():
+        return None
+    rng = np.random.default_rng(seed)
+    rows = rng.integers(0, n_series, size=(n_boot, n_series))
+    cols = rng.integers(0, n_draws, size=(n_boot, n_draws))
+    # (boot, draws): the picked series' totals in each picked draw.
+    sse_sum = np.stack([sse[rows[b]][:, cols[b]].sum(0) for b in range(n_boot)])
+    cnt_sum = np.stack([count[rows[b]][:, cols[b]].sum(0) for b in range(n_boot)])
+    values = np.sqrt(sse_sum / np.maximum(cnt_sum, 1.0)).mean(1)
+    tail = (1 - level) / 2 * 100
+    return [float(np.percentile(values, tail)), float(np.percentile(values, 100 - tail))]
+
+
+def mean_over_draws(rows: list[dict]) -> dict:
+    """One score dict from one per draw: numbers averaged (None where a draw has none), counts summed."""
+    out = {}
+    for key in rows[0]:
+        values = [r[key] for r in rows]
+        if key.startswith("n"):
+            out[key] = int(sum(values))
+        elif all(isinstance(v, (int, float)) and v is not None for v in values):
+            out[key] = float(np.mean(values))
+        else:
+            numbers = [v for v in values if isinstance(v, (int, float))]
+            out[key] = float(np.mean(numbers)) if numbers else None
+    return out
 
 
 def error_sources(estimate: np.ndarray, a: SplitArrays) -> dict:

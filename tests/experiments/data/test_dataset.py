@@ -96,6 +96,12 @@ def test_loader_gives_both_splits_and_labelled_corruption(small):
     assert {"d_meas", "c_meas", "label", "kind"} <= set(bad.columns) and len(bad) == len(ds.frame)
     assert 0.2 < bad["label"].mean() < 0.5
     pd.testing.assert_frame_equal(bad, ds.corrupted("strong"))
+    # A draw depends on what a series is (its drive's seed), not on its id (which hashes the code).
+    renamed = ds.frame.assign(series_id=ds.frame["series_id"] + "-renamed")
+    again = type(ds)(renamed, {k: [i + "-renamed" for i in v] for k, v in ds.split.items()}, ds.path).corrupted("strong")
+    np.testing.assert_array_equal(again["d_meas"].to_numpy(), bad["d_meas"].to_numpy())
+    assert not np.array_equal(ds.corrupted("strong", draw=1)["label"].to_numpy(), bad["label"].to_numpy())
+    assert set(bad["drive_seed"]) == {300000, 300001, 300002}
     outside = bad["label"] == 0
     pd.testing.assert_series_equal(bad.loc[outside, "d_meas"], bad.loc[outside, "d_clean"], check_names=False)
     with pytest.raises(ValueError, match="split must be one of"):

@@ -28,7 +28,7 @@ def _write_dataset(folder, n_series=12, seed=0):
                                        "speed": speed}))
         s = pd.concat(parts, ignore_index=True)
         n = len(s)
-        s = s.assign(series_id=f"drive{i}", t=np.arange(n) * 0.02, speed_set=1.0,
+        s = s.assign(series_id=f"drive{i}", drive_seed=i, t=np.arange(n) * 0.02, speed_set=1.0, bearing=0.0,
                      sign_in_view=np.isfinite(s["d_clean"]), detected=np.isfinite(s["d_clean"]),
                      scan_new=np.arange(n) % 5 == 0, scan_fov_mm=[np.zeros(4, np.uint16)] * n, steering=0.0,
                      yaw_rate=0.0, accel=0.0, x=0.0, y=0.0, yaw=0.0, dist_to_stop_line=s["d_clean"], brake=False,
@@ -73,10 +73,16 @@ def test_json_has_every_split_preset_and_method(bench_runs):
                 assert results[split][preset][method]["rmse_h16"] is not None
             n = {results[split][preset][m]["n"] for m in METHODS}
             assert len(n) == 1  # every method is scored on the same steps
+            odca = results[split][preset]["odca"]
+            assert odca["n_draws"] == 2 and len(odca["rmse_draws"]) == 2
+            assert odca["rmse"] == pytest.approx(np.mean(odca["rmse_draws"]))  # the mean over the draws
+            low, high = odca["rmse_ci"]
+            assert low <= high
     assert 0 <= results["clean"]["odca_rmse_vs_input"] < 0.5
     assert results["wall_s"] > 0
     assert [r["objective"] for r in results["ablation"]] == ["L_ID", "L_ID + L_Delta0", "L_ID + L_Delta0 + L_cons",
-                                                             "L_ID + L_Delta0 + L_kin", "full"]
+                                                             "L_ID + L_Delta0 + L_kin", "full",
+                                                             "full, two-witness gate", "full, no kinematics"]
     assert results["complexity"]["odca"]["trainable"] == 917
 
 
@@ -119,5 +125,7 @@ def test_bad_input_is_rejected_before_any_work(tmp_path, capsys):
         BenchConfig(presets=("extreme",))
     with pytest.raises(ValueError, match="splits"):
         BenchConfig(splits=())
+    with pytest.raises(ValueError, match="draws"):
+        BenchConfig(draws=0)
     with pytest.raises(SystemExit):
         main(["bench", "--split", "random"])

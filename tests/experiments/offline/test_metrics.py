@@ -132,3 +132,16 @@ def test_error_sources_split_the_squared_error_by_segment_kind_and_lidar():
     assert out["none|lidar"]["n"] == 1 and out["none|no_lidar"]["n"] == 1
     assert out["degradation|lidar"] == {"n": 0, "sse": 0.0, "rmse": None}
     assert sum(v["n"] for v in out.values()) == int(a.scored.sum())
+
+
+def test_the_interval_resamples_drives_and_draws_together():
+    from experiments.offline.scoring import bootstrap_rmse_draws
+
+    count = np.full((6, 5), 100.0)
+    same = np.full((6, 5), 4.0)  # every drive and draw: RMSE 0.2
+    low, high = bootstrap_rmse_draws(same, count, 200, seed=0)
+    assert low == pytest.approx(0.2) and high == pytest.approx(0.2)
+    # Drives alike, draws apart: the interval must open (a drives-only bootstrap would not).
+    by_draw = np.tile(np.array([1.0, 4.0, 9.0, 16.0, 25.0]), (6, 1))
+    low, high = bootstrap_rmse_draws(by_draw, count, 400, seed=0)
+    assert low < 0.3 - 0.02 and high > 0.3 + 0.02  # the mean of 0.1 ... 0.5 is 0.3
