@@ -24,7 +24,8 @@ def odca_losses(delta, base, d, c, l_al, v, clean, valid_pair, dt: float, tau_lo
     """Returns (total, parts) for one batch of steps (1-D tensors, NaN already masked by the flags).
 
     Args:
-        delta: predicted corrections. base: what they add to (d~ or its stand-in).
+        delta: predicted corrections (0 where the depth passed). base: what they add to (the
+            witness the gate's verdict rests on).
         d: measured depth with NaN replaced by 0; ``clean`` marks steps that are unattacked,
             confident and measured (identity preservation applies there).
         l_al: aligned LiDAR with NaN replaced by 0 (``l_ok`` is l_al > 0).

@@ -12,7 +12,8 @@ the LiDAR and the speed.
    depth-LiDAR residuals; the verdicts do not depend on the head).
 3. Gate: tau among the 99th / 99.5th percentiles of the residual on unattacked validation
    steps and the kinematic branch's n_sigma, by grid search for the lowest validation RMSE
-   against d_clean.
+   against d_clean among the candidates that leave clean validation series unchanged
+   (Proposition 1 as a constraint).
 """
 
 from __future__ import annotations
@@ -29,7 +30,8 @@ from odca.head import HeadWeights, head_parameters, make_head
 from odca.losses import LossWeights, odca_losses
 from odca.online import ODCA, ODCAConfig, segments
 
-__all__ = ["prepare", "prepare_split", "initial_model", "fit", "train_head", "calibrate_gate", "score", "pass_through",
+__all__ = ["prepare", "prepare_split", "prepare_clean", "revote", "initial_model", "fit", "train_head", "calibrate_gate",
+           "unchanged_share", "score", "pass_through",
            "evaluate", "train_odca"]
 
 
@@ -118,8 +120,9 @@ def _rmse(err: np.ndarray) -> float | None:
 def score(model: ODCA, data: dict[str, np.ndarray]) -> dict[str, float]:
     """RMSE/MAE against d_clean (all and moving samples) and RMSE against d_true, of ODCA and of raw depth.
 
-    Raw depth holds the last valid value of its series; the steps before a series' first
-    valid measurement are scored for neither.
+    Raw depth holds the last valid value of its target; the steps before a target's first
+    valid measurement are scored for neither (no causal method can know it is there), and
+    where ODCA has no target it is scored as the held raw depth, as every method is.
     """
     held = pd.Series(data["d"]).groupby(np.cumsum(data["first"])).ffill().to_numpy()
     fused = _fused(model, data)
@@ -158,27 +161,51 @@ def pass_through(model: ODCA, frame: pd.DataFrame, tolerance_m: float = 1e-9) ->
             "rmse_vs_input": _rmse((fused - d)[has_d]), "n_both_present": int(both.sum()), "n_depth": int(has_d.sum())}
 
 
-def calibrate_gate(model: ODCA, val: dict[str, np.ndarray]) -> GateConfig:
+#: The kinematic branch's agreement widths (in its std) the gate calibration tries.
+N_SIGMA_GRID = (1.0, 1.5, 2.0, 3.0)
+
+
+#: Proposition 1 as a constraint on the calibration: a candidate gate must leave at least this
+#: share of clean validation steps with a depth unchanged.
+MIN_CLEAN_UNCHANGED = 0.999
+
+
+def calibrate_gate(model: ODCA, val: dict[str, np.ndarray], clean: dict[str, np.ndarray] | None = None) -> GateConfig:
     """The gate from validation data (the model's config is updated in place).
 
     tau among the 99th / 99.5th percentiles of unattacked depth-LiDAR residuals (so clean
     samples agree: Proposition 1); trust_confidence at the 1st percentile of unattacked
     confidences (the first sight of a clean target passes); the kinematic branch's n_sigma
-    by grid search with tau for the lowest validation RMSE.
+    by grid search with tau for the lowest validation RMSE, among the candidates that leave
+    at least ``MIN_CLEAN_UNCHANGED`` of the ``clean`` validation steps unchanged (prepared
+    with ``prepare_clean``; the most faithful candidate if none does).
     """
     tau_grid, trust = clean_tolerances(val, (99.0, 99.5))
-    best = None
+    candidates = []
     for tau in tau_grid:
-        for n_sigma in (2.0, 3.0, 4.0):
+        for n_sigma in N_SIGMA_GRID:
             config = replace(model.config, gate=GateConfig(tau, trust),
                              kinematics=replace(model.config.kinematics, n_sigma=n_sigma))
             model.config = config
             rmse = score(model, revote(model, val))["rmse"]
-            if best is None or rmse < best[0]:
-                best = (rmse, config)
-    model.config = best[1]
+            unchanged = unchanged_share(model, revote(model, clean)) if clean is not None else 1.0
+            candidates.append((unchanged >= MIN_CLEAN_UNCHANGED, rmse, -unchanged, config))
+    faithful = [c for c in candidates if c[0]]
+    best = min(faithful, key=lambda c: c[1]) if faithful else min(candidates, key=lambda c: c[2])
+    model.config = best[3]
     revote(model, val)
-    return best[1].gate
+    return best[3].gate
+
+
+def prepare_clean(model: ODCA, frame: pd.DataFrame) -> dict[str, np.ndarray]:
+    """``prepare`` of clean series: the input is d_clean itself, nothing is attacked."""
+    return prepare(model, frame.assign(d_meas=frame["d_clean"], c_meas=frame["c_clean"], label=0))
+
+
+def unchanged_share(model: ODCA, data: dict[str, np.ndarray]) -> float:
+    """The share of steps with a depth that ODCA outputs unchanged."""
+    has_d = np.isfinite(data["d"])
+    return float(np.mean(_fused(model, data)[has_d] == data["d"][has_d])) if has_d.any() else 1.0
 
 
 def clean_tolerances(data: dict[str, np.ndarray], percentiles) -> tuple[list[float], float]:
@@ -208,8 +235,10 @@ def prepare_split(model: ODCA, dataset, split: str, presets=("weak", "mid", "str
 
 
 def fit(model: ODCA, train: dict[str, np.ndarray], val: dict[str, np.ndarray], epochs: int = 800, seed: int = 0,
-        weights: LossWeights | None = None, progress: bool = True) -> dict:
-    """Trains the head on prepared train data and calibrates the gate on validation data (in place).
+        weights: LossWeights | None = None, progress: bool = True, clean_val: dict[str, np.ndarray] | None = None
+        ) -> dict:
+    """Trains the head on prepared train data and calibrates the gate on validation data (in place;
+    ``clean_val``, from ``prepare_clean``, holds the calibration to Proposition 1).
 
     Returns the training part of the report.
     """
@@ -219,7 +248,7 @@ def fit(model: ODCA, train: dict[str, np.ndarray], val: dict[str, np.ndarray], e
     head, history = train_head(train, tau, model.config.dt, epochs=epochs, seed=seed, weights=weights,
                                progress=progress)
     model.head = head
-    gate = calibrate_gate(model, val)
+    gate = calibrate_gate(model, val, clean_val)
     return {"alignment": asdict(model.config.alignment), "gate": asdict(gate),
             "kinematics": asdict(model.config.kinematics), "head_parameters": head.n_parameters,
             "loss_weights": asdict(weights or LossWeights()), "final_losses": history[-1], "epochs": epochs,
@@ -232,7 +261,8 @@ def train_odca(dataset, prior, epochs: int = 800, seed: int = 0, presets=("weak"
     """The whole recipe on a ``QCarDataset``; returns the trained ODCA and a report."""
     model = initial_model(dataset, prior)
     train, val = (prepare_split(model, dataset, split, presets) for split in ("train", "val"))
-    report = fit(model, train, val, epochs=epochs, seed=seed, weights=weights, progress=progress)
+    report = fit(model, train, val, epochs=epochs, seed=seed, weights=weights, progress=progress,
+                 clean_val=prepare_clean(model, dataset.clean("val")))
     if evaluate_test:
         report.update(evaluate(model, dataset, presets))
     return model, report

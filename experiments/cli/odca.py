@@ -116,7 +116,8 @@ def train_table(report: dict) -> str:
                      f"{f(r['rmse_moving_raw']):>12}{f(r['rmse_moving']):>13}{f(r['mae_raw']):>9}{f(r['mae']):>10}"
                      f"{f(r['rmse_true_raw']):>13}{f(r['rmse_true']):>14}")
     p = report["clean_pass_through"]
-    lines.append(f"clean pass-through (input = d_clean): unchanged on {p['unchanged_share_both_present']:.2%} of "
-                 f"{p['n_both_present']} steps with depth and LiDAR; RMSE vs input {p['rmse_vs_input']:.4f} m over "
-                 f"{p['n_depth']} steps with depth; changed > 1 cm on {p['changed_over_1cm_share']:.2%}")
+    lines.append(f"clean pass-through (input = d_clean): unchanged on {p['unchanged_share']:.2%} of {p['n_depth']} "
+                 f"steps with depth ({p['unchanged_share_both_present']:.2%} of {p['n_both_present']} with the LiDAR "
+                 f"too); RMSE vs input {1000 * p['rmse_vs_input']:.2f} mm; changed > 1 cm on "
+                 f"{p['changed_over_1cm_share']:.2%}")
     return "\n".join(lines)

@@ -165,7 +165,7 @@ def _trained_odca(ds: QCarDataset, prior, cfg: BenchConfig, weights: dict, tag: 
     from odca import ODCA
     from odca.losses import LossWeights
     from odca.prior import SHIPPED_PRIOR
-    from odca.train import fit, initial_model, prepare_split
+    from odca.train import fit, initial_model, prepare_clean, prepare_split
 
     code = code_version("odca", "experiments/data")
     key = hashlib.sha256(json.dumps({"data": _frame_hash(ds.clean("train"), ds.clean("val")), "weights": weights,
@@ -182,10 +182,11 @@ def _trained_odca(ds: QCarDataset, prior, cfg: BenchConfig, weights: dict, tag: 
     data_key = (_frame_hash(ds.clean("train"), ds.clean("val")), id(prior))
     if cache.get("key") != data_key:  # the prior's features on train/val, shared by the ablation's heads
         cache.clear()
-        cache.update(key=data_key, train=prepare_split(model, ds, "train"), val=prepare_split(model, ds, "val"))
+        cache.update(key=data_key, train=prepare_split(model, ds, "train"), val=prepare_split(model, ds, "val"),
+                     clean_val=prepare_clean(model, ds.clean("val")))
     t0 = time.perf_counter()
     report = fit(model, cache["train"], cache["val"], epochs=cfg.odca_epochs, seed=cfg.seed,
-                 weights=LossWeights(**weights), progress=False)
+                 weights=LossWeights(**weights), progress=False, clean_val=cache["clean_val"])
     report["train_s"] = time.perf_counter() - t0
     model.save(folder)
     (folder / "report.json").write_text(json.dumps(report, indent=1, allow_nan=False))
