@@ -10,8 +10,9 @@ then replays the log and those frames into a recording on the ``sim_time`` timel
 - ``world/car/lidar``: the LiDAR returns in the car's frame, the tracked reference's
   cluster in red, and ``world/car/lidar/track`` the tracked point;
 - ``map``: a top view of the mat with the car's trajectory and its current position;
-- ``series/*`` (d_true, d_clean, d_meas, lidar, d_fused) and ``control/*`` (gate w, brake,
-  attack active), every step, sent with ``send_columns``.
+- ``series/*`` (d_true, d_clean, d_meas, lidar, d_fused, and ODCA's d_kin; NaN, where an
+  estimator has no target, is a gap) and ``control/*`` (gate w, brake, attack active), every
+  step, sent with ``send_columns``.
 
 A default blueprint lays these out so the story reads at a glance.
 """
@@ -27,7 +28,8 @@ import pandas as pd
 __all__ = ["FrameRecorder", "write_rrd", "SERIES", "CONTROL"]
 
 #: Distance series (metres) and control series, as logged (entity name -> log column).
-SERIES = {"d_true": "d_true", "d_clean": "d_clean", "d_meas": "d_meas", "lidar": "lidar", "d_fused": "d_fused"}
+SERIES = {"d_true": "d_true", "d_clean": "d_clean", "d_meas": "d_meas", "lidar": "lidar", "d_fused": "d_fused",
+          "d_kin": "d_kin"}
 CONTROL = {"gate_w": "w", "brake": "brake", "attack_active": "attack_active"}
 _MAP_PX_PER_M = 60
 #: A LiDAR return belongs to the tracked cluster within this distance of the tracked point, m.
