@@ -34,7 +34,10 @@ def test_summary_has_the_protocol_keys_and_wilson_interval():
     s = summarize(rows, attack=True)
     assert set(s) == {"n", "scr", "scr_ci", "asr", "asr_ci", "trigger_delay_mean", "trigger_delay_std",
                       "dt_brake_mean", "dt_brake_std", "n_latency", "failures", "lost_frames_mean", "attacked_share",
-                      "n_attack_before_t_star", "scr_attack_before_t_star", "scr_attack_before_t_star_ci"}
+                      "n_attack_before_t_star", "scr_attack_before_t_star", "scr_attack_before_t_star_ci",
+                      "max_fused_jump_m"}
+    assert s["max_fused_jump_m"] is None  # the rows carry no jumps
+    assert summarize(rows.assign(fused_jump_m=[0.1] * 9 + [math.nan]))["max_fused_jump_m"] == 0.1
     # Only the last trial's attack began before t* (1.2 < 1.5 s), and it failed.
     assert s["n_attack_before_t_star"] == 1 and s["scr_attack_before_t_star"] == 0.0
     assert s["dt_brake_mean"] == pytest.approx(0.1) and s["trigger_delay_mean"] == pytest.approx(0.02)
