@@ -105,7 +105,8 @@ class FusedSample:
         r_delta: |Delta|, the head's correction.
         r_post: |d_fused - l|.
         mu, sigma: the prior's forecast for this step.
-        d_kin, kin_std: the kinematic branch and its std (NaN when it has none).
+        d_kin, kin_std: the kinematic branch and its std as the gate saw them: advanced to
+            this step, before this step's anchor (NaN when there is no branch).
         source: what the output rests on, an index into ``SOURCES``.
     """
 

@@ -86,13 +86,11 @@ def test_clean_depth_passes_through_exactly(rows, speed):
         assert out.w == 0.0 and out.d_fused == depth and out.source_name == "depth"
 
 
-def _approach(n=100, speed=1.5, blackout=(40, 90), bias=None):
-    t = np.arange(n)
-    truth = 3.5 - speed * 0.02 * t
+def _approach(n=100, speed=1.5, blackout=(40, 90)):
+    """A straight approach: the true distance and the depth with a blackout."""
+    truth = 3.5 - speed * 0.02 * np.arange(n)
     depth = truth.copy()
     depth[blackout[0]:blackout[1]] = np.nan
-    if bias is not None:
-        depth[bias[0]:bias[1]] += bias[2]
     return truth, depth
 
 
