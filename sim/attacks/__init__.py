@@ -3,6 +3,7 @@
 - :class:`PatchAttack`: a naturalistic patch over a share of the sign (RGB).
 - :class:`DepthBlackout`, :class:`DepthBias`, :class:`ConfidenceDegradation`: depth attacks.
 - :class:`LidarDropout`, :class:`LidarSpoof`: LiDAR faults (beyond the paper).
+- :class:`StaleData` (``delay``): old data replayed as new: LiDAR scans late, or depth frozen.
 Each marks ``info["attack"]`` (active attacks) and ``info["attack_active"]``.
 
 ``ATTACKS`` finds them by name (each wrapper's ``name``): a new attack is one module and one
@@ -17,10 +18,11 @@ from sim.attacks.lidar_dropout import LidarDropout
 from sim.attacks.lidar_spoof import LidarSpoof
 from sim.attacks.patch import PatchAttack, patch_rows
 from sim.attacks.schedule import AttackSchedule
+from sim.attacks.stale import StaleData
 
 #: Every attack wrapper by name.
 ATTACKS: dict[str, type[AttackWrapper]] = {cls.name: cls for cls in (
-    PatchAttack, LidarSpoof, LidarDropout, DepthBlackout, DepthBias, ConfidenceDegradation)}
+    PatchAttack, LidarSpoof, LidarDropout, DepthBlackout, DepthBias, ConfidenceDegradation, StaleData)}
 
 __all__ = ["ATTACKS", "AttackSchedule", "AttackWrapper", "ConfidenceDegradation", "DepthBias", "DepthBlackout",
-           "LidarDropout", "LidarSpoof", "PatchAttack", "patch_rows"]
+           "LidarDropout", "LidarSpoof", "PatchAttack", "StaleData", "patch_rows"]
