@@ -4,6 +4,7 @@
 - :class:`DepthBlackout`, :class:`DepthBias`, :class:`ConfidenceDegradation`: depth attacks.
 - :class:`LidarDropout`, :class:`LidarSpoof`: LiDAR faults (beyond the paper).
 - :class:`StaleData` (``delay``): old data replayed as new: LiDAR scans late, or depth frozen.
+- :class:`TimedDropout` (``dropout_timed``): a depth attack on while the LiDAR has nothing on the sign.
 Each marks ``info["attack"]`` (active attacks) and ``info["attack_active"]``.
 
 ``ATTACKS`` finds them by name (each wrapper's ``name``): a new attack is one module and one
@@ -19,10 +20,11 @@ from sim.attacks.lidar_spoof import LidarSpoof
 from sim.attacks.patch import PatchAttack, patch_rows
 from sim.attacks.schedule import AttackSchedule
 from sim.attacks.stale import StaleData
+from sim.attacks.timed_dropout import TimedDropout
 
 #: Every attack wrapper by name.
 ATTACKS: dict[str, type[AttackWrapper]] = {cls.name: cls for cls in (
-    PatchAttack, LidarSpoof, LidarDropout, DepthBlackout, DepthBias, ConfidenceDegradation, StaleData)}
+    PatchAttack, LidarSpoof, LidarDropout, DepthBlackout, DepthBias, ConfidenceDegradation, StaleData, TimedDropout)}
 
 __all__ = ["ATTACKS", "AttackSchedule", "AttackWrapper", "ConfidenceDegradation", "DepthBias", "DepthBlackout",
-           "LidarDropout", "LidarSpoof", "PatchAttack", "StaleData", "patch_rows"]
+           "LidarDropout", "LidarSpoof", "PatchAttack", "StaleData", "TimedDropout", "patch_rows"]

@@ -74,6 +74,12 @@ class AttackWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
             mask = cv2.dilate(mask.view(np.uint8), np.ones((k, k), np.uint8)).astype(bool)
         return mask
 
+    def sign_range_m(self) -> float:
+        """The LiDAR's horizontal distance to the target sign, m (ground truth)."""
+        u = self.env.unwrapped
+        lidar = u.data.site("lidar")
+        return float(np.hypot(u.target_sign.position[0] - lidar.xpos[0], u.target_sign.position[1] - lidar.xpos[1]))
+
     def sign_beams(self, n_beams: int, extra_half_width_rad: float = 0.0) -> np.ndarray:
         """(n_beams,) bool: LiDAR beams that point at the target sign's plate (ground truth)."""
         u = self.env.unwrapped
@@ -81,7 +87,7 @@ class AttackWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         lidar = u.data.site("lidar")
         yaw = float(np.arctan2(lidar.xmat[3], lidar.xmat[0]))
         dx, dy = sign.position[0] - lidar.xpos[0], sign.position[1] - lidar.xpos[1]
-        dist = max(float(np.hypot(dx, dy)), 1e-3)
+        dist = max(self.sign_range_m(), 1e-3)
         bearing = np.arctan2(dy, dx) - yaw
         half = np.arctan(0.05 / dist) + extra_half_width_rad
         angles = 2 * np.pi * np.arange(n_beams) / n_beams
