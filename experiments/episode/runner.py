@@ -133,6 +133,7 @@ def _run(env: gym.Env, spec: TrialSpec, estimator, on_step: StepHook | None, cle
     delay_steps = int(round(spec.delay_ms / 1000.0 / dt))
     # The car gets its build and its mission before it starts, then only observations.
     car = build_car(env, spec, mission(env, options), estimator)
+    _grant_white_box(env, car.estimator)
     targets = car.mission.targets
     referee = Referee(car.calibration, spec.braking, dt, _find_wrapper(env, AttackWrapper) is not None, clean_pass)
     pending: deque = deque()
@@ -205,6 +206,14 @@ def _first_attack_windows(env: gym.Env) -> list[tuple[float, float]]:
     if not attacks:
         return []
     return min(attacks, key=lambda a: (a.schedule.windows[0][0], not isinstance(a, PatchAttack))).schedule.windows
+
+
+def _grant_white_box(env: gym.Env, defence) -> None:
+    """Hands the defence to every white-box attack in the env's wrappers (their threat model)."""
+    while isinstance(env, gym.Wrapper):
+        if isinstance(env, AttackWrapper) and env.threat_model == "white box":
+            env.attach_defence(defence)
+        env = env.env
 
 
 def _find_wrapper(env: gym.Env, kind: type) -> gym.Env | None:

@@ -5,6 +5,7 @@
 - :class:`LidarDropout`, :class:`LidarSpoof`: LiDAR faults (beyond the paper).
 - :class:`StaleData` (``delay``): old data replayed as new: LiDAR scans late, or depth frozen.
 - :class:`TimedDropout` (``dropout_timed``): a depth attack on while the LiDAR has nothing on the sign.
+- :class:`StealthRamp` (``stealth_ramp``, white box): a depth bias ramp kept under the defence's tolerance.
 Each marks ``info["attack"]`` (active attacks) and ``info["attack_active"]``.
 
 ``ATTACKS`` finds them by name (each wrapper's ``name``): a new attack is one module and one
@@ -20,11 +21,12 @@ from sim.attacks.lidar_spoof import LidarSpoof
 from sim.attacks.patch import PatchAttack, patch_rows
 from sim.attacks.schedule import AttackSchedule
 from sim.attacks.stale import StaleData
+from sim.attacks.stealth_ramp import StealthRamp
 from sim.attacks.timed_dropout import TimedDropout
 
 #: Every attack wrapper by name.
 ATTACKS: dict[str, type[AttackWrapper]] = {cls.name: cls for cls in (
-    PatchAttack, LidarSpoof, LidarDropout, DepthBlackout, DepthBias, ConfidenceDegradation, StaleData, TimedDropout)}
+    PatchAttack, LidarSpoof, LidarDropout, DepthBlackout, DepthBias, ConfidenceDegradation, StaleData, TimedDropout, StealthRamp)}
 
 __all__ = ["ATTACKS", "AttackSchedule", "AttackWrapper", "ConfidenceDegradation", "DepthBias", "DepthBlackout",
-           "LidarDropout", "LidarSpoof", "PatchAttack", "StaleData", "TimedDropout", "patch_rows"]
+           "LidarDropout", "LidarSpoof", "PatchAttack", "StaleData", "StealthRamp", "TimedDropout", "patch_rows"]

@@ -25,6 +25,10 @@ class AttackWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
     #: Constructor arguments an experiment sets per episode (e.g. the patch's ``rho``); the
     #: others keep their defaults.
     episode_params: tuple[str, ...] = ()
+    #: ``"black box"`` (the observations and where the sign is) or ``"white box"`` (also the
+    #: defence: the runner hands it the car's estimator through ``attach_defence``).
+    threat_model = "black box"
+    defence: Any = None
 
     def __init__(self, env: gym.Env, schedule: AttackSchedule | None) -> None:
         gym.Wrapper.__init__(self, env)
@@ -57,6 +61,12 @@ class AttackWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         info["attack"] = attacks
         info["attack_active"] = bool(attacks)
         return info
+
+    def attach_defence(self, defence: Any) -> None:
+        """A white-box attack is given the defence it faces (its thresholds and state)."""
+        if self.threat_model != "white box":
+            raise ValueError(f"{type(self).__name__} is a {self.threat_model} attack: it may not read the defence")
+        self.defence = defence
 
     def _on_reset(self) -> None:
         """Per-episode draws (textures, signs of a bias, ...)."""

@@ -138,3 +138,25 @@ def test_an_attack_without_the_patch_has_its_own_start_and_duration():
     assert log["attack_active"].any() and math.isnan(result.rho)
     assert result.attack_start_s == pytest.approx(log.loc[log["attack_active"], "t"].iloc[0], abs=0.021)
     assert result.t_atk_s == pytest.approx(2.0, abs=0.021)
+
+
+def test_white_box_attacks_are_handed_the_cars_estimator_and_black_box_ones_are_not():
+    from experiments.episode.stack import default_env
+    from sim.attacks import AttackWrapper, StealthRamp
+
+    made = {}
+
+    def make_env(spec):
+        made["env"] = default_env(spec)
+        return made["env"]
+
+    run_trial(TrialSpec("attack+stealth_ramp+odca", 0, 1.5, 0), make_env=make_env, clean_pass=False)
+    attacks, env = [], made["env"]
+    while hasattr(env, "env"):
+        if isinstance(env, AttackWrapper):
+            attacks.append(env)
+        env = env.env
+    ramp = next(a for a in attacks if isinstance(a, StealthRamp))
+    assert ramp.defence is not None and ramp.defence.name == "odca"
+    assert ramp.max_step_m == pytest.approx(0.9 * ramp.defence.model.config.step_bound_m)
+    assert all(a.defence is None for a in attacks if a.threat_model == "black box")
