@@ -6,6 +6,7 @@
 - :class:`StaleData` (``delay``): old data replayed as new: LiDAR scans late, or depth frozen.
 - :class:`TimedDropout` (``dropout_timed``): a depth attack on while the LiDAR has nothing on the sign.
 - :class:`StealthRamp` (``stealth_ramp``, white box): a depth bias ramp kept under the defence's tolerance.
+- :class:`FrustumSpoof` (``frustum_spoof``, white box): the same ramp on depth and LiDAR together.
 Each marks ``info["attack"]`` (active attacks) and ``info["attack_active"]``.
 
 ``ATTACKS`` finds them by name (each wrapper's ``name``): a new attack is one module and one
@@ -16,6 +17,7 @@ from sim.attacks.base import AttackWrapper
 from sim.attacks.confidence_degradation import ConfidenceDegradation
 from sim.attacks.depth_bias import DepthBias
 from sim.attacks.depth_blackout import DepthBlackout
+from sim.attacks.frustum_spoof import FrustumSpoof
 from sim.attacks.lidar_dropout import LidarDropout
 from sim.attacks.lidar_spoof import LidarSpoof
 from sim.attacks.patch import PatchAttack, patch_rows
@@ -26,7 +28,8 @@ from sim.attacks.timed_dropout import TimedDropout
 
 #: Every attack wrapper by name.
 ATTACKS: dict[str, type[AttackWrapper]] = {cls.name: cls for cls in (
-    PatchAttack, LidarSpoof, LidarDropout, DepthBlackout, DepthBias, ConfidenceDegradation, StaleData, TimedDropout, StealthRamp)}
+    PatchAttack, LidarSpoof, LidarDropout, DepthBlackout, DepthBias, ConfidenceDegradation, StaleData, TimedDropout, StealthRamp, FrustumSpoof)}
 
 __all__ = ["ATTACKS", "AttackSchedule", "AttackWrapper", "ConfidenceDegradation", "DepthBias", "DepthBlackout",
-           "LidarDropout", "LidarSpoof", "PatchAttack", "StaleData", "StealthRamp", "TimedDropout", "patch_rows"]
+           "FrustumSpoof", "LidarDropout", "LidarSpoof", "PatchAttack", "StaleData", "StealthRamp", "TimedDropout",
+           "patch_rows"]

@@ -96,7 +96,7 @@ def test_every_attack_is_registered_under_its_own_name(stub_env):
     from sim.attacks import ATTACKS, AttackWrapper
 
     assert list(ATTACKS) == ["patch", "lidar_spoof", "lidar_dropout", "depth_blackout", "depth_bias",
-                             "confidence_degradation", "delay", "dropout_timed", "stealth_ramp"]
+                             "confidence_degradation", "delay", "dropout_timed", "stealth_ramp", "frustum_spoof"]
     for name, cls in ATTACKS.items():
         assert issubclass(cls, AttackWrapper) and cls.name == name
         wrapped = cls(stub_env(), **{param: (0.5, 0.5) for param in cls.episode_params})

@@ -1,0 +1,46 @@
+"""``FrustumSpoof``: depth and LiDAR moved together, so they agree with each other and not with the world."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+
+from sim.attacks.stealth_ramp import StealthRamp
+
+__all__ = ["FrustumSpoof"]
+
+#: A beam's return counts as the sign's within this of the LiDAR's distance to it, m.
+SIGN_RETURN_M = 0.15
+
+
+class FrustumSpoof(StealthRamp):
+    """Shifts the sign's depth and the LiDAR's returns from the sign by the same bias b(t).
+
+    After Hallyburton et al. (USENIX Security 2022): points moved inside the camera's
+    frustum so that camera and LiDAR stay consistent. b ramps as in ``StealthRamp`` (white
+    box: capped per step under the defence's tolerance), so no cross-check of depth against
+    LiDAR can see it; only the car's own odometry can. The LiDAR's returns from the sign
+    (beams towards the plate reading within 0.15 m of its distance) move by b along their
+    beams; on a beam at bearing a the return's depth along the optical axis moves by
+    b cos(a), within 1 cm of b inside the +-8 deg the sign spans at the ranges the braking
+    window covers.
+
+    Args: those of ``StealthRamp``.
+    """
+
+    name = "frustum_spoof"
+
+    def __init__(self, env: gym.Env, rate_mps: float = 1.0, direction: int = 1, margin: float = 0.9,
+                 region: str = "sign", **schedule: Any) -> None:
+        super().__init__(env, rate_mps=rate_mps, direction=direction, margin=margin, region=region, **schedule)
+
+    def _attack(self, obs: dict, info: dict) -> dict:
+        obs = super()._attack(obs, info)  # advances the bias and moves the depth
+        ranges = np.array(obs["lidar"], copy=True)
+        beams = self.sign_beams(ranges.size)
+        on_sign = beams & np.isfinite(ranges) & (np.abs(ranges - self.sign_range_m()) <= SIGN_RETURN_M)
+        ranges[on_sign] = np.maximum(ranges[on_sign] + self.bias, 0.0)
+        obs["lidar"] = ranges.astype(obs["lidar"].dtype)
+        return obs

@@ -1,0 +1,38 @@
+"""``FrustumSpoof`` (``frustum_spoof``, white box): depth and LiDAR moved together, within 1 cm of each other."""
+
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from sim.attacks import ATTACKS, FrustumSpoof
+
+SIGN_BEAM = 30  # the stub's LiDAR sees the sign on this beam
+ODCA_LIKE = SimpleNamespace(model=SimpleNamespace(config=SimpleNamespace(step_bound_m=0.2)))
+
+
+def test_depth_and_lidar_move_together_and_nothing_else_moves(stub_env, drive, grown):
+    env = FrustumSpoof(stub_env(), rate_mps=2.0, duration_s=5.0, trigger="always")
+    env.attach_defence(ODCA_LIKE)
+    biases = []
+    for obs, clean, info in drive(env, 15):
+        sign = info["sign_mask"] & (clean["depth"][..., 0] > 0)
+        depth_shift = (obs["depth"][..., 0] - clean["depth"][..., 0])[sign]
+        lidar_shift = obs["lidar"][SIGN_BEAM] - clean["lidar"][SIGN_BEAM]
+        # The two sensors agree with each other (within 1 cm) and both are off by the bias.
+        assert np.abs(depth_shift - lidar_shift).max() <= 0.01
+        assert lidar_shift == pytest.approx(env.bias, abs=1e-5)
+        others = np.arange(obs["lidar"].size) != SIGN_BEAM
+        np.testing.assert_array_equal(obs["lidar"][others], clean["lidar"][others])
+        outside = ~grown(info["sign_mask"], 1)  # the sign's region, grown by a pixel, is the attack's
+        np.testing.assert_array_equal(obs["depth"][..., 0][outside], clean["depth"][..., 0][outside])
+        biases.append(env.bias)
+    steps = np.diff(biases)
+    assert (steps > 0).all() and (steps <= 0.9 * 0.2 + 1e-9).all()  # the ramp, under ODCA's tolerance
+    assert biases[-1] == pytest.approx(2.0 * 0.02 * 14, abs=1e-6)
+
+
+def test_registered_as_a_white_box_attack_with_the_ramps_checks(stub_env):
+    assert ATTACKS["frustum_spoof"] is FrustumSpoof and FrustumSpoof.threat_model == "white box"
+    with pytest.raises(ValueError, match="rate_mps"):
+        FrustumSpoof(stub_env(), rate_mps=-1.0)
