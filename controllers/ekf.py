@@ -9,7 +9,12 @@ curves, where depth falls slower than the car advances). Prediction over dt with
 
 Measurements are d itself: the depth distance with variance ``depth_std_m^2 / c~`` (low
 confidence counts for less), and the aligned LiDAR reference with variance
-``lidar_std_m^2``. Either may be missing (NaN), then the update is skipped. The model is
+``lidar_std_m^2``. Either may be missing (NaN), then the update is skipped.
+
+Its innovation test (the residual detector of the stealthy-attack literature) flags a step
+whose depth or LiDAR innovation lies more than ``innovation_sigma`` standard deviations
+from the prediction (``flagged``). It only watches: the filter still takes the measurement,
+as the paper's baseline does. The model is
 linear, so the "extended" filter is the plain Kalman filter; the name follows the paper.
 Pure numpy: one step costs a few microseconds.
 """
@@ -36,6 +41,8 @@ class EKFConfig:
         min_confidence: confidences below this are clipped (a bounded variance).
         drop_after_s: the estimate turns NaN (and the filter restarts at the next
             measurement) after this long without one.
+        innovation_sigma: the innovation test flags a measurement this many innovation
+            standard deviations from the prediction (3: 0.27 % of clean Gaussian steps).
     """
 
     depth_std_m: float = 0.03
@@ -44,10 +51,11 @@ class EKFConfig:
     init_rate_std_mps: float = 0.3
     min_confidence: float = 0.05
     drop_after_s: float = 1.5
+    innovation_sigma: float = 3.0
 
     def __post_init__(self) -> None:
         for name in ("depth_std_m", "lidar_std_m", "accel_std_mps2", "init_rate_std_mps", "min_confidence",
-                     "drop_after_s"):
+                     "drop_after_s", "innovation_sigma"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0):
                 raise ValueError(f"{name} must be a positive finite number, got {value!r}")
@@ -64,6 +72,7 @@ class DistanceEKF:
         self.x = np.zeros(2)
         self.P = np.eye(2)
         self.initialised = False
+        self.flagged = False
         self._since_measurement_s = 0.0
 
     def step(self, depth: float, confidence: float, lidar: float, speed: float, dt: float) -> float:
@@ -77,16 +86,33 @@ class DistanceEKF:
         if self.initialised:
             self._predict(speed, dt)
             self._since_measurement_s += dt
+        self.flagged = False
         if depth_ok:
-            conf = min(1.0, max(c.min_confidence, float(confidence) if math.isfinite(confidence) else 0.0))
-            self._update(float(depth), c.depth_std_m ** 2 / conf)
+            r = self.depth_variance(confidence)
+            self.flagged |= not self.innovation_ok(float(depth), r)
+            self._update(float(depth), r)
         if lidar_ok:
+            self.flagged |= not self.innovation_ok(float(lidar), c.lidar_std_m ** 2)
             self._update(float(lidar), c.lidar_std_m ** 2)
         if depth_ok or lidar_ok:
             self._since_measurement_s = 0.0
         elif self.initialised and self._since_measurement_s > c.drop_after_s:
             self.reset()
         return float(self.x[0]) if self.initialised else math.nan
+
+    def depth_variance(self, confidence: float) -> float:
+        """The depth measurement's variance at ``confidence``, m^2."""
+        c = self.config
+        conf = min(1.0, max(c.min_confidence, float(confidence) if math.isfinite(confidence) else 0.0))
+        return c.depth_std_m ** 2 / conf
+
+    def innovation_ok(self, z: float, r: float, prediction: float | None = None) -> bool:
+        """Whether ``z`` (variance ``r``) passes the innovation test against the state (or
+        ``prediction`` of it); True before the first measurement (nothing to test against)."""
+        if not self.initialised:
+            return True
+        x = self.x[0] if prediction is None else prediction
+        return abs(z - x) <= self.config.innovation_sigma * math.sqrt(self.P[0, 0] + r)
 
     def _predict(self, speed: float, dt: float) -> None:
         F = np.array([[1.0, dt], [0.0, 1.0]])

@@ -7,6 +7,7 @@ the forecasting baselines implement the same protocol.
 
 from __future__ import annotations
 
+import math
 from typing import Protocol, runtime_checkable
 
 from controllers.ekf import DistanceEKF, EKFConfig
@@ -35,7 +36,14 @@ class DistanceEstimator(Protocol):
 
     def diagnostics(self) -> dict[str, float]:
         """What the last ``estimate`` call leaves to log beside the distance, by column name
-        (ODCA: its gate ``w``); empty when the estimator has nothing to add."""
+        (ODCA: its gate ``w``; a defence with a detector: ``flag``, 1.0 when it flagged the
+        step); empty when the estimator has nothing to add."""
+
+    def would_pass(self, *, depth: float, speed_mps: float, dt: float, yaw_rate_radps: float = 0.0,
+                   lidar_shift: float = 0.0) -> bool:
+        """Whether a next step whose depth distance is ``depth`` would leave the detector quiet,
+        the LiDAR moved by the car's motion and ``lidar_shift`` m (a spoof moving it with the
+        depth). Changes nothing: the question a white-box attacker asks."""
 
 
 class RawDepthEstimator:
@@ -52,6 +60,10 @@ class RawDepthEstimator:
     def diagnostics(self) -> dict[str, float]:
         return {}
 
+    def would_pass(self, *, depth: float, speed_mps: float, dt: float, yaw_rate_radps: float = 0.0,
+                   lidar_shift: float = 0.0) -> bool:
+        return True  # no detector
+
 
 class EKFEstimator:
     """The EKF baseline: depth and LiDAR fused with odometry (:mod:`controllers.ekf`)."""
@@ -60,12 +72,29 @@ class EKFEstimator:
 
     def __init__(self, config: EKFConfig | None = None) -> None:
         self.filter = DistanceEKF(config)
+        self._stepped = False
 
     def reset(self) -> None:
         self.filter.reset()
+        self._stepped = False
 
     def estimate(self, sample: PerceptionSample, speed_mps: float, dt: float, yaw_rate_radps: float = 0.0) -> float:
+        self._stepped = True
         return self.filter.step(sample.d_meas, sample.c_meas, sample.lidar_m, speed_mps, dt)
 
     def diagnostics(self) -> dict[str, float]:
-        return {}
+        return {"flag": float(self.filter.flagged)} if self._stepped else {}
+
+    def would_pass(self, *, depth: float, speed_mps: float, dt: float, yaw_rate_radps: float = 0.0,
+                   lidar_shift: float = 0.0) -> bool:
+        """The innovation test at full confidence against the prediction over ``dt``; a spoof
+        that moves the LiDAR with the depth (``lidar_shift``) must pass it as LiDAR too."""
+        f = self.filter
+        if not f.initialised:
+            return True
+        prediction = f.x[0] + (f.x[1] - speed_mps) * dt
+        p00 = f.P[0, 0] + 2 * dt * f.P[0, 1] + dt * dt * f.P[1, 1] + f.config.accel_std_mps2 ** 2 * dt ** 4 / 4
+        ok = abs(depth - prediction) <= f.config.innovation_sigma * math.sqrt(p00 + f.depth_variance(1.0))
+        if lidar_shift:
+            ok &= abs(depth - prediction) <= f.config.innovation_sigma * math.sqrt(p00 + f.config.lidar_std_m ** 2)
+        return bool(ok)

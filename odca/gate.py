@@ -5,7 +5,11 @@ Per step, with d~ the depth, l the aligned LiDAR reference and d_kin the kinemat
 
 - Depth passes unchanged (w = 0) when it agrees with at least one other witness: with the
   LiDAR within ``tau_m``, or with d_kin within ``tau_m + n_sigma * std_kin``. Clean depth
-  agrees with its witnesses, so it is never changed (the paper's Proposition 1).
+  agrees with its witnesses, so it is never changed (the paper's Proposition 1). One
+  exception: when the LiDAR and d_kin agree with each other and the depth lies more than
+  ``tau_m`` from both, two witnesses outvote it even if it lies inside d_kin's (wider)
+  tolerance; else a depth ramped slowly inside that tolerance would pass against an honest
+  LiDAR.
   With no other witness at all (the first sight of a target), a depth of confidence
   >= ``trust_confidence`` passes: there is nothing to vote against it.
 - Otherwise the depth is outvoted or missing and the step is repaired (w = 1) from the
@@ -23,11 +27,12 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-__all__ = ["GateConfig", "SOURCES", "vote"]
+__all__ = ["GateConfig", "SOURCES", "vote", "BASELINE"]
 
 #: What a step's output rests on (the ``source`` code of a fused sample indexes this).
-SOURCES = ("depth", "lidar", "lidar+kinematics", "kinematics", "depth (unconfirmed)", "prior", "none")
-DEPTH, LIDAR, LIDAR_KIN, KIN, DEPTH_UNCONFIRMED, PRIOR, NONE = range(len(SOURCES))
+SOURCES = ("depth", "lidar", "lidar+kinematics", "kinematics", "depth (unconfirmed)", "prior", "none",
+           "kinematic baseline")
+DEPTH, LIDAR, LIDAR_KIN, KIN, DEPTH_UNCONFIRMED, PRIOR, NONE, BASELINE = range(len(SOURCES))
 
 
 @dataclass(frozen=True)
@@ -72,7 +77,9 @@ def vote(d: float, c: float, l: float, k: float, k_tol: float, mu: float, gate: 
     agree_dl = d_ok and l_ok and abs(d - l) <= gate.tau_m
     agree_dk = d_ok and k_votes and abs(d - k) <= k_tol
     agree_lk = l_ok and k_ok and abs(l - k) <= k_tol
-    if agree_dl or agree_dk:
+    # LiDAR and kinematics agree; the depth is off the LiDAR and off d_kin by more than tau.
+    outvoted = agree_lk and not agree_dl and abs(d - k) > gate.tau_m
+    if agree_dl or (agree_dk and not outvoted):
         return DEPTH, d, agree_dl
     if d_ok and not l_ok and not k_votes and c >= gate.trust_confidence:
         return DEPTH, d, False

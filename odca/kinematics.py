@@ -16,6 +16,14 @@ Its standard deviation starts at ``anchor_std_m`` when the branch is anchored an
 with the distance travelled (encoder scale, slip) and with time (what the model leaves
 out). Past ``max_std_m``, or once the target would be behind the camera, the branch is
 lost and says nothing (NaN) until the next trusted measurement.
+
+Beside it runs the **baseline**: the same point, anchored at the target's first trusted
+measurement and then moved by odometry alone, never re-anchored until it is lost (its std
+grows by ``drift_travel_std`` per metre). Re-anchoring is what lets the branch follow the
+target, and also what a slow, consistent drift of depth and LiDAR together (a frustum
+spoof) would exploit: each anchor within the tolerance of the last. The baseline bounds
+that: a measurement off the baseline by more than ``tau + n_sigma * std`` has drifted away
+from where odometry puts the target (:meth:`drifted`).
 """
 
 from __future__ import annotations
@@ -43,6 +51,8 @@ class KinematicsConfig:
         time_std_mps: std growth per second.
         max_std_m: beyond this std the branch is lost, m.
         n_sigma: a witness agrees with the branch within ``tau + n_sigma * std``.
+        drift_travel_std: the baseline's std growth per metre travelled (None: no baseline,
+            the branch as it was before issue 23).
     """
 
     enabled: bool = True
@@ -53,8 +63,12 @@ class KinematicsConfig:
     time_std_mps: float = 0.01
     max_std_m: float = 0.4
     n_sigma: float = 3.0
+    drift_travel_std: float | None = 0.02
 
     def __post_init__(self) -> None:
+        if self.drift_travel_std is not None and not (
+                isinstance(self.drift_travel_std, (int, float)) and 0.0 <= self.drift_travel_std <= 1.0):
+            raise ValueError(f"kinematics drift_travel_std must be in [0, 1] or None, got {self.drift_travel_std!r}")
         for name, lo, hi in (("camera_lever_m", -2.0, 2.0), ("anchor_std_m", 0.0, 1.0), ("travel_std", 0.0, 1.0),
                              ("time_std_mps", 0.0, 1.0), ("max_std_m", 0.01, 10.0), ("n_sigma", 0.0, 10.0)):
             value = getattr(self, name)
@@ -73,6 +87,10 @@ class KinematicBranch:
         self.z = math.nan
         self.y = 0.0
         self.std = math.nan
+        self._lose_baseline()
+
+    def _lose_baseline(self) -> None:
+        self.base_z, self.base_y, self.base_std = math.nan, 0.0, math.nan
 
     @property
     def alive(self) -> bool:
@@ -87,17 +105,33 @@ class KinematicBranch:
         """How far a witness may lie from d_kin and still agree with it, m."""
         return tau_m + self.config.n_sigma * self.std
 
+    @property
+    def baseline(self) -> float:
+        """The baseline's distance, m (NaN without one)."""
+        return self.base_z
+
+    def drifted(self, distance: float, tau_m: float) -> bool:
+        """Whether a measurement lies off the baseline by more than its tolerance (False without one)."""
+        if not math.isfinite(self.base_z) or not math.isfinite(distance):
+            return False
+        return abs(distance - self.base_z) > tau_m + self.config.n_sigma * self.base_std
+
     def predict(self, speed: float, yaw_rate: float, dt: float) -> float:
         """Moves the target by the car's motion over ``dt``; returns the change of d_kin (NaN when lost)."""
+        c = self.config
+        if math.isfinite(self.base_z):
+            self.base_z, self.base_y = advance(self.base_z, self.base_y, speed, yaw_rate, dt, c.camera_lever_m)
+            self.base_std += (c.drift_travel_std or 0.0) * abs(speed) * dt + c.time_std_mps * dt
+            if self.base_std > c.max_std_m or self.base_z <= 0.0:
+                self._lose_baseline()
         if not self.alive:
             return math.nan
-        c = self.config
         z, y = advance(self.z, self.y, speed, yaw_rate, dt, c.camera_lever_m)
         change = z - self.z
         self.z, self.y = z, y
         self.std += c.travel_std * abs(speed) * dt + c.time_std_mps * dt
         if self.std > c.max_std_m or self.z <= 0.0:
-            self.reset()
+            self.z, self.y, self.std = math.nan, 0.0, math.nan
         return change
 
     def anchor(self, distance: float, bearing: float = math.nan) -> None:
@@ -110,6 +144,8 @@ class KinematicBranch:
             self.y = 0.0
         self.z = distance
         self.std = self.config.anchor_std_m
+        if self.config.drift_travel_std is not None and not math.isfinite(self.base_z):
+            self.base_z, self.base_y, self.base_std = self.z, self.y, self.std
 
 
 def advance(z: float, y: float, speed: float, yaw_rate: float, dt: float, lever_m: float) -> tuple[float, float]:

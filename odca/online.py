@@ -11,7 +11,15 @@ Per step t:
 3. the gate votes among depth, LiDAR and kinematics (:mod:`odca.gate`): depth that agrees
    with a witness passes unchanged; otherwise the repair rests on the witnesses that agree,
    and the delta head adds its correction, bounded by the gate's tolerance;
-4. a trusted measurement re-anchors the kinematic branch;
+4. a trusted measurement re-anchors the kinematic branch: the LiDAR, or a depth the LiDAR
+   confirms (a depth that passed on the branch's word alone does not, else a depth ramped
+   inside the branch's tolerance would drag the branch along; issue 23). A depth within
+   tau of the LiDAR may still carry a bias up to tau, so against an honest LiDAR a ramp
+   is held within about 2 tau (anchoring on the LiDAR instead would hold it to tau, but
+   would outvote the clean depth-LiDAR residual's tail: 99.1 % of clean depth unchanged,
+   not 99.9 %). A
+   measurement off the branch's odometry-only baseline (``KinematicBranch.drifted``) is
+   outvoted instead, depth and LiDAR together: the step rests on the baseline;
 5. the output moves no further per step than the car's motion plus the tolerance of a
    fresh measurement (``step_bound_m``); it is NaN when there is no target at all.
 
@@ -21,6 +29,7 @@ same fixed-size batches, the head row by row), so it matches ``step`` exactly.
 
 from __future__ import annotations
 
+import copy
 import json
 import math
 from dataclasses import asdict, dataclass, field, fields
@@ -31,7 +40,7 @@ import pandas as pd
 
 from odca.align import Alignment, fit_alignment
 from odca.features import MAX_RANGE_M, features, sanitize, usable_forecast
-from odca.gate import DEPTH, LIDAR, LIDAR_KIN, NONE, SOURCES, GateConfig, vote
+from odca.gate import BASELINE, DEPTH, LIDAR, LIDAR_KIN, NONE, SOURCES, GateConfig, vote
 from odca.head import HeadWeights
 from odca.kinematics import KinematicBranch, KinematicsConfig
 from odca.prior import SHIPPED_PRIOR, Chronos2Prior, CheckpointError, TemporalPrior
@@ -156,7 +165,9 @@ class _Witnesses:
         k, k_std = branch.distance, branch.std
         source, base, lidar_trusted = vote(d, c, l, k, branch.tolerance(cfg.gate.tau_m) if k == k else math.nan, mu,
                                            cfg.gate, cfg.kinematics.witness)
-        if on and source == DEPTH:
+        if on and source in (DEPTH, LIDAR, LIDAR_KIN) and branch.drifted(base, cfg.gate.tau_m):
+            source, base, lidar_trusted = BASELINE, branch.baseline, False
+        elif on and source == DEPTH and (lidar_trusted or not branch.alive):
             branch.anchor(d, bearing)
         elif on and source in (LIDAR, LIDAR_KIN):
             branch.anchor(l, bearing)
@@ -244,6 +255,7 @@ class ODCA:
         self._std = np.full(self.config.horizon, np.nan)
         self._witnesses = _Witnesses(self.config)
         self._prev = math.nan
+        self._last_lidar = math.nan
 
     def step(self, *, depth: float, confidence: float, lidar: float = math.nan, speed: float = 0.0,
              yaw_rate: float = 0.0, bearing: float = math.nan, dt: float | None = None) -> FusedSample:
@@ -271,6 +283,7 @@ class ODCA:
         d, c, l, v, w, b = (float(x) for x in sanitize(depth, confidence, lidar, speed, yaw_rate, bearing))
         l_al = float(self.config.alignment(l))
         mu, sigma = float(self._mean[k]), float(self._std[k])
+        self._last_lidar = l_al
         verdict = self._witnesses.step(d, c, l_al, v, w, b, mu, dt)
         cols = self._finish(*(np.array([x], float) for x in (d, c, l_al, v, mu, sigma, *verdict)),
                             prev=self._prev)
@@ -279,6 +292,27 @@ class ODCA:
         self._context[-1] = d
         self._t += 1
         return FusedSample(*(float(col[0]) for col in cols))
+
+    def would_pass(self, *, depth: float, speed: float = 0.0, yaw_rate: float = 0.0, lidar_shift: float = 0.0,
+                   dt: float | None = None) -> bool:
+        """Whether a next step with this depth would pass the gate unchanged (w = 0). Changes nothing.
+
+        The LiDAR reference is taken as the last step's, moved by the car's motion and by
+        ``lidar_shift`` m (a spoof that moves it with the depth). The question a white-box
+        attacker asks before it picks its bias.
+        """
+        cfg = self.config
+        dt = cfg.dt if dt is None else float(dt)
+        branch = copy.copy(self._witnesses.branch)
+        motion = branch.predict(speed, yaw_rate, dt) if cfg.kinematics.enabled else math.nan
+        if not motion == motion:
+            motion = -speed * dt
+        d = float(sanitize(depth, 1.0, math.nan, 0.0)[0])
+        k = branch.distance
+        source, base, _ = vote(d, 1.0, self._last_lidar + motion + lidar_shift, k,
+                               branch.tolerance(cfg.gate.tau_m) if k == k else math.nan, math.nan, cfg.gate,
+                               cfg.kinematics.witness)
+        return source == DEPTH and not (cfg.kinematics.enabled and branch.drifted(base, cfg.gate.tau_m))
 
     # -- batched offline path ------------------------------------------------------------------
     def run(self, df: pd.DataFrame) -> pd.DataFrame:

@@ -148,7 +148,7 @@ def _run(env: gym.Env, spec: TrialSpec, estimator, on_step: StepHook | None, cle
             "t": info["time"], "slot": step.slot, "target": car.target.name, "control": step.control,
             "d_true": truth.pop("d_true"), "d_clean": truth.pop("d_clean"), "d_meas": sample.d_meas,
             "c_meas": sample.c_meas, "lidar": sample.lidar_m, "d_fused": step.d_fused,
-            "w": math.nan, **car.estimator.diagnostics(), "detected": sample.detected,
+            "w": math.nan, "flag": math.nan, **car.estimator.diagnostics(), "detected": sample.detected,
             "det_confidence": sample.detection_confidence, "bearing": sample.bearing_rad,
             **dict(zip(("det_x0", "det_y0", "det_x1", "det_y1"),
                        sample.detection.box if sample.detection is not None else (-1, -1, -1, -1))),

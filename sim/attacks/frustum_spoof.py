@@ -20,8 +20,8 @@ class FrustumSpoof(StealthRamp):
 
     After Hallyburton et al. (USENIX Security 2022): points moved inside the camera's
     frustum so that camera and LiDAR stay consistent. b ramps as in ``StealthRamp`` (white
-    box: capped per step under the defence's tolerance), so no cross-check of depth against
-    LiDAR can see it; only the car's own odometry can. The LiDAR's returns from the sign
+    box: as far as the defence's detector lets it, asked with the LiDAR moved too), so no
+    cross-check of depth against LiDAR can see it; only the car's own odometry can. The LiDAR's returns from the sign
     (beams towards the plate reading within 0.15 m of its distance) move by b along their
     beams; on a beam at bearing a the return's depth along the optical axis moves by
     b cos(a), within 1 cm of b inside the +-8 deg the sign spans at the ranges the braking
@@ -31,6 +31,7 @@ class FrustumSpoof(StealthRamp):
     """
 
     name = "frustum_spoof"
+    moves_lidar = True
 
     def __init__(self, env: gym.Env, rate_mps: float = 1.0, direction: int = 1, margin: float = 0.9,
                  region: str = "sign", **schedule: Any) -> None:

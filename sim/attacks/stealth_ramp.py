@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import gymnasium as gym
@@ -11,42 +12,52 @@ from sim.attacks._common import check_region
 from sim.attacks.base import AttackWrapper
 from sim.attacks.schedule import AttackSchedule
 
-__all__ = ["StealthRamp", "per_step_tolerance"]
+__all__ = ["StealthRamp", "quiet_bias"]
+
+#: Bisection steps of the search for the largest quiet bias (2^-12 of the wanted step).
+_SEARCH_STEPS = 12
 
 
-def per_step_tolerance(defence: Any) -> float:
-    """How far the depth may move in one step, beyond the car's motion, without the defence
-    flagging it, m; inf for a defence with no such test (raw depth, the EKF, Chronos-only).
-
-    ODCA re-anchors its kinematic branch on every depth that passes, so a depth passes while
-    each step's change stays within the tolerance of a freshly anchored branch.
-    """
-    config = getattr(getattr(defence, "model", None), "config", None)
-    if config is None or not hasattr(config, "step_bound_m"):
-        return float("inf")
-    return float(config.step_bound_m)
+def quiet_bias(would_pass, current: float, wanted: float, steps: int = _SEARCH_STEPS) -> float:
+    """The bias nearest ``wanted``, between ``current`` and ``wanted``, for which
+    ``would_pass(bias)`` holds (bisection: the quiet set is taken as an interval around the
+    truth); ``current`` when even a step towards ``wanted`` fails."""
+    if would_pass(wanted):
+        return wanted
+    lo, hi = current, wanted
+    if not would_pass(lo):
+        return current
+    for _ in range(steps):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if would_pass(mid) else (lo, mid)
+    return lo
 
 
 class StealthRamp(AttackWrapper):
-    """Adds a bias to the sign's depth that grows at ``rate_mps``, capped per step below the
-    defence's own tolerance, so the gate never opens.
+    """Adds a bias to the sign's depth that grows at ``rate_mps``, as far as the defence's own
+    detector lets it without flagging a step.
 
-    White box: it reads the defence's thresholds (``attach_defence``; the runner hands it the
-    car's estimator). Against a defence with no per-step test the ramp is uncapped. Each
-    step's increment is at most ``margin`` x the tolerance (``per_step_tolerance``), and
-    ``max_step_m`` holds the cap in force.
+    White box: it is handed the defence (``attach_defence``: the runner gives it the car's
+    estimator) and, before each step, asks it ``would_pass(depth=...)`` for the depth it
+    plans (the true depth plus the bias, with the bias scaled by ``1 / margin`` to keep a
+    reserve for the camera's noise), with the car's odometry. It takes the largest bias,
+    no further than ``rate_mps`` allows, that the defence would not flag, so the gate (or
+    innovation test) stays quiet. Against a defence with no detector (raw depth), or none
+    attached, the ramp is limited by ``rate_mps`` alone.
 
     Args:
         env: the racf env.
-        rate_mps: how fast the bias grows, m/s (0 to 20).
+        rate_mps: how fast the bias may grow, m/s (0 to 20).
         direction: ``+1`` (farther: the dangerous case) or ``-1``.
-        margin: the share of the tolerance it uses per step (0 to 1).
+        margin: the share of the defence's room it uses (0 to 1].
         region: ``"sign"`` or ``"frame"``.
         **schedule: ``AttackSchedule`` fields; its defaults are the protocol's.
     """
 
     name = "stealth_ramp"
     threat_model = "white box"
+    #: The LiDAR moves with the depth (``FrustumSpoof``): the defence is asked with the shift.
+    moves_lidar = False
 
     def __init__(self, env: gym.Env, rate_mps: float = 1.0, direction: int = 1, margin: float = 0.9,
                  region: str = "sign", **schedule: Any) -> None:
@@ -62,22 +73,38 @@ class StealthRamp(AttackWrapper):
         self.region = check_region(region)
         super().__init__(env, AttackSchedule(**schedule))
         self.bias = 0.0
+        self.held_back = 0  # steps the defence's room, not the rate, limited the bias
         self._last_time: float | None = None
-
-    @property
-    def max_step_m(self) -> float:
-        """The largest increment of the bias in one step against the attached defence, m."""
-        return self.margin * per_step_tolerance(self.defence)
 
     def _on_reset(self) -> None:
         self.bias = 0.0
+        self.held_back = 0
         self._last_time = None
+
+    def _next_bias(self, obs: dict, info: dict, dt: float) -> float:
+        wanted = self.bias + self.direction * self.rate_mps * dt
+        probe = getattr(self.defence, "would_pass", None)
+        d_true = float(info.get("d_true", math.nan))
+        if probe is None or not math.isfinite(d_true) or dt <= 0:
+            return wanted
+        state = np.asarray(obs["state"], float)
+        speed, yaw_rate = float(state[0]), float(state[2])
+        old = self.bias
+
+        def quiet(bias: float) -> bool:
+            reserve = bias / self.margin
+            return bool(probe(depth=d_true + reserve, speed_mps=speed, dt=dt, yaw_rate_radps=yaw_rate,
+                              lidar_shift=(reserve - old) if self.moves_lidar else 0.0))
+
+        bias = quiet_bias(quiet, old, wanted)
+        self.held_back += int(bias != wanted)
+        return bias
 
     def _attack(self, obs: dict, info: dict) -> dict:
         t = float(info["time"])
         dt = t - self._last_time if self._last_time is not None else 0.0
         self._last_time = t
-        self.bias += self.direction * min(self.rate_mps * dt, self.max_step_m)
+        self.bias = self._next_bias(obs, info, dt)
         depth = obs["depth"].copy()
         plane = depth[..., 0]
         where = (plane > 0) & (self.sign_region(info, 1) if self.region == "sign" else True)

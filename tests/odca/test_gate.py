@@ -22,6 +22,8 @@ TABLE = [
     ((1.00, 0.9, NAN, NAN, NAN), ("depth", 1.00)),  # first sight, confident: nothing to vote against
     ((1.00, 0.2, NAN, NAN, 1.3), ("depth (unconfirmed)", 1.00)),  # first sight, unsure: repaired around it
     ((1.60, 0.9, 1.02, 1.00, NAN), ("lidar+kinematics", 1.02)),  # depth outvoted (a bias)
+    ((1.15, 0.9, 1.00, 1.01, NAN), ("lidar+kinematics", 1.00)),  # a ramp inside d_kin's tolerance, LiDAR confirms d_kin
+    ((1.08, 0.9, 0.95, 1.01, NAN), ("depth", 1.08)),  # off the LiDAR but within tau of d_kin: clean noise
     ((NAN, 0.0, 1.02, 1.00, NAN), ("lidar+kinematics", 1.02)),  # blackout, LiDAR confirmed
     ((1.60, 0.9, 1.02, NAN, NAN), ("lidar", 1.02)),  # depth against LiDAR, no kinematics yet
     ((1.60, 0.9, NAN, 1.00, NAN), ("kinematics", 1.00)),  # depth against kinematics
@@ -55,12 +57,14 @@ maybe = st.one_of(st.just(NAN), distance)
 @settings(max_examples=400, deadline=None)
 @given(distance, st.floats(0, 1), maybe, maybe, st.floats(0, 1), maybe)
 def test_depth_that_agrees_with_a_witness_passes_unchanged(d, c, l, k, share, mu):
-    """Proposition 1: whatever the third witness says."""
+    """Proposition 1: depth within tau of the LiDAR passes whatever d_kin says; depth within
+    d_kin's tolerance passes unless the LiDAR confirms d_kin against it (off both by > tau)."""
     source, base, _ = vote(d, c, d + 0.999 * share * GATE.tau_m, k, K_TOL, mu, GATE)
     assert SOURCES[source] == "depth" and base == d
     kin = d - 0.999 * share * K_TOL
     source, base, _ = vote(d, c, l, kin, K_TOL, mu, GATE)
-    assert SOURCES[source] == "depth" and base == d
+    lidar_outvotes = l == l and abs(l - kin) <= K_TOL and abs(d - l) > GATE.tau_m and abs(d - kin) > GATE.tau_m
+    assert (SOURCES[source] == "depth" and base == d) != lidar_outvotes
 
 
 @settings(max_examples=400, deadline=None)

@@ -75,3 +75,15 @@ def test_bad_settings_are_clear_errors():
         KinematicsConfig(travel_std=-0.1)
     with pytest.raises(ValueError, match="max_std_m"):
         KinematicsConfig(max_std_m=float("nan"))
+
+
+def test_the_baseline_is_anchored_once_and_moved_by_odometry_alone():
+    b = KinematicBranch(KinematicsConfig())
+    b.anchor(3.0)
+    for _ in range(10):
+        b.predict(1.0, 0.0, 0.02)
+    b.anchor(2.5)  # a re-anchor moves the branch, not the baseline
+    assert b.distance == 2.5 and b.baseline == pytest.approx(2.8)
+    tol = 0.1 + 3.0 * b.base_std
+    assert not b.drifted(2.8 + 0.99 * tol, 0.1) and b.drifted(2.8 + 1.01 * tol, 0.1)
+    assert not KinematicBranch(KinematicsConfig(drift_travel_std=None)).drifted(9.0, 0.1)  # no baseline

@@ -204,3 +204,37 @@ def test_calibrate_fits_the_alignment_from_paired_arrays():
     a = m.calibrate(1.02 * l - 0.1, l)
     assert a.alpha == pytest.approx(1.02, abs=1e-3) and m.config.alignment == a
     assert isinstance(m.config.gate, GateConfig)
+
+
+@settings(max_examples=20, deadline=None)
+@given(st.floats(0.5, 5.0), st.floats(1.0, 2.0))
+def test_a_drift_of_depth_and_lidar_together_is_caught_by_the_kinematic_baseline(rate, speed):
+    """A frustum spoof: depth and LiDAR agree with each other and drift from the truth at
+    ``rate`` m/s. Re-anchoring follows them, the odometry-only baseline does not: the drift
+    is flagged before it passes the baseline's tolerance, and the output stays near the truth."""
+    m = _stub()
+    n, start = 150, 30
+    truth = 6.5 - speed * 0.02 * np.arange(n)  # >= 0.5 m to the end
+    drift = rate * 0.02 * np.clip(np.arange(n) - start, 0, None)
+    out = [m.step(depth=t + b, confidence=0.9, lidar=t + b, speed=speed) for t, b in zip(truth, drift)]
+    flagged = np.array([o.w for o in out]) == 1.0
+    assert flagged.any() and not flagged[:start].any()
+    first = int(np.argmax(flagged))
+    kin = m.config.kinematics
+    travelled = speed * 0.02 * first
+    bound = m.config.gate.tau_m + kin.n_sigma * (kin.anchor_std_m + kin.drift_travel_std * travelled
+                                                 + kin.time_std_mps * 0.02 * first)
+    assert drift[first] <= bound + rate * 0.02 + 1e-9  # caught within one step of the tolerance
+    assert {out[i].source_name for i in np.flatnonzero(flagged)} == {"kinematic baseline"}
+    fused = np.array([o.d_fused for o in out])
+    assert np.abs(fused - truth)[flagged].max() <= bound + m.config.gate.tau_m + 1e-6
+
+
+def test_a_depth_that_passed_on_the_branchs_word_alone_does_not_re_anchor_it():
+    m = _stub()
+    truth = 4.0 - 1.5 * 0.02 * np.arange(120)
+    for t in truth[:20]:
+        m.step(depth=t, confidence=0.9, lidar=t, speed=1.5)
+    for i, t in enumerate(truth[20:], 1):  # no LiDAR: a depth ramp inside d_kin's tolerance
+        o = m.step(depth=t + 0.002 * i, confidence=0.9, speed=1.5)
+        assert abs(o.d_kin - t) < 1e-6  # the branch stays where odometry puts the target
