@@ -20,21 +20,30 @@ __all__ = ["CameraModel", "DepthDistance"]
 
 @dataclass(frozen=True)
 class CameraModel:
-    """What perception needs of the camera: horizontal pinhole intrinsics.
+    """What perception needs of the camera: pinhole intrinsics.
 
     Attributes:
         width: image width, pixels.
         fx: horizontal focal length, pixels.
         cx: principal point column, pixels.
+        fy: vertical focal length, pixels (None: square pixels, fx).
     """
 
     width: int
     fx: float
     cx: float
+    fy: float | None = None
 
     def __post_init__(self) -> None:
         if not (self.width > 0 and self.fx > 0 and 0 <= self.cx <= self.width):
             raise ValueError(f"need width > 0, fx > 0 and 0 <= cx <= width, got {self}")
+        if self.fy is not None and not self.fy > 0:
+            raise ValueError(f"need fy > 0 (or None: square pixels), got {self.fy!r}")
+
+    def height_per_metre(self, v0: float, v1: float) -> float:
+        """The height an image extent from row ``v0`` to row ``v1`` (its edges) spans per metre of
+        depth along the optical axis: (v1 - v0) / fy."""
+        return abs(v1 - v0) / (self.fy if self.fy is not None else self.fx)
 
     @property
     def half_hfov_rad(self) -> float:

@@ -102,6 +102,13 @@ class LidarTargetConfig:
             depth, for a stop sign (0.10 m across flats, narrower when seen obliquely);
             checked when a track starts.
         obstacle_box_width_m: the same for a crate.
+        sign_box_height_max_m: the tallest a stop sign's box may be at the cluster's depth
+            when a track starts. The plate is 0.10 m across flats, and its red mask's box
+            about 0.09 m tall, a height that does not shrink when the sign is seen obliquely,
+            as the width does: 0.125 m leaves two pixels of slack at 4 m and rejects a
+            return from 1.4 x or more the sign's distance, the background that a sign the
+            scan plane misses leaves in its box.
+        obstacle_box_height_max_m: the same for a crate.
         gate_radius_m: association gate around the predicted position right after support.
         gate_growth_mps: the gate grows by this per second without support (slowly: odometry
             drifts little in a second, and a wide gate would take in other objects).
@@ -124,6 +131,8 @@ class LidarTargetConfig:
     obstacle_width_m: tuple[float, float] = (0.10, 0.26)
     sign_box_width_m: tuple[float, float] = (0.015, 0.16)
     obstacle_box_width_m: tuple[float, float] = (0.08, 0.32)
+    sign_box_height_max_m: float = 0.125
+    obstacle_box_height_max_m: float = 0.5
     gate_radius_m: float = 0.12
     gate_growth_mps: float = 0.1
     smoothing: float = 0.5
@@ -148,12 +157,18 @@ class LidarTargetConfig:
         if isinstance(self.smoothing, bool) or not isinstance(self.smoothing, (int, float)) or not 0 < self.smoothing <= 1:
             raise ValueError(f"smoothing must be in (0, 1], got {self.smoothing!r}")
         _check_range("start_depth_tolerance_m", self.start_depth_tolerance_m, 0.0, 5.0, "m")
+        _check_range("sign_box_height_max_m", self.sign_box_height_max_m, 0.01, 2.0, "m")
+        _check_range("obstacle_box_height_max_m", self.obstacle_box_height_max_m, 0.01, 2.0, "m")
         _check_range("report_max_age_s", self.report_max_age_s, 0.0, 10.0, "s")
         _check_range("drop_after_s", self.drop_after_s, 0.0, 60.0, "s")
 
     def width_m(self, target: str) -> tuple[float, float]:
         """(min, max) LiDAR width of a target kind, metres."""
         return self.sign_width_m if target == "sign" else self.obstacle_width_m
+
+    def box_height_max_m(self, target: str) -> float:
+        """The tallest a detection box of a target kind may be at the cluster's depth, metres."""
+        return self.sign_box_height_max_m if target == "sign" else self.obstacle_box_height_max_m
 
     def box_width_m(self, target: str) -> tuple[float, float]:
         """(min, max) width a detection box of a target kind implies, metres."""
@@ -228,6 +243,14 @@ class LidarTargetTracker:
         self._n_points = 0
         self._n_clusters = 0
         self._value = math.nan
+        self._depth_confirmed = False
+
+    @property
+    def depth_confirmed(self) -> bool:
+        """Whether the camera's depth has agreed (within ``start_depth_tolerance_m``) with the
+        track since it started. A track started while the depth was missing may sit on the
+        background behind a sign the scan plane misses; the fusion then counts it as one witness."""
+        return self._pos is not None and self._depth_confirmed
 
     @property
     def state(self) -> LidarTargetState:
@@ -243,7 +266,7 @@ class LidarTargetTracker:
     def step(self, *, scan: np.ndarray | None, detection_bearing: float,
              detection_span: tuple[float, float] | None, target: str, speed: float, yaw_rate: float,
              dt: float, lateral_speed: float = 0.0, detection_depth: float = math.nan,
-             beam_age_s: np.ndarray | float | None = None) -> float:
+             beam_age_s: np.ndarray | float | None = None, detection_height: float = math.nan) -> float:
         """Advances one control step and returns l.
 
         Args:
@@ -266,6 +289,10 @@ class LidarTargetTracker:
                 an (N,) array (a sweeping LiDAR: one age per beam), one float for all beams,
                 or None (all taken now). Each cluster is carried forward by the odometry
                 (``speed``, ``lateral_speed``, ``yaw_rate``) over its beams' mean age.
+            detection_height: the detection box's height per metre of depth (its pixel
+                height / fy; NaN: unknown). Used only to start a track: the box may not be
+                taller than ``box_height_max_m`` at the cluster's depth. Without a depth (a
+                blacked-out one), it is what keeps a track off the background behind a sign.
 
         Returns:
             Depth of the tracked target along the camera's optical axis, metres; NaN before
@@ -286,7 +313,8 @@ class LidarTargetTracker:
         if scan is not None:
             det = detection_bearing is not None and math.isfinite(detection_bearing)
             self._measure(scan, detection_bearing if det else None, detection_span if det else None, target,
-                          detection_depth if det else math.nan, ages, (speed, lateral_speed, yaw_rate))
+                          detection_depth if det else math.nan, ages, (speed, lateral_speed, yaw_rate),
+                          detection_height if det else math.nan)
         if self._pos is not None and self._age > c.drop_after_s:
             self.reset_track()
         if self._pos is not None and self._reporting and self._age <= c.report_max_age_s:
@@ -307,7 +335,7 @@ class LidarTargetTracker:
 
     def _measure(self, scan: np.ndarray, bearing: float | None, span: tuple[float, float] | None,
                  target: str, depth: float, ages: np.ndarray | float | None,
-                 odometry: tuple[float, float, float]) -> None:
+                 odometry: tuple[float, float, float], height: float = math.nan) -> None:
         """Associates one scan with the track (or starts one) and updates it.
 
         Args:
@@ -374,6 +402,8 @@ class LidarTargetTracker:
                         continue
                 if abs(x - depth) > c.start_depth_tolerance_m:  # False when depth is NaN
                     continue
+                if x * height > c.box_height_max_m(target):  # False when height is NaN
+                    continue
                 score = abs(math.atan2(y, x) - bearing)
                 if span is not None:
                     score += max(float(hi[k] + half[k]) - left, 0.0) + max(right - float(lo[k] - half[k]), 0.0)
@@ -388,6 +418,10 @@ class LidarTargetTracker:
             a = c.smoothing
             zx = self._pos[0] + a * (zx - self._pos[0])
             zy = self._pos[1] + a * (zy - self._pos[1])
+        if not tracked:
+            self._depth_confirmed = False
+        if math.isfinite(depth) and abs(float(mx[picked]) - depth) <= c.start_depth_tolerance_m:
+            self._depth_confirmed = True
         self._pos = (zx, zy)
         self._kind = target
         self._age = 0.0

@@ -33,6 +33,8 @@ class PerceptionSample:
         lidar_m: the LiDAR target reference: the tracked target's depth along the
             camera's optical axis, m (NaN: nothing fits the track).
         bearing_rad: bearing of the detection's centre, left positive (NaN: none).
+        lidar_confirmed: whether the camera's depth has agreed with the LiDAR's track since it
+            started (``LidarTargetTracker.depth_confirmed``).
     """
 
     detection: Detection | None
@@ -40,6 +42,7 @@ class PerceptionSample:
     c_meas: float
     lidar_m: float
     bearing_rad: float
+    lidar_confirmed: bool = True
 
     @property
     def detected(self) -> bool:
@@ -121,12 +124,16 @@ class Perception:
                 detection, span = None, None
             d_meas, c_meas = self.depth.estimate(depth, detection)
             bearing = self.camera.bearing(detection.centroid[0]) if detection is not None else math.nan
-            self._held = _Held(detection, d_meas, c_meas, bearing, span)
+            height = self.camera.height_per_metre(detection.box[1], detection.box[3]) if detection is not None \
+                else math.nan
+            self._held = _Held(detection, d_meas, c_meas, bearing, span, height)
         held = self._held or _NO_FRAME
         lidar_m = self.lidar.step(scan=scan, detection_bearing=held.bearing, detection_span=held.span,
                                   target=self.target, speed=speed, yaw_rate=yaw_rate, dt=dt,
-                                  lateral_speed=lateral_speed, detection_depth=held.d_meas, beam_age_s=beam_age_s)
-        return PerceptionSample(held.detection, held.d_meas, held.c_meas, lidar_m, held.bearing)
+                                  lateral_speed=lateral_speed, detection_depth=held.d_meas, beam_age_s=beam_age_s,
+                                  detection_height=held.height)
+        return PerceptionSample(held.detection, held.d_meas, held.c_meas, lidar_m, held.bearing,
+                                self.lidar.depth_confirmed)
 
     def _span(self, detection: Detection) -> tuple[float, float]:
         """(left, right) bearings of the detection box's outer edges, rad."""
@@ -147,6 +154,7 @@ class _Held:
     c_meas: float
     bearing: float
     span: tuple[float, float] | None
+    height: float = math.nan  # the box's height per metre of depth (CameraModel.height_per_metre)
 
 
 _NO_FRAME = _Held(None, math.nan, 0.0, math.nan, None)

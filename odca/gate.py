@@ -59,13 +59,17 @@ class GateConfig:
 
 
 def vote(d: float, c: float, l: float, k: float, k_tol: float, mu: float, gate: GateConfig,
-         kinematics_votes: bool = True) -> tuple[int, float, bool]:
+         kinematics_votes: bool = True, lidar_unconfirmed: bool = False) -> tuple[int, float, bool]:
     """One step's verdict: (source, base, lidar_trusted).
 
     Args:
         d, c: depth (NaN: missing) and its confidence. l: aligned LiDAR (NaN: none).
         k, k_tol: d_kin (NaN: no branch) and how far a witness may lie from it.
         mu: the prior's forecast (NaN: none).
+        lidar_unconfirmed: the LiDAR's track (and d_kin, anchored on it alone) never had a
+            depth agree with it: it may be the background behind a sign the scan plane
+            misses. Then it is one witness, not two, and a confident depth that disagrees
+            with it passes (and takes over the branch).
 
     Returns the source code (``SOURCES``), the value the output rests on (the depth itself
     when it passes; NaN when there is no target) and whether the LiDAR counts as a trusted
@@ -81,6 +85,8 @@ def vote(d: float, c: float, l: float, k: float, k_tol: float, mu: float, gate: 
     outvoted = agree_lk and not agree_dl and abs(d - k) > gate.tau_m
     if agree_dl or (agree_dk and not outvoted):
         return DEPTH, d, agree_dl
+    if lidar_unconfirmed and d_ok and c >= gate.trust_confidence:
+        return DEPTH, d, False
     if d_ok and not l_ok and not k_votes and c >= gate.trust_confidence:
         return DEPTH, d, False
     lidar_trusted = l_ok and (agree_lk or not k_votes)

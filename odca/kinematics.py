@@ -17,9 +17,11 @@ with the distance travelled (encoder scale, slip) and with time (what the model 
 out). Past ``max_std_m``, or once the target would be behind the camera, the branch is
 lost and says nothing (NaN) until the next trusted measurement.
 
-Beside it runs the **baseline**: the same point, anchored at the target's first trusted
-measurement and then moved by odometry alone, never re-anchored until it is lost (its std
-grows by ``drift_travel_std`` per metre). Re-anchoring is what lets the branch follow the
+Beside it runs the **baseline**: the same point, anchored at the target's first
+*confirmed* measurement (two witnesses agreeing: a depth alone may already be corrupted)
+and then moved by odometry alone, never re-anchored until it is lost (its std grows by
+``drift_travel_std`` per metre; it is lost with the branch, since a point model carried
+through long unseen turns drifts past its std). Re-anchoring is what lets the branch follow the
 target, and also what a slow, consistent drift of depth and LiDAR together (a frustum
 spoof) would exploit: each anchor within the tolerance of the last. The baseline bounds
 that: a measurement off the baseline by more than ``tau + n_sigma * std`` has drifted away
@@ -87,6 +89,7 @@ class KinematicBranch:
         self.z = math.nan
         self.y = 0.0
         self.std = math.nan
+        self.lidar_only = False  # anchored on a LiDAR no depth has agreed with (see anchor)
         self._lose_baseline()
 
     def _lose_baseline(self) -> None:
@@ -125,17 +128,22 @@ class KinematicBranch:
             if self.base_std > c.max_std_m or self.base_z <= 0.0:
                 self._lose_baseline()
         if not self.alive:
+            self._lose_baseline()
             return math.nan
         z, y = advance(self.z, self.y, speed, yaw_rate, dt, c.camera_lever_m)
         change = z - self.z
         self.z, self.y = z, y
         self.std += c.travel_std * abs(speed) * dt + c.time_std_mps * dt
         if self.std > c.max_std_m or self.z <= 0.0:
-            self.z, self.y, self.std = math.nan, 0.0, math.nan
+            self.z, self.y, self.std, self.lidar_only = math.nan, 0.0, math.nan, False
         return change
 
-    def anchor(self, distance: float, bearing: float = math.nan) -> None:
-        """Restarts the branch at a trusted distance (m) and, if known, the target's bearing (rad, left positive)."""
+    def anchor(self, distance: float, bearing: float = math.nan, confirmed: bool = True,
+               lidar_only: bool = False) -> None:
+        """Restarts the branch at a trusted distance (m) and, if known, the target's bearing (rad, left
+        positive); a ``confirmed`` one (two witnesses agree) also starts the baseline if there is none.
+        ``lidar_only``: the anchor rests on a LiDAR track that no depth has agreed with."""
+        self.lidar_only = bool(lidar_only)
         if math.isfinite(bearing) and abs(bearing) < 1.5:
             self.y = distance * math.tan(bearing)
         elif self.alive and self.z > 0.0:
@@ -144,7 +152,7 @@ class KinematicBranch:
             self.y = 0.0
         self.z = distance
         self.std = self.config.anchor_std_m
-        if self.config.drift_travel_std is not None and not math.isfinite(self.base_z):
+        if confirmed and self.config.drift_travel_std is not None and not math.isfinite(self.base_z):
             self.base_z, self.base_y, self.base_std = self.z, self.y, self.std
 
 

@@ -154,8 +154,9 @@ class _Witnesses:
     def reset(self) -> None:
         self.branch.reset()
 
-    def step(self, d, c, l, v, yaw_rate, bearing, mu, dt):
-        """Returns (source, base, lidar_trusted, d_kin, kin_std, motion) for one sanitised step."""
+    def step(self, d, c, l, v, yaw_rate, bearing, mu, dt, lidar_confirmed=True):
+        """Returns (source, base, lidar_trusted, d_kin, kin_std, motion) for one sanitised step.
+        ``lidar_confirmed``: whether a depth ever agreed with the LiDAR's track (perception's word)."""
         cfg = self.config
         branch = self.branch
         on = cfg.kinematics.enabled
@@ -163,14 +164,16 @@ class _Witnesses:
         if not motion == motion:
             motion = -v * dt  # no branch: a straight approach's change
         k, k_std = branch.distance, branch.std
+        lidar_only = on and branch.alive and branch.lidar_only
+        unconfirmed = lidar_only or (l == l and not lidar_confirmed)
         source, base, lidar_trusted = vote(d, c, l, k, branch.tolerance(cfg.gate.tau_m) if k == k else math.nan, mu,
-                                           cfg.gate, cfg.kinematics.witness)
+                                           cfg.gate, cfg.kinematics.witness, lidar_unconfirmed=unconfirmed)
         if on and source in (DEPTH, LIDAR, LIDAR_KIN) and branch.drifted(base, cfg.gate.tau_m):
             source, base, lidar_trusted = BASELINE, branch.baseline, False
-        elif on and source == DEPTH and (lidar_trusted or not branch.alive):
-            branch.anchor(d, bearing)
+        elif on and source == DEPTH and (lidar_trusted or lidar_only or not branch.alive):
+            branch.anchor(d, bearing, confirmed=lidar_trusted)
         elif on and source in (LIDAR, LIDAR_KIN):
-            branch.anchor(l, bearing)
+            branch.anchor(l, bearing, confirmed=source == LIDAR_KIN and lidar_confirmed, lidar_only=not lidar_confirmed)
         return source, base, lidar_trusted, k, k_std, motion
 
 
@@ -256,9 +259,11 @@ class ODCA:
         self._witnesses = _Witnesses(self.config)
         self._prev = math.nan
         self._last_lidar = math.nan
+        self._lidar_confirmed = True
 
     def step(self, *, depth: float, confidence: float, lidar: float = math.nan, speed: float = 0.0,
-             yaw_rate: float = 0.0, bearing: float = math.nan, dt: float | None = None) -> FusedSample:
+             yaw_rate: float = 0.0, bearing: float = math.nan, dt: float | None = None,
+             lidar_confirmed: bool = True) -> FusedSample:
         """One causal step. Any input may be NaN, inf, zero or negative (treated as missing).
 
         Args:
@@ -266,6 +271,11 @@ class ODCA:
             speed: the car's speed, m/s. yaw_rate: its yaw rate, rad/s (left positive).
             bearing: the detection's bearing, rad (left positive; NaN: none).
             dt: time since the last step (default the config's).
+            lidar_confirmed: whether a depth ever agreed with the LiDAR's track (perception
+                knows: ``LidarTargetTracker.depth_confirmed``). A track started while the
+                depth was missing may sit on the background behind a sign the scan plane
+                misses: it counts as one witness, and a confident depth that disagrees with
+                it passes. Offline series have no such column: their LiDAR counts as confirmed.
         """
         for name, value in (("depth", depth), ("confidence", confidence), ("lidar", lidar), ("speed", speed),
                             ("yaw_rate", yaw_rate), ("bearing", bearing)):
@@ -284,7 +294,8 @@ class ODCA:
         l_al = float(self.config.alignment(l))
         mu, sigma = float(self._mean[k]), float(self._std[k])
         self._last_lidar = l_al
-        verdict = self._witnesses.step(d, c, l_al, v, w, b, mu, dt)
+        self._lidar_confirmed = bool(lidar_confirmed)
+        verdict = self._witnesses.step(d, c, l_al, v, w, b, mu, dt, self._lidar_confirmed)
         cols = self._finish(*(np.array([x], float) for x in (d, c, l_al, v, mu, sigma, *verdict)),
                             prev=self._prev)
         self._prev = float(cols[0][0])
@@ -311,7 +322,8 @@ class ODCA:
         k = branch.distance
         source, base, _ = vote(d, 1.0, self._last_lidar + motion + lidar_shift, k,
                                branch.tolerance(cfg.gate.tau_m) if k == k else math.nan, math.nan, cfg.gate,
-                               cfg.kinematics.witness)
+                               cfg.kinematics.witness,
+                               lidar_unconfirmed=(branch.alive and branch.lidar_only) or not self._lidar_confirmed)
         return source == DEPTH and not (cfg.kinematics.enabled and branch.drifted(base, cfg.gate.tau_m))
 
     # -- batched offline path ------------------------------------------------------------------

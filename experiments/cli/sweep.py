@@ -11,11 +11,16 @@ from experiments.cli.common import attack_help, backend_flags, count, estimator_
 __all__ = ["register"]
 
 
+def _shipped_specs() -> list[str]:
+    from experiments.sweeps.spec import SPECS_DIR
+    return sorted(p.name for p in SPECS_DIR.glob("*.toml"))
+
+
 def register(sub: argparse._SubParsersAction) -> None:
     sw = sub.add_parser("sweep", help="a Monte Carlo attack sweep from a TOML spec or flags (grid or random draws) "
                                       "on a local process pool or Ray; resumes; summary and SCR plots")
     sw.add_argument("spec", nargs="?", type=Path, default=None,
-                    help="the sweep spec (TOML); shipped: smoke.toml, attack-types.toml, strong-1000.toml, spoof-1000.toml. "
+                    help=f"the sweep spec (TOML); shipped: {', '.join(_shipped_specs())}. "
                          "Without one, the flags below make the sweep")
     sw.add_argument("--out", type=Path, default=None, help="results folder (default outputs/sweeps/<spec name>)")
     backend_flags(sw, workers_help="parallel episodes (local processes, or a local Ray's CPUs)")

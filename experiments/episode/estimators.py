@@ -55,20 +55,27 @@ class ODCAEstimator:
     def __init__(self, checkpoint: str | None = None) -> None:
         self.model = _odca(checkpoint)
         self.last = None
+        self._had_depth = False
 
     def reset(self) -> None:
         self.model.reset()
         self.last = None
+        self._had_depth = False
 
     def estimate(self, sample: PerceptionSample, speed_mps: float, dt: float, yaw_rate_radps: float = 0.0) -> float:
         self.last = self.model.step(depth=sample.d_meas, confidence=sample.c_meas, lidar=sample.lidar_m,
-                                    speed=speed_mps, yaw_rate=yaw_rate_radps, bearing=sample.bearing_rad, dt=dt)
+                                    speed=speed_mps, yaw_rate=yaw_rate_radps, bearing=sample.bearing_rad, dt=dt,
+                                    lidar_confirmed=sample.lidar_confirmed)
+        self._had_depth = math.isfinite(sample.d_meas)
         return self.last.d_fused
 
     def diagnostics(self) -> dict[str, float]:
         if self.last is None:
             return {}
-        return {"w": self.last.w, "flag": self.last.w, "odca_source": self.last.source, "d_kin": self.last.d_kin}
+        # The gate flags a depth it outvotes (or one off the kinematic baseline); a missing
+        # depth, or one passed on first sight, is nothing to flag.
+        flagged = self._had_depth and self.last.source_name not in ("depth", "depth (unconfirmed)")
+        return {"w": self.last.w, "flag": float(flagged), "odca_source": self.last.source, "d_kin": self.last.d_kin}
 
     def would_pass(self, *, depth: float, speed_mps: float, dt: float, yaw_rate_radps: float = 0.0,
                    lidar_shift: float = 0.0) -> bool:

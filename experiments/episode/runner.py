@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import math
 from collections import deque
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, astuple, dataclass
 from typing import Callable
 
 import gymnasium as gym
@@ -28,7 +28,7 @@ import pandas as pd
 
 from controllers import Phase
 from experiments.episode.referee import Referee
-from experiments.episode.scoring import largest_jump, score_log
+from experiments.episode.scoring import largest_jump, score_log, stealth
 from experiments.episode.spec import TrialSpec
 from experiments.episode.stack import build_car, default_env, mission
 from sim.attacks import PatchAttack
@@ -70,7 +70,9 @@ class TrialResult:
     ``attack_start_s`` and ``t_atk_s`` are the first window of the attack that began first
     (the patch on a tie; NaN: no attack began); ``rho`` is the patch's (NaN: no patch).
     ``fused_jump_m``: the largest step change of the distance the car acted on beyond its own
-    motion (``scoring.largest_jump``).
+    motion (``scoring.largest_jump``). ``undetected_error_m``, ``detection_delay_s`` and
+    ``detected``: how far the attack pushed that distance before the defence flagged it, and
+    when it did (``scoring.stealth``).
     """
 
     trial_id: str
@@ -96,6 +98,9 @@ class TrialResult:
     n_targets: int = 1
     targets_served: int = 0
     fused_jump_m: float = math.nan
+    undetected_error_m: float = math.nan
+    detection_delay_s: float = math.nan
+    detected: bool = False
 
     def to_dict(self) -> dict:
         """Strict-JSON-ready: NaN becomes None."""
@@ -193,7 +198,7 @@ def _result(spec: TrialSpec, env: gym.Env, log: pd.DataFrame) -> TrialResult:
         windows[0][1] - windows[0][0] if windows else math.nan, windows[0][0] if windows else math.nan, lost,
         bool(served == n_targets), not math.isnan(first.rest_distance_m), first.rest_distance_m,
         first.t_star_s, first.t_brake_s, first.trigger_delay_s, first.dt_brake_s, first.failure,
-        float(log["t"].iloc[-1]), n_targets, served, largest_jump(log))
+        float(log["t"].iloc[-1]), n_targets, served, largest_jump(log), *astuple(stealth(log)))
 
 
 def _first_attack_windows(env: gym.Env) -> list[tuple[float, float]]:

@@ -14,6 +14,11 @@ Failures are named by where they come from: ``never_confirmed`` (no confirmed tr
 the line), ``confirmed_lost`` (a track was confirmed but lost, and no brake followed),
 ``braked_late`` (braked, but came to rest past the line or ran it), ``braked_early``
 (came to rest more than 0.60 m before the line: phantom or early braking), ``timeout``.
+Stealth (``stealth``): the **undetected error** is the largest |d_fused - d_true| over the
+attacked steps before the defence's detector first flags one (``flag``: ODCA's gate, the
+EKF's innovation test, Chronos-only's residual test; raw depth has none, so every attacked
+step counts); the **detection delay** is the time from the attack's start to that first flag.
+
 Old logs can be rescored: nothing here reads the simulator.
 """
 
@@ -25,8 +30,8 @@ from dataclasses import asdict, dataclass
 import numpy as np
 import pandas as pd
 
-__all__ = ["TargetOutcome", "score_target", "score_log", "largest_jump", "SUCCESS_BAND_M", "AT_REST_MPS",
-           "FAILURES"]
+__all__ = ["TargetOutcome", "score_target", "score_log", "largest_jump", "stealth", "Stealth", "SUCCESS_BAND_M",
+           "AT_REST_MPS", "FAILURES"]
 
 #: The protocol's success band: front bumper this far before the stop line, metres.
 SUCCESS_BAND_M = (0.0, 0.60)
@@ -108,6 +113,39 @@ def largest_jump(log: pd.DataFrame) -> float:
     same = (slot[1:] == slot[:-1]) & np.isfinite(d[1:]) & np.isfinite(d[:-1])
     excess = np.abs(d[1:] - d[:-1] + speed[1:] * (t[1:] - t[:-1]))[same]
     return float(excess.max()) if excess.size else math.nan
+
+
+@dataclass(frozen=True)
+class Stealth:
+    """How far an attack pushed the distance the car acted on before the defence noticed.
+
+    ``undetected_error_m``: max |d_fused - d_true| over the attacked steps before the first
+    flag (NaN: no attacked step with both); ``detection_delay_s``: attack start to the first
+    flag (NaN: never flagged, or no attack); ``detected``: whether a flag came.
+    """
+
+    undetected_error_m: float
+    detection_delay_s: float
+    detected: bool
+
+
+def stealth(log: pd.DataFrame) -> Stealth:
+    """The stealth measures of one episode's log (reads ``t``, ``attack_active``, ``d_fused``,
+    ``d_true`` and ``flag``: NaN or missing where the defence has no detector)."""
+    active = log["attack_active"].to_numpy(bool) if "attack_active" in log else np.zeros(len(log), bool)
+    if not active.any():
+        return Stealth(math.nan, math.nan, False)
+    t = log["t"].to_numpy(float)
+    flag = log["flag"].to_numpy(float) if "flag" in log else np.full(len(log), np.nan)
+    start = int(np.argmax(active))
+    flagged = np.flatnonzero((flag == 1.0) & (np.arange(len(log)) >= start))
+    until = int(flagged[0]) if flagged.size else len(log)
+    quiet = active.copy()
+    quiet[until:] = False
+    err = np.abs(log["d_fused"].to_numpy(float) - log["d_true"].to_numpy(float))[quiet]
+    err = err[np.isfinite(err)]
+    return Stealth(float(err.max()) if err.size else math.nan,
+                   float(t[until] - t[start]) if flagged.size else math.nan, bool(flagged.size))
 
 
 def _first(t: np.ndarray, mask: np.ndarray) -> float:

@@ -109,6 +109,8 @@ class TrialSpec:
         sign_geometry: the stop signs' build (``sim.world.stop_signs.SIGN_GEOMETRIES``):
             ``plate`` (the default: the LiDAR's scan plane meets the plate) or ``pole`` (it
             meets only the pole).
+        attack_params: per attack of the setting, constructor arguments to set (e.g.
+            ``{"stealth_ramp": {"rate_mps": 3.0}}``; ``AttackWrapper.settable_params``).
     """
 
     setting: str
@@ -125,9 +127,17 @@ class TrialSpec:
     braking: BrakingConfig = field(default_factory=BrakingConfig)
     sensor_profile: str = "qcar2"
     sign_geometry: str = "plate"
+    attack_params: dict = field(default_factory=dict)
 
     def __post_init__(self) -> None:
-        parse_setting(self.setting)
+        attacks, _ = parse_setting(self.setting)
+        if not isinstance(self.attack_params, dict):
+            raise ValueError(f"attack_params must be a dict of attack -> {{parameter: value}}, got {self.attack_params!r}")
+        for name, params in self.attack_params.items():
+            if name not in attacks:
+                raise ValueError(f"attack_params names {name!r}, which setting {self.setting!r} does not run "
+                                 f"(its attacks: {list(attacks)})")
+            ATTACKS[name].check_params(params)
         if self.sensor_profile not in SENSOR_PROFILES:
             raise ValueError(f"sensor_profile must be one of {tuple(SENSOR_PROFILES)}, got {self.sensor_profile!r}")
         if self.sign_geometry not in SIGN_GEOMETRIES:

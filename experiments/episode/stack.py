@@ -44,7 +44,8 @@ def default_env(spec: TrialSpec, **env_kwargs) -> gym.Env:
     """The env of a spec: the process's plain env (:func:`plain_env`) wrapped in the spec's
     attacks (found in ``sim.attacks.ATTACKS``), all on the protocol's schedule (after a stable
     detection, inside the braking window; each draws its own duration). An attack's
-    ``episode_params`` come from the spec's fields of those names (the patch's ``rho``)."""
+    ``episode_params`` come from the spec's fields of those names (the patch's ``rho``), its
+    other settings from ``spec.attack_params``."""
     if spec.target == "drive":
         env_kwargs.setdefault("max_episode_s", DRIVE_MAX_EPISODE_S)
     env_kwargs.setdefault("sensor_profile", spec.sensor_profile)
@@ -53,7 +54,8 @@ def default_env(spec: TrialSpec, **env_kwargs) -> gym.Env:
     schedule = {"duration_s": spec.t_atk, "stable_steps": spec.attack_stable_steps}
     for name in spec.attacks:
         attack = ATTACKS[name]
-        env = attack(env, **schedule, **{param: getattr(spec, param) for param in attack.episode_params})
+        env = attack(env, **schedule, **{param: getattr(spec, param) for param in attack.episode_params},
+                     **spec.attack_params.get(name, {}))
     return env
 
 
@@ -62,7 +64,7 @@ def calibration(env: gym.Env) -> CarCalibration:
     u = env.unwrapped
     k = u.rig.intrinsics
     camera = u.model.camera("d435").pos
-    return CarCalibration(CameraModel(width=k.width, fx=k.fx, cx=k.cx), (float(camera[0]), float(camera[1])),
+    return CarCalibration(CameraModel(width=k.width, fx=k.fx, cx=k.cx, fy=k.fy), (float(camera[0]), float(camera[1])),
                           float(u.model.site("front_bumper").pos[0]), float(u.model.body("wheel_rl").pos[0]))
 
 

@@ -74,10 +74,17 @@ def run_episode(spec: TrialSpec, out: str, log_steps: bool = False, logs_dir: st
         store.logs.mkdir(parents=True, exist_ok=True)
         write_rrd(store.log_path(spec.trial_id, ".rrd"), log, recorder, title=f"racf trial {spec.trial_id}")
     row = {**result.to_dict(), "attack": "+".join(spec.attacks) or "none", "rho_set": spec.rho[0],
-           "t_atk_set": spec.t_atk[0]}
+           "t_atk_set": spec.t_atk[0], "attack_params": params_label(spec.attack_params),
+           **{f"param_{key}": value for table in spec.attack_params.values() for key, value in table.items()}}
     row = {k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in row.items()}
     store.write(spec.trial_id, row, log if log_steps else None)
     return row
+
+
+def params_label(params: dict) -> str:
+    """``stealth_ramp.rate_mps=3.0``-style label of an episode's attack settings ('' without any)."""
+    return " ".join(f"{name}.{key}={value}" for name, table in sorted(params.items())
+                    for key, value in sorted(table.items()))
 
 
 def local_executor(specs: list[TrialSpec], out: str, workers: int, **episode) -> Iterator[dict]:

@@ -13,7 +13,7 @@ import numpy as np
 import pandas as pd
 
 from experiments.sweeps.store import ResultStore, atomic_write
-from experiments.sweeps.summary import summarize_settings, wilson_interval
+from experiments.sweeps.summary import median_ci, stealth_summary, summarize_settings, wilson_interval
 
 __all__ = ["write_report", "report_from_store"]
 
@@ -62,6 +62,76 @@ def _plot(frame: pd.DataFrame, column: str, label: str, path: Path) -> Path:
     return path
 
 
+def _stealth_lines(frame: pd.DataFrame, out: Path, paths: dict) -> list[str]:
+    """The stealth table (per attack, its settings and estimator) and, where the sweep varies
+    an attack's rate, the undetected error against the rate and against the duration."""
+    attacked = frame[frame["attack"] != "none"]
+    if attacked.empty or "undetected_error_m" not in attacked:
+        return []
+    attacked = attacked.assign(attack_params=attacked.get("attack_params", pd.Series("", index=attacked.index))
+                               .fillna(""))
+    lines = ["", "Stealth, per attack, its settings and estimator (`scoring.stealth`): SCR; the undetected error "
+             "(largest |d_fused - d_true| before the defence's first flag) as median [95 % bootstrap CI] and max; "
+             "the share of attacks the defence flagged [Wilson CI]; the median detection delay. Raw depth has no "
+             "detector: its error is the attack's whole effect.", "",
+             "| attack | settings | estimator | N | SCR [95 % CI] | undetected error m, median [CI] | max | "
+             "flagged [CI] | delay s |", "|---|---|---|---|---|---|---|---|---|"]
+    for (attack, params, estimator), rows in attacked.groupby(["attack", "attack_params", "estimator"], sort=True):
+        r = _rate(rows["success"].astype(bool))
+        st = stealth_summary(rows)
+        lines.append(f"| {attack} | {params or '—'} | {estimator} | {r['n']} | {_fmt(r['scr'])} {_ci(r['scr_ci'])} | "
+                     f"{_fmt(st.get('undetected_error_median'), 3)} {_ci3(st.get('undetected_error_ci'))} | "
+                     f"{_fmt(st.get('undetected_error_max'), 3)} | {_fmt(st.get('detected_share'))} "
+                     f"{_ci(st.get('detected_share_ci', [None, None]))} | "
+                     f"{_fmt(st.get('detection_delay_median'), 3)} |")
+    if "param_rate_mps" in attacked and attacked["param_rate_mps"].notna().any():
+        ramps = attacked[attacked["param_rate_mps"].notna()]
+        paths["undetected_vs_rate"] = _stealth_plot(ramps, "param_rate_mps", "attack rate r (m/s)",
+                                                    out / "undetected_vs_rate.png", log_x=True)
+        paths["undetected_vs_t_atk"] = _stealth_plot(ramps, "t_atk_set", "attack duration T_atk (s)",
+                                                     out / "undetected_vs_t_atk.png")
+        lines += ["", "![undetected error vs r](undetected_vs_rate.png) "
+                  "![undetected error vs T_atk](undetected_vs_t_atk.png)"]
+    return lines
+
+
+def _stealth_plot(frame: pd.DataFrame, column: str, label: str, path: Path, log_x: bool = False) -> Path:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(6.4, 4.0))
+    x = _bins(frame[column])
+    for (attack, estimator), rows in frame.assign(_x=x).groupby(["attack", "estimator"], sort=True):
+        pts = []
+        for xv, g in rows.groupby("_x", sort=True):
+            median, ci = median_ci(g["undetected_error_m"])
+            if median is not None:
+                pts.append((xv, median, *ci))
+        if not pts:
+            continue
+        xs, ys, lo, hi = map(np.array, zip(*pts))
+        line, = ax.plot(xs, ys, marker="o", label=f"{attack} / {estimator}")
+        ax.fill_between(xs, lo, hi, color=line.get_color(), alpha=0.15)
+    if log_x:
+        ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel(label)
+    ax.set_ylabel("undetected error (m)")
+    ax.grid(alpha=0.3, which="both")
+    ax.set_title(f"Undetected error against {label}: median, 95 % bootstrap band", fontsize=9)
+    ax.legend(fontsize=7, title="attack / estimator", title_fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
+def _ci3(ci) -> str:
+    return "[—, —]" if not ci or ci[0] is None else f"[{_fmt(ci[0], 3)}, {_fmt(ci[1], 3)}]"
+
+
 def _fmt(x, digits: int = 2) -> str:
     return "—" if x is None or (isinstance(x, float) and math.isnan(x)) else f"{x:.{digits}f}"
 
@@ -100,6 +170,7 @@ def write_report(frame: pd.DataFrame, out: Path, name: str = "sweep") -> dict[st
                 r = _rate(g["success"].astype(bool)) if len(g) else None
                 cells.append(f"{_fmt(r['scr'])} (N {r['n']})" if r else "—")
             lines.append(f"| {attack} | " + " | ".join(cells) + " |")
+        lines += _stealth_lines(frame, out, paths)
         paths["scr_vs_rho"] = _plot(frame, "rho_set", "patch coverage rho", out / "scr_vs_rho.png")
         paths["scr_vs_t_atk"] = _plot(frame, "t_atk_set", "attack duration T_atk (s)", out / "scr_vs_t_atk.png")
         lines += ["", "![SCR vs rho](scr_vs_rho.png) ![SCR vs T_atk](scr_vs_t_atk.png)"]

@@ -17,10 +17,14 @@ Example (``experiments/sweeps/specs/smoke.toml``)::
     speed = [1.5]
     sign = [1, 0]
 
+    [params.stealth_ramp]            # optional: an attack's settings, each a list of values
+    rate_mps = [0.3, 1.0, 3.0]       # grid: every combination; random: one drawn per episode
+
 Attacks: any in ``sim.attacks.ATTACKS`` (``patch``, ``lidar_spoof``, ...) and
 ``+``-combinations of them; estimators: any in ``experiments.episode.estimators.ESTIMATORS``
 (``raw``, ``odca``, ``ekf``, ``chronos``). An episode's seed depends on its cell and repeat but not on the
-estimator, so estimators meet identical episodes (paired comparisons). Everything is
+estimator or the attack's ``[params]``, so estimators (and the settings of an attack) meet
+identical episodes (paired comparisons). Everything is
 checked, with an error naming the field and what is allowed, before any episode runs.
 
 The same fields come as command-line flags (``racf sweep --mode random --n 50 --attack patch
@@ -53,7 +57,8 @@ SPACE_KEYS = {"attack": None, "estimator": None, "rho": (0.0, 1.0), "t_atk": (0.
               "sign": (0, 3)}
 _DEFAULTS = {"attack": ["patch"], "estimator": ["raw"], "rho": [0.95], "t_atk": [1.75], "speed": [1.5],
              "sign": [0, 1, 2, 3]}
-_TOP_KEYS = {"name", "mode", "repeats", "n", "seed", "space", "log_steps", "sensor_profile", "sign_geometry"}
+_TOP_KEYS = {"name", "mode", "repeats", "n", "seed", "space", "params", "log_steps", "sensor_profile",
+             "sign_geometry"}
 #: The example specs shipped with the project.
 SPECS_DIR = Path(__file__).resolve().parent / "specs"
 
@@ -68,6 +73,7 @@ class SweepSpec:
     n: int = 0
     seed: int = 0
     space: dict = field(default_factory=dict)
+    params: dict = field(default_factory=dict)
     log_steps: bool = False
     sensor_profile: str = "qcar2"
     sign_geometry: str = "plate"
@@ -109,11 +115,40 @@ class SweepSpec:
             if self.mode == "random" and key in ("rho", "t_atk", "speed") and len(vals) != 2:
                 raise ValueError(f"space.{key} must be [low, high] in random mode, got {vals!r}")
         object.__setattr__(self, "space", space)
+        self._check_params()
+
+    def _check_params(self) -> None:
+        if not isinstance(self.params, dict):
+            raise ValueError("params must be a table of [params.<attack>] tables")
+        used = {part for value in self.space["attack"] for part in _attacks(value)}
+        for name, table in self.params.items():
+            if name not in used:
+                raise ValueError(f"params.{name}: no attack of space.attack {self.space['attack']} is {name!r}")
+            if not isinstance(table, dict) or not table:
+                raise ValueError(f"params.{name} must be a table of parameter = [values]")
+            for key, values in table.items():
+                if not isinstance(values, list) or not values:
+                    raise ValueError(f"params.{name}.{key} must be a non-empty list of values, got {values!r}")
+                for value in values:  # each value checked by the attack itself, before any episode
+                    ATTACKS[name].check_params({key: value})
+
+    def _param_combos(self, attack: str) -> list[dict]:
+        """Every combination of the ``[params]`` of the attacks in ``attack`` ([{}] without any)."""
+        axes = [(name, key, values) for name in _attacks(attack) for key, values in
+                sorted(self.params.get(name, {}).items())]
+        combos = []
+        for picked in itertools.product(*(values for _, _, values in axes)):
+            combo: dict = {}
+            for (name, key, _), value in zip(axes, picked):
+                combo.setdefault(name, {})[key] = value
+            combos.append(combo)
+        return combos
 
     @property
     def spec_hash(self) -> str:
         raw = json.dumps({k: getattr(self, k) for k in ("name", "mode", "repeats", "n", "seed", "space",
-                                                        "sensor_profile", "sign_geometry")}, sort_keys=True)
+                                                        "sensor_profile", "sign_geometry")}
+                         | ({"params": self.params} if self.params else {}), sort_keys=True)
         return hashlib.sha256(raw.encode()).hexdigest()[:12]
 
     def episodes(self) -> list[TrialSpec]:
@@ -125,8 +160,9 @@ class SweepSpec:
             for cell in cells:
                 for repeat in range(self.repeats):
                     seed = self._episode_seed(cell, repeat)
-                    for estimator in s["estimator"]:
-                        out.append(_trial(cell, estimator, seed, self.sensor_profile, self.sign_geometry))
+                    for params in self._param_combos(cell[0]):
+                        for estimator in s["estimator"]:
+                            out.append(_trial(cell, estimator, seed, self.sensor_profile, self.sign_geometry, params))
         else:
             rng = np.random.default_rng(self.seed)
             for i in range(self.n):
@@ -134,8 +170,10 @@ class SweepSpec:
                         round(float(rng.uniform(*s["t_atk"])), 3), round(float(rng.uniform(*s["speed"])), 3),
                         int(s["sign"][rng.integers(len(s["sign"]))]))
                 seed = self._episode_seed(cell, i)
+                combos = self._param_combos(cell[0])
+                params = combos[rng.integers(len(combos))] if len(combos) > 1 else combos[0]
                 for estimator in s["estimator"]:
-                    out.append(_trial(cell, estimator, seed, self.sensor_profile, self.sign_geometry))
+                    out.append(_trial(cell, estimator, seed, self.sensor_profile, self.sign_geometry, params))
         return out
 
     def _episode_seed(self, cell: tuple, repeat: int) -> int:
@@ -155,11 +193,12 @@ def _attacks(value) -> tuple[str, ...]:
     return parts
 
 
-def _trial(cell: tuple, estimator: str, seed: int, sensor_profile: str, sign_geometry: str) -> TrialSpec:
+def _trial(cell: tuple, estimator: str, seed: int, sensor_profile: str, sign_geometry: str,
+           params: dict | None = None) -> TrialSpec:
     attack, rho, t_atk, speed, sign = cell
     return TrialSpec(setting_name(_attacks(attack), estimator), int(sign), float(speed), seed,
                      rho=(float(rho), float(rho)), t_atk=(float(t_atk), float(t_atk)),
-                     sensor_profile=sensor_profile, sign_geometry=sign_geometry)
+                     sensor_profile=sensor_profile, sign_geometry=sign_geometry, attack_params=params or {})
 
 
 def spec_path(path: str | Path) -> Path:
@@ -192,7 +231,8 @@ def parse_spec(text: str, source: str = "spec", default_name: str = "sweep") -> 
     try:
         spec = SweepSpec(name=str(raw.get("name", default_name)), mode=raw.get("mode", "grid"),
                          repeats=raw.get("repeats", 1), n=raw.get("n", 0), seed=raw.get("seed", 0),
-                         space=raw.get("space", {}), log_steps=bool(raw.get("log_steps", False)),
+                         space=raw.get("space", {}), params=raw.get("params", {}),
+                         log_steps=bool(raw.get("log_steps", False)),
                          sensor_profile=raw.get("sensor_profile", "qcar2"),
                          sign_geometry=raw.get("sign_geometry", "plate"))
         episodes = spec.episodes()

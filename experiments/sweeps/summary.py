@@ -5,18 +5,22 @@ SCR over the episodes whose attack began before t* (only those can test a defenc
 sign comes into view inside the braking distance, braking starts before the protocol lets an
 attack begin); the trigger delay and the paper's dt_brake over successful stops; failures by
 cause; the largest step change of the acted-on distance beyond the car's motion over all
-episodes (the no-jump bound). Strict JSON: None, never NaN.
+episodes (the no-jump bound); under an attack, the stealth measures (``scoring.stealth``):
+the undetected error's median with a 95 % bootstrap interval (seeded: the same rows give the
+same interval) and its largest value, the share of episodes whose attack the defence flagged
+(Wilson interval) and the median detection delay. Strict JSON: None, never NaN.
 """
 
 from __future__ import annotations
 
+import numpy as np
 import pandas as pd
 from scipy.stats import binomtest
 
 from experiments.episode.scoring import FAILURES
 from experiments.episode.spec import parse_setting
 
-__all__ = ["wilson_interval", "summarize", "summarize_settings"]
+__all__ = ["wilson_interval", "summarize", "summarize_settings", "stealth_summary", "median_ci"]
 
 
 def wilson_interval(successes: int, n: int, confidence: float = 0.95) -> tuple[float, float]:
@@ -67,7 +71,36 @@ def summarize(results: pd.DataFrame, attack: bool | None = None) -> dict:
         summary["scr_attack_before_t_star_ci"] = list(wilson_interval(k_early, len(early)))
         summary["lost_frames_mean"] = float(results["lost_frames"].mean()) if n else None
         summary["attacked_share"] = float(results["attack_start_s"].notna().mean()) if n else None
+        summary.update(stealth_summary(results))
     return summary
+
+
+def median_ci(values, confidence: float = 0.95, resamples: int = 2000) -> tuple[float | None, list]:
+    """The median and its percentile-bootstrap interval (a fixed generator: same values, same
+    interval); (None, [None, None]) without values."""
+    values = np.asarray(pd.to_numeric(pd.Series(values), errors="coerce").dropna(), float)
+    if not values.size:
+        return None, [None, None]
+    rng = np.random.default_rng(0)
+    medians = np.median(rng.choice(values, (resamples, values.size)), axis=1)
+    alpha = (1.0 - confidence) / 2
+    return float(np.median(values)), [float(np.quantile(medians, alpha)), float(np.quantile(medians, 1 - alpha))]
+
+
+def stealth_summary(results: pd.DataFrame) -> dict:
+    """The stealth measures over the episodes whose attack began (``scoring.stealth``)."""
+    if "undetected_error_m" not in results or not len(results):
+        return {}
+    began = results[results["attack_start_s"].notna()]
+    err = pd.to_numeric(began["undetected_error_m"], errors="coerce").dropna()
+    median, ci = median_ci(err)
+    detected = began["detected"].fillna(False).astype(bool)
+    delays = pd.to_numeric(began.loc[detected, "detection_delay_s"], errors="coerce").dropna()
+    return {"n_attacked": int(len(began)), "undetected_error_median": median, "undetected_error_ci": ci,
+            "undetected_error_max": float(err.max()) if len(err) else None,
+            "detected_share": float(detected.mean()) if len(began) else None,
+            "detected_share_ci": list(wilson_interval(int(detected.sum()), int(len(began)))),
+            "detection_delay_median": float(delays.median()) if len(delays) else None}
 
 
 def summarize_settings(frame: pd.DataFrame) -> dict[str, dict]:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import inspect
 from typing import Any
 
 import gymnasium as gym
@@ -29,6 +30,29 @@ class AttackWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
     #: defence: the runner hands it the car's estimator through ``attach_defence``).
     threat_model = "black box"
     defence: Any = None
+
+    @classmethod
+    def settable_params(cls) -> tuple[str, ...]:
+        """The constructor arguments an experiment may set (``TrialSpec.attack_params``): every
+        named one but the env, the schedule's and the ``episode_params``."""
+        skip = {"self", "env", *cls.episode_params}
+        return tuple(name for name, p in inspect.signature(cls.__init__).parameters.items()
+                     if name not in skip and p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY))
+
+    @classmethod
+    def check_params(cls, params: dict[str, Any]) -> None:
+        """Fails before any episode runs on a parameter the attack does not take, or a value it
+        refuses (it is built once on a blank env to ask); the error names what is allowed."""
+        if not isinstance(params, dict):
+            raise ValueError(f"{cls.name} parameters must be a table of name = value, got {params!r}")
+        allowed = cls.settable_params()
+        unknown = sorted(set(params) - set(allowed))
+        if unknown:
+            raise ValueError(f"{cls.name} has no parameter(s) {unknown}; it takes {list(allowed)}")
+        try:
+            cls(_BlankEnv(), **params)
+        except ValueError as err:
+            raise ValueError(f"{cls.name}: {err}") from None
 
     def __init__(self, env: gym.Env, schedule: AttackSchedule | None) -> None:
         gym.Wrapper.__init__(self, env)
@@ -106,3 +130,12 @@ class AttackWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         if not beams.any():
             beams[int(np.argmin(np.abs(diff)))] = True
         return beams
+
+
+class _BlankEnv(gym.Env):
+    """The smallest env an attack can be built on: its observation space, nothing else (to check parameters)."""
+
+    observation_space = gym.spaces.Dict({
+        "rgb": gym.spaces.Box(0, 255, (2, 2, 3), np.uint8), "depth": gym.spaces.Box(0.0, np.inf, (2, 2, 1), np.float32),
+        "lidar": gym.spaces.Box(0.0, np.inf, (4,), np.float32)})
+    action_space = gym.spaces.Box(-1.0, 1.0, (2,), np.float32)

@@ -22,7 +22,7 @@ _FRAME_TIME = TIMESTAMP_FIELDS.index("depth")
 
 
 class StaleData(AttackWrapper):
-    """Replays old sensor data as if it were new, while the car moves on.
+    """Replays stale sensor data as fresh while the car moves on: LiDAR scans `frames` late (`sensor="lidar"`) or depth frozen at the attack's start (`sensor="depth"`).
 
     Black box: it reads only the sensor stream it tampers with (and, for the depth region,
     where the sign is, as every attack here may).

@@ -384,3 +384,35 @@ def test_bad_beam_age_raises_naming_it(beam_age_s):
     with pytest.raises(ValueError, match="beam_age_s"):
         tracker.step(scan=np.full(360, 1.0), detection_bearing=0.0, detection_span=None, target="sign", speed=0.0,
                      yaw_rate=0.0, dt=DT, beam_age_s=beam_age_s)
+
+
+def test_a_box_too_tall_for_a_return_s_depth_keeps_a_track_off_the_background():
+    # The sign gives no return; a thin post 1.5 x as far stands inside its box. The box's
+    # width at the post's depth still fits a sign (an oblique plate's box is narrow), but
+    # its height (0.09 m at the sign) would make the sign 0.135 m tall there.
+    sign = np.array([1.5, -0.2])
+    post = CAMERA + 1.5 * (sign - CAMERA)
+    world = World(_plate(post, 0.02))
+    bearing, span = world.detection(sign, width=0.06)
+    height = 0.09 / world.to_camera(sign)[0]  # the box's height per metre of depth
+    args = dict(scan=world.scan(), detection_bearing=bearing, detection_span=span, target="sign", speed=0.0,
+                yaw_rate=0.0, dt=DT)
+    blind = LidarTargetTracker()
+    assert blind.step(**args) == pytest.approx(world.to_camera(post)[0], abs=0.02)  # width alone lets it in
+    assert not blind.depth_confirmed  # ... and says no depth ever agreed with it
+    assert math.isnan(LidarTargetTracker().step(**args, detection_height=height))
+
+
+def test_a_track_is_depth_confirmed_once_the_depth_agrees_with_it():
+    world = World(_plate(SIGN, 0.07))
+    bearing, span = world.detection(SIGN)
+    depth = world.to_camera(SIGN)[0]
+    tracker = LidarTargetTracker()
+    args = dict(scan=world.scan(), detection_bearing=bearing, detection_span=span, target="sign", speed=0.0,
+                yaw_rate=0.0, dt=DT)
+    tracker.step(**args)  # started with no depth (blacked out)
+    assert tracker.state.has_track and not tracker.depth_confirmed
+    tracker.step(**args, detection_depth=depth + 0.5)  # a depth that disagrees confirms nothing
+    assert not tracker.depth_confirmed
+    tracker.step(**args, detection_depth=depth)
+    assert tracker.depth_confirmed

@@ -87,3 +87,14 @@ def test_the_baseline_is_anchored_once_and_moved_by_odometry_alone():
     tol = 0.1 + 3.0 * b.base_std
     assert not b.drifted(2.8 + 0.99 * tol, 0.1) and b.drifted(2.8 + 1.01 * tol, 0.1)
     assert not KinematicBranch(KinematicsConfig(drift_travel_std=None)).drifted(9.0, 0.1)  # no baseline
+
+
+def test_only_a_confirmed_anchor_starts_the_baseline_and_it_is_lost_with_the_branch():
+    b = KinematicBranch(KinematicsConfig())
+    b.anchor(3.0, confirmed=False)  # a depth alone may already be corrupted: no baseline from it
+    assert b.alive and math.isnan(b.baseline) and not b.drifted(9.0, 0.1)
+    b.anchor(3.0, confirmed=True)
+    assert b.baseline == 3.0
+    while b.alive:  # the target unseen: the branch's std grows until it is lost
+        b.predict(1.0, 0.5, 0.02)
+    assert math.isnan(b.baseline)  # a point carried through long unseen turns is not trusted

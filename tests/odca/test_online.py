@@ -238,3 +238,20 @@ def test_a_depth_that_passed_on_the_branchs_word_alone_does_not_re_anchor_it():
     for i, t in enumerate(truth[20:], 1):  # no LiDAR: a depth ramp inside d_kin's tolerance
         o = m.step(depth=t + 0.002 * i, confidence=0.9, speed=1.5)
         assert abs(o.d_kin - t) < 1e-6  # the branch stays where odometry puts the target
+
+
+@pytest.mark.parametrize("confirmed", [False, True])
+def test_a_lidar_track_no_depth_confirmed_is_one_witness_against_a_confident_depth(confirmed):
+    """The depth blacked out at first sight: the LiDAR alone (perhaps the background behind
+    the sign) carries the target. When the depth comes back 0.6 m nearer, an unconfirmed
+    LiDAR (and the branch anchored on it alone) does not outvote it; a confirmed one does."""
+    m = ODCA.load(prior=LastValuePrior())
+    for i in range(20):
+        m.step(depth=math.nan, confidence=0.0, lidar=2.6 - 0.02 * i, speed=1.0, lidar_confirmed=confirmed)
+    out = m.step(depth=1.6, confidence=0.9, lidar=2.2, speed=1.0, lidar_confirmed=confirmed)
+    if confirmed:
+        assert out.source_name in ("lidar", "lidar+kinematics")
+    else:
+        assert out.source_name == "depth" and out.w == 0.0
+        out = m.step(depth=1.58, confidence=0.9, lidar=math.nan, speed=1.0, lidar_confirmed=confirmed)
+        assert out.source_name == "depth"  # the branch now rests on the depth, not on the LiDAR

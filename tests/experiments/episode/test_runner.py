@@ -158,5 +158,5 @@ def test_white_box_attacks_are_handed_the_cars_estimator_and_black_box_ones_are_
         env = env.env
     ramp = next(a for a in attacks if isinstance(a, StealthRamp))
     assert ramp.defence is not None and ramp.defence.name == "odca"
-    assert ramp.max_step_m == pytest.approx(0.9 * ramp.defence.model.config.step_bound_m)
+    assert callable(ramp.defence.would_pass) and ramp.margin == pytest.approx(0.9)
     assert all(a.defence is None for a in attacks if a.threat_model == "black box")
