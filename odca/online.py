@@ -19,7 +19,10 @@ Per step t:
    would outvote the clean depth-LiDAR residual's tail: 99.1 % of clean depth unchanged,
    not 99.9 %). A
    measurement off the branch's odometry-only baseline (``KinematicBranch.drifted``) is
-   outvoted instead, depth and LiDAR together: the step rests on the baseline;
+   outvoted instead, depth and LiDAR together: the step rests on the baseline. A LiDAR
+   track that no depth ever confirmed (``lidar_confirmed=False``: perception started it while
+   the depth was missing) counts as one witness, and so does a branch anchored on it alone:
+   a confident depth that disagrees with them passes;
 5. the output moves no further per step than the car's motion plus the tolerance of a
    fresh measurement (``step_bound_m``); it is NaN when there is no target at all.
 
