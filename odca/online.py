@@ -157,6 +157,12 @@ class _Witnesses:
     def reset(self) -> None:
         self.branch.reset()
 
+    def lidar_unconfirmed(self, l: float, lidar_confirmed: bool, branch: KinematicBranch) -> bool:
+        """Whether the LiDAR side of the vote is one witness: a track no depth confirmed, or a
+        branch anchored on such a track alone."""
+        return (self.config.kinematics.enabled and branch.alive and branch.lidar_only) or (
+            l == l and not lidar_confirmed)
+
     def step(self, d, c, l, v, yaw_rate, bearing, mu, dt, lidar_confirmed=True):
         """Returns (source, base, lidar_trusted, d_kin, kin_std, motion) for one sanitised step.
         ``lidar_confirmed``: whether a depth ever agreed with the LiDAR's track (perception's word)."""
@@ -168,9 +174,9 @@ class _Witnesses:
             motion = -v * dt  # no branch: a straight approach's change
         k, k_std = branch.distance, branch.std
         lidar_only = on and branch.alive and branch.lidar_only
-        unconfirmed = lidar_only or (l == l and not lidar_confirmed)
         source, base, lidar_trusted = vote(d, c, l, k, branch.tolerance(cfg.gate.tau_m) if k == k else math.nan, mu,
-                                           cfg.gate, cfg.kinematics.witness, lidar_unconfirmed=unconfirmed)
+                                           cfg.gate, cfg.kinematics.witness,
+                                           lidar_unconfirmed=self.lidar_unconfirmed(l, lidar_confirmed, branch))
         if on and source in (DEPTH, LIDAR, LIDAR_KIN) and branch.drifted(base, cfg.gate.tau_m):
             source, base, lidar_trusted = BASELINE, branch.baseline, False
         elif on and source == DEPTH and (lidar_trusted or lidar_only or not branch.alive):
@@ -323,10 +329,10 @@ class ODCA:
             motion = -speed * dt
         d = float(sanitize(depth, 1.0, math.nan, 0.0)[0])
         k = branch.distance
-        source, base, _ = vote(d, 1.0, self._last_lidar + motion + lidar_shift, k,
-                               branch.tolerance(cfg.gate.tau_m) if k == k else math.nan, math.nan, cfg.gate,
-                               cfg.kinematics.witness,
-                               lidar_unconfirmed=(branch.alive and branch.lidar_only) or not self._lidar_confirmed)
+        l = self._last_lidar + motion + lidar_shift
+        source, base, _ = vote(d, 1.0, l, k, branch.tolerance(cfg.gate.tau_m) if k == k else math.nan, math.nan,
+                               cfg.gate, cfg.kinematics.witness,
+                               lidar_unconfirmed=self._witnesses.lidar_unconfirmed(l, self._lidar_confirmed, branch))
         return source == DEPTH and not (cfg.kinematics.enabled and branch.drifted(base, cfg.gate.tau_m))
 
     # -- batched offline path ------------------------------------------------------------------

@@ -29,6 +29,7 @@ from typing import Callable
 import numpy as np
 
 from odca.features import usable_forecast
+from odca.gate import DEPTH, DEPTH_UNCONFIRMED
 
 from controllers import DistanceEstimator, EKFEstimator, PerceptionSample, RawDepthEstimator
 
@@ -74,7 +75,7 @@ class ODCAEstimator:
             return {}
         # The gate flags a depth it outvotes (or one off the kinematic baseline); a missing
         # depth, or one passed on first sight, is nothing to flag.
-        flagged = self._had_depth and self.last.source_name not in ("depth", "depth (unconfirmed)")
+        flagged = self._had_depth and int(self.last.source) not in (DEPTH, DEPTH_UNCONFIRMED)
         return {"w": self.last.w, "flag": float(flagged), "odca_source": self.last.source, "d_kin": self.last.d_kin}
 
     def would_pass(self, *, depth: float, speed_mps: float, dt: float, yaw_rate_radps: float = 0.0,

@@ -32,7 +32,10 @@ def _bins(values: pd.Series, max_bins: int = 6) -> pd.Series:
     return values.groupby(codes).transform("mean")
 
 
-def _plot(frame: pd.DataFrame, column: str, label: str, path: Path) -> Path:
+def _band_plot(frame: pd.DataFrame, column: str, point, path: Path, *, xlabel: str, ylabel: str, title: str,
+               log_x: bool = False, log_y: bool = False, ylim: tuple[float, float] | None = None) -> Path:
+    """One line per (attack, estimator) against ``column`` (binned), with a shaded interval:
+    ``point(rows)`` gives (value, low, high) for one bin's rows, or None to skip it."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -41,25 +44,42 @@ def _plot(frame: pd.DataFrame, column: str, label: str, path: Path) -> Path:
     fig, ax = plt.subplots(figsize=(6.4, 4.0))
     x = _bins(frame[column])
     for (attack, estimator), rows in frame.assign(_x=x).groupby(["attack", "estimator"], sort=True):
-        pts = []
-        for xv, g in rows.groupby("_x", sort=True):
-            r = _rate(g["success"].astype(bool))
-            pts.append((xv, r["scr"], *r["scr_ci"], r["n"]))
+        pts = [(xv, *p) for xv, g in rows.groupby("_x", sort=True) if (p := point(g)) is not None]
         if not pts:
             continue
-        xs, ys, lo, hi, ns = map(np.array, zip(*pts))
+        xs, ys, lo, hi = map(np.array, zip(*pts))
         line, = ax.plot(xs, ys, marker="o", label=f"{attack} / {estimator}")
         ax.fill_between(xs, lo, hi, color=line.get_color(), alpha=0.15)
-    ax.set_xlabel(label)
-    ax.set_ylabel("stop compliance (SCR)")
-    ax.set_ylim(-0.02, 1.02)
-    ax.grid(alpha=0.3)
-    ax.set_title(f"SCR against {label} (95 % Wilson bands)", fontsize=9)
+    if log_x:
+        ax.set_xscale("log")
+    if log_y:
+        ax.set_yscale("log")
+    if ylim is not None:
+        ax.set_ylim(*ylim)
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.grid(alpha=0.3, which="both" if log_y else "major")
+    ax.set_title(title, fontsize=9)
     ax.legend(fontsize=7, title="attack / estimator", title_fontsize=7)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
     return path
+
+
+def _scr_point(rows: pd.DataFrame):
+    r = _rate(rows["success"].astype(bool))
+    return r["scr"], *r["scr_ci"]
+
+
+def _undetected_point(rows: pd.DataFrame):
+    median, ci = median_ci(rows["undetected_error_m"])
+    return None if median is None else (median, *ci)
+
+
+def _plot(frame: pd.DataFrame, column: str, label: str, path: Path) -> Path:
+    return _band_plot(frame, column, _scr_point, path, xlabel=label, ylabel="stop compliance (SCR)",
+                      title=f"SCR against {label} (95 % Wilson bands)", ylim=(-0.02, 1.02))
 
 
 def _stealth_lines(frame: pd.DataFrame, out: Path, paths: dict) -> list[str]:
@@ -96,36 +116,8 @@ def _stealth_lines(frame: pd.DataFrame, out: Path, paths: dict) -> list[str]:
 
 
 def _stealth_plot(frame: pd.DataFrame, column: str, label: str, path: Path, log_x: bool = False) -> Path:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(6.4, 4.0))
-    x = _bins(frame[column])
-    for (attack, estimator), rows in frame.assign(_x=x).groupby(["attack", "estimator"], sort=True):
-        pts = []
-        for xv, g in rows.groupby("_x", sort=True):
-            median, ci = median_ci(g["undetected_error_m"])
-            if median is not None:
-                pts.append((xv, median, *ci))
-        if not pts:
-            continue
-        xs, ys, lo, hi = map(np.array, zip(*pts))
-        line, = ax.plot(xs, ys, marker="o", label=f"{attack} / {estimator}")
-        ax.fill_between(xs, lo, hi, color=line.get_color(), alpha=0.15)
-    if log_x:
-        ax.set_xscale("log")
-    ax.set_yscale("log")
-    ax.set_xlabel(label)
-    ax.set_ylabel("undetected error (m)")
-    ax.grid(alpha=0.3, which="both")
-    ax.set_title(f"Undetected error against {label}: median, 95 % bootstrap band", fontsize=9)
-    ax.legend(fontsize=7, title="attack / estimator", title_fontsize=7)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return _band_plot(frame, column, _undetected_point, path, xlabel=label, ylabel="undetected error (m)",
+                      title=f"Undetected error against {label}: median, 95 % bootstrap band", log_x=log_x, log_y=True)
 
 
 def _ci3(ci) -> str:
