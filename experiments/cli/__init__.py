@@ -6,13 +6,13 @@ from __future__ import annotations
 import argparse
 import sys
 
-from experiments.cli import bench, data, odca, sweep, trials, view
+from experiments.cli import bench, data, detector, odca, sweep, trials, view
 from experiments.cli.common import UsageError, fail
 
 __all__ = ["main", "build_parser", "GROUPS"]
 
 #: The command groups, in the order ``racf --help`` lists their commands.
-GROUPS = (view, trials, sweep, data, odca, bench)
+GROUPS = (view, trials, sweep, data, odca, detector, bench)
 
 
 def build_parser() -> argparse.ArgumentParser:

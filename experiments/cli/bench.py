@@ -7,7 +7,10 @@ import argparse
 import json
 from pathlib import Path
 
+from controllers.detectors import DETECTORS
 from experiments.cli.common import count, fail, fmt_ci, sensor_flags
+
+DETECTOR_NAMES = tuple(DETECTORS)
 
 __all__ = ["register"]
 
@@ -51,8 +54,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     sensor_flags(bl, geometry_default=None)
     bl.set_defaults(handler=_bench_loop)
 
-    bd = sub.add_parser("bench-detector", help="stop-sign detector recall and false-positive frames on rendered drives")
-    bd.add_argument("--seed", type=int, default=0)
+    bd = sub.add_parser("bench-detector", help="stop-sign detectors side by side: recall and false-positive frames "
+                                               "on held-out views and approach drives, time per frame on one core")
+    bd.add_argument("--detector", choices=("both", *DETECTOR_NAMES), default="both",
+                    help="which detector(s) to measure (default both, side by side)")
+    bd.add_argument("--seed", type=int, default=0, help="seed of the approach drives (default 0)")
     bd.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
     bd.set_defaults(handler=_bench_detector)
 
@@ -125,18 +131,34 @@ def _bench_loop(args: argparse.Namespace) -> int:
 
 
 def _bench_detector(args: argparse.Namespace) -> int:
-    from experiments.bench.detector import bench_detector
+    from experiments.bench.detector import BUDGET_MS, FRAME_PERIOD_MS, bench_detector
+    from experiments.detector.dataset import DEFAULT_DATA_DIR, load_split, make_dataset
 
-    r = bench_detector(seed=args.seed, progress=not args.json)
+    names = DETECTOR_NAMES if args.detector == "both" else (args.detector,)
+    heldout = load_split(make_dataset(root=DEFAULT_DATA_DIR, progress=not args.json), "heldout")
+    try:
+        results = [bench_detector(name, seed=args.seed, heldout=heldout, progress=not args.json) for name in names]
+    except FileNotFoundError as err:
+        fail("bench-detector", str(err))
     if args.json:
-        print(json.dumps(r.to_dict()))
+        print(json.dumps({r.detector: r.to_dict() for r in results}, allow_nan=False))
         return 0
-    print(f"frames {r.n_frames}, ms per frame {r.ms_per_frame:.2f}")
-    print(f"recall (signs 0.5-2.5 m, N = {r.n_positive}): {r.recall:.3f} {fmt_ci(*r.recall_ci)}  "
-          + "  ".join(f"sign {s}: {v:.3f}" for s, v in r.recall_by_sign.items()))
-    print(f"false-positive frames: {r.n_fp_frames} / {r.n_frames} = {r.fp_rate:.4f} "
-          f"{fmt_ci(*r.fp_rate_ci, digits=4)}")
-    print("mean confidence with a share of the sign's box occluded:")
-    for side, row in r.occlusion_confidence.items():
-        print(f"  from the {side:<5}" + "".join(f"  {q:.1f}: {c:.2f}" for q, c in row.items()))
+    h = results[0].heldout
+    print(f"held-out views: {h['n_frames']} frames, {h['n_positive']} with a resolvable stop sign")
+    print(f"{'detector':<11}{'held-out recall':>26}{'held-out FP frames':>28}{'drive recall (0.5-2.5 m)':>32}"
+          f"{'drive FP frames':>24}{'ms/frame, 1 core':>18}{'/ 33.3 ms':>11}{'/ 3 ms':>8}")
+    for r in results:
+        h = r.heldout
+        print(f"{r.detector:<11}{h['recall']:>10.4f} {fmt_ci(*h['recall_ci']):>15}"
+              f"{h['n_fp']:>6}/{h['n_frames']} = {100 * h['fp_rate']:.2f} %"
+              f"{r.recall:>14.4f} {fmt_ci(*r.recall_ci):>15} N={r.n_positive:<4}"
+              f"{r.n_fp_frames:>6}/{r.n_frames} = {100 * r.fp_rate:.2f} %"
+              f"{r.ms_per_frame_one_core:>14.2f}{r.ms_per_frame_one_core / FRAME_PERIOD_MS:>11.3f}"
+              f"{r.ms_per_frame_one_core / BUDGET_MS:>8.2f}")
+    print("goals for the learned detector: held-out recall >= 0.99, false-positive frames <= 0.1 %, "
+          "time / 3 ms <= 1")
+    for r in results:
+        print(f"{r.detector}: mean confidence with a share of the sign's box occluded:")
+        for side, row in r.occlusion_confidence.items():
+            print(f"  from the {side:<5}" + "".join(f"  {q:.1f}: {c:.2f}" for q, c in row.items()))
     return 0

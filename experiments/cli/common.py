@@ -144,6 +144,12 @@ def sensor_flags(p, default: str | None = "qcar2", geometry_default: str | None 
                         "it meets only the 6 mm pole")
 
 
+def _detector_names() -> tuple[str, ...]:
+    from controllers.detectors import DETECTORS
+
+    return tuple(DETECTORS)
+
+
 def episode_flags(p: argparse.ArgumentParser) -> None:
     """The flags ``racf trial`` and ``racf trials`` share: what runs and how."""
     p.add_argument("--setting", default=None,
@@ -160,6 +166,9 @@ def episode_flags(p: argparse.ArgumentParser) -> None:
     p.add_argument("--delay-ms", type=float, default=0.0,
                    help="perception-to-actuation delay, ms (default 0; the paper's offboard loop: 49)")
     p.add_argument("--control-hz", type=float, default=None, help="controller rate, Hz (default: every 50 Hz step)")
+    p.add_argument("--detector", choices=_detector_names(), default=None,
+                   help="the car's stop-sign detector: classical (colour and shape; default) or learned (the "
+                        "segmenter; the default of --table --patch physical)")
     p.add_argument("--stable-steps", type=int, default=None,
                    help="steps the sign must be visible before an attack may start (default: the braking "
                         "controller's confirm_frames + 3 = 6)")
@@ -189,7 +198,8 @@ def episode_params(args: argparse.Namespace, command: str, table: bool = False) 
         params = {"rho": pair(command, "--rho", args.rho, STRONG_RHO),
                   "t_atk": pair(command, "--t-atk", args.t_atk, STRONG_T_ATK_S),
                   "delay_ms": args.delay_ms, "control_hz": args.control_hz, "stable_steps": args.stable_steps,
-                  "sensor_profile": args.sensor_profile, "sign_geometry": args.sign_geometry}
+                  "sensor_profile": args.sensor_profile, "sign_geometry": args.sign_geometry,
+                  "detector": args.detector or "classical"}
     except ValueError as err:
         flag_error(command, str(err))
     return setting, params

@@ -31,6 +31,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     ts.add_argument("--table", action="store_true",
                     help="the paper's table: every setting of TABLE_SETTINGS (clean, clean+odca, attack, attack+odca, "
                          "attack+ekf, attack+chronos, attack+lidar_spoof+odca), N per setting")
+    ts.add_argument("--patch", choices=("occlusion", "physical"), default="occlusion",
+                    help="with --table: the occluder's table (the paper's, default) or the sticker printed on the "
+                         "sign's table (physical_patch on the protocol's schedule and from the episode's start; "
+                         "clean, no defence, ODCA, EKF), with the learned detector unless --detector says otherwise")
     ts.add_argument("-n", type=count, default=30, help="number of trials (default 30; 12 cover every sign x speed)")
     ts.add_argument("--seed", type=int, default=0, help="seed of the first trial; trial i uses seed + i")
     backend_flags(ts)
@@ -91,19 +95,29 @@ def _trials(args: argparse.Namespace) -> int:
 
     where = {"workers": args.workers, "backend": args.backend, "address": args.address}
     if args.table:
+        from experiments.sweeps.batches import TABLES
+
         _, params = episode_params(args, "trials", table=True)
+        physical = args.patch == "physical"
+        if physical and args.detector is None:
+            params["detector"] = "learned"
+        out = args.out or Path("outputs/table" + ("-physical" if physical else ""))
         try:
-            table = run_table(args.n, args.out or Path("outputs/table"), seed=args.seed, progress=not args.json,
-                              rerun=args.rerun, **where, **params)
+            table = run_table(args.n, out, seed=args.seed, progress=not args.json, rerun=args.rerun,
+                              rows=TABLES[args.patch], **where, **params)
         except ValueError as err:
             fail("trials", str(err))
         if args.json:
             print(json.dumps({"sensor_profile": args.sensor_profile, "sign_geometry": args.sign_geometry,
-                              "settings": table}, allow_nan=False))
+                              "detector": params["detector"], "patch": args.patch, "settings": table},
+                             allow_nan=False))
         else:
-            print(f"sensor profile {args.sensor_profile}, stop signs {args.sign_geometry}")
+            print(f"sensor profile {args.sensor_profile}, stop signs {args.sign_geometry}, "
+                  f"detector {params['detector']}, patch {args.patch}")
             print(table_text(table))
         return 0
+    if args.patch != "occlusion":
+        fail("trials", "--patch chooses a --table; without --table give the setting (e.g. clean+physical_patch)")
     setting, params = episode_params(args, "trials")
     try:
         specs = batch_specs(setting, args.n, args.seed, **params)
@@ -133,7 +147,7 @@ def table_text(table: dict[str, dict]) -> str:
     def ms(mean, std):
         return "-" if mean is None else f"{mean:.3f} +- {std or 0:.3f}"
 
-    lines = [f"{'setting':<26}{'N':>4}{'SCR [95% Wilson]':>20}{'ASR [95% Wilson]':>20}{'trigger delay s':>18}"
+    lines = [f"{'setting':<32}{'N':>4}{'SCR [95% Wilson]':>20}{'ASR [95% Wilson]':>20}{'trigger delay s':>18}"
              f"{'dt_brake s':>18}{'n':>4}{'SCR, attack before t*':>28}  failures"]
     for name, r in table.items():
         asr = f"{r['asr']:.2f} {fmt_ci(*r['asr_ci'])}" if r.get("asr") is not None else "-"
@@ -141,7 +155,7 @@ def table_text(table: dict[str, dict]) -> str:
         early = "-" if r.get("scr_attack_before_t_star") is None else (
             f"{r['scr_attack_before_t_star']:.2f} {fmt_ci(*r['scr_attack_before_t_star_ci'])} "
             f"({r['n_attack_before_t_star']})")
-        lines.append(f"{name:<26}{r['n']:>4}{r['scr']:>6.2f} {fmt_ci(*r['scr_ci']):>13}{asr:>20}"
+        lines.append(f"{name:<32}{r['n']:>4}{r['scr']:>6.2f} {fmt_ci(*r['scr_ci']):>13}{asr:>20}"
                      f"{ms(r['trigger_delay_mean'], r['trigger_delay_std']):>18}"
                      f"{ms(r['dt_brake_mean'], r['dt_brake_std']):>18}{r['n_latency']:>4}{early:>28}  {fails}")
     paper = "; ".join(f"{name} SCR {p['scr']:.2f}, dt {p['dt_brake_s']:.3f} s"

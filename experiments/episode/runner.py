@@ -31,7 +31,7 @@ from experiments.episode.referee import Referee
 from experiments.episode.scoring import largest_jump, score_log, stealth
 from experiments.episode.spec import TrialSpec
 from experiments.episode.stack import build_car, default_env, mission
-from sim.attacks import PatchAttack
+from sim.attacks import PatchOcclusion
 from sim.attacks.base import AttackWrapper
 from sim.sensors import STATE_FIELDS
 
@@ -187,7 +187,7 @@ def _run(env: gym.Env, spec: TrialSpec, estimator, on_step: StepHook | None, cle
 def _result(spec: TrialSpec, env: gym.Env, log: pd.DataFrame) -> TrialResult:
     outcomes = score_log(log)
     first = outcomes[0]
-    patch = _find_wrapper(env, PatchAttack)
+    patch = _find_wrapper(env, PatchOcclusion)
     windows = _first_attack_windows(env)
     lost = int((log["attack_active"] & log["sign_in_view"] & ~log["detected"]).sum())
     n_targets = len(env.unwrapped.route_targets)
@@ -210,7 +210,7 @@ def _first_attack_windows(env: gym.Env) -> list[tuple[float, float]]:
         env = env.env
     if not attacks:
         return []
-    return min(attacks, key=lambda a: (a.schedule.windows[0][0], not isinstance(a, PatchAttack))).schedule.windows
+    return min(attacks, key=lambda a: (a.schedule.windows[0][0], not isinstance(a, PatchOcclusion))).schedule.windows
 
 
 def _grant_white_box(env: gym.Env, defence) -> None:

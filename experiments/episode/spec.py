@@ -1,9 +1,9 @@
 """What an episode runs: the setting (attacks and estimator), target, speed, seed, attack
 parameters and timing, and the id that names its result.
 
-A setting is a ``+``-joined name: ``clean`` or ``attack`` (the patch attack), then any
+A setting is a ``+``-joined name: ``clean`` or ``attack`` (the image-space occluder ``patch_occlusion``), then any
 extra attacks (``lidar_spoof``, ``lidar_dropout``, ``depth_blackout``, ``depth_bias``,
-``confidence_degradation``; ``clean+depth_bias`` is the bias alone), then the estimator when it is not raw
+``confidence_degradation``, ``physical_patch``, ...; ``clean+depth_bias`` is the bias alone), then the estimator when it is not raw
 depth (``odca``, ``ekf``, ``chronos``). The paper's table uses ``clean``, ``clean+odca``,
 ``attack``, ``attack+odca``, ``attack+ekf``, ``attack+chronos`` and, beyond the paper,
 ``attack+lidar_spoof+odca``.
@@ -22,6 +22,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from controllers import BrakingConfig
+from controllers.detectors import DETECTORS
 from experiments.episode.estimators import ESTIMATORS
 from experiments.sweeps.store import code_version
 from sim.attacks import ATTACKS
@@ -44,7 +45,7 @@ STRONG_T_ATK_S = (0.5, 3.0)
 #: Attacks that may join (or replace) the patch in a setting (every registered attack but the
 #: patch, in the registry's order): LiDAR faults (ODCA's gate trusts the LiDAR) and the depth
 #: camera's own faults, each on the protocol's schedule.
-EXTRA_ATTACKS = tuple(name for name in ATTACKS if name != "patch")
+EXTRA_ATTACKS = tuple(name for name in ATTACKS if name != "patch_occlusion")
 #: The env's step rate, Hz (attack timing is counted in its steps).
 ENV_HZ = 50.0
 #: The paper's closed-loop table, plus the LiDAR spoof under ODCA.
@@ -53,7 +54,7 @@ TABLE_SETTINGS = ("clean", "clean+odca", "attack", "attack+odca", "attack+ekf", 
 
 
 def parse_setting(setting: str) -> tuple[tuple[str, ...], str]:
-    """``"attack+lidar_spoof+odca"`` -> (("patch", "lidar_spoof"), "odca"); ValueError names what is allowed."""
+    """``"attack+lidar_spoof+odca"`` -> (("patch_occlusion", "lidar_spoof"), "odca"); ValueError names what is allowed."""
     if not isinstance(setting, str) or not setting:
         raise ValueError(f"setting must be a non-empty string, got {setting!r}")
     base, *rest = setting.split("+")
@@ -66,19 +67,19 @@ def parse_setting(setting: str) -> tuple[tuple[str, ...], str]:
     if unknown:
         raise ValueError(f"unknown part(s) {unknown} of setting {setting!r}: after 'clean'/'attack' come extra "
                          f"attacks {EXTRA_ATTACKS}, then an estimator {tuple(ESTIMATORS)}")
-    attacks = (("patch",) if base == "attack" else ()) + tuple(rest)
+    attacks = (("patch_occlusion",) if base == "attack" else ()) + tuple(rest)
     return attacks, estimator
 
 
 def setting_name(attacks: tuple[str, ...] | list[str], estimator: str = "raw") -> str:
     """The setting of a set of attacks (``patch`` and/or ``EXTRA_ATTACKS``) and an estimator."""
     attacks = tuple(attacks)
-    unknown = [a for a in attacks if a != "patch" and a not in EXTRA_ATTACKS]
+    unknown = [a for a in attacks if a != "patch_occlusion" and a not in EXTRA_ATTACKS]
     if unknown:
         raise ValueError(f"unknown attack(s) {unknown}; choose from {tuple(ATTACKS)}")
     if estimator not in ESTIMATORS:
         raise ValueError(f"estimator must be one of {tuple(ESTIMATORS)}, got {estimator!r}")
-    parts = ["attack" if "patch" in attacks else "clean"] + [a for a in EXTRA_ATTACKS if a in attacks]
+    parts = ["attack" if "patch_occlusion" in attacks else "clean"] + [a for a in EXTRA_ATTACKS if a in attacks]
     name = "+".join(parts + ([estimator] if estimator != "raw" else []))
     parse_setting(name)
     return name
@@ -111,6 +112,8 @@ class TrialSpec:
             meets only the pole).
         attack_params: per attack of the setting, constructor arguments to set (e.g.
             ``{"stealth_ramp": {"rate_mps": 3.0}}``; ``AttackWrapper.settable_params``).
+        detector: the car's stop-sign detector (``controllers.detectors.DETECTORS``):
+            ``classical`` (colour and shape, the default) or ``learned`` (the segmenter).
     """
 
     setting: str
@@ -128,6 +131,7 @@ class TrialSpec:
     sensor_profile: str = "qcar2"
     sign_geometry: str = "plate"
     attack_params: dict = field(default_factory=dict)
+    detector: str = "classical"
 
     def __post_init__(self) -> None:
         attacks, _ = parse_setting(self.setting)
@@ -142,6 +146,8 @@ class TrialSpec:
             raise ValueError(f"sensor_profile must be one of {tuple(SENSOR_PROFILES)}, got {self.sensor_profile!r}")
         if self.sign_geometry not in SIGN_GEOMETRIES:
             raise ValueError(f"sign_geometry must be one of {tuple(SIGN_GEOMETRIES)}, got {self.sign_geometry!r}")
+        if self.detector not in DETECTORS:
+            raise ValueError(f"detector must be one of {tuple(DETECTORS)}, got {self.detector!r}")
         if self.target not in TARGETS:
             raise ValueError(f"target must be one of {tuple(TARGETS)}, got {self.target!r}")
         if self.sign not in range(TARGETS[self.target]):

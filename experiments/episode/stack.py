@@ -8,6 +8,7 @@ import gymnasium as gym
 
 import sim
 from controllers import CameraModel, ObstacleDetector, Perception
+from controllers.detectors import make_detector
 from experiments.episode.car import Car, CarCalibration, Mission
 from experiments.episode.estimators import make_estimator
 from experiments.episode.spec import TrialSpec
@@ -82,7 +83,7 @@ def build_car(env: gym.Env, spec: TrialSpec, brief: Mission, estimator=None) -> 
     calib = calibration(env)
     config = env.unwrapped.config
     every = max(1, int(round(config.control_hz / spec.control_hz))) if spec.control_hz else 1
-    perceptions = {"sign": Perception(calib.camera),
+    perceptions = {"sign": Perception(calib.camera, detector=make_detector(spec.detector)),
                    "obstacle": Perception(calib.camera, detector=ObstacleDetector(), target="obstacle")}
     return Car(calib, brief, perceptions, estimator if estimator is not None else make_estimator(spec.estimator),
                spec.braking, 1.0 / config.control_hz, every, config.localisation)

@@ -19,7 +19,8 @@ from experiments.sweeps.run import run_episodes
 from experiments.sweeps.store import ResultStore, atomic_write
 from experiments.sweeps.summary import summarize
 
-__all__ = ["SIGNS", "SPEEDS_MPS", "TRIALS_LOGS", "batch_specs", "run_batch", "run_table"]
+__all__ = ["SIGNS", "SPEEDS_MPS", "TRIALS_LOGS", "batch_specs", "run_batch", "run_table", "PHYSICAL_TABLE_ROWS",
+           "TABLES"]
 
 SIGNS = (0, 1, 2, 3)
 SPEEDS_MPS = (1.0, 1.5, 2.0)
@@ -52,16 +53,39 @@ def run_batch(specs: list[TrialSpec], out_dir: Path, workers: int = 2, progress:
     return results
 
 
+_FROM_START = {"attack_params": {"physical_patch": {"from_start": True}}}
+#: The table with the sticker printed on the sign (``physical_patch``, on the protocol's schedule and
+#: from the episode's start), by row label: (setting, further ``TrialSpec`` fields).
+PHYSICAL_TABLE_ROWS: dict[str, tuple[str, dict]] = {
+    "clean": ("clean", {}),
+    "physical_patch": ("clean+physical_patch", {}),
+    "physical_patch+odca": ("clean+physical_patch+odca", {}),
+    "physical_patch+ekf": ("clean+physical_patch+ekf", {}),
+    "physical_patch from start": ("clean+physical_patch", _FROM_START),
+    "physical_patch+odca from start": ("clean+physical_patch+odca", _FROM_START),
+    "physical_patch+ekf from start": ("clean+physical_patch+ekf", _FROM_START),
+}
+#: The closed-loop tables ``racf trials --table --patch`` runs: the occluder's (the paper's table)
+#: and the printed sticker's.
+TABLES: dict[str, dict[str, tuple[str, dict]]] = {
+    "occlusion": {s: (s, {}) for s in TABLE_SETTINGS},
+    "physical": PHYSICAL_TABLE_ROWS,
+}
+
+
 def run_table(n: int, out_dir: Path, seed: int = 0, settings: tuple[str, ...] = TABLE_SETTINGS, workers: int = 2,
               progress: bool = True, rerun: bool = False, backend: str = "local", address: str | None = None,
-              **params) -> dict[str, dict]:
-    """The paper's closed-loop table: ``n`` trials per setting (the same signs, speeds and
-    seeds in each), one summary per setting. All specs are built, and so checked, first."""
-    specs = {s: batch_specs(s, n, seed, **params) for s in settings}
+              rows: dict[str, tuple[str, dict]] | None = None, **params) -> dict[str, dict]:
+    """A closed-loop table: ``n`` trials per row (the same signs, speeds and seeds in each), one
+    summary per row. The rows are ``settings`` (the paper's table by default) or, given, ``rows``
+    (label -> (setting, further spec fields)). All specs are built, and so checked, first."""
+    rows = rows if rows is not None else {s: (s, {}) for s in settings}
+    specs = {label: batch_specs(setting, n, seed, **{**params, **extra}) for label, (setting, extra) in rows.items()}
     with backend_session(backend, workers, address):
-        return {setting: summarize(run_batch(batch, Path(out_dir) / setting, workers=workers, progress=progress,
-                                             rerun=rerun, backend=backend, address=address, desc=setting))
-                for setting, batch in specs.items()}
+        return {label: summarize(run_batch(batch, Path(out_dir) / label.replace(" ", "_"), workers=workers,
+                                           progress=progress, rerun=rerun, backend=backend, address=address,
+                                           desc=label))
+                for label, batch in specs.items()}
 
 
 #: The paper's closed-loop numbers (its Table 4, QCar 2), printed beside ours for comparison.

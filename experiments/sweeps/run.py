@@ -65,6 +65,7 @@ def run_sweep(spec: SweepSpec, spec_text: str, out: str | Path, backend: str = "
     frame, ran = run_episodes(episodes, store, backend, workers, address, log_steps=spec.log_steps,
                               progress=progress, desc=f"sweep {spec.name}")
     frame = frame.sort_values("trial_id", ignore_index=True)
-    write_report(frame, Path(out), f"{spec.name} ({spec.sensor_profile} sensors, {spec.sign_geometry} signs)")
+    write_report(frame, Path(out), f"{spec.name} ({spec.sensor_profile} sensors, {spec.sign_geometry} signs, "
+                                   f"{spec.detector} detector)")
     return {"n": len(episodes), "done": ran, "reused": len(episodes) - ran, "wall_s": time.perf_counter() - t0,
             "scr": {k: v["scr"] for k, v in summarize_settings(frame).items()}}

@@ -8,9 +8,10 @@ Example (``experiments/sweeps/specs/smoke.toml``)::
     seed = 0
     sensor_profile = "qcar2" # the car's sensors as delivered (default), or "ideal" (an ablation)
     sign_geometry = "plate"  # the LiDAR's scan plane meets the sign's plate (default), or "pole"
+    detector = "classical"   # the car's stop-sign detector: "classical" (default) or "learned"
 
     [space]
-    attack = ["patch", "none"]       # "none", an attack, or attacks joined by "+"
+    attack = ["patch_occlusion", "none"]       # "none", an attack, or attacks joined by "+"
     estimator = ["raw", "odca"]
     rho = [1.0]                      # grid: values; random: [low, high] drawn uniformly
     t_atk = [2.0]
@@ -20,14 +21,14 @@ Example (``experiments/sweeps/specs/smoke.toml``)::
     [params.stealth_ramp]            # optional: an attack's settings, each a list of values
     rate_mps = [0.3, 1.0, 3.0]       # grid: every combination; random: one drawn per episode
 
-Attacks: any in ``sim.attacks.ATTACKS`` (``patch``, ``lidar_spoof``, ...) and
+Attacks: any in ``sim.attacks.ATTACKS`` (``patch_occlusion``, ``lidar_spoof``, ...) and
 ``+``-combinations of them; estimators: any in ``experiments.episode.estimators.ESTIMATORS``
 (``raw``, ``odca``, ``ekf``, ``chronos``). An episode's seed depends on its cell and repeat but not on the
 estimator or the attack's ``[params]``, so estimators (and the settings of an attack) meet
 identical episodes (paired comparisons). Everything is
 checked, with an error naming the field and what is allowed, before any episode runs.
 
-The same fields come as command-line flags (``racf sweep --mode random --n 50 --attack patch
+The same fields come as command-line flags (``racf sweep --mode random --n 50 --attack patch_occlusion
 --estimator raw odca --rho 0.9 1``), alone or replacing a spec's (:func:`spec_text`).
 """
 
@@ -43,6 +44,7 @@ from pathlib import Path
 
 import numpy as np
 
+from controllers.detectors import DETECTORS
 from experiments.episode import TrialSpec
 from experiments.episode.estimators import ESTIMATORS
 from experiments.episode.spec import setting_name
@@ -55,10 +57,10 @@ __all__ = ["SweepSpec", "load_spec", "parse_spec", "spec_text", "spec_path", "SP
 #: The axes a sweep may vary, and their allowed ranges (None: a list of names).
 SPACE_KEYS = {"attack": None, "estimator": None, "rho": (0.0, 1.0), "t_atk": (0.0, 60.0), "speed": (0.1, 3.0),
               "sign": (0, 3)}
-_DEFAULTS = {"attack": ["patch"], "estimator": ["raw"], "rho": [0.95], "t_atk": [1.75], "speed": [1.5],
+_DEFAULTS = {"attack": ["patch_occlusion"], "estimator": ["raw"], "rho": [0.95], "t_atk": [1.75], "speed": [1.5],
              "sign": [0, 1, 2, 3]}
 _TOP_KEYS = {"name", "mode", "repeats", "n", "seed", "space", "params", "log_steps", "sensor_profile",
-             "sign_geometry"}
+             "sign_geometry", "detector"}
 #: The example specs shipped with the project.
 SPECS_DIR = Path(__file__).resolve().parent / "specs"
 
@@ -77,8 +79,11 @@ class SweepSpec:
     log_steps: bool = False
     sensor_profile: str = "qcar2"
     sign_geometry: str = "plate"
+    detector: str = "classical"
 
     def __post_init__(self) -> None:
+        if self.detector not in DETECTORS:
+            raise ValueError(f"detector must be one of {tuple(DETECTORS)}, got {self.detector!r}")
         if self.sensor_profile not in SENSOR_PROFILES:
             raise ValueError(f"sensor_profile must be one of {tuple(SENSOR_PROFILES)}, got {self.sensor_profile!r}")
         if self.sign_geometry not in SIGN_GEOMETRIES:
@@ -148,7 +153,8 @@ class SweepSpec:
     def spec_hash(self) -> str:
         raw = json.dumps({k: getattr(self, k) for k in ("name", "mode", "repeats", "n", "seed", "space",
                                                         "sensor_profile", "sign_geometry")}
-                         | ({"params": self.params} if self.params else {}), sort_keys=True)
+                         | ({"params": self.params} if self.params else {})
+                         | ({"detector": self.detector} if self.detector != "classical" else {}), sort_keys=True)
         return hashlib.sha256(raw.encode()).hexdigest()[:12]
 
     def episodes(self) -> list[TrialSpec]:
@@ -162,7 +168,7 @@ class SweepSpec:
                     seed = self._episode_seed(cell, repeat)
                     for params in self._param_combos(cell[0]):
                         for estimator in s["estimator"]:
-                            out.append(_trial(cell, estimator, seed, self.sensor_profile, self.sign_geometry, params))
+                            out.append(_trial(cell, estimator, seed, self, params))
         else:
             rng = np.random.default_rng(self.seed)
             for i in range(self.n):
@@ -173,7 +179,7 @@ class SweepSpec:
                 combos = self._param_combos(cell[0])
                 params = combos[rng.integers(len(combos))] if len(combos) > 1 else combos[0]
                 for estimator in s["estimator"]:
-                    out.append(_trial(cell, estimator, seed, self.sensor_profile, self.sign_geometry, params))
+                    out.append(_trial(cell, estimator, seed, self, params))
         return out
 
     def _episode_seed(self, cell: tuple, repeat: int) -> int:
@@ -182,7 +188,7 @@ class SweepSpec:
 
 def _attacks(value) -> tuple[str, ...]:
     if not isinstance(value, str) or not value:
-        raise ValueError(f"space.attack entries must be strings like 'patch' or 'patch+lidar_spoof', got {value!r}")
+        raise ValueError(f"space.attack entries must be strings like 'patch_occlusion' or 'patch_occlusion+lidar_spoof', got {value!r}")
     if value == "none":
         return ()
     parts = tuple(value.split("+"))
@@ -193,12 +199,12 @@ def _attacks(value) -> tuple[str, ...]:
     return parts
 
 
-def _trial(cell: tuple, estimator: str, seed: int, sensor_profile: str, sign_geometry: str,
-           params: dict | None = None) -> TrialSpec:
+def _trial(cell: tuple, estimator: str, seed: int, sweep: SweepSpec, params: dict | None = None) -> TrialSpec:
     attack, rho, t_atk, speed, sign = cell
     return TrialSpec(setting_name(_attacks(attack), estimator), int(sign), float(speed), seed,
                      rho=(float(rho), float(rho)), t_atk=(float(t_atk), float(t_atk)),
-                     sensor_profile=sensor_profile, sign_geometry=sign_geometry, attack_params=params or {})
+                     sensor_profile=sweep.sensor_profile, sign_geometry=sweep.sign_geometry,
+                     attack_params=params or {}, detector=sweep.detector)
 
 
 def spec_path(path: str | Path) -> Path:
@@ -234,7 +240,8 @@ def parse_spec(text: str, source: str = "spec", default_name: str = "sweep") -> 
                          space=raw.get("space", {}), params=raw.get("params", {}),
                          log_steps=bool(raw.get("log_steps", False)),
                          sensor_profile=raw.get("sensor_profile", "qcar2"),
-                         sign_geometry=raw.get("sign_geometry", "plate"))
+                         sign_geometry=raw.get("sign_geometry", "plate"),
+                         detector=raw.get("detector", "classical"))
         episodes = spec.episodes()
     except ValueError as err:
         raise ValueError(f"{source}: {err}") from None

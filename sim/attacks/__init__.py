@@ -1,6 +1,7 @@
 """Attack wrappers for the racf env, one per module; they compose.
 
-- :class:`PatchAttack`: a naturalistic patch over a share of the sign (RGB).
+- :class:`PatchOcclusion` (``patch_occlusion``): a naturalistic occluder pasted over a share of the sign (RGB).
+- :class:`PhysicalPatch` (``physical_patch``): a sticker printed on the sign in the scene (the renderer shows it).
 - :class:`DepthBlackout`, :class:`DepthBias`, :class:`ConfidenceDegradation`: depth attacks.
 - :class:`LidarDropout`, :class:`LidarSpoof`: LiDAR faults (beyond the paper).
 - :class:`StaleData` (``delay``): old data replayed as new: LiDAR scans late, or depth frozen.
@@ -20,7 +21,8 @@ from sim.attacks.depth_blackout import DepthBlackout
 from sim.attacks.frustum_spoof import FrustumSpoof
 from sim.attacks.lidar_dropout import LidarDropout
 from sim.attacks.lidar_spoof import LidarSpoof
-from sim.attacks.patch import PatchAttack, patch_rows
+from sim.attacks.patch_occlusion import PatchOcclusion, paste_occluder, patch_rows
+from sim.attacks.physical_patch import PhysicalPatch
 from sim.attacks.schedule import AttackSchedule
 from sim.attacks.stale import StaleData
 from sim.attacks.stealth_ramp import StealthRamp
@@ -28,8 +30,8 @@ from sim.attacks.timed_dropout import TimedDropout
 
 #: Every attack wrapper by name.
 ATTACKS: dict[str, type[AttackWrapper]] = {cls.name: cls for cls in (
-    PatchAttack, LidarSpoof, LidarDropout, DepthBlackout, DepthBias, ConfidenceDegradation, StaleData, TimedDropout, StealthRamp, FrustumSpoof)}
+    PatchOcclusion, PhysicalPatch, LidarSpoof, LidarDropout, DepthBlackout, DepthBias, ConfidenceDegradation, StaleData, TimedDropout, StealthRamp, FrustumSpoof)}
 
 __all__ = ["ATTACKS", "AttackSchedule", "AttackWrapper", "ConfidenceDegradation", "DepthBias", "DepthBlackout",
-           "FrustumSpoof", "LidarDropout", "LidarSpoof", "PatchAttack", "StaleData", "StealthRamp", "TimedDropout",
-           "patch_rows"]
+           "FrustumSpoof", "LidarDropout", "LidarSpoof", "PatchOcclusion", "PhysicalPatch", "StaleData", "StealthRamp", "TimedDropout",
+           "paste_occluder", "patch_rows"]

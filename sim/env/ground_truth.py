@@ -16,7 +16,7 @@ import numpy as np
 from sim.sensors.camera import CameraIntrinsics
 from sim.world.stop_signs import SIGN_FACE_ACROSS_FLATS_M, StopSign
 
-__all__ = ["SignView", "sign_view", "obstacle_view", "with_centre_from"]
+__all__ = ["SignView", "sign_view", "face_area_px", "obstacle_view", "with_centre_from"]
 
 #: Converts MuJoCo's camera frame (x right, y up, looking along -z) to the optical frame.
 _MJ_TO_OPTICAL = np.diag([1.0, -1.0, -1.0])
@@ -87,6 +87,19 @@ def sign_view(sign: StopSign, cam_pos: np.ndarray, cam_mat: np.ndarray,
             visible = np.abs(clean_depth[rows, cols] - plane_z) < _DEPTH_TOLERANCE_M
             mask[rows[~visible], cols[~visible]] = False
     return _result(centre, mask)
+
+
+def face_area_px(sign: StopSign, cam_pos: np.ndarray, cam_mat: np.ndarray, intrinsics: CameraIntrinsics) -> float:
+    """Area in pixels of the sign's whole face projected on the image plane, as if nothing hid it
+    and the image had no edges (0 when the camera sees its back or a corner is behind it); the
+    share of it that ``sign_view``'s mask holds is how much of the sign a frame shows."""
+    world_to_opt = _MJ_TO_OPTICAL @ cam_mat.T
+    corners = (world_to_opt @ (_octagon_world(sign) - cam_pos).T).T
+    facing = float(np.dot(cam_pos - sign.centre, [math.cos(sign.face_yaw), math.sin(sign.face_yaw), 0.0])) > 0
+    if not facing or (corners[:, 2] <= 0.05).any():
+        return 0.0
+    u, v = intrinsics.project(corners).T
+    return float(0.5 * abs(np.dot(u, np.roll(v, 1)) - np.dot(v, np.roll(u, 1))))
 
 
 def obstacle_view(obstacle, cam_pos: np.ndarray, cam_mat: np.ndarray,

@@ -23,6 +23,7 @@ import math
 import numbers
 from typing import Any
 
+import cv2
 import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
@@ -36,7 +37,8 @@ from sim.sensors.a2m12 import A2M12Lidar
 from sim.vehicle import QCar2
 from sim.world.drives import RouteTarget, start_pose, targets_on_path
 from sim.world.road_graph import Path, qcar2_road_graph
-from sim.world.scene import load_model
+from sim.world.scene import HIDDEN_GEOM_GROUP, PROP_GEOM_GROUP, load_model, patch_geom, patch_texture
+from sim.world.sign_patch import PatchPlacement
 from sim.world.obstacles import Obstacle, obstacles
 from sim.world.stop_signs import StopSign, stop_signs
 
@@ -149,6 +151,9 @@ class QCar2Env(gym.Env):
         self._chassis_geom = self.model.geom("chassis").id
         self._wheel_geoms = {self.model.geom(w).id for w in ("wheel_fl", "wheel_fr", "wheel_rl", "wheel_rr")}
         self._floor_geoms = {self.model.geom("mat").id, self.model.geom("lab_floor").id}
+        n_signs = len(stop_signs(self.config.sign))
+        self._patch_geoms = [self.model.geom(patch_geom(i)).id for i in range(n_signs)]
+        self._patch_textures = [self.model.texture(patch_texture(i)).id for i in range(n_signs)]
         self._viewer = None
         # Crates stand on the map only in their own episodes (as a test operator would place one).
         self._crates = [(self.model.body(f"obstacle_{o.index}").id, self.model.body(f"obstacle_{o.index}").pos.copy())
@@ -190,6 +195,7 @@ class QCar2Env(gym.Env):
         self._cruise_speed = float(speed)
         for i, (body, home) in enumerate(self._crates):
             self.model.body_pos[body] = home if crate == i else home + np.array([0.0, 0.0, -5.0])
+        self.hide_sign_patches()  # an env shared by episodes: no sticker outlives its episode
         mujoco.mj_resetData(self.model, self.data)
         self.rig.invalidate()  # the crates may have moved; the car may start where it started before
         self._route_s = start_s
@@ -278,6 +284,49 @@ class QCar2Env(gym.Env):
         terminated = collision or off_road or self._route_s >= self._path.length - 0.05
         truncated = self._step * (1.0 / self.config.control_hz) >= self.config.max_episode_s - 1e-9
         return self._observation(), reward, terminated, truncated, info
+
+    # -- stickers on the stop signs (sim.world.sign_patch) ---------------------------------
+    def show_sign_patch(self, sign_index: int, texture: np.ndarray, placement: PatchPlacement) -> None:
+        """Prints a sticker on stop sign ``sign_index``: ``texture`` ((H, W, 3) uint8, row 0 its top
+        edge as seen from in front; resized to the scene's texture) where ``placement`` says. The
+        camera and the LiDAR see it from the next reading on."""
+        if sign_index not in range(len(self._patch_geoms)):
+            raise ValueError(f"sign_index must be 0..{len(self._patch_geoms) - 1}, got {sign_index!r}")
+        if not isinstance(placement, PatchPlacement):
+            raise TypeError(f"placement must be a PatchPlacement, got {type(placement).__name__}")
+        texture = np.asarray(texture)
+        if texture.ndim != 3 or texture.shape[2] != 3 or texture.dtype != np.uint8:
+            raise ValueError(f"texture must be an (H, W, 3) uint8 image, got shape {texture.shape} dtype {texture.dtype}")
+        geom, tex = self._patch_geoms[sign_index], self._patch_textures[sign_index]
+        size = (int(self.model.tex_width[tex]), int(self.model.tex_height[tex]))
+        if texture.shape[:2] != size[::-1]:
+            texture = cv2.resize(texture, size, interpolation=cv2.INTER_AREA)
+        adr, n = int(self.model.tex_adr[tex]), int(self.model.tex_nchannel[tex])
+        self.model.tex_data[adr:adr + texture.size // 3 * n] = texture.reshape(-1) if n == 3 else \
+            np.concatenate([texture, np.full(texture.shape[:2] + (1,), 255, np.uint8)], 2).reshape(-1)
+        corners = placement.corners_local(self.config.sign)
+        self.model.geom_pos[geom] = [corners[0, 0] - self.model.geom_size[geom][0], *corners[:, 1:].mean(axis=0)]
+        self.model.geom_size[geom][1:] = placement.side_m / 2
+        self.model.geom_group[geom] = PROP_GEOM_GROUP
+        mujoco.mj_kinematics(self.model, self.data)
+        self.rig.upload_texture(self.model, tex)
+        if self._viewer is not None:
+            self._viewer.upload_texture(tex)
+
+    def retake_reset_frame(self) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+        """Takes the reset's camera frame again (the world changed before time started: a sticker
+        was put up) and returns the reset's observation and info anew."""
+        if self._step != 0:
+            raise RuntimeError("retake_reset_frame is for the reset's frame; later frames come with time")
+        self._take_frame(0.0)
+        self._view = None
+        return self._observation(), self._info(collision=False, off_road=False)
+
+    def hide_sign_patches(self) -> None:
+        """Takes every sticker off (back to the group no sensor sees)."""
+        for geom in self._patch_geoms:
+            self.model.geom_group[geom] = HIDDEN_GEOM_GROUP
+        self.rig.invalidate()
 
     def render(self):
         if self.render_mode != "rgb_array":
@@ -460,6 +509,10 @@ class _ChaseView:
         self._model = model
         self._rect = mujoco.MjrRect(0, 0, width, height)
         self._rgb = np.empty((height, width, 3), np.uint8)
+
+    def upload_texture(self, texture_id: int) -> None:
+        self._gl.make_current()
+        mujoco.mjr_uploadTexture(self._model, self._con, texture_id)
 
     def render(self, data: mujoco.MjData) -> np.ndarray:
         self._gl.make_current()

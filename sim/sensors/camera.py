@@ -175,6 +175,14 @@ class RGBDCameraRig:
         self._frame_key = key
         return self._rgb, self._depth
 
+    def upload_texture(self, model: mujoco.MjModel, texture_id: int) -> None:
+        """Sends a texture the model's ``tex_data`` changed to the renderer (a context made later
+        reads it from the model anyway), and forgets the cached frame."""
+        if self._con is not None:
+            self._gl.make_current()
+            mujoco.mjr_uploadTexture(model, self._con, texture_id)
+        self.invalidate()
+
     def invalidate(self) -> None:
         """Forgets the cached frame: the scene changed in a way the state does not show
         (bodies moved in the model), so the next read renders again."""

@@ -22,6 +22,7 @@ import mujoco  # noqa: E402  (the GL backend must be chosen before mujoco is imp
 from sim.world import map_facts  # noqa: E402
 from sim.world.mat_texture import mat_png_bytes  # noqa: E402
 from sim.world.obstacles import OBSTACLE_SIZE_M, obstacles  # noqa: E402
+from sim.world.sign_patch import PATCH_FRONT_X_M, TEXTURE_PX  # noqa: E402
 from sim.world.stop_signs import (  # noqa: E402
     PLATE_IN_SCAN,
     SIGN_CENTRE_HEIGHT_M,
@@ -30,7 +31,8 @@ from sim.world.stop_signs import (  # noqa: E402
     stop_signs,
 )
 
-__all__ = ["ASSETS_DIR", "build_scene_xml", "load_model", "PROP_GEOM_GROUP", "CAR_GEOM_GROUP"]
+__all__ = ["ASSETS_DIR", "build_scene_xml", "load_model", "PROP_GEOM_GROUP", "CAR_GEOM_GROUP", "HIDDEN_GEOM_GROUP",
+           "patch_geom", "patch_texture"]
 
 ASSETS_DIR = Path(os.environ.get("RACF_ASSETS", Path(__file__).resolve().parents[2] / "assets" / "qcar2_map"))
 #: Geom groups: 0 map and props (seen by camera and LiDAR), 3 the car (skipped by the LiDAR).
@@ -40,6 +42,11 @@ CAR_GEOM_GROUP = 3
 MAX_IMAGE_SIZE = (1280, 960)
 
 _SIGN_THICKNESS_M = 0.003
+#: Half the thickness of the sticker each stop sign carries (``sim.world.sign_patch``).
+_PATCH_HALF_THICKNESS_M = 0.0001
+#: Geom group of what exists but no sensor sees: the stickers until the env shows one (the
+#: camera renders groups 0-2, the LiDARs hit groups 0-2).
+HIDDEN_GEOM_GROUP = 5
 #: The yield signs' pole (their build is not a scenario parameter).
 _POLE_RADIUS_M = 0.004
 
@@ -73,7 +80,27 @@ def _stop_sign_xml(index: int, x: float, y: float, yaw: float, geometry: SignGeo
       <geom name="stop_sign_{index}_border" type="mesh" mesh="stop_octagon_border" pos="0 0 {z}" rgba="0.97 0.97 0.97 1"/>
       <geom name="stop_sign_{index}_face" type="mesh" mesh="stop_octagon_face" pos="0.001 0 {z}"
             rgba="0.80 0.05 0.06 1" contype="0" conaffinity="0"/>
+      <geom name="stop_sign_{index}_patch" type="box" pos="{PATCH_FRONT_X_M - _PATCH_HALF_THICKNESS_M} 0 {z}"
+            size="{_PATCH_HALF_THICKNESS_M} 0.02 0.02" material="stop_sign_{index}_patch" contype="0" conaffinity="0"
+            group="{HIDDEN_GEOM_GROUP}"/>
     </body>"""
+
+
+def patch_geom(index: int) -> str:
+    """Name of stop sign ``index``'s sticker geom."""
+    return f"stop_sign_{index}_patch"
+
+
+def patch_texture(index: int) -> str:
+    """Name of stop sign ``index``'s sticker texture."""
+    return f"stop_sign_{index}_patch"
+
+
+def _patch_assets() -> str:
+    return "".join(
+        f'\n    <texture name="{patch_texture(i)}" type="2d" builtin="flat" width="{TEXTURE_PX}" height="{TEXTURE_PX}"'
+        f' rgb1="0.5 0.5 0.5"/>\n    <material name="{patch_texture(i)}" texture="{patch_texture(i)}"'
+        ' specular="0" shininess="0" reflectance="0"/>' for i in range(len(map_facts.STOP_SIGNS)))
 
 
 def _traffic_light_xml(index: int, x: float, y: float, yaw_deg: float) -> str:
@@ -163,7 +190,7 @@ def build_scene_xml(sign_geometry: SignGeometry = PLATE_IN_SCAN) -> str:
     {_octagon_mesh("stop_octagon_border", SIGN_FACE_ACROSS_FLATS_M, _SIGN_THICKNESS_M)}
     {_octagon_mesh("stop_octagon_face", SIGN_FACE_ACROSS_FLATS_M * 0.88, 0.0005)}
     {_triangle_mesh("yield_border", 0.11, _SIGN_THICKNESS_M)}
-    {_triangle_mesh("yield_face", 0.075, 0.0005)}
+    {_triangle_mesh("yield_face", 0.075, 0.0005)}{_patch_assets()}
   </asset>
   <include file="qcar2.xml"/>
   <worldbody>

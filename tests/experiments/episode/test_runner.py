@@ -86,7 +86,7 @@ def test_strong_patch_attack_hides_the_sign_and_the_car_runs_the_line():
     assert not result.success and result.failure == "confirmed_lost"
     assert result.rho == 1.0 and result.t_atk_s == pytest.approx(3.0)
     attacked = log[log["attack_active"]]
-    assert len(attacked) > 10 and (attacked["attack"] == "patch").all()
+    assert len(attacked) > 10 and (attacked["attack"] == "patch_occlusion").all()
     assert result.lost_frames == int((attacked["sign_in_view"] & ~attacked["detected"]).sum()) > 10
     # d_clean comes from the unattacked readings: finite where the attacked pipeline has nothing.
     hidden = attacked[attacked["sign_in_view"] & ~attacked["detected"]]

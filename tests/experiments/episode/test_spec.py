@@ -12,9 +12,9 @@ from experiments.episode import TABLE_SETTINGS, TrialSpec, parse_setting, settin
 
 def test_settings_parse_into_attacks_and_estimator():
     assert parse_setting("clean") == ((), "raw")
-    assert parse_setting("attack+odca") == (("patch",), "odca")
-    assert parse_setting("attack+lidar_spoof+odca") == (("patch", "lidar_spoof"), "odca")
-    assert setting_name(["lidar_spoof", "patch"], "ekf") == "attack+lidar_spoof+ekf"
+    assert parse_setting("attack+odca") == (("patch_occlusion",), "odca")
+    assert parse_setting("attack+lidar_spoof+odca") == (("patch_occlusion", "lidar_spoof"), "odca")
+    assert setting_name(["lidar_spoof", "patch_occlusion"], "ekf") == "attack+lidar_spoof+ekf"
     for name in TABLE_SETTINGS:
         assert setting_name(*parse_setting(name)) == name
     with pytest.raises(ValueError, match="unknown attack"):
@@ -73,5 +73,5 @@ def test_bad_flags_are_rejected_before_any_episode_runs(argv, message, monkeypat
 
 def test_rho_outside_the_unit_interval_is_a_usage_error(capsys):
     with pytest.raises(SystemExit):
-        main(["trial", "--attack", "patch", "--rho", "1.5"])
+        main(["trial", "--attack", "patch_occlusion", "--rho", "1.5"])
     assert "rho must be in [0, 1]" in capsys.readouterr().err

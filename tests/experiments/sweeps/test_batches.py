@@ -54,7 +54,7 @@ def test_summary_has_the_protocol_keys_and_wilson_interval():
 def test_a_sweeps_report_gives_the_scr_of_episodes_attacked_before_t_star(tmp_path):
     from experiments.sweeps.report import write_report
 
-    rows = pd.DataFrame({"trial_id": [f"t{i}" for i in range(4)], "setting": "attack", "attack": "patch",
+    rows = pd.DataFrame({"trial_id": [f"t{i}" for i in range(4)], "setting": "attack", "attack": "patch_occlusion",
                          "estimator": "raw", "success": [True, True, False, True],
                          "trigger_delay_s": [0.0, 0.0, math.nan, 0.0], "dt_brake_s": [0.1, 0.1, math.nan, 0.1],
                          "failure": [None, None, "confirmed_lost", None], "lost_frames": [0, 0, 30, 5],

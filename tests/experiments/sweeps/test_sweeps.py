@@ -24,7 +24,7 @@ repeats = 2
 seed = 3
 
 [space]
-attack = ["patch", "none"]
+attack = ["patch_occlusion", "none"]
 estimator = ["raw"]
 rho = [1.0]
 t_atk = [2.0]
@@ -97,7 +97,7 @@ def test_report_redraws_from_the_store_without_running(uninterrupted, capsys):
     (TINY.replace("speed = [1.5]", "speed = [1.5]\nwind = [1]"), "unknown parameter"),
     (TINY.replace('estimator = ["raw"]', "estimator = []"), "non-empty list"),
     (TINY.replace("rho = [1.0]", "rho = [1.5]"), r"rho must lie in \[0.0, 1.0\]"),
-    (TINY.replace('"patch", "none"', '"laser"'), "unknown attack"),
+    (TINY.replace('"patch_occlusion", "none"', '"laser"'), "unknown attack"),
     (TINY.replace('["raw"]', '["kalman"]'), "estimator"),
     (TINY.replace('mode = "grid"', 'mode = "random"'), "n \\(the number of random draws\\)"),
     ("budget = 3\n" + TINY, "unknown field"),
@@ -115,7 +115,7 @@ def test_bad_specs_are_refused_before_any_work(tmp_path, capsys, text, message):
 
 def test_flags_make_the_same_sweep_as_the_spec(uninterrupted, tmp_path, capsys):
     _, summary, rows = uninterrupted
-    flags = ["--repeats", "2", "--seed", "3", "--attack", "patch", "none", "--estimator", "raw", "--rho", "1",
+    flags = ["--repeats", "2", "--seed", "3", "--attack", "patch_occlusion", "none", "--estimator", "raw", "--rho", "1",
              "--t-atk", "2", "--speed", "1.5", "--sign", "1"]
     assert main(["sweep", *flags, "--out", str(tmp_path / "flags"), "--workers", "1", "--json"]) == 0
     out = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
@@ -130,7 +130,7 @@ def test_flags_make_the_same_sweep_as_the_spec(uninterrupted, tmp_path, capsys):
 
 
 def test_bad_flags_are_refused_before_any_work(tmp_path, capsys):
-    assert main(["sweep", "--attack", "patch", "--rho", "1.5", "--out", str(tmp_path / "out")]) == 2
+    assert main(["sweep", "--attack", "patch_occlusion", "--rho", "1.5", "--out", str(tmp_path / "out")]) == 2
     assert "rho must lie in [0.0, 1.0]" in capsys.readouterr().err
     assert not (tmp_path / "out").exists()
     assert main(["sweep", "smoke.toml", "--mode", "random", "--out", str(tmp_path / "out")]) == 2

@@ -5,9 +5,9 @@ import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env
 
-from sim.attacks import ConfidenceDegradation, DepthBias, DepthBlackout, LidarDropout, LidarSpoof, PatchAttack
+from sim.attacks import ConfidenceDegradation, DepthBias, DepthBlackout, LidarDropout, LidarSpoof, PatchOcclusion
 
-ALL = (PatchAttack, DepthBlackout, DepthBias, ConfidenceDegradation, LidarDropout, LidarSpoof)
+ALL = (PatchOcclusion, DepthBlackout, DepthBias, ConfidenceDegradation, LidarDropout, LidarSpoof)
 
 
 @pytest.mark.parametrize("wrapper", ALL, ids=lambda w: w.__name__)
@@ -19,7 +19,7 @@ def test_check_env_passes_when_wrapped(wrapper, stub_env):
 
 def test_same_seed_same_attack_windows_and_observations(stub_env, drive):
     def windows(seed):
-        env = PatchAttack(stub_env(), rho=(0.3, 1.0), duration_s=(0.2, 0.6), window_s=2.0)
+        env = PatchOcclusion(stub_env(), rho=(0.3, 1.0), duration_s=(0.2, 0.6), window_s=2.0)
         frames = [obs["rgb"] for obs, _, _ in drive(env, 40, seed=seed)]
         return list(env.schedule.windows), env.rho, frames
     w1, rho1, f1 = windows(7)
@@ -38,12 +38,12 @@ def test_reset_marks_no_attack_and_steps_mark_the_active_ones(stub_env, drive):
 
 
 def test_wrappers_compose_and_mark_every_active_attack(stub_env):
-    env = DepthBias(PatchAttack(stub_env(), rho=0.5, duration_s=5.0, trigger="always"), bias_m=0.3,
+    env = DepthBias(PatchOcclusion(stub_env(), rho=0.5, duration_s=5.0, trigger="always"), bias_m=0.3,
                     duration_s=5.0, trigger="always")
     _, info = env.reset(seed=0, options={"sign": 3})
     assert info["attack"] == () and info["attack_active"] is False
     obs, _, _, _, info = env.step(np.array([1.0, 0.0], np.float32))
-    assert info["attack"] == ("patch", "depth_bias") and info["attack_active"]
+    assert info["attack"] == ("patch_occlusion", "depth_bias") and info["attack_active"]
     # Both changes reach the outside: the inner patch on the image, the outer bias on the depth.
     clean = env.unwrapped.sensor_observation()
     sign = info["sign_mask"]
@@ -53,15 +53,15 @@ def test_wrappers_compose_and_mark_every_active_attack(stub_env):
 
 
 def test_an_inactive_outer_wrapper_passes_the_inner_attack_and_its_mark_through(stub_env):
-    env = LidarSpoof(PatchAttack(stub_env(), rho=1.0, duration_s=5.0, trigger="always"), range_m=2.0,
+    env = LidarSpoof(PatchOcclusion(stub_env(), rho=1.0, duration_s=5.0, trigger="always"), range_m=2.0,
                      duration_s=5.0, window_s=0.0)  # a zero braking window never opens
     env.reset(seed=0)
-    inner_only = PatchAttack(stub_env(), rho=1.0, duration_s=5.0, trigger="always")
+    inner_only = PatchOcclusion(stub_env(), rho=1.0, duration_s=5.0, trigger="always")
     inner_only.reset(seed=0)
     for _ in range(5):
         obs, _, _, _, info = env.step(np.array([1.0, 0.0], np.float32))
         expected, _, _, _, _ = inner_only.step(np.array([1.0, 0.0], np.float32))
-        assert info["attack"] == ("patch",) and info["attack_active"]
+        assert info["attack"] == ("patch_occlusion",) and info["attack_active"]
         for key in expected:
             np.testing.assert_array_equal(obs[key], expected[key])
 
@@ -95,7 +95,7 @@ def test_an_env_without_the_racf_observations_is_refused(wrapper):
 def test_every_attack_is_registered_under_its_own_name(stub_env):
     from sim.attacks import ATTACKS, AttackWrapper
 
-    assert list(ATTACKS) == ["patch", "lidar_spoof", "lidar_dropout", "depth_blackout", "depth_bias",
+    assert list(ATTACKS) == ["patch_occlusion", "physical_patch", "lidar_spoof", "lidar_dropout", "depth_blackout", "depth_bias",
                              "confidence_degradation", "delay", "dropout_timed", "stealth_ramp", "frustum_spoof"]
     for name, cls in ATTACKS.items():
         assert issubclass(cls, AttackWrapper) and cls.name == name

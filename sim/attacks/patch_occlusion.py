@@ -1,4 +1,11 @@
-"""``PatchAttack``: a textured patch over part of the stop sign in the RGB image."""
+"""``PatchOcclusion`` (``patch_occlusion``): a textured occluder pasted over part of the stop sign in the RGB image.
+
+It is named for what it is: an occluder in the image, not an adversarial patch. It hides
+the sign's red pixels with a naturalistic texture; nothing about it is optimised against a
+detector, and it exists in the image, not in the world (every view is the same paste). The
+sticker printed on the sign in the scene, optimised against the learned detector, is
+``physical_patch``.
+"""
 
 from __future__ import annotations
 
@@ -12,7 +19,7 @@ from sim.attacks.base import AttackWrapper
 from sim.attacks.schedule import AttackSchedule, as_range
 from sim.attacks.texture import natural_texture
 
-__all__ = ["PatchAttack", "patch_rows"]
+__all__ = ["PatchOcclusion", "patch_rows", "paste_occluder"]
 
 
 def patch_rows(mask: np.ndarray, rho: float) -> np.ndarray:
@@ -31,10 +38,26 @@ def patch_rows(mask: np.ndarray, rho: float) -> np.ndarray:
     return covered
 
 
-class PatchAttack(AttackWrapper):
-    """Covers a share ``rho`` of the stop sign's image region with a naturalistic patch.
+def paste_occluder(rgb: np.ndarray, region: np.ndarray, rho: float, texture: np.ndarray) -> np.ndarray:
+    """``rgb`` (a copy) with ``texture`` stretched over the box of ``region`` (the sign's pixels)
+    and shown on its top rows that hold a share ``rho`` of them."""
+    covered = patch_rows(region, rho)
+    if not covered.any():
+        return rgb
+    # Stretch the texture over the sign's box so it moves and scales with the sign.
+    rows, cols = np.nonzero(region)
+    y0, y1, x0, x1 = rows.min(), rows.max() + 1, cols.min(), cols.max() + 1
+    tex = cv2.resize(texture, (int(x1 - x0), int(y1 - y0)), interpolation=cv2.INTER_LINEAR)
+    out = rgb.copy()
+    box = covered[y0:y1, x0:x1]
+    out[y0:y1, x0:x1][box] = tex[box]
+    return out
 
-    The paper's physical patch attack: after a stable detection and when the sign enters
+
+class PatchOcclusion(AttackWrapper):
+    """Covers a share ``rho`` of the stop sign's image region with a naturalistic occluder.
+
+    The paper's patch attack as an image-space stand-in: after a stable detection and when the sign enters
     the braking window (see :class:`~sim.attacks.schedule.AttackSchedule`), the top rows of
     the sign's face holding a share ``rho`` of its pixels show a textured patch for
     ``T_atk ~ U(0.5, 3.0)`` s, then a cooldown. The patch lies on the sign's face, so the
@@ -48,14 +71,14 @@ class PatchAttack(AttackWrapper):
 
     Example:
         >>> import gymnasium as gym, sim
-        >>> from sim.attacks import PatchAttack
-        >>> env = PatchAttack(gym.make("RACF/QCar2-v3", camera_width=160, camera_height=120), rho=1.0, duration_s=1.0)
+        >>> from sim.attacks import PatchOcclusion
+        >>> env = PatchOcclusion(gym.make("RACF/QCar2-v3", camera_width=160, camera_height=120), rho=1.0, duration_s=1.0)
         >>> obs, info = env.reset(seed=0, options={"sign": 2})
         >>> info["attack_active"]
         False
     """
 
-    name = "patch"
+    name = "patch_occlusion"
     episode_params = ("rho",)
 
     def __init__(self, env: gym.Env, rho: Any = (0.9, 1.0), **schedule: Any) -> None:
@@ -70,16 +93,5 @@ class PatchAttack(AttackWrapper):
         self._texture = natural_texture(self.rng)
 
     def _attack(self, obs: dict, info: dict) -> dict:
-        region = self.sign_region(info)
-        covered = patch_rows(region, self.rho)
-        if not covered.any():
-            return obs
-        # Stretch the texture over the sign's box so it moves and scales with the sign.
-        rows, cols = np.nonzero(region)
-        y0, y1, x0, x1 = rows.min(), rows.max() + 1, cols.min(), cols.max() + 1
-        tex = cv2.resize(self._texture, (int(x1 - x0), int(y1 - y0)), interpolation=cv2.INTER_LINEAR)
-        rgb = obs["rgb"].copy()
-        box = covered[y0:y1, x0:x1]
-        rgb[y0:y1, x0:x1][box] = tex[box]
-        obs["rgb"] = rgb
+        obs["rgb"] = paste_occluder(obs["rgb"], self.sign_region(info), self.rho, self._texture)
         return obs

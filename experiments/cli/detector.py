@@ -1,0 +1,177 @@
+"""The learned detector and its adversarial patch: ``detector-data``, ``train-detector``,
+``optimise-patch`` and ``bench-patch``."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+from experiments.cli.common import count, fail, fmt_ci
+
+__all__ = ["register"]
+
+
+def _share(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number in (0, 0.6], got {text!r}") from None
+    if not 0.0 < value <= 0.6:
+        raise argparse.ArgumentTypeError(f"expected a number in (0, 0.6], got {text!r}")
+    return value
+
+
+def _position(text: str) -> tuple[float, float]:
+    try:
+        right, up = (float(v) for v in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected RIGHT,UP (across-flats units, each in [-0.5, 0.5]), "
+                                         f"got {text!r}") from None
+    return right, up
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    dd = sub.add_parser("detector-data", help="render the learned detector's views with ground-truth sign masks "
+                                              "(training and held-out splits; seeded, resumes)")
+    dd.add_argument("--out", type=Path, default=Path("data/detector"), help="folder (default data/detector)")
+    dd.add_argument("--seed", type=int, default=0, help="seed of the training split (held-out: seed + 1000003)")
+    dd.add_argument("--train", type=count, default=6000, help="training views (default 6000)")
+    dd.add_argument("--heldout", type=count, default=1500, help="held-out views (default 1500)")
+    dd.set_defaults(handler=_detector_data)
+
+    td = sub.add_parser("train-detector", help="train the stop-sign segmenter on the CPU (renders the views first "
+                                               "if missing); writes a checkpoint")
+    td.add_argument("--data", type=Path, default=Path("data/detector"), help="views folder (racf detector-data)")
+    td.add_argument("--out", type=Path, default=Path("outputs/sign-segmenter"),
+                    help="checkpoint folder (default outputs/sign-segmenter; the shipped one is "
+                         "assets/checkpoints/sign-segmenter)")
+    td.add_argument("--seed", type=int, default=0, help="initialisation, batch order and augmentation seed")
+    td.add_argument("--epochs", type=count, default=None, help="passes over the training views (default 30)")
+    td.add_argument("--threads", type=count, default=2, help="torch threads (default 2)")
+    td.add_argument("--json", action="store_true", help="print the training report as one JSON object")
+    td.set_defaults(handler=_train_detector)
+
+    op = sub.add_parser("optimise-patch", help="optimise an adversarial sticker against the learned segmenter "
+                                               "(EOT over rendered views, differentiable warp); writes a PNG")
+    op.add_argument("--data", type=Path, default=Path("data/detector"), help="views folder (racf detector-data)")
+    op.add_argument("--checkpoint", type=Path, default=None, help="segmenter checkpoint (default: the shipped one)")
+    op.add_argument("--out", type=Path, default=Path("outputs/patches"),
+                    help="folder for learned.png and learned.json (default outputs/patches; the shipped one is "
+                         "assets/patches)")
+    op.add_argument("--seed", type=int, default=0, help="initial texture and transformation seed")
+    op.add_argument("--size", type=_share, default=0.5, help="sticker area / plate area, in (0, 0.6] (default 0.5)")
+    op.add_argument("--position", type=_position, default=(0.0, 0.0),
+                    help="sticker centre RIGHT,UP on the plate, across-flats units (default 0,0)")
+    op.add_argument("--steps", type=count, default=None, help="optimiser steps (default 600)")
+    op.add_argument("--json", action="store_true", help="print the report as one JSON object")
+    op.set_defaults(handler=_optimise_patch)
+
+    bp = sub.add_parser("bench-patch", help="the sticker printed on the sign in the scene vs the image-space "
+                                            "occluder, on both detectors: recall on fresh views (transfer report)")
+    bp.add_argument("-n", type=count, default=400, help="views of a stop sign (default 400)")
+    bp.add_argument("--texture", default="learned",
+                    help="sticker: a shipped name (learned), natural, or a PNG path (default learned)")
+    bp.add_argument("--size", type=_share, default=0.5, help="sticker area / plate area (default 0.5)")
+    bp.add_argument("--position", type=_position, default=(0.0, 0.0),
+                    help="sticker centre RIGHT,UP on the plate, across-flats units (default 0,0)")
+    bp.add_argument("--figure", type=Path, default=None,
+                    help="also write a PNG of near views, clean and patched, with the learned detector's mask")
+    bp.add_argument("--json", action="store_true", help="print one JSON object instead of the table")
+    bp.set_defaults(handler=_bench_patch)
+
+
+def _detector_data(args: argparse.Namespace) -> int:
+    from experiments.detector.dataset import DatasetSpec, load_split, make_dataset
+
+    try:
+        spec = DatasetSpec(seed=args.seed, n_train=args.train, n_heldout=args.heldout)
+    except ValueError as err:
+        fail("detector-data", str(err))
+    make_dataset(spec, args.out)
+    for split in ("train", "heldout"):
+        d = load_split(args.out, split)
+        print(f"{split}: {len(d['rgb'])} views, {int((d['sign'] >= 0).sum())} looking at a stop sign, "
+              f"{int(d['mask'].any(axis=(1, 2)).sum())} with a stop sign's face in view")
+    print(f"views in {args.out}")
+    return 0
+
+
+def _train_detector(args: argparse.Namespace) -> int:
+    from experiments.detector.dataset import DatasetSpec, make_dataset
+    from experiments.detector.train import TrainConfig, train_segmenter
+
+    try:
+        config = TrainConfig(seed=args.seed, threads=args.threads,
+                             **({"epochs": args.epochs} if args.epochs else {}))
+    except ValueError as err:
+        fail("train-detector", str(err))
+    if not (args.data / "manifest.json").is_file():
+        make_dataset(DatasetSpec(), args.data)
+    _, report = train_segmenter(config, args.data, args.out, progress=not args.json)
+    if args.json:
+        print(json.dumps(report, allow_nan=False))
+        return 0
+    h = report["heldout"]
+    print(f"trained {report['parameters']} parameters on {report['n_train']} views in {report['train_s'] / 60:.1f} min")
+    print(f"held-out views (N = {h['n_positive']} with a sign): recall {h['recall']:.4f} {fmt_ci(*h['recall_ci'])}, "
+          f"false-positive frames {h['n_fp']} / {h['n_frames']} = {100 * h['fp_rate']:.2f} %")
+    print(f"checkpoint in {args.out}")
+    return 0
+
+
+def _optimise_patch(args: argparse.Namespace) -> int:
+    from controllers.learned_detector import SHIPPED_SEGMENTER
+    from experiments.detector.patch_opt import PatchConfig, optimise_patch
+
+    try:
+        config = PatchConfig(seed=args.seed, size=args.size, position=args.position,
+                             **({"steps": args.steps} if args.steps else {}))
+    except ValueError as err:
+        fail("optimise-patch", str(err))
+    if not (args.data / "manifest.json").is_file():
+        fail("optimise-patch", f"no views in {args.data}: render them with `racf detector-data --out {args.data}`")
+    try:
+        _, report = optimise_patch(config, args.data, args.checkpoint or SHIPPED_SEGMENTER, args.out,
+                                   progress=not args.json)
+    except (FileNotFoundError, ValueError) as err:
+        fail("optimise-patch", str(err))
+    if args.json:
+        print(json.dumps(report, allow_nan=False))
+        return 0
+    print(f"optimised over {report['n_views']} views in {report['optimise_s']:.0f} s: loss "
+          f"{report['loss_first']:.3f} -> {report['loss_last']:.3f}")
+    print(f"sticker in {args.out / 'learned.png'}; try it in the scene with `racf bench-patch --texture "
+          f"{args.out / 'learned.png'}`")
+    return 0
+
+
+def _bench_patch(args: argparse.Namespace) -> int:
+    from experiments.bench.patch_transfer import DISTANCE_BANDS_M, RENDERINGS, bench_patch
+
+    try:
+        result, examples = bench_patch(args.n, args.texture, args.size, args.position, progress=not args.json,
+                                       keep_examples=4 if args.figure else 0)
+    except (FileNotFoundError, ValueError) as err:
+        fail("bench-patch", str(err))
+    if args.figure:
+        from experiments.viz.patch_figure import patched_sign_figure
+
+        patched_sign_figure(examples, args.figure)
+    if args.json:
+        print(json.dumps(result.to_dict(), allow_nan=False))
+        return 0
+    any_counts = next(iter(next(iter(result.counts.values())).values()))
+    print(f"sticker {args.texture!r}, {args.size:.2f} of the plate at {args.position}; {result.n_views} views, "
+          f"N = {any_counts.n_positive} with the sign resolvable")
+    bands = [f"{lo:g}-{hi:g} m" for lo, hi in DISTANCE_BANDS_M]
+    print(f"{'detector':<11}{'rendering':<17}{'recall [95 % CI]':>26}" + "".join(f"{b:>14}" for b in bands))
+    for det, row in result.counts.items():
+        for rendering in RENDERINGS:
+            c = row[rendering]
+            per_band = result.by_band[det][rendering]
+            print(f"{det:<11}{rendering:<17}{c.recall:>10.3f} {fmt_ci(*c.to_dict()['recall_ci']):>15}"
+                  + "".join(f"{per_band[b].recall:>9.3f} N={per_band[b].n_positive:<3}"
+                            if per_band[b].recall is not None else f"{'-':>14}" for b in bands))
+    print("goal: physical_patch lowers the learned detector's recall to <= 0.2 (sticker <= half the plate)")
+    return 0

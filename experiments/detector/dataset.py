@@ -1,0 +1,127 @@
+"""The segmenter's dataset on disk: rendered views in shards, named by what made them.
+
+``racf detector-data`` renders ``n_train`` training views and ``n_heldout`` held-out views
+(a different seed: no pose, lighting or distractor draw is shared) into
+``data/detector/<split>/shard-NNN.npz``. A ``manifest.json`` records the settings and the
+code version of the simulator and of this package; a dataset whose manifest differs from
+what is asked is rendered again, and finished shards of a matching one are kept (an
+interrupted run resumes where it stopped).
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import numpy as np
+
+from experiments.detector.views import ViewRenderer, draw_view
+from experiments.sweeps.store import code_version
+
+__all__ = ["DatasetSpec", "DEFAULT_DATA_DIR", "make_dataset", "load_split", "SPLITS"]
+
+DEFAULT_DATA_DIR = Path("data/detector")
+SPLITS = ("train", "heldout")
+_SHARD = 500
+#: What renders a view: the world, the car, its camera and this package's view code.
+_RENDER_CODE = ("sim/world", "sim/env", "sim/sensors", "sim/vehicle", "assets/qcar2_map",
+                "experiments/detector/views.py", "experiments/detector/dataset.py")
+
+
+@dataclass(frozen=True)
+class DatasetSpec:
+    """What a dataset is.
+
+    Attributes:
+        seed: the training split's seed; the held-out split's is ``seed + 1_000_003``.
+        n_train, n_heldout: views per split.
+        sign_share: share of views that look at a stop sign (the rest stand anywhere).
+        distractor_p: probability that a view moves props into the picture.
+    """
+
+    seed: int = 0
+    n_train: int = 6000
+    n_heldout: int = 1500
+    sign_share: float = 0.65
+    distractor_p: float = 0.5
+
+    def __post_init__(self) -> None:
+        for name in ("seed", "n_train", "n_heldout"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int) or value < (0 if name == "seed" else 1):
+                raise ValueError(f"{name} must be an int >= {0 if name == 'seed' else 1}, got {value!r}")
+        for name in ("sign_share", "distractor_p"):
+            if not 0.0 <= getattr(self, name) <= 1.0:
+                raise ValueError(f"{name} must be in [0, 1], got {getattr(self, name)!r}")
+
+    def split_seed(self, split: str) -> int:
+        if split not in SPLITS:
+            raise ValueError(f"split must be one of {SPLITS}, got {split!r}")
+        return self.seed if split == "train" else self.seed + 1_000_003
+
+    def size(self, split: str) -> int:
+        return self.n_train if split == "train" else self.n_heldout
+
+
+def _manifest(spec: DatasetSpec) -> dict:
+    return {"spec": asdict(spec), "code": code_version(*_RENDER_CODE)}
+
+
+def make_dataset(spec: DatasetSpec = DatasetSpec(), root: Path = DEFAULT_DATA_DIR, progress: bool = True) -> Path:
+    """Renders (or resumes) the dataset of ``spec`` under ``root``; returns ``root``."""
+    from tqdm import tqdm
+
+    root = Path(root)
+    manifest = _manifest(spec)
+    path = root / "manifest.json"
+    if path.is_file() and json.loads(path.read_text()) != manifest:
+        for old in root.glob("*/shard-*.npz"):
+            old.unlink()
+    root.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(manifest, indent=2, sort_keys=True) + "\n")
+    renderer = None
+    try:
+        for split in SPLITS:
+            n = spec.size(split)
+            # One generator per shard, from the split's seed and the shard's index: shards are
+            # independent, so a resumed run renders exactly what an uninterrupted one would.
+            shards = range((n + _SHARD - 1) // _SHARD)
+            for k in tqdm(shards, desc=f"detector-data {split}", unit="shard", disable=not progress):
+                out = root / split / f"shard-{k:03d}.npz"
+                if out.is_file():
+                    continue
+                renderer = renderer or ViewRenderer()
+                rng = np.random.default_rng([spec.split_seed(split), k])
+                count = min(_SHARD, n - k * _SHARD)
+                views = [renderer.render(draw_view(rng, "sign" if rng.random() < spec.sign_share else "map",
+                                                   spec.distractor_p)) for _ in range(count)]
+                out.parent.mkdir(parents=True, exist_ok=True)
+                tmp = out.with_suffix(".tmp.npz")
+                np.savez_compressed(
+                    tmp, rgb=np.stack([v.rgb for v in views]), mask=np.packbits(np.stack([v.mask for v in views]), -1),
+                    target=np.packbits(np.stack([v.target for v in views]), -1),
+                    sign=np.array([v.spec.sign for v in views], np.int8),
+                    target_share=np.array([v.target_share for v in views], np.float32),
+                    faces_share=np.array([v.faces_share for v in views], np.float32), d_true=np.array([v.d_true for v in views]),
+                    cam_pos=np.stack([v.cam_pos for v in views]), cam_mat=np.stack([v.cam_mat for v in views]),
+                    sign_px=np.array([v.sign_masks for v in views], np.int32))
+                tmp.replace(out)  # a shard is there whole or not at all
+    finally:
+        if renderer is not None:
+            renderer.close()
+    return root
+
+
+def load_split(root: Path, split: str) -> dict[str, np.ndarray]:
+    """All shards of a split, concatenated: rgb (N, H, W, 3) uint8, mask and target (N, H, W) bool, sign (N,), target_share and faces_share (N,),
+    d_true (N,), cam_pos (N, 3), cam_mat (N, 3, 3), sign_px (N, 4)."""
+    files = sorted((Path(root) / split).glob("shard-*.npz"))
+    if not files:
+        raise FileNotFoundError(f"no {split} shards under {root}; render them with `racf detector-data`")
+    parts = [dict(np.load(f)) for f in files]
+    out = {key: np.concatenate([p[key] for p in parts]) for key in parts[0]}
+    width = out["rgb"].shape[2]
+    for key in ("mask", "target"):
+        out[key] = np.unpackbits(out[key], -1, count=width).astype(bool)
+    return out
