@@ -3,7 +3,7 @@
 - :class:`DepthDistance`: median valid depth inside the detection's mask, the paper's
   d~(t), with a confidence c~(t) = detection confidence x share of valid depth pixels.
 
-The LiDAR reference l(t) is :class:`controllers.lidar_target.LidarTargetTracker`.
+The LiDAR reference l(t) is :class:`racf.controllers.lidar_target.LidarTargetTracker`.
 """
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from controllers.detector import Detection
+from racf.controllers.detector import Detection
 
 __all__ = ["CameraModel", "DepthDistance"]
 

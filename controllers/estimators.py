@@ -10,8 +10,8 @@ from __future__ import annotations
 import math
 from typing import Protocol, runtime_checkable
 
-from controllers.ekf import DistanceEKF, EKFConfig
-from controllers.perception import PerceptionSample
+from racf.controllers.ekf import DistanceEKF, EKFConfig
+from racf.controllers.perception import PerceptionSample
 
 __all__ = ["DistanceEstimator", "RawDepthEstimator", "EKFEstimator"]
 
@@ -66,7 +66,7 @@ class RawDepthEstimator:
 
 
 class EKFEstimator:
-    """The EKF baseline: depth and LiDAR fused with odometry (:mod:`controllers.ekf`)."""
+    """The EKF baseline: depth and LiDAR fused with odometry (:mod:`racf.controllers.ekf`)."""
 
     name = "ekf"
 

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from controllers.speed import SpeedPI, SpeedPIConfig, SpeedProfile
+from racf.controllers.speed import SpeedPI, SpeedPIConfig, SpeedProfile
 
 __all__ = ["StanleyConfig", "StanleyController", "RouteFollower"]
 

@@ -1,10 +1,10 @@
 """Stop-sign detection by a learned segmenter (the paper detects the sign with YOLOv8-seg).
 
-A small convolutional network (:class:`~controllers.segmenter_net.SignSegmenterNet`) scores
+A small convolutional network (:class:`~racf.controllers.segmenter_net.SignSegmenterNet`) scores
 every pixel; the pixels above ``threshold`` form connected components, and each component
 large enough is a candidate whose confidence is its mean score. Same interface as the
-colour-and-shape detector (``detect`` / ``candidates`` -> :class:`~controllers.detector.Detection`),
-so perception, the referee and the benchmarks take either by name (``controllers.detectors``).
+colour-and-shape detector (``detect`` / ``candidates`` -> :class:`~racf.controllers.detector.Detection`),
+so perception, the referee and the benchmarks take either by name (``racf.controllers.detectors``).
 
 The network's weights are the project's own checkpoint (``assets/checkpoints/sign-segmenter``),
 trained on the simulator's frames by ``racf train-detector``; nothing is downloaded.
@@ -21,13 +21,14 @@ import cv2
 import numpy as np
 import torch
 
-from controllers.detector import BlobDetector, Detection, check_rgb
-from controllers.segmenter_net import SegmenterConfig, SignSegmenterNet
+from racf.controllers.detector import BlobDetector, Detection, check_rgb
+from racf.controllers.segmenter_net import SegmenterConfig, SignSegmenterNet
+from racf.assets import asset_path
 
 __all__ = ["LearnedDetectorConfig", "LearnedSignDetector", "SHIPPED_SEGMENTER", "load_segmenter", "save_segmenter"]
 
 #: The shipped checkpoint's directory: ``model.pt`` (state dict) and ``segmenter.json``.
-SHIPPED_SEGMENTER = Path(__file__).resolve().parents[1] / "assets" / "checkpoints" / "sign-segmenter"
+SHIPPED_SEGMENTER = asset_path("checkpoints", "sign-segmenter")
 
 
 @dataclass(frozen=True)

@@ -14,7 +14,7 @@ measured by the 2D LiDAR and tracked with odometry.
 2. **Measure** (on a step with a new scan). The returns of the beams within
    ``sector_half_angle_rad`` of forward (a LiDAR-frame sector that holds every return ahead
    of the camera within that bearing of its optical axis) and range <= ``max_range_m`` are
-   segmented with :func:`~controllers.lidar_segmentation.segment_scan` (DBSCAN with
+   segmented with :func:`~racf.controllers.lidar_segmentation.segment_scan` (DBSCAN with
    ``min_samples=1``, ``eps_m``), and each cluster is described in the camera frame:
    centroid (its x is the cluster's depth along the optical axis: the mean fitted the
    simulator's d_true of the sign's plate and of a crate's near face slightly better than
@@ -55,7 +55,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from controllers.lidar_segmentation import segment_scan
+from racf.controllers.lidar_segmentation import segment_scan
 
 __all__ = ["TARGET_KINDS", "LidarTargetConfig", "LidarTargetState", "LidarTargetTracker"]
 

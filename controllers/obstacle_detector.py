@@ -2,7 +2,7 @@
 
 The crates are a stand-in for any obstacle on the lane; what matters downstream is a mask
 whose depth gives the distance, as for a stop sign. Same interface as the stop-sign
-detector (``detect`` / ``candidates`` returning :class:`~controllers.detector.Detection`).
+detector (``detect`` / ``candidates`` returning :class:`~racf.controllers.detector.Detection`).
 """
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from controllers.detector import BlobDetector, Detection, check_rgb
+from racf.controllers.detector import BlobDetector, Detection, check_rgb
 
 __all__ = ["ObstacleDetectorConfig", "ObstacleDetector"]
 

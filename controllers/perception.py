@@ -12,9 +12,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from controllers.detector import BlobDetector, Detection, StopSignDetector
-from controllers.distance import CameraModel, DepthDistance
-from controllers.lidar_target import TARGET_KINDS, LidarTargetTracker
+from racf.controllers.detector import BlobDetector, Detection, StopSignDetector
+from racf.controllers.distance import CameraModel, DepthDistance
+from racf.controllers.lidar_target import TARGET_KINDS, LidarTargetTracker
 
 __all__ = ["Perception", "PerceptionSample"]
 

@@ -5,11 +5,11 @@ Knows nothing of the simulator: it sees distance series and the car's odometry, 
 paper's offline benchmark does.
 """
 
-from odca.align import Alignment, fit_alignment
-from odca.gate import SOURCES, GateConfig, vote
-from odca.kinematics import KinematicBranch, KinematicsConfig
-from odca.online import ODCA, FusedSample, ODCAConfig
-from odca.prior import CheckpointError, Chronos2Prior, LastValuePrior, TemporalPrior
+from racf.odca.align import Alignment, fit_alignment
+from racf.odca.gate import SOURCES, GateConfig, vote
+from racf.odca.kinematics import KinematicBranch, KinematicsConfig
+from racf.odca.online import ODCA, FusedSample, ODCAConfig
+from racf.odca.prior import CheckpointError, Chronos2Prior, LastValuePrior, TemporalPrior
 
 __all__ = ["ODCA", "ODCAConfig", "FusedSample", "Alignment", "fit_alignment", "GateConfig", "vote", "SOURCES",
            "KinematicsConfig", "KinematicBranch", "TemporalPrior", "Chronos2Prior", "LastValuePrior",

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from odca.features import FEATURE_NAMES
+from racf.odca.features import FEATURE_NAMES
 
 __all__ = ["HEAD_HIDDEN", "make_head", "head_parameters", "HeadWeights"]
 

@@ -7,8 +7,8 @@ Per step t:
    ``context_length`` depths every ``refresh_steps`` steps (mu(t), sigma(t) are read off the
    current forecast);
 2. the kinematic branch advances the last trusted distance by the car's odometry
-   (:mod:`odca.kinematics`);
-3. the gate votes among depth, LiDAR and kinematics (:mod:`odca.gate`): depth that agrees
+   (:mod:`racf.odca.kinematics`);
+3. the gate votes among depth, LiDAR and kinematics (:mod:`racf.odca.gate`): depth that agrees
    with a witness passes unchanged; otherwise the repair rests on the witnesses that agree,
    and the delta head adds its correction, bounded by the gate's tolerance;
 4. a trusted measurement re-anchors the kinematic branch: the LiDAR, or a depth the LiDAR
@@ -41,21 +41,22 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from odca.align import Alignment, fit_alignment
-from odca.features import MAX_RANGE_M, features, sanitize, usable_forecast
-from odca.gate import BASELINE, DEPTH, LIDAR, LIDAR_KIN, NONE, SOURCES, GateConfig, vote
-from odca.head import HeadWeights
-from odca.kinematics import KinematicBranch, KinematicsConfig
-from odca.prior import SHIPPED_PRIOR, Chronos2Prior, CheckpointError, TemporalPrior
+from racf.odca.align import Alignment, fit_alignment
+from racf.odca.features import MAX_RANGE_M, features, sanitize, usable_forecast
+from racf.odca.gate import BASELINE, DEPTH, LIDAR, LIDAR_KIN, NONE, SOURCES, GateConfig, vote
+from racf.odca.head import HeadWeights
+from racf.odca.kinematics import KinematicBranch, KinematicsConfig
+from racf.odca.prior import SHIPPED_PRIOR, Chronos2Prior, CheckpointError, TemporalPrior
+from racf.assets import asset_path
 
 __all__ = ["ODCA", "ODCAConfig", "FusedSample", "SHIPPED_HEAD", "SOURCES"]
 
-SHIPPED_HEAD = Path(__file__).resolve().parents[1] / "assets" / "checkpoints" / "odca-head"
+SHIPPED_HEAD = asset_path("checkpoints", "odca-head")
 
 
 @dataclass(frozen=True)
 class ODCAConfig:
-    """ODCA's settings (saved as ``odca.json`` beside the head's weights).
+    """ODCA's settings (saved as ``racf.odca.json`` beside the head's weights).
 
     Attributes:
         context_length: prior context W, steps.
@@ -223,7 +224,7 @@ class ODCA:
     # -- loading and saving ----------------------------------------------------------------
     @classmethod
     def load(cls, path: str | Path | None = None, prior: TemporalPrior | None = None) -> "ODCA":
-        """Loads ``odca.json`` + ``head.npz`` from ``path`` (default: the shipped ones) and the prior."""
+        """Loads ``racf.odca.json`` + ``head.npz`` from ``path`` (default: the shipped ones) and the prior."""
         folder = Path(path) if path is not None else SHIPPED_HEAD
         cfg_file, weights_file = folder / "odca.json", folder / "head.npz"
         if not cfg_file.exists() or not weights_file.exists():

@@ -2,7 +2,7 @@
 
 The Hugging Face hub is unreachable on the build machines, so the prior is a tiny model of
 the Chronos-2 architecture (``chronos.chronos2.Chronos2Model``), randomly initialised and
-trained with ``Chronos2Pipeline.fit`` on :mod:`odca.synthetic` series. It is *not*
+trained with ``Chronos2Pipeline.fit`` on :mod:`racf.odca.synthetic` series. It is *not*
 Amazon's ``amazon/chronos-2`` weights; its model card says how it was made and scored.
 """
 
@@ -14,8 +14,8 @@ from pathlib import Path
 
 import numpy as np
 
-from odca.prior import Chronos2Prior, LastValuePrior
-from odca.synthetic import synthetic_series
+from racf.odca.prior import Chronos2Prior, LastValuePrior
+from racf.odca.synthetic import synthetic_series
 
 __all__ = ["TINY_CONFIG", "pretrain_prior", "score_prior", "write_scores"]
 

@@ -20,11 +20,12 @@ from pathlib import Path
 from typing import Iterator, Protocol, runtime_checkable
 
 import numpy as np
+from racf.assets import asset_path
 
 __all__ = ["TemporalPrior", "LastValuePrior", "Chronos2Prior", "CheckpointError", "SHIPPED_PRIOR"]
 
 #: The project's own small Chronos-2-architecture checkpoint (see its MODEL_CARD.md).
-SHIPPED_PRIOR = Path(__file__).resolve().parents[1] / "assets" / "checkpoints" / "chronos2-racf-tiny"
+SHIPPED_PRIOR = asset_path("checkpoints", "chronos2-racf-tiny")
 _Z90 = 1.2815515655446004  # standard normal 90 % quantile
 
 

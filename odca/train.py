@@ -23,12 +23,12 @@ from dataclasses import asdict, replace
 import numpy as np
 import pandas as pd
 
-from odca.align import fit_alignment
-from odca.features import sanitize
-from odca.gate import DEPTH, GateConfig
-from odca.head import HeadWeights, head_parameters, make_head
-from odca.losses import LossWeights, odca_losses
-from odca.online import ODCA, ODCAConfig, segments
+from racf.odca.align import fit_alignment
+from racf.odca.features import sanitize
+from racf.odca.gate import DEPTH, GateConfig
+from racf.odca.head import HeadWeights, head_parameters, make_head
+from racf.odca.losses import LossWeights, odca_losses
+from racf.odca.online import ODCA, ODCAConfig, segments
 
 __all__ = ["prepare", "prepare_split", "prepare_clean", "revote", "initial_model", "fit", "train_head", "calibrate_gate",
            "unchanged_share", "score", "pass_through",

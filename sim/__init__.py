@@ -1,14 +1,14 @@
 """racf simulator: the Quanser QCar 2 and its indoor map in MuJoCo, as a Gymnasium env.
 
-Importing ``sim`` registers ``RACF/QCar2-v3`` (so ``gym.make("sim:RACF/QCar2-v3")`` works in
+Importing ``sim`` registers ``RACF/QCar2-v3`` (so ``gym.make("racf.sim:RACF/QCar2-v3")`` works in
 a fresh process) and selects headless EGL rendering unless ``MUJOCO_GL`` is already set.
 """
 
-from sim._gl import ensure_gl_backend
+from racf.sim._gl import ensure_gl_backend
 
 ensure_gl_backend()
 
-from sim.registration import ENV_ID, register_envs  # noqa: E402
+from racf.sim.registration import ENV_ID, register_envs  # noqa: E402
 
 register_envs()
 

@@ -16,5 +16,5 @@ def register_envs() -> None:
     """Registers ``RACF/QCar2-v3``; calling it again does nothing."""
     if ENV_ID in gym.registry:
         return
-    gym.register(id=ENV_ID, entry_point="sim.env.qcar2_env:QCar2Env", max_episode_steps=None,
+    gym.register(id=ENV_ID, entry_point="racf.sim.env.qcar2_env:QCar2Env", max_episode_steps=None,
                  disable_env_checker=False)

@@ -4,7 +4,7 @@ Two sets of frames, neither seen in training:
 
 - *Held-out views* (``racf detector-data``'s held-out split): 0.3-4 m from a sign, up to
   60 deg off its face, varied lighting and moved props, and views from anywhere on the map.
-  Recall and false-positive frames as in ``experiments.detector.evaluate``.
+  Recall and false-positive frames as in ``racf.experiments.detector.evaluate``.
 - *Approach drives*: drives every stop-sign approach (all four signs, cruise speeds 1.0 / 1.5 / 2.0 m/s) from
 the start of the run-up to the end of the route, with the lane follower and no braking,
 and runs the detector on every rendered frame. The yield signs, traffic lights and the
@@ -32,11 +32,11 @@ import cv2
 import gymnasium as gym
 import numpy as np
 
-import sim
-from controllers.detectors import make_detector
-from experiments.detector.evaluate import DetectionCounts, resolvable, score_frame
-from experiments.episode.car import route_follower
-from experiments.sweeps.summary import wilson_interval
+from racf import sim
+from racf.controllers.detectors import make_detector
+from racf.experiments.detector.evaluate import DetectionCounts, resolvable, score_frame
+from racf.experiments.episode.car import route_follower
+from racf.experiments.sweeps.summary import wilson_interval
 
 __all__ = ["DetectorBenchResult", "bench_detector", "occlude", "FRAME_PERIOD_MS", "BUDGET_MS"]
 
@@ -75,8 +75,8 @@ class DetectorBenchResult:
 
 def all_sign_masks(env: gym.Env) -> list[np.ndarray]:
     """Ground-truth face masks of all four stop signs in the current frame (evaluation only)."""
-    from sim.env.ground_truth import sign_view
-    from sim.world.stop_signs import stop_signs
+    from racf.sim.env.ground_truth import sign_view
+    from racf.sim.world.stop_signs import stop_signs
 
     u = env.unwrapped
     cam_pos, cam_mat = u.car.camera_pose(u.model, u.data)
@@ -137,13 +137,13 @@ def time_one_core(detector, frames: np.ndarray, repeats: int = 3) -> float:
 def bench_detector(detector_name: str = "classical", seed: int = 0, speeds: tuple[float, ...] = SPEEDS_MPS,
                    signs: tuple[int, ...] = (0, 1, 2, 3), heldout: dict[str, np.ndarray] | None = None,
                    progress: bool = True) -> DetectorBenchResult:
-    """Runs the benchmark for one detector (``controllers.detectors.DETECTORS``); ``heldout`` is
-    the held-out split (``experiments.detector.dataset.load_split``). See the module docstring."""
+    """Runs the benchmark for one detector (``racf.controllers.detectors.DETECTORS``); ``heldout`` is
+    the held-out split (``racf.experiments.detector.dataset.load_split``). See the module docstring."""
     from tqdm import tqdm
 
     detector = make_detector(detector_name)
     if heldout is None:
-        from experiments.detector.dataset import DEFAULT_DATA_DIR, load_split, make_dataset
+        from racf.experiments.detector.dataset import DEFAULT_DATA_DIR, load_split, make_dataset
 
         heldout = load_split(make_dataset(root=DEFAULT_DATA_DIR, progress=progress), "heldout")
     held = heldout_counts(detector, heldout, progress)

@@ -25,14 +25,14 @@ _RATE_SETTING = "attack+odca"
 
 
 def _episodes(setting: str, n: int, seed: int, profile: str):
-    from experiments.episode import TrialSpec
+    from racf.experiments.episode import TrialSpec
 
     return [TrialSpec(setting, i % 4, (1.0, 1.5, 2.0)[(i // 4) % 3], seed + i, sensor_profile=profile)
             for i in range(n)]
 
 
 def _rtf(setting: str, n: int, seed: int, profile: str) -> dict:
-    from experiments.episode import run_trial
+    from racf.experiments.episode import run_trial
 
     run_trial(_episodes(setting, 1, seed + 1000, profile)[0])  # warm up: the env, ODCA checkpoint, caches
     sim_s = wall_s = 0.0
@@ -47,7 +47,7 @@ def _rtf(setting: str, n: int, seed: int, profile: str) -> dict:
 def _warm(barrier=None, profile: str = "qcar2") -> int:
     """Readies a worker with one episode (imports, the env, ODCA), then waits for the others,
     so that every worker takes one; returns the worker's pid."""
-    from experiments.episode import run_trial
+    from racf.experiments.episode import run_trial
 
     run_trial(_episodes(_RATE_SETTING, 1, 10_000, profile)[0], clean_pass=False)
     if barrier is not None:
@@ -69,8 +69,8 @@ def _local_rates(specs, rounds: int = 2) -> tuple[dict[int, float], dict[int, fl
     import multiprocessing as mp
     from contextlib import ExitStack
 
-    from experiments.sweeps.executors import run_episode
-    from experiments.sweeps.executors import spawn_pool
+    from racf.experiments.sweeps.executors import run_episode
+    from racf.experiments.sweeps.executors import spawn_pool
 
     counts = (1, 2)
     elapsed, ready = dict.fromkeys(counts, 0.0), {}
@@ -96,7 +96,7 @@ def _local_rates(specs, rounds: int = 2) -> tuple[dict[int, float], dict[int, fl
 def _ray_rate(workers: int, specs) -> tuple[float, float]:
     import ray
 
-    from experiments.sweeps.executors import ray_executor, ray_session
+    from racf.experiments.sweeps.executors import ray_executor, ray_session
 
     with tempfile.TemporaryDirectory() as out, ray_session(workers):
         t0 = time.perf_counter()
@@ -114,7 +114,7 @@ def bench_loop(n_rtf: int = 8, n_rate: int = 48, seed: int = 0, ray: bool = True
     """Measures everything above on ``sensor_profile``; ``n_rtf`` episodes per RTF setting, ``n_rate`` per rate."""
     from tqdm import tqdm
 
-    from experiments.sweeps.executors import single_thread
+    from racf.experiments.sweeps.executors import single_thread
 
     single_thread()  # one core: torch, OpenMP and the software rasteriser on one thread
     steps = ["rtf clean", "rtf attack+odca", "1 worker", "2 workers"] + (["ray"] if ray else [])

@@ -17,8 +17,8 @@ __all__ = ["odca_latency"]
 def odca_latency(steps: int = 2000, seed: int = 0, threads: int = 1) -> dict:
     import torch
 
-    from odca import ODCA
-    from odca.synthetic import approach_curve
+    from racf.odca import ODCA
+    from racf.odca.synthetic import approach_curve
 
     torch.set_num_threads(threads)
     rng = np.random.default_rng(seed)

@@ -7,10 +7,10 @@ Fresh views (seeded apart from the training and held-out splits) look at a stop 
 - ``physical_patch``: with the sticker printed on the viewed sign (the scene's own render:
   perspective, light and resolution as the world gives them);
 - ``patch_occlusion``: the image-space occluder of the same area share pasted over the top
-  rows of the sign's pixels (``sim.attacks.patch_occlusion``).
+  rows of the sign's pixels (``racf.sim.attacks.patch_occlusion``).
 
 For each detector and rendering: recall over the views whose sign is resolvable (see
-``experiments.detector.evaluate``), with Wilson intervals, overall and by distance. The
+``racf.experiments.detector.evaluate``), with Wilson intervals, overall and by distance. The
 sticker optimised against the learned segmenter tried on the classical detector, and the
 occluder tried on the learned one, are the transfer report.
 """
@@ -21,9 +21,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from controllers.detectors import DETECTORS, make_detector
-from experiments.detector.evaluate import DetectionCounts, score_frame
-from experiments.detector.views import ViewRenderer, draw_view
+from racf.controllers.detectors import DETECTORS, make_detector
+from racf.experiments.detector.evaluate import DetectionCounts, score_frame
+from racf.experiments.detector.views import ViewRenderer, draw_view
 
 __all__ = ["PatchBenchResult", "bench_patch", "RENDERINGS", "DISTANCE_BANDS_M", "occluded"]
 
@@ -61,8 +61,8 @@ def _band(d: float) -> str | None:
 def occluded(rgb: np.ndarray, target: np.ndarray, share: float, rng: np.random.Generator) -> np.ndarray:
     """``rgb`` with the occluder (a naturalistic texture) pasted over a ``share`` of the sign's
     pixels (the top rows), as ``patch_occlusion`` does."""
-    from sim.attacks.patch_occlusion import paste_occluder
-    from sim.attacks.texture import natural_texture
+    from racf.sim.attacks.patch_occlusion import paste_occluder
+    from racf.sim.attacks.texture import natural_texture
 
     return paste_occluder(rgb, target, share, natural_texture(rng))
 
@@ -74,7 +74,7 @@ def bench_patch(n_views: int = 400, texture: str = "learned", size: float = 0.5,
     (clean, patched) frame pairs of near views (for the README's picture)."""
     from tqdm import tqdm
 
-    from sim.world.sign_patch import PatchPlacement, load_patch_texture
+    from racf.sim.world.sign_patch import PatchPlacement, load_patch_texture
 
     placement = PatchPlacement(area_share=size, centre=position)
     rng = np.random.default_rng(seed)

@@ -14,8 +14,8 @@ from dataclasses import dataclass
 import gymnasium as gym
 import numpy as np
 
-import sim
-from controllers import StanleyController
+from racf import sim
+from racf.controllers import StanleyController
 
 __all__ = ["BenchRow", "bench_sim"]
 

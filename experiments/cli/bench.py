@@ -7,8 +7,8 @@ import argparse
 import json
 from pathlib import Path
 
-from controllers.detectors import DETECTORS
-from experiments.cli.common import count, fail, fmt_ci, sensor_flags
+from racf.controllers.detectors import DETECTORS
+from racf.experiments.cli.common import count, fail, fmt_ci, sensor_flags
 
 DETECTOR_NAMES = tuple(DETECTORS)
 
@@ -64,7 +64,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _bench_sim(args: argparse.Namespace) -> int:
-    from experiments.bench.sim import bench_sim
+    from racf.experiments.bench.sim import bench_sim
 
     if args.steps < 10:
         fail("bench-sim", "--steps must be >= 10")
@@ -83,8 +83,8 @@ def _bench_sim(args: argparse.Namespace) -> int:
 
 
 def _bench(args: argparse.Namespace) -> int:
-    from experiments.offline.benchmark import BenchConfig, load_splits, run_benchmark
-    from experiments.offline.report import main_table, strict, write_report
+    from racf.experiments.offline.benchmark import BenchConfig, load_splits, run_benchmark
+    from racf.experiments.offline.report import main_table, strict, write_report
 
     if not (args.dataset / "dataset.parquet").exists():
         fail("bench", f"no dataset at {args.dataset} (make one with `racf collect --out {args.dataset}`)")
@@ -114,7 +114,7 @@ def _bench(args: argparse.Namespace) -> int:
 
 
 def _bench_loop(args: argparse.Namespace) -> int:
-    from experiments.bench.loop import bench_loop
+    from racf.experiments.bench.loop import bench_loop
 
     if args.sign_geometry is not None:
         fail("bench-loop", "--sign-geometry does not apply here: the benchmark times the default signs")
@@ -131,8 +131,8 @@ def _bench_loop(args: argparse.Namespace) -> int:
 
 
 def _bench_detector(args: argparse.Namespace) -> int:
-    from experiments.bench.detector import BUDGET_MS, FRAME_PERIOD_MS, bench_detector
-    from experiments.detector.dataset import DEFAULT_DATA_DIR, load_split, make_dataset
+    from racf.experiments.bench.detector import BUDGET_MS, FRAME_PERIOD_MS, bench_detector
+    from racf.experiments.detector.dataset import DEFAULT_DATA_DIR, load_split, make_dataset
 
     names = DETECTOR_NAMES if args.detector == "both" else (args.detector,)
     heldout = load_split(make_dataset(root=DEFAULT_DATA_DIR, progress=not args.json), "heldout")

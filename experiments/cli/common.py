@@ -7,13 +7,14 @@ import os
 import sys
 from typing import NoReturn
 
-from experiments.episode.estimators import ESTIMATORS
-from sim.attacks import ATTACKS
+from racf.experiments.episode.estimators import ESTIMATORS
+from racf.sim.attacks import ATTACKS
 
 __all__ = ["UsageError", "sign", "positive", "speed", "share", "duration", "count", "pair", "fail", "flag_error",
            "fmt_ci", "DEFAULT_WORKERS",
            "episode_flags", "episode_params", "backend_flags", "sensor_flags", "attack_help", "estimator_help",
-           "registry_rows", "registry_markdown"]
+           "registry_rows", "registry_markdown", "plugin_flag", "estimator_option_flag", "estimator_options",
+           "load_plugins_from_argv"]
 
 #: Parallel episodes by default: two, or one on a single-core machine.
 DEFAULT_WORKERS = min(2, os.cpu_count() or 1)
@@ -99,20 +100,86 @@ def estimator_help() -> str:
     return ", ".join(ESTIMATORS)
 
 
+def plugin_flag(p: argparse.ArgumentParser) -> None:
+    """``--plugin FILE``: a user's estimator, attack or detector from a Python file (read before
+    the parser is built, by :func:`load_plugins_from_argv`, so the choices include it)."""
+    p.add_argument("--plugin", action="append", default=[], metavar="FILE.py",
+                   help="load an estimator, attack or detector from a Python file (repeatable); it is then valid "
+                        "wherever a built-in one is, and its source enters the result ids")
+
+
+def load_plugins_from_argv(argv: list[str]) -> None:
+    """Loads every ``--plugin FILE`` of a command line (PluginError names a bad one)."""
+    from racf.plugins import PluginError, load_plugin_file
+
+    for i, token in enumerate(argv):
+        if token == "--plugin":
+            if i + 1 >= len(argv):
+                raise PluginError("--plugin needs a file: --plugin path/to/file.py")
+            load_plugin_file(argv[i + 1])
+        elif token.startswith("--plugin="):
+            load_plugin_file(token.split("=", 1)[1])
+
+
+def estimator_option_flag(p: argparse.ArgumentParser) -> None:
+    """``--estimator-option [NAME.]KEY=VALUE``: an option of the estimator (e.g. ``checkpoint=outputs/odca-head``)."""
+    p.add_argument("--estimator-option", action="append", default=[], metavar="[NAME.]KEY=VALUE",
+                   help="an option of the estimator, e.g. checkpoint=outputs/odca-head, or odca.checkpoint=... to name "
+                        "the estimator (repeatable; values are TOML: numbers, true/false, else text); options and "
+                        "the content of a file they name enter the result ids")
+
+
+def estimator_options(command: str, values: list[str], estimators: tuple[str, ...],
+                      default: str | None = None) -> dict[str, dict]:
+    """``--estimator-option`` values as {estimator: {key: value}}; a bare KEY applies to ``default``
+    (the one estimator a command runs). Exits 2 naming a bad one."""
+    import tomllib
+
+    from racf.experiments.episode.estimators import check_options
+
+    out: dict[str, dict] = {}
+    for item in values:
+        key, sep, raw = item.partition("=")
+        if not sep or not key.strip():
+            flag_error(command, f"--estimator-option takes [NAME.]KEY=VALUE, got {item!r}")
+        name, dot, key = key.strip().rpartition(".")
+        if not dot:
+            if default is None:
+                flag_error(command, f"--estimator-option {item!r}: name the estimator (NAME.KEY=VALUE, one of "
+                                    f"{list(estimators)})")
+            name = default
+        if name not in estimators:
+            flag_error(command, f"--estimator-option {item!r}: this command runs estimator(s) {list(estimators)}, "
+                                f"not {name!r}")
+        try:
+            value = tomllib.loads(f"v = {raw}")["v"]
+        except tomllib.TOMLDecodeError:
+            value = raw
+        out.setdefault(name, {})[key] = value
+    for name, options in out.items():
+        try:
+            check_options(name, options)
+        except ValueError as err:
+            flag_error(command, f"--estimator-option: {err}")
+    return out
+
+
 def registry_rows(registry: dict) -> list[tuple[str, str]]:
     """(name, one-line description) of each registered class, from its docstring's first sentence."""
     rows = []
     for name, cls in registry.items():
-        doc = " ".join((cls.__doc__ or "").strip().split("\n\n")[0].split())
+        doc = " ".join((getattr(cls, "description", None) or cls.__doc__ or "").strip().split("\n\n")[0].split())
         first = doc.replace("``", "`").split(". ")[0].split(" (:mod:")[0].rstrip(".")
         rows.append((name, first))
     return rows
 
 
 def registry_markdown() -> str:
-    """The README's tables of attacks and estimators, made from the registries."""
+    """The README's tables of attacks, estimators and detectors, made from the registries."""
+    from racf.controllers.detectors import DETECTORS
+
     lines = []
-    for title, registry in (("attack", ATTACKS), ("estimator", ESTIMATORS)):
+    for title, registry in (("attack", ATTACKS), ("estimator", ESTIMATORS), ("detector", DETECTORS)):
         lines += [f"| {title} | what it does |", "|---|---|"]
         lines += [f"| `{name}` | {text} |" for name, text in registry_rows(registry)]
         lines.append("")
@@ -121,7 +188,7 @@ def registry_markdown() -> str:
 
 def backend_flags(p: argparse.ArgumentParser, workers_help: str = "parallel processes") -> None:
     """``--backend``, ``--address`` and ``--workers``: where a command's episodes run."""
-    from experiments.sweeps.executors import BACKENDS
+    from racf.experiments.sweeps.executors import BACKENDS
 
     p.add_argument("--backend", choices=BACKENDS, default="local",
                    help="local spawned processes (default) or Ray")
@@ -132,8 +199,8 @@ def backend_flags(p: argparse.ArgumentParser, workers_help: str = "parallel proc
 
 def sensor_flags(p, default: str | None = "qcar2", geometry_default: str | None = "plate") -> None:
     """``--sensor-profile`` (the car's sensors) and ``--sign-geometry`` (the stop signs' build)."""
-    from sim.env.config import SENSOR_PROFILES
-    from sim.world.stop_signs import SIGN_GEOMETRIES
+    from racf.sim.env.config import SENSOR_PROFILES
+    from racf.sim.world.stop_signs import SIGN_GEOMETRIES
 
     p.add_argument("--sensor-profile", choices=tuple(SENSOR_PROFILES), default=default,
                    help="the car's sensors: qcar2, as the QCar 2 delivers them (the A2M12 swept over its "
@@ -145,7 +212,7 @@ def sensor_flags(p, default: str | None = "qcar2", geometry_default: str | None 
 
 
 def _detector_names() -> tuple[str, ...]:
-    from controllers.detectors import DETECTORS
+    from racf.controllers.detectors import DETECTORS
 
     return tuple(DETECTORS)
 
@@ -172,13 +239,17 @@ def episode_flags(p: argparse.ArgumentParser) -> None:
     p.add_argument("--stable-steps", type=int, default=None,
                    help="steps the sign must be visible before an attack may start (default: the braking "
                         "controller's confirm_frames + 3 = 6)")
+    estimator_option_flag(p)
+    plugin_flag(p)
     sensor_flags(p)
 
 
 def episode_params(args: argparse.Namespace, command: str, table: bool = False) -> tuple[str | None, dict]:
     """The setting and the spec fields the episode flags give; SystemExit(2) naming what is wrong.
-    With ``table`` the settings are the table's own: none may be given, and the setting is None."""
-    from experiments.episode import STRONG_RHO, STRONG_T_ATK_S, parse_setting, setting_name
+    With ``table`` the settings are the table's own: none may be given, and the setting is None.
+    ``estimator_options`` is by estimator name ({"odca": {"checkpoint": ...}}): a batch gives each
+    setting its own estimator's."""
+    from racf.experiments.episode import STRONG_RHO, STRONG_T_ATK_S, parse_setting, setting_name
 
     try:
         if table and (args.setting is not None or args.attack is not None or args.estimator is not None):
@@ -195,11 +266,19 @@ def episode_params(args: argparse.Namespace, command: str, table: bool = False) 
             setting = setting_name(attacks, args.estimator or "raw")
         if setting is not None and not parse_setting(setting)[0] and (args.rho is not None or args.t_atk is not None):
             flag_error(command, "--rho and --t-atk apply to settings with an attack")
+        if table:
+            from racf.experiments.episode import TABLE_SETTINGS
+
+            used = tuple(dict.fromkeys(parse_setting(s)[1] for s in TABLE_SETTINGS))
+            options = estimator_options(command, args.estimator_option, used)
+        else:
+            options = estimator_options(command, args.estimator_option, (parse_setting(setting)[1],),
+                                        default=parse_setting(setting)[1])
         params = {"rho": pair(command, "--rho", args.rho, STRONG_RHO),
                   "t_atk": pair(command, "--t-atk", args.t_atk, STRONG_T_ATK_S),
                   "delay_ms": args.delay_ms, "control_hz": args.control_hz, "stable_steps": args.stable_steps,
                   "sensor_profile": args.sensor_profile, "sign_geometry": args.sign_geometry,
-                  "detector": args.detector or "classical"}
+                  "detector": args.detector or "classical", "estimator_options": options}
     except ValueError as err:
         flag_error(command, str(err))
     return setting, params

@@ -6,7 +6,7 @@ import argparse
 import json
 from pathlib import Path
 
-from experiments.cli.common import backend_flags, count, sensor_flags
+from racf.experiments.cli.common import backend_flags, count, sensor_flags
 
 __all__ = ["register"]
 
@@ -24,7 +24,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _collect(args: argparse.Namespace) -> int:
-    from experiments.data.dataset import DEFAULT_DRIVES, collect, load_dataset, summarize_dataset
+    from racf.experiments.data.dataset import DEFAULT_DRIVES, collect, load_dataset, summarize_dataset
 
     # The bar is on stderr; --summary JSON stays alone on stdout.
     path = collect(args.out, drives=args.drives or DEFAULT_DRIVES, seed=args.seed, workers=args.workers,

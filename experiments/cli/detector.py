@@ -7,7 +7,7 @@ import argparse
 import json
 from pathlib import Path
 
-from experiments.cli.common import count, fail, fmt_ci
+from racf.experiments.cli.common import count, fail, fmt_ci
 
 __all__ = ["register"]
 
@@ -82,7 +82,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _detector_data(args: argparse.Namespace) -> int:
-    from experiments.detector.dataset import DatasetSpec, load_split, make_dataset
+    from racf.experiments.detector.dataset import DatasetSpec, load_split, make_dataset
 
     try:
         spec = DatasetSpec(seed=args.seed, n_train=args.train, n_heldout=args.heldout)
@@ -98,8 +98,8 @@ def _detector_data(args: argparse.Namespace) -> int:
 
 
 def _train_detector(args: argparse.Namespace) -> int:
-    from experiments.detector.dataset import DatasetSpec, make_dataset
-    from experiments.detector.train import TrainConfig, train_segmenter
+    from racf.experiments.detector.dataset import DatasetSpec, make_dataset
+    from racf.experiments.detector.train import TrainConfig, train_segmenter
 
     try:
         config = TrainConfig(seed=args.seed, threads=args.threads,
@@ -121,8 +121,8 @@ def _train_detector(args: argparse.Namespace) -> int:
 
 
 def _optimise_patch(args: argparse.Namespace) -> int:
-    from controllers.learned_detector import SHIPPED_SEGMENTER
-    from experiments.detector.patch_opt import PatchConfig, optimise_patch
+    from racf.controllers.learned_detector import SHIPPED_SEGMENTER
+    from racf.experiments.detector.patch_opt import PatchConfig, optimise_patch
 
     try:
         config = PatchConfig(seed=args.seed, size=args.size, position=args.position,
@@ -147,7 +147,7 @@ def _optimise_patch(args: argparse.Namespace) -> int:
 
 
 def _bench_patch(args: argparse.Namespace) -> int:
-    from experiments.bench.patch_transfer import DISTANCE_BANDS_M, RENDERINGS, bench_patch
+    from racf.experiments.bench.patch_transfer import DISTANCE_BANDS_M, RENDERINGS, bench_patch
 
     try:
         result, examples = bench_patch(args.n, args.texture, args.size, args.position, progress=not args.json,
@@ -155,7 +155,7 @@ def _bench_patch(args: argparse.Namespace) -> int:
     except (FileNotFoundError, ValueError) as err:
         fail("bench-patch", str(err))
     if args.figure:
-        from experiments.viz.patch_figure import patched_sign_figure
+        from racf.experiments.viz.patch_figure import patched_sign_figure
 
         patched_sign_figure(examples, args.figure)
     if args.json:

@@ -7,7 +7,7 @@ import json
 import sys
 from pathlib import Path
 
-from experiments.cli.common import count
+from racf.experiments.cli.common import count
 
 __all__ = ["register"]
 
@@ -55,8 +55,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _pretrain_prior(args: argparse.Namespace) -> int:
-    from experiments.offline.training import pretrain_checkpoint
-    from odca.prior import SHIPPED_PRIOR
+    from racf.experiments.offline.training import pretrain_checkpoint
+    from racf.odca.prior import SHIPPED_PRIOR
 
     if not (args.dataset / "dataset.parquet").exists():
         print(f"no dataset at {args.dataset}: scoring on synthetic series only", file=sys.stderr)
@@ -68,8 +68,8 @@ def _pretrain_prior(args: argparse.Namespace) -> int:
 
 
 def _train(args: argparse.Namespace) -> int:
-    from experiments.offline.training import train_checkpoint
-    from odca.online import SHIPPED_HEAD
+    from racf.experiments.offline.training import train_checkpoint
+    from racf.odca.online import SHIPPED_HEAD
 
     report = train_checkpoint(args.dataset, args.out, split=args.split, epochs=args.epochs, seed=args.seed)
     print(json.dumps(report, indent=1))
@@ -81,9 +81,9 @@ def _train(args: argparse.Namespace) -> int:
 
 
 def _evaluate(args: argparse.Namespace) -> int:
-    from experiments.data.dataset import load_dataset
-    from odca.online import ODCA
-    from odca.train import evaluate
+    from racf.experiments.data.dataset import load_dataset
+    from racf.odca.online import ODCA
+    from racf.odca.train import evaluate
 
     report = evaluate(ODCA.load(args.checkpoint), load_dataset(args.dataset, split=args.split))
     print(json.dumps(report) if args.json else train_table(report))
@@ -91,7 +91,7 @@ def _evaluate(args: argparse.Namespace) -> int:
 
 
 def _odca_latency(args: argparse.Namespace) -> int:
-    from experiments.bench.odca_latency import odca_latency
+    from racf.experiments.bench.odca_latency import odca_latency
 
     r = odca_latency(steps=args.steps, threads=args.threads)
     if args.json:

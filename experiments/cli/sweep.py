@@ -6,13 +6,13 @@ import argparse
 import json
 from pathlib import Path
 
-from experiments.cli.common import attack_help, backend_flags, count, estimator_help, fail, sensor_flags
+from racf.experiments.cli.common import attack_help, backend_flags, count, estimator_help, fail, sensor_flags
 
 __all__ = ["register"]
 
 
 def _shipped_specs() -> list[str]:
-    from experiments.sweeps.spec import SPECS_DIR
+    from racf.experiments.sweeps.spec import SPECS_DIR
     return sorted(p.name for p in SPECS_DIR.glob("*.toml"))
 
 
@@ -48,7 +48,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _sweep(args: argparse.Namespace) -> int:
-    from experiments.sweeps.report import report_from_store
+    from racf.experiments.sweeps.report import report_from_store
 
     if args.report is not None:
         try:
@@ -67,8 +67,8 @@ def _sweep(args: argparse.Namespace) -> int:
                                            ("sign", args.sign)) if value is not None}
     if args.spec is None and not (space or fields):
         fail("sweep", "give a spec (e.g. smoke.toml), axis flags (--attack, --estimator, --rho, ...) or --report DIR")
-    from experiments.sweeps.run import run_sweep
-    from experiments.sweeps.spec import parse_spec, spec_text
+    from racf.experiments.sweeps.run import run_sweep
+    from racf.experiments.sweeps.spec import parse_spec, spec_text
 
     try:
         text = spec_text(args.spec, fields, space)

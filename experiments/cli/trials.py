@@ -6,8 +6,8 @@ import argparse
 import json
 from pathlib import Path
 
-from experiments.cli.common import (backend_flags, count, episode_flags, episode_params, fail, fmt_ci,
-                                    registry_markdown, registry_rows, sensor_flags, sign, speed)
+from racf.experiments.cli.common import (backend_flags, count, episode_flags, episode_params, fail, fmt_ci,
+                                         plugin_flag, registry_markdown, registry_rows, sensor_flags, sign, speed)
 
 __all__ = ["register"]
 
@@ -58,28 +58,31 @@ def register(sub: argparse._SubParsersAction) -> None:
     st.add_argument("--json", action="store_true", help="print one JSON object instead of tables")
     st.set_defaults(handler=_attack_study)
 
-    ls = sub.add_parser("list", help="the registered attacks and distance estimators, with what each does")
+    ls = sub.add_parser("list", help="the registered attacks, estimators (defences) and detectors, plug-ins included")
     ls.add_argument("--markdown", action="store_true", help="print the README's Markdown tables")
+    ls.add_argument("--json", action="store_true", help="print {kind: {name: {origin, description}}} as JSON")
+    plugin_flag(ls)
     ls.set_defaults(handler=_list)
 
 
 def _trial(args: argparse.Namespace) -> int:
-    from experiments.episode import TrialSpec, run_trial
-    from experiments.sweeps.store import atomic_write
+    from racf.experiments.episode import TrialSpec, parse_setting, run_trial
+    from racf.experiments.sweeps.store import atomic_write
 
     setting, params = episode_params(args, "trial")
+    params["estimator_options"] = params["estimator_options"].get(parse_setting(setting)[1], {})
     try:
         spec = TrialSpec(setting, args.sign, args.speed, args.seed, target=args.target, **params)
     except ValueError as err:
         fail("trial", str(err))
     recorder = None
     if args.rerun is not None:
-        from experiments.viz.rerun_log import FrameRecorder
+        from racf.experiments.viz.rerun_log import FrameRecorder
 
         recorder = FrameRecorder()
     result, log = run_trial(spec, on_step=recorder)
     if recorder is not None:
-        from experiments.viz.rerun_log import write_rrd
+        from racf.experiments.viz.rerun_log import write_rrd
 
         write_rrd(args.rerun, log, recorder, title=f"racf trial {spec.trial_id}")
     args.out.mkdir(parents=True, exist_ok=True)
@@ -90,12 +93,12 @@ def _trial(args: argparse.Namespace) -> int:
 
 
 def _trials(args: argparse.Namespace) -> int:
-    from experiments.sweeps.batches import batch_specs, run_batch, run_table
-    from experiments.sweeps.summary import summarize
+    from racf.experiments.sweeps.batches import batch_specs, run_batch, run_table
+    from racf.experiments.sweeps.summary import summarize
 
     where = {"workers": args.workers, "backend": args.backend, "address": args.address}
     if args.table:
-        from experiments.sweeps.batches import TABLES
+        from racf.experiments.sweeps.batches import TABLES
 
         _, params = episode_params(args, "trials", table=True)
         physical = args.patch == "physical"
@@ -142,7 +145,7 @@ def _trials(args: argparse.Namespace) -> int:
 
 def table_text(table: dict[str, dict]) -> str:
     """SCR / ASR with Wilson intervals, trigger delay and dt_brake over successes, failures by cause."""
-    from experiments.sweeps.batches import PAPER_TABLE
+    from racf.experiments.sweeps.batches import PAPER_TABLE
 
     def ms(mean, std):
         return "-" if mean is None else f"{mean:.3f} +- {std or 0:.3f}"
@@ -167,7 +170,7 @@ def table_text(table: dict[str, dict]) -> str:
 
 
 def _attack_study(args: argparse.Namespace) -> int:
-    from experiments.sweeps.studies import STUDIES, run_study
+    from racf.experiments.sweeps.studies import STUDIES, run_study
 
     names = list(dict.fromkeys(args.studies or STUDIES))
     unknown = [n for n in names if n not in STUDIES]
@@ -192,15 +195,20 @@ def _attack_study(args: argparse.Namespace) -> int:
 
 
 def _list(args: argparse.Namespace) -> int:
-    from experiments.episode.estimators import ESTIMATORS
-    from sim.attacks import ATTACKS
+    from racf.plugins import ATTACKS, DETECTORS, ESTIMATORS, REGISTRIES
 
     if args.markdown:
         print(registry_markdown())
         return 0
+    if args.json:
+        print(json.dumps({kind: {name: {"origin": registry.plugin(name).origin, "description": text}
+                                 for name, text in registry_rows(registry)}
+                          for kind, registry in REGISTRIES.items()}))
+        return 0
     for title, registry in (("attacks (--attack, joined by ',' or '+')", ATTACKS),
-                            ("estimators (--estimator)", ESTIMATORS)):
+                            ("estimators (--estimator)", ESTIMATORS), ("detectors (--detector)", DETECTORS)):
         print(title)
         for name, text in registry_rows(registry):
-            print(f"  {name:<24}{text}")
+            origin = registry.plugin(name).origin
+            print(f"  {name:<24}{text}" + ("" if origin == "racf" else f"  [plug-in: {origin}]"))
     return 0

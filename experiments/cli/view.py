@@ -7,7 +7,7 @@ import os
 import sys
 from pathlib import Path
 
-from experiments.cli.common import positive, sensor_flags, sign, speed
+from racf.experiments.cli.common import positive, sensor_flags, sign, speed
 
 __all__ = ["register"]
 
@@ -37,7 +37,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _snapshot(args: argparse.Namespace) -> int:
-    from experiments.viz.snapshot import snapshot
+    from racf.experiments.viz.snapshot import snapshot
 
     for path in snapshot(args.out, sign=args.sign, run_up_m=args.run_up, width=args.width, height=args.height,
                          seed=args.seed):
@@ -46,7 +46,7 @@ def _snapshot(args: argparse.Namespace) -> int:
 
 
 def _demo(args: argparse.Namespace) -> int:
-    from experiments.viz.demo import demo_table, run_demo
+    from racf.experiments.viz.demo import demo_table, run_demo
 
     summary = run_demo(args.out, sign=args.sign, speed=args.speed, seed=args.seed, sensor_profile=args.sensor_profile,
                        sign_geometry=args.sign_geometry)

@@ -3,11 +3,11 @@
 Shaped like the paper's QCar 2 benchmark: synchronized 50 Hz series of the perception
 pipeline's clean depth distance and confidence, the LiDAR target reference and a compact
 scan, the vehicle state and pose, and the simulator's ground truth. One series is one
-continuous clean closed-loop drive (``experiments.episode`` with ``target="drive"``): a random
+continuous clean closed-loop drive (``racf.experiments.episode`` with ``target="drive"``): a random
 road-graph route of 20-60 s that meets two or more targets; the car stops at every stop
 sign, dwells and drives on, and a crate on the lane ends the drive. The seed draws the
 start node, run-up, lateral offset, heading error and cruise speed
-(``sim.world.drives.draw_drive``); the nominal speeds 1.0 / 1.5 / 2.0 m/s take turns.
+(``racf.sim.world.drives.draw_drive``); the nominal speeds 1.0 / 1.5 / 2.0 m/s take turns.
 
 Layout of a dataset folder:
 
@@ -27,11 +27,11 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from experiments.data.corruption import corrupt_series, draw_seed
-from experiments.episode import DRIVE_S, TrialSpec
-from experiments.episode.runner import SCAN_FOV_HALF_BEAMS
-from experiments.sweeps.batches import SPEEDS_MPS, TRIALS_LOGS, run_batch
-from experiments.sweeps.store import atomic_write
+from racf.experiments.data.corruption import corrupt_series, draw_seed
+from racf.experiments.episode import DRIVE_S, TrialSpec
+from racf.experiments.episode.runner import SCAN_FOV_HALF_BEAMS
+from racf.experiments.sweeps.batches import SPEEDS_MPS, TRIALS_LOGS, run_batch
+from racf.experiments.sweeps.store import atomic_write
 
 __all__ = ["COLUMNS", "DEFAULT_DRIVES", "SPLITS", "collection_specs", "collect", "summarize_dataset",
            "reference_quality", "load_dataset", "QCarDataset", "SPLIT_SHARES", "make_split",
@@ -104,7 +104,7 @@ def collect(out_dir: Path, drives: int = DEFAULT_DRIVES, seed: int = 0, workers:
             address: str | None = None, sensor_profile: str = "qcar2", sign_geometry: str = "plate") -> Path:
     """Records (or resumes) the collection on ``backend`` and writes the dataset files; returns ``dataset.parquet``.
 
-    The drives run on the one batch path (``experiments.sweeps``); their per-step logs stay in
+    The drives run on the one batch path (``racf.experiments.sweeps``); their per-step logs stay in
     ``<out_dir>/_runs/trials/``, so an interrupted collection resumes where it stopped.
     """
     out_dir = Path(out_dir)
@@ -325,7 +325,7 @@ over all {loc['n']} steps: position RMSE {loc['filter']['position_m_rmse']:.4f} 
 |---|---|---|
 {rows}
 
-**Corruption.** `experiments.data.dataset.load_dataset(path).corrupted("weak" | "mid" | "strong", draw=k)`
+**Corruption.** `racf.experiments.data.dataset.load_dataset(path).corrupted("weak" | "mid" | "strong", draw=k)`
 adds the protocol's offline corruption (`d_meas`, `c_meas`, `label`, `kind`); draw k of a series
 is seeded by (its `drive_seed`, the preset, k), so it does not change with the code.
 """)

@@ -16,8 +16,8 @@ from pathlib import Path
 
 import numpy as np
 
-from experiments.detector.views import ViewRenderer, draw_view
-from experiments.sweeps.store import code_version
+from racf.experiments.detector.views import ViewRenderer, draw_view
+from racf.experiments.sweeps.store import code_version
 
 __all__ = ["DatasetSpec", "DEFAULT_DATA_DIR", "make_dataset", "load_split", "SPLITS"]
 
@@ -25,8 +25,8 @@ DEFAULT_DATA_DIR = Path("data/detector")
 SPLITS = ("train", "heldout")
 _SHARD = 500
 #: What renders a view: the world, the car, its camera and this package's view code.
-_RENDER_CODE = ("sim/world", "sim/env", "sim/sensors", "sim/vehicle", "assets/qcar2_map",
-                "experiments/detector/views.py", "experiments/detector/dataset.py")
+_RENDER_CODE = ("racf.sim.world", "racf.sim.env", "racf.sim.sensors", "racf.sim.vehicle", "racf.assets.qcar2_map",
+                "racf.experiments.detector.views", "racf.experiments.detector.dataset")
 
 
 @dataclass(frozen=True)

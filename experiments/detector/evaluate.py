@@ -13,7 +13,7 @@ from dataclasses import asdict, dataclass
 import cv2
 import numpy as np
 
-from experiments.sweeps.summary import wilson_interval
+from racf.experiments.sweeps.summary import wilson_interval
 
 __all__ = ["DetectionCounts", "resolvable", "score_frame", "MIN_SHARE"]
 

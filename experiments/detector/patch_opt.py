@@ -4,7 +4,7 @@ Expectation over transformation (Athalye et al. 2018; Brown et al. 2017, "Advers
 Patch"; Eykholt et al. 2018, "Robust Physical-World Attacks"): MuJoCo's renderer is not
 differentiable, so the patch is put into *rendered* frames of the training split by a
 differentiable perspective warp (kornia), using the sign's known pose in each frame: the
-sticker's four corners on the plate (``sim.world.sign_patch.PatchPlacement``) are projected
+sticker's four corners on the plate (``racf.sim.world.sign_patch.PatchPlacement``) are projected
 with the camera's pose and intrinsics, and the texture is warped onto them. Over a batch of
 views (distances 0.3-4 m, up to 60 deg off the face, the room's lighting as rendered) and
 random transformations (pose error of a pixel, the light's gain and tint, sensor noise,
@@ -29,17 +29,18 @@ import numpy as np
 import torch
 from torch.nn import functional as F
 
-from controllers.learned_detector import SHIPPED_SEGMENTER, load_segmenter
-from controllers.segmenter_net import SignSegmenterNet
-from experiments.detector.dataset import load_split
-from sim.world.sign_patch import PatchPlacement
-from sim.world.stop_signs import stop_signs
+from racf.controllers.learned_detector import SHIPPED_SEGMENTER, load_segmenter
+from racf.controllers.segmenter_net import SignSegmenterNet
+from racf.experiments.detector.dataset import load_split
+from racf.sim.world.sign_patch import PatchPlacement
+from racf.sim.world.stop_signs import stop_signs
+from racf.assets import asset_path
 
 __all__ = ["PatchConfig", "optimise_patch", "patch_corners_px", "composite", "SHIPPED_PATCH_DIR"]
 
-SHIPPED_PATCH_DIR = Path(__file__).resolve().parents[2] / "assets" / "patches"
+SHIPPED_PATCH_DIR = asset_path("patches")
 _MJ_TO_OPTICAL = np.diag([1.0, -1.0, -1.0])
-#: The red face's colour in the scene (``sim.world.scene``): a rendered face pixel over it is
+#: The red face's colour in the scene (``racf.sim.world.scene``): a rendered face pixel over it is
 #: the light's gain at that view.
 _FACE_RED = 0.80
 TEXTURE_PX = 64
@@ -165,7 +166,7 @@ def optimise_patch(config: PatchConfig = PatchConfig(), data_root: Path = Path("
     the segmenter's recall on the training views with and without it, composited)."""
     from tqdm import tqdm
 
-    from sim.sensors.camera import CameraIntrinsics
+    from racf.sim.sensors.camera import CameraIntrinsics
 
     torch.set_num_threads(config.threads)
     g = torch.Generator().manual_seed(config.seed)

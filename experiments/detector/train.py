@@ -20,10 +20,10 @@ import numpy as np
 import torch
 from torch.nn import functional as F
 
-from controllers.learned_detector import LearnedSignDetector, save_segmenter
-from controllers.segmenter_net import SegmenterConfig, SignSegmenterNet
-from experiments.detector.dataset import load_split
-from experiments.detector.evaluate import DetectionCounts, score_frame
+from racf.controllers.learned_detector import LearnedSignDetector, save_segmenter
+from racf.controllers.segmenter_net import SegmenterConfig, SignSegmenterNet
+from racf.experiments.detector.dataset import load_split
+from racf.experiments.detector.evaluate import DetectionCounts, score_frame
 
 __all__ = ["TrainConfig", "train_segmenter", "evaluate_detector_on_split"]
 

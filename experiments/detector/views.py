@@ -21,10 +21,10 @@ from dataclasses import dataclass
 import gymnasium as gym
 import numpy as np
 
-import sim
-from sim.env.ground_truth import face_area_px, sign_view
-from sim.world import map_facts
-from sim.world.stop_signs import stop_signs
+from racf import sim
+from racf.sim.env.ground_truth import face_area_px, sign_view
+from racf.sim.world import map_facts
+from racf.sim.world.stop_signs import stop_signs
 
 __all__ = ["ViewSpec", "View", "ViewRenderer", "draw_view", "DISTRACTOR_BODIES", "SIGN_RANGE_M"]
 

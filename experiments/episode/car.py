@@ -6,8 +6,8 @@ step it reads the observation and nothing else: its pose comes from its own loca
 filter (odometry and the gyro predict, the localiser's fixes correct), and that pose places
 the map's targets in view, drives the lane follower and says which target is next. It never
 sees ``info`` or the env; the runner builds the calibration and the mission once, before the
-episode (:mod:`experiments.episode.stack`). Ground truth is the referee's
-(:mod:`experiments.episode.referee`).
+episode (:mod:`racf.experiments.episode.stack`). Ground truth is the referee's
+(:mod:`racf.experiments.episode.referee`).
 """
 
 from __future__ import annotations
@@ -17,12 +17,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from controllers import (BrakeDecision, BrakingConfig, CameraModel, Perception, PerceptionSample, PoseFilter,
+from racf.controllers import (BrakeDecision, BrakingConfig, CameraModel, Perception, PerceptionSample, PoseFilter,
                          RouteFollower, StopSignBraker)
-from sim.sensors import TIMESTAMP_FIELDS
-from sim.sensors.localiser import LOCALISATIONS
-from sim.world.drives import RouteTarget
-from sim.world.road_graph import Path
+from racf.sim.sensors import TIMESTAMP_FIELDS
+from racf.sim.sensors.localiser import LOCALISATIONS
+from racf.sim.world.drives import RouteTarget
+from racf.sim.world.road_graph import Path
 
 __all__ = ["CarCalibration", "Mission", "CarStep", "Car", "sign_depth_at_line", "route_follower", "map_bearing",
            "PASS_LINE_M"]
@@ -124,7 +124,7 @@ class Car:
         dt: the car's loop period, s (one observation per call of :meth:`step`).
         control_every: the controller runs every this many steps and holds its action between;
             the localisation filter runs every step.
-        localisation: the env's (``sim.sensors.localiser.LOCALISATIONS``): ``qcar2``, the car runs its
+        localisation: the env's (``racf.sim.sensors.localiser.LOCALISATIONS``): ``qcar2``, the car runs its
             own filter on odometry, the gyro and the localiser's fixes; ``true``, the fix is the
             true pose at every step and the car takes it as it is (the ablation).
     """

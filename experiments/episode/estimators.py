@@ -1,4 +1,5 @@
-"""The distance estimators a closed-loop episode can run, found by name in ``ESTIMATORS``.
+"""The distance estimators (defences) an episode runs, found by name in ``ESTIMATORS``
+(:data:`racf.plugins.ESTIMATORS`, filled from the ``racf.estimators`` entry points).
 
 Each is causal and sees, per 50 Hz step, the live depth distance, its confidence and
 bearing, the LiDAR reference and the car's odometry (the ``DistanceEstimator`` protocol):
@@ -22,23 +23,25 @@ worker runs (loading takes about a second).
 
 from __future__ import annotations
 
+import inspect
 import math
 from functools import lru_cache
-from typing import Callable
+from typing import Any
 
 import numpy as np
 
-from odca.features import usable_forecast
-from odca.gate import DEPTH, DEPTH_UNCONFIRMED
+from racf.odca.features import usable_forecast
+from racf.odca.gate import DEPTH, DEPTH_UNCONFIRMED
 
-from controllers import DistanceEstimator, EKFEstimator, PerceptionSample, RawDepthEstimator
+from racf.controllers import DistanceEstimator, PerceptionSample
+from racf.plugins import ESTIMATORS
 
-__all__ = ["ESTIMATORS", "make_estimator", "ODCAEstimator", "ChronosEstimator"]
+__all__ = ["ESTIMATORS", "make_estimator", "estimator_options", "check_options", "ODCAEstimator", "ChronosEstimator"]
 
 
 @lru_cache(maxsize=None)
 def _odca(checkpoint: str | None):
-    from odca import ODCA
+    from racf.odca import ODCA
 
     return ODCA.load(checkpoint)
 
@@ -144,13 +147,30 @@ class ChronosEstimator:
         return {"flag": float(self.flagged)} if self._t else {}
 
 
-#: Every estimator by name (each one's ``name``): a new one is a class and a line here.
-ESTIMATORS: dict[str, Callable[[], DistanceEstimator]] = {cls.name: cls for cls in (
-    RawDepthEstimator, ODCAEstimator, EKFEstimator, ChronosEstimator)}
+def make_estimator(name: str, options: dict[str, Any] | None = None) -> DistanceEstimator:
+    """A fresh estimator by name (a key of ``ESTIMATORS``), built with ``options`` as keyword
+    arguments (e.g. ``{"checkpoint": "outputs/odca-head"}``); ValueError names what is allowed."""
+    cls = ESTIMATORS.plugin(name).obj
+    options = dict(options or {})
+    check_options(name, options)
+    try:
+        return cls(**options)
+    except (TypeError, ValueError, OSError) as err:
+        raise ValueError(f"estimator {name!r} with options {options}: {err}") from None
 
 
-def make_estimator(name: str) -> DistanceEstimator:
-    """A fresh estimator by name (a key of ``ESTIMATORS``)."""
-    if name not in ESTIMATORS:
-        raise ValueError(f"estimator must be one of {tuple(ESTIMATORS)}, got {name!r}")
-    return ESTIMATORS[name]()
+def estimator_options(name: str) -> tuple[str, ...]:
+    """The keyword arguments estimator ``name`` takes (what ``--estimator-option`` may set)."""
+    cls = ESTIMATORS.plugin(name).obj
+    return tuple(k for k, p in inspect.signature(cls.__init__).parameters.items()
+                 if k != "self" and p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY))
+
+
+def check_options(name: str, options: dict[str, Any]) -> None:
+    """Fails before any episode on an option estimator ``name`` does not take."""
+    if not isinstance(options, dict):
+        raise ValueError(f"estimator options must be a table of name = value, got {options!r}")
+    allowed = estimator_options(name)
+    unknown = sorted(set(options) - set(allowed))
+    if unknown:
+        raise ValueError(f"estimator {name!r} has no option(s) {unknown}; it takes {list(allowed) or 'none'}")

@@ -16,9 +16,9 @@ import math
 import gymnasium as gym
 import numpy as np
 
-from controllers import BrakingConfig, Perception, StopSignBraker
-from experiments.episode.car import CarCalibration, CarStep, sign_depth_at_line
-from sim.world.drives import RouteTarget
+from racf.controllers import BrakingConfig, Perception, StopSignBraker
+from racf.experiments.episode.car import CarCalibration, CarStep, sign_depth_at_line
+from racf.sim.world.drives import RouteTarget
 
 __all__ = ["Referee"]
 

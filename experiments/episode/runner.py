@@ -1,5 +1,5 @@
-"""The one step loop: env -> the car (:mod:`~experiments.episode.car`) -> env, with the referee
-(:mod:`~experiments.episode.referee`) watching.
+"""The one step loop: env -> the car (:mod:`~racf.experiments.episode.car`) -> env, with the referee
+(:mod:`~racf.experiments.episode.referee`) watching.
 
 Trials, dataset collection and the demo all run episodes through :func:`run_trial`. The car
 gets the observation only; the referee gets everything and feeds nothing back. Per step the
@@ -7,7 +7,7 @@ log records every signal of the protocol (d_true, d_clean, d_meas, c_meas, l, d_
 gate w under ODCA), the controller's state and brake command, the reference controller's
 (``ideal_brake``, which defines t*), the car's pose estimate (``x_est``, ``y_est``,
 ``yaw_est``) beside the true pose (``x``, ``y``, ``yaw``) and speed. The result row comes
-from :func:`experiments.episode.scoring.score_log` on that log, so a stored log can be
+from :func:`racf.experiments.episode.scoring.score_log` on that log, so a stored log can be
 rescored without running anything.
 
 Timing: the controller runs every ``round(50 / control_hz)`` steps and holds its action between;
@@ -26,14 +26,14 @@ import gymnasium as gym
 import numpy as np
 import pandas as pd
 
-from controllers import Phase
-from experiments.episode.referee import Referee
-from experiments.episode.scoring import largest_jump, score_log, stealth
-from experiments.episode.spec import TrialSpec
-from experiments.episode.stack import build_car, default_env, mission
-from sim.attacks import PatchOcclusion
-from sim.attacks.base import AttackWrapper
-from sim.sensors import STATE_FIELDS
+from racf.controllers import Phase
+from racf.experiments.episode.referee import Referee
+from racf.experiments.episode.scoring import largest_jump, score_log, stealth
+from racf.experiments.episode.spec import TrialSpec
+from racf.experiments.episode.stack import build_car, default_env, mission
+from racf.sim.attacks import PatchOcclusion
+from racf.sim.attacks.base import AttackWrapper
+from racf.sim.sensors import STATE_FIELDS
 
 __all__ = ["TrialResult", "StepHook", "run_trial", "reset_options", "scan_fov", "SCAN_FOV_HALF_BEAMS",
            "RUN_THROUGH_M"]
@@ -114,7 +114,7 @@ def run_trial(spec: TrialSpec, estimator=None, make_env: Callable[[TrialSpec], g
     Args:
         spec: the episode.
         estimator: overrides the spec's estimator (an object with the ``DistanceEstimator`` protocol).
-        make_env: builds the env (default :func:`~experiments.episode.stack.default_env`).
+        make_env: builds the env (default :func:`~racf.experiments.episode.stack.default_env`).
         on_step: called as ``on_step(env, obs, info, row)`` after each step's decision
             (figures, viewers); it must not change anything.
         clean_pass: under attack, also run perception on the env's own unattacked readings

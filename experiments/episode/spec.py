@@ -17,22 +17,23 @@ from __future__ import annotations
 
 import hashlib
 import json
+import os
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from controllers import BrakingConfig
-from controllers.detectors import DETECTORS
-from experiments.episode.estimators import ESTIMATORS
-from experiments.sweeps.store import code_version
-from sim.attacks import ATTACKS
-from sim.attacks.schedule import as_range
-from sim.env.config import SENSOR_PROFILES
-from sim.world.stop_signs import SIGN_GEOMETRIES
-from sim.world.drives import DriveSpec, draw_drive
+from racf.controllers import BrakingConfig
+from racf.controllers.detectors import DETECTORS
+from racf.experiments.episode.estimators import ESTIMATORS, check_options
+from racf.experiments.sweeps.store import code_version
+from racf.sim.attacks import ATTACKS
+from racf.sim.attacks.schedule import as_range
+from racf.sim.env.config import SENSOR_PROFILES
+from racf.sim.world.stop_signs import SIGN_GEOMETRIES
+from racf.sim.world.drives import DriveSpec, draw_drive
 
 __all__ = ["TrialSpec", "parse_setting", "setting_name", "EPISODE_CODE", "TARGETS", "DRIVE_S", "STRONG_RHO",
-           "STRONG_T_ATK_S", "EXTRA_ATTACKS", "TABLE_SETTINGS"]
+           "STRONG_T_ATK_S", "extra_attacks", "TABLE_SETTINGS", "plugin_sources"]
 
 #: What a trial approaches (``TrialSpec.sign`` is the index): the four stop signs or the two
 #: crates; or a ``drive`` (index 0), a random route drawn from the seed that meets >= 2 targets.
@@ -42,10 +43,15 @@ DRIVE_S = (20.0, 60.0)
 #: The protocol's strong regime.
 STRONG_RHO = (0.9, 1.0)
 STRONG_T_ATK_S = (0.5, 3.0)
-#: Attacks that may join (or replace) the patch in a setting (every registered attack but the
-#: patch, in the registry's order): LiDAR faults (ODCA's gate trusts the LiDAR) and the depth
-#: camera's own faults, each on the protocol's schedule.
-EXTRA_ATTACKS = tuple(name for name in ATTACKS if name != "patch_occlusion")
+
+
+def extra_attacks() -> tuple[str, ...]:
+    """Attacks that may join (or replace) the patch in a setting: every registered attack but
+    the patch, in the registry's order, plug-ins included (read at each call: a plug-in
+    registered after import counts)."""
+    return tuple(name for name in ATTACKS if name != "patch_occlusion")
+
+
 #: The env's step rate, Hz (attack timing is counted in its steps).
 ENV_HZ = 50.0
 #: The paper's closed-loop table, plus the LiDAR spoof under ODCA.
@@ -63,23 +69,24 @@ def parse_setting(setting: str) -> tuple[tuple[str, ...], str]:
     estimator = "raw"
     if rest and rest[-1] in ESTIMATORS:
         estimator = rest.pop()
-    unknown = [r for r in rest if r not in EXTRA_ATTACKS]
+    extra = extra_attacks()
+    unknown = [r for r in rest if r not in extra]
     if unknown:
         raise ValueError(f"unknown part(s) {unknown} of setting {setting!r}: after 'clean'/'attack' come extra "
-                         f"attacks {EXTRA_ATTACKS}, then an estimator {tuple(ESTIMATORS)}")
+                         f"attacks {extra}, then an estimator {tuple(ESTIMATORS)}")
     attacks = (("patch_occlusion",) if base == "attack" else ()) + tuple(rest)
     return attacks, estimator
 
 
 def setting_name(attacks: tuple[str, ...] | list[str], estimator: str = "raw") -> str:
-    """The setting of a set of attacks (``patch`` and/or ``EXTRA_ATTACKS``) and an estimator."""
-    attacks = tuple(attacks)
-    unknown = [a for a in attacks if a != "patch_occlusion" and a not in EXTRA_ATTACKS]
+    """The setting of a set of attacks (``patch_occlusion`` and/or :func:`extra_attacks`) and an estimator."""
+    attacks, extra = tuple(attacks), extra_attacks()
+    unknown = [a for a in attacks if a != "patch_occlusion" and a not in extra]
     if unknown:
         raise ValueError(f"unknown attack(s) {unknown}; choose from {tuple(ATTACKS)}")
     if estimator not in ESTIMATORS:
         raise ValueError(f"estimator must be one of {tuple(ESTIMATORS)}, got {estimator!r}")
-    parts = ["attack" if "patch_occlusion" in attacks else "clean"] + [a for a in EXTRA_ATTACKS if a in attacks]
+    parts = ["attack" if "patch_occlusion" in attacks else "clean"] + [a for a in extra if a in attacks]
     name = "+".join(parts + ([estimator] if estimator != "raw" else []))
     parse_setting(name)
     return name
@@ -104,16 +111,18 @@ class TrialSpec:
         delay_ms: perception-to-actuation delay (0: off). The paper's offboard loop: 49 ms.
         control_hz: the controller's rate (None: every 50 Hz step); the action is held between.
         braking: the braking controller's parameters.
-        sensor_profile: the env's sensors (``sim.env.config.SENSOR_PROFILES``): ``qcar2``
+        sensor_profile: the env's sensors (``racf.sim.env.config.SENSOR_PROFILES``): ``qcar2``
             (the default: the A2M12 through Quanser's driver, the camera at 30 Hz, the car's
             own localisation) or ``ideal`` (env v2's sensors and the true pose, an ablation).
-        sign_geometry: the stop signs' build (``sim.world.stop_signs.SIGN_GEOMETRIES``):
+        sign_geometry: the stop signs' build (``racf.sim.world.stop_signs.SIGN_GEOMETRIES``):
             ``plate`` (the default: the LiDAR's scan plane meets the plate) or ``pole`` (it
             meets only the pole).
         attack_params: per attack of the setting, constructor arguments to set (e.g.
             ``{"stealth_ramp": {"rate_mps": 3.0}}``; ``AttackWrapper.settable_params``).
-        detector: the car's stop-sign detector (``controllers.detectors.DETECTORS``):
-            ``classical`` (colour and shape, the default) or ``learned`` (the segmenter).
+        detector: the car's stop-sign detector (``racf.controllers.detectors.DETECTORS``):
+            ``classical`` (colour and shape, the default), ``learned`` (the segmenter) or a plug-in.
+        estimator_options: keyword arguments for the setting's estimator (e.g.
+            ``{"checkpoint": "outputs/odca-head"}``); a path's content enters the trial id.
     """
 
     setting: str
@@ -132,9 +141,14 @@ class TrialSpec:
     sign_geometry: str = "plate"
     attack_params: dict = field(default_factory=dict)
     detector: str = "classical"
+    estimator_options: dict = field(default_factory=dict)
 
     def __post_init__(self) -> None:
-        attacks, _ = parse_setting(self.setting)
+        attacks, estimator = parse_setting(self.setting)
+        try:
+            check_options(estimator, self.estimator_options)
+        except ValueError as err:
+            raise ValueError(f"estimator_options: {err}") from None
         if not isinstance(self.attack_params, dict):
             raise ValueError(f"attack_params must be a dict of attack -> {{parameter: value}}, got {self.attack_params!r}")
         for name, params in self.attack_params.items():
@@ -142,6 +156,10 @@ class TrialSpec:
                 raise ValueError(f"attack_params names {name!r}, which setting {self.setting!r} does not run "
                                  f"(its attacks: {list(attacks)})")
             ATTACKS[name].check_params(params)
+        for name in attacks:
+            if self.target in TARGETS and self.target not in ATTACKS[name].targets:
+                raise ValueError(f"attack {name!r} cannot act on target {self.target!r}: it acts on "
+                                 f"{list(ATTACKS[name].targets)}")
         if self.sensor_profile not in SENSOR_PROFILES:
             raise ValueError(f"sensor_profile must be one of {tuple(SENSOR_PROFILES)}, got {self.sensor_profile!r}")
         if self.sign_geometry not in SIGN_GEOMETRIES:
@@ -195,14 +213,37 @@ class TrialSpec:
 
     @property
     def trial_id(self) -> str:
-        """Readable prefix + a hash of the spec, its configs and the code version."""
-        from sim.env.config import EnvConfig
+        """Readable prefix + a hash of the spec, its configs, the code version and the source of
+        every plug-in it uses (read now: an edited plug-in makes new ids)."""
+        from racf.sim.env.config import EnvConfig
 
         payload = {"spec": self.to_dict(), "env": asdict(EnvConfig()), "code": code_version(*EPISODE_CODE)}
+        extra = plugin_sources(self)
+        if extra:  # racf's own parts add nothing: the ids of built-in episodes stay as they were
+            payload["plugins"] = extra
         digest = hashlib.sha256(json.dumps(payload, sort_keys=True, default=str).encode()).hexdigest()[:12]
         return f"{self.setting}_{self.target}{self.sign}_v{self.speed:.2f}_seed{self.seed}_{digest}"
 
 
 #: What "the code" of an episode is: the source that runs it and the assets (map, shipped
 #: checkpoints). Summaries, tables and the CLI are left out: changing them changes no episode.
-EPISODE_CODE = ("sim", "controllers", "odca", "experiments/episode", "assets")
+EPISODE_CODE = ("racf.sim", "racf.controllers", "racf.odca", "racf.experiments.episode", "racf.assets")
+
+
+def plugin_sources(spec: TrialSpec) -> dict[str, str]:
+    """What versions a spec's plug-ins and option files: ``{"estimator:NAME": hash, ...}`` for each
+    part from outside racf, and each estimator option naming a file or folder (a checkpoint)."""
+    from racf.controllers.detectors import DETECTORS
+    from racf.experiments.sweeps.store import source_version
+
+    parts = [("estimator", ESTIMATORS, spec.estimator), ("detector", DETECTORS, spec.detector),
+             *(("attack", ATTACKS, name) for name in spec.attacks)]
+    out = {}
+    for kind, registry, name in parts:
+        source = registry.source_id(name)
+        if source is not None:
+            out[f"{kind}:{name}"] = source
+    for key, value in sorted(spec.estimator_options.items()):
+        if isinstance(value, str) and value and os.path.exists(value):
+            out[f"option:{key}"] = source_version(os.path.abspath(value))
+    return out

@@ -1,19 +1,19 @@
 """The parts an episode wires together: the env under the spec's attacks, and what the car's
 software is configured with before it starts (its build, its mission, its perception pipelines
-and estimator). The car itself is :class:`experiments.episode.car.Car`."""
+and estimator). The car itself is :class:`racf.experiments.episode.car.Car`."""
 
 from __future__ import annotations
 
 import gymnasium as gym
 
-import sim
-from controllers import CameraModel, ObstacleDetector, Perception
-from controllers.detectors import make_detector
-from experiments.episode.car import Car, CarCalibration, Mission
-from experiments.episode.estimators import make_estimator
-from experiments.episode.spec import TrialSpec
-from sim.attacks import ATTACKS
-from sim.world.stop_signs import SIGN_GEOMETRIES
+from racf import sim
+from racf.controllers import CameraModel, ObstacleDetector, Perception
+from racf.controllers.detectors import make_detector
+from racf.experiments.episode.car import Car, CarCalibration, Mission
+from racf.experiments.episode.estimators import make_estimator
+from racf.experiments.episode.spec import TrialSpec
+from racf.sim.attacks import ATTACKS
+from racf.sim.world.stop_signs import SIGN_GEOMETRIES
 
 __all__ = ["default_env", "plain_env", "calibration", "mission", "build_car", "DRIVE_MAX_EPISODE_S"]
 
@@ -43,7 +43,7 @@ def plain_env(**env_kwargs) -> gym.Env:
 
 def default_env(spec: TrialSpec, **env_kwargs) -> gym.Env:
     """The env of a spec: the process's plain env (:func:`plain_env`) wrapped in the spec's
-    attacks (found in ``sim.attacks.ATTACKS``), all on the protocol's schedule (after a stable
+    attacks (found in ``racf.sim.attacks.ATTACKS``), all on the protocol's schedule (after a stable
     detection, inside the braking window; each draws its own duration). An attack's
     ``episode_params`` come from the spec's fields of those names (the patch's ``rho``), its
     other settings from ``spec.attack_params``."""
@@ -85,5 +85,5 @@ def build_car(env: gym.Env, spec: TrialSpec, brief: Mission, estimator=None) -> 
     every = max(1, int(round(config.control_hz / spec.control_hz))) if spec.control_hz else 1
     perceptions = {"sign": Perception(calib.camera, detector=make_detector(spec.detector)),
                    "obstacle": Perception(calib.camera, detector=ObstacleDetector(), target="obstacle")}
-    return Car(calib, brief, perceptions, estimator if estimator is not None else make_estimator(spec.estimator),
+    return Car(calib, brief, perceptions, estimator if estimator is not None else make_estimator(spec.estimator, spec.estimator_options),
                spec.braking, 1.0 / config.control_hz, every, config.localisation)

@@ -6,7 +6,7 @@ what made them, so a rerun only rescores), corrupts the test series with each pr
 (fixed seeds per series), runs every method causally and scores it (``docs/protocol.md``).
 It adds the loss ablation (ODCA's head retrained per objective), BD / RGR, the complexity
 figures and the clean pass-through, and writes ``results.json``, Markdown / CSV tables and
-PNG figures (:mod:`experiments.offline.report`).
+PNG figures (:mod:`racf.experiments.offline.report`).
 """
 
 from __future__ import annotations
@@ -20,24 +20,24 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from experiments.data.dataset import SPLITS, QCarDataset, load_dataset
-from experiments.offline.forecasters import NF_MODELS, ChronosForecaster, NFSettings, train_nf, training_frame
-from experiments.offline.methods import (FORECASTERS, METHODS, ekf_estimate, forecast_at,
+from racf.experiments.data.dataset import SPLITS, QCarDataset, load_dataset
+from racf.experiments.offline.forecasters import NF_MODELS, ChronosForecaster, NFSettings, train_nf, training_frame
+from racf.experiments.offline.methods import (FORECASTERS, METHODS, ekf_estimate, forecast_at,
                                          lidar_estimate, raw_estimate, split_arrays, with_fallback)
-from experiments.offline.metrics import bounded_degradation, resilience_gain
-from experiments.sweeps.store import code_version
-from experiments.offline.scoring import (bootstrap_rmse_draws, diagnostic_scores, error_sources, horizon_scores,
+from racf.experiments.offline.metrics import bounded_degradation, resilience_gain
+from racf.experiments.sweeps.store import code_version
+from racf.experiments.offline.scoring import (bootstrap_rmse_draws, diagnostic_scores, error_sources, horizon_scores,
                                          mean_over_draws, recovery_scores, series_sse)
 
 __all__ = ["BenchConfig", "ABLATION", "load_splits", "run_benchmark", "PRESETS"]
 
 PRESETS = ("weak", "mid", "strong")
 #: The source a benchmark result depends on: the methods (ODCA, the EKF), the corruption and the scoring.
-BENCH_CODE = ("odca", "controllers", "experiments/data", "experiments/offline")
+BENCH_CODE = ("racf.odca", "racf.controllers", "racf.experiments.data", "racf.experiments.offline")
 
 
 def _ablation_rows() -> dict[str, dict]:
-    from odca.losses import LossWeights
+    from racf.odca.losses import LossWeights
 
     full = LossWeights()
     off = {"minimal_change": 0.0, "consistency": 0.0, "kinematics": 0.0}
@@ -162,12 +162,12 @@ _PREPARED: dict = {}
 def _trained_odca(ds: QCarDataset, prior, cfg: BenchConfig, weights: dict, tag: str, kinematics: dict | None = None):
     """ODCA trained on the split's train series with these loss weights (and kinematic branch
     settings); cached by what made it."""
-    from odca import ODCA
-    from odca.losses import LossWeights
-    from odca.prior import SHIPPED_PRIOR
-    from odca.train import fit, initial_model, prepare_clean, prepare_split
+    from racf.odca import ODCA
+    from racf.odca.losses import LossWeights
+    from racf.odca.prior import SHIPPED_PRIOR
+    from racf.odca.train import fit, initial_model, prepare_clean, prepare_split
 
-    code = code_version("odca", "experiments/data")
+    code = code_version("racf.odca", "racf.experiments.data")
     key = hashlib.sha256(json.dumps({"data": _frame_hash(ds.clean("train"), ds.clean("val")), "weights": weights,
                                      "kinematics": kinematics or {},
                                      "epochs": cfg.odca_epochs, "seed": cfg.seed, "code": code,
@@ -286,8 +286,8 @@ def run_benchmark(cfg: BenchConfig, progress: bool = True, datasets: dict[str, Q
     """Runs the benchmark and returns the results object (also written by :func:`report.write_report`)."""
     from tqdm import tqdm
 
-    from odca.prior import SHIPPED_PRIOR, Chronos2Prior
-    from odca.train import pass_through
+    from racf.odca.prior import SHIPPED_PRIOR, Chronos2Prior
+    from racf.odca.train import pass_through
 
     t0 = time.perf_counter()
     datasets = datasets or load_splits(cfg)

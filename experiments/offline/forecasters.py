@@ -27,8 +27,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from experiments.offline.metrics import hold_last
-from experiments.sweeps.store import atomic_write, code_version
+from racf.experiments.offline.metrics import hold_last
+from racf.experiments.sweeps.store import atomic_write, code_version
 
 __all__ = ["NF_MODELS", "NFSettings", "context_windows", "train_nf", "NFForecaster", "ChronosForecaster",
            "training_frame"]
@@ -162,7 +162,7 @@ def _cache_key(name: str, settings: NFSettings, train: pd.DataFrame) -> str:
 
     digest = hashlib.sha256()
     digest.update(json.dumps({"model": name, "settings": asdict(settings), "nf": neuralforecast.__version__,
-                              "torch": torch.__version__, "code": code_version("experiments/offline/forecasters.py")}, sort_keys=True).encode())
+                              "torch": torch.__version__, "code": code_version("racf.experiments.offline.forecasters")}, sort_keys=True).encode())
     digest.update(pd.util.hash_pandas_object(train, index=False).to_numpy().tobytes())
     return digest.hexdigest()[:16]
 
@@ -244,7 +244,7 @@ class ChronosForecaster:
     train_s = None
 
     def __init__(self, horizon: int = 16, batch_size: int = 256) -> None:
-        from odca.prior import Chronos2Prior
+        from racf.odca.prior import Chronos2Prior
 
         self.prior = Chronos2Prior(batch_size=batch_size)
         self.horizon = horizon

@@ -5,7 +5,7 @@ per step of a long-format corrupted frame:
 
 - ``raw``: d~ held over its gaps (the last valid value of the series);
 - ``lidar``: the aligned LiDAR reference alpha * l + beta where it reports;
-- ``ekf``: :class:`controllers.ekf.DistanceEKF` (depth with noise scaled by 1/c~, aligned
+- ``ekf``: :class:`racf.controllers.ekf.DistanceEKF` (depth with noise scaled by 1/c~, aligned
   LiDAR, odometry as control input);
 - forecasters (``chronos``, ``softs``, ``nhits``, ``dlinear``, ``nlinear``): full replacement,
   the one-step-ahead forecast from the W depths before the step (:mod:`.forecasters`);
@@ -26,10 +26,10 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from controllers.ekf import DistanceEKF, EKFConfig
-from odca.align import Alignment
-from experiments.offline.metrics import hold_last
-from odca.features import sanitize
+from racf.controllers.ekf import DistanceEKF, EKFConfig
+from racf.odca.align import Alignment
+from racf.experiments.offline.metrics import hold_last
+from racf.odca.features import sanitize
 
 __all__ = ["METHODS", "FORECASTERS", "SplitArrays", "split_arrays", "raw_estimate", "lidar_estimate", "ekf_estimate",
            "forecast_at", "with_fallback"]
@@ -116,7 +116,7 @@ def forecast_at(forecaster, a: SplitArrays, origins: np.ndarray, width: int, hor
     measurement is not used: a forecast of t from the past). With no context yet the
     one-step estimate falls back to the held raw depth.
     """
-    from experiments.offline.forecasters import context_windows
+    from racf.experiments.offline.forecasters import context_windows
 
     windows, mask = context_windows(a.d, a.first, origins, width)
     paths = np.asarray(forecaster.forecast(windows, mask), float)[:, :horizon]

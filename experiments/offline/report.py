@@ -8,8 +8,8 @@ from pathlib import Path
 
 import pandas as pd
 
-from experiments.offline.methods import FORECASTERS, METHODS
-from experiments.sweeps.store import atomic_write
+from racf.experiments.offline.methods import FORECASTERS, METHODS
+from racf.experiments.sweeps.store import atomic_write
 
 __all__ = ["write_report", "main_table", "strict", "PAPER_RECOVERY"]
 
@@ -181,7 +181,7 @@ def diagnostics_frame(results: dict) -> pd.DataFrame:
 
 def write_report(results: dict, out: Path) -> dict[str, Path]:
     """Writes everything under ``out``; returns the paths by name."""
-    from experiments.viz import offline as figures
+    from racf.experiments.viz import offline as figures
 
     out = Path(out)
     (out / "tables").mkdir(parents=True, exist_ok=True)

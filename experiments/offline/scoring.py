@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from experiments.offline.methods import SplitArrays
-from experiments.offline.metrics import auprc, auroc, mae, rmse
-from odca.train import MOVING_MPS  # the protocol's standstill bound, m/s
+from racf.experiments.offline.methods import SplitArrays
+from racf.experiments.offline.metrics import auprc, auroc, mae, rmse
+from racf.odca.train import MOVING_MPS  # the protocol's standstill bound, m/s
 
 __all__ = ["MOVING_MPS", "recovery_scores", "horizon_scores", "diagnostic_scores", "bootstrap_rmse",
            "series_sse", "bootstrap_rmse_draws", "error_sources", "mean_over_draws"]
@@ -122,7 +122,7 @@ def mean_over_draws(rows: list[dict]) -> dict:
 
 def error_sources(estimate: np.ndarray, a: SplitArrays) -> dict:
     """Where the error comes from: RMSE and sum of squared errors per (segment kind, LiDAR present)."""
-    from experiments.data.corruption import SEGMENT_KINDS
+    from racf.experiments.data.corruption import SEGMENT_KINDS
 
     scored = a.scored
     sq = (estimate - a.d_clean) ** 2

@@ -5,8 +5,8 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from experiments.data.dataset import COLLECTION_FILE, load_dataset
-from experiments.sweeps.store import atomic_write
+from racf.experiments.data.dataset import COLLECTION_FILE, load_dataset
+from racf.experiments.sweeps.store import atomic_write
 
 __all__ = ["train_checkpoint", "pretrain_checkpoint"]
 
@@ -14,8 +14,8 @@ __all__ = ["train_checkpoint", "pretrain_checkpoint"]
 def train_checkpoint(dataset: Path, out: Path, split: str = "by_series", epochs: int = 800, seed: int = 0) -> dict:
     """Fits the alignment, the delta head and the gate on ``dataset``'s train split (the shipped
     prior frozen), saves the checkpoint and ``train_report.json`` to ``out``; returns the report."""
-    from odca.prior import Chronos2Prior
-    from odca.train import train_odca
+    from racf.odca.prior import Chronos2Prior
+    from racf.odca.train import train_odca
 
     model, report = train_odca(load_dataset(dataset, split=split), Chronos2Prior(), epochs=epochs, seed=seed)
     # What it was trained on: the dataset's making (sensor profile, sign geometry, drives, seed) and the split.
@@ -32,7 +32,7 @@ def pretrain_checkpoint(out: Path, steps: int, series: int, seed: int, dataset: 
     ``dataset`` holds a collected dataset, its test split's d_clean series are scored too."""
     import torch
 
-    from odca.pretrain import pretrain_prior
+    from racf.odca.pretrain import pretrain_prior
 
     torch.manual_seed(seed)
     sim_series = None

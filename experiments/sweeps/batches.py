@@ -13,11 +13,11 @@ from pathlib import Path
 
 import pandas as pd
 
-from experiments.episode import TABLE_SETTINGS, TrialSpec
-from experiments.sweeps.executors import backend_session
-from experiments.sweeps.run import run_episodes
-from experiments.sweeps.store import ResultStore, atomic_write
-from experiments.sweeps.summary import summarize
+from racf.experiments.episode import TABLE_SETTINGS, TrialSpec, parse_setting
+from racf.experiments.sweeps.executors import backend_session
+from racf.experiments.sweeps.run import run_episodes
+from racf.experiments.sweeps.store import ResultStore, atomic_write
+from racf.experiments.sweeps.summary import summarize
 
 __all__ = ["SIGNS", "SPEEDS_MPS", "TRIALS_LOGS", "batch_specs", "run_batch", "run_table", "PHYSICAL_TABLE_ROWS",
            "TABLES"]
@@ -29,12 +29,16 @@ TRIALS_LOGS = "trials"
 
 
 def batch_specs(setting: str, n: int, seed: int = 0, signs: tuple[int, ...] = SIGNS,
-                speeds: tuple[float, ...] = SPEEDS_MPS, **params) -> list[TrialSpec]:
+                speeds: tuple[float, ...] = SPEEDS_MPS, estimator_options: dict[str, dict] | None = None,
+                **params) -> list[TrialSpec]:
     """``n`` trials cycling through every (sign, speed) pair; ``params`` are further
-    ``TrialSpec`` fields (``rho``, ``t_atk``, ``delay_ms``, ...). Bad values fail here, before any trial runs."""
+    ``TrialSpec`` fields (``rho``, ``t_atk``, ``delay_ms``, ...), ``estimator_options`` the options
+    by estimator name (each trial takes its own estimator's). Bad values fail here, before any trial runs."""
     if n < 1:
         raise ValueError(f"n must be >= 1, got {n}")
-    return [TrialSpec(setting, signs[i % len(signs)], speeds[(i // len(signs)) % len(speeds)], seed + i, **params)
+    options = (estimator_options or {}).get(parse_setting(setting)[1], {})
+    return [TrialSpec(setting, signs[i % len(signs)], speeds[(i // len(signs)) % len(speeds)], seed + i,
+                      estimator_options=options, **params)
             for i in range(n)]
 
 

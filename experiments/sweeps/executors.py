@@ -22,7 +22,7 @@ from concurrent.futures import ProcessPoolExecutor, as_completed
 from contextlib import contextmanager, nullcontext
 from typing import Callable, Iterator
 
-from experiments.episode import TrialSpec
+from racf.experiments.episode import TrialSpec
 
 __all__ = ["BACKENDS", "SINGLE_THREAD_ENV", "single_thread", "spawn_pool", "run_episode", "local_executor",
            "ray_executor", "ray_session", "backend_session", "executor"]
@@ -58,18 +58,18 @@ def run_episode(spec: TrialSpec, out: str, log_steps: bool = False, logs_dir: st
         logs_dir: the store's log folder.
         rerun: also record the episode to ``<logs_dir>/<id>.rrd`` (implies ``log_steps``).
     """
-    from experiments.episode import run_trial
-    from experiments.sweeps.store import ResultStore
+    from racf.experiments.episode import run_trial
+    from racf.experiments.sweeps.store import ResultStore
 
     store = ResultStore(out, logs_dir)
     recorder = None
     if rerun:
-        from experiments.viz.rerun_log import FrameRecorder
+        from racf.experiments.viz.rerun_log import FrameRecorder
 
         recorder, log_steps = FrameRecorder(), True
     result, log = run_trial(spec, on_step=recorder, clean_pass=log_steps)
     if recorder is not None:
-        from experiments.viz.rerun_log import write_rrd
+        from racf.experiments.viz.rerun_log import write_rrd
 
         store.logs.mkdir(parents=True, exist_ok=True)
         write_rrd(store.log_path(spec.trial_id, ".rrd"), log, recorder, title=f"racf trial {spec.trial_id}")

@@ -12,8 +12,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from experiments.sweeps.store import ResultStore, atomic_write
-from experiments.sweeps.summary import median_ci, stealth_summary, summarize_settings, wilson_interval
+from racf.experiments.sweeps.store import ResultStore, atomic_write
+from racf.experiments.sweeps.summary import median_ci, stealth_summary, summarize_settings, wilson_interval
 
 __all__ = ["write_report", "report_from_store"]
 

@@ -9,12 +9,12 @@ from pathlib import Path
 
 import pandas as pd
 
-from experiments.episode import TrialSpec
-from experiments.sweeps.executors import BACKENDS, executor
-from experiments.sweeps.report import write_report
-from experiments.sweeps.spec import SweepSpec
-from experiments.sweeps.store import ResultStore
-from experiments.sweeps.summary import summarize_settings
+from racf.experiments.episode import TrialSpec
+from racf.experiments.sweeps.executors import BACKENDS, executor
+from racf.experiments.sweeps.report import write_report
+from racf.experiments.sweeps.spec import SweepSpec
+from racf.experiments.sweeps.store import ResultStore
+from racf.experiments.sweeps.summary import summarize_settings
 
 __all__ = ["run_episodes", "run_sweep"]
 

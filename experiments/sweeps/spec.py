@@ -21,9 +21,12 @@ Example (``experiments/sweeps/specs/smoke.toml``)::
     [params.stealth_ramp]            # optional: an attack's settings, each a list of values
     rate_mps = [0.3, 1.0, 3.0]       # grid: every combination; random: one drawn per episode
 
-Attacks: any in ``sim.attacks.ATTACKS`` (``patch_occlusion``, ``lidar_spoof``, ...) and
-``+``-combinations of them; estimators: any in ``experiments.episode.estimators.ESTIMATORS``
-(``raw``, ``odca``, ``ekf``, ``chronos``). An episode's seed depends on its cell and repeat but not on the
+    [estimators.odca]                # optional: an estimator's options (one value each)
+    checkpoint = "outputs/odca-head" # a trained head instead of the shipped one
+
+Attacks: any in ``racf.sim.attacks.ATTACKS`` (``patch_occlusion``, ``lidar_spoof``, ...) and
+``+``-combinations of them; estimators: any in ``racf.experiments.episode.estimators.ESTIMATORS``
+(``raw``, ``odca``, ``ekf``, ``chronos``), plug-ins included. An episode's seed depends on its cell and repeat but not on the
 estimator or the attack's ``[params]``, so estimators (and the settings of an attack) meet
 identical episodes (paired comparisons). Everything is
 checked, with an error naming the field and what is allowed, before any episode runs.
@@ -44,13 +47,13 @@ from pathlib import Path
 
 import numpy as np
 
-from controllers.detectors import DETECTORS
-from experiments.episode import TrialSpec
-from experiments.episode.estimators import ESTIMATORS
-from experiments.episode.spec import setting_name
-from sim.attacks import ATTACKS
-from sim.env.config import SENSOR_PROFILES
-from sim.world.stop_signs import SIGN_GEOMETRIES
+from racf.controllers.detectors import DETECTORS
+from racf.experiments.episode import TrialSpec
+from racf.experiments.episode.estimators import ESTIMATORS, check_options
+from racf.experiments.episode.spec import setting_name
+from racf.sim.attacks import ATTACKS
+from racf.sim.env.config import SENSOR_PROFILES
+from racf.sim.world.stop_signs import SIGN_GEOMETRIES
 
 __all__ = ["SweepSpec", "load_spec", "parse_spec", "spec_text", "spec_path", "SPACE_KEYS", "SPECS_DIR"]
 
@@ -59,7 +62,7 @@ SPACE_KEYS = {"attack": None, "estimator": None, "rho": (0.0, 1.0), "t_atk": (0.
               "sign": (0, 3)}
 _DEFAULTS = {"attack": ["patch_occlusion"], "estimator": ["raw"], "rho": [0.95], "t_atk": [1.75], "speed": [1.5],
              "sign": [0, 1, 2, 3]}
-_TOP_KEYS = {"name", "mode", "repeats", "n", "seed", "space", "params", "log_steps", "sensor_profile",
+_TOP_KEYS = {"name", "mode", "repeats", "n", "seed", "space", "params", "estimators", "log_steps", "sensor_profile",
              "sign_geometry", "detector"}
 #: The example specs shipped with the project.
 SPECS_DIR = Path(__file__).resolve().parent / "specs"
@@ -80,6 +83,7 @@ class SweepSpec:
     sensor_profile: str = "qcar2"
     sign_geometry: str = "plate"
     detector: str = "classical"
+    estimators: dict = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         if self.detector not in DETECTORS:
@@ -96,7 +100,10 @@ class SweepSpec:
             raise ValueError(f"n (the number of random draws) must be an int >= 1 in random mode, got {self.n!r}")
         if not isinstance(self.seed, int):
             raise ValueError(f"seed must be an int, got {self.seed!r}")
-        space = {**_DEFAULTS, **self.space}
+        # A random sweep draws from [low, high]: an axis it does not name stays at the default value.
+        defaults = {k: (v * 2 if self.mode == "random" and k in ("rho", "t_atk", "speed") else v)
+                    for k, v in _DEFAULTS.items()}
+        space = {**defaults, **self.space}
         unknown = sorted(set(self.space) - set(SPACE_KEYS))
         if unknown:
             raise ValueError(f"unknown parameter(s) {unknown} in [space]; allowed: {sorted(SPACE_KEYS)}")
@@ -121,6 +128,20 @@ class SweepSpec:
                 raise ValueError(f"space.{key} must be [low, high] in random mode, got {vals!r}")
         object.__setattr__(self, "space", space)
         self._check_params()
+        self._check_estimators()
+
+    def _check_estimators(self) -> None:
+        if not isinstance(self.estimators, dict):
+            raise ValueError("estimators must be a table of [estimators.<name>] tables")
+        for name, options in self.estimators.items():
+            if name not in self.space["estimator"]:
+                raise ValueError(f"estimators.{name}: {name!r} is not in space.estimator {self.space['estimator']}")
+            if not isinstance(options, dict):
+                raise ValueError(f"estimators.{name} must be a table of option = value")
+            try:
+                check_options(name, options)
+            except ValueError as err:
+                raise ValueError(f"estimators.{name}: {err}") from None
 
     def _check_params(self) -> None:
         if not isinstance(self.params, dict):
@@ -154,6 +175,7 @@ class SweepSpec:
         raw = json.dumps({k: getattr(self, k) for k in ("name", "mode", "repeats", "n", "seed", "space",
                                                         "sensor_profile", "sign_geometry")}
                          | ({"params": self.params} if self.params else {})
+                         | ({"estimators": self.estimators} if self.estimators else {})
                          | ({"detector": self.detector} if self.detector != "classical" else {}), sort_keys=True)
         return hashlib.sha256(raw.encode()).hexdigest()[:12]
 
@@ -204,7 +226,8 @@ def _trial(cell: tuple, estimator: str, seed: int, sweep: SweepSpec, params: dic
     return TrialSpec(setting_name(_attacks(attack), estimator), int(sign), float(speed), seed,
                      rho=(float(rho), float(rho)), t_atk=(float(t_atk), float(t_atk)),
                      sensor_profile=sweep.sensor_profile, sign_geometry=sweep.sign_geometry,
-                     attack_params=params or {}, detector=sweep.detector)
+                     attack_params=params or {}, detector=sweep.detector,
+                     estimator_options=sweep.estimators.get(estimator, {}))
 
 
 def spec_path(path: str | Path) -> Path:
@@ -234,6 +257,9 @@ def parse_spec(text: str, source: str = "spec", default_name: str = "sweep") -> 
         raise ValueError(f"{source}: unknown field(s) {unknown}; allowed: {sorted(_TOP_KEYS)}")
     if "space" in raw and not isinstance(raw["space"], dict):
         raise ValueError(f"{source}: space must be a table ([space])")
+    if not raw.get("space"):
+        raise ValueError(f"{source}: the spec has no [space]: name what the sweep varies, at least one of "
+                         f"{sorted(SPACE_KEYS)} (e.g. attack = [\"patch_occlusion\"])")
     try:
         spec = SweepSpec(name=str(raw.get("name", default_name)), mode=raw.get("mode", "grid"),
                          repeats=raw.get("repeats", 1), n=raw.get("n", 0), seed=raw.get("seed", 0),
@@ -241,7 +267,7 @@ def parse_spec(text: str, source: str = "spec", default_name: str = "sweep") -> 
                          log_steps=bool(raw.get("log_steps", False)),
                          sensor_profile=raw.get("sensor_profile", "qcar2"),
                          sign_geometry=raw.get("sign_geometry", "plate"),
-                         detector=raw.get("detector", "classical"))
+                         detector=raw.get("detector", "classical"), estimators=raw.get("estimators", {}))
         episodes = spec.episodes()
     except ValueError as err:
         raise ValueError(f"{source}: {err}") from None

@@ -18,10 +18,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from experiments.episode import STRONG_RHO, STRONG_T_ATK_S
-from experiments.sweeps.batches import batch_specs, run_batch
-from experiments.sweeps.executors import backend_session
-from experiments.sweeps.summary import summarize
+from racf.experiments.episode import STRONG_RHO, STRONG_T_ATK_S
+from racf.experiments.sweeps.batches import batch_specs, run_batch
+from racf.experiments.sweeps.executors import backend_session
+from racf.experiments.sweeps.summary import summarize
 
 __all__ = ["StudyRow", "STUDIES", "STRONG_MIN_N", "run_study"]
 

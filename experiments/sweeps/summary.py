@@ -17,8 +17,8 @@ import numpy as np
 import pandas as pd
 from scipy.stats import binomtest
 
-from experiments.episode.scoring import FAILURES
-from experiments.episode.spec import parse_setting
+from racf.experiments.episode.scoring import FAILURES
+from racf.experiments.episode.spec import parse_setting
 
 __all__ = ["wilson_interval", "summarize", "summarize_settings", "stealth_summary", "median_ci"]
 

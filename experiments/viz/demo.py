@@ -32,8 +32,8 @@ def run_demo(out_dir: Path, sign: int = 1, speed: float = 1.5, seed: int = 0,
     """Runs the settings at one sign and writes ``<setting>.rrd``, ``<setting>.parquet`` and ``demo_traces.png``."""
     from tqdm import tqdm
 
-    from experiments.episode import TrialSpec, run_trial
-    from experiments.viz.rerun_log import FrameRecorder, write_rrd
+    from racf.experiments.episode import TrialSpec, run_trial
+    from racf.experiments.viz.rerun_log import FrameRecorder, write_rrd
 
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)

@@ -11,10 +11,10 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from sim.world import map_facts  # noqa: E402
-from sim.world.mat_texture import render_mat  # noqa: E402
-from sim.world.road_graph import qcar2_road_graph  # noqa: E402
-from sim.world.stop_signs import stop_signs  # noqa: E402
+from racf.sim.world import map_facts  # noqa: E402
+from racf.sim.world.mat_texture import render_mat  # noqa: E402
+from racf.sim.world.road_graph import qcar2_road_graph  # noqa: E402
+from racf.sim.world.stop_signs import stop_signs  # noqa: E402
 
 __all__ = ["top_view", "camera_views"]
 

@@ -18,7 +18,7 @@ def patched_sign_figure(examples: list[tuple[np.ndarray, np.ndarray, np.ndarray]
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from controllers.detectors import make_detector
+    from racf.controllers.detectors import make_detector
 
     if not examples:
         raise ValueError("no example views to draw (none came near enough)")

@@ -1,6 +1,6 @@
 """Episodes as rerun recordings (``.rrd``), replayed from the per-step log, off the hot path.
 
-:class:`FrameRecorder` is a step hook for :func:`experiments.episode.run_trial`: it keeps
+:class:`FrameRecorder` is a step hook for :func:`racf.experiments.episode.run_trial`: it keeps
 what the per-step log does not hold (camera and depth frames, the full LiDAR scan, the
 camera pose, the patch's box) every ``every`` steps and nothing else. :func:`write_rrd`
 then replays the log and those frames into a recording on the ``sim_time`` timeline:
@@ -102,7 +102,7 @@ def _blueprint():
 
 
 def _map_px(xy: np.ndarray) -> np.ndarray:
-    from sim.world import map_facts
+    from racf.sim.world import map_facts
 
     x0, _, _, y1 = map_facts.WALL_BOUNDS_M
     xy = np.atleast_2d(np.asarray(xy, float))
@@ -114,9 +114,9 @@ def write_rrd(path: str | Path, log: pd.DataFrame, recorder: FrameRecorder | Non
     """Writes the episode (``log`` from ``run_trial``, frames from ``recorder``) to ``path``; returns it."""
     import rerun as rr
 
-    from controllers.lidar_target import LidarTargetConfig
-    from sim.world.mat_texture import render_mat
-    from sim.world.stop_signs import stop_signs
+    from racf.controllers.lidar_target import LidarTargetConfig
+    from racf.sim.world.mat_texture import render_mat
+    from racf.sim.world.stop_signs import stop_signs
 
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)

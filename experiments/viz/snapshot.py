@@ -6,8 +6,8 @@ from pathlib import Path
 
 import gymnasium as gym
 
-import sim  # noqa: F401  (registers the env)
-from experiments.viz.figures import camera_views, top_view
+from racf import sim  # noqa: F401  (registers the env)
+from racf.experiments.viz.figures import camera_views, top_view
 
 __all__ = ["snapshot"]
 

@@ -10,27 +10,27 @@
 - :class:`FrustumSpoof` (``frustum_spoof``, white box): the same ramp on depth and LiDAR together.
 Each marks ``info["attack"]`` (active attacks) and ``info["attack_active"]``.
 
-``ATTACKS`` finds them by name (each wrapper's ``name``): a new attack is one module and one
-line there. The order is the order attacks take in a setting's name.
+``ATTACKS`` finds them by name (each wrapper's ``name``). It is :data:`racf.plugins.ATTACKS`,
+filled from the ``racf.attacks`` entry points: racf's own are listed in ``pyproject.toml``, and
+a user's register the same way (or come from a ``--plugin`` file). Attacks take the registry's
+order (racf's own by name, then plug-ins by name) in a setting's name.
 """
 
-from sim.attacks.base import AttackWrapper
-from sim.attacks.confidence_degradation import ConfidenceDegradation
-from sim.attacks.depth_bias import DepthBias
-from sim.attacks.depth_blackout import DepthBlackout
-from sim.attacks.frustum_spoof import FrustumSpoof
-from sim.attacks.lidar_dropout import LidarDropout
-from sim.attacks.lidar_spoof import LidarSpoof
-from sim.attacks.patch_occlusion import PatchOcclusion, paste_occluder, patch_rows
-from sim.attacks.physical_patch import PhysicalPatch
-from sim.attacks.schedule import AttackSchedule
-from sim.attacks.stale import StaleData
-from sim.attacks.stealth_ramp import StealthRamp
-from sim.attacks.timed_dropout import TimedDropout
+from racf.sim.attacks.base import AttackWrapper
+from racf.sim.attacks.confidence_degradation import ConfidenceDegradation
+from racf.sim.attacks.depth_bias import DepthBias
+from racf.sim.attacks.depth_blackout import DepthBlackout
+from racf.sim.attacks.frustum_spoof import FrustumSpoof
+from racf.sim.attacks.lidar_dropout import LidarDropout
+from racf.sim.attacks.lidar_spoof import LidarSpoof
+from racf.sim.attacks.patch_occlusion import PatchOcclusion, paste_occluder, patch_rows
+from racf.sim.attacks.physical_patch import PhysicalPatch
+from racf.sim.attacks.schedule import AttackSchedule
+from racf.sim.attacks.stale import StaleData
+from racf.sim.attacks.stealth_ramp import StealthRamp
+from racf.sim.attacks.timed_dropout import TimedDropout
 
-#: Every attack wrapper by name.
-ATTACKS: dict[str, type[AttackWrapper]] = {cls.name: cls for cls in (
-    PatchOcclusion, PhysicalPatch, LidarSpoof, LidarDropout, DepthBlackout, DepthBias, ConfidenceDegradation, StaleData, TimedDropout, StealthRamp, FrustumSpoof)}
+from racf.plugins import ATTACKS  # noqa: E402  (every attack wrapper by name, plug-ins included)
 
 __all__ = ["ATTACKS", "AttackSchedule", "AttackWrapper", "ConfidenceDegradation", "DepthBias", "DepthBlackout",
            "FrustumSpoof", "LidarDropout", "LidarSpoof", "PatchOcclusion", "PhysicalPatch", "StaleData", "StealthRamp", "TimedDropout",

@@ -8,7 +8,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from sim.attacks.schedule import AttackSchedule
+from racf.sim.attacks.schedule import AttackSchedule
 
 __all__ = ["AttackWrapper"]
 
@@ -16,7 +16,7 @@ __all__ = ["AttackWrapper"]
 class AttackWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
     """Applies ``_attack`` to the observation on the steps its schedule makes active.
 
-    Subclasses set ``name`` (their key in ``sim.attacks.ATTACKS``) and implement ``_attack(obs, info) -> obs`` (and, for
+    Subclasses set ``name`` (their key in ``racf.sim.attacks.ATTACKS``) and implement ``_attack(obs, info) -> obs`` (and, for
     per-episode draws, ``_on_reset()``). Wrappers compose: ``info["attack"]`` is the tuple
     of the attacks active this step, ``info["attack_active"]`` whether there is any.
     Randomness comes from a generator drawn from the env's seeded one at each reset.
@@ -29,6 +29,9 @@ class AttackWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
     #: ``"black box"`` (the observations and where the sign is) or ``"white box"`` (also the
     #: defence: the runner hands it the car's estimator through ``attach_defence``).
     threat_model = "black box"
+    #: The targets it can act on (``TrialSpec.target``): a stop sign approach, an obstacle crate's,
+    #: a drive (which meets stop signs). An episode that asks for another is refused before it runs.
+    targets: tuple[str, ...] = ("sign", "obstacle", "drive")
     defence: Any = None
 
     @classmethod

@@ -6,9 +6,9 @@ from typing import Any
 
 import gymnasium as gym
 
-from sim.attacks._common import check_region
-from sim.attacks.base import AttackWrapper
-from sim.attacks.schedule import AttackSchedule
+from racf.sim.attacks._common import check_region
+from racf.sim.attacks.base import AttackWrapper
+from racf.sim.attacks.schedule import AttackSchedule
 
 __all__ = ["DepthBlackout"]
 

@@ -7,7 +7,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from sim.attacks.stealth_ramp import StealthRamp
+from racf.sim.attacks.stealth_ramp import StealthRamp
 
 __all__ = ["FrustumSpoof"]
 

@@ -8,8 +8,8 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from sim.attacks.base import AttackWrapper
-from sim.attacks.schedule import AttackSchedule
+from racf.sim.attacks.base import AttackWrapper
+from racf.sim.attacks.schedule import AttackSchedule
 
 __all__ = ["LidarDropout"]
 

@@ -6,8 +6,8 @@ from typing import Any
 
 import gymnasium as gym
 
-from sim.attacks.base import AttackWrapper
-from sim.attacks.schedule import AttackSchedule, as_range
+from racf.sim.attacks.base import AttackWrapper
+from racf.sim.attacks.schedule import AttackSchedule, as_range
 
 __all__ = ["LidarSpoof", "SPOOF_RANGE_M"]
 

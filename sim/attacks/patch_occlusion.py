@@ -15,9 +15,9 @@ import cv2
 import gymnasium as gym
 import numpy as np
 
-from sim.attacks.base import AttackWrapper
-from sim.attacks.schedule import AttackSchedule, as_range
-from sim.attacks.texture import natural_texture
+from racf.sim.attacks.base import AttackWrapper
+from racf.sim.attacks.schedule import AttackSchedule, as_range
+from racf.sim.attacks.texture import natural_texture
 
 __all__ = ["PatchOcclusion", "patch_rows", "paste_occluder"]
 
@@ -58,7 +58,7 @@ class PatchOcclusion(AttackWrapper):
     """Covers a share ``rho`` of the stop sign's image region with a naturalistic occluder.
 
     The paper's patch attack as an image-space stand-in: after a stable detection and when the sign enters
-    the braking window (see :class:`~sim.attacks.schedule.AttackSchedule`), the top rows of
+    the braking window (see :class:`~racf.sim.attacks.schedule.AttackSchedule`), the top rows of
     the sign's face holding a share ``rho`` of its pixels show a textured patch for
     ``T_atk ~ U(0.5, 3.0)`` s, then a cooldown. The patch lies on the sign's face, so the
     depth of its pixels is the face's depth: the depth image is left as it is.
@@ -79,6 +79,8 @@ class PatchOcclusion(AttackWrapper):
     """
 
     name = "patch_occlusion"
+    #: It is drawn on a stop sign's face: a crate has none.
+    targets = ("sign", "drive")
     episode_params = ("rho",)
 
     def __init__(self, env: gym.Env, rho: Any = (0.9, 1.0), **schedule: Any) -> None:

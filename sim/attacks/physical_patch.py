@@ -13,10 +13,10 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from sim.attacks.base import AttackWrapper
-from sim.attacks.schedule import AttackSchedule
-from sim.world.sign_patch import PatchPlacement, load_patch_texture
-from sim.world.stop_signs import StopSign
+from racf.sim.attacks.base import AttackWrapper
+from racf.sim.attacks.schedule import AttackSchedule
+from racf.sim.world.sign_patch import PatchPlacement, load_patch_texture
+from racf.sim.world.stop_signs import StopSign
 
 __all__ = ["PhysicalPatch"]
 
@@ -38,13 +38,15 @@ class PhysicalPatch(AttackWrapper):
             ``racf optimise-patch``), ``natural`` (a naturalistic sticker drawn per episode), or a PNG path.
         size: the sticker's area over the plate's, in (0, 0.6].
         position: its centre (right, up) on the plate, across-flats units, or a name of
-            ``sim.world.sign_patch.POSITIONS`` (as far that way as it stays on the plate).
+            ``racf.sim.world.sign_patch.POSITIONS`` (as far that way as it stays on the plate).
         from_start: on the sign from the episode's start.
         stays: once up, up until the episode ends.
         **schedule: ``AttackSchedule`` fields.
     """
 
     name = "physical_patch"
+    #: It is drawn on a stop sign's face: a crate has none.
+    targets = ("sign", "drive")
 
     def __init__(self, env: gym.Env, texture: str = "learned", size: float = 0.5, position: Any = "centre",
                  from_start: bool = False, stays: bool = True, **schedule: Any) -> None:

@@ -8,10 +8,10 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from sim.attacks._common import check_region
-from sim.attacks.base import AttackWrapper
-from sim.attacks.schedule import AttackSchedule
-from sim.sensors import TIMESTAMP_FIELDS
+from racf.sim.attacks._common import check_region
+from racf.sim.attacks.base import AttackWrapper
+from racf.sim.attacks.schedule import AttackSchedule
+from racf.sim.sensors import TIMESTAMP_FIELDS
 
 __all__ = ["StaleData", "STALE_SENSORS"]
 

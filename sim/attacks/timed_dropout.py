@@ -7,9 +7,9 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from sim.attacks.base import AttackWrapper
-from sim.attacks.schedule import AttackSchedule
-from sim.sensors import TIMESTAMP_FIELDS
+from racf.sim.attacks.base import AttackWrapper
+from racf.sim.attacks.schedule import AttackSchedule
+from racf.sim.sensors import TIMESTAMP_FIELDS
 
 __all__ = ["TimedDropout", "TIMED_EFFECTS"]
 

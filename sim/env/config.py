@@ -6,13 +6,13 @@ import dataclasses
 from dataclasses import dataclass, field
 from typing import Any
 
-from sim.sensors.a2m12 import A2M12Config
-from sim.sensors.camera import CameraConfig
-from sim.sensors.lidar import LidarConfig
-from sim.sensors.localiser import LOCALISATIONS, LocaliserConfig
-from sim.sensors.state import OdometryConfig
-from sim.vehicle.qcar2 import VehicleConfig
-from sim.world.stop_signs import SignGeometry
+from racf.sim.sensors.a2m12 import A2M12Config
+from racf.sim.sensors.camera import CameraConfig
+from racf.sim.sensors.lidar import LidarConfig
+from racf.sim.sensors.localiser import LOCALISATIONS, LocaliserConfig
+from racf.sim.sensors.state import OdometryConfig
+from racf.sim.vehicle.qcar2 import VehicleConfig
+from racf.sim.world.stop_signs import SignGeometry
 
 __all__ = ["EnvConfig", "RESET_OPTIONS", "LOCALISATIONS", "SENSOR_PROFILES"]
 

@@ -13,8 +13,8 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from sim.sensors.camera import CameraIntrinsics
-from sim.world.stop_signs import SIGN_FACE_ACROSS_FLATS_M, StopSign
+from racf.sim.sensors.camera import CameraIntrinsics
+from racf.sim.world.stop_signs import SIGN_FACE_ACROSS_FLATS_M, StopSign
 
 __all__ = ["SignView", "sign_view", "face_area_px", "obstacle_view", "with_centre_from"]
 

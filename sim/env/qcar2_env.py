@@ -28,19 +28,19 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from sim._gl import ensure_gl_backend, gl_context_class
-from sim.env.config import RESET_OPTIONS, EnvConfig
-from sim.env.ground_truth import SignView, obstacle_view, sign_view, with_centre_from
-from sim.sensors import (TIMESTAMP_FIELDS, DepthCamera, Lidar2D, LocalisationFix, RGBCamera, RGBDCameraRig, Sensor,
+from racf.sim._gl import ensure_gl_backend, gl_context_class
+from racf.sim.env.config import RESET_OPTIONS, EnvConfig
+from racf.sim.env.ground_truth import SignView, obstacle_view, sign_view, with_centre_from
+from racf.sim.sensors import (TIMESTAMP_FIELDS, DepthCamera, Lidar2D, LocalisationFix, RGBCamera, RGBDCameraRig, Sensor,
                          VehicleStateSensor)
-from sim.sensors.a2m12 import A2M12Lidar
-from sim.vehicle import QCar2
-from sim.world.drives import RouteTarget, start_pose, targets_on_path
-from sim.world.road_graph import Path, qcar2_road_graph
-from sim.world.scene import HIDDEN_GEOM_GROUP, PROP_GEOM_GROUP, load_model, patch_geom, patch_texture
-from sim.world.sign_patch import PatchPlacement
-from sim.world.obstacles import Obstacle, obstacles
-from sim.world.stop_signs import StopSign, stop_signs
+from racf.sim.sensors.a2m12 import A2M12Lidar
+from racf.sim.vehicle import QCar2
+from racf.sim.world.drives import RouteTarget, start_pose, targets_on_path
+from racf.sim.world.road_graph import Path, qcar2_road_graph
+from racf.sim.world.scene import HIDDEN_GEOM_GROUP, PROP_GEOM_GROUP, load_model, patch_geom, patch_texture
+from racf.sim.world.sign_patch import PatchPlacement
+from racf.sim.world.obstacles import Obstacle, obstacles
+from racf.sim.world.stop_signs import StopSign, stop_signs
 
 ensure_gl_backend()
 import mujoco  # noqa: E402
@@ -67,13 +67,13 @@ class QCar2Env(gym.Env):
     return (both the last frame, taken at ``camera_hz``: 30 Hz on the ``qcar2`` profile);
     ``lidar`` (360,) float32 m, inf = no return, bin i at i deg counter-clockwise from the
     car's forward (the last complete revolution: on ``qcar2`` swept over 0.1 s and delivered
-    through Quanser's driver, see ``sim.sensors.a2m12``); ``lidar_beam_times`` (360,)
+    through Quanser's driver, see ``racf.sim.sensors.a2m12``); ``lidar_beam_times`` (360,)
     float64, when each bin was measured, s; ``gps`` (3,) float32, the localiser's
     fix (x, y m, yaw rad, map frame): with ``localisation="qcar2"`` (the default) one per
-    LiDAR scan, with Quanser's drift and noise (``sim.sensors.localiser``), with
+    LiDAR scan, with Quanser's drift and noise (``racf.sim.sensors.localiser``), with
     ``localisation="true"`` the true pose at every step; ``state`` (4,) float32, the
     encoder's speed, the steering servo's angle and the IMU's yaw rate and acceleration (see
-    ``sim.sensors.STATE_FIELDS``); ``timestamps`` (5,) float64, the time (s) each held
+    ``racf.sim.sensors.STATE_FIELDS``); ``timestamps`` (5,) float64, the time (s) each held
     reading was taken, in the order of ``TIMESTAMP_FIELDS``. Action (``Box``): [speed
     command m/s, steering rad].
 
@@ -82,7 +82,7 @@ class QCar2Env(gym.Env):
     - an approach: ``sign`` (0..3) or ``obstacle`` (0..1, a crate on a lane with a virtual
       stop line before it), ``cruise_speed`` (m/s; the car starts moving at it) and
       ``run_up_m`` (distance from the front bumper to the stop line at the start);
-    - a drive (``sim.world.drives``): ``route`` (road-graph nodes), ``start_s_m`` (start
+    - a drive (``racf.sim.world.drives``): ``route`` (road-graph nodes), ``start_s_m`` (start
       along the route's path), ``lateral_offset_m``, ``heading_error_rad``, ``crate`` (a
       crate index to place on the route, which ends the drive, or None) and
       ``cruise_speed``. Its targets are the stop signs whose stop lines the route crosses

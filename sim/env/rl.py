@@ -67,7 +67,7 @@ class FiniteLidar(gym.ObservationWrapper):
 def rl_env(env_id: str | None = None, max_depth_m: float = 5.0, **kwargs) -> gym.Env:
     """``gym.make(env_id, **kwargs)`` with a [-1, 1] action box (``RescaleAction``), uint8 depth and
     finite LiDAR ranges (``FiniteLidar``)."""
-    from sim.registration import ENV_ID
+    from racf.sim.registration import ENV_ID
 
     env = FiniteLidar(DepthAsImage(gym.make(env_id or ENV_ID, **kwargs), max_depth_m))
     one = np.ones(env.action_space.shape, np.float32)

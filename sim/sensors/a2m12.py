@@ -20,7 +20,7 @@ One sample, as modelled:
 - **Range.** Gaussian noise of ``noise_rel`` x range (the datasheet's 1 %), quantised to
   ``quantum_m`` (1 mm), no return below ``range_min_m`` (0.2 m) or above ``range_max_m``.
 
-A finished revolution goes through :func:`sim.sensors.lidar_driver.deliver` (Quanser's read
+A finished revolution goes through :func:`racf.sim.sensors.lidar_driver.deliver` (Quanser's read
 of 384 samples and ``filter_rplidar_data``'s 1-degree bins) and is turned into the car's
 frame: bin i at i degrees counter-clockwise from the car's +x, ``inf`` for no return, like
 the ideal LiDAR's. :attr:`A2M12Lidar.beam_times` says when the rotor was at each bin.
@@ -36,9 +36,9 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
-from sim._gl import ensure_gl_backend
-from sim.sensors.base import Sensor, check_range
-from sim.sensors.lidar_driver import filter_rplidar_data, quanser_read
+from racf.sim._gl import ensure_gl_backend
+from racf.sim.sensors.base import Sensor, check_range
+from racf.sim.sensors.lidar_driver import filter_rplidar_data, quanser_read
 
 ensure_gl_backend()
 import mujoco  # noqa: E402
@@ -52,7 +52,7 @@ _VISIBLE_GROUPS = np.array([1, 1, 1, 0, 0, 0], dtype=np.uint8)
 
 
 def material_of(geom_name: str) -> str:
-    """The material class of a geom of the map, by its name (see ``sim.world.scene``)."""
+    """The material class of a geom of the map, by its name (see ``racf.sim.world.scene``)."""
     if geom_name.endswith("_pole"):
         return "pole"
     if geom_name.startswith(("stop_sign_", "yield_")):

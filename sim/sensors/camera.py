@@ -18,8 +18,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.special import ndtri
 
-from sim._gl import ensure_gl_backend, gl_context_class
-from sim.sensors.base import Sensor
+from racf.sim._gl import ensure_gl_backend, gl_context_class
+from racf.sim.sensors.base import Sensor
 
 ensure_gl_backend()
 import mujoco  # noqa: E402

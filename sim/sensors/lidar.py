@@ -13,8 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from sim._gl import ensure_gl_backend
-from sim.sensors.base import Sensor
+from racf.sim._gl import ensure_gl_backend
+from racf.sim.sensors.base import Sensor
 
 ensure_gl_backend()
 import mujoco  # noqa: E402

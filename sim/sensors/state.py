@@ -13,8 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from sim.sensors.base import Sensor, SensorRate, check_range
-from sim.vehicle.qcar2 import QCar2
+from racf.sim.sensors.base import Sensor, SensorRate, check_range
+from racf.sim.vehicle.qcar2 import QCar2
 
 __all__ = ["OdometryConfig", "VehicleStateSensor", "STATE_FIELDS"]
 

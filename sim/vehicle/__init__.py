@@ -1,5 +1,5 @@
 """The QCar 2 as a MuJoCo physics model: actuation and state read-out."""
 
-from sim.vehicle.qcar2 import QCar2, VehicleConfig, VehicleState
+from racf.sim.vehicle.qcar2 import QCar2, VehicleConfig, VehicleState
 
 __all__ = ["QCar2", "VehicleConfig", "VehicleState"]

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from sim._gl import ensure_gl_backend
+from racf.sim._gl import ensure_gl_backend
 
 ensure_gl_backend()
 import mujoco  # noqa: E402
@@ -72,7 +72,7 @@ class QCar2:
     """The car inside a compiled map model.
 
     Args:
-        model: the compiled model (``sim.world.scene.load_model``).
+        model: the compiled model (``racf.sim.world.scene.load_model``).
         config: command limits.
     """
 

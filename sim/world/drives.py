@@ -15,9 +15,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from sim.world.obstacles import Obstacle, obstacles
-from sim.world.road_graph import Path, qcar2_road_graph
-from sim.world.stop_signs import PLATE_IN_SCAN, SignGeometry, StopSign, stop_signs
+from racf.sim.world.obstacles import Obstacle, obstacles
+from racf.sim.world.road_graph import Path, qcar2_road_graph
+from racf.sim.world.stop_signs import PLATE_IN_SCAN, SignGeometry, StopSign, stop_signs
 
 __all__ = ["RouteTarget", "DriveSpec", "targets_on_path", "draw_drive", "start_pose", "estimate_duration_s", "NOMINAL_SPEEDS_MPS",
            "MIN_TARGET_AHEAD_M"]

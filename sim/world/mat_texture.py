@@ -14,9 +14,9 @@ import cv2
 import numpy as np
 from scipy.spatial import cKDTree
 
-from sim.world import map_facts
-from sim.world.road_graph import RoadGraph, qcar2_road_graph
-from sim.world.stop_signs import stop_signs
+from racf.sim.world import map_facts
+from racf.sim.world.road_graph import RoadGraph, qcar2_road_graph
+from racf.sim.world.stop_signs import stop_signs
 
 __all__ = ["MatGeometry", "render_mat", "mat_png_bytes", "mat_geometry"]
 

@@ -13,7 +13,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from sim.world.road_graph import Path, qcar2_road_graph
+from racf.sim.world.road_graph import Path, qcar2_road_graph
 
 __all__ = ["Obstacle", "obstacles", "OBSTACLE_SIZE_M", "STANDOFF_M"]
 

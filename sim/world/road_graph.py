@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 import networkx as nx
 import numpy as np
 
-from sim.world import map_facts
+from racf.sim.world import map_facts
 
 __all__ = ["Path", "RoadGraph", "scs_path", "qcar2_road_graph"]
 

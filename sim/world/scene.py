@@ -14,16 +14,17 @@ import os
 from functools import lru_cache
 from pathlib import Path
 
-from sim._gl import ensure_gl_backend
+from racf.assets import asset_path
+from racf.sim._gl import ensure_gl_backend
 
 ensure_gl_backend()
 import mujoco  # noqa: E402  (the GL backend must be chosen before mujoco is imported)
 
-from sim.world import map_facts  # noqa: E402
-from sim.world.mat_texture import mat_png_bytes  # noqa: E402
-from sim.world.obstacles import OBSTACLE_SIZE_M, obstacles  # noqa: E402
-from sim.world.sign_patch import PATCH_FRONT_X_M, TEXTURE_PX  # noqa: E402
-from sim.world.stop_signs import (  # noqa: E402
+from racf.sim.world import map_facts  # noqa: E402
+from racf.sim.world.mat_texture import mat_png_bytes  # noqa: E402
+from racf.sim.world.obstacles import OBSTACLE_SIZE_M, obstacles  # noqa: E402
+from racf.sim.world.sign_patch import PATCH_FRONT_X_M, TEXTURE_PX  # noqa: E402
+from racf.sim.world.stop_signs import (  # noqa: E402
     PLATE_IN_SCAN,
     SIGN_CENTRE_HEIGHT_M,
     SIGN_FACE_ACROSS_FLATS_M,
@@ -34,7 +35,7 @@ from sim.world.stop_signs import (  # noqa: E402
 __all__ = ["ASSETS_DIR", "build_scene_xml", "load_model", "PROP_GEOM_GROUP", "CAR_GEOM_GROUP", "HIDDEN_GEOM_GROUP",
            "patch_geom", "patch_texture"]
 
-ASSETS_DIR = Path(os.environ.get("RACF_ASSETS", Path(__file__).resolve().parents[2] / "assets" / "qcar2_map"))
+ASSETS_DIR = Path(os.environ["RACF_ASSETS"]) if "RACF_ASSETS" in os.environ else asset_path("qcar2_map")
 #: Geom groups: 0 map and props (seen by camera and LiDAR), 3 the car (skipped by the LiDAR).
 PROP_GEOM_GROUP = 0
 CAR_GEOM_GROUP = 3
@@ -42,7 +43,7 @@ CAR_GEOM_GROUP = 3
 MAX_IMAGE_SIZE = (1280, 960)
 
 _SIGN_THICKNESS_M = 0.003
-#: Half the thickness of the sticker each stop sign carries (``sim.world.sign_patch``).
+#: Half the thickness of the sticker each stop sign carries (``racf.sim.world.sign_patch``).
 _PATCH_HALF_THICKNESS_M = 0.0001
 #: Geom group of what exists but no sensor sees: the stickers until the env shows one (the
 #: camera renders groups 0-2, the LiDARs hit groups 0-2).

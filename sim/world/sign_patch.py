@@ -1,7 +1,7 @@
 """A sticker printed on a stop sign's plate: where it sits, how large it is, and its picture.
 
 The scene gives every stop sign a hidden square sticker just in front of its face
-(``sim.world.scene``); the env shows it with a texture and a :class:`PatchPlacement`
+(``racf.sim.world.scene``); the env shows it with a texture and a :class:`PatchPlacement`
 (``QCar2Env.show_sign_patch``), and every camera view then renders it as the world would.
 
 Coordinates on the plate are seen from in front of the sign: ``right`` and ``up`` from the
@@ -18,13 +18,14 @@ from pathlib import Path
 
 import numpy as np
 
-from sim.world.stop_signs import SIGN_FACE_ACROSS_FLATS_M, SignGeometry, StopSign
+from racf.sim.world.stop_signs import SIGN_FACE_ACROSS_FLATS_M, SignGeometry, StopSign
+from racf.assets import asset_path
 
 __all__ = ["PatchPlacement", "POSITIONS", "PATCHES_DIR", "TEXTURE_PX", "PATCH_FRONT_X_M", "load_patch_texture",
            "shipped_patches", "OCTAGON_AREA"]
 
 #: The shipped sticker textures (``<name>.png``).
-PATCHES_DIR = Path(__file__).resolve().parents[2] / "assets" / "patches"
+PATCHES_DIR = asset_path("patches")
 #: The scene's sticker textures are this many texels a side.
 TEXTURE_PX = 64
 #: The sticker's front surface, m in front of the sign body's origin (the red face is at 0.001 m).
@@ -150,7 +151,7 @@ def load_patch_texture(texture: str, rng: np.random.Generator | None = None) -> 
         raise ValueError(f"texture must be a shipped name {shipped_patches()}, 'natural' or a PNG path, "
                          f"got {texture!r}")
     if texture == "natural":
-        from sim.attacks.texture import natural_texture
+        from racf.sim.attacks.texture import natural_texture
 
         return natural_texture(rng if rng is not None else np.random.default_rng(0), TEXTURE_PX)
     path = PATCHES_DIR / f"{texture}.png" if "/" not in texture and not texture.endswith(".png") else Path(texture)

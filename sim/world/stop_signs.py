@@ -25,8 +25,8 @@ from functools import lru_cache
 
 import numpy as np
 
-from sim.world import map_facts
-from sim.world.road_graph import Path, qcar2_road_graph
+from racf.sim.world import map_facts
+from racf.sim.world.road_graph import Path, qcar2_road_graph
 
 __all__ = ["PLATE_IN_SCAN", "POLE_ONLY", "SIGN_CENTRE_HEIGHT_M", "SIGN_FACE_ACROSS_FLATS_M", "SIGN_GEOMETRIES",
            "SignGeometry", "StopSign", "stop_signs"]

@@ -7,7 +7,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from controllers import BrakingConfig, Phase, SpeedPI, SpeedProfile, StopSignBraker
+from racf.controllers import BrakingConfig, Phase, SpeedPI, SpeedProfile, StopSignBraker
 
 DT = 0.02
 DEPTH_AT_LINE = 0.12

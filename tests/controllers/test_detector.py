@@ -5,8 +5,8 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-import sim
-from controllers import DetectorConfig, StopSignDetector
+from racf import sim
+from racf.controllers import DetectorConfig, StopSignDetector
 
 DET = StopSignDetector()
 

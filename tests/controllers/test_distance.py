@@ -7,7 +7,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from controllers import CameraModel, DepthDistance, Detection
+from racf.controllers import CameraModel, DepthDistance, Detection
 
 CAM = CameraModel(width=320, fx=227.6, cx=160.0)
 

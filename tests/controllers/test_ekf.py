@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from controllers.ekf import DistanceEKF, EKFConfig
+from racf.controllers.ekf import DistanceEKF, EKFConfig
 
 
 def test_first_update_is_the_measurement_and_equal_noise_fuses_to_the_mean():

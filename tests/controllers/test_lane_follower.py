@@ -3,7 +3,7 @@ import math
 import numpy as np
 import pytest
 
-from controllers import StanleyConfig, StanleyController
+from racf.controllers import StanleyConfig, StanleyController
 
 
 def _straight_east(n: int = 200, length_m: float = 4.0) -> tuple[np.ndarray, np.ndarray]:

@@ -5,11 +5,11 @@ import numpy as np
 import pytest
 import torch
 
-import sim
-from controllers.detector import Detection
-from controllers.detectors import DETECTORS, make_detector
-from controllers.learned_detector import LearnedDetectorConfig, LearnedSignDetector, load_segmenter, save_segmenter
-from controllers.segmenter_net import SegmenterConfig, SignSegmenterNet
+from racf import sim
+from racf.controllers.detector import Detection
+from racf.controllers.detectors import DETECTORS, make_detector
+from racf.controllers.learned_detector import LearnedDetectorConfig, LearnedSignDetector, load_segmenter, save_segmenter
+from racf.controllers.segmenter_net import SegmenterConfig, SignSegmenterNet
 
 
 @pytest.fixture(scope="module")

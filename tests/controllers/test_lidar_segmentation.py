@@ -12,7 +12,7 @@ from hypothesis import strategies as st
 from scipy.spatial.distance import pdist
 from sklearn.cluster import DBSCAN
 
-from controllers.lidar_segmentation import bench_segmentation, scan_points, segment_scan
+from racf.controllers.lidar_segmentation import bench_segmentation, scan_points, segment_scan
 
 SCANS = Path(__file__).resolve().parents[1] / "data" / "lidar_scans.npz"
 

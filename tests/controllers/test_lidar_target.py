@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from controllers.lidar_target import LidarTargetConfig, LidarTargetState, LidarTargetTracker
+from racf.controllers.lidar_target import LidarTargetConfig, LidarTargetState, LidarTargetTracker
 
 SCANS = Path(__file__).resolve().parents[1] / "data" / "lidar_scans.npz"
 LIDAR = np.array([-0.012, 0.0])  # body frame, m

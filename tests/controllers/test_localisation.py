@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from controllers.localisation import PoseFilter, PoseFilterConfig, wrap_angle
+from racf.controllers.localisation import PoseFilter, PoseFilterConfig, wrap_angle
 
 RATE_HZ, FIX_EVERY = 50, 5  # control at 50 Hz, fixes at 10 Hz
 BIAS = math.radians(0.4)  # constant gyro zero-rate offset, rad/s

@@ -6,9 +6,9 @@ import cv2
 import numpy as np
 import pytest
 
-from controllers import CameraModel, StopSignDetector
-from controllers.detector import Detection
-from controllers.perception import Perception
+from racf.controllers import CameraModel, StopSignDetector
+from racf.controllers.detector import Detection
+from racf.controllers.perception import Perception
 
 CAMERA = CameraModel(width=160, fx=100.0, cx=80.0)
 MARGIN = math.radians(3.0)

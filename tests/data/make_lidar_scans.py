@@ -26,7 +26,7 @@ from pathlib import Path
 import gymnasium as gym
 import numpy as np
 
-import sim
+from racf import sim
 
 OUT = Path(__file__).with_name("lidar_scans.npz")
 #: Reset options per approach; the run-ups put the car on the straight before the target.

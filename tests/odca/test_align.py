@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from odca import fit_alignment
+from racf.odca import fit_alignment
 
 
 def test_recovers_the_affine_map_despite_outliers():

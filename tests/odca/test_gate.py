@@ -6,7 +6,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from odca import SOURCES, GateConfig, vote
+from racf.odca import SOURCES, GateConfig, vote
 
 NAN = math.nan
 GATE = GateConfig(tau_m=0.1, trust_confidence=0.5)

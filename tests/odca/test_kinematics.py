@@ -7,7 +7,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from odca import KinematicBranch, KinematicsConfig
+from racf.odca import KinematicBranch, KinematicsConfig
 
 
 @settings(max_examples=100, deadline=None)

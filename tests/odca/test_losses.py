@@ -2,7 +2,7 @@
 
 import torch
 
-from odca.losses import LossWeights, odca_losses
+from racf.odca.losses import LossWeights, odca_losses
 
 
 def _batch(delta, d, l_al, v=None, clean=None):

@@ -9,10 +9,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from odca import ODCA, Alignment, CheckpointError, GateConfig, LastValuePrior, ODCAConfig
-from odca.features import MAX_RANGE_M
-from odca.head import head_parameters, make_head
-from odca.online import SHIPPED_HEAD
+from racf.odca import ODCA, Alignment, CheckpointError, GateConfig, LastValuePrior, ODCAConfig
+from racf.odca.features import MAX_RANGE_M
+from racf.odca.head import head_parameters, make_head
+from racf.odca.online import SHIPPED_HEAD
 
 
 def _stub(alignment=Alignment(1.0, 0.0)) -> ODCA:

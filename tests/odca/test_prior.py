@@ -3,10 +3,10 @@
 import numpy as np
 import pytest
 
-from odca import CheckpointError, Chronos2Prior, LastValuePrior
-from odca.pretrain import score_prior
-from odca.prior import SHIPPED_PRIOR
-from odca.synthetic import synthetic_series
+from racf.odca import CheckpointError, Chronos2Prior, LastValuePrior
+from racf.odca.pretrain import score_prior
+from racf.odca.prior import SHIPPED_PRIOR
+from racf.odca.synthetic import synthetic_series
 
 
 @pytest.fixture(scope="module")
@@ -65,7 +65,7 @@ def test_last_value_prior_holds_the_last_finite_value():
 def test_traced_forecasts_are_bit_identical_to_the_eager_model():
     import torch
 
-    from odca.prior import Chronos2Prior
+    from racf.odca.prior import Chronos2Prior
 
     prior = Chronos2Prior(batch_size=8)
     rng = np.random.default_rng(3)

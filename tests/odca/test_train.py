@@ -3,9 +3,9 @@
 import numpy as np
 import pandas as pd
 
-from odca import LastValuePrior
-from odca.synthetic import approach_curve
-from odca.train import N_SIGMA_GRID, train_odca
+from racf.odca import LastValuePrior
+from racf.odca.synthetic import approach_curve
+from racf.odca.train import N_SIGMA_GRID, train_odca
 
 #: Share of samples inside attack segments, and the bias magnitude range (m), per preset.
 PRESETS = {"weak": (0.10, (0.10, 0.25)), "mid": (0.20, (0.25, 0.50)), "strong": (0.35, (0.50, 1.00))}

@@ -6,9 +6,9 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-import sim  # noqa: F401  (registers the env)
-from sim.env.config import EnvConfig
-from sim.sensors.a2m12 import A2M12Config, A2M12Lidar, material_of
+from racf import sim  # noqa: F401  (registers the env)
+from racf.sim.env.config import EnvConfig
+from racf.sim.sensors.a2m12 import A2M12Config, A2M12Lidar, material_of
 
 SMALL = {"camera_width": 160, "camera_height": 120}
 

@@ -4,13 +4,13 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-import sim  # noqa: F401  (registers the env)
-from controllers import RouteFollower
-from sim.env.qcar2_env import PASS_LINE_M
-from sim.world.drives import MIN_TARGET_AHEAD_M, draw_drive, estimate_duration_s, targets_on_path
-from sim.world.obstacles import obstacles
-from sim.world.road_graph import qcar2_road_graph
-from sim.world.stop_signs import POLE_ONLY, stop_signs
+from racf import sim  # noqa: F401  (registers the env)
+from racf.controllers import RouteFollower
+from racf.sim.env.qcar2_env import PASS_LINE_M
+from racf.sim.world.drives import MIN_TARGET_AHEAD_M, draw_drive, estimate_duration_s, targets_on_path
+from racf.sim.world.obstacles import obstacles
+from racf.sim.world.road_graph import qcar2_road_graph
+from racf.sim.world.stop_signs import POLE_ONLY, stop_signs
 
 SMALL = {"camera_width": 80, "camera_height": 60}
 

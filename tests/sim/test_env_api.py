@@ -13,9 +13,9 @@ import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env
 
-import sim  # noqa: F401  (registers RACF/QCar2-v3)
-import sim.world.map_facts  # noqa: F401
-from sim.env.config import EnvConfig
+from racf import sim  # noqa: F401  (registers RACF/QCar2-v3)
+import racf.sim.world.map_facts  # noqa: F401
+from racf.sim.env.config import EnvConfig
 
 REPO_ROOT = Path(__file__).resolve().parents[2]
 SMALL = {"camera_width": 160, "camera_height": 120}
@@ -45,7 +45,7 @@ def test_observation_matches_space_after_reset_and_step(env):
 def test_make_with_module_prefix_in_fresh_process():
     code = (
         "import gymnasium as gym\n"
-        "env = gym.make('sim:RACF/QCar2-v3', camera_width=160, camera_height=120)\n"
+        "env = gym.make('racf.sim:RACF/QCar2-v3', camera_width=160, camera_height=120)\n"
         "obs, info = env.reset(seed=0)\n"
         "print('SHAPES', {k: tuple(v.shape) for k, v in sorted(obs.items())})\n"
         "env.close()\n"
@@ -211,7 +211,7 @@ def test_non_integer_sizes_raise_value_error(kwargs, name):
 
 
 def test_bad_render_mode_rejected():
-    from sim.env.qcar2_env import QCar2Env
+    from racf.sim.env.qcar2_env import QCar2Env
 
     with pytest.raises(ValueError, match="render_mode"):
         QCar2Env(render_mode="rgb", **SMALL)

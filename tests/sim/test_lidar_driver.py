@@ -15,7 +15,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from sim.sensors.lidar_driver import (
+from racf.sim.sensors.lidar_driver import (
     DriverConfig,
     deliver,
     filter_rplidar_data,

@@ -8,7 +8,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from sim.sensors import LocalisationFix, LocaliserConfig, Sensor
+from racf.sim.sensors import LocalisationFix, LocaliserConfig, Sensor
 
 MAX = 0.07 / math.sqrt(2)
 

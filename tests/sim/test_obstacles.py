@@ -4,10 +4,10 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-import sim
-from controllers import ObstacleDetector
-from sim.world.obstacles import OBSTACLE_SIZE_M, STANDOFF_M, obstacles
-from sim.world.stop_signs import stop_signs
+from racf import sim
+from racf.controllers import ObstacleDetector
+from racf.sim.world.obstacles import OBSTACLE_SIZE_M, STANDOFF_M, obstacles
+from racf.sim.world.stop_signs import stop_signs
 
 
 @pytest.fixture(scope="module")

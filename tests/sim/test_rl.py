@@ -6,8 +6,8 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-import sim
-from sim.env.rl import DepthAsImage, rl_env
+from racf import sim
+from racf.sim.env.rl import DepthAsImage, rl_env
 
 SMALL = {"camera_width": 160, "camera_height": 120}
 

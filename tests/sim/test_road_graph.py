@@ -10,8 +10,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from sim.world import map_facts
-from sim.world.road_graph import Path, qcar2_road_graph, scs_path
+from racf.sim.world import map_facts
+from racf.sim.world.road_graph import Path, qcar2_road_graph, scs_path
 
 GRAPH = qcar2_road_graph()
 EDGE_IDS = [f"{a}-{b}{letter}" for a, b, letter in map_facts.EDGES]

@@ -8,8 +8,8 @@ import mujoco
 import numpy as np
 import pytest
 
-from sim.world.scene import build_scene_xml, load_model
-from sim.world.stop_signs import (
+from racf.sim.world.scene import build_scene_xml, load_model
+from racf.sim.world.stop_signs import (
     PLATE_IN_SCAN,
     POLE_ONLY,
     SIGN_CENTRE_HEIGHT_M,

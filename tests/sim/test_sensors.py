@@ -9,12 +9,12 @@ import mujoco
 import numpy as np
 import pytest
 
-import sim  # noqa: F401  (registers RACF/QCar2-v3)
-from sim.sensors import CameraConfig, Lidar2D, LidarConfig, RGBDCameraRig
-from sim.vehicle import QCar2
-from sim.world import map_facts
-from sim.world.scene import load_model
-from sim.world.stop_signs import stop_signs
+from racf import sim  # noqa: F401  (registers RACF/QCar2-v3)
+from racf.sim.sensors import CameraConfig, Lidar2D, LidarConfig, RGBDCameraRig
+from racf.sim.vehicle import QCar2
+from racf.sim.world import map_facts
+from racf.sim.world.scene import load_model
+from racf.sim.world.stop_signs import stop_signs
 
 LIDAR_BODY_X = -0.012
 LIDAR_BODY_Z = 0.193

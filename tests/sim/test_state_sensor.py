@@ -9,10 +9,10 @@ import mujoco
 import numpy as np
 import pytest
 
-import sim
-from sim.sensors import STATE_FIELDS, OdometryConfig, VehicleStateSensor
-from sim.vehicle import QCar2
-from sim.world.scene import load_model
+from racf import sim
+from racf.sim.sensors import STATE_FIELDS, OdometryConfig, VehicleStateSensor
+from racf.sim.vehicle import QCar2
+from racf.sim.world.scene import load_model
 
 RATE_HZ = 50.0
 DT = 1.0 / RATE_HZ

@@ -8,9 +8,9 @@ import math
 import numpy as np
 import pytest
 
-from sim.world import map_facts
-from sim.world.road_graph import qcar2_road_graph
-from sim.world.stop_signs import (
+from racf.sim.world import map_facts
+from racf.sim.world.road_graph import qcar2_road_graph
+from racf.sim.world.stop_signs import (
     PLATE_IN_SCAN,
     POLE_ONLY,
     SIGN_CENTRE_HEIGHT_M,

@@ -12,9 +12,9 @@ import mujoco
 import numpy as np
 import pytest
 
-from sim.vehicle import QCar2, VehicleConfig
-from sim.world import map_facts
-from sim.world.scene import load_model
+from racf.sim.vehicle import QCar2, VehicleConfig
+from racf.sim.world import map_facts
+from racf.sim.world.scene import load_model
 
 WHEELBASE_M = 0.256
 TRACK_M = 0.170

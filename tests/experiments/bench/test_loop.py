@@ -4,7 +4,7 @@ import json
 
 import pytest
 
-from experiments.cli import main
+from racf.experiments.cli import main
 
 
 @pytest.mark.slow

@@ -4,13 +4,13 @@ from pathlib import Path
 
 import pytest
 
-from experiments.cli import main
+from racf.experiments.cli import main
 
 ROOT = Path(__file__).resolve().parents[3]
 
 
 def test_help_lists_the_commands():
-    out = subprocess.run([sys.executable, "-m", "experiments.cli", "--help"], cwd=ROOT,
+    out = subprocess.run([sys.executable, "-m", "racf.experiments.cli", "--help"], cwd=ROOT,
                          capture_output=True, text=True, check=True).stdout
     for command in ("snapshot", "bench-sim", "demo", "trial", "trials", "bench-detector"):
         assert command in out
@@ -58,7 +58,7 @@ def test_view_rejects_what_is_not_a_recording(tmp_path, capsys):
 
 
 def test_odca_commands_are_listed_and_latency_prints_json(capsys):
-    out = subprocess.run([sys.executable, "-m", "experiments.cli", "--help"], cwd=ROOT,
+    out = subprocess.run([sys.executable, "-m", "racf.experiments.cli", "--help"], cwd=ROOT,
                          capture_output=True, text=True, check=True).stdout
     for command in ("pretrain-prior", "train", "odca-latency", "collect", "attack-study"):
         assert command in out

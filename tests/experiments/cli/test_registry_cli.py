@@ -4,10 +4,10 @@ from pathlib import Path
 
 import pytest
 
-from experiments.cli import main
-from experiments.cli.common import registry_markdown
-from experiments.episode.estimators import ESTIMATORS
-from sim.attacks import ATTACKS
+from racf.experiments.cli import main
+from racf.experiments.cli.common import registry_markdown
+from racf.experiments.episode.estimators import ESTIMATORS
+from racf.sim.attacks import ATTACKS
 
 ROOT = Path(__file__).resolve().parents[3]
 

@@ -5,7 +5,7 @@ import json
 import pandas as pd
 import pytest
 
-from experiments.cli import main
+from racf.experiments.cli import main
 
 PROTOCOL_SIGNALS = ("d_true", "d_clean", "d_meas", "c_meas", "lidar", "d_fused")
 

@@ -5,7 +5,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from experiments.data.corruption import PRESETS, SEGMENT_KINDS, CorruptionPreset, corrupt_series, draw_seed
+from racf.experiments.data.corruption import PRESETS, SEGMENT_KINDS, CorruptionPreset, corrupt_series, draw_seed
 
 DT = 0.02
 

@@ -7,8 +7,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from experiments.cli import main
-from experiments.data.dataset import (COLUMNS, SPLIT_SHARES, collect, collection_specs, load_dataset, make_split,
+from racf.experiments.cli import main
+from racf.experiments.data.dataset import (COLUMNS, SPLIT_SHARES, collect, collection_specs, load_dataset, make_split,
                                  make_target_split)
 
 #: Short drives keep the test collection small (the default drives last 20-60 s).
@@ -111,7 +111,7 @@ def test_loader_gives_both_splits_and_labelled_corruption(small):
 
 
 def test_same_seed_same_bytes_and_resume_redoes_nothing(tmp_path, small, monkeypatch):
-    import experiments.sweeps.executors as executors_module
+    import racf.experiments.sweeps.executors as executors_module
 
     a = tmp_path / "a"
     # Copy the finished runs of the module's collection, then "resume": nothing may be re-run.
@@ -137,7 +137,7 @@ def test_specs_cycle_speeds_and_differ_by_seed():
 
 
 def test_cli_summary_json_and_missing_dataset_error(small, capsys, tmp_path, monkeypatch):
-    import experiments.data.dataset as dataset_module
+    import racf.experiments.data.dataset as dataset_module
 
     # The CLI resumes the module's collection (its drives are the short ones).
     monkeypatch.setattr(dataset_module, "DRIVE_S", SHORT)

@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 import torch
 
-from experiments.detector.dataset import DatasetSpec, make_dataset
-from experiments.detector.patch_opt import PatchConfig, composite, optimise_patch
-from experiments.detector.train import TrainConfig, train_segmenter
+from racf.experiments.detector.dataset import DatasetSpec, make_dataset
+from racf.experiments.detector.patch_opt import PatchConfig, composite, optimise_patch
+from racf.experiments.detector.train import TrainConfig, train_segmenter
 
 
 @pytest.fixture(scope="module")

@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from experiments.detector.dataset import DatasetSpec, load_split, make_dataset
-from experiments.detector.views import SIGN_RANGE_M, ViewRenderer, draw_view
+from racf.experiments.detector.dataset import DatasetSpec, load_split, make_dataset
+from racf.experiments.detector.views import SIGN_RANGE_M, ViewRenderer, draw_view
 
 
 @pytest.fixture(scope="module")

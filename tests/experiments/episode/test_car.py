@@ -8,9 +8,9 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from controllers import CameraModel
-from experiments.episode import car
-from experiments.episode.car import CarCalibration, map_bearing, sign_depth_at_line
+from racf.controllers import CameraModel
+from racf.experiments.episode import car
+from racf.experiments.episode.car import CarCalibration, map_bearing, sign_depth_at_line
 
 CAL = CarCalibration(CameraModel(width=320, fx=230.0, cx=160.0), camera_xy_m=(0.2, 0.0), bumper_x_m=0.25,
                      rear_axle_x_m=-0.128)
@@ -37,5 +37,5 @@ def test_the_car_module_does_not_reach_into_the_simulator():
     tree = ast.parse(Path(car.__file__).read_text())
     imported = {alias.name for node in ast.walk(tree) if isinstance(node, ast.Import) for alias in node.names}
     imported |= {node.module for node in ast.walk(tree) if isinstance(node, ast.ImportFrom)}
-    assert not any(m.startswith(("gymnasium", "mujoco", "sim.env")) for m in imported), imported
+    assert not any(m.startswith(("gymnasium", "mujoco", "racf.sim.env")) for m in imported), imported
     assert "info" not in {n.id for n in ast.walk(tree) if isinstance(n, ast.Name)}

@@ -10,8 +10,8 @@ import gymnasium as gym
 import numpy as np
 import pandas as pd
 
-from experiments.episode import TrialSpec, run_trial
-from experiments.episode.stack import default_env
+from racf.experiments.episode import TrialSpec, run_trial
+from racf.experiments.episode.stack import default_env
 
 #: What the car does and works out; none of it may depend on ``info``.
 CAR_COLUMNS = ["speed_cmd", "steer_cmd", "d_fused", "d_meas", "lidar", "detected", "brake", "phase", "slot",

@@ -5,8 +5,8 @@ import math
 import numpy as np
 import pytest
 
-from controllers import PerceptionSample
-from experiments.episode import ESTIMATORS, make_estimator
+from racf.controllers import PerceptionSample
+from racf.experiments.episode import ESTIMATORS, make_estimator
 
 
 def _samples(depths, lidar_offset=0.0):
@@ -46,7 +46,7 @@ def test_raw_depth_has_nothing_without_a_detection_and_unknown_names_fail():
 
 @pytest.mark.parametrize("name", ESTIMATORS)
 def test_each_estimator_is_found_by_its_own_name_and_follows_the_protocol(name):
-    from controllers import DistanceEstimator
+    from racf.controllers import DistanceEstimator
 
     est = make_estimator(name)
     assert est.name == name and isinstance(est, DistanceEstimator)

@@ -6,8 +6,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from experiments.cli import main
-from experiments.episode import TrialSpec, run_trial
+from racf.experiments.cli import main
+from racf.experiments.episode import TrialSpec, run_trial
 
 PROTOCOL_SIGNALS = ("d_true", "d_clean", "d_meas", "c_meas", "lidar", "d_fused")
 
@@ -60,7 +60,7 @@ def test_same_seed_same_log(sign0_trial):
 def test_the_shared_env_gives_the_log_of_a_fresh_one(sign0_trial):
     import gymnasium as gym
 
-    import sim
+    from racf import sim
 
     # The process's env has meanwhile run another episode, with a crate placed on the map.
     run_trial(TrialSpec("clean", 1, 2.0, 0, target="obstacle"))
@@ -141,8 +141,8 @@ def test_an_attack_without_the_patch_has_its_own_start_and_duration():
 
 
 def test_white_box_attacks_are_handed_the_cars_estimator_and_black_box_ones_are_not():
-    from experiments.episode.stack import default_env
-    from sim.attacks import AttackWrapper, StealthRamp
+    from racf.experiments.episode.stack import default_env
+    from racf.sim.attacks import AttackWrapper, StealthRamp
 
     made = {}
 

@@ -7,7 +7,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from experiments.episode.scoring import score_log, score_target
+from racf.experiments.episode.scoring import score_log, score_target
 
 
 def _log(dist, speed, brake, ideal, confirmed, slot=0, dt=0.02):
@@ -59,7 +59,7 @@ def test_score_log_gives_one_outcome_per_target_and_names_missing_columns():
 
 
 def test_largest_jump_is_the_step_change_beyond_the_cars_motion_within_a_target():
-    from experiments.episode.scoring import largest_jump
+    from racf.experiments.episode.scoring import largest_jump
 
     t = np.arange(8) * 0.02
     log = pd.DataFrame({"t": t, "slot": [0, 0, 0, 0, 1, 1, 1, 1], "control": True,

@@ -4,10 +4,10 @@ import dataclasses
 
 import pytest
 
-import experiments.episode.spec as spec_module
-from controllers import BrakingConfig
-from experiments.cli import main
-from experiments.episode import TABLE_SETTINGS, TrialSpec, parse_setting, setting_name
+import racf.experiments.episode.spec as spec_module
+from racf.controllers import BrakingConfig
+from racf.experiments.cli import main
+from racf.experiments.episode import TABLE_SETTINGS, TrialSpec, parse_setting, setting_name
 
 
 def test_settings_parse_into_attacks_and_estimator():
@@ -61,7 +61,7 @@ def test_attack_waits_for_more_steps_than_confirmation_needs():
     (["--table", "--estimator", "odca"], "--table runs its own settings"),
 ])
 def test_bad_flags_are_rejected_before_any_episode_runs(argv, message, monkeypatch, capsys, tmp_path):
-    import experiments.sweeps.batches as batches_module
+    import racf.experiments.sweeps.batches as batches_module
 
     monkeypatch.setattr(batches_module, "run_batch", lambda *a, **k: pytest.fail("ran an episode"))
     with pytest.raises(SystemExit) as exit_info:

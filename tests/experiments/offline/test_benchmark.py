@@ -7,11 +7,11 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from experiments.cli import main
-from experiments.data.dataset import COLUMNS, make_splits
-from experiments.offline.benchmark import BenchConfig
-from experiments.offline.methods import METHODS
-from odca.synthetic import approach_curve
+from racf.experiments.cli import main
+from racf.experiments.data.dataset import COLUMNS, make_splits
+from racf.experiments.offline.benchmark import BenchConfig
+from racf.experiments.offline.methods import METHODS
+from racf.odca.synthetic import approach_curve
 
 
 def _write_dataset(folder, n_series=12, seed=0):

@@ -5,11 +5,11 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from experiments.offline.forecasters import (NF_MODELS, ChronosForecaster, NFForecaster, NFSettings, _build,
+from racf.experiments.offline.forecasters import (NF_MODELS, ChronosForecaster, NFForecaster, NFSettings, _build,
                                              context_windows, train_nf, training_frame)
-from experiments.offline.methods import ekf_estimate, forecast_at, lidar_estimate, raw_estimate, split_arrays
-from odca import LastValuePrior, ODCA
-from odca.align import Alignment
+from racf.experiments.offline.methods import ekf_estimate, forecast_at, lidar_estimate, raw_estimate, split_arrays
+from racf.odca import LastValuePrior, ODCA
+from racf.odca.align import Alignment
 
 CUT = 150
 

@@ -7,11 +7,11 @@ import pandas as pd
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from experiments.offline.methods import split_arrays
-from experiments.offline.metrics import auprc, auroc, bounded_degradation, hold_last, mae, resilience_gain, rmse
-from experiments.offline.scoring import (bootstrap_rmse, diagnostic_scores, error_sources, horizon_scores,
+from racf.experiments.offline.methods import split_arrays
+from racf.experiments.offline.metrics import auprc, auroc, bounded_degradation, hold_last, mae, resilience_gain, rmse
+from racf.experiments.offline.scoring import (bootstrap_rmse, diagnostic_scores, error_sources, horizon_scores,
                                          recovery_scores)
-from odca.align import Alignment
+from racf.odca.align import Alignment
 
 
 def test_rmse_and_mae_by_hand_ignoring_nan_and_honouring_the_mask():
@@ -135,7 +135,7 @@ def test_error_sources_split_the_squared_error_by_segment_kind_and_lidar():
 
 
 def test_the_interval_resamples_drives_and_draws_together():
-    from experiments.offline.scoring import bootstrap_rmse_draws
+    from racf.experiments.offline.scoring import bootstrap_rmse_draws
 
     count = np.full((6, 5), 100.0)
     same = np.full((6, 5), 4.0)  # every drive and draw: RMSE 0.2

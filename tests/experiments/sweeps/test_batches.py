@@ -6,8 +6,8 @@ import math
 import pandas as pd
 import pytest
 
-from experiments.sweeps.batches import batch_specs, run_batch
-from experiments.sweeps.summary import summarize, wilson_interval
+from racf.experiments.sweeps.batches import batch_specs, run_batch
+from racf.experiments.sweeps.summary import summarize, wilson_interval
 
 
 def test_batch_covers_every_sign_and_speed_and_resumes(tmp_path, monkeypatch):
@@ -18,7 +18,7 @@ def test_batch_covers_every_sign_and_speed_and_resumes(tmp_path, monkeypatch):
     first = run_batch(two, tmp_path, workers=1, progress=False)
     assert len(first) == 2 and (tmp_path / "results.parquet").exists()
     # A rerun finds both trials finished and runs nothing.
-    import experiments.sweeps.executors as executors_module
+    import racf.experiments.sweeps.executors as executors_module
 
     monkeypatch.setattr(executors_module, "run_episode", lambda *a, **k: pytest.fail("re-ran a finished trial"))
     again = run_batch(two, tmp_path, workers=1, progress=False)
@@ -52,7 +52,7 @@ def test_summary_has_the_protocol_keys_and_wilson_interval():
 
 
 def test_a_sweeps_report_gives_the_scr_of_episodes_attacked_before_t_star(tmp_path):
-    from experiments.sweeps.report import write_report
+    from racf.experiments.sweeps.report import write_report
 
     rows = pd.DataFrame({"trial_id": [f"t{i}" for i in range(4)], "setting": "attack", "attack": "patch_occlusion",
                          "estimator": "raw", "success": [True, True, False, True],

@@ -5,11 +5,11 @@ from pathlib import Path
 
 import pytest
 
-from experiments.cli import main
-from experiments.episode import TrialSpec
-from experiments.sweeps.executors import executor
-from experiments.sweeps.run import run_episodes
-from experiments.sweeps.store import ResultStore
+from racf.experiments.cli import main
+from racf.experiments.episode import TrialSpec
+from racf.experiments.sweeps.executors import executor
+from racf.experiments.sweeps.run import run_episodes
+from racf.experiments.sweeps.store import ResultStore
 
 
 def test_an_address_without_ray_is_refused_before_any_work(tmp_path, capsys):

@@ -5,8 +5,8 @@ import os
 import pandas as pd
 import pytest
 
-import experiments.sweeps.store as store_module
-from experiments.sweeps.store import ResultStore, atomic_write, code_version
+import racf.experiments.sweeps.store as store_module
+from racf.experiments.sweeps.store import ResultStore, atomic_write, code_version
 
 
 def test_atomic_write_writes_every_kind_and_leaves_no_temporary(tmp_path):

@@ -12,10 +12,10 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-from experiments.cli import main
-from experiments.sweeps.run import run_sweep
-from experiments.sweeps.spec import SweepSpec, load_spec
-from experiments.sweeps.store import ResultStore
+from racf.experiments.cli import main
+from racf.experiments.sweeps.run import run_sweep
+from racf.experiments.sweeps.spec import SweepSpec, load_spec
+from racf.experiments.sweeps.store import ResultStore
 
 ROOT = Path(__file__).resolve().parents[3]
 TINY = """name = "tiny"
@@ -61,7 +61,7 @@ def test_sweep_runs_every_episode_and_reports(uninterrupted):
 def test_sigkilled_sweep_resumes_to_the_same_rows(uninterrupted, tmp_path):
     folder, _, reference = uninterrupted
     out = tmp_path / "b"
-    cmd = [sys.executable, "-m", "experiments.cli", "sweep", str(folder / "tiny.toml"), "--out", str(out),
+    cmd = [sys.executable, "-m", "racf.experiments.cli", "sweep", str(folder / "tiny.toml"), "--out", str(out),
            "--workers", "1", "--json"]
     proc = subprocess.Popen(cmd, cwd=ROOT, start_new_session=True, stdout=subprocess.DEVNULL,
                             stderr=subprocess.DEVNULL)
@@ -138,7 +138,7 @@ def test_bad_flags_are_refused_before_any_work(tmp_path, capsys):
 
 
 def test_flags_replace_a_specs_fields_under_a_new_name():
-    from experiments.sweeps.spec import parse_spec, spec_text
+    from racf.experiments.sweeps.spec import parse_spec, spec_text
 
     spec = parse_spec(spec_text("smoke.toml", {}, {"estimator": ["ekf"]}))
     assert spec.name.startswith("smoke-") and spec.space["estimator"] == ["ekf"]

@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from experiments.episode import TrialSpec, run_trial
-from experiments.viz.rerun_log import CONTROL, SERIES, FrameRecorder, write_rrd
+from racf.experiments.episode import TrialSpec, run_trial
+from racf.experiments.viz.rerun_log import CONTROL, SERIES, FrameRecorder, write_rrd
 
 
 @pytest.fixture(scope="module")
@@ -60,7 +60,7 @@ def test_bad_input_is_refused(tmp_path):
 
 
 def test_trials_record_every_trial_they_run(tmp_path):
-    from experiments.sweeps.batches import batch_specs, run_batch
+    from racf.experiments.sweeps.batches import batch_specs, run_batch
 
     specs = batch_specs("clean", 2, signs=(1,), speeds=(1.5,))
     run_batch(specs, tmp_path, workers=1, progress=False, rerun=True)

@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 from gymnasium import spaces
 
-import sim
+from racf import sim
 
 #: Image size of the stub, pixels.
 H, W = 48, 64

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env
 
-from sim.attacks import ConfidenceDegradation, DepthBias, DepthBlackout, LidarDropout, LidarSpoof, PatchOcclusion
+from racf.sim.attacks import ConfidenceDegradation, DepthBias, DepthBlackout, LidarDropout, LidarSpoof, PatchOcclusion
 
 ALL = (PatchOcclusion, DepthBlackout, DepthBias, ConfidenceDegradation, LidarDropout, LidarSpoof)
 
@@ -93,7 +93,7 @@ def test_an_env_without_the_racf_observations_is_refused(wrapper):
 
 
 def test_every_attack_is_registered_under_its_own_name(stub_env):
-    from sim.attacks import ATTACKS, AttackWrapper
+    from racf.sim.attacks import ATTACKS, AttackWrapper
 
     assert list(ATTACKS) == ["patch_occlusion", "physical_patch", "lidar_spoof", "lidar_dropout", "depth_blackout", "depth_bias",
                              "confidence_degradation", "delay", "dropout_timed", "stealth_ramp", "frustum_spoof"]

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from sim.attacks import ConfidenceDegradation
+from racf.sim.attacks import ConfidenceDegradation
 
 
 def test_confidence_degradation_removes_the_share_and_adds_noise(stub_env, drive, grown):

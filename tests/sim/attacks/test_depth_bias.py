@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from sim.attacks import DepthBias
+from racf.sim.attacks import DepthBias
 
 
 def test_bias_shifts_the_sign_depth_by_the_drawn_offset(stub_env, drive, grown):

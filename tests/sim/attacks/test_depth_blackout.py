@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from sim.attacks import DepthBlackout
+from racf.sim.attacks import DepthBlackout
 
 
 def test_blackout_invalidates_depth_only_inside_its_window_and_region(stub_env, drive, grown):

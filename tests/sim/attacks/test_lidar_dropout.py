@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from sim.attacks import LidarDropout
+from racf.sim.attacks import LidarDropout
 
 SIGN_BEAM = 30  # the stub's LiDAR sees the sign on this beam (beam i points i degrees CCW of forward)
 

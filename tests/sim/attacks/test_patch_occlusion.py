@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from sim.attacks import PatchOcclusion, patch_rows
+from racf.sim.attacks import PatchOcclusion, patch_rows
 
 
 @pytest.mark.parametrize("rho", [0.0, 0.3, 0.6, 0.9, 1.0])

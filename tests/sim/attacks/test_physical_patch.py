@@ -4,8 +4,8 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-import sim
-from sim.attacks import ATTACKS, PhysicalPatch
+from racf import sim
+from racf.sim.attacks import ATTACKS, PhysicalPatch
 
 
 def _run(env, steps=30):

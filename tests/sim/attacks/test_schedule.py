@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from sim.attacks import AttackSchedule
+from racf.sim.attacks import AttackSchedule
 
 
 def test_schedule_opens_after_a_stable_sighting_inside_the_braking_window():

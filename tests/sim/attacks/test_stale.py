@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from sim.attacks import ATTACKS, StaleData
+from racf.sim.attacks import ATTACKS, StaleData
 
 SIGN_BEAM = 30  # the stub's LiDAR sees the sign on this beam
 

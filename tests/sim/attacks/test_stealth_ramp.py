@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from sim.attacks import ATTACKS, DepthBias, StealthRamp
-from sim.attacks.stealth_ramp import quiet_bias
+from racf.sim.attacks import ATTACKS, DepthBias, StealthRamp
+from racf.sim.attacks.stealth_ramp import quiet_bias
 
 
 class RoomDefence:
@@ -57,8 +57,8 @@ def test_quiet_bias_finds_the_edge_of_the_quiet_set():
 def test_against_odca_a_noise_free_ramp_never_opens_the_gate_and_is_held_within_two_tau():
     """ODCA as shipped, an honest LiDAR, a straight approach: the ramp rides the gate's edge
     (the depth may sit tau off the LiDAR, and re-anchor the kinematic branch there)."""
-    from controllers import PerceptionSample
-    from experiments.episode.estimators import make_estimator
+    from racf.controllers import PerceptionSample
+    from racf.experiments.episode.estimators import make_estimator
 
     odca = make_estimator("odca")
     odca.reset()

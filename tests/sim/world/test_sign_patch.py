@@ -8,9 +8,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-import sim
-from sim.world.sign_patch import OCTAGON_AREA, POSITIONS, PatchPlacement, load_patch_texture
-from sim.world.stop_signs import SIGN_FACE_ACROSS_FLATS_M, stop_signs
+from racf import sim
+from racf.sim.world.sign_patch import OCTAGON_AREA, POSITIONS, PatchPlacement, load_patch_texture
+from racf.sim.world.stop_signs import SIGN_FACE_ACROSS_FLATS_M, stop_signs
 
 
 @given(st.floats(0.01, 0.6), st.sampled_from(sorted(POSITIONS)))
@@ -54,7 +54,7 @@ def _quadrants():
 
 
 def test_the_sticker_renders_upright_and_unmirrored_where_its_corners_project(env):
-    from sim.env.ground_truth import _MJ_TO_OPTICAL
+    from racf.sim.env.ground_truth import _MJ_TO_OPTICAL
 
     obs, _ = env.reset(seed=0, options={"sign": 2, "cruise_speed": 0.0, "run_up_m": 0.5})
     u = env.unwrapped

@@ -1,0 +1,278 @@
+"""The registries of racf's parts that a user can bring their own of: estimators (defences),
+attacks and stop-sign detectors.
+
+Each registry is filled from one entry-point group of the installed distributions, racf's own
+parts registering the same way as a user's:
+
+=====================  ==========================================================  ==========
+group                  an entry point names                                         registry
+=====================  ==========================================================  ==========
+``racf.estimators``    a ``DistanceEstimator`` class (``racf.controllers``)         ESTIMATORS
+``racf.attacks``       an ``AttackWrapper`` subclass (``racf.sim.attacks``)         ATTACKS
+``racf.detectors``     a class or factory whose objects have ``detect(rgb)``        DETECTORS
+=====================  ==========================================================  ==========
+
+A user who has not packaged their code loads a file instead (``--plugin path/to/file.py`` on the
+commands that run episodes, or :func:`load_plugin_file`): every class defined in it with a
+``name`` and the shape of one of the three kinds is registered under that name. The files
+loaded are remembered in ``RACF_PLUGINS`` (an environment variable), so the worker processes
+a sweep spawns load them too.
+
+A plug-in's source enters the ids of the results it makes (:meth:`Registry.source_id`): editing
+it never lets a resumed run reuse a result the old code made. racf's own parts are covered by
+the code version instead.
+
+Example:
+    >>> from racf.plugins import ATTACKS, ESTIMATORS
+    >>> "odca" in ESTIMATORS and "depth_bias" in ATTACKS
+    True
+"""
+
+from __future__ import annotations
+
+import hashlib
+import importlib.util
+import inspect
+import os
+import sys
+from collections.abc import Callable, Iterator, Mapping
+from dataclasses import dataclass
+from importlib.metadata import entry_points
+from pathlib import Path
+from typing import Any
+
+__all__ = ["Plugin", "PluginError", "Registry", "ESTIMATORS", "ATTACKS", "DETECTORS", "REGISTRIES",
+           "load_plugin_file", "plugin_files", "PLUGIN_ENV"]
+
+#: The environment variable that lists the plug-in files this process and its workers load.
+PLUGIN_ENV = "RACF_PLUGINS"
+_OWN = "racf"
+
+
+class PluginError(ValueError):
+    """A plug-in that cannot be loaded or used: the message names it and what is wrong."""
+
+
+@dataclass(frozen=True)
+class Plugin:
+    """One registered part.
+
+    Attributes:
+        name: its key (what settings, specs and the CLI call it).
+        obj: the class (or factory) that makes it.
+        origin: ``racf``, the distribution that registered it, or the file it was loaded from.
+        source: what its source is hashed from: None for racf's own (the code version covers
+            it), else a module or package name, or a file's path.
+    """
+
+    name: str
+    obj: Any
+    origin: str
+    source: str | None
+
+    @property
+    def description(self) -> str:
+        """The first line of its ``description`` or docstring."""
+        text = getattr(self.obj, "description", None) or inspect.getdoc(self.obj) or ""
+        return text.strip().splitlines()[0] if text.strip() else ""
+
+    @property
+    def builtin(self) -> bool:
+        return self.origin == _OWN
+
+
+class Registry(Mapping[str, Any]):
+    """Parts of one kind by name, read from the entry-point group ``group`` on first use.
+
+    It is a read-only mapping of name -> class (or factory), racf's own first, then the
+    others, each by name; :meth:`register` adds one at run time.
+
+    Args:
+        group: the entry-point group.
+        kind: what one part is called in messages (``estimator``, ``attack``, ``detector``).
+        accepts: whether an object can be a part of this kind (a file plug-in's classes are
+            sorted by it; an entry point that fails it is refused by name).
+    """
+
+    def __init__(self, group: str, kind: str, accepts: Callable[[Any], bool]) -> None:
+        self.group, self.kind, self.accepts = group, kind, accepts
+        self._plugins: dict[str, Plugin] | None = None
+
+    # --- the mapping -------------------------------------------------------------------------
+    def __getitem__(self, name: str) -> Any:
+        return self._all()[name].obj
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._all())
+
+    def __len__(self) -> int:
+        return len(self._all())
+
+    def __repr__(self) -> str:
+        return f"Registry({self.group!r}: {list(self)})"
+
+    # --- lookups -----------------------------------------------------------------------------
+    def plugin(self, name: str) -> Plugin:
+        """The part called ``name``; PluginError names the choices."""
+        plugins = self._all()
+        if name not in plugins:
+            raise PluginError(f"unknown {self.kind} {name!r}; choose from {tuple(plugins)} "
+                              f"(a plug-in registers under the entry-point group {self.group!r}, "
+                              f"or is loaded with --plugin FILE.py)")
+        return plugins[name]
+
+    def source_id(self, name: str) -> str | None:
+        """A hash of the part's source, read now (None for racf's own parts)."""
+        plugin = self.plugin(name)
+        if plugin.source is None:
+            return None
+        from racf.experiments.sweeps.store import source_version
+
+        return f"{plugin.origin}:{source_version(plugin.source)}"
+
+    # --- registration ------------------------------------------------------------------------
+    def register(self, obj: Any, name: str | None = None, *, origin: str | None = None) -> Plugin:
+        """Adds ``obj`` under ``name`` (default: its ``name`` attribute) and returns its entry.
+
+        Registering the same object again is a no-op; another object under a taken name is
+        refused (PluginError), so a plug-in never silently replaces a part.
+        """
+        name = name or getattr(obj, "name", None)
+        if not isinstance(name, str) or not name.isidentifier():
+            raise PluginError(f"a {self.kind} needs a name that is an identifier (its 'name' attribute), "
+                              f"got {name!r} for {obj!r}")
+        if not self.accepts(obj):
+            raise PluginError(f"{obj!r} is not a {self.kind}: {_SHAPES[self.kind]}")
+        plugins = self._all()
+        if name in plugins:
+            if plugins[name].obj is obj:
+                return plugins[name]
+            raise PluginError(f"{self.kind} {name!r} is already registered by {plugins[name].origin}; "
+                              f"choose another name")
+        origin, source = _provenance(obj) if origin is None else (origin, _provenance(obj)[1])
+        plugins[name] = Plugin(name, obj, origin, source)
+        return plugins[name]
+
+    def _all(self) -> dict[str, Plugin]:
+        if self._plugins is None:
+            self._plugins = {}
+            # racf's own first, then the others; each by name: the same on every machine (and
+            # the order attacks take in a setting's name).
+            found = sorted(entry_points(group=self.group), key=lambda ep: (not _is_own(ep), ep.name))
+            for ep in found:
+                if ep.name in self._plugins:
+                    continue  # the same distribution seen twice on the path: the first wins, as for imports
+                dist = ep.dist.name if ep.dist is not None else "?"
+                try:
+                    obj = ep.load()
+                except Exception as err:  # a user's broken plug-in: name it, never a traceback
+                    raise PluginError(f"{self.kind} plug-in {ep.name!r} ({ep.value}, from {dist}) failed to load: "
+                                      f"{type(err).__name__}: {err}") from None
+                if getattr(obj, "name", ep.name) != ep.name and inspect.isclass(obj):
+                    raise PluginError(f"{self.kind} plug-in {ep.name!r} ({ep.value}, from {dist}) calls itself "
+                                      f"{obj.name!r}: the entry point's name and the class's 'name' must agree")
+                if not self.accepts(obj):
+                    raise PluginError(f"{self.kind} plug-in {ep.name!r} ({ep.value}, from {dist}) is not a "
+                                      f"{self.kind}: {_SHAPES[self.kind]}")
+                self._plugins[ep.name] = Plugin(ep.name, obj, dist, None if dist == _OWN else ep.module.split(".")[0])
+            for path in plugin_files():
+                load_plugin_file(path)
+        return self._plugins
+
+
+def _is_own(ep) -> bool:
+    return ep.dist is not None and ep.dist.name == _OWN
+
+
+def _provenance(obj: Any) -> tuple[str, str | None]:
+    """Where a part registered at run time comes from, and what to hash for its source."""
+    module = getattr(obj, "__module__", "") or ""
+    top = module.split(".")[0]
+    if top == _OWN:
+        return _OWN, None
+    if module in _FILE_MODULES:
+        return _FILE_MODULES[module], _FILE_MODULES[module]
+    file = getattr(sys.modules.get(module), "__file__", None)
+    if top and top != "__main__" and importlib.util.find_spec(top) is not None and file:
+        return top, top
+    if file:
+        return str(Path(file).resolve()), str(Path(file).resolve())
+    raise PluginError(f"{obj!r} has no source file to version its results by; define it in a file")
+
+
+# --- the kinds --------------------------------------------------------------------------------
+def _is_estimator(obj: Any) -> bool:
+    return inspect.isclass(obj) and isinstance(getattr(obj, "name", None), str) and all(
+        callable(getattr(obj, m, None)) for m in ("reset", "estimate", "diagnostics", "would_pass"))
+
+
+def _is_attack(obj: Any) -> bool:
+    from racf.sim.attacks.base import AttackWrapper
+
+    return inspect.isclass(obj) and issubclass(obj, AttackWrapper) and obj is not AttackWrapper
+
+
+def _is_detector(obj: Any) -> bool:
+    if inspect.isclass(obj):
+        return callable(getattr(obj, "detect", None))
+    return callable(obj)
+
+
+_SHAPES = {
+    "estimator": "a class with a 'name' and reset(), estimate(sample, speed_mps, dt, yaw_rate_radps), "
+                 "diagnostics() and would_pass(...) (racf.controllers.DistanceEstimator)",
+    "attack": "a subclass of racf.sim.attacks.AttackWrapper with a 'name'",
+    "detector": "a class (or factory) whose objects have detect(rgb) -> Detection | None",
+}
+
+#: Every part a user can bring, by name.
+ESTIMATORS = Registry("racf.estimators", "estimator", _is_estimator)
+ATTACKS = Registry("racf.attacks", "attack", _is_attack)
+DETECTORS = Registry("racf.detectors", "detector", _is_detector)
+REGISTRIES: dict[str, Registry] = {"estimator": ESTIMATORS, "attack": ATTACKS, "detector": DETECTORS}
+
+#: Module name -> file of the plug-in files loaded in this process.
+_FILE_MODULES: dict[str, str] = {}
+
+
+def plugin_files() -> list[str]:
+    """The plug-in files this process loads (``RACF_PLUGINS``, separated by ``os.pathsep``)."""
+    return [p for p in os.environ.get(PLUGIN_ENV, "").split(os.pathsep) if p]
+
+
+def load_plugin_file(path: str | os.PathLike) -> list[Plugin]:
+    """Loads a Python file and registers every estimator, attack and detector class defined in
+    it (classes with a ``name``); returns them. The file is added to ``RACF_PLUGINS`` so that
+    worker processes load it too. PluginError: no such file, it fails to import, or it defines
+    nothing racf can use."""
+    file = Path(path).expanduser().resolve()
+    if not file.is_file() or file.suffix != ".py":
+        raise PluginError(f"--plugin {path}: no such Python file (give the path of a .py file that defines "
+                          f"an estimator, an attack or a detector)")
+    module_name = f"racf_plugin_{file.stem}_{hashlib.sha256(str(file).encode()).hexdigest()[:8]}"
+    if module_name not in sys.modules:
+        spec = importlib.util.spec_from_file_location(module_name, file)
+        module = importlib.util.module_from_spec(spec)
+        sys.modules[module_name] = module
+        _FILE_MODULES[module_name] = str(file)
+        try:
+            spec.loader.exec_module(module)
+        except Exception as err:
+            del sys.modules[module_name]
+            raise PluginError(f"--plugin {path} failed to import: {type(err).__name__}: {err}") from None
+    module = sys.modules[module_name]
+    found = []
+    for _, obj in inspect.getmembers(module, inspect.isclass):
+        if obj.__module__ != module_name or not isinstance(getattr(obj, "name", None), str):
+            continue
+        for registry in REGISTRIES.values():
+            if registry.accepts(obj):
+                found.append(registry.register(obj, origin=str(file)))
+                break
+    if not found:
+        raise PluginError(f"--plugin {path} defines no estimator, attack or detector (a class with a 'name' "
+                          f"that is one of: {'; '.join(_SHAPES.values())})")
+    listed = plugin_files()
+    if str(file) not in listed:
+        os.environ[PLUGIN_ENV] = os.pathsep.join([*listed, str(file)])
+    return found
