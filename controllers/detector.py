@@ -120,7 +120,7 @@ class BlobDetector:
 
 
 class StopSignDetector(BlobDetector):
-    """Finds the most prominent stop sign in an RGB frame.
+    """The classical detector: the most prominent red octagon in a light ring, by colour and shape (OpenCV).
 
     Example:
         >>> import numpy as np

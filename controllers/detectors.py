@@ -21,9 +21,10 @@ __all__ = ["DETECTORS", "make_detector", "shared_learned_detector"]
 
 @lru_cache(maxsize=1)
 def shared_learned_detector() -> BlobDetector:
-    """The learned segmenter (small convolutional net trained on the simulator's frames), one per
-    process: it keeps no state between frames, and loading its weights for every episode would
-    cost more than the episode's frames."""
+    """The learned segmenter: a small convolutional net trained on the simulator's frames.
+
+    One per process: it keeps no state between frames, and loading its weights for every
+    episode would cost more than the episode's frames."""
     from racf.controllers.learned_detector import LearnedSignDetector  # torch: loaded only when chosen
 
     return LearnedSignDetector()

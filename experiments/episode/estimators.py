@@ -61,6 +61,13 @@ class ODCAEstimator:
         self.last = None
         self._had_depth = False
 
+    @classmethod
+    def of(cls, model) -> "ODCAEstimator":
+        """The estimator around an ODCA model already in memory (the benchmark's per-split heads)."""
+        estimator = cls.__new__(cls)
+        estimator.model, estimator.last, estimator._had_depth = model, None, False
+        return estimator
+
     def reset(self) -> None:
         self.model.reset()
         self.last = None
@@ -72,6 +79,11 @@ class ODCAEstimator:
                                     lidar_confirmed=sample.lidar_confirmed)
         self._had_depth = math.isfinite(sample.d_meas)
         return self.last.d_fused
+
+    def estimate_series(self, frame) -> np.ndarray:
+        """d_fused over whole recorded series (``ODCA.run``, the batched path that gives the
+        numbers ``estimate`` gives step by step): what the offline benchmark calls."""
+        return self.model.run(frame)["d_fused"].to_numpy(float)
 
     def diagnostics(self) -> dict[str, float]:
         if self.last is None:

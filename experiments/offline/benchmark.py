@@ -22,8 +22,8 @@ import pandas as pd
 
 from racf.experiments.data.dataset import SPLITS, QCarDataset, load_dataset
 from racf.experiments.offline.forecasters import NF_MODELS, ChronosForecaster, NFSettings, train_nf, training_frame
-from racf.experiments.offline.methods import (FORECASTERS, METHODS, ekf_estimate, forecast_at,
-                                         lidar_estimate, raw_estimate, split_arrays, with_fallback)
+from racf.experiments.offline.methods import (FORECASTERS, estimator_estimate, forecast_at, lidar_estimate,
+                                              offline_estimators, split_arrays, table_order, with_fallback)
 from racf.experiments.offline.metrics import bounded_degradation, resilience_gain
 from racf.experiments.sweeps.store import code_version
 from racf.experiments.offline.scoring import (bootstrap_rmse_draws, diagnostic_scores, error_sources, horizon_scores,
@@ -210,7 +210,7 @@ def _score_split(ds: QCarDataset, preset: str, odca_model, forecasters: dict, cf
         frame = ds.corrupted(preset, "test", draw)
         a = split_arrays(frame, odca_model.config.alignment)
         estimates, horizon = _estimates(frame, a, odca_model, forecasters)
-        for name in (m for m in METHODS if m in estimates):
+        for name in table_order(estimates):
             est = estimates[name]
             per_draw.setdefault(name, []).append({**recovery_scores(est, a), **horizon.get(name, {}),
                                                   **diagnostic_scores(est, a)})
@@ -232,10 +232,14 @@ def _score_split(ds: QCarDataset, preset: str, odca_model, forecasters: dict, cf
 
 
 def _estimates(frame: pd.DataFrame, a, odca_model, forecasters: dict) -> tuple[dict, dict]:
-    """Every method's estimate on one corrupted frame, and the forecasters' horizon scores."""
+    """Every method's estimate on one corrupted frame, and the forecasters' horizon scores.
+
+    Every registered estimator runs as the car runs it (``odca`` with the split's trained
+    model); the LiDAR reference and the forecasters are offline-only."""
     origins = np.flatnonzero(a.scored)
-    estimates = {"raw": raw_estimate(a), "lidar": lidar_estimate(a), "ekf": ekf_estimate(a),
-                 "odca": with_fallback(odca_model.run(frame)["d_fused"].to_numpy(), a)}
+    estimates = {"lidar": lidar_estimate(a)}
+    for name in offline_estimators():
+        estimates[name] = estimator_estimate(_bench_estimator(name, odca_model), a, frame)
     horizon = {}
     for name, forecaster in forecasters.items():
         one_step, paths = forecast_at(forecaster, a, origins, odca_model.config.context_length,
@@ -245,6 +249,13 @@ def _estimates(frame: pd.DataFrame, a, odca_model, forecasters: dict) -> tuple[d
         estimates[name] = est
         horizon[name] = horizon_scores(origins, paths, a)
     return estimates, horizon
+
+
+def _bench_estimator(name: str, odca_model):
+    """The estimator ``name`` as the car builds it; ODCA with this split's trained model."""
+    from racf.experiments.episode.estimators import ODCAEstimator, make_estimator
+
+    return ODCAEstimator.of(odca_model) if name == "odca" else make_estimator(name)
 
 
 def _pooled_sources(per_draw: list[dict]) -> dict:

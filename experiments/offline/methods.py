@@ -3,14 +3,18 @@
 Every method is causal (the estimate at step t uses data up to t) and returns one estimate
 per step of a long-format corrupted frame:
 
-- ``raw``: d~ held over its gaps (the last valid value of the series);
-- ``lidar``: the aligned LiDAR reference alpha * l + beta where it reports;
-- ``ekf``: :class:`racf.controllers.ekf.DistanceEKF` (depth with noise scaled by 1/c~, aligned
-  LiDAR, odometry as control input);
-- forecasters (``chronos``, ``softs``, ``nhits``, ``dlinear``, ``nlinear``): full replacement,
-  the one-step-ahead forecast from the W depths before the step (:mod:`.forecasters`);
-  computed at the scored steps only, with the next-H forecast kept for the horizon score;
-- ``odca``: the online module's fused output (its batched path, identical to ``step``).
+- every registered estimator (``racf.plugins.ESTIMATORS``: ``raw``, ``ekf``, ``odca`` and any
+  plug-in), run step by step on the recorded series exactly as the car runs it
+  (:func:`estimator_estimate`): the same class, the same ``estimate`` call. ``raw`` is d~, held
+  over its gaps by the fallback below; ``odca`` is the split's retrained head (its batched
+  path, ``estimate_series``, gives the numbers ``step`` gives);
+- ``lidar``: the aligned LiDAR reference alpha * l + beta where it reports (a reference, not a
+  defence a car runs);
+- forecasters (``chronos``, ``softs``, ``nhits``, ``dlinear``, ``nlinear``): offline-only, full
+  replacement, the one-step-ahead forecast from the W depths before the step
+  (:mod:`.forecasters`); computed at the scored steps only, with the next-H forecast kept for
+  the horizon score. The ``chronos`` estimator of the closed loop is scored here as this
+  forecaster (the prior it wraps), which the horizon score needs.
 
 Every method starts afresh at each target (a new ``slot`` of a drive), as the car resets
 its estimator when its track changes target. A method with no estimate at a step (no LiDAR
@@ -26,18 +30,33 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from racf.controllers.ekf import DistanceEKF, EKFConfig
-from racf.odca.align import Alignment
+from racf.controllers.perception import PerceptionSample
 from racf.experiments.offline.metrics import hold_last
+from racf.odca.align import Alignment
 from racf.odca.features import sanitize
+from racf.plugins import ESTIMATORS
 
-__all__ = ["METHODS", "FORECASTERS", "SplitArrays", "split_arrays", "raw_estimate", "lidar_estimate", "ekf_estimate",
-           "forecast_at", "with_fallback"]
+__all__ = ["METHODS", "FORECASTERS", "SplitArrays", "split_arrays", "raw_estimate", "lidar_estimate",
+           "estimator_estimate", "offline_estimators", "table_order", "forecast_at", "with_fallback", "STEP_S"]
 
-#: Every method, in table order.
+#: racf's own methods, in table order (plug-in estimators follow, by name: :func:`table_order`).
 METHODS = ("raw", "lidar", "ekf", "chronos", "softs", "nhits", "dlinear", "nlinear", "odca")
 #: The forecast-only methods (scored one step ahead and over the horizon).
 FORECASTERS = ("chronos", "softs", "nhits", "dlinear", "nlinear")
+#: The dataset's step, s (50 Hz).
+STEP_S = 0.02
+
+
+def offline_estimators() -> tuple[str, ...]:
+    """The registered estimators the benchmark runs step by step: all but those a forecaster of
+    the same name scores (``chronos``)."""
+    return tuple(name for name in ESTIMATORS if name not in FORECASTERS)
+
+
+def table_order(names) -> list[str]:
+    """``names`` in table order: racf's methods first, then the others (plug-ins) by name."""
+    names = set(names)
+    return [m for m in METHODS if m in names] + sorted(names - set(METHODS))
 
 
 @dataclass(frozen=True)
@@ -49,7 +68,10 @@ class SplitArrays:
     d: np.ndarray  # corrupted depth, NaN = missing
     c: np.ndarray
     l_al: np.ndarray  # aligned LiDAR reference, NaN = none
+    l: np.ndarray  # the LiDAR reference as the car's tracker reports it, NaN = none
     v: np.ndarray
+    w: np.ndarray  # yaw rate, rad/s
+    bearing: np.ndarray  # the detection's bearing, rad (NaN: none)
     label: np.ndarray  # 1 inside a corruption segment
     d_clean: np.ndarray
     d_true: np.ndarray
@@ -74,12 +96,15 @@ def split_arrays(frame: pd.DataFrame, alignment: Alignment) -> SplitArrays:
     if "slot" in frame and len(sid):
         slot = frame["slot"].to_numpy()
         first[1:] |= slot[1:] != slot[:-1]
-    d, c, l, v, _, _ = sanitize(frame["d_meas"].to_numpy(float), frame["c_meas"].to_numpy(float),
-                          frame["lidar"].to_numpy(float), frame["speed"].to_numpy(float))
+    d, c, l, v, w, b = sanitize(frame["d_meas"].to_numpy(float), frame["c_meas"].to_numpy(float),
+                                frame["lidar"].to_numpy(float), frame["speed"].to_numpy(float),
+                                frame["yaw_rate"].to_numpy(float) if "yaw_rate" in frame else 0.0,
+                                frame["bearing"].to_numpy(float) if "bearing" in frame else np.nan)
+    w, b = np.broadcast_to(w, d.shape), np.broadcast_to(b, d.shape)
     d_true = frame["d_true"].to_numpy(float) if "d_true" in frame else np.full(len(frame), np.nan)
     label = frame["label"].to_numpy(int)
     kind = frame["kind"].to_numpy(int) if "kind" in frame else label
-    return SplitArrays(sid, first, d, c, alignment(l), v, label, frame["d_clean"].to_numpy(float), d_true,
+    return SplitArrays(sid, first, d, c, alignment(l), l, v, w, b, label, frame["d_clean"].to_numpy(float), d_true,
                        hold_last(d, first), kind)
 
 
@@ -98,13 +123,20 @@ def lidar_estimate(a: SplitArrays) -> np.ndarray:
     return with_fallback(a.l_al, a)
 
 
-def ekf_estimate(a: SplitArrays, config: EKFConfig | None = None, dt: float = 0.02) -> np.ndarray:
+def estimator_estimate(estimator, a: SplitArrays, frame: pd.DataFrame | None = None, dt: float = STEP_S) -> np.ndarray:
+    """A ``DistanceEstimator``'s estimates over a split, step by step as the car runs it: reset at
+    each target, then ``estimate(sample, speed, dt, yaw_rate)`` with the step's depth, confidence,
+    LiDAR reference and bearing. An estimator with a batched path (``estimate_series(frame)``,
+    which must give the numbers ``estimate`` gives) is run through it on ``frame``."""
+    batched = getattr(estimator, "estimate_series", None)
+    if callable(batched) and frame is not None:
+        return with_fallback(np.asarray(batched(frame), float), a)
     out = np.full(len(a), np.nan)
-    ekf = DistanceEKF(config)
     for t in range(len(a)):
         if a.first[t]:
-            ekf.reset()
-        out[t] = ekf.step(a.d[t], a.c[t], a.l_al[t], a.v[t], dt)
+            estimator.reset()
+        sample = PerceptionSample(None, float(a.d[t]), float(a.c[t]), float(a.l[t]), float(a.bearing[t]))
+        out[t] = estimator.estimate(sample, float(a.v[t]), dt, float(a.w[t]))
     return with_fallback(out, a)
 
 

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from racf.experiments.offline.methods import FORECASTERS, METHODS
+from racf.experiments.offline.methods import FORECASTERS, table_order
 from racf.experiments.sweeps.store import atomic_write
 
 __all__ = ["write_report", "main_table", "strict", "PAPER_RECOVERY"]
@@ -80,7 +80,7 @@ def main_table(results: dict, reference: str = "", block: str = "") -> str:
                      f"(N = {', '.join(f'{p} {n[p]}' for p in presets)} scored steps over all draws)\n")
         head = "| method | " + " | ".join(f"{p} RMSE | {p} MAE" for p in presets) + " |"
         lines += [head, "|" + "---|" * (1 + 2 * len(presets))]
-        for method in (m for m in METHODS if m in results[split][presets[0]]):
+        for method in table_order(results[split][presets[0]]):
             cells = []
             for p in presets:
                 row = results[split][p][method]

@@ -40,7 +40,7 @@ def test_repairing_estimators_bridge_a_missing_depth_with_the_lidar(name):
 def test_raw_depth_has_nothing_without_a_detection_and_unknown_names_fail():
     out = _run("raw", _samples([1.0, math.nan]))
     assert out[0] == 1.0 and math.isnan(out[1])
-    with pytest.raises(ValueError, match="estimator must be one of"):
+    with pytest.raises(ValueError, match="unknown estimator 'kalman'; choose from"):
         make_estimator("kalman")
 
 

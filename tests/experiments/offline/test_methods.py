@@ -7,7 +7,10 @@ import pytest
 
 from racf.experiments.offline.forecasters import (NF_MODELS, ChronosForecaster, NFForecaster, NFSettings, _build,
                                              context_windows, train_nf, training_frame)
-from racf.experiments.offline.methods import ekf_estimate, forecast_at, lidar_estimate, raw_estimate, split_arrays
+from racf.controllers import EKFEstimator, RawDepthEstimator
+from racf.experiments.episode.estimators import ODCAEstimator
+from racf.experiments.offline.methods import (estimator_estimate, forecast_at, lidar_estimate, raw_estimate,
+                                              split_arrays)
 from racf.odca import LastValuePrior, ODCA
 from racf.odca.align import Alignment
 
@@ -51,7 +54,7 @@ def nf_models():
 
 def _estimates(frame: pd.DataFrame, nf_models: dict) -> dict[str, np.ndarray]:
     a = split_arrays(frame, Alignment(1.0, 0.0))
-    out = {"raw": raw_estimate(a), "lidar": lidar_estimate(a), "ekf": ekf_estimate(a),
+    out = {"raw": raw_estimate(a), "lidar": lidar_estimate(a), "ekf": estimator_estimate(EKFEstimator(), a),
            "odca": ODCA.load(prior=LastValuePrior()).run(frame)["d_fused"].to_numpy()}
     origins = np.flatnonzero(a.scored)
     for name, f in {"chronos": ChronosForecaster(), **nf_models}.items():
@@ -127,3 +130,25 @@ def test_trained_baselines_are_cached_by_what_made_them(tmp_path):
         train_nf("arima", train, settings)
     with pytest.raises(ValueError, match="max_steps"):
         NFSettings(max_steps=0)
+
+
+class _StepOnly:
+    """An estimator without a batched path: the benchmark must step it."""
+
+    def __init__(self, inner) -> None:
+        self.inner = inner
+
+    def reset(self) -> None:
+        self.inner.reset()
+
+    def estimate(self, *args):
+        return self.inner.estimate(*args)
+
+
+def test_an_estimator_run_step_by_step_gives_its_batched_numbers_and_raw_is_held_depth():
+    frame = _frame(3)
+    a = split_arrays(frame, Alignment(1.0, 0.0))
+    odca = ODCAEstimator.of(ODCA.load(prior=LastValuePrior()))
+    np.testing.assert_allclose(estimator_estimate(_StepOnly(odca), a), estimator_estimate(odca, a, frame),
+                               rtol=0, atol=1e-9, equal_nan=True)
+    np.testing.assert_array_equal(estimator_estimate(RawDepthEstimator(), a), raw_estimate(a))

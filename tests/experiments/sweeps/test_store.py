@@ -6,7 +6,7 @@ import pandas as pd
 import pytest
 
 import racf.experiments.sweeps.store as store_module
-from racf.experiments.sweeps.store import ResultStore, atomic_write, code_version
+from racf.experiments.sweeps.store import ResultStore, atomic_write, code_version, source_version
 
 
 def test_atomic_write_writes_every_kind_and_leaves_no_temporary(tmp_path):
@@ -36,19 +36,31 @@ def test_a_failed_write_keeps_the_old_file_whole(tmp_path):
 
 
 def test_code_version_follows_content_and_names(tmp_path, monkeypatch):
-    monkeypatch.setattr(store_module, "ROOT", tmp_path)
-    (tmp_path / "pkg").mkdir()
-    (tmp_path / "pkg" / "a.py").write_text("x = 1\n")
-    (tmp_path / "pkg" / "notes.md").write_text("not code")
-    first = code_version.__wrapped__("pkg")
-    (tmp_path / "pkg" / "notes.md").write_text("still not code")
-    assert code_version.__wrapped__("pkg") == first
-    (tmp_path / "pkg" / "a.py").write_text("x = 2\n")
-    assert code_version.__wrapped__("pkg") != first
-    (tmp_path / "pkg" / "a.py").rename(tmp_path / "pkg" / "b.py")
-    assert code_version.__wrapped__("pkg") != first
-    with pytest.raises(ValueError, match="no 'missing'"):
-        code_version.__wrapped__("missing")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    (tmp_path / "racf_test_pkg").mkdir()
+    (tmp_path / "racf_test_pkg" / "__init__.py").write_text("")
+    (tmp_path / "racf_test_pkg" / "a.py").write_text("x = 1\n")
+    (tmp_path / "racf_test_pkg" / "notes.md").write_text("not code")
+    first = code_version.__wrapped__("racf_test_pkg")
+    by_path = source_version(str(tmp_path / "racf_test_pkg"))
+    (tmp_path / "racf_test_pkg" / "notes.md").write_text("still not code")
+    assert code_version.__wrapped__("racf_test_pkg") == first
+    (tmp_path / "racf_test_pkg" / "a.py").write_text("x = 2\n")
+    assert code_version.__wrapped__("racf_test_pkg") != first
+    assert source_version(str(tmp_path / "racf_test_pkg")) != by_path
+    (tmp_path / "racf_test_pkg" / "a.py").rename(tmp_path / "racf_test_pkg" / "b.py")
+    assert code_version.__wrapped__("racf_test_pkg") != first
+    with pytest.raises(ValueError, match="no module or package 'racf_missing'"):
+        code_version.__wrapped__("racf_missing")
+    with pytest.raises(ValueError, match="no file or folder"):
+        code_version.__wrapped__(str(tmp_path / "nowhere"))
+
+
+def test_code_version_names_files_relative_to_the_root_so_a_moved_checkout_agrees(tmp_path):
+    for where in ("one", "two"):
+        (tmp_path / where / "ckpt").mkdir(parents=True)
+        (tmp_path / where / "ckpt" / "head.npz").write_bytes(b"weights")
+    assert source_version(str(tmp_path / "one" / "ckpt")) == source_version(str(tmp_path / "two" / "ckpt"))
 
 
 def test_rows_come_back_in_the_order_asked_and_a_missing_one_is_named(tmp_path):
