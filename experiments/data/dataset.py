@@ -29,6 +29,7 @@ import pandas as pd
 
 from racf.experiments.data.corruption import corrupt_series, draw_seed
 from racf.experiments.episode import DRIVE_S, TrialSpec
+from racf.experiments.episode.record import STEP_LOG
 from racf.experiments.episode.runner import SCAN_FOV_HALF_BEAMS
 from racf.experiments.sweeps.batches import SPEEDS_MPS, TRIALS_LOGS, run_batch
 from racf.experiments.sweeps.store import atomic_write
@@ -47,44 +48,33 @@ COLLECTION_FILE = "collection.json"
 #: A sample counts as moving above this speed (the protocol's standstill bound), m/s.
 MOVING_MPS = 0.05
 
-#: Dataset columns: name -> (unit, meaning).
-COLUMNS: dict[str, tuple[str, str]] = {
+#: The dataset's own columns: name -> (unit, meaning).
+_OWN_COLUMNS: dict[str, tuple[str, str]] = {
     "series_id": ("", "one drive; the splits are by series"),
     "drive_seed": ("", "the drive's seed: what the drive is (its corruption draws derive from it)"),
-    "t": ("s", "time since the start of the series (50 Hz)"),
-    "slot": ("", "which of the drive's targets is current (0, 1, ...: the order the route meets them)"),
-    "target": ("", "the current target: sign0-sign3 (stop signs) or obstacle0-obstacle1 (blue crates)"),
     "speed_set": ("m/s", "nominal cruise speed of the series (1.0, 1.5 or 2.0; the drive's own is within +-10 %)"),
     "d_clean": ("m", "perception output: median depth in the detector's mask (NaN: no detection)"),
     "c_clean": ("1", "its confidence: detection confidence x valid-depth share"),
-    "d_true": ("m", "ground truth: depth of the target's centre (sign plate / crate's near face) along the camera axis"),
-    "sign_in_view": ("bool", "ground truth: some of the target is visible"),
-    "detected": ("bool", "the detector reported a target"),
-    "bearing": ("rad", "perception's bearing of the detection's centre from the optical axis, left positive (NaN: none)"),
-    "lidar": ("m", "LiDAR target reference: the tracked cluster's depth along the camera axis, carried "
-                   "forward by odometry between scans (NaN: nothing fits the track)"),
-    "scan_new": ("bool", "a new LiDAR scan arrived this step (10 Hz)"),
     "scan_fov_mm": ("mm", f"LiDAR ranges (uint16), beams -{SCAN_FOV_HALF_BEAMS}..+{SCAN_FOV_HALF_BEAMS} deg "
                             "CCW from forward; 0 = no return"),
-    "speed": ("m/s", "measured speed"),
-    "steering": ("rad", "measured steering angle, left positive"),
-    "yaw_rate": ("rad/s", "IMU yaw rate"),
-    "accel": ("m/s^2", "IMU longitudinal acceleration"),
-    "x": ("m", "ground truth: pose in the map frame"),
-    "y": ("m", "ground truth: pose in the map frame"),
-    "yaw": ("rad", "ground truth: heading in the map frame"),
-    "x_est": ("m", "the car's own pose estimate (its filter on odometry, gyro and the localiser's fixes)"),
-    "y_est": ("m", "the car's own pose estimate"),
-    "yaw_est": ("rad", "the car's own heading estimate"),
-    "fix_x": ("m", "the localiser's last fix (as Quanser's LiDAR scan matcher gives it: drift + noise, 10 Hz)"),
-    "fix_y": ("m", "the localiser's last fix"),
-    "fix_yaw": ("rad", "the localiser's last fix, heading"),
-    "dist_to_stop_line": ("m", "ground truth: front bumper to the current target's stop line along the route"),
-    "brake": ("bool", "the braking controller's command"),
 }
+#: Dataset columns copied from the step log (racf.experiments.episode.record): name -> its log column.
+_FROM_LOG = {"t": "t", "slot": "slot", "target": "target", "d_true": "d_true", "sign_in_view": "sign_in_view",
+             "detected": "detected", "bearing": "bearing", "lidar": "lidar", "scan_new": "scan_new",
+             "speed": "state_speed_mps", "steering": "state_steering_rad", "yaw_rate": "state_yaw_rate_radps",
+             "accel": "state_accel_mps2", "x": "x", "y": "y", "yaw": "yaw", "x_est": "x_est", "y_est": "y_est",
+             "yaw_est": "yaw_est", "fix_x": "fix_x", "fix_y": "fix_y", "fix_yaw": "fix_yaw",
+             "dist_to_stop_line": "dist_to_stop_line", "brake": "brake"}
+_ORDER = ("series_id", "drive_seed", "t", "slot", "target", "speed_set", "d_clean", "c_clean", "d_true", "sign_in_view",
+          "detected", "bearing", "lidar", "scan_new", "scan_fov_mm", "speed", "steering", "yaw_rate", "accel", "x", "y",
+          "yaw", "x_est", "y_est", "yaw_est", "fix_x", "fix_y", "fix_yaw", "dist_to_stop_line", "brake")
+#: Dataset columns: name -> (unit, meaning); those from the step log take the log's declaration.
+COLUMNS: dict[str, tuple[str, str]] = {
+    name: _OWN_COLUMNS[name] if name in _OWN_COLUMNS else (STEP_LOG[_FROM_LOG[name]].unit,
+                                                           STEP_LOG[_FROM_LOG[name]].meaning)
+    for name in _ORDER}
 
-_RENAME = {"c_meas": "c_clean", "state_speed_mps": "speed", "state_steering_rad": "steering",
-           "state_yaw_rate_radps": "yaw_rate", "state_accel_mps2": "accel"}
+_RENAME = {"c_meas": "c_clean", **{log: name for name, log in _FROM_LOG.items() if log != name}}
 
 
 def collection_specs(drives: int = DEFAULT_DRIVES, seed: int = 0, speeds: tuple[float, ...] = SPEEDS_MPS,

@@ -23,13 +23,10 @@ from racf.sim.sensors import TIMESTAMP_FIELDS
 from racf.sim.sensors.localiser import LOCALISATIONS
 from racf.sim.world.drives import RouteTarget
 from racf.sim.world.road_graph import Path
+from racf.sim.world.route_plan import current_slot
 
-__all__ = ["CarCalibration", "Mission", "CarStep", "Car", "sign_depth_at_line", "route_follower", "map_bearing",
-           "PASS_LINE_M"]
+__all__ = ["CarCalibration", "Mission", "CarStep", "Car", "sign_depth_at_line", "route_follower", "map_bearing"]
 
-#: The next target becomes current once the front bumper is this far past the current one's
-#: stop line (the car has served it and driven on); the env's own rule, on the car's pose.
-PASS_LINE_M = 0.3
 #: The tyres' grip bounds the body's acceleration (friction 0.75 x g): a faster change of the
 #: encoder's speed is the wheels spinning up or locking, not the car (m/s^2).
 MAX_ACCEL_MPS2 = 0.75 * 9.81
@@ -46,12 +43,19 @@ class CarCalibration:
         camera_xy_m: the camera's position on the body, m.
         bumper_x_m: the front bumper's position ahead of the body origin, m.
         rear_axle_x_m: the rear axle's position on the body, m (negative: behind the origin).
+        lidar_xy_m: the LiDAR's position on the body, m (the scan plane's origin).
     """
 
     camera: CameraModel
     camera_xy_m: tuple[float, float]
     bumper_x_m: float
     rear_axle_x_m: float
+    lidar_xy_m: tuple[float, float]
+
+    @property
+    def camera_lever_m(self) -> float:
+        """The camera's distance ahead of the rear axle, m (the kinematic branch's lever)."""
+        return round(self.camera_xy_m[0] - self.rear_axle_x_m, 6)
 
 
 @dataclass(frozen=True)
@@ -209,11 +213,10 @@ class Car:
             self.follower = route_follower(self.mission.path, self.mission.cruise_mps, start_s)
             self._bumper_ahead_of_axle = self.calibration.bumper_x_m - self.follower.steering.config.front_axle_m
             self._begin(0)
-        # The car's own localisation and the map say which target is next.
-        targets = self.mission.targets
-        while (self.slot + 1 < len(targets)
-               and self.follower.progress_m + self._bumper_ahead_of_axle - targets[self.slot].stop_s > PASS_LINE_M):
-            self._begin(self.slot + 1)
+        # The car's own localisation and the map say which target is next (the env's rule, on the car's pose).
+        slot = current_slot(self.mission.targets, self.slot, self.follower.progress_m + self._bumper_ahead_of_axle)
+        if slot != self.slot:
+            self._begin(slot)
         speed = float(obs["state"][0])
         # A scan is handed to the tracker once, on the step it arrives (the LiDAR runs at 10 Hz).
         scan_time = float(obs["timestamps"][_SCAN_TIME])

@@ -80,6 +80,18 @@ class ODCAEstimator:
         self._had_depth = math.isfinite(sample.d_meas)
         return self.last.d_fused
 
+    def use_calibration(self, calibration) -> None:
+        """Sets the kinematic branch's lever (camera ahead of the rear axle) from the car's build;
+        a checkpoint keeps the lever of the car it was trained for."""
+        from dataclasses import replace
+
+        from racf.odca import ODCA
+
+        kinematics = self.model.config.kinematics
+        if kinematics.camera_lever_m != calibration.camera_lever_m:
+            config = replace(self.model.config, kinematics=replace(kinematics, camera_lever_m=calibration.camera_lever_m))
+            self.model = ODCA(config, self.model.head, self.model.prior)
+
     def estimate_series(self, frame) -> np.ndarray:
         """d_fused over whole recorded series (``ODCA.run``, the batched path that gives the
         numbers ``estimate`` gives step by step): what the offline benchmark calls."""

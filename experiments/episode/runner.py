@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import math
 from collections import deque
-from dataclasses import asdict, astuple, dataclass
+from dataclasses import asdict, dataclass
 from typing import Callable
 
 import gymnasium as gym
@@ -27,15 +27,17 @@ import numpy as np
 import pandas as pd
 
 from racf.controllers import Phase
+from racf.experiments.episode.record import step_row
 from racf.experiments.episode.referee import Referee
 from racf.experiments.episode.scoring import largest_jump, score_log, stealth
 from racf.experiments.episode.spec import TrialSpec
-from racf.experiments.episode.stack import build_car, default_env, mission
+from racf.experiments.episode.plan import EpisodePlan, plan_episode
+from racf.experiments.episode.stack import build_car, default_env
 from racf.sim.attacks import PatchOcclusion
 from racf.sim.attacks.base import AttackWrapper
 from racf.sim.sensors import STATE_FIELDS
 
-__all__ = ["TrialResult", "StepHook", "run_trial", "reset_options", "scan_fov", "SCAN_FOV_HALF_BEAMS",
+__all__ = ["TrialResult", "StepHook", "run_trial", "scan_fov", "SCAN_FOV_HALF_BEAMS",
            "RUN_THROUGH_M"]
 
 #: An episode ends once the bumper is this far past the last target's line.
@@ -53,15 +55,7 @@ def scan_fov(ranges: np.ndarray, half_beams: int = SCAN_FOV_HALF_BEAMS) -> np.nd
     return np.concatenate([ranges[-half_beams:], ranges[:half_beams + 1]])
 
 
-def reset_options(spec: TrialSpec) -> dict:
-    """The env's reset options for a spec: an approach to one target, or a drive."""
-    drive = spec.drive
-    if drive is not None:
-        return drive.reset_options()
-    return {spec.target: spec.sign, "cruise_speed": spec.speed}
-
-
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class TrialResult:
     """The result row of one episode; the timing fields are the first target's (NaN: none).
 
@@ -114,7 +108,8 @@ def run_trial(spec: TrialSpec, estimator=None, make_env: Callable[[TrialSpec], g
     Args:
         spec: the episode.
         estimator: overrides the spec's estimator (an object with the ``DistanceEstimator`` protocol).
-        make_env: builds the env (default :func:`~racf.experiments.episode.stack.default_env`).
+        make_env: builds the env (default :func:`~racf.experiments.episode.stack.default_env`); it
+            must be the env the plan describes (``plan_episode(spec).env_kwargs``).
         on_step: called as ``on_step(env, obs, info, row)`` after each step's decision
             (figures, viewers); it must not change anything.
         clean_pass: under attack, also run perception on the env's own unattacked readings
@@ -124,36 +119,35 @@ def run_trial(spec: TrialSpec, estimator=None, make_env: Callable[[TrialSpec], g
     """
     env = make_env(spec) if make_env is not None else default_env(spec)
     try:
-        log = _run(env, spec, estimator, on_step, clean_pass)
-        return _result(spec, env, log), log
+        plan = plan_episode(spec)
+        log = _run(env, spec, plan, estimator, on_step, clean_pass)
+        return _result(spec, plan, env, log), log
     finally:
         env.close()
 
 
-def _run(env: gym.Env, spec: TrialSpec, estimator, on_step: StepHook | None, clean_pass: bool) -> pd.DataFrame:
-    options = reset_options(spec)
-    obs, info = env.reset(seed=spec.seed, options=options)
-    u = env.unwrapped
-    dt = 1.0 / u.config.control_hz
+def _run(env: gym.Env, spec: TrialSpec, plan: EpisodePlan, estimator, on_step: StepHook | None,
+         clean_pass: bool) -> pd.DataFrame:
+    obs, info = env.reset(seed=spec.seed, options=plan.reset_options)
+    dt = plan.control_dt_s
     delay_steps = int(round(spec.delay_ms / 1000.0 / dt))
     # The car gets its build and its mission before it starts, then only observations.
-    car = build_car(env, spec, mission(env, options), estimator)
+    car = build_car(spec, plan, estimator)
     _grant_white_box(env, car.estimator)
     targets = car.mission.targets
     referee = Referee(car.calibration, spec.braking, dt, _find_wrapper(env, AttackWrapper) is not None, clean_pass)
     pending: deque = deque()
     rows: list[dict] = []
-    for _ in range(int(round(u.config.max_episode_s / dt))):
+    for _ in range(plan.max_steps):
         step = car.step(obs)
         pending.append(step.action)
         applied = pending.popleft() if len(pending) > delay_steps else pending[0]
         sample, decision = step.sample, step.decision
         truth = referee.observe(env, obs, info, step, car.target, car.perception)
-        rows.append({
+        rows.append(step_row({
             "t": info["time"], "slot": step.slot, "target": car.target.name, "control": step.control,
-            "d_true": truth.pop("d_true"), "d_clean": truth.pop("d_clean"), "d_meas": sample.d_meas,
-            "c_meas": sample.c_meas, "lidar": sample.lidar_m, "d_fused": step.d_fused,
-            "w": math.nan, "flag": math.nan, **car.estimator.diagnostics(), "detected": sample.detected,
+            "d_meas": sample.d_meas, "c_meas": sample.c_meas, "lidar": sample.lidar_m, "d_fused": step.d_fused,
+            "detected": sample.detected,
             "det_confidence": sample.detection_confidence, "bearing": sample.bearing_rad,
             **dict(zip(("det_x0", "det_y0", "det_x1", "det_y1"),
                        sample.detection.box if sample.detection is not None else (-1, -1, -1, -1))),
@@ -170,7 +164,7 @@ def _run(env: gym.Env, spec: TrialSpec, estimator, on_step: StepHook | None, cle
             "frame_new": step.frame_new, "scan_new": step.scan_new, "scan_fov": scan_fov(obs["lidar"]),
             # The LiDAR reference's tracked point in the body frame (NaN without a track), for viewers.
             "track_x": step.tracked_xy[0], "track_y": step.tracked_xy[1],
-        })
+        }, car.estimator.diagnostics()))
         if on_step is not None:
             on_step(env, obs, info, rows[-1])
         last = step.slot == len(targets) - 1
@@ -184,21 +178,24 @@ def _run(env: gym.Env, spec: TrialSpec, estimator, on_step: StepHook | None, cle
     return log
 
 
-def _result(spec: TrialSpec, env: gym.Env, log: pd.DataFrame) -> TrialResult:
+def _result(spec: TrialSpec, plan: EpisodePlan, env: gym.Env, log: pd.DataFrame) -> TrialResult:
     outcomes = score_log(log)
     first = outcomes[0]
     patch = _find_wrapper(env, PatchOcclusion)
     windows = _first_attack_windows(env)
     lost = int((log["attack_active"] & log["sign_in_view"] & ~log["detected"]).sum())
-    n_targets = len(env.unwrapped.route_targets)
+    n_targets = len(plan.mission.targets)
     served = sum(o.success for o in outcomes)
     return TrialResult(
-        spec.trial_id, spec.setting, spec.estimator, spec.target, spec.sign, spec.speed, spec.seed,
-        patch.rho if patch is not None else math.nan,
-        windows[0][1] - windows[0][0] if windows else math.nan, windows[0][0] if windows else math.nan, lost,
-        bool(served == n_targets), not math.isnan(first.rest_distance_m), first.rest_distance_m,
-        first.t_star_s, first.t_brake_s, first.trigger_delay_s, first.dt_brake_s, first.failure,
-        float(log["t"].iloc[-1]), n_targets, served, largest_jump(log), *astuple(stealth(log)))
+        trial_id=spec.trial_id, setting=spec.setting, estimator=spec.estimator, target=spec.target, sign=spec.sign,
+        speed=spec.speed, seed=spec.seed, rho=patch.rho if patch is not None else math.nan,
+        t_atk_s=windows[0][1] - windows[0][0] if windows else math.nan,
+        attack_start_s=windows[0][0] if windows else math.nan, lost_frames=lost,
+        success=bool(served == n_targets), stopped=not math.isnan(first.rest_distance_m),
+        stop_distance_m=first.rest_distance_m, t_star_s=first.t_star_s, t_brake_s=first.t_brake_s,
+        trigger_delay_s=first.trigger_delay_s, dt_brake_s=first.dt_brake_s, failure=first.failure,
+        duration_s=float(log["t"].iloc[-1]), n_targets=n_targets, targets_served=served,
+        fused_jump_m=largest_jump(log), **asdict(stealth(log)))
 
 
 def _first_attack_windows(env: gym.Env) -> list[tuple[float, float]]:

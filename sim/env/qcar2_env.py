@@ -20,7 +20,6 @@ lateral speed, which no sensor on the car measures.
 from __future__ import annotations
 
 import math
-import numbers
 from typing import Any
 
 import cv2
@@ -35,8 +34,9 @@ from racf.sim.sensors import (TIMESTAMP_FIELDS, DepthCamera, Lidar2D, Localisati
                          VehicleStateSensor)
 from racf.sim.sensors.a2m12 import A2M12Lidar
 from racf.sim.vehicle import QCar2
-from racf.sim.world.drives import RouteTarget, start_pose, targets_on_path
-from racf.sim.world.road_graph import Path, qcar2_road_graph
+from racf.sim.world.drives import RouteTarget
+from racf.sim.world.route_plan import current_slot, plan_route
+from racf.sim.world.road_graph import Path
 from racf.sim.world.scene import HIDDEN_GEOM_GROUP, PROP_GEOM_GROUP, load_model, patch_geom, patch_texture
 from racf.sim.world.sign_patch import PatchPlacement
 from racf.sim.world.obstacles import Obstacle, obstacles
@@ -53,11 +53,6 @@ _NAV_SENSORS = ("gps", "state")
 #: Each sensor's entry in the ``timestamps`` observation.
 _STAMP_SLOT = {name: i for i, name in enumerate(TIMESTAMP_FIELDS)}
 
-_BUMPER_AHEAD_M = 0.2125  # body origin to front bumper
-#: On a drive, the next target becomes current once the front bumper is this far past
-#: the current one's stop line (the car has served it and driven on).
-PASS_LINE_M = 0.3
-_DRIVE_OPTIONS = ("route", "start_s_m", "lateral_offset_m", "heading_error_rad", "crate")
 
 
 class QCar2Env(gym.Env):
@@ -87,7 +82,7 @@ class QCar2Env(gym.Env):
       crate index to place on the route, which ends the drive, or None) and
       ``cruise_speed``. Its targets are the stop signs whose stop lines the route crosses
       in their direction (and the crate); the next becomes current once the bumper is
-      ``PASS_LINE_M`` past the current one's stop line (``info["target_slot"]``).
+      ``route_plan.PASS_LINE_M`` past the current one's stop line (``info["target_slot"]``).
 
     Ground truth is in ``info`` (the ``sign_*`` keys describe the current target, sign or
     crate; ``target_kind`` says which): ``d_true`` (target depth along the camera axis, m),
@@ -125,6 +120,8 @@ class QCar2Env(gym.Env):
         self.model.opt.timestep = self.config.physics_dt_s
         self.data = mujoco.MjData(self.model)
         self.car = QCar2(self.model, self.config.vehicle)
+        #: Body origin to the front bumper along x, m (the car's MJCF).
+        self._bumper_ahead_m = float(self.model.site("front_bumper").pos[0])
         self.rig = RGBDCameraRig(self.config.camera)
         self.rig.configure_model(self.model)
         true_pose = self.config.localisation == "true"
@@ -182,10 +179,11 @@ class QCar2Env(gym.Env):
         unknown = sorted(set(options) - set(RESET_OPTIONS))
         if unknown:
             raise ValueError(f"unknown reset option(s) {unknown}; allowed: {list(RESET_OPTIONS)}")
-        if "route" in options:
-            path, targets, crate, start_s, pose, speed = self._drive_from_options(options)
-        else:
-            path, targets, crate, start_s, pose, speed = self._approach_from_options(options)
+        plan = plan_route(options, sign_geometry=self.config.sign, bumper_ahead_m=self._bumper_ahead_m,
+                          max_speed_mps=self.config.vehicle.max_speed_mps,
+                          cruise_speeds_mps=self.config.cruise_speeds_mps, rng=self.np_random)
+        path, targets, crate, start_s, pose, speed = (plan.path, plan.targets, plan.crate, plan.start_s,
+                                                      plan.start_pose, plan.cruise_mps)
 
         # One generator for the cameras' and the LiDAR's noise and one for the fix's and the
         # odometry's, both derived from the env's seeded generator.
@@ -208,62 +206,6 @@ class QCar2Env(gym.Env):
             sensor.reset(self._rng_of(sensor))
         self._read_sensors(force=True)
         return self._observation(), self._info(collision=False, off_road=False)
-
-    def _approach_from_options(self, options: dict[str, Any]):
-        extra = sorted(set(options) & set(_DRIVE_OPTIONS))
-        if extra:
-            raise ValueError(f"reset option(s) {extra} need options['route'] (a drive)")
-        if "sign" in options and "obstacle" in options:
-            raise ValueError("pass options['sign'] (a stop sign) or options['obstacle'] (a crate), not both")
-        key, targets = ("obstacle", obstacles()) if "obstacle" in options else ("sign", stop_signs(self.config.sign))
-        index = options.get(key, int(self.np_random.integers(len(targets))))
-        if not _is_int(index) or int(index) not in range(len(targets)):
-            raise ValueError(f"options[{key!r}] must be an int in 0..{len(targets) - 1}, got {index!r}")
-        sign = targets[int(index)]
-        speed = self._cruise_option(options)
-        longest = sign.stop_s - sign.earliest_start_s - _BUMPER_AHEAD_M
-        run_up = options.get("run_up_m", min(3.0, longest))
-        if not (_is_real(run_up) and 0.3 <= run_up <= longest + 1e-9):
-            raise ValueError(f"options['run_up_m'] for sign {sign.index} must be in [0.3, {longest:.2f}] m, got {run_up!r}")
-        s_target, _ = sign.path.project(np.asarray(sign.position), s_hint=sign.stop_s, window_m=0.6)
-        start_s = sign.stop_s - run_up - _BUMPER_AHEAD_M
-        crate = sign.index if isinstance(sign, Obstacle) else None
-        return (sign.path, (RouteTarget(sign, sign.stop_s, s_target),), crate, start_s,
-                sign.path.pose_at(start_s), speed)
-
-    def _drive_from_options(self, options: dict[str, Any]):
-        clash = sorted(set(options) & {"sign", "obstacle", "run_up_m"})
-        if clash:
-            raise ValueError(f"reset option(s) {clash} do not combine with options['route'] (a drive)")
-        route = options["route"]
-        if isinstance(route, (str, bytes)) or not all(_is_int(n) for n in route):
-            raise ValueError(f"options['route'] must be a sequence of road-graph node ids, got {route!r}")
-        path = qcar2_road_graph().route_path([int(n) for n in route])  # ValueError names a bad edge
-        crate = options.get("crate")
-        if crate is not None and (not _is_int(crate) or int(crate) not in range(len(obstacles()))):
-            raise ValueError(f"options['crate'] must be None or an int in 0..{len(obstacles()) - 1}, got {crate!r}")
-        start_s = options.get("start_s_m", 0.0)
-        if not (_is_real(start_s) and 0.0 <= start_s < path.length - 0.5):
-            raise ValueError(f"options['start_s_m'] must be in [0, {path.length - 0.5:.2f}) m, got {start_s!r}")
-        lateral = options.get("lateral_offset_m", 0.0)
-        if not (_is_real(lateral) and abs(lateral) <= 0.1):
-            raise ValueError(f"options['lateral_offset_m'] must be in [-0.1, 0.1] m, got {lateral!r}")
-        heading_err = options.get("heading_error_rad", 0.0)
-        if not (_is_real(heading_err) and abs(heading_err) <= 0.5):
-            raise ValueError(f"options['heading_error_rad'] must be in [-0.5, 0.5] rad, got {heading_err!r}")
-        targets = targets_on_path(path, crate, float(start_s), geometry=self.config.sign)
-        if not targets:
-            raise ValueError(f"route {list(route)} meets no target after start_s_m={start_s}: no stop sign "
-                             "faces its lanes (and no crate is placed on it)")
-        speed = self._cruise_option(options)
-        return (path, targets, crate, float(start_s), start_pose(path, float(start_s), float(lateral),
-                                                                  float(heading_err)), speed)
-
-    def _cruise_option(self, options: dict[str, Any]) -> float:
-        speed = options.get("cruise_speed", float(self.np_random.choice(self.config.cruise_speeds_mps)))
-        if not (_is_real(speed) and 0.0 <= speed <= self.config.vehicle.max_speed_mps):
-            raise ValueError(f"options['cruise_speed'] must be in [0, {self.config.vehicle.max_speed_mps}] m/s, got {speed!r}")
-        return float(speed)
 
     def step(self, action):
         action = np.asarray(action, dtype=np.float64)
@@ -417,10 +359,8 @@ class QCar2Env(gym.Env):
     def _update_route_progress(self) -> None:
         x, y = self.data.qpos[self.car.root_qpos : self.car.root_qpos + 2]
         self._route_s, self._lateral = self._path.project(np.array([x, y]), s_hint=self._route_s, window_m=0.5)
-        # Served and passed: the next target of a drive becomes current.
-        while (self._slot + 1 < len(self._targets)
-               and self._route_s + _BUMPER_AHEAD_M - self._targets[self._slot].stop_s > PASS_LINE_M):
-            self._slot += 1
+        # Served and passed: the next target of a drive becomes current (the rule the car applies to its own pose).
+        self._slot = current_slot(self._targets, self._slot, self._route_s + self._bumper_ahead_m)
 
     def _info(self, collision: bool, off_road: bool) -> dict[str, Any]:
         if self._step == 0:
@@ -450,7 +390,7 @@ class QCar2Env(gym.Env):
             "speed": state.speed,
             "route_s": self._route_s,
             "lateral_error": self._lateral,
-            "dist_to_stop_line": self._targets[self._slot].stop_s - (self._route_s + _BUMPER_AHEAD_M),
+            "dist_to_stop_line": self._targets[self._slot].stop_s - (self._route_s + self._bumper_ahead_m),
             "collision": collision,
             "off_road": off_road,
             "time": self._step / self.config.control_hz,
@@ -483,14 +423,6 @@ class QCar2Env(gym.Env):
         """
         return self._observation()
 
-
-def _is_int(value: Any) -> bool:
-    return isinstance(value, numbers.Integral) and not isinstance(value, bool)
-
-
-def _is_real(value: Any) -> bool:
-    """A finite real number (NaN compares false with every range check, reject it here)."""
-    return isinstance(value, numbers.Real) and not isinstance(value, bool) and value == value
 
 
 class _ChaseView:

@@ -6,7 +6,7 @@ import pytest
 
 from racf import sim  # noqa: F401  (registers the env)
 from racf.controllers import RouteFollower
-from racf.sim.env.qcar2_env import PASS_LINE_M
+from racf.sim.world.route_plan import PASS_LINE_M
 from racf.sim.world.drives import MIN_TARGET_AHEAD_M, draw_drive, estimate_duration_s, targets_on_path
 from racf.sim.world.obstacles import obstacles
 from racf.sim.world.road_graph import qcar2_road_graph

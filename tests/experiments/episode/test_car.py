@@ -13,7 +13,7 @@ from racf.experiments.episode import car
 from racf.experiments.episode.car import CarCalibration, map_bearing, sign_depth_at_line
 
 CAL = CarCalibration(CameraModel(width=320, fx=230.0, cx=160.0), camera_xy_m=(0.2, 0.0), bumper_x_m=0.25,
-                     rear_axle_x_m=-0.128)
+                     rear_axle_x_m=-0.128, lidar_xy_m=(-0.012, 0.0))
 
 
 def _sign(x, y, face_yaw=math.pi):

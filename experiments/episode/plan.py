@@ -1,0 +1,113 @@
+"""The scenario plan: what an episode is, made once from its spec and the map, before the env runs.
+
+:func:`plan_episode` is pure. From a :class:`~racf.experiments.episode.spec.TrialSpec` it makes
+the env's settings and reset options, the car's mission (the route, its targets, the cruise
+speed) and the car's calibration (its build, read from the car's MJCF and the camera's
+intrinsics). The env's reset reads the same route source (``racf.sim.world.route_plan``), and
+nothing is read back out of the env: the runner hands the mission and the calibration to the
+car and the referee.
+
+A new scenario kind is a new branch of :func:`reset_options` (and of the env's reset hook).
+
+Example:
+    >>> from racf.experiments.episode import TrialSpec
+    >>> from racf.experiments.episode.plan import plan_episode
+    >>> plan = plan_episode(TrialSpec("clean", 2, 1.0, 0))
+    >>> plan.reset_options, plan.mission.cruise_mps, len(plan.mission.targets)
+    ({'sign': 2, 'cruise_speed': 1.0}, 1.0, 1)
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+
+from racf.controllers import CameraModel
+from racf.experiments.episode.car import CarCalibration, Mission
+from racf.experiments.episode.spec import TrialSpec
+from racf.sim.env.config import EnvConfig
+from racf.sim.sensors.camera import CameraIntrinsics
+from racf.sim.world.route_plan import plan_route
+from racf.sim.world.stop_signs import SIGN_GEOMETRIES
+
+__all__ = ["EpisodePlan", "plan_episode", "reset_options", "env_settings", "car_calibration",
+           "DRIVE_MAX_EPISODE_S"]
+
+#: A drive's episode time limit, s.
+DRIVE_MAX_EPISODE_S = 120.0
+
+
+@dataclass(frozen=True)
+class EpisodePlan:
+    """Everything an episode is before it runs.
+
+    Attributes:
+        env_kwargs: the env's settings (``gym.make(racf.sim.ENV_ID, **env_kwargs)``).
+        reset_options: ``env.reset(options=...)``.
+        mission: the car's briefing.
+        calibration: the car's build.
+        control_dt_s: the car's loop period, s (the env's step).
+        localisation: how the car localises (``qcar2``: its own filter; ``true``: the ablation).
+        max_steps: the episode's step limit.
+    """
+
+    env_kwargs: dict
+    reset_options: dict
+    mission: Mission
+    calibration: CarCalibration
+    control_dt_s: float
+    localisation: str
+    max_steps: int
+
+
+def env_settings(spec: TrialSpec) -> dict:
+    """The env's settings for ``spec``: its sensors, its stop signs and (a drive) a longer limit."""
+    kwargs = {"sensor_profile": spec.sensor_profile, "sign": SIGN_GEOMETRIES[spec.sign_geometry]}
+    if spec.target == "drive":
+        kwargs["max_episode_s"] = DRIVE_MAX_EPISODE_S
+    return kwargs
+
+
+def reset_options(spec: TrialSpec) -> dict:
+    """The env's reset options for a spec: an approach to one target, or a drive."""
+    drive = spec.drive
+    if drive is not None:
+        return drive.reset_options()
+    return {spec.target: spec.sign, "cruise_speed": spec.speed}
+
+
+def plan_episode(spec: TrialSpec, **env_kwargs) -> EpisodePlan:
+    """The plan of one episode (``env_kwargs`` override the spec's env settings)."""
+    kwargs = {**env_settings(spec), **env_kwargs}
+    config = EnvConfig.from_kwargs(**kwargs)
+    options = reset_options(spec)
+    calibration = car_calibration(config.camera.width, config.camera.height)
+    # The options name the target and the speed: the generator is never asked for them.
+    route = plan_route(options, sign_geometry=config.sign, bumper_ahead_m=calibration.bumper_x_m,
+                       max_speed_mps=config.vehicle.max_speed_mps, cruise_speeds_mps=config.cruise_speeds_mps,
+                       rng=np.random.default_rng(0))
+    mission = Mission(route.path, route.targets, route.cruise_mps, options.get("start_s_m"))
+    dt = 1.0 / config.control_hz
+    return EpisodePlan(kwargs, options, mission, calibration, dt, config.localisation,
+                       int(round(config.max_episode_s / dt)))
+
+
+@lru_cache(maxsize=8)
+def car_calibration(width_px: int, height_px: int) -> CarCalibration:
+    """The car's build as its software is configured with it: the camera's intrinsics at this
+    resolution and the mounts of the camera, the LiDAR, the front bumper and the rear axle,
+    read from the car's MJCF (the model the simulator drives)."""
+    import mujoco
+
+    from racf.sim.world.scene import ASSETS_DIR
+
+    car = (ASSETS_DIR / "qcar2.xml").read_bytes()
+    model = mujoco.MjModel.from_xml_string('<mujoco model="qcar2"><include file="qcar2.xml"/></mujoco>',
+                                           {"qcar2.xml": car})
+    k = CameraIntrinsics.d435_colour(width_px, height_px)
+    camera, lidar = model.camera("d435").pos, model.site("lidar").pos
+    return CarCalibration(CameraModel(width=k.width, fx=k.fx, cx=k.cx, fy=k.fy), (float(camera[0]), float(camera[1])),
+                          float(model.site("front_bumper").pos[0]), float(model.body("wheel_rl").pos[0]),
+                          (float(lidar[0]), float(lidar[1])))
