@@ -142,7 +142,7 @@ class Registry(Mapping[str, Any]):
             raise PluginError(f"a {self.kind} needs a name that is an identifier (its 'name' attribute), "
                               f"got {name!r} for {obj!r}")
         if not self.accepts(obj):
-            raise PluginError(f"{obj!r} is not a {self.kind}: {_SHAPES[self.kind]}")
+            raise PluginError(f"{obj!r} is not {_an(self.kind)}: {_SHAPES[self.kind]}")
         plugins = self._all()
         if name in plugins:
             if plugins[name].obj is obj:
@@ -172,12 +172,16 @@ class Registry(Mapping[str, Any]):
                     raise PluginError(f"{self.kind} plug-in {ep.name!r} ({ep.value}, from {dist}) calls itself "
                                       f"{obj.name!r}: the entry point's name and the class's 'name' must agree")
                 if not self.accepts(obj):
-                    raise PluginError(f"{self.kind} plug-in {ep.name!r} ({ep.value}, from {dist}) is not a "
-                                      f"{self.kind}: {_SHAPES[self.kind]}")
+                    raise PluginError(f"{self.kind} plug-in {ep.name!r} ({ep.value}, from {dist}) is not "
+                                      f"{_an(self.kind)}: {_SHAPES[self.kind]}")
                 self._plugins[ep.name] = Plugin(ep.name, obj, dist, None if dist == _OWN else ep.module.split(".")[0])
             for path in plugin_files():
                 load_plugin_file(path)
         return self._plugins
+
+
+def _an(kind: str) -> str:
+    return f"{'an' if kind[0] in 'aeiou' else 'a'} {kind}"
 
 
 def _is_own(ep) -> bool:

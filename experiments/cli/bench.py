@@ -8,9 +8,7 @@ import json
 from pathlib import Path
 
 from racf.controllers.detectors import DETECTORS
-from racf.experiments.cli.common import count, fail, fmt_ci, sensor_flags
-
-DETECTOR_NAMES = tuple(DETECTORS)
+from racf.experiments.cli.common import count, fail, fmt_ci, plugin_flag, sensor_flags
 
 __all__ = ["register"]
 
@@ -22,8 +20,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     sensor_flags(b, geometry_default=None)
     b.set_defaults(handler=_bench_sim)
 
-    ob = sub.add_parser("bench", help="the offline repair benchmark: raw, LiDAR, EKF, Chronos-2, SOFTS, NHITS, "
-                                      "DLinear, NLinear and ODCA on both splits and presets (tables, figures, "
+    ob = sub.add_parser("bench", help="the offline repair benchmark: every registered estimator (raw, EKF, ODCA, "
+                                      "plug-ins) beside the LiDAR reference and the forecasters (Chronos-2, SOFTS, "
+                                      "NHITS, DLinear, NLinear) on both splits and presets (tables, figures, "
                                       "results.json)")
     ob.add_argument("--dataset", type=Path, default=Path("data/qcar2"), help="dataset folder (racf collect)")
     ob.add_argument("--out", type=Path, default=Path("outputs/bench"), help="results folder (default outputs/bench)")
@@ -41,6 +40,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                     help="optimiser steps of the neuralforecast baselines (default 600; --quick 15)")
     ob.add_argument("--epochs", type=count, default=None, help="ODCA head epochs (default 800; --quick 40)")
     ob.add_argument("--json", action="store_true", help="print the results as one JSON object instead of the table")
+    plugin_flag(ob)
     ob.set_defaults(handler=_bench)
 
     bl = sub.add_parser("bench-loop", help="closed-loop throughput: real-time factor on one core (clean, attack + "
@@ -56,7 +56,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
     bd = sub.add_parser("bench-detector", help="stop-sign detectors side by side: recall and false-positive frames "
                                                "on held-out views and approach drives, time per frame on one core")
-    bd.add_argument("--detector", choices=("both", *DETECTOR_NAMES), default="both",
+    bd.add_argument("--detector", choices=("both", *DETECTORS), default="both",
                     help="which detector(s) to measure (default both, side by side)")
     bd.add_argument("--seed", type=int, default=0, help="seed of the approach drives (default 0)")
     bd.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
@@ -134,7 +134,7 @@ def _bench_detector(args: argparse.Namespace) -> int:
     from racf.experiments.bench.detector import BUDGET_MS, FRAME_PERIOD_MS, bench_detector
     from racf.experiments.detector.dataset import DEFAULT_DATA_DIR, load_split, make_dataset
 
-    names = DETECTOR_NAMES if args.detector == "both" else (args.detector,)
+    names = tuple(DETECTORS) if args.detector == "both" else (args.detector,)
     heldout = load_split(make_dataset(root=DEFAULT_DATA_DIR, progress=not args.json), "heldout")
     try:
         results = [bench_detector(name, seed=args.seed, heldout=heldout, progress=not args.json) for name in names]

@@ -6,7 +6,8 @@ import argparse
 import json
 from pathlib import Path
 
-from racf.experiments.cli.common import attack_help, backend_flags, count, estimator_help, fail, sensor_flags
+from racf.experiments.cli.common import (attack_help, backend_flags, count, estimator_help, estimator_option_flag,
+                                         estimator_options, fail, plugin_flag, sensor_flags)
 
 __all__ = ["register"]
 
@@ -44,6 +45,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         fl.add_argument(flag, nargs="+", type=float, default=None, metavar="X",
                         help=f"{what}: values (grid) or LOW HIGH (random)")
     fl.add_argument("--sign", nargs="+", type=int, default=None, metavar="K", help="stop signs 0-3")
+    estimator_option_flag(fl)
+    plugin_flag(sw)
     sw.set_defaults(handler=_sweep)
 
 
@@ -65,6 +68,11 @@ def _sweep(args: argparse.Namespace) -> int:
     space = {key: value for key, value in (("attack", args.attack), ("estimator", args.estimator),
                                            ("rho", args.rho), ("t_atk", args.t_atk), ("speed", args.speed),
                                            ("sign", args.sign)) if value is not None}
+    if args.estimator_option:
+        from racf.plugins import ESTIMATORS
+
+        default = args.estimator[0] if args.estimator and len(args.estimator) == 1 else None
+        fields["estimators"] = estimator_options("sweep", args.estimator_option, tuple(ESTIMATORS), default)
     if args.spec is None and not (space or fields):
         fail("sweep", "give a spec (e.g. smoke.toml), axis flags (--attack, --estimator, --rho, ...) or --report DIR")
     from racf.experiments.sweeps.run import run_sweep

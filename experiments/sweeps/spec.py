@@ -299,7 +299,12 @@ def spec_text(path: str | Path | None = None, fields: dict | None = None, space:
         return path.read_text() if path is not None else tomli_w.dumps(raw)
     if not isinstance(raw.get("space", {}), dict):
         raise ValueError(f"{path}: space must be a table ([space])")
+    estimators = {**raw.get("estimators", {})}
+    for name, options in fields.get("estimators", {}).items():  # an option given replaces that option only
+        estimators[name] = {**estimators.get(name, {}), **options}
     raw.update(fields)
+    if estimators:
+        raw["estimators"] = estimators
     if space:
         raw["space"] = {**raw.get("space", {}), **space}
     if "name" not in fields:

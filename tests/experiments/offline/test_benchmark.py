@@ -7,39 +7,10 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from conftest import write_bench_dataset
 from racf.experiments.cli import main
-from racf.experiments.data.dataset import COLUMNS, make_splits
 from racf.experiments.offline.benchmark import BenchConfig
 from racf.experiments.offline.methods import METHODS
-from racf.odca.synthetic import approach_curve
-
-
-def _write_dataset(folder, n_series=12, seed=0):
-    rng = np.random.default_rng(seed)
-    frames = []
-    for i in range(n_series):
-        parts = []
-        for slot, target in enumerate((f"sign{i % 5}", f"sign{(i + 1) % 5}")):
-            d = approach_curve(rng, 220)
-            lidar = d + rng.normal(0, 0.01, d.size)
-            speed = np.clip(-np.gradient(pd.Series(d).ffill().bfill().to_numpy(), 0.02), 0, 3)
-            parts.append(pd.DataFrame({"slot": slot, "target": target, "d_clean": d, "d_true": d + 0.005,
-                                       "c_clean": np.where(np.isfinite(d), 0.9, 0.0), "lidar": lidar,
-                                       "speed": speed}))
-        s = pd.concat(parts, ignore_index=True)
-        n = len(s)
-        s = s.assign(series_id=f"drive{i}", drive_seed=i, t=np.arange(n) * 0.02, speed_set=1.0, bearing=0.0,
-                     sign_in_view=np.isfinite(s["d_clean"]), detected=np.isfinite(s["d_clean"]),
-                     scan_new=np.arange(n) % 5 == 0, scan_fov_mm=[np.zeros(4, np.uint16)] * n, steering=0.0,
-                     yaw_rate=0.0, accel=0.0, x=0.0, y=0.0, yaw=0.0, dist_to_stop_line=s["d_clean"], brake=False,
-                     x_est=0.0, y_est=0.0, yaw_est=0.0, fix_x=0.0, fix_y=0.0, fix_yaw=0.0)
-        frames.append(s[list(COLUMNS)])
-    data = pd.concat(frames, ignore_index=True)
-    folder.mkdir(parents=True, exist_ok=True)
-    data.to_parquet(folder / "dataset.parquet", index=False)
-    (folder / "split.json").write_text(json.dumps({"seed": 0, "shares": [0.7, 0.1, 0.2],
-                                                   **make_splits(data, seed=0)}))
-    return folder
 
 
 def _bench_json(data, out) -> dict:
@@ -56,7 +27,7 @@ def _bench_json(data, out) -> dict:
 @pytest.fixture(scope="module")
 def bench_runs(tmp_path_factory):
     root = tmp_path_factory.mktemp("bench")
-    data = _write_dataset(root / "data")
+    data = write_bench_dataset(root / "data")
     out = root / "out"
     return out, [_bench_json(data, out)], data
 

@@ -1,0 +1,91 @@
+"""Fixtures shared across the test packages: the example plug-ins, installed or loaded."""
+
+from __future__ import annotations
+
+import shutil
+import sys
+from pathlib import Path
+
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from racf.experiments.data.dataset import COLUMNS, make_splits
+from racf.odca.synthetic import approach_curve
+from racf.plugins import REGISTRIES
+
+ROOT = Path(__file__).resolve().parents[1]
+EXAMPLES = ROOT / "examples"
+
+
+def _forget_plugins() -> None:
+    """The registries read the entry points afresh on next use."""
+    for registry in REGISTRIES.values():
+        registry._plugins = None
+
+
+def install_cusum(site: Path) -> Path:
+    """The example defence as pip would install it (its package beside a dist-info with its entry
+    point) in ``site``, a folder to put on the path: importlib.metadata finds it as it finds any
+    installed distribution. Returns the installed package's folder."""
+    package = site / "racf_cusum"
+    shutil.copytree(EXAMPLES / "racf-cusum" / "src" / "racf_cusum", package)
+    info = site / "racf_cusum-0.1.0.dist-info"
+    info.mkdir()
+    (info / "METADATA").write_text("Metadata-Version: 2.1\nName: racf-cusum\nVersion: 0.1.0\n")
+    (info / "entry_points.txt").write_text("[racf.estimators]\ncusum = racf_cusum:CusumDefence\n")
+    return package
+
+
+@pytest.fixture
+def cusum_installed(tmp_path, monkeypatch):
+    """The example defence installed for one test (and the worker processes it spawns)."""
+    site = tmp_path / "site"
+    package = install_cusum(site)
+    for name in [m for m in sys.modules if m.split(".")[0] == "racf_cusum"]:  # another test's copy
+        monkeypatch.delitem(sys.modules, name)
+    monkeypatch.syspath_prepend(str(site))
+    monkeypatch.setenv("PYTHONPATH", str(site))
+    _forget_plugins()
+    yield package
+    _forget_plugins()
+
+
+@pytest.fixture
+def plugin_env(monkeypatch):
+    """Plug-in files loaded by a test are forgotten after it."""
+    monkeypatch.setenv("RACF_PLUGINS", "")  # restored (unset) after the test, whatever it loaded
+    _forget_plugins()
+    yield
+    _forget_plugins()
+
+
+def write_bench_dataset(folder, n_series=12, seed=0):
+    """A small synthetic dataset folder in the shape ``racf collect`` writes (for ``racf bench --quick``)."""
+    rng = np.random.default_rng(seed)
+    frames = []
+    for i in range(n_series):
+        parts = []
+        for slot, target in enumerate((f"sign{i % 5}", f"sign{(i + 1) % 5}")):
+            d = approach_curve(rng, 220)
+            lidar = d + rng.normal(0, 0.01, d.size)
+            speed = np.clip(-np.gradient(pd.Series(d).ffill().bfill().to_numpy(), 0.02), 0, 3)
+            parts.append(pd.DataFrame({"slot": slot, "target": target, "d_clean": d, "d_true": d + 0.005,
+                                       "c_clean": np.where(np.isfinite(d), 0.9, 0.0), "lidar": lidar,
+                                       "speed": speed}))
+        s = pd.concat(parts, ignore_index=True)
+        n = len(s)
+        s = s.assign(series_id=f"drive{i}", drive_seed=i, t=np.arange(n) * 0.02, speed_set=1.0, bearing=0.0,
+                     sign_in_view=np.isfinite(s["d_clean"]), detected=np.isfinite(s["d_clean"]),
+                     scan_new=np.arange(n) % 5 == 0, scan_fov_mm=[np.zeros(4, np.uint16)] * n, steering=0.0,
+                     yaw_rate=0.0, accel=0.0, x=0.0, y=0.0, yaw=0.0, dist_to_stop_line=s["d_clean"], brake=False,
+                     x_est=0.0, y_est=0.0, yaw_est=0.0, fix_x=0.0, fix_y=0.0, fix_yaw=0.0)
+        frames.append(s[list(COLUMNS)])
+    data = pd.concat(frames, ignore_index=True)
+    folder.mkdir(parents=True, exist_ok=True)
+    data.to_parquet(folder / "dataset.parquet", index=False)
+    (folder / "split.json").write_text(json.dumps({"seed": 0, "shares": [0.7, 0.1, 0.2],
+                                                   **make_splits(data, seed=0)}))
+    return folder

@@ -1,0 +1,113 @@
+"""The worked examples: the installable CUSUM defence and the one-file attack, used as a
+researcher would (racf list, a trial, trials, a sweep from Python), with no edit to racf."""
+
+from __future__ import annotations
+
+import importlib.util
+import io
+import json
+import math
+from contextlib import redirect_stdout
+
+import pytest
+
+from conftest import EXAMPLES
+from racf.controllers import PerceptionSample
+from racf.experiments.cli import main
+
+ATTACK = str(EXAMPLES / "depth_scale_attack.py")
+
+
+def _run(argv: list[str]) -> tuple[int, str]:
+    out = io.StringIO()
+    with redirect_stdout(out):
+        code = main(argv)
+    return code, out.getvalue()
+
+
+def test_both_plugins_show_up_in_racf_list(cusum_installed, plugin_env):
+    code, out = _run(["list", "--json", "--plugin", ATTACK])
+    listed = json.loads(out)
+    assert code == 0
+    assert listed["estimator"]["cusum"]["origin"] == "racf-cusum"
+    assert listed["attack"]["depth_scale"]["origin"].endswith("depth_scale_attack.py")
+    assert listed["estimator"]["odca"]["origin"] == "racf"
+
+
+def test_the_defence_and_the_attack_run_in_a_trial_and_in_trials(cusum_installed, plugin_env, tmp_path):
+    code, out = _run(["trial", "--plugin", ATTACK, "--attack", "depth_scale", "--estimator", "cusum",
+                      "--estimator-option", "h_m=0.2", "--sign", "1", "--speed", "1.5", "--out", str(tmp_path / "t")])
+    row = json.loads(out)
+    assert code == 0 and row["setting"] == "clean+depth_scale+cusum" and row["estimator"] == "cusum"
+    code, out = _run(["trials", "--plugin", ATTACK, "--attack", "depth_scale", "--estimator", "cusum", "-n", "2",
+                      "--workers", "2", "--json", "--out", str(tmp_path / "ts")])
+    assert code == 0 and json.loads(out)["n"] == 2
+
+
+def test_a_sweep_from_python_reruns_only_what_an_edited_defence_touches(cusum_installed, plugin_env, tmp_path):
+    spec = importlib.util.spec_from_file_location("sweep_from_python", EXAMPLES / "sweep_from_python.py")
+    script = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(script)
+    args = ["--signs", "1", "--workers", "2", "--out", str(tmp_path / "sweep")]
+    with redirect_stdout(io.StringIO()) as out:
+        assert script.main(args) == 0
+    scr = json.loads(out.getvalue().split("\n}")[0] + "}")
+    assert set(scr) == {"clean", "clean+odca", "clean+cusum", "clean+depth_scale", "clean+depth_scale+odca",
+                        "clean+depth_scale+cusum"}
+    source = cusum_installed / "__init__.py"
+    source.write_text(source.read_text().replace("recover_steps: int = 10", "recover_steps: int = 12"))
+    with redirect_stdout(io.StringIO()) as out:
+        assert script.main(args) == 0
+    assert "6 episodes (2 run, 4 reused)" in out.getvalue()
+
+
+def _sample(depth: float, lidar: float) -> PerceptionSample:
+    return PerceptionSample(None, depth, 0.9, lidar, 0.0)
+
+
+def test_cusum_passes_agreeing_depth_and_replaces_a_biased_one_with_the_lidar(cusum_installed):
+    from racf_cusum import CusumDefence
+
+    defence = CusumDefence(k_m=0.05, h_m=0.25)
+    for k in range(20):
+        d = 3.0 - 0.03 * k
+        assert defence.estimate(_sample(d, d + 0.01), 1.5, 0.02) == d
+    assert defence.diagnostics()["flag"] == 0.0
+    assert not defence.would_pass(depth=3.0, speed_mps=1.5, dt=0.02)  # 0.6 m off the LiDAR at once
+    outs = [defence.estimate(_sample(2.4 - 0.03 * k + 0.6, 2.4 - 0.03 * k), 1.5, 0.02) for k in range(5)]
+    assert defence.diagnostics()["flag"] == 1.0
+    assert outs[-1] == pytest.approx(2.4 - 0.03 * 4)
+    carried = defence.estimate(_sample(3.0, math.nan), 1.5, 0.02)  # no LiDAR: the last, moved on by odometry
+    assert carried == pytest.approx(outs[-1] - 1.5 * 0.02)
+
+
+def test_the_offline_benchmark_scores_an_installed_defence_step_by_step(cusum_installed):
+    from racf.experiments.offline.benchmark import _estimates
+    from racf.experiments.offline.methods import split_arrays, table_order
+    from racf.odca import LastValuePrior, ODCA
+
+    import numpy as np
+    import pandas as pd
+
+    n = 200
+    d = np.linspace(3.0, 0.6, n)
+    biased = d.copy()
+    biased[80:140] += 0.8
+    frame = pd.DataFrame({"series_id": "s0", "t": np.arange(n) * 0.02, "d_meas": biased, "c_meas": 0.9,
+                          "lidar": d, "speed": 1.5, "label": 0, "d_clean": d, "c_clean": 0.9, "d_true": d})
+    model = ODCA.load(prior=LastValuePrior())
+    a = split_arrays(frame, model.config.alignment)
+    estimates, _ = _estimates(frame, a, model, {})
+    assert table_order(estimates) == ["raw", "lidar", "ekf", "odca", "cusum"]
+    assert np.abs(estimates["cusum"][100:140] - d[100:140]).max() < 0.05  # the LiDAR, not the biased depth
+
+
+@pytest.mark.slow
+def test_racf_bench_quick_scores_the_installed_defence(cusum_installed, tmp_path):
+    from conftest import write_bench_dataset
+
+    data = write_bench_dataset(tmp_path / "data")
+    code, out = _run(["bench", "--quick", "--dataset", str(data), "--out", str(tmp_path / "bench"), "--json"])
+    assert code == 0
+    results = json.loads(out)
+    assert results["by_series"]["strong"]["cusum"]["rmse"] is not None

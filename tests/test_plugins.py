@@ -1,0 +1,98 @@
+"""The plug-in registries: entry points, files, run-time registration, and versioned ids."""
+
+from __future__ import annotations
+
+import pytest
+
+from racf.experiments.episode import TrialSpec
+from racf.plugins import ATTACKS, DETECTORS, ESTIMATORS, PluginError, load_plugin_file
+from racf.sim.attacks import AttackWrapper
+
+ATTACK_FILE = '''
+from racf.sim.attacks import AttackSchedule, AttackWrapper
+
+
+class ZeroDepth(AttackWrapper):
+    """Blanks the whole depth image."""
+
+    name = "depth_zero"
+
+    def __init__(self, env, **schedule):
+        super().__init__(env, AttackSchedule(**schedule))
+
+    def _attack(self, obs, info):
+        obs["depth"] = obs["depth"] * {factor}
+        return obs
+'''
+
+
+def test_racf_registers_its_own_parts_through_its_entry_points():
+    assert {"raw", "odca", "ekf", "chronos"} <= set(ESTIMATORS)
+    assert {"classical", "learned"} <= set(DETECTORS)
+    assert all(ATTACKS.plugin(name).builtin and ATTACKS.plugin(name).source is None for name in ATTACKS)
+    assert ESTIMATORS.source_id("odca") is None
+
+
+def test_an_attack_registered_from_a_script_is_valid_in_a_setting(plugin_env, tmp_path):
+    path = tmp_path / "zero.py"
+    path.write_text(ATTACK_FILE.format(factor=0))
+    with pytest.raises(ValueError, match="unknown part"):
+        TrialSpec("clean+depth_zero", 0, 1.0, 0)
+    (plugin,) = load_plugin_file(path)
+    assert plugin.name == "depth_zero" and issubclass(plugin.obj, AttackWrapper)
+    spec = TrialSpec("clean+depth_zero+odca", 0, 1.0, 0)
+    assert spec.attacks == ("depth_zero",)
+
+
+def test_editing_a_plugin_changes_the_ids_of_its_results_only(plugin_env, tmp_path):
+    path = tmp_path / "zero.py"
+    path.write_text(ATTACK_FILE.format(factor=0))
+    load_plugin_file(path)
+    attacked, clean = TrialSpec("clean+depth_zero", 0, 1.0, 0), TrialSpec("clean", 0, 1.0, 0)
+    before = attacked.trial_id, clean.trial_id
+    path.write_text(ATTACK_FILE.format(factor=0.5))
+    assert attacked.trial_id != before[0] and clean.trial_id == before[1]
+
+
+def test_a_taken_name_and_a_non_part_are_refused(plugin_env):
+    class Impostor(AttackWrapper):
+        name = "depth_bias"
+
+    with pytest.raises(PluginError, match="already registered by racf"):
+        ATTACKS.register(Impostor)
+    with pytest.raises(PluginError, match="is not an estimator"):
+        ESTIMATORS.register(int, "integer")
+    with pytest.raises(PluginError, match="unknown detector 'yolo'; choose from"):
+        DETECTORS.plugin("yolo")
+
+
+@pytest.mark.parametrize("text, message", [
+    (None, "no such Python file"),
+    ("import not_a_module_anywhere\n", "failed to import: ModuleNotFoundError"),
+    ("x = 1\n", "defines no estimator, attack or detector"),
+])
+def test_a_bad_plugin_file_is_named(plugin_env, tmp_path, text, message):
+    path = tmp_path / "mine.py"
+    if text is not None:
+        path.write_text(text)
+    with pytest.raises(PluginError, match=message):
+        load_plugin_file(path)
+
+
+def test_a_broken_entry_point_is_named_not_skipped(plugin_env, tmp_path, monkeypatch):
+    info = tmp_path / "broken-0.1.dist-info"
+    info.mkdir()
+    (info / "METADATA").write_text("Metadata-Version: 2.1\nName: broken\nVersion: 0.1\n")
+    (info / "entry_points.txt").write_text("[racf.estimators]\nbroken = no_such_module:Defence\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    with pytest.raises(PluginError, match="'broken' .*from broken.* failed to load: ModuleNotFoundError"):
+        list(ESTIMATORS)
+
+
+def test_an_installed_plugin_is_found_and_versioned_by_its_package(cusum_installed):
+    plugin = ESTIMATORS.plugin("cusum")
+    assert plugin.origin == "racf-cusum" and not plugin.builtin
+    spec = TrialSpec("attack+cusum", 0, 1.0, 0)
+    before = spec.trial_id
+    (cusum_installed / "__init__.py").write_text((cusum_installed / "__init__.py").read_text() + "\n# edited\n")
+    assert spec.trial_id != before
