@@ -135,7 +135,7 @@ def estimator_options(command: str, values: list[str], estimators: tuple[str, ..
     (the one estimator a command runs). Exits 2 naming a bad one."""
     import tomllib
 
-    from racf.experiments.episode.estimators import check_options
+    from racf.experiments.episode.estimators import check_options, make_estimator
 
     out: dict[str, dict] = {}
     for item in values:
@@ -159,6 +159,7 @@ def estimator_options(command: str, values: list[str], estimators: tuple[str, ..
     for name, options in out.items():
         try:
             check_options(name, options)
+            make_estimator(name, options)  # a checkpoint that is missing or corrupt fails here, before any work
         except ValueError as err:
             flag_error(command, f"--estimator-option: {err}")
     return out

@@ -58,13 +58,24 @@ def _demo(args: argparse.Namespace) -> int:
     return 0
 
 
+def _readable_recording(path: Path) -> bool:
+    """Whether rerun can read the file's first chunk (a truncated or foreign file cannot)."""
+    from rerun.chunk import RrdReader
+
+    try:
+        next(iter(RrdReader(path).stream()), None)
+    except Exception:  # rerun reports a bad file as RuntimeError, and may change its type
+        return False
+    return True
+
+
 def _view(args: argparse.Namespace) -> int:
     """Opens the rerun viewer on the recording, or says how to where there is no display."""
     import shutil
     import subprocess
 
     path = args.path
-    if path.suffix != ".rrd" or not path.is_file():
+    if path.suffix != ".rrd" or not path.is_file() or not _readable_recording(path):
         print(f"racf view: {path} is not a rerun recording (.rrd); `racf demo` and `racf trial --rerun PATH` "
               "write them", file=sys.stderr)
         return 2

@@ -49,7 +49,7 @@ import numpy as np
 
 from racf.controllers.detectors import DETECTORS
 from racf.experiments.episode import TrialSpec
-from racf.experiments.episode.estimators import ESTIMATORS, check_options
+from racf.experiments.episode.estimators import ESTIMATORS, check_options, make_estimator
 from racf.experiments.episode.spec import setting_name
 from racf.sim.attacks import ATTACKS
 from racf.sim.env.config import SENSOR_PROFILES
@@ -140,6 +140,7 @@ class SweepSpec:
                 raise ValueError(f"estimators.{name} must be a table of option = value")
             try:
                 check_options(name, options)
+                make_estimator(name, options)  # a missing or corrupt checkpoint fails before any episode
             except ValueError as err:
                 raise ValueError(f"estimators.{name}: {err}") from None
 
