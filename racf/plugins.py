@@ -155,29 +155,35 @@ class Registry(Mapping[str, Any]):
 
     def _all(self) -> dict[str, Plugin]:
         if self._plugins is None:
-            self._plugins = {}
+            found: dict[str, Plugin] = {}
             # racf's own first, then the others; each by name: the same on every machine (and
             # the order attacks take in a setting's name).
-            found = sorted(entry_points(group=self.group), key=lambda ep: (not _is_own(ep), ep.name))
-            for ep in found:
-                if ep.name in self._plugins:
-                    continue  # the same distribution seen twice on the path: the first wins, as for imports
-                dist = ep.dist.name if ep.dist is not None else "?"
-                try:
-                    obj = ep.load()
-                except Exception as err:  # a user's broken plug-in: name it, never a traceback
-                    raise PluginError(f"{self.kind} plug-in {ep.name!r} ({ep.value}, from {dist}) failed to load: "
-                                      f"{type(err).__name__}: {err}") from None
-                if getattr(obj, "name", ep.name) != ep.name and inspect.isclass(obj):
-                    raise PluginError(f"{self.kind} plug-in {ep.name!r} ({ep.value}, from {dist}) calls itself "
-                                      f"{obj.name!r}: the entry point's name and the class's 'name' must agree")
-                if not self.accepts(obj):
-                    raise PluginError(f"{self.kind} plug-in {ep.name!r} ({ep.value}, from {dist}) is not "
-                                      f"{_an(self.kind)}: {_SHAPES[self.kind]}")
-                self._plugins[ep.name] = Plugin(ep.name, obj, dist, None if dist == _OWN else ep.module.split(".")[0])
-            for path in plugin_files():
-                load_plugin_file(path)
+            for ep in sorted(entry_points(group=self.group), key=lambda ep: (not _is_own(ep), ep.name)):
+                if ep.name not in found:  # a distribution seen twice on the path: the first wins, as for imports
+                    found[ep.name] = self._load(ep)
+            self._plugins = found
+            try:
+                for path in plugin_files():
+                    load_plugin_file(path)
+            except PluginError:
+                self._plugins = None  # never a half-filled registry
+                raise
         return self._plugins
+
+    def _load(self, ep) -> Plugin:
+        """One entry point's part; PluginError names a plug-in that fails to load or is no part."""
+        dist = ep.dist.name if ep.dist is not None else "?"
+        where = f"{self.kind} plug-in {ep.name!r} ({ep.value}, from {dist})"
+        try:
+            obj = ep.load()
+        except Exception as err:  # a user's broken plug-in: name it, never a traceback
+            raise PluginError(f"{where} failed to load: {type(err).__name__}: {err}") from None
+        if inspect.isclass(obj) and getattr(obj, "name", ep.name) != ep.name:
+            raise PluginError(f"{where} calls itself {obj.name!r}: the entry point's name and the class's "
+                              f"'name' must agree")
+        if not self.accepts(obj):
+            raise PluginError(f"{where} is not {_an(self.kind)}: {_SHAPES[self.kind]}")
+        return Plugin(ep.name, obj, dist, None if dist == _OWN else ep.module.split(".")[0])
 
 
 def _an(kind: str) -> str:

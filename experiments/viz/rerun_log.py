@@ -11,8 +11,9 @@ then replays the log and those frames into a recording on the ``sim_time`` timel
   cluster in red, and ``world/car/lidar/track`` the tracked point;
 - ``map``: a top view of the mat with the car's trajectory and its current position;
 - ``series/*`` (d_true, d_clean, d_meas, lidar, d_fused, and ODCA's d_kin; NaN, where an
-  estimator has no target, is a gap) and ``control/*`` (gate w, brake, attack active), every
-  step, sent with ``send_columns``.
+  estimator has no target, is a gap), ``control/*`` (gate w, the defence's flag, brake, attack
+  active) and ``estimator/*`` (whatever else the estimator, a plug-in's too, reports in
+  ``diagnostics()``), every step, sent with ``send_columns``.
 
 A default blueprint lays these out so the story reads at a glance.
 """
@@ -30,7 +31,7 @@ __all__ = ["FrameRecorder", "write_rrd", "SERIES", "CONTROL"]
 #: Distance series (metres) and control series, as logged (entity name -> log column).
 SERIES = {"d_true": "d_true", "d_clean": "d_clean", "d_meas": "d_meas", "lidar": "lidar", "d_fused": "d_fused",
           "d_kin": "d_kin"}
-CONTROL = {"gate_w": "w", "brake": "brake", "attack_active": "attack_active"}
+CONTROL = {"gate_w": "w", "flag": "flag", "brake": "brake", "attack_active": "attack_active"}
 _MAP_PX_PER_M = 60
 #: A LiDAR return belongs to the tracked cluster within this distance of the tracked point, m.
 _CLUSTER_RADIUS_M = 0.12
@@ -115,6 +116,7 @@ def write_rrd(path: str | Path, log: pd.DataFrame, recorder: FrameRecorder | Non
     import rerun as rr
 
     from racf.controllers.lidar_target import LidarTargetConfig
+    from racf.experiments.episode.record import STEP_LOG
     from racf.sim.world.mat_texture import render_mat
     from racf.sim.world.stop_signs import stop_signs
 
@@ -141,8 +143,11 @@ def write_rrd(path: str | Path, log: pd.DataFrame, recorder: FrameRecorder | Non
 
     # Every step: the signals, as columns.
     times = rr.TimeColumn("sim_time", duration=log["t"].to_numpy(float))
+    shown = set(SERIES.values()) | set(CONTROL.values())
+    own = {f"estimator/{c}": c for c in log.columns  # the estimator's diagnostics beyond the declared log
+           if c not in STEP_LOG and c not in shown and pd.api.types.is_numeric_dtype(log[c])}
     for name, column in {**{f"series/{k}": v for k, v in SERIES.items()},
-                         **{f"control/{k}": v for k, v in CONTROL.items()}}.items():
+                         **{f"control/{k}": v for k, v in CONTROL.items()}, **own}.items():
         if column in log:
             values = log[column].to_numpy(float)
             rec.send_columns(name, indexes=[times], columns=rr.Scalars.columns(scalars=values))

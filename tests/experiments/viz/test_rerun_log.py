@@ -31,7 +31,7 @@ def test_entities_and_timeline_length_match_the_episode(recorded):
         if "sim_time" in chunk.timeline_names:
             batch = chunk.to_record_batch()
             times.setdefault(name, []).extend(batch.column("sim_time").to_pylist())
-    for name in [f"/series/{k}" for k in SERIES] + [f"/control/{k}" for k in CONTROL]:
+    for name in [f"/series/{k}" for k in SERIES] + [f"/control/{k}" for k in CONTROL] + ["/estimator/odca_source"]:
         assert rows[name] == len(log), name  # one sample per step on the sim_time timeline
         assert len(set(times[name])) == len(log)
     for name in ("/world/camera/image", "/world/camera/depth", "/world/car/lidar", "/world/car", "/map/car"):

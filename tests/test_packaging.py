@@ -1,0 +1,80 @@
+"""racf installs as one namespace that carries its assets: the package list names every package
+folder, nothing imports the old top-level names, and (slow) a wheel works in a fresh venv."""
+
+from __future__ import annotations
+
+import os
+import re
+import subprocess
+import sys
+import tomllib
+from pathlib import Path
+
+import pytest
+
+import racf
+from racf.assets import asset_path
+
+ROOT = Path(__file__).resolve().parents[1]
+PYPROJECT = tomllib.loads((ROOT / "pyproject.toml").read_text())
+TOPS = {"racf": "racf", "racf.assets": "assets", "racf.sim": "sim", "racf.odca": "odca",
+        "racf.controllers": "controllers", "racf.experiments": "experiments"}
+
+
+def test_every_package_folder_installs_under_racf_and_nothing_else():
+    setuptools = PYPROJECT["tool"]["setuptools"]
+    assert setuptools["package-dir"] == TOPS
+    found = {"racf", "racf.assets"}
+    for name, folder in TOPS.items():
+        if name in ("racf", "racf.assets"):
+            continue
+        for init in (ROOT / folder).rglob("__init__.py"):
+            found.add(".".join([name, *init.parent.relative_to(ROOT / folder).parts]))
+    assert set(setuptools["packages"]) == found
+    assert all(p == "racf" or p.startswith("racf.") for p in setuptools["packages"])
+
+
+def test_no_module_imports_the_old_top_level_names():
+    old = re.compile(r"^\s*(from|import) (sim|odca|controllers|experiments)\b", re.M)
+    offenders = [str(path.relative_to(ROOT)) for folder in ("sim", "odca", "controllers", "experiments", "racf",
+                                                            "tests", "examples")
+                 for path in (ROOT / folder).rglob("*.py") if old.search(path.read_text())]
+    assert offenders == []
+
+
+def test_assets_are_found_through_the_package_not_the_checkout():
+    assert asset_path("qcar2_map", "qcar2.xml").is_file()
+    assert (asset_path("checkpoints", "odca-head") / "odca.json").is_file()
+    with pytest.raises(FileNotFoundError, match="racf asset 'nowhere'"):
+        asset_path("nowhere")
+    reach = re.compile(r"parents\[\d\]\s*/\s*\"assets\"")
+    assert not [p for p in ROOT.glob("*/**/*.py") if ".venv" not in p.parts and reach.search(p.read_text())]
+
+
+def test_the_version_is_the_distributions():
+    out = subprocess.run([sys.executable, "-m", "racf.experiments.cli", "--version"], capture_output=True, text=True)
+    assert out.returncode == 0 and out.stdout.strip() == f"racf {racf.__version__}"
+    assert racf.__version__ == PYPROJECT["project"]["version"]
+
+
+@pytest.mark.slow
+def test_the_wheel_installs_and_runs_in_a_fresh_venv_outside_the_repository(tmp_path):
+    """Builds the wheel, installs it (torch's CPU wheel first) in a new venv, and from a folder
+    outside the checkout: racf --version, the imports, no generic top-level package, the demo."""
+    env = {**os.environ, "MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl"), "PYTHONPATH": ""}
+    run = lambda *cmd, **kw: subprocess.run(cmd, check=True, capture_output=True, text=True, env=env, **kw)  # noqa: E731
+    run(sys.executable, "-m", "pip", "wheel", "-q", "--no-deps", "--no-build-isolation", str(ROOT), "-w",
+        str(tmp_path / "wheel"))
+    (wheel,) = (tmp_path / "wheel").glob("racf-*.whl")
+    run(sys.executable, "-m", "venv", str(tmp_path / "venv"))
+    py, bin_ = tmp_path / "venv" / "bin" / "python", tmp_path / "venv" / "bin"
+    run(str(py), "-m", "pip", "install", "-q", "torch==2.13.0")
+    run(str(py), "-m", "pip", "install", "-q", str(wheel))
+    outside = tmp_path / "elsewhere"
+    (outside / "experiments").mkdir(parents=True)  # a user's own folder of that name shadows nothing
+    assert run(str(bin_ / "racf"), "--version", cwd=outside).stdout.strip() == f"racf {racf.__version__}"
+    run(str(py), "-c", "import racf.sim, racf.odca, racf.experiments.episode", cwd=outside)
+    site = next((tmp_path / "venv" / "lib").glob("python3*/site-packages"))
+    assert not {"sim", "odca", "controllers", "experiments"} & {p.name for p in site.iterdir()}
+    demo = run(str(bin_ / "racf"), "demo", "--out", str(outside / "demo"), cwd=outside).stdout
+    assert "attack+odca" in demo and (outside / "demo").is_dir()
