@@ -96,3 +96,27 @@ def test_an_installed_plugin_is_found_and_versioned_by_its_package(cusum_install
     before = spec.trial_id
     (cusum_installed / "__init__.py").write_text((cusum_installed / "__init__.py").read_text() + "\n# edited\n")
     assert spec.trial_id != before
+
+
+DETECTOR_FILE = '''
+class Blind:
+    """Sees nothing, ever."""
+
+    name = "blind"
+
+    def detect(self, rgb):
+        return None
+'''
+
+
+def test_a_plugin_detector_is_among_the_clis_choices(plugin_env, tmp_path):
+    from racf.experiments.cli import build_parser
+    from racf.experiments.cli.common import load_plugins_from_argv
+
+    path = tmp_path / "blind.py"
+    path.write_text(DETECTOR_FILE)
+    argv = ["trial", "--plugin", str(path), "--detector", "blind"]
+    load_plugins_from_argv(argv)
+    assert build_parser().parse_args(argv).detector == "blind"
+    assert DETECTORS.plugin("blind").origin == str(path)
+    assert TrialSpec("clean", 0, 1.0, 0, detector="blind").trial_id != TrialSpec("clean", 0, 1.0, 0).trial_id

@@ -48,7 +48,7 @@ def test_a_sweep_from_python_reruns_only_what_an_edited_defence_touches(cusum_in
     spec = importlib.util.spec_from_file_location("sweep_from_python", EXAMPLES / "sweep_from_python.py")
     script = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(script)
-    args = ["--signs", "1", "--workers", "2", "--out", str(tmp_path / "sweep")]
+    args = ["--signs", "1", "--workers", "1", "--out", str(tmp_path / "sweep")]
     with redirect_stdout(io.StringIO()) as out:
         assert script.main(args) == 0
     scr = json.loads(out.getvalue().split("\n}")[0] + "}")

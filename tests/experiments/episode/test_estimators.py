@@ -66,3 +66,25 @@ def test_odca_logs_its_gate_through_diagnostics():
     assert math.isnan(d["d_kin"])  # what the vote saw: no branch before the first depth
     est.estimate(_samples([1.48])[0], 1.0, 0.02)
     assert est.diagnostics()["d_kin"] == pytest.approx(1.5 - 1.0 * 0.02)  # the first depth, advanced
+
+
+def test_a_trained_head_runs_by_option_and_its_content_enters_the_id(tmp_path):
+    import json
+    import shutil
+
+    from racf.assets import asset_path
+    from racf.experiments.episode import TrialSpec
+
+    head = tmp_path / "odca-head"
+    shutil.copytree(asset_path("checkpoints", "odca-head"), head)
+    shipped = TrialSpec("attack+odca", 0, 1.0, 0)
+    mine = TrialSpec("attack+odca", 0, 1.0, 0, estimator_options={"checkpoint": str(head)})
+    assert make_estimator("odca", {"checkpoint": str(head)}).model.config == make_estimator("odca").model.config
+    before = mine.trial_id
+    assert before != shipped.trial_id
+    config = json.loads((head / "odca.json").read_text())
+    config["gate"]["tau_m"] = config["gate"]["tau_m"] + 0.01
+    (head / "odca.json").write_text(json.dumps(config))
+    assert mine.trial_id != before  # the same path, other weights or settings: another result
+    with pytest.raises(ValueError, match="has no option\\(s\\) \\['flavour'\\]"):
+        TrialSpec("attack+odca", 0, 1.0, 0, estimator_options={"flavour": 1})

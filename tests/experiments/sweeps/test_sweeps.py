@@ -163,3 +163,19 @@ def test_a_folder_of_another_sweep_is_refused(uninterrupted):
     other = SweepSpec(name="other", mode=other.mode, repeats=1, seed=9, space=other.space)
     with pytest.raises(ValueError, match="another sweep"):
         run_sweep(other, "x", folder / "a", progress=False)
+
+
+def test_an_estimators_table_gives_its_estimator_options_and_enters_the_hash():
+    from racf.assets import asset_path
+    from racf.experiments.sweeps.spec import parse_spec
+
+    head = str(asset_path("checkpoints", "odca-head"))
+    plain = parse_spec(TINY.replace('estimator = ["raw"]', 'estimator = ["raw", "odca"]'))
+    text = plain_text = TINY.replace('estimator = ["raw"]', 'estimator = ["raw", "odca"]')
+    text += f'\n[estimators.odca]\ncheckpoint = "{head}"\n'
+    spec = parse_spec(text)
+    assert spec.spec_hash != plain.spec_hash
+    options = {e.estimator: e.estimator_options for e in spec.episodes()}
+    assert options == {"raw": {}, "odca": {"checkpoint": head}}
+    with pytest.raises(ValueError, match="estimators.ekf: 'ekf' is not in space.estimator"):
+        parse_spec(plain_text + '\n[estimators.ekf]\nx = 1\n')
