@@ -5,8 +5,8 @@ route on the map, its targets and their stop lines, the cruise speed) and its ow
 step it reads the observation and nothing else: its pose comes from its own localisation
 filter (odometry and the gyro predict, the localiser's fixes correct), and that pose places
 the map's targets in view, drives the lane follower and says which target is next. It never
-sees ``info`` or the env; the runner builds the calibration and the mission once, before the
-episode (:mod:`racf.experiments.episode.stack`). Ground truth is the referee's
+sees ``info`` or the env; the calibration and the mission come from the episode's plan, made
+once before the episode (:mod:`racf.experiments.episode.plan`). Ground truth is the referee's
 (:mod:`racf.experiments.episode.referee`).
 """
 

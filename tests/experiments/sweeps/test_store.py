@@ -5,7 +5,6 @@ import os
 import pandas as pd
 import pytest
 
-import racf.experiments.sweeps.store as store_module
 from racf.experiments.sweeps.store import ResultStore, atomic_write, code_version, source_version
 
 

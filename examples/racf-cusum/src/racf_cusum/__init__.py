@@ -3,7 +3,8 @@
 Page's two-sided CUSUM accumulates the residual r = depth - LiDAR beyond a slack ``k_m``; once
 either sum passes ``h_m`` the depth is declared attacked, and the defence drives on the LiDAR
 (or, with no LiDAR return, on its last distance carried forward by odometry) until the
-residual has stayed within the slack for ``recover_steps`` steps.
+residual has stayed within the slack for ``recover_steps`` steps. Odometry alone is trusted
+for ``max_carry_s`` at most: after that the defence has no distance (NaN), not a guess.
 
 It implements racf's ``DistanceEstimator`` contract (``racf.controllers.DistanceEstimator``):
 ``name``, ``reset``, ``estimate``, ``diagnostics`` and ``would_pass``. Nothing here imports
@@ -24,14 +25,17 @@ class CusumDefence:
         k_m: the slack, m: residuals within it count as noise.
         h_m: the alarm threshold of either cumulative sum, m.
         recover_steps: steps within the slack that clear an alarm.
+        max_carry_s: how long the last distance is carried forward by odometry alone, s.
     """
 
     name = "cusum"
 
-    def __init__(self, k_m: float = 0.05, h_m: float = 0.25, recover_steps: int = 10) -> None:
-        if not (k_m >= 0 and h_m > 0 and recover_steps >= 1):
-            raise ValueError(f"need k_m >= 0, h_m > 0, recover_steps >= 1; got {k_m}, {h_m}, {recover_steps}")
+    def __init__(self, k_m: float = 0.05, h_m: float = 0.25, recover_steps: int = 10, max_carry_s: float = 1.0) -> None:
+        if not (k_m >= 0 and h_m > 0 and recover_steps >= 1 and max_carry_s >= 0):
+            raise ValueError(f"need k_m >= 0, h_m > 0, recover_steps >= 1, max_carry_s >= 0; got {k_m}, {h_m}, "
+                             f"{recover_steps}, {max_carry_s}")
         self.k_m, self.h_m, self.recover_steps = float(k_m), float(h_m), int(recover_steps)
+        self.max_carry_s = float(max_carry_s)
         self.reset()
 
     def reset(self) -> None:
@@ -40,6 +44,7 @@ class CusumDefence:
         self.quiet = 0
         self.last = math.nan  # the distance last put out, m
         self.lidar = math.nan  # the last LiDAR reference, m
+        self.carried_s = 0.0  # how long the output has rested on odometry alone, s
         self.stepped = False
 
     def _sums(self, residual: float) -> tuple[float, float]:
@@ -59,12 +64,15 @@ class CusumDefence:
                 self.quiet = self.quiet + 1 if abs(residual) <= self.k_m else 0
                 if self.quiet >= self.recover_steps:
                     self.alarm, self.high, self.low = False, 0.0, 0.0
+        self.carried_s = self.carried_s + dt if self.alarm and not math.isfinite(lidar) else 0.0
         if not self.alarm:
             out = depth
         elif math.isfinite(lidar):
             out = lidar
-        else:  # no witness this step: the last distance, carried forward by the car's own motion
-            out = self.last - speed_mps * dt if math.isfinite(self.last) else math.nan
+        elif self.carried_s <= self.max_carry_s and math.isfinite(self.last):
+            out = max(self.last - speed_mps * dt, 0.0)  # no witness: the last distance, moved on by odometry
+        else:
+            out = math.nan
         self.last = out if math.isfinite(out) else self.last
         return out
 
