@@ -51,9 +51,12 @@ def test_assets_are_found_through_the_package_not_the_checkout():
     assert not [p for p in ROOT.glob("*/**/*.py") if ".venv" not in p.parts and reach.search(p.read_text())]
 
 
-def test_the_version_is_the_distributions():
-    out = subprocess.run([sys.executable, "-m", "racf.experiments.cli", "--version"], capture_output=True, text=True)
-    assert out.returncode == 0 and out.stdout.strip() == f"racf {racf.__version__}"
+def test_the_version_is_the_distributions(capsys):
+    from racf.experiments.cli import main
+
+    with pytest.raises(SystemExit) as done:
+        main(["--version"])
+    assert done.value.code == 0 and capsys.readouterr().out.strip() == f"racf {racf.__version__}"
     assert racf.__version__ == PYPROJECT["project"]["version"]
 
 

@@ -9,6 +9,7 @@ import json
 import math
 from contextlib import redirect_stdout
 
+import pandas as pd
 import pytest
 
 from conftest import EXAMPLES
@@ -34,16 +35,28 @@ def test_both_plugins_show_up_in_racf_list(cusum_installed, plugin_env):
     assert listed["estimator"]["odca"]["origin"] == "racf"
 
 
-def test_the_defence_and_the_attack_run_in_a_trial_and_in_trials(cusum_installed, plugin_env, tmp_path):
-    code, out = _run(["trial", "--plugin", ATTACK, "--attack", "depth_scale", "--estimator", "cusum",
-                      "--estimator-option", "h_m=0.2", "--sign", "1", "--speed", "1.5", "--out", str(tmp_path / "t")])
-    row = json.loads(out)
-    assert code == 0 and row["setting"] == "clean+depth_scale+cusum" and row["estimator"] == "cusum"
-    code, out = _run(["trials", "--plugin", ATTACK, "--attack", "depth_scale", "--estimator", "cusum", "-n", "2",
+def test_the_defence_and_the_attack_run_in_trials_on_spawned_workers(cusum_installed, plugin_env, tmp_path):
+    code, out = _run(["trials", "--plugin", ATTACK, "--attack", "depth_scale", "--estimator", "cusum",
+                      "--estimator-option", "h_m=0.2", "--seed", "0", "-n", "2",
                       "--workers", "2", "--json", "--out", str(tmp_path / "ts")])
-    assert code == 0 and json.loads(out)["n"] == 2
+    summary = json.loads(out)
+    assert code == 0 and summary["n"] == 2  # the workers found both: the package by entry point, the file by RACF_PLUGINS
+    rows = pd.read_parquet(tmp_path / "ts" / "results.parquet")
+    assert set(rows["setting"]) == {"clean+depth_scale+cusum"} and set(rows["estimator"]) == {"cusum"}
 
 
+def test_a_sweep_from_flags_runs_both_and_an_edited_plugin_reruns(cusum_installed, plugin_env, tmp_path):
+    argv = ["sweep", "--plugin", ATTACK, "--attack", "depth_scale", "--estimator", "cusum", "--sign", "1",
+            "--workers", "1", "--json", "--out", str(tmp_path / "sweep")]
+    first = json.loads(_run(argv)[1])
+    assert first["done"] == 1 and set(first["scr"]) == {"clean+depth_scale+cusum"}
+    assert json.loads(_run(argv)[1])["reused"] == 1
+    source = cusum_installed / "__init__.py"
+    source.write_text(source.read_text() + "\n# edited\n")
+    assert json.loads(_run(argv)[1])["done"] == 1  # a new id: the old result is not reused
+
+
+@pytest.mark.slow
 def test_a_sweep_from_python_reruns_only_what_an_edited_defence_touches(cusum_installed, plugin_env, tmp_path):
     spec = importlib.util.spec_from_file_location("sweep_from_python", EXAMPLES / "sweep_from_python.py")
     script = importlib.util.module_from_spec(spec)
@@ -87,7 +100,6 @@ def test_the_offline_benchmark_scores_an_installed_defence_step_by_step(cusum_in
     from racf.odca import LastValuePrior, ODCA
 
     import numpy as np
-    import pandas as pd
 
     n = 200
     d = np.linspace(3.0, 0.6, n)
