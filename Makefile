@@ -9,7 +9,7 @@ STAMP := $(VENV)/.racf-installed
 TORCH := torch==2.13.0
 export MUJOCO_GL ?= egl
 
-.PHONY: demo test test-all check-slow bench bench-sim snapshot trials bench-detector clean
+.PHONY: demo test test-all check-slow docs bench bench-sim snapshot trials bench-detector clean
 
 $(PY):
 	$(PYTHON) -m venv $(VENV)
@@ -25,15 +25,24 @@ demo: $(STAMP)
 	$(VENV)/bin/racf demo --out outputs/demo
 
 # The default run leaves out the checks marked slow (Ray, kill-and-resume, bench-loop, full
-# collection, PPO); `make test-all` runs everything, `make check-slow` only those.
+# collection, PPO, the wheel in a fresh venv); `make test-all` runs everything, `make check-slow`
+# only those. It runs one test file per core (pytest-xdist), each process on one thread: left to
+# their defaults, torch, OpenMP and Mesa start a thread per core in every process.
+SINGLE_THREAD := OMP_NUM_THREADS=1 MKL_NUM_THREADS=1 LP_NUM_THREADS=0
 test: $(STAMP)
-	$(PY) -m pytest -q --durations=10
+	$(SINGLE_THREAD) $(PY) -m pytest -q -n auto --dist loadfile --durations=10
 
 test-all: $(STAMP)
 	$(PY) -m pytest -q -m "" --durations=10
 
 check-slow: $(STAMP)
 	$(PY) -m pytest -q -m slow --durations=10
+
+# The documentation site into site/ (the reference pages are written from the code first).
+# Serve it with: .venv/bin/mkdocs serve (http://127.0.0.1:8000), or open site/index.html.
+docs: $(STAMP)
+	NO_MKDOCS_2_WARNING=1 $(VENV)/bin/mkdocs build --strict
+	@echo "site/ is built: open site/index.html, or serve it with $(VENV)/bin/mkdocs serve"
 
 # The offline repair benchmark on the default dataset (collected first if missing).
 bench: $(STAMP)
@@ -53,4 +62,4 @@ bench-detector: $(STAMP)
 	$(VENV)/bin/racf bench-detector
 
 clean:
-	rm -rf $(VENV) outputs
+	rm -rf $(VENV) outputs site build

@@ -26,7 +26,7 @@ import gymnasium as gym
 import numpy as np
 import pandas as pd
 
-from racf.controllers import Phase
+from racf.controllers import DistanceEstimator, Phase
 from racf.experiments.episode.record import step_row
 from racf.experiments.episode.referee import Referee
 from racf.experiments.episode.scoring import largest_jump, score_log, stealth
@@ -101,7 +101,7 @@ class TrialResult:
         return {k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in asdict(self).items()}
 
 
-def run_trial(spec: TrialSpec, estimator=None, make_env: Callable[[TrialSpec], gym.Env] | None = None,
+def run_trial(spec: TrialSpec, estimator: DistanceEstimator | None = None, make_env: Callable[[TrialSpec], gym.Env] | None = None,
               on_step: StepHook | None = None, clean_pass: bool = True) -> tuple[TrialResult, pd.DataFrame]:
     """Runs one episode; returns its result row and per-step log.
 

@@ -1,0 +1,87 @@
+"""The documentation's reference pages, made from the code so that they cannot drift from it:
+the CLI (from the argparse parsers), the registered parts (from the registries) and the step
+log (from its one declaration). ``make docs`` writes them (``docs/hooks.py``), and a test
+checks that the committed copies are current."""
+
+from __future__ import annotations
+
+import argparse
+import os
+from pathlib import Path
+
+__all__ = ["cli_markdown", "parts_markdown", "step_log_markdown", "PAGES", "write_pages"]
+
+
+def cli_markdown() -> str:
+    """Every ``racf`` command with its help and flags, as ``racf COMMAND --help`` prints them."""
+    from racf.experiments.cli import build_parser
+
+    saved = os.environ.get("COLUMNS")
+    os.environ["COLUMNS"] = "100"  # argparse wraps to the terminal: the page must not depend on it
+    try:
+        return _cli_markdown(build_parser())
+    finally:
+        if saved is None:
+            os.environ.pop("COLUMNS", None)
+        else:
+            os.environ["COLUMNS"] = saved
+
+
+def _cli_markdown(parser: argparse.ArgumentParser) -> str:
+    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    helps = {a.dest: a.help for a in sub._choices_actions}
+    lines = ["# The `racf` command line", "",
+             "Made from the argparse parsers (`racf COMMAND --help` prints the same). Every command "
+             "that runs episodes takes `--plugin FILE.py`.", ""]
+    for name, command in sub.choices.items():
+        command.prog = f"racf {name}"
+        lines += [f"## `racf {name}`", "", helps.get(name) or "", "", "```text",
+                  command.format_help().rstrip(), "```", ""]
+    return "\n".join(lines)
+
+
+def parts_markdown() -> str:
+    """The registered attacks, estimators and detectors with what each does."""
+    from racf.experiments.cli.common import registry_markdown
+
+    return "\n".join(["# The registered parts", "",
+                      "racf's own attacks, estimators (defences) and detectors, read from the registries "
+                      "(`racf list --markdown` prints the same; a plug-in you install or load joins them).", "",
+                      registry_markdown()])
+
+
+def step_log_markdown() -> str:
+    """The step log's columns from their one declaration, and the result row's fields."""
+    from dataclasses import fields
+
+    from racf.experiments.episode.record import STEP_COLUMNS
+    from racf.experiments.episode.runner import TrialResult
+
+    lines = ["# The step log and the result row", "",
+             "Every episode logs one row per 50 Hz step with these columns "
+             "(`racf.experiments.episode.record.STEP_COLUMNS`), then whatever the estimator reports "
+             "in `diagnostics()`. *car*: made by the car's software from its observations and the "
+             "map; *referee*: ground truth, never seen by the car.", "",
+             "| column | unit | side | meaning |", "|---|---|---|---|"]
+    lines += [f"| `{c.name}` | {c.unit or '-'} | {c.side} | {c.meaning} |" for c in STEP_COLUMNS]
+    lines += ["", "The result row (`TrialResult`, strict JSON: null for a missing number):", "",
+              ", ".join(f"`{f.name}`" for f in fields(TrialResult)), ""]
+    return "\n".join(lines)
+
+
+#: The generated pages, relative to ``docs/``.
+PAGES = {"reference/cli.md": cli_markdown, "reference/parts.md": parts_markdown,
+         "reference/step-log.md": step_log_markdown}
+
+
+def write_pages(docs: Path) -> list[Path]:
+    """Writes every generated page under ``docs`` (only where it changed); returns them."""
+    out = []
+    for name, make in PAGES.items():
+        path = Path(docs) / name
+        text = make()
+        if not path.exists() or path.read_text() != text:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            path.write_text(text)
+        out.append(path)
+    return out

@@ -1,0 +1,97 @@
+"""The documentation cannot go stale: a short README, generated reference pages that match the
+code, a site that builds strictly, and every fenced Python and shell block run, except those
+marked ``<!-- illustrative: why -->`` (and ``<!-- slow -->`` ones, which run with -m slow)."""
+
+from __future__ import annotations
+
+import os
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").rglob("*.md"))]
+_FENCE = re.compile(r"(?:^<!-- (illustrative|slow)[^>]*-->\n)?^```(\w*)\n(.*?)^```", re.M | re.S)
+_RUN = ("python", "bash")
+
+
+def blocks(page: Path) -> list[tuple[str, str, str]]:
+    """(mark: '' | 'illustrative' | 'slow', language, code) of each fenced block of a page."""
+    return [(m.group(1) or "", m.group(2), m.group(3)) for m in _FENCE.finditer(page.read_text())]
+
+
+def _runnable(page: Path, slow: bool) -> dict[str, list[str]]:
+    out: dict[str, list[str]] = {"python": [], "bash": []}
+    for mark, lang, code in blocks(page):
+        if lang in _RUN and mark != "illustrative" and (slow or mark != "slow"):
+            out[lang].append(code)
+    return out
+
+
+def test_the_readme_is_short():
+    assert (ROOT / "README.md").stat().st_size <= 15_000
+
+
+def test_no_page_names_a_path_outside_the_repository():
+    offenders = [str(p.relative_to(ROOT)) for p in PAGES if re.search(r"\.\./shared|/work/", p.read_text())]
+    assert offenders == []
+
+
+def test_the_generated_reference_pages_are_current():
+    from racf.experiments.cli.reference import PAGES as GENERATED
+
+    stale = [name for name, make in GENERATED.items() if (ROOT / "docs" / name).read_text() != make()]
+    assert stale == [], f"run `make docs` to regenerate {stale}"
+
+
+def test_every_block_is_run_or_marked():
+    counted = {"run": 0, "slow": 0, "illustrative": 0}
+    for page in PAGES:
+        for mark, lang, _ in blocks(page):
+            if lang in _RUN:
+                counted[mark or "run"] += 1
+    assert counted["run"] >= 4 and counted["illustrative"] <= counted["run"] + counted["slow"] + 8, counted
+
+
+def _run_page(page: Path, tmp_path: Path, slow: bool, monkeypatch) -> None:
+    code = _runnable(page, slow)
+    env = {**os.environ, "MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl"),
+           "PATH": f"{Path(sys.executable).parent}{os.pathsep}{os.environ.get('PATH', '')}"}
+    (tmp_path / "examples").symlink_to(ROOT / "examples")  # pages name the examples from the checkout's root
+    monkeypatch.chdir(tmp_path)
+    namespace: dict = {"__name__": "__docs__"}  # a page's Python blocks share one namespace, in order
+    for i, block in enumerate(code["python"]):
+        try:
+            exec(compile(block, f"{page.name}:python block {i + 1}", "exec"), namespace)
+        except Exception as err:  # name the page and the block
+            pytest.fail(f"{page.name}: Python block {i + 1} failed: {type(err).__name__}: {err}\n{block}")
+    import gymnasium as gym
+
+    for env in [v for v in namespace.values() if isinstance(v, (gym.Env, gym.vector.VectorEnv))]:
+        env.close()  # the pages' envs
+    for block in code["bash"]:
+        done = subprocess.run(["bash", "-e", "-c", block], cwd=tmp_path, env=env, capture_output=True, text=True)
+        assert done.returncode == 0, f"{page.name}: a shell block failed:\n{block}\n{done.stderr[-2000:]}"
+
+
+@pytest.mark.parametrize("page", [p for p in PAGES if any(_runnable(p, False).values())],
+                         ids=lambda p: str(p.relative_to(ROOT)))
+def test_the_pages_code_runs(page, tmp_path, monkeypatch):
+    _run_page(page, tmp_path, slow=False, monkeypatch=monkeypatch)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("page", [p for p in PAGES if any(_runnable(p, True).values()) and
+                                  _runnable(p, True) != _runnable(p, False)], ids=lambda p: str(p.relative_to(ROOT)))
+def test_the_pages_slow_code_runs(page, tmp_path, monkeypatch):
+    _run_page(page, tmp_path, slow=True, monkeypatch=monkeypatch)
+
+
+def test_the_site_builds_strictly(tmp_path):
+    mkdocs = Path(sys.executable).parent / "mkdocs"
+    done = subprocess.run([str(mkdocs), "build", "--strict", "--site-dir", str(tmp_path / "site")], cwd=ROOT,
+                          capture_output=True, text=True, env={**os.environ, "NO_MKDOCS_2_WARNING": "1"})
+    assert done.returncode == 0, done.stderr[-3000:]
