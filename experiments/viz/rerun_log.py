@@ -26,12 +26,40 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-__all__ = ["FrameRecorder", "write_rrd", "SERIES", "CONTROL"]
+__all__ = ["FrameRecorder", "write_rrd", "SERIES", "CONTROL", "STYLE", "CAR_HALF_SIZE_M"]
 
 #: Distance series (metres) and control series, as logged (entity name -> log column).
 SERIES = {"d_true": "d_true", "d_clean": "d_clean", "d_meas": "d_meas", "lidar": "lidar", "d_fused": "d_fused",
           "d_kin": "d_kin"}
 CONTROL = {"gate_w": "w", "flag": "flag", "brake": "brake", "attack_active": "attack_active"}
+#: Each series' colour (RGB) and legend name: one hue family per kind of signal, no two alike.
+STYLE: dict[str, tuple[tuple[int, int, int], str]] = {
+    "d_true": ((40, 40, 40), "d_true (ground truth, sign in view)"),
+    "d_clean": ((44, 160, 44), "d_clean (perception, unattacked)"),
+    "d_meas": ((214, 39, 40), "d_meas (depth camera)"),
+    "lidar": ((23, 190, 207), "LiDAR reference"),
+    "d_fused": ((31, 119, 180), "d_fused (what the car brakes on)"),
+    "d_kin": ((148, 103, 189), "d_kin (ODCA's kinematic branch)"),
+    "gate_w": ((255, 127, 14), "gate w (ODCA's repair weight)"),
+    "flag": ((227, 119, 194), "flag (the defence's detector)"),
+    "brake": ((140, 86, 75), "brake"),
+    "attack_active": ((188, 189, 34), "attack active"),
+}
+#: The car's body (QCar 2: 0.425 x 0.192 x 0.20 m), centred over the axles' midpoint, m.
+CAR_HALF_SIZE_M = (0.2125, 0.096, 0.10)
+_CAR_CENTRE_Z_M = 0.10
+
+
+def _shown(log: pd.DataFrame, column: str) -> np.ndarray:
+    """The column as drawn: NaN (a gap) where the quantity is undefined. d_true only while the sign
+    is in view (out of view it is not what the car is approaching); the gate and the flag only
+    while the defence has a target."""
+    values = log[column].to_numpy(float).copy()
+    if column == "d_true" and "sign_in_view" in log:
+        values[~log["sign_in_view"].to_numpy(bool)] = np.nan
+    if column in ("w", "flag") and "d_fused" in log:
+        values[~np.isfinite(log["d_fused"].to_numpy(float))] = np.nan
+    return values
 _MAP_PX_PER_M = 60
 #: A LiDAR return belongs to the tracked cluster within this distance of the tracked point, m.
 _CLUSTER_RADIUS_M = 0.12
@@ -149,8 +177,11 @@ def write_rrd(path: str | Path, log: pd.DataFrame, recorder: FrameRecorder | Non
     for name, column in {**{f"series/{k}": v for k, v in SERIES.items()},
                          **{f"control/{k}": v for k, v in CONTROL.items()}, **own}.items():
         if column in log:
-            values = log[column].to_numpy(float)
-            rec.send_columns(name, indexes=[times], columns=rr.Scalars.columns(scalars=values))
+            key = name.split("/", 1)[1]
+            if key in STYLE:
+                colour, legend = STYLE[key]
+                rec.log(name, rr.SeriesLines(colors=[colour], names=[legend]), static=True)
+            rec.send_columns(name, indexes=[times], columns=rr.Scalars.columns(scalars=_shown(log, column)))
 
     if recorder is not None and recorder.frames:
         k = recorder.intrinsics
@@ -158,6 +189,8 @@ def write_rrd(path: str | Path, log: pd.DataFrame, recorder: FrameRecorder | Non
                                            height=k.height, camera_xyz=rr.ViewCoordinates.RUB,
                                            image_plane_distance=0.3), static=True)
         lidar_cfg = LidarTargetConfig()
+        rec.log("world/car/body", rr.Boxes3D(half_sizes=[CAR_HALF_SIZE_M], centers=[[0.0, 0.0, _CAR_CENTRE_Z_M]],
+                                             colors=[[60, 60, 70]], labels=["QCar 2"]), static=True)
         by_t = log.set_index("t")
         for frame in recorder.frames:
             row = by_t.loc[frame.t]

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from racf.experiments.episode import TrialSpec, run_trial
-from racf.experiments.viz.rerun_log import CONTROL, SERIES, FrameRecorder, write_rrd
+from racf.experiments.viz.rerun_log import CONTROL, SERIES, STYLE, FrameRecorder, _blueprint, _shown, write_rrd
 
 
 @pytest.fixture(scope="module")
@@ -27,6 +27,9 @@ def test_entities_and_timeline_length_match_the_episode(recorded):
     times: dict[str, list] = {}
     for chunk in _chunks(path):
         name = str(chunk.entity_path)
+        if "sim_time" not in chunk.timeline_names:  # static: styles, the map, the car's body
+            rows.setdefault(name, 0)
+            continue
         rows[name] = rows.get(name, 0) + chunk.num_rows
         if "sim_time" in chunk.timeline_names:
             batch = chunk.to_record_batch()
@@ -36,7 +39,7 @@ def test_entities_and_timeline_length_match_the_episode(recorded):
         assert len(set(times[name])) == len(log)
     for name in ("/world/camera/image", "/world/camera/depth", "/world/car/lidar", "/world/car", "/map/car"):
         assert rows[name] == len(recorder.frames) == int(np.ceil(len(log) / 5)), name
-    for name in ("/world/camera", "/map/mat", "/map/trajectory", "/map/trajectory_estimate", "/map/stop_signs",
+    for name in ("/world/camera", "/map/mat", "/world/car/body", "/map/trajectory", "/map/trajectory_estimate", "/map/stop_signs",
                  "/world/camera/image/detection",
                  "/world/camera/image/patch", "/world/car/lidar/track"):
         assert name in rows, name
@@ -65,3 +68,29 @@ def test_trials_record_every_trial_they_run(tmp_path):
     specs = batch_specs("clean", 2, signs=(1,), speeds=(1.5,))
     run_batch(specs, tmp_path, workers=1, progress=False, rerun=True)
     assert sorted(p.stem for p in (tmp_path / "trials").glob("*.rrd")) == sorted(s.trial_id for s in specs)
+
+
+def test_every_series_has_its_own_colour_and_legend_and_gaps_where_undefined(recorded):
+    _, log, _ = recorded
+    assert set(STYLE) == set(SERIES) | set(CONTROL)
+    colours = [colour for colour, _ in STYLE.values()]
+    assert len(set(colours)) == len(colours)
+    shown = _shown(log, "d_true")
+    assert np.isnan(shown[~log["sign_in_view"].to_numpy(bool)]).all()
+    gate = _shown(log, "w")
+    assert np.isnan(gate[~np.isfinite(log["d_fused"].to_numpy(float))]).all()  # no target: no gate drawn
+
+
+def test_the_default_layout_shows_the_story():
+    blueprint = _blueprint()
+    names = [view.name for view in _views(blueprint.root_container)]
+    assert names == ["camera (detection green, patch magenta)", "depth", "distances (m)", "gate w, brake, attack",
+                     "map (top view)", "car, camera and LiDAR"]
+
+
+def _views(container):
+    for item in container.contents:
+        if hasattr(item, "contents") and not hasattr(item, "class_identifier"):
+            yield from _views(item)
+        else:
+            yield item
