@@ -1,4 +1,4 @@
-"""mkdocs hooks: the reference pages are written from the code before every build, and the API
+"""mkdocs hooks: the reference pages are written from the code before every build (at config time), and the API
 reference reads the package as it installs (one ``racf`` namespace over the top-level folders).
 
 The sources stay where the design card puts them (``sim/``, ``odca/``, ...); setuptools maps them
@@ -10,11 +10,14 @@ from __future__ import annotations
 import shutil
 from pathlib import Path
 
+from mkdocs.plugins import event_priority
+
 _FOLDERS = {"sim": "sim", "odca": "odca", "controllers": "controllers", "experiments": "experiments",
             "assets": "assets"}
 
 
-def on_pre_build(config, **kwargs):
+@event_priority(100)  # before mkdocstrings reads its search paths, which must exist by then
+def on_config(config, **kwargs):
     from racf.experiments.cli.reference import write_pages
 
     root = Path(config["config_file_path"]).resolve().parent
@@ -27,3 +30,4 @@ def on_pre_build(config, **kwargs):
             shutil.copy2(path, view / path.name)
     for name, folder in _FOLDERS.items():
         (view / name).symlink_to(root / folder, target_is_directory=True)
+    return config
