@@ -126,6 +126,8 @@ class Registry(Mapping[str, Any]):
         plugin = self.plugin(name)
         if plugin.source is None:
             return None
+        if plugin.source.startswith(_CODE):  # defined where no file holds it: versioned by its compiled code
+            return f"{plugin.origin}:{plugin.source[len(_CODE):]}"
         from racf.experiments.sweeps.store import source_version
 
         return f"{plugin.origin}:{source_version(plugin.source)}"
@@ -147,6 +149,10 @@ class Registry(Mapping[str, Any]):
         if name in plugins:
             if plugins[name].obj is obj:
                 return plugins[name]
+            old = plugins[name]
+            if old.origin == _INTERACTIVE and getattr(old.obj, "__qualname__", None) == getattr(obj, "__qualname__", ""):
+                del plugins[name]  # the same class defined again in a session (edited): the new one replaces it
+                return self.register(obj, name, origin=origin)
             raise PluginError(f"{self.kind} {name!r} is already registered by {plugins[name].origin}; "
                               f"choose another name")
         origin, source = _provenance(obj) if origin is None else (origin, _provenance(obj)[1])
@@ -207,7 +213,25 @@ def _provenance(obj: Any) -> tuple[str, str | None]:
         return top, top
     if file:
         return str(Path(file).resolve()), str(Path(file).resolve())
-    raise PluginError(f"{obj!r} has no source file to version its results by; define it in a file")
+    # Defined in a notebook or exec'd code: no file to hash, so its compiled code is the version.
+    return _INTERACTIVE, _CODE + _code_hash(obj)
+
+
+def _code_hash(obj: Any) -> str:
+    """A hash of a class's (or function's) compiled code and plain class attributes: the same
+    code gives the same hash on any machine with the same Python."""
+    import marshal
+
+    h = hashlib.sha256()
+    members = vars(obj).items() if inspect.isclass(obj) else [("", obj)]
+    for key, value in sorted(members, key=lambda kv: kv[0]):
+        function = getattr(value, "__func__", value)
+        code = getattr(function, "__code__", None)
+        if code is not None:
+            h.update(key.encode() + marshal.dumps(code))
+        elif isinstance(value, (str, int, float, bool, tuple)) and not key.startswith("__"):
+            h.update(f"{key}={value!r}".encode())
+    return h.hexdigest()[:16]
 
 
 # --- the kinds --------------------------------------------------------------------------------
@@ -241,6 +265,8 @@ ATTACKS = Registry("racf.attacks", "attack", _is_attack)
 DETECTORS = Registry("racf.detectors", "detector", _is_detector)
 REGISTRIES: dict[str, Registry] = {"estimator": ESTIMATORS, "attack": ATTACKS, "detector": DETECTORS}
 
+_INTERACTIVE = "interactive"
+_CODE = "code:"
 #: Module name -> file of the plug-in files loaded in this process.
 _FILE_MODULES: dict[str, str] = {}
 

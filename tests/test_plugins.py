@@ -120,3 +120,22 @@ def test_a_plugin_detector_is_among_the_clis_choices(plugin_env, tmp_path):
     assert build_parser().parse_args(argv).detector == "blind"
     assert DETECTORS.plugin("blind").origin == str(path)
     assert TrialSpec("clean", 0, 1.0, 0, detector="blind").trial_id != TrialSpec("clean", 0, 1.0, 0).trial_id
+
+
+def test_a_class_defined_without_a_file_is_versioned_by_its_code(plugin_env):
+    namespace: dict = {"__name__": "__notebook__"}
+    source = '''
+class Halver:
+    name = "halver"
+    def reset(self): pass
+    def estimate(self, sample, speed_mps, dt, yaw_rate_radps=0.0): return sample.d_meas * {k}
+    def diagnostics(self): return {{}}
+    def would_pass(self, *, depth, speed_mps, dt, yaw_rate_radps=0.0, lidar_shift=0.0): return True
+'''
+    exec(source.format(k=0.5), namespace)
+    ESTIMATORS.register(namespace["Halver"])
+    spec = TrialSpec("clean+halver", 0, 1.0, 0)
+    before = spec.trial_id
+    exec(source.format(k=0.25), namespace)  # edited and defined again, as in a notebook cell
+    ESTIMATORS.register(namespace["Halver"])
+    assert ESTIMATORS.plugin("halver").origin == "interactive" and spec.trial_id != before

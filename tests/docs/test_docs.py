@@ -79,14 +79,14 @@ def _run_page(page: Path, tmp_path: Path, slow: bool, monkeypatch) -> None:
 
 @pytest.mark.parametrize("page", [p for p in PAGES if any(_runnable(p, False).values())],
                          ids=lambda p: str(p.relative_to(ROOT)))
-def test_the_pages_code_runs(page, tmp_path, monkeypatch):
+def test_the_pages_code_runs(page, tmp_path, monkeypatch, plugin_env):
     _run_page(page, tmp_path, slow=False, monkeypatch=monkeypatch)
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("page", [p for p in PAGES if any(_runnable(p, True).values()) and
                                   _runnable(p, True) != _runnable(p, False)], ids=lambda p: str(p.relative_to(ROOT)))
-def test_the_pages_slow_code_runs(page, tmp_path, monkeypatch):
+def test_the_pages_slow_code_runs(page, tmp_path, monkeypatch, plugin_env):
     _run_page(page, tmp_path, slow=True, monkeypatch=monkeypatch)
 
 
