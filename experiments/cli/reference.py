@@ -74,6 +74,17 @@ PAGES = {"reference/cli.md": cli_markdown, "reference/parts.md": parts_markdown,
          "reference/step-log.md": step_log_markdown}
 
 
+def _measured() -> str:
+    from racf.experiments.viz.results_pages import measured_markdown
+
+    return measured_markdown(_DOCS / "results" / "data")
+
+
+#: The docs folder of the checkout (the results data lives there, not in the package).
+_DOCS = Path(__file__).resolve().parents[2] / "docs"
+PAGES["results/measured.md"] = _measured
+
+
 def write_pages(docs: Path) -> list[Path]:
     """Writes every generated page under ``docs`` (only where it changed); returns them."""
     out = []
