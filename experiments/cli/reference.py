@@ -83,6 +83,8 @@ def _measured() -> str:
 #: The docs folder of the checkout (the results data lives there, not in the package).
 _DOCS = Path(__file__).resolve().parents[2] / "docs"
 PAGES["results/measured.md"] = _measured
+#: The changelog is kept once, at the top of the repository; the site shows that file.
+PAGES["changelog.md"] = lambda: (_DOCS.parent / "CHANGELOG.md").read_text()
 
 
 def write_pages(docs: Path) -> list[Path]:

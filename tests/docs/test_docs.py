@@ -70,8 +70,8 @@ def _run_page(page: Path, tmp_path: Path, slow: bool, monkeypatch) -> None:
             pytest.fail(f"{page.name}: Python block {i + 1} failed: {type(err).__name__}: {err}\n{block}")
     import gymnasium as gym
 
-    for env in [v for v in namespace.values() if isinstance(v, (gym.Env, gym.vector.VectorEnv))]:
-        env.close()  # the pages' envs
+    for made in [v for v in namespace.values() if isinstance(v, (gym.Env, gym.vector.VectorEnv))]:
+        made.close()  # the pages' envs
     for block in code["bash"]:
         done = subprocess.run(["bash", "-e", "-c", block], cwd=tmp_path, env=env, capture_output=True, text=True)
         assert done.returncode == 0, f"{page.name}: a shell block failed:\n{block}\n{done.stderr[-2000:]}"
