@@ -12,9 +12,18 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-__all__ = ["measured_markdown"]
+__all__ = ["measured_markdown", "SWEEPS"]
 
 _METHODS = ("raw", "lidar", "ekf", "chronos", "softs", "nhits", "dlinear", "nlinear", "odca")
+
+
+#: The stored sweep summaries the page shows, in order, with their titles.
+SWEEPS = {
+    "strong-1000.json": "1,000 strong-regime episodes (250 random draws, every estimator on each)",
+    "spoof-1000.json": "1,000 strong-regime episodes with the LiDAR spoofed too (patch + lidar_spoof)",
+    "attack-types.json": "Every attack type alone and two combined (attack-types.toml)",
+    "physical-patch.json": "The printed sticker against the learned detector (physical-patch.toml)",
+}
 
 
 def _ci(pair) -> str:
@@ -72,8 +81,9 @@ def measured_markdown(data_dir: str | Path) -> str:
              "every number here is what the command beside it printed, on the code and sensors named.", "",
              "## The paper's closed-loop table", ""]
     lines += _settings_table(load("closed-loop-table.json"))
-    lines += ["## 1,000 strong-regime episodes (250 random draws, every estimator on each)", ""]
-    lines += _settings_table(load("strong-1000.json"))
+    for name, title in SWEEPS.items():
+        if (data_dir / name).exists():
+            lines += [f"## {title}", ""] + _settings_table(load(name))
     lines += ["## The offline repair benchmark", ""]
     lines += _bench_table(load("offline-bench.json"))
     return "\n".join(lines)
