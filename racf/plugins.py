@@ -71,12 +71,6 @@ class Plugin:
     source: str | None
 
     @property
-    def description(self) -> str:
-        """The first line of its ``description`` or docstring."""
-        text = getattr(self.obj, "description", None) or inspect.getdoc(self.obj) or ""
-        return text.strip().splitlines()[0] if text.strip() else ""
-
-    @property
     def builtin(self) -> bool:
         return self.origin == _OWN
 

@@ -113,8 +113,12 @@ def ray_session(workers: int, address: str | None = None) -> Iterator[None]:
     os.environ.setdefault("RAY_AUTH_MODE", "disabled")
     import ray
 
+    from racf.plugins import PLUGIN_ENV
+
     env_vars = {"MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl"), "RAY_USAGE_STATS_ENABLED": "0",
                 "RAY_AUTH_MODE": "disabled", **SINGLE_THREAD_ENV}
+    if os.environ.get(PLUGIN_ENV):  # --plugin files: a cluster's workers load them too (same path on every node)
+        env_vars[PLUGIN_ENV] = os.environ[PLUGIN_ENV]
     started = False
     if not ray.is_initialized():
         kwargs = ({"address": address} if address else
