@@ -18,10 +18,11 @@ _FOLDERS = {"sim": "sim", "odca": "odca", "controllers": "controllers", "experim
 
 @event_priority(100)  # before mkdocstrings reads its search paths, which must exist by then
 def on_config(config, **kwargs):
-    from racf.experiments.cli.reference import write_pages
+    from racf.experiments.cli.reference import write_pages, write_readme
 
     root = Path(config["config_file_path"]).resolve().parent
     write_pages(Path(config["docs_dir"]))
+    write_readme(root / "README.md")
     view = root / "build" / "api-src" / "racf"
     shutil.rmtree(view, ignore_errors=True)
     view.mkdir(parents=True)

@@ -9,7 +9,8 @@ import argparse
 import os
 from pathlib import Path
 
-__all__ = ["cli_markdown", "parts_markdown", "step_log_markdown", "PAGES", "write_pages"]
+__all__ = ["cli_markdown", "parts_markdown", "step_log_markdown", "PAGES", "write_pages", "readme_with_table",
+           "write_readme"]
 
 
 def cli_markdown() -> str:
@@ -74,15 +75,18 @@ PAGES = {"reference/cli.md": cli_markdown, "reference/parts.md": parts_markdown,
          "reference/step-log.md": step_log_markdown}
 
 
-def _measured() -> str:
-    from racf.experiments.viz.results_pages import measured_markdown
-
-    return measured_markdown(_DOCS / "results" / "data")
-
-
 #: The docs folder of the checkout (the results data lives there, not in the package).
 _DOCS = Path(__file__).resolve().parents[2] / "docs"
-PAGES["results/measured.md"] = _measured
+
+
+def _results_pages() -> None:
+    from racf.experiments.viz.results_pages import RESULT_PAGES
+
+    for name, make in RESULT_PAGES.items():
+        PAGES[name] = (lambda make: lambda: make(_DOCS / "results" / "data"))(make)
+
+
+_results_pages()
 #: The changelog is kept once, at the top of the repository; the site shows that file.
 PAGES["changelog.md"] = lambda: (_DOCS.parent / "CHANGELOG.md").read_text()
 
@@ -98,3 +102,27 @@ def write_pages(docs: Path) -> list[Path]:
             path.write_text(text)
         out.append(path)
     return out
+
+
+#: The README's headline table sits between these lines; the docs build rewrites what is between.
+README_MARKERS = ("<!-- results table: written from docs/results/data by `make docs` -->", "<!-- end of results table -->")
+
+
+def readme_with_table(text: str) -> str:
+    """The README's text with its headline table written afresh from the stored results."""
+    from racf.experiments.viz.results_pages import readme_table
+
+    begin, end = README_MARKERS
+    if begin not in text or end not in text:
+        raise ValueError(f"the README has lost its results-table markers: {begin} ... {end}")
+    head, rest = text.split(begin, 1)
+    _, tail = rest.split(end, 1)
+    return f"{head}{begin}\n{readme_table(_DOCS / 'results' / 'data')}\n{end}{tail}"
+
+
+def write_readme(readme: Path) -> None:
+    """Rewrites the README's headline table where it changed."""
+    text = Path(readme).read_text()
+    new = readme_with_table(text)
+    if new != text:
+        Path(readme).write_text(new)

@@ -15,7 +15,7 @@ import pandas as pd
 from racf.experiments.sweeps.store import ResultStore, atomic_write
 from racf.experiments.sweeps.summary import median_ci, stealth_summary, summarize_settings, wilson_interval
 
-__all__ = ["write_report", "report_from_store"]
+__all__ = ["write_report", "report_from_store", "stealth_rows"]
 
 
 def _rate(success: pd.Series) -> dict:
@@ -82,28 +82,42 @@ def _plot(frame: pd.DataFrame, column: str, label: str, path: Path) -> Path:
                       title=f"SCR against {label} (95 % Wilson bands)", ylim=(-0.02, 1.02))
 
 
-def _stealth_lines(frame: pd.DataFrame, out: Path, paths: dict) -> list[str]:
-    """The stealth table (per attack, its settings and estimator) and, where the sweep varies
-    an attack's rate, the undetected error against the rate and against the duration."""
+def stealth_rows(frame: pd.DataFrame) -> list[dict]:
+    """The stealth measures per attack, its settings and estimator (``scoring.stealth``), as data:
+    what ``stealth.json`` stores and the summary's stealth table shows."""
     attacked = frame[frame["attack"] != "none"]
     if attacked.empty or "undetected_error_m" not in attacked:
         return []
     attacked = attacked.assign(attack_params=attacked.get("attack_params", pd.Series("", index=attacked.index))
                                .fillna(""))
+    rows_out = []
+    for (attack, params, estimator), rows in attacked.groupby(["attack", "attack_params", "estimator"], sort=True):
+        rows_out.append({"attack": str(attack), "params": str(params), "estimator": str(estimator),
+                         **_rate(rows["success"].astype(bool)), **stealth_summary(rows)})
+    return rows_out
+
+
+def _stealth_lines(frame: pd.DataFrame, out: Path, paths: dict) -> list[str]:
+    """The stealth table (per attack, its settings and estimator) and, where the sweep varies
+    an attack's rate, the undetected error against the rate and against the duration."""
+    rows = stealth_rows(frame)
+    if not rows:
+        return []
+    atomic_write(out / "stealth.json", json.dumps(rows, indent=1, allow_nan=False))
     lines = ["", "Stealth, per attack, its settings and estimator (`scoring.stealth`): SCR; the undetected error "
              "(largest |d_fused - d_true| before the defence's first flag) as median [95 % bootstrap CI] and max; "
              "the share of attacks the defence flagged [Wilson CI]; the median detection delay. Raw depth has no "
              "detector: its error is the attack's whole effect.", "",
              "| attack | settings | estimator | N | SCR [95 % CI] | undetected error m, median [CI] | max | "
              "flagged [CI] | delay s |", "|---|---|---|---|---|---|---|---|---|"]
-    for (attack, params, estimator), rows in attacked.groupby(["attack", "attack_params", "estimator"], sort=True):
-        r = _rate(rows["success"].astype(bool))
-        st = stealth_summary(rows)
-        lines.append(f"| {attack} | {params or '—'} | {estimator} | {r['n']} | {_fmt(r['scr'])} {_ci(r['scr_ci'])} | "
+    for st in rows:
+        lines.append(f"| {st['attack']} | {st['params'] or '—'} | {st['estimator']} | {st['n']} | "
+                     f"{_fmt(st['scr'])} {_ci(st['scr_ci'])} | "
                      f"{_fmt(st.get('undetected_error_median'), 3)} {_ci3(st.get('undetected_error_ci'))} | "
                      f"{_fmt(st.get('undetected_error_max'), 3)} | {_fmt(st.get('detected_share'))} "
                      f"{_ci(st.get('detected_share_ci', [None, None]))} | "
                      f"{_fmt(st.get('detection_delay_median'), 3)} |")
+    attacked = frame[frame["attack"] != "none"]
     if "param_rate_mps" in attacked and attacked["param_rate_mps"].notna().any():
         ramps = attacked[attacked["param_rate_mps"].notna()]
         paths["undetected_vs_rate"] = _stealth_plot(ramps, "param_rate_mps", "attack rate r (m/s)",

@@ -1,57 +1,123 @@
-"""The measured results page, written from stored results so that no number on it is typed by
-hand: ``docs/results/data/*.json`` holds what the commands printed (with the command, the code
-it ran on and the sensor profile), and :func:`measured_markdown` lays it out. ``make docs``
-writes the page; a test checks that the committed page is the one the data gives.
+"""The results pages, written from stored results so that no number on them is typed by hand.
 
-To add a measurement: run its command with ``--json``, store the output beside the others
-with its ``meta`` (command, commit, sensor profile), and rebuild the docs.
+``docs/results/data/*.json`` holds what the commands printed, each with its ``meta`` (command,
+commit, racf version, date, machine, sensor profile; ``racf.experiments.viz.results_store``
+writes them), and :data:`RESULT_PAGES` lays each page out. The docs build writes the pages; a
+test checks that the committed pages are the ones the data gives. The only numbers not from a
+stored result are the paper's own, quoted with the table they come from.
+
+To add a measurement: run its command with ``--json`` (or a sweep), store it with
+``python -m racf.experiments.viz.results_store NAME SOURCE --command "..."``, and rebuild the docs.
 """
 
 from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import Callable
 
-__all__ = ["measured_markdown", "SWEEPS"]
+__all__ = ["RESULT_PAGES", "PAPER", "paper_rows", "readme_table"]
 
 _METHODS = ("raw", "lidar", "ekf", "chronos", "softs", "nhits", "dlinear", "nlinear", "odca")
+_ESTIMATORS = ("raw", "ekf", "chronos", "odca")
+
+#: The paper's numbers (racf-paper.tex: the real-car table, Table "attack persistence" and
+#: Table "recovery", strong preset), quoted beside racf's measurements.
+PAPER = {"clean_scr": 1.00, "clean_dt_brake": 0.1647, "attack_scr": 0.17, "odca_scr": 0.80, "odca_dt_brake": 0.19,
+         "persistence_asr": {"0.5": 0.50, "1.0": 0.90, "3.0": 1.00}, "strong_rmse_odca": 0.323,
+         "strong_rmse_chronos": 0.503, "strong_rmse_lidar": 0.600, "head_parameters": 921}
+
+_NOTE = ("Written by `racf.experiments.viz.results_pages` from the stored results in `docs/results/data/`: every "
+         "number is what the command beside it printed, on the code, machine and sensors named. Intervals are "
+         "95 %: Wilson for rates, bootstrap for medians and RMSE.")
 
 
-#: The stored sweep summaries the page shows, in order, with their titles.
-SWEEPS = {
-    "strong-1000.json": "1,000 strong-regime episodes (250 random draws, every estimator on each)",
-    "spoof-1000.json": "1,000 strong-regime episodes with the LiDAR spoofed too (patch + lidar_spoof)",
-    "attack-types.json": "Every attack type alone and two combined (attack-types.toml)",
-    "physical-patch.json": "The printed sticker against the learned detector (physical-patch.toml)",
-}
+class _Data:
+    """The stored results of one folder, loaded on demand."""
+
+    def __init__(self, root: Path):
+        self.root = Path(root)
+
+    def __contains__(self, name: str) -> bool:
+        return (self.root / f"{name}.json").exists()
+
+    def __getitem__(self, name: str) -> dict:
+        return json.loads((self.root / f"{name}.json").read_text())
 
 
-def _ci(pair) -> str:
-    return "-" if not pair else f"[{pair[0]:.2f}, {pair[1]:.2f}]"
+# --- formatting ------------------------------------------------------------------------------------------------
+
+def _ci(pair, digits: int = 2) -> str:
+    return "" if not pair or pair[0] is None else f"[{pair[0]:.{digits}f}, {pair[1]:.{digits}f}]"
 
 
 def _num(value, digits: int = 3) -> str:
     return "-" if value is None else f"{value:.{digits}f}"
 
 
+def _rate(value, pair, digits: int = 2) -> str:
+    return "-" if value is None else f"{value:.{digits}f} {_ci(pair, digits)}".strip()
+
+
 def _meta(meta: dict) -> list[str]:
     extra = ", ".join(f"{k.replace('_', ' ')} {meta[k]}" for k in ("sensor_profile", "sign_geometry", "detector",
                                                                  "dataset", "draws") if k in meta)
-    return [f"`{meta['command']}` on commit `{meta['commit']}` (racf {meta['racf']}), {meta['machine']}, "
-            f"{meta['measured']}; {extra}.", ""]
+    return [f"*Measured by* `{meta['command']}` *on commit* `{meta['commit']}` (racf {meta['racf']}), "
+            f"{meta['machine']}, {meta['measured']}" + (f"; {extra}." if extra else "."), ""]
 
+
+def _missing(name: str, command: str) -> list[str]:
+    return [f"Not stored yet (`{name}`): run `{command}` and store it with `results_store`.", ""]
+
+
+# --- tables ----------------------------------------------------------------------------------------------------
 
 def _settings_table(data: dict) -> list[str]:
     lines = _meta(data["meta"]) + [
-        "| setting | N | SCR [95% Wilson] | ASR [95% Wilson] | dt_brake s (mean +- std, n) | SCR, attack before t* (n) |",
+        "| setting | N | SCR [95% CI] | ASR [95% CI] | dt_brake s, mean +- std (n) | SCR, attack before t* (n) |",
         "|---|---|---|---|---|---|"]
     for name, r in data["settings"].items():
-        asr = "-" if r.get("asr") is None else f"{r['asr']:.2f} {_ci(r.get('asr_ci'))}"
         early = ("-" if r.get("scr_attack_before_t_star") is None else
-                 f"{r['scr_attack_before_t_star']:.2f} {_ci(r['scr_attack_before_t_star_ci'])} "
+                 f"{_rate(r['scr_attack_before_t_star'], r['scr_attack_before_t_star_ci'])} "
                  f"({r['n_attack_before_t_star']})")
-        lines.append(f"| {name} | {r['n']} | {r['scr']:.3f} {_ci(r['scr_ci'])} | {asr} | "
-                     f"{_num(r['dt_brake_mean'])} +- {_num(r['dt_brake_std'])} ({r['n_latency']}) | {early} |")
+        lines.append(f"| {name} | {r['n']} | {_rate(r['scr'], r['scr_ci'])} | {_rate(r.get('asr'), r.get('asr_ci'))} "
+                     f"| {_num(r['dt_brake_mean'])} +- {_num(r['dt_brake_std'])} ({r['n_latency']}) | {early} |")
+    return lines + [""]
+
+
+def _split_estimator(setting: str) -> tuple[str, str]:
+    """``"clean+stealth_ramp+odca"`` -> ("stealth_ramp", "odca"); no estimator is raw depth."""
+    parts = setting.split("+")
+    estimator = parts.pop() if parts[-1] in _ESTIMATORS else "raw"
+    attack = "+".join(p for p in parts if p != "clean") or "patch_occlusion"
+    if parts[0] == "attack":
+        attack = "+".join(["patch_occlusion", *parts[1:]])
+    return attack, estimator
+
+
+def _by_estimator_table(data: dict) -> list[str]:
+    """SCR per attack (rows) and estimator (columns)."""
+    cells: dict[str, dict[str, dict]] = {}
+    for setting, r in data["settings"].items():
+        attack, estimator = _split_estimator(setting)
+        cells.setdefault(attack, {})[estimator] = r
+    estimators = [e for e in _ESTIMATORS if any(e in row for row in cells.values())]
+    lines = ["| attack | " + " | ".join(estimators) + " |", "|---|" + "---|" * len(estimators)]
+    for attack, row in cells.items():
+        lines.append(f"| `{attack}` | " + " | ".join(
+            f"{_rate(row[e]['scr'], row[e]['scr_ci'])} (N {row[e]['n']})" if e in row else "-" for e in estimators)
+            + " |")
+    return lines + [""]
+
+
+def _stealth_table(rows: list[dict]) -> list[str]:
+    lines = ["| attack | settings | estimator | N | SCR [95% CI] | undetected error m, median [CI] | max | "
+             "flagged [CI] | detection delay s, median |", "|---|---|---|---|---|---|---|---|---|"]
+    for st in rows:
+        lines.append(f"| `{st['attack']}` | {st['params'] or '-'} | {st['estimator']} | {st['n']} | "
+                     f"{_rate(st['scr'], st['scr_ci'])} | {_rate(st.get('undetected_error_median'), st.get('undetected_error_ci'), 3)} | "
+                     f"{_num(st.get('undetected_error_max'))} | {_rate(st.get('detected_share'), st.get('detected_share_ci'))} | "
+                     f"{_num(st.get('detection_delay_median'))} |")
     return lines + [""]
 
 
@@ -59,31 +125,253 @@ def _bench_table(data: dict) -> list[str]:
     results = data["results"]
     presets = ("weak", "mid", "strong")
     lines = _meta(data["meta"]) + [
-        "RMSE in metres, the mean over the corruption draws, with its 95 % interval (test drives and draws "
-        "resampled together); N is the number of scored steps per draw.", ""]
+        "RMSE in metres against the clean depth, the mean over the corruption draws, with its 95 % interval "
+        "(test drives and draws resampled together); N is the number of scored steps per draw.", ""]
     for split, per_preset in results.items():
         lines += [f"**{split.replace('_', ' ')}**", "", "| method | " + " | ".join(presets) + " | N (strong) |",
                   "|---|" + "---|" * len(presets) + "---|"]
         methods = [m for m in _METHODS if m in per_preset["strong"]] + sorted(set(per_preset["strong"]) - set(_METHODS))
         for m in methods:
-            cells = [f"{per_preset[p][m]['rmse']:.3f} {_ci(per_preset[p][m]['rmse_ci'])}" for p in presets]
+            cells = [f"{per_preset[p][m]['rmse']:.3f} {_ci(per_preset[p][m]['rmse_ci'], 3)}" for p in presets]
             lines.append(f"| {m} | " + " | ".join(cells) + f" | {per_preset['strong'][m]['n']} |")
         lines.append("")
     return lines
 
 
-def measured_markdown(data_dir: str | Path) -> str:
-    """The page, from the stored results in ``data_dir``."""
-    data_dir = Path(data_dir)
-    load = lambda name: json.loads((data_dir / name).read_text())  # noqa: E731
-    lines = ["# The latest measurements", "",
-             "Written by `racf.experiments.viz.results_pages` from the stored results in `docs/results/data/`: "
-             "every number here is what the command beside it printed, on the code and sensors named.", "",
-             "## The paper's closed-loop table", ""]
-    lines += _settings_table(load("closed-loop-table.json"))
-    for name, title in SWEEPS.items():
-        if (data_dir / name).exists():
-            lines += [f"## {title}", ""] + _settings_table(load(name))
-    lines += ["## The offline repair benchmark", ""]
-    lines += _bench_table(load("offline-bench.json"))
+# --- pages -----------------------------------------------------------------------------------------------------
+
+def _closed_loop(d: _Data) -> str:
+    lines = ["# ODCA in the closed loop: the paper's table", "", _NOTE, "",
+             "`racf trials --table`: the paper's settings, N = 30 each over the four signs and three speeds, the "
+             "strong patch regime (rho ~ U(0.9, 1), T_atk ~ U(0.5, 3) s), the same episodes in every setting. "
+             "Only an attack that begins before t* (the first braking command of the clean run) can test a "
+             "defence: its column is the one to read. [The protocol](../protocol.md) defines every measure.", ""]
+    for name, title, command in (
+            ("closed-loop-table", "On the QCar 2's sensors (`qcar2`, the default)", "racf trials --table --json"),
+            ("closed-loop-table-ideal", "On ideal sensors (an ablation)",
+             "racf trials --table --sensor-profile ideal --json"),
+            ("closed-loop-table-pole", "With pole-only signs (the LiDAR's plane misses the plate)",
+             "racf trials --table --sign-geometry pole --json")):
+        lines += [f"## {title}", ""] + (_settings_table(d[name]) if name in d else _missing(name, command))
     return "\n".join(lines)
+
+
+_SWEEPS = {"strong-1000": "1,000 strong-regime episodes: 250 random draws, every estimator on each",
+           "spoof-1000": "The same with the LiDAR spoofed too (patch + lidar_spoof)",
+           "attack-types": "Every attack type alone and two combined"}
+
+
+def _sweeps(d: _Data) -> str:
+    lines = ["# Monte Carlo attack sweeps", "", _NOTE, "",
+             "`racf sweep SPEC` runs a shipped spec (`experiments/sweeps/specs/`) on a local pool or Ray and "
+             "resumes when interrupted; [the sweeps tutorial](../tutorials/sweeps.md) shows how. Each draw runs "
+             "with every estimator on the same episode (paired seeds).", ""]
+    for name, title in _SWEEPS.items():
+        lines += [f"## {title}", ""]
+        if name not in d:
+            lines += _missing(name, f"racf sweep {name}.toml")
+            continue
+        data = d[name]
+        lines += _settings_table(data)
+        if len({_split_estimator(k)[0] for k in data["settings"]}) > 1:
+            lines += ["SCR by attack and estimator:", ""] + _by_estimator_table(data)
+    return "\n".join(lines)
+
+
+def _offline(d: _Data) -> str:
+    lines = ["# The offline repair benchmark", "", _NOTE, "",
+             "`racf bench` scores every registered estimator step by step, beside the forecasting baselines "
+             "(Chronos-2 forecast-only, SOFTS, NHITS, DLinear, NLinear) and the aligned LiDAR, on the test drives "
+             "of two splits under the weak, mid and strong corruption presets. Each preset is drawn several times; "
+             "[the protocol](../protocol.md) fixes the presets and the scoring.", ""]
+    lines += _bench_table(d["offline-bench"]) if "offline-bench" in d else _missing("offline-bench", "racf bench --json")
+    return "\n".join(lines)
+
+
+def _adaptive(d: _Data) -> str:
+    lines = ["# Adaptive attacks: an attacker who knows the defence", "", _NOTE, "",
+             "`racf sweep adaptive.toml`: four adaptive attacks at their strongest settings (the two ramps over "
+             "their rate r), each over three durations at the four signs, two seeds per cell, every estimator on "
+             "the same episode. The undetected error is the largest |d_fused - d_true| before the defence's first "
+             "flag ([the protocol](../protocol.md#5-adaptive-attacks-and-stealth)); raw depth has no detector, so "
+             "its error is the attack's whole effect.", ""]
+    if "adaptive" not in d:
+        return "\n".join(lines + _missing("adaptive", "racf sweep adaptive.toml"))
+    data = d["adaptive"]
+    lines += ["## Stop compliance per attack and estimator", ""] + _meta(data["meta"]) + _by_estimator_table(data)
+    if data.get("stealth"):
+        lines += ["## Stealth, per attack setting", ""] + _stealth_table(data["stealth"])
+    figures = [f for f in ("undetected_vs_rate.png", "undetected_vs_t_atk.png")
+               if (d.root.parent.parent / "adaptive" / f).exists()]
+    if figures:
+        lines += ["| " + " | ".join(f"![](../adaptive/{f})" for f in figures) + " |",
+                  "|" + "---|" * len(figures), ""]
+    return "\n".join(lines)
+
+
+def paper_rows(d: _Data, link: str = "") -> list[str]:
+    """The paper's claims beside racf's measurements, as a Markdown table; ``link`` prefixes the
+    links to the results pages (the README sits elsewhere than the pages)."""
+    lines = ["| claim | paper (QCar 2) | racf | details |", "|---|---|---|---|"]
+    if "closed-loop-table" in d:
+        s = d["closed-loop-table"]["settings"]
+        clean, attack, odca = s["clean"], s["attack"], s["attack+odca"]
+        lines += [
+            f"| clean: SCR, dt_brake s | {PAPER['clean_scr']:.2f}, {PAPER['clean_dt_brake']:.3f} | "
+            f"{_rate(clean['scr'], clean['scr_ci'])}, {_num(clean['dt_brake_mean'])} (N {clean['n']}) | "
+            f"[closed loop]({link}closed-loop.md) |",
+            f"| patch attack, no defence: SCR | {PAPER['attack_scr']:.2f} | {_rate(attack['scr'], attack['scr_ci'])} "
+            f"overall; {_rate(attack['scr_attack_before_t_star'], attack['scr_attack_before_t_star_ci'])} attacked "
+            f"before t* (N {attack['n_attack_before_t_star']}) | [closed loop]({link}closed-loop.md) |",
+            f"| attack + ODCA: SCR, dt_brake s | {PAPER['odca_scr']:.2f}, {PAPER['odca_dt_brake']:.3f} | "
+            f"{_rate(odca['scr'], odca['scr_ci'])}, {_num(odca['dt_brake_mean'])} (N {odca['n']}) | "
+            f"[closed loop]({link}closed-loop.md) |"]
+    if "strong-1000" in d:
+        s = d["strong-1000"]["settings"]
+        cells = ", ".join(f"{name} {_rate(s[key]['scr'], s[key]['scr_ci'])}" for name, key in
+                          (("ODCA", "attack+odca"), ("EKF", "attack+ekf"), ("Chronos-only", "attack+chronos"),
+                           ("none", "attack")) if key in s)
+        lines.append(f"| SCR over {s['attack']['n']} random strong draws | - | {cells} | [sweeps]({link}sweeps.md) |")
+    if "persistence" in d:
+        rows = d["persistence"]["persistence"]
+        ours = " / ".join(f"{r['asr']:.2f} {_ci(r['asr_ci'])}" for r in rows)
+        lines.append(f"| attack persistence 0.5 / 1 / 3 s: ASR | "
+                     f"{' / '.join(f'{v:.2f}' for v in PAPER['persistence_asr'].values())} | {ours} "
+                     f"(N {rows[0]['n']} each) | [paper]({link}paper.md) |")
+    if "offline-bench" in d:
+        for split, per in d["offline-bench"]["results"].items():
+            strong = per["strong"]
+            lines.append(f"| offline strong RMSE m, ODCA / Chronos-only / LiDAR ({split.replace('_', ' ')}) | "
+                         f"{PAPER['strong_rmse_odca']:.3f} / {PAPER['strong_rmse_chronos']:.3f} / "
+                         f"{PAPER['strong_rmse_lidar']:.3f} | {strong['odca']['rmse']:.3f} / "
+                         f"{strong['chronos']['rmse']:.3f} / {strong['lidar']['rmse']:.3f} | "
+                         f"[offline benchmark]({link}offline-benchmark.md) |")
+    return lines
+
+
+def _paper(d: _Data) -> str:
+    lines = ["# Reproduced from the paper", "", _NOTE, "",
+             "The paper's numbers are from its real-car table, its attack-persistence table and its recovery table "
+             "(strong preset). Here the car is simulated on the `qcar2` sensor profile.", ""]
+    lines += paper_rows(d) + [""]
+    if "persistence" in d:
+        lines += ["## Attack persistence (no defence)", ""] + _meta(d["persistence"]["meta"]) + [
+            "| T_atk s | N | ASR [95% CI] | lost frames, mean | paper ASR |", "|---|---|---|---|---|"]
+        for r, paper in zip(d["persistence"]["persistence"], PAPER["persistence_asr"].values()):
+            lines.append(f"| {r['label']} | {r['n']} | {_rate(r['asr'], r['asr_ci'])} | {r['lost_frames_mean']:.1f} | "
+                         f"{paper:.2f} |")
+        lines.append("")
+    lines += ["What differs from the paper's set-up (see [what is modelled](../concepts/what-is-modelled.md)): "
+              "the temporal prior is racf's own small Chronos-2-architecture checkpoint pretrained on synthetic "
+              "series, because the Hugging Face hub cannot be reached at run time; the car, its sensors and the "
+              "map are simulated; the default detector is classical (colour and shape), with a learned segmenter "
+              "beside it; the offline data are simulated drives.", ""]
+    return "\n".join(lines)
+
+
+def readme_table(root: Path) -> str:
+    """The README's headline table: :func:`paper_rows` with links into ``docs/results/``."""
+    return "\n".join(paper_rows(_Data(root), link="docs/results/"))
+
+
+def _detector(d: _Data) -> str:
+    lines = ["# The learned detector and the printed sticker", "", _NOTE, "",
+             "The paper detects the sign with YOLOv8-seg and attacks it with a physical patch. racf has a classical "
+             "colour-and-shape detector (the default) and a small learned segmenter trained on the simulator's "
+             "frames; the sticker is optimised against the segmenter and printed on the sign in the scene "
+             "([the tutorial](../tutorials/detector.md)).", "",
+             "![Near views, clean and with the sticker printed on the sign](../detector/patched_sign.png)", ""]
+    lines += ["## The detectors, on held-out views and approach drives", ""]
+    if "bench-detector" in d:
+        data = d["bench-detector"]
+        lines += _meta(data["meta"]) + [
+            "| detector | held-out recall [CI] (N) | held-out false-positive frames (of N) | drive recall [CI] (N) | "
+            "drive false-positive frames (of N) | ms per frame, one core, p50 / p99 |", "|---|---|---|---|---|---|"]
+        for name, r in data["detectors"].items():
+            h, a = r["heldout"], r["drives"]
+            lines.append(f"| {name} | {_rate(h['recall'], h['recall_ci'], 3)} ({h['n_positive']}) | "
+                         f"{h['fp_frames']} ({h['n_frames']}) | {_rate(a['recall'], a['recall_ci'], 3)} "
+                         f"({a['n_positive']}) | {a['fp_frames']} ({a['n_frames']}) | "
+                         f"{_num(r['ms_p50'], 2)} / {_num(r['ms_p99'], 2)} |")
+        lines.append("")
+    else:
+        lines += _missing("bench-detector", "racf bench-detector --json")
+    lines += ["## The sticker in the scene, per view", ""]
+    if "bench-patch" in d:
+        data = d["bench-patch"]
+        lines += _meta(data["meta"]) + ["| detector | recall, clean [CI] | recall, sticker [CI] | "
+                                         "recall, occluder of the same area [CI] | N |", "|---|---|---|---|---|"]
+        for name, r in data["detectors"].items():
+            lines.append(f"| {name} | {_rate(r['clean'], r['clean_ci'], 3)} | {_rate(r['sticker'], r['sticker_ci'], 3)} "
+                         f"| {_rate(r.get('occluder'), r.get('occluder_ci'), 3)} | {r['n']} |")
+        lines.append("")
+    else:
+        lines += _missing("bench-patch", "racf bench-patch -n 300 --json")
+    lines += ["## The sticker in the closed loop", ""]
+    if "physical-patch" in d:
+        data = d["physical-patch"]
+        lines += _settings_table(data) + ["SCR by estimator:", ""] + _by_estimator_table(data)
+    else:
+        lines += _missing("physical-patch", "racf sweep physical-patch.toml")
+    return "\n".join(lines)
+
+
+def _speed(d: _Data) -> str:
+    lines = ["# Speed", "", _NOTE, "",
+             "The real-time factor is simulated seconds per wall-clock second at the 50 Hz control rate. This "
+             "machine's speed drifts by 10-20 % from minute to minute: compare two versions in one run, in "
+             "alternation, not across pages.", ""]
+    lines += ["## The simulator alone (`racf bench-sim`)", ""]
+    if "bench-sim" in d:
+        data = d["bench-sim"]
+        lines += _meta(data["meta"]) + ["| setting | steps/s | real-time factor |", "|---|---|---|"]
+        lines += [f"| {k} | {v['steps_per_s']:.1f} | {v['real_time_factor']:.2f} |" for k, v in data["settings"].items()]
+        lines.append("")
+    else:
+        lines += _missing("bench-sim", "racf bench-sim --json")
+    lines += ["## Whole episodes, as a sweep runs them (`racf bench-loop`)", ""]
+    if "bench-loop" in d:
+        data = d["bench-loop"]
+        lines += _meta(data["meta"]) + ["| measure | value |", "|---|---|"]
+        lines += [f"| {k.replace('_', ' ')} | {_num(v, 2) if isinstance(v, float) else v} |"
+                  for k, v in data["loop"].items()]
+        lines.append("")
+    else:
+        lines += _missing("bench-loop", "racf bench-loop --json")
+    lines += ["## ODCA's per-step cost (`racf odca-latency`)", ""]
+    if "odca-latency" in d:
+        data = d["odca-latency"]
+        lines += _meta(data["meta"]) + ["| measure | value |", "|---|---|"]
+        lines += [f"| {k.replace('_', ' ')} | {_num(v, 3) if isinstance(v, float) else v} |"
+                  for k, v in data["latency"].items()]
+        lines.append("")
+    else:
+        lines += _missing("odca-latency", "racf odca-latency --json")
+    return "\n".join(lines)
+
+
+def _index(d: _Data) -> str:
+    lines = ["# Results", "", _NOTE, "",
+             "| page | what |", "|---|---|",
+             "| [Reproduced from the paper](paper.md) | the paper's claims beside racf's measurements |",
+             "| [Closed loop](closed-loop.md) | the paper's table on three sensor set-ups |",
+             "| [Sweeps](sweeps.md) | 1,000-episode random sweeps and every attack type |",
+             "| [Offline benchmark](offline-benchmark.md) | repair RMSE against forecasting baselines |",
+             "| [Adaptive attacks](adaptive-attacks.md) | white- and black-box attacks that know the defence |",
+             "| [Detector and sticker](detector-and-sticker.md) | the learned segmenter and the printed sticker |",
+             "| [Speed](speed.md) | the simulator, whole episodes and ODCA's per-step cost |", "",
+             "## Every stored result", "",
+             "| result | command | commit | measured | machine |", "|---|---|---|---|---|"]
+    for path in sorted(d.root.glob("*.json")):
+        meta = json.loads(path.read_text())["meta"]
+        lines.append(f"| `{path.stem}` | `{meta['command']}` | `{meta['commit']}` | {meta['measured']} | "
+                     f"{meta['machine']} |")
+    return "\n".join(lines + [""])
+
+
+#: The generated results pages (relative to ``docs/``) and the function that writes each from the data folder.
+RESULT_PAGES: dict[str, Callable[[Path], str]] = {
+    f"results/{name}.md": (lambda make: lambda root: make(_Data(root)))(make)
+    for name, make in (("index", _index), ("paper", _paper), ("closed-loop", _closed_loop), ("sweeps", _sweeps),
+                       ("offline-benchmark", _offline), ("adaptive-attacks", _adaptive),
+                       ("detector-and-sticker", _detector), ("speed", _speed))}

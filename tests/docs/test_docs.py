@@ -47,6 +47,13 @@ def test_the_generated_reference_pages_are_current():
     assert stale == [], f"run `make docs` to regenerate {stale}"
 
 
+def test_the_readmes_results_table_is_written_from_the_stored_results():
+    from racf.experiments.cli.reference import readme_with_table
+
+    text = (ROOT / "README.md").read_text()
+    assert readme_with_table(text) == text, "run `make docs` to rewrite the README's results table"
+
+
 def test_every_block_is_run_or_marked():
     counted = {"run": 0, "slow": 0, "illustrative": 0}
     for page in PAGES:

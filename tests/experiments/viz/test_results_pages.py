@@ -1,0 +1,71 @@
+"""The results pages come from stored results only: a stored number appears, with its command and
+commit; a result not stored says how to make it, and no page invents one."""
+
+import json
+
+import pytest
+
+from racf.experiments.viz import results_store
+from racf.experiments.viz.results_pages import RESULT_PAGES, readme_table
+
+
+def _settings(scr):
+    return {"n": 30, "scr": scr, "scr_ci": [scr - 0.1, min(1.0, scr + 0.1)], "asr": 1 - scr,
+            "asr_ci": [0.0, 0.2], "dt_brake_mean": 0.1234, "dt_brake_std": 0.01, "n_latency": 30,
+            "scr_attack_before_t_star": scr, "scr_attack_before_t_star_ci": [0.5, 1.0], "n_attack_before_t_star": 16}
+
+
+@pytest.fixture
+def data_dir(tmp_path, monkeypatch):
+    monkeypatch.setattr(results_store, "commit", lambda root=None: "abc1234")
+    table = {name: _settings(scr) for name, scr in (("clean", 1.0), ("attack", 0.4567), ("attack+odca", 0.9876))}
+    results_store.store_result("closed-loop-table", {"settings": table}, command="racf trials --table --json",
+                               data_dir=tmp_path, sensor_profile="qcar2")
+    return tmp_path
+
+
+def test_a_stored_number_reaches_its_page_with_its_command_and_commit(data_dir):
+    page = RESULT_PAGES["results/closed-loop.md"](data_dir)
+    assert "0.46 [0.36, 0.56]" in page and "0.99 [0.89, 1.00]" in page
+    assert "`racf trials --table --json`" in page and "`abc1234`" in page and "sensor profile qcar2" in page
+
+
+def test_a_result_not_stored_says_how_to_make_it(data_dir):
+    page = RESULT_PAGES["results/adaptive-attacks.md"](data_dir)
+    assert "Not stored yet (`adaptive`)" in page and "racf sweep adaptive.toml" in page
+
+
+def test_the_paper_table_quotes_the_paper_beside_the_measurement(data_dir):
+    table = readme_table(data_dir)
+    assert "| patch attack, no defence: SCR | 0.17 | 0.46" in table
+    assert "docs/results/closed-loop.md" in table
+
+
+def test_every_page_renders_from_an_empty_folder(tmp_path):
+    for name, make in RESULT_PAGES.items():
+        assert make(tmp_path).startswith("# "), name
+
+
+def test_the_store_writes_strict_json_with_its_provenance(tmp_path):
+    path = results_store.store_result("x", {"v": 1.5}, command="racf x", data_dir=tmp_path, detector="learned")
+    data = json.loads(path.read_text())
+    assert data["v"] == 1.5 and data["meta"]["command"] == "racf x" and data["meta"]["detector"] == "learned"
+    assert {"commit", "racf", "measured", "machine"} <= set(data["meta"])
+    with pytest.raises(ValueError):
+        results_store.store_result("x", {"v": float("nan")}, command="racf x", data_dir=tmp_path)
+
+
+def test_the_store_reads_a_sweeps_folder(tmp_path):
+    sweep = tmp_path / "sweep"
+    sweep.mkdir()
+    (sweep / "summary.json").write_text(json.dumps({"attack": _settings(0.5)}))
+    (sweep / "stealth.json").write_text(json.dumps([{"attack": "delay"}]))
+    assert results_store.load_source(sweep) == {"settings": {"attack": _settings(0.5)}, "stealth": [{"attack": "delay"}]}
+
+
+def test_bad_sources_are_one_line_and_exit_2(tmp_path, capsys):
+    (tmp_path / "list.json").write_text("[1, 2]")
+    assert results_store.main(["x", str(tmp_path / "list.json"), "--command", "c", "--data-dir", str(tmp_path)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and "a result is a JSON object" in err
+    assert not (tmp_path / "x.json").exists()
