@@ -50,6 +50,7 @@ class RawDepthEstimator:
     """d~ as perception measured it: no defence (NaN without a detection)."""
 
     name = "raw"
+    n_parameters = 0
 
     def reset(self) -> None:
         pass
@@ -69,6 +70,7 @@ class EKFEstimator:
     """The EKF baseline: depth and LiDAR fused with odometry (:mod:`racf.controllers.ekf`)."""
 
     name = "ekf"
+    n_parameters = 0  # a filter with hand-set noise models: nothing trained
 
     def __init__(self, config: EKFConfig | None = None) -> None:
         self.filter = DistanceEKF(config)

@@ -28,6 +28,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     """Runs one command; returns its exit code (2: bad input, nothing run)."""
+    from racf.experiments.sweeps.executors import CodeChangedError
     from racf.odca.prior import CheckpointError
     from racf.plugins import PluginError
 
@@ -43,6 +44,9 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     except PluginError as err:  # a user's plug-in that cannot load, or a name no registry knows
         print(f"racf: {err}", file=sys.stderr)
+        return 2
+    except CodeChangedError as err:  # the source was edited mid-run: nothing stale is stored
+        print(f"racf {argv[0] if argv else ''}: {err}".replace(" :", ":"), file=sys.stderr)
         return 2
     except CheckpointError as err:  # a checkpoint a user named that is missing or corrupt
         print(f"racf {argv[0] if argv else ''}: {err}".replace(" :", ":"), file=sys.stderr)

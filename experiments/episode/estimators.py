@@ -61,6 +61,15 @@ class ODCAEstimator:
         self.last = None
         self._had_depth = False
 
+    @property
+    def n_parameters(self) -> int:
+        """Trainable parameters: the delta head's (the prior is frozen)."""
+        return self.model.head.n_parameters
+
+    @property
+    def n_frozen_parameters(self) -> int:
+        return _prior_parameters(self.model.prior)
+
     @classmethod
     def of(cls, model) -> "ODCAEstimator":
         """The estimator around an ODCA model already in memory (the benchmark's per-split heads)."""
@@ -119,6 +128,11 @@ class ChronosEstimator:
     """
 
     name = "chronos"
+    n_parameters = 0  # nothing trained for the task: the prior is used as it ships
+
+    @property
+    def n_frozen_parameters(self) -> int:
+        return _prior_parameters(self.prior)
 
     def __init__(self, context_length: int = 64, horizon: int = 16, refresh_steps: int = 4,
                  flag_sigma: float = 3.0) -> None:
@@ -169,6 +183,11 @@ class ChronosEstimator:
 
     def diagnostics(self) -> dict[str, float]:
         return {"flag": float(self.flagged)} if self._t else {}
+
+
+def _prior_parameters(prior) -> int:
+    model = getattr(prior, "model", None)
+    return int(sum(p.numel() for p in model.parameters())) if model is not None else 0
 
 
 def make_estimator(name: str, options: dict[str, Any] | None = None) -> DistanceEstimator:

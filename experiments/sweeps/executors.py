@@ -24,7 +24,7 @@ from typing import Callable, Iterator
 
 from racf.experiments.episode import TrialSpec
 
-__all__ = ["BACKENDS", "SINGLE_THREAD_ENV", "single_thread", "spawn_pool", "run_episode", "local_executor",
+__all__ = ["BACKENDS", "SINGLE_THREAD_ENV", "CodeChangedError", "single_thread", "spawn_pool", "run_episode", "local_executor",
            "ray_executor", "ray_session", "backend_session", "executor"]
 
 #: Where episodes can run.
@@ -46,8 +46,14 @@ def spawn_pool(workers: int) -> ProcessPoolExecutor:
     return ProcessPoolExecutor(max_workers=workers, mp_context=mp.get_context("spawn"), initializer=single_thread)
 
 
+class CodeChangedError(ValueError):
+    """A worker's episode id differs from the one the batch computed: racf's code, or a
+    plug-in's, changed on disk while the batch ran, so the stored episode would not be the
+    one asked for."""
+
+
 def run_episode(spec: TrialSpec, out: str, log_steps: bool = False, logs_dir: str = "logs",
-                rerun: bool = False) -> dict:
+                rerun: bool = False, expected_id: str | None = None) -> dict:
     """Runs one episode and stores it in the :class:`ResultStore` at ``out``; returns its row.
 
     Args:
@@ -57,10 +63,15 @@ def run_episode(spec: TrialSpec, out: str, log_steps: bool = False, logs_dir: st
             carries; the row is the same without it).
         logs_dir: the store's log folder.
         rerun: also record the episode to ``<logs_dir>/<id>.rrd`` (implies ``log_steps``).
+        expected_id: the id the batch computed; a worker that computes another refuses to run
+            (:class:`CodeChangedError`).
     """
     from racf.experiments.episode import run_trial
     from racf.experiments.sweeps.store import ResultStore
 
+    if expected_id is not None and spec.trial_id != expected_id:
+        raise CodeChangedError(f"racf's code or a plug-in changed on disk while the batch ran (episode "
+                               f"{expected_id} is now {spec.trial_id}); run the command again")
     store = ResultStore(out, logs_dir)
     recorder = None
     if rerun:
@@ -95,7 +106,7 @@ def local_executor(specs: list[TrialSpec], out: str, workers: int, **episode) ->
             yield run_episode(spec, out, **episode)
         return
     with spawn_pool(workers) as pool:
-        futures = [pool.submit(run_episode, spec, out, **episode) for spec in specs]
+        futures = [pool.submit(run_episode, spec, out, expected_id=spec.trial_id, **episode) for spec in specs]
         for future in as_completed(futures):
             yield future.result()
 
@@ -144,7 +155,7 @@ def ray_executor(specs: list[TrialSpec], out: str, workers: int, address: str | 
 
     with ray_session(workers, address):
         remote: Callable = ray.remote(num_cpus=1)(run_episode)
-        pending = [remote.remote(spec, out, **episode) for spec in specs]
+        pending = [remote.remote(spec, out, expected_id=spec.trial_id, **episode) for spec in specs]
         while pending:
             ready, pending = ray.wait(pending, num_returns=1)
             yield ray.get(ready[0])

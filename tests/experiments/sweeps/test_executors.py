@@ -39,3 +39,13 @@ def test_a_local_ray_run_ignores_a_stale_cluster_address(tmp_path, monkeypatch):
             address_file.unlink()
     assert ran == 1 and bool(rows["success"].iloc[0])
     assert os.environ["RAY_ADDRESS"] == "127.0.0.1:6399"
+
+
+def test_a_worker_whose_code_changed_refuses_to_store_under_another_id(tmp_path):
+    from racf.experiments.episode import TrialSpec
+    from racf.experiments.sweeps.executors import CodeChangedError, run_episode
+
+    spec = TrialSpec("clean", 0, 1.0, 0)
+    with pytest.raises(CodeChangedError, match="changed on disk while the batch ran"):
+        run_episode(spec, str(tmp_path), expected_id=spec.trial_id + "x")
+    assert not any(tmp_path.rglob("*.json"))

@@ -1,0 +1,124 @@
+"""The scorecard's battery: a named, versioned list of the episodes and measurements every
+defence is rated on. A battery never changes once released: a change is a new name
+(``racf-2``), so two cards of one battery always rate the same thing.
+
+``racf-1`` (N per defence; ``--quick`` keeps every row at a small N, and says so):
+
+- **closed loop**, each row a batch of ordinary episodes with ids, on the ``qcar2`` sensors:
+  the paper's table (clean and the strong patch, ``racf trials --table``'s episodes); random
+  strong patch draws; the same with the LiDAR spoofed too; each adaptive attack at its
+  strongest; the printed sticker against the learned detector;
+- **drives**: seeded drives past several targets, clean and with the patch;
+- **offline**: the repair benchmark's presets on the dataset's by-series test drives;
+- **detection** and **cost**, from the closed-loop rows' step logs and the offline run.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+from typing import Callable
+
+from racf.experiments.episode import TrialSpec
+from racf.experiments.sweeps.batches import batch_specs
+from racf.experiments.sweeps.spec import SweepSpec
+
+__all__ = ["LoopRow", "Battery", "BATTERIES", "DEFAULT_BATTERY", "PENALTIES"]
+
+#: The driving score's penalties (CARLA's leaderboard coefficients): one factor per infraction.
+PENALTIES = {"ran_stop_sign": 0.80, "hit_static_object": 0.65}
+
+
+@dataclass(frozen=True)
+class LoopRow:
+    """One closed-loop row: ``make(defence, n)`` gives its episodes."""
+
+    key: str
+    title: str
+    n: int
+    n_quick: int
+    make: Callable[[str, int], list[TrialSpec]] = field(compare=False, repr=False)
+    attacked: bool = True
+
+    def specs(self, defence: str, quick: bool = False) -> list[TrialSpec]:
+        return self.make(defence, self.n_quick if quick else self.n)
+
+
+def _paper(setting: str) -> Callable[[str, int], list[TrialSpec]]:
+    def make(defence: str, n: int) -> list[TrialSpec]:
+        return batch_specs(setting + ("" if defence == "raw" else f"+{defence}"), n)
+    return make
+
+
+def _sweep(name: str, attack: str, *, mode: str = "random", detector: str = "classical", params: dict | None = None,
+           t_atk: list | None = None, rho: list | None = None, speed: list | None = None
+           ) -> Callable[[str, int], list[TrialSpec]]:
+    """Episodes of a sweep over the four signs; ``n`` is the number of draws (random) or of
+    episodes (grid: repeats over the four signs)."""
+    def make(defence: str, n: int) -> list[TrialSpec]:
+        space = {"attack": [attack], "estimator": [defence], "sign": [0, 1, 2, 3]}
+        if mode == "random":
+            space |= {"rho": rho or [0.9, 1.0], "t_atk": t_atk or [0.5, 3.0], "speed": speed or [1.0, 2.0]}
+            spec = SweepSpec(name, mode="random", n=n, seed=0, space=space, log_steps=True, detector=detector)
+        else:
+            space |= {"rho": rho or [1.0], "t_atk": t_atk or [3.0], "speed": speed or [1.5]}
+            spec = SweepSpec(name, mode="grid", repeats=max(1, n // 4), seed=0, space=space, params=params or {},
+                             log_steps=True, detector=detector)
+        return spec.episodes()
+    return make
+
+
+def _drives(attack: bool) -> Callable[[str, int], list[TrialSpec]]:
+    def make(defence: str, n: int) -> list[TrialSpec]:
+        setting = ("attack" if attack else "clean") + ("" if defence == "raw" else f"+{defence}")
+        return [TrialSpec(setting, 0, 1.5, seed, target="drive") for seed in range(n)]
+    return make
+
+
+@dataclass(frozen=True)
+class Battery:
+    """A named battery: its closed-loop rows, its drives and its offline settings."""
+
+    name: str
+    loop: tuple[LoopRow, ...]
+    drives: tuple[LoopRow, ...]
+    offline_presets: tuple[str, ...] = ("weak", "mid", "strong")
+    offline_split: str = "by_series"
+    offline_draws: int = 5
+    offline_draws_quick: int = 1
+
+    def rows(self) -> tuple[LoopRow, ...]:
+        return self.loop + self.drives
+
+    def quick(self) -> "Battery":
+        return replace(self, name=f"{self.name}-quick")
+
+
+_RACF_1 = Battery(
+    name="racf-1",
+    loop=(
+        LoopRow("paper_clean", "the paper's table: clean", 30, 4, _paper("clean"), attacked=False),
+        LoopRow("paper_attack", "the paper's table: the strong patch", 30, 4, _paper("attack")),
+        LoopRow("strong_random", "random strong patch draws", 60, 4, _sweep("strong", "patch_occlusion")),
+        LoopRow("patch_spoof", "random strong patch + LiDAR spoof", 60, 4,
+                _sweep("spoof", "patch_occlusion+lidar_spoof")),
+        LoopRow("stealth_ramp", "stealth_ramp, r 3 m/s over 3 s (white box)", 24, 4,
+                _sweep("adaptive", "stealth_ramp", mode="grid", params={"stealth_ramp": {"rate_mps": [3.0]}})),
+        LoopRow("frustum_spoof", "frustum_spoof, r 3 m/s over 3 s (white box)", 24, 4,
+                _sweep("adaptive", "frustum_spoof", mode="grid", params={"frustum_spoof": {"rate_mps": [3.0]}})),
+        LoopRow("dropout_timed", "dropout_timed, blackout after 1 empty scan (black box)", 24, 4,
+                _sweep("adaptive", "dropout_timed", mode="grid",
+                       params={"dropout_timed": {"scans": [1], "effect": ["blackout"]}})),
+        LoopRow("delay", "delay, the depth frozen for 3 s (black box)", 24, 4,
+                _sweep("adaptive", "delay", mode="grid", params={"delay": {"sensor": ["depth"], "frames": [50]}})),
+        LoopRow("sticker", "the printed sticker against the learned detector", 30, 4,
+                _sweep("sticker", "physical_patch", detector="learned")),
+    ),
+    drives=(
+        LoopRow("drives_clean", "seeded drives, clean", 6, 1, _drives(False), attacked=False),
+        LoopRow("drives_attack", "seeded drives, the strong patch at the first target", 6, 1, _drives(True)),
+    ),
+)
+
+#: Every released battery, by name.
+BATTERIES = {"racf-1": _RACF_1}
+DEFAULT_BATTERY = "racf-1"

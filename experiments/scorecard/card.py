@@ -1,0 +1,106 @@
+"""One defence's card on a battery: every row run (or reused) and summarised.
+
+Episodes are ordinary episodes with ids, stored under ``out/episodes/<row>/`` and shared by
+every card made in ``out``: a rerun, or a run after a SIGKILL, reuses what is stored and runs
+only what is missing. The offline rows are cached under ``out/offline/`` by the defence's
+code version (its plug-in source included), the dataset's hash and the battery, so they are
+computed once per version. Wall times and per-step times sit under ``timing``, the only part
+of the card that differs between two runs of the same command.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import time
+from dataclasses import replace
+from pathlib import Path
+
+import pandas as pd
+
+from racf.experiments.episode import TrialSpec
+from racf.experiments.scorecard.battery import PENALTIES, Battery
+from racf.experiments.scorecard.detection import detection_rows
+from racf.experiments.scorecard.drives import driving_rows
+from racf.experiments.sweeps.store import ResultStore, atomic_write
+from racf.experiments.sweeps.summary import summarize
+
+__all__ = ["run_card", "card_version"]
+
+
+def card_version(defence: str) -> str:
+    """The code a card depends on: racf's episode code and, for a plug-in, its own source (as a
+    trial id holds it)."""
+    return TrialSpec("clean" + ("" if defence == "raw" else f"+{defence}"), 0, 1.0, 0).trial_id
+
+
+def _loop_summary(rows: pd.DataFrame, attacked: bool) -> dict:
+    s = summarize(rows, attack=attacked)
+    keep = ("n", "scr", "scr_ci", "asr", "asr_ci", "n_attack_before_t_star", "scr_attack_before_t_star",
+            "scr_attack_before_t_star_ci", "dt_brake_mean", "dt_brake_std", "n_latency", "failures")
+    return {k: s.get(k) for k in keep if k in s}
+
+
+def _dataset_hash(ds) -> str:
+    """The test drives the offline rows read (their clean frame), so a new dataset is a new key."""
+    frame = ds.clean("test")
+    digest = hashlib.sha256(pd.util.hash_pandas_object(frame, index=False).to_numpy().tobytes())
+    return digest.hexdigest()[:16]
+
+
+def _logs(store: ResultStore, ids: list[str]) -> list[pd.DataFrame]:
+    return [pd.read_parquet(store.log_path(i)) for i in ids]
+
+
+def run_card(defence: str, battery: Battery, out: Path, *, quick: bool = False, dataset=None,
+             backend: str = "local", workers: int = 2, address: str | None = None, progress: bool = True,
+             options: dict | None = None) -> dict:
+    """Runs (or resumes) ``battery`` for ``defence`` and returns its card (strict-JSON-ready).
+
+    ``dataset`` is the offline rows' ``QCarDataset`` (by-series split); None leaves them out.
+    """
+    from racf.experiments.scorecard.offline import offline_rows, step_times_ms, trainable_parameters
+    from racf.experiments.sweeps.run import run_episodes
+
+    t0 = time.perf_counter()
+    out = Path(out)
+    card: dict = {"battery": battery.name + ("-quick" if quick else ""), "quick": quick, "defence": defence,
+                  "version": card_version(defence), "sensor_profile": "qcar2", "closed_loop": {}, "drives": {}}
+    timing: dict = {}
+    loop_logs: list[pd.DataFrame] = []
+    for row in battery.rows():
+        specs = row.specs(defence, quick)
+        if options:
+            specs = [replace(s, estimator_options=options) for s in specs]
+        store = ResultStore(out / "episodes" / row.key)
+        t_row = time.perf_counter()
+        frame, _ = run_episodes(specs, store, backend, workers, address, log_steps=True, progress=progress,
+                                desc=f"{defence}: {row.key}")
+        timing[row.key + "_s"] = time.perf_counter() - t_row
+        ids = [s.trial_id for s in specs]
+        logs = _logs(store, ids)
+        summary = {"title": row.title, "detector": specs[0].detector, **_loop_summary(frame, row.attacked)}
+        if row in battery.drives:
+            card["drives"][row.key] = {**summary, **driving_rows(frame, logs, PENALTIES)}
+        else:
+            card["closed_loop"][row.key] = summary
+            loop_logs += logs
+    card["detection"] = detection_rows(loop_logs)
+    card["penalties"] = PENALTIES
+    card["cost"] = {"parameters": trainable_parameters(defence, options)}
+    if dataset is not None:
+        draws = battery.offline_draws_quick if quick else battery.offline_draws
+        cache = out / "offline" / f"{defence}-{card['version']}-{_dataset_hash(dataset)}-{battery.name}-{draws}.json"
+        t_off = time.perf_counter()
+        if cache.exists():
+            card["offline"] = json.loads(cache.read_text())
+        else:
+            card["offline"] = offline_rows(defence, dataset, battery.offline_presets, draws, options)
+            card["offline"]["split"] = battery.offline_split
+            cache.parent.mkdir(parents=True, exist_ok=True)
+            atomic_write(cache, json.dumps(card["offline"], allow_nan=False))
+        timing["offline_s"] = time.perf_counter() - t_off
+        timing["step_time"] = step_times_ms(defence, dataset, options)
+    timing["wall_s"] = time.perf_counter() - t0
+    card["timing"] = timing
+    return card
