@@ -73,6 +73,7 @@ class DistanceEKF:
         self.P = np.eye(2)
         self.initialised = False
         self.flagged = False
+        self.score = 0.0
         self._since_measurement_s = 0.0
 
     def step(self, depth: float, confidence: float, lidar: float, speed: float, dt: float) -> float:
@@ -86,14 +87,15 @@ class DistanceEKF:
         if self.initialised:
             self._predict(speed, dt)
             self._since_measurement_s += dt
-        self.flagged = False
+        self.score = 0.0  # the largest normalised innovation of this step's measurements
         if depth_ok:
             r = self.depth_variance(confidence)
-            self.flagged |= not self.innovation_ok(float(depth), r)
+            self.score = max(self.score, self.normalised_innovation(float(depth), r))
             self._update(float(depth), r)
         if lidar_ok:
-            self.flagged |= not self.innovation_ok(float(lidar), c.lidar_std_m ** 2)
+            self.score = max(self.score, self.normalised_innovation(float(lidar), c.lidar_std_m ** 2))
             self._update(float(lidar), c.lidar_std_m ** 2)
+        self.flagged = self.score > c.innovation_sigma
         if depth_ok or lidar_ok:
             self._since_measurement_s = 0.0
         elif self.initialised and self._since_measurement_s > c.drop_after_s:
@@ -109,10 +111,14 @@ class DistanceEKF:
     def innovation_ok(self, z: float, r: float, prediction: float | None = None) -> bool:
         """Whether ``z`` (variance ``r``) passes the innovation test against the state (or
         ``prediction`` of it); True before the first measurement (nothing to test against)."""
+        return self.normalised_innovation(z, r, prediction) <= self.config.innovation_sigma
+
+    def normalised_innovation(self, z: float, r: float, prediction: float | None = None) -> float:
+        """|z - prediction| in innovation standard deviations; 0 before the first measurement."""
         if not self.initialised:
-            return True
+            return 0.0
         x = self.x[0] if prediction is None else prediction
-        return abs(z - x) <= self.config.innovation_sigma * math.sqrt(self.P[0, 0] + r)
+        return abs(z - x) / math.sqrt(self.P[0, 0] + r)
 
     def _predict(self, speed: float, dt: float) -> None:
         F = np.array([[1.0, dt], [0.0, 1.0]])

@@ -37,7 +37,10 @@ class DistanceEstimator(Protocol):
     def diagnostics(self) -> dict[str, float]:
         """What the last ``estimate`` call leaves to log beside the distance, by column name
         (ODCA: its gate ``w``; a defence with a detector: ``flag``, 1.0 when it flagged the
-        step); empty when the estimator has nothing to add."""
+        step, and, if it has one, ``score``, the statistic it thresholds, higher is more
+        suspicious: the scorecard sweeps a threshold over it); empty when the estimator has
+        nothing to add. A defence may also declare ``n_parameters`` (trainable) and
+        ``n_frozen_parameters`` for the scorecard's cost row."""
 
     def would_pass(self, *, depth: float, speed_mps: float, dt: float, yaw_rate_radps: float = 0.0,
                    lidar_shift: float = 0.0) -> bool:
@@ -85,7 +88,7 @@ class EKFEstimator:
         return self.filter.step(sample.d_meas, sample.c_meas, sample.lidar_m, speed_mps, dt)
 
     def diagnostics(self) -> dict[str, float]:
-        return {"flag": float(self.filter.flagged)} if self._stepped else {}
+        return {"flag": float(self.filter.flagged), "score": self.filter.score} if self._stepped else {}
 
     def would_pass(self, *, depth: float, speed_mps: float, dt: float, yaw_rate_radps: float = 0.0,
                    lidar_shift: float = 0.0) -> bool:

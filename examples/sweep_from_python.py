@@ -27,7 +27,7 @@ seed = 0
 
 [space]
 attack = ["none", "depth_scale"]
-estimator = ["raw", "odca", "cusum"]
+estimator = ["raw", "odca", "lidar_cusum"]
 rho = [1.0]
 t_atk = [2.0]
 speed = [1.5]
@@ -36,7 +36,7 @@ sign = {signs}
 [params.depth_scale]
 scale = [1.6]
 
-[estimators.cusum]
+[estimators.lidar_cusum]
 h_m = 0.25
 """
 
@@ -47,7 +47,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--signs", type=int, nargs="+", default=[0, 1, 2, 3], help="stop signs 0-3 (default all)")
     parser.add_argument("--workers", type=int, default=2, help="parallel episodes (default 2)")
     args = parser.parse_args(argv)
-    if "cusum" not in ESTIMATORS:
+    if "lidar_cusum" not in ESTIMATORS:
         parser.error("the example defence is not installed: pip install examples/racf-cusum")
     load_plugin_file(HERE / "depth_scale_attack.py")  # the one-file attack; worker processes load it too
     text = SPEC.format(signs=json.dumps(args.signs))

@@ -35,7 +35,7 @@ def install_cusum(site: Path) -> Path:
     info = site / "racf_cusum-0.1.0.dist-info"
     info.mkdir()
     (info / "METADATA").write_text("Metadata-Version: 2.1\nName: racf-cusum\nVersion: 0.1.0\n")
-    (info / "entry_points.txt").write_text("[racf.estimators]\ncusum = racf_cusum:CusumDefence\n")
+    (info / "entry_points.txt").write_text("[racf.estimators]\nlidar_cusum = racf_cusum:CusumDefence\n")
     return package
 
 

@@ -90,9 +90,9 @@ def test_a_broken_entry_point_is_named_not_skipped(plugin_env, tmp_path, monkeyp
 
 
 def test_an_installed_plugin_is_found_and_versioned_by_its_package(cusum_installed):
-    plugin = ESTIMATORS.plugin("cusum")
+    plugin = ESTIMATORS.plugin("lidar_cusum")
     assert plugin.origin == "racf-cusum" and not plugin.builtin
-    spec = TrialSpec("attack+cusum", 0, 1.0, 0)
+    spec = TrialSpec("attack+lidar_cusum", 0, 1.0, 0)
     before = spec.trial_id
     (cusum_installed / "__init__.py").write_text((cusum_installed / "__init__.py").read_text() + "\n# edited\n")
     assert spec.trial_id != before

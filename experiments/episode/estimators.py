@@ -87,6 +87,7 @@ class ODCAEstimator:
                                     speed=speed_mps, yaw_rate=yaw_rate_radps, bearing=sample.bearing_rad, dt=dt,
                                     lidar_confirmed=sample.lidar_confirmed)
         self._had_depth = math.isfinite(sample.d_meas)
+        self._depth = sample.d_meas
         return self.last.d_fused
 
     def use_calibration(self, calibration) -> None:
@@ -112,7 +113,20 @@ class ODCAEstimator:
         # The gate flags a depth it outvotes (or one off the kinematic baseline); a missing
         # depth, or one passed on first sight, is nothing to flag.
         flagged = self._had_depth and int(self.last.source) not in (DEPTH, DEPTH_UNCONFIRMED)
-        return {"w": self.last.w, "flag": float(flagged), "odca_source": self.last.source, "d_kin": self.last.d_kin}
+        return {"w": self.last.w, "flag": float(flagged), "score": self._score(), "odca_source": self.last.source,
+                "d_kin": self.last.d_kin}
+
+    def _score(self) -> float:
+        """The depth's disagreement with its closest witness, in that witness's tolerance: the
+        LiDAR's tau, the kinematic branch's tau + n_sigma x std (0: no depth, or no witness).
+        The gate votes rather than thresholds this, so it is the statistic a threshold sweep reads."""
+        last, cfg = self.last, self.model.config
+        ratios = []
+        if self._had_depth and math.isfinite(last.r_xs):
+            ratios.append(last.r_xs / cfg.gate.tau_m)
+        if self._had_depth and math.isfinite(last.d_kin) and math.isfinite(last.kin_std):
+            ratios.append(abs(self._depth - last.d_kin) / (cfg.gate.tau_m + cfg.kinematics.n_sigma * last.kin_std))
+        return min(ratios) if ratios else 0.0
 
     def would_pass(self, *, depth: float, speed_mps: float, dt: float, yaw_rate_radps: float = 0.0,
                    lidar_shift: float = 0.0) -> bool:
@@ -165,6 +179,8 @@ class ChronosEstimator:
             self._mean, self._std = self._forecast()
         d = sample.d_meas if math.isfinite(sample.d_meas) and sample.d_meas > 0 else math.nan
         self.flagged = not self._residual_ok(d, self._mean[k], self._std[k])
+        self.score = (abs(d - self._mean[k]) / self._std[k] if math.isfinite(d) and math.isfinite(self._mean[k])
+                      and math.isfinite(self._std[k]) and self._std[k] > 0 else 0.0)
         self._context = np.roll(self._context, -1)
         self._context[-1] = d
         self._t += 1
@@ -182,7 +198,7 @@ class ChronosEstimator:
         return self._residual_ok(depth, mean[k], std[k])
 
     def diagnostics(self) -> dict[str, float]:
-        return {"flag": float(self.flagged)} if self._t else {}
+        return {"flag": float(self.flagged), "score": self.score} if self._t else {}
 
 
 def _prior_parameters(prior) -> int:

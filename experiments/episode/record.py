@@ -7,7 +7,7 @@ through :func:`step_row`, which refuses a row that leaves out a declared column 
 undeclared one, so this table, the log, the scorer and the dataset cannot drift apart.
 
 An estimator adds its own columns through ``diagnostics()`` (ODCA: ``w``, ``flag``,
-``odca_source``, ``d_kin``; a plug-in: whatever it reports). ``w`` and ``flag`` are declared
+``odca_source``, ``d_kin``; a plug-in: whatever it reports). ``w``, ``flag`` and ``score`` are declared
 (NaN when the estimator has none), the others ride along on the car's side.
 
 Example:
@@ -64,6 +64,8 @@ STEP_COLUMNS: tuple[Column, ...] = (
     _c(CAR, "d_fused", "m", "the distance the car acted on: the estimator's output (NaN: no target)"),
     _c(CAR, "w", "1", "ODCA's gate weight (NaN for other estimators)"),
     _c(CAR, "flag", "bool", "the defence's detector flagged the step (1.0; NaN: it has no detector)"),
+    _c(CAR, "score", "1", "the defence's detection statistic, higher is more suspicious (NaN: it reports none); "
+                          "the scorecard sweeps a threshold over it"),
     _c(CAR, "detected", "bool", "the detector reported a target"),
     _c(CAR, "det_confidence", "1", "the detection's confidence (0: none)"),
     _c(CAR, "bearing", "rad", "the detection's bearing from the optical axis, left positive (NaN: none)"),
@@ -108,7 +110,7 @@ STEP_COLUMNS: tuple[Column, ...] = (
 #: The columns by name.
 STEP_LOG: dict[str, Column] = {c.name: c for c in STEP_COLUMNS}
 _DECLARED = frozenset(STEP_LOG) - {"trial_id"}
-_FROM_DIAGNOSTICS = {"w", "flag"}
+_FROM_DIAGNOSTICS = {"w", "flag", "score"}
 
 
 def columns_of(side: str) -> tuple[str, ...]:
@@ -121,7 +123,7 @@ def columns_of(side: str) -> tuple[str, ...]:
 def step_row(values: dict, diagnostics: dict) -> dict:
     """One step's row, in the declared order, then the estimator's own diagnostics.
 
-    ``values`` holds every declared column but ``trial_id`` (added per log) and ``w``/``flag``
+    ``values`` holds every declared column but ``trial_id`` (added per log) and ``w``/``flag``/``score``
     (from ``diagnostics`` when the estimator reports them, else NaN). ValueError names a
     column left out or not declared: a new column is declared here first.
     """

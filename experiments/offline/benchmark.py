@@ -29,7 +29,7 @@ from racf.experiments.sweeps.store import code_version
 from racf.experiments.offline.scoring import (bootstrap_rmse_draws, diagnostic_scores, error_sources, horizon_scores,
                                          mean_over_draws, recovery_scores, series_sse)
 
-__all__ = ["BenchConfig", "ABLATION", "load_splits", "run_benchmark", "PRESETS"]
+__all__ = ["BenchConfig", "ABLATION", "load_splits", "run_benchmark", "PRESETS", "frame_hash"]
 
 PRESETS = ("weak", "mid", "strong")
 #: The source a benchmark result depends on: the methods (ODCA, the EKF), the corruption and the scoring.
@@ -148,7 +148,8 @@ _USED = ["series_id", "drive_seed", "t", "slot", "d_clean", "c_clean", "d_true",
          "bearing"]
 
 
-def _frame_hash(*frames: pd.DataFrame) -> str:
+def frame_hash(*frames: pd.DataFrame) -> str:
+    """A short hash of the columns the benchmark reads, so a new dataset is a new key."""
     digest = hashlib.sha256()
     for frame in frames:
         digest.update(pd.util.hash_pandas_object(frame[_USED], index=False).to_numpy().tobytes())
@@ -168,7 +169,7 @@ def _trained_odca(ds: QCarDataset, prior, cfg: BenchConfig, weights: dict, tag: 
     from racf.odca.train import fit, initial_model, prepare_clean, prepare_split
 
     code = code_version("racf.odca", "racf.experiments.data")
-    key = hashlib.sha256(json.dumps({"data": _frame_hash(ds.clean("train"), ds.clean("val")), "weights": weights,
+    key = hashlib.sha256(json.dumps({"data": frame_hash(ds.clean("train"), ds.clean("val")), "weights": weights,
                                      "kinematics": kinematics or {},
                                      "epochs": cfg.odca_epochs, "seed": cfg.seed, "code": code,
                                      "prior": code_version(str(SHIPPED_PRIOR))},
@@ -179,7 +180,7 @@ def _trained_odca(ds: QCarDataset, prior, cfg: BenchConfig, weights: dict, tag: 
     model = initial_model(ds, prior)
     model.config = replace(model.config, kinematics=replace(model.config.kinematics, **(kinematics or {})))
     cache = _PREPARED
-    data_key = (_frame_hash(ds.clean("train"), ds.clean("val")), id(prior))
+    data_key = (frame_hash(ds.clean("train"), ds.clean("val")), id(prior))
     if cache.get("key") != data_key:  # the prior's features on train/val, shared by the ablation's heads
         cache.clear()
         cache.update(key=data_key, train=prepare_split(model, ds, "train"), val=prepare_split(model, ds, "val"),
@@ -373,7 +374,7 @@ def run_benchmark(cfg: BenchConfig, progress: bool = True, datasets: dict[str, Q
     results["complexity"] = complexity
     results["ablation"] = ablation
     frames = [datasets[s].frame for s in cfg.splits[:1]]
-    results["dataset"] = {"path": str(cfg.data), "quick": cfg.quick, "sha": _frame_hash(*frames),
+    results["dataset"] = {"path": str(cfg.data), "quick": cfg.quick, "sha": frame_hash(*frames),
                           "code": code_version(*BENCH_CODE), "prior": code_version(str(SHIPPED_PRIOR))}
     results["wall_s"] = time.perf_counter() - t0
     results["_traces"] = traces  # for the figures; not written to results.json

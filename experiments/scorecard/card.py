@@ -10,7 +10,6 @@ of the card that differs between two runs of the same command.
 
 from __future__ import annotations
 
-import hashlib
 import json
 import time
 from dataclasses import replace
@@ -42,10 +41,10 @@ def _loop_summary(rows: pd.DataFrame, attacked: bool) -> dict:
 
 
 def _dataset_hash(ds) -> str:
-    """The test drives the offline rows read (their clean frame), so a new dataset is a new key."""
-    frame = ds.clean("test")
-    digest = hashlib.sha256(pd.util.hash_pandas_object(frame, index=False).to_numpy().tobytes())
-    return digest.hexdigest()[:16]
+    """The test drives the offline rows read, so a new dataset is a new cache key."""
+    from racf.experiments.offline.benchmark import frame_hash
+
+    return frame_hash(ds.clean("test"))
 
 
 def _logs(store: ResultStore, ids: list[str]) -> list[pd.DataFrame]:

@@ -71,7 +71,7 @@ def offline_rows(defence: str, ds, presets: tuple[str, ...], draws: int, options
 
 def _pass_through(defence: str, ds, alignment, options: dict | None) -> dict:
     frame = ds.clean("test")
-    clean = frame.assign(d_meas=frame["d_clean"], c_meas=frame["c_clean"])
+    clean = frame.assign(d_meas=frame["d_clean"], c_meas=frame["c_clean"], label=0)
     a = split_arrays(clean, alignment)
     out = estimator_estimate(_make(defence, options), a, clean)
     d = clean["d_meas"].to_numpy(float)

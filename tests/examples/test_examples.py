@@ -30,26 +30,26 @@ def test_both_plugins_show_up_in_racf_list(cusum_installed, plugin_env):
     code, out = _run(["list", "--json", "--plugin", ATTACK])
     listed = json.loads(out)
     assert code == 0
-    assert listed["estimator"]["cusum"]["origin"] == "racf-cusum"
+    assert listed["estimator"]["lidar_cusum"]["origin"] == "racf-cusum"
     assert listed["attack"]["depth_scale"]["origin"].endswith("depth_scale_attack.py")
     assert listed["estimator"]["odca"]["origin"] == "racf"
 
 
 def test_the_defence_and_the_attack_run_in_trials_on_spawned_workers(cusum_installed, plugin_env, tmp_path):
-    code, out = _run(["trials", "--plugin", ATTACK, "--attack", "depth_scale", "--estimator", "cusum",
+    code, out = _run(["trials", "--plugin", ATTACK, "--attack", "depth_scale", "--estimator", "lidar_cusum",
                       "--estimator-option", "h_m=0.2", "--seed", "0", "-n", "2",
                       "--workers", "2", "--json", "--out", str(tmp_path / "ts")])
     summary = json.loads(out)
     assert code == 0 and summary["n"] == 2  # the workers found both: the package by entry point, the file by RACF_PLUGINS
     rows = pd.read_parquet(tmp_path / "ts" / "results.parquet")
-    assert set(rows["setting"]) == {"clean+depth_scale+cusum"} and set(rows["estimator"]) == {"cusum"}
+    assert set(rows["setting"]) == {"clean+depth_scale+lidar_cusum"} and set(rows["estimator"]) == {"lidar_cusum"}
 
 
 def test_a_sweep_from_flags_runs_both_and_an_edited_plugin_reruns(cusum_installed, plugin_env, tmp_path):
-    argv = ["sweep", "--plugin", ATTACK, "--attack", "depth_scale", "--estimator", "cusum", "--sign", "1",
+    argv = ["sweep", "--plugin", ATTACK, "--attack", "depth_scale", "--estimator", "lidar_cusum", "--sign", "1",
             "--workers", "1", "--json", "--out", str(tmp_path / "sweep")]
     first = json.loads(_run(argv)[1])
-    assert first["done"] == 1 and set(first["scr"]) == {"clean+depth_scale+cusum"}
+    assert first["done"] == 1 and set(first["scr"]) == {"clean+depth_scale+lidar_cusum"}
     assert json.loads(_run(argv)[1])["reused"] == 1
     source = cusum_installed / "__init__.py"
     source.write_text(source.read_text() + "\n# edited\n")
@@ -65,8 +65,8 @@ def test_a_sweep_from_python_reruns_only_what_an_edited_defence_touches(cusum_in
     with redirect_stdout(io.StringIO()) as out:
         assert script.main(args) == 0
     scr = json.loads(out.getvalue().split("\n}")[0] + "}")
-    assert set(scr) == {"clean", "clean+odca", "clean+cusum", "clean+depth_scale", "clean+depth_scale+odca",
-                        "clean+depth_scale+cusum"}
+    assert set(scr) == {"clean", "clean+odca", "clean+lidar_cusum", "clean+depth_scale", "clean+depth_scale+odca",
+                        "clean+depth_scale+lidar_cusum"}
     source = cusum_installed / "__init__.py"
     source.write_text(source.read_text().replace("recover_steps: int = 10", "recover_steps: int = 12"))
     with redirect_stdout(io.StringIO()) as out:
@@ -110,8 +110,8 @@ def test_the_offline_benchmark_scores_an_installed_defence_step_by_step(cusum_in
     model = ODCA.load(prior=LastValuePrior())
     a = split_arrays(frame, model.config.alignment)
     estimates, _ = _estimates(frame, a, model, {})
-    assert table_order(estimates) == ["raw", "lidar", "ekf", "odca", "cusum"]
-    assert np.abs(estimates["cusum"][100:140] - d[100:140]).max() < 0.05  # the LiDAR, not the biased depth
+    assert table_order(estimates) == ["raw", "lidar", "ekf", "odca", "lidar_cusum"]
+    assert np.abs(estimates["lidar_cusum"][100:140] - d[100:140]).max() < 0.05  # the LiDAR, not the biased depth
 
 
 @pytest.mark.slow
@@ -122,4 +122,4 @@ def test_racf_bench_quick_scores_the_installed_defence(cusum_installed, tmp_path
     code, out = _run(["bench", "--quick", "--dataset", str(data), "--out", str(tmp_path / "bench"), "--json"])
     assert code == 0
     results = json.loads(out)
-    assert results["by_series"]["strong"]["cusum"]["rmse"] is not None
+    assert results["by_series"]["strong"]["lidar_cusum"]["rmse"] is not None

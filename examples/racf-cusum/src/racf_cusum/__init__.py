@@ -28,7 +28,7 @@ class CusumDefence:
         max_carry_s: how long the last distance is carried forward by odometry alone, s.
     """
 
-    name = "cusum"
+    name = "lidar_cusum"
 
     def __init__(self, k_m: float = 0.05, h_m: float = 0.25, recover_steps: int = 10, max_carry_s: float = 1.0) -> None:
         if not (k_m >= 0 and h_m > 0 and recover_steps >= 1 and max_carry_s >= 0):

@@ -1,0 +1,80 @@
+"""A card end to end on a tiny battery: every section filled, strict JSON, a second run reuses
+every episode and gives the same card bar its timings; the CLI names bad input in one line;
+a plug-in defence gets a card with no edit to racf."""
+
+import json
+
+import pytest
+
+from racf.experiments.cli import main
+from racf.experiments.data.dataset import load_dataset
+from racf.experiments.scorecard import battery as battery_module
+from racf.experiments.scorecard.battery import Battery, LoopRow, _paper, _sweep
+from racf.experiments.scorecard.card import run_card
+from racf.experiments.scorecard.report import compare_markdown, strict_json, write_scorecard
+from tests.conftest import write_bench_dataset
+
+TINY = Battery(name="tiny", loop=(
+    LoopRow("paper_clean", "clean", 1, 1, _paper("clean"), attacked=False),
+    LoopRow("stealth_ramp", "stealth_ramp", 1, 1,
+            _sweep("adaptive", "stealth_ramp", mode="grid", params={"stealth_ramp": {"rate_mps": [3.0]}},
+                   speed=[2.0])),
+), drives=(), offline_presets=("strong",), offline_draws=1, offline_draws_quick=1)
+
+
+@pytest.fixture(scope="module")
+def dataset(tmp_path_factory):
+    return load_dataset(write_bench_dataset(tmp_path_factory.mktemp("data"), n_series=10), split="by_series")
+
+
+def _without_timing(card):
+    return {k: v for k, v in card.items() if k != "timing"}
+
+
+def test_a_card_fills_every_section_and_a_rerun_reuses_everything(tmp_path, dataset):
+    card = run_card("ekf", TINY, tmp_path, quick=True, dataset=dataset, workers=1, progress=False)
+    assert set(card["closed_loop"]) == {"paper_clean", "stealth_ramp"} and card["battery"] == "tiny-quick"
+    assert card["closed_loop"]["stealth_ramp"]["n"] == 4  # grid: the four signs
+    assert card["detection"]["n_positive_steps"] > 0 and card["detection"]["auroc_from"] == "score"
+    assert card["offline"]["strong"]["rmse"] is not None and "strong_ratio_to_chronos" in card["offline"]
+    assert card["cost"]["parameters"] == {"trainable": 0, "frozen": 0, "from": "declared"}
+    again = run_card("ekf", TINY, tmp_path, quick=True, dataset=dataset, workers=1, progress=False)
+    assert strict_json(_without_timing(again)) == strict_json(_without_timing(card))
+    assert again["timing"]["paper_clean_s"] < card["timing"]["paper_clean_s"]  # reused, not run
+    paths = write_scorecard([card], tmp_path)
+    assert "NaN" not in paths["json"].read_text() and "quick battery" in paths["md"].read_text()
+    assert paths["html"].read_text().count("data:image/png;base64") == 3
+
+
+def test_compare_marks_rows_whose_intervals_do_not_overlap():
+    def card(name, scr, ci):
+        return {"defence": name, "battery": "racf-1", "drives": {}, "cost": {"parameters": {"trainable": 0,
+                "from": "declared"}}, "closed_loop": {"r": {"title": "row", "scr": scr, "scr_ci": ci, "n": 30}}}
+    text = compare_markdown(card("a", 0.9, [0.8, 0.95]), card("b", 0.3, [0.2, 0.5]))
+    assert "**yes: a**" in text
+    assert "**yes" not in compare_markdown(card("a", 0.9, [0.6, 0.95]), card("b", 0.7, [0.5, 0.8]))
+
+
+@pytest.mark.parametrize("argv,message", [
+    (["--defence", "nope"], "unknown defence(s) ['nope']"),
+    (["--defence", "raw", "--battery", "racf-0"], "unknown battery 'racf-0'"),
+    (["--compare", "raw", "odca"], "no card"),
+    (["--attack", "nope"], "unknown attack 'nope'"),
+])
+def test_bad_input_is_one_line_and_exit_2(tmp_path, capsys, argv, message):
+    assert main(["scorecard", *argv, "--out", str(tmp_path)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert message in err and "\n" not in err
+
+
+def test_the_example_plugin_defence_gets_a_card_with_no_edit_to_racf(cusum_installed, tmp_path, dataset,
+                                                                       monkeypatch, capsys):
+    monkeypatch.setitem(battery_module.BATTERIES, "tiny", TINY)
+    data = tmp_path / "data"
+    write_bench_dataset(data, n_series=10)
+    code = main(["scorecard", "--defence", "lidar_cusum", "--battery", "tiny", "--quick", "--workers", "1",
+                 "--out", str(tmp_path), "--dataset", str(data), "--json"])
+    assert code == 0
+    card = json.loads(capsys.readouterr().out)["cards"][0]
+    assert card["defence"] == "lidar_cusum" and card["detection"]["n_positive_steps"] > 0
+    assert (tmp_path / "cards" / "tiny-quick" / "lidar_cusum.json").exists()
