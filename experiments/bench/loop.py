@@ -8,6 +8,8 @@
   spawned local workers, once the workers are up, over the same episodes run twice in
   alternation (1, 2, 1, 2 workers); ``scaling_efficiency`` = rate with 2 / (2 x rate with 1).
 - ``episodes_per_min_ray``: the same on the Ray backend with 2 CPUs.
+- ``share_*``: where an attack + ODCA episode's time goes (render, LiDAR, physics, perception,
+  the estimator, the rest), from one profiled episode (:mod:`racf.experiments.bench.profile`).
 - ``ready_s_*``: what each backend takes to be ready (spawning, imports, the env, ODCA; one
   warm-up episode per worker), reported apart because a sweep pays it once, not per episode.
 """
@@ -114,10 +116,11 @@ def bench_loop(n_rtf: int = 8, n_rate: int = 48, seed: int = 0, ray: bool = True
     """Measures everything above on ``sensor_profile``; ``n_rtf`` episodes per RTF setting, ``n_rate`` per rate."""
     from tqdm import tqdm
 
+    from racf.experiments.bench.profile import step_profile
     from racf.experiments.sweeps.executors import single_thread
 
     single_thread()  # one core: torch, OpenMP and the software rasteriser on one thread
-    steps = ["rtf clean", "rtf attack+odca", "1 worker", "2 workers"] + (["ray"] if ray else [])
+    steps = ["rtf clean", "rtf attack+odca", "1 worker", "2 workers"] + (["ray"] if ray else []) + ["profile"]
     bar = tqdm(steps, desc="bench-loop", disable=not progress)
     out: dict = {}
     bar.set_postfix_str(steps[0])
@@ -136,6 +139,10 @@ def bench_loop(n_rtf: int = 8, n_rate: int = 48, seed: int = 0, ray: bool = True
         bar.set_postfix_str("ray")
         out["episodes_per_min_ray"], ready["ray"] = _ray_rate(2, specs)
         bar.update()
+    bar.set_postfix_str("profile")
+    shares = step_profile(_RATE_SETTING, profile=sensor_profile)["shares"]
+    out.update({f"share_{part}": share for part, share in shares.items()})
+    bar.update()
     bar.close()
     out.update(sensor_profile=sensor_profile, n_rtf=n_rtf, n_rate=n_rate, sim_s_clean=clean["sim_s"],
                sim_s_attack_odca=attack["sim_s"], ready_s_1=ready[1], ready_s_2=ready[2], torch_threads=1)
