@@ -70,9 +70,28 @@ def step_log_markdown() -> str:
     return "\n".join(lines)
 
 
+def battery_markdown() -> str:
+    """Every released scorecard battery, row by row, from its one declaration."""
+    from racf.experiments.scorecard.battery import BATTERIES, PENALTIES
+
+    lines = ["# The scorecard's batteries", "",
+             "Written from `racf.experiments.scorecard.battery.BATTERIES`. A released battery never changes: "
+             "a change is a new name. `--quick` runs every row at its quick N.", ""]
+    for name, battery in BATTERIES.items():
+        lines += [f"## `{name}`", "", "| row | what | N | quick N | attacked |", "|---|---|---|---|---|"]
+        lines += [f"| `{r.key}` | {r.title} | {r.n} | {r.n_quick} | {'yes' if r.attacked else 'no'} |"
+                  for r in battery.rows()]
+        lines += ["", f"Offline: presets {', '.join(battery.offline_presets)} on the `{battery.offline_split}` test "
+                      f"drives, {battery.offline_draws} corruption draws ({battery.offline_draws_quick} quick); the "
+                      "strong RMSE also as a ratio to Chronos-only's. Detection: from every closed-loop row's step "
+                      "logs. Cost: trainable parameters and the per-step time. Driving-score penalties: "
+                      + ", ".join(f"{k.replace('_', ' ')} x {v}" for k, v in PENALTIES.items()) + ".", ""]
+    return "\n".join(lines)
+
+
 #: The generated pages, relative to ``docs/``.
 PAGES = {"reference/cli.md": cli_markdown, "reference/parts.md": parts_markdown,
-         "reference/step-log.md": step_log_markdown}
+         "reference/step-log.md": step_log_markdown, "reference/battery.md": battery_markdown}
 
 
 #: The docs folder of the checkout (the results data lives there, not in the package).

@@ -40,7 +40,7 @@ __all__ = ["METHODS", "FORECASTERS", "SplitArrays", "split_arrays", "raw_estimat
            "estimator_estimate", "offline_estimators", "table_order", "forecast_at", "with_fallback", "STEP_S"]
 
 #: racf's own methods, in table order (plug-in estimators follow, by name: :func:`table_order`).
-METHODS = ("raw", "lidar", "ekf", "chronos", "softs", "nhits", "dlinear", "nlinear", "odca")
+METHODS = ("raw", "lidar", "ekf", "chi2", "cusum", "chronos", "softs", "nhits", "dlinear", "nlinear", "odca")
 #: The forecast-only methods (scored one step ahead and over the horizon).
 FORECASTERS = ("chronos", "softs", "nhits", "dlinear", "nlinear")
 #: The dataset's step, s (50 Hz).

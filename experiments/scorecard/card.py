@@ -10,6 +10,7 @@ of the card that differs between two runs of the same command.
 
 from __future__ import annotations
 
+import hashlib
 import json
 import time
 from dataclasses import replace
@@ -22,7 +23,7 @@ from racf.experiments.scorecard.battery import PENALTIES, Battery
 from racf.experiments.scorecard.detection import detection_rows
 from racf.experiments.scorecard.drives import driving_rows
 from racf.experiments.sweeps.store import ResultStore, atomic_write
-from racf.experiments.sweeps.summary import summarize
+from racf.experiments.sweeps.summary import stealth_summary, summarize
 
 __all__ = ["run_card", "card_version"]
 
@@ -40,11 +41,40 @@ def _loop_summary(rows: pd.DataFrame, attacked: bool) -> dict:
     return {k: s.get(k) for k in keep if k in s}
 
 
+#: The offline reference every card's strong RMSE is divided by.
+REFERENCE = "chronos"
+
+
+def _cached_offline(defence: str, options: dict | None, dataset, battery: Battery, draws: int, out: Path) -> dict:
+    """A defence's offline rows, computed once per code version, options, dataset and battery."""
+    from racf.experiments.scorecard.offline import offline_rows
+
+    key = hashlib.sha256(json.dumps([card_version(defence), options or {}, _dataset_hash(dataset), battery.name,
+                                     draws], sort_keys=True).encode()).hexdigest()[:16]
+    cache = out / "offline" / f"{defence}-{key}.json"
+    if cache.exists():
+        return json.loads(cache.read_text())
+    rows = {**offline_rows(defence, dataset, battery.offline_presets, draws, options), "split": battery.offline_split}
+    cache.parent.mkdir(parents=True, exist_ok=True)
+    atomic_write(cache, json.dumps(rows, allow_nan=False))
+    return rows
+
+
 def _dataset_hash(ds) -> str:
     """The test drives the offline rows read, so a new dataset is a new cache key."""
     from racf.experiments.offline.benchmark import frame_hash
 
     return frame_hash(ds.clean("test"))
+
+
+def _stealth(frame: pd.DataFrame) -> dict:
+    """The row's undetected error (``scoring.stealth``), and per attack rate where the row varies it."""
+    keep = ("undetected_error_median", "undetected_error_ci", "detected_share", "detected_share_ci")
+    out = {k: v for k, v in stealth_summary(frame).items() if k in keep}
+    if "param_rate_mps" in frame and frame["param_rate_mps"].notna().any():
+        out["by_rate"] = {f"{rate:g}": {k: v for k, v in stealth_summary(rows).items() if k in keep}
+                          for rate, rows in frame.groupby("param_rate_mps", sort=True)}
+    return out
 
 
 def _logs(store: ResultStore, ids: list[str]) -> list[pd.DataFrame]:
@@ -58,7 +88,7 @@ def run_card(defence: str, battery: Battery, out: Path, *, quick: bool = False, 
 
     ``dataset`` is the offline rows' ``QCarDataset`` (by-series split); None leaves them out.
     """
-    from racf.experiments.scorecard.offline import offline_rows, step_times_ms, trainable_parameters
+    from racf.experiments.scorecard.offline import step_times_ms, trainable_parameters
     from racf.experiments.sweeps.run import run_episodes
 
     t0 = time.perf_counter()
@@ -79,6 +109,8 @@ def run_card(defence: str, battery: Battery, out: Path, *, quick: bool = False, 
         ids = [s.trial_id for s in specs]
         logs = _logs(store, ids)
         summary = {"title": row.title, "detector": specs[0].detector, **_loop_summary(frame, row.attacked)}
+        if row.attacked:
+            summary.update(_stealth(frame))
         if row in battery.drives:
             card["drives"][row.key] = {**summary, **driving_rows(frame, logs, PENALTIES)}
         else:
@@ -88,16 +120,13 @@ def run_card(defence: str, battery: Battery, out: Path, *, quick: bool = False, 
     card["penalties"] = PENALTIES
     card["cost"] = {"parameters": trainable_parameters(defence, options)}
     if dataset is not None:
-        draws = battery.offline_draws_quick if quick else battery.offline_draws
-        cache = out / "offline" / f"{defence}-{card['version']}-{_dataset_hash(dataset)}-{battery.name}-{draws}.json"
         t_off = time.perf_counter()
-        if cache.exists():
-            card["offline"] = json.loads(cache.read_text())
-        else:
-            card["offline"] = offline_rows(defence, dataset, battery.offline_presets, draws, options)
-            card["offline"]["split"] = battery.offline_split
-            cache.parent.mkdir(parents=True, exist_ok=True)
-            atomic_write(cache, json.dumps(card["offline"], allow_nan=False))
+        draws = battery.offline_draws_quick if quick else battery.offline_draws
+        card["offline"] = _cached_offline(defence, options, dataset, battery, draws, out)
+        reference = _cached_offline(REFERENCE, None, dataset, battery, draws, out)
+        strong, ref = card["offline"].get("strong", {}), reference.get("strong", {})
+        if strong.get("rmse") is not None and ref.get("rmse"):
+            card["offline"]["strong_ratio_to_chronos"] = strong["rmse"] / ref["rmse"]
         timing["offline_s"] = time.perf_counter() - t_off
         timing["step_time"] = step_times_ms(defence, dataset, options)
     timing["wall_s"] = time.perf_counter() - t0

@@ -1,6 +1,7 @@
 """A scorecard's outputs: ``scorecard.json`` (strict), ``scorecard.md`` (one card per defence,
 row by row) and ``scorecard.html`` (the same tables with the plots: the detection ROC, SCR per
-attack with Wilson bands, and the undetected error per attack); and two cards side by side."""
+attack with Wilson bands, and the undetected error against the stealth ramp's rate); and two
+cards side by side."""
 
 from __future__ import annotations
 
@@ -11,6 +12,9 @@ import json
 from pathlib import Path
 
 from racf.experiments.sweeps.store import atomic_write
+
+#: The closed-loop rows that run the stealth ramp, whose undetected error is plotted against its rate.
+RAMP_ROWS = ("ramp_rates", "stealth_ramp")
 
 __all__ = ["card_markdown", "compare_markdown", "write_scorecard", "strict_json", "card_rows"]
 
@@ -46,6 +50,9 @@ def card_rows(card: dict) -> list[tuple[str, str, str, float | None, list | None
         if r.get("n_attack_before_t_star"):
             rows.append(("closed loop", r["title"], "SCR, attack before t*", r["scr_attack_before_t_star"],
                          r["scr_attack_before_t_star_ci"], r["n_attack_before_t_star"], True))
+        if r.get("undetected_error_median") is not None:
+            rows.append(("closed loop", r["title"], "undetected error m, median", r["undetected_error_median"],
+                         r["undetected_error_ci"], r["n"], False))
     for key, r in card["drives"].items():
         rows.append(("drives", r["title"], "driving score", r["driving_score"], r["driving_score_ci"], r["n"], True))
         rows.append(("drives", r["title"], "route completion", r["route_completion"], None, r["n"], True))
@@ -156,15 +163,21 @@ def _plots(cards: list[dict]) -> list[str]:
     images.append(_png(fig))
     plt.close(fig)
     fig, ax = plt.subplots(figsize=(5.2, 4.2))
-    names = [c["defence"] for c in cards if c.get("detection")]
-    values = [c["detection"]["undetected_error_median_m"] or 0.0 for c in cards if c.get("detection")]
-    cis = [c["detection"]["undetected_error_ci"] for c in cards if c.get("detection")]
-    if names:
-        err = [[v - (ci[0] if ci[0] is not None else v) for v, ci in zip(values, cis)],
-               [(ci[1] if ci[1] is not None else v) - v for v, ci in zip(values, cis)]]
-        ax.bar(names, values, yerr=err, capsize=3)
-    ax.set(ylabel="undetected error, m (median, 95 % bootstrap)",
-           title="Undetected error at 1 % false alarms, attacked episodes")
+    for card in cards:
+        rates = {}
+        for key in RAMP_ROWS:  # the stealth ramp at every rate the battery runs
+            rates.update(card["closed_loop"].get(key, {}).get("by_rate", {}))
+        points = sorted((float(r), v) for r, v in rates.items() if v.get("undetected_error_median") is not None)
+        if points:
+            xs = [p[0] for p in points]
+            ys = [p[1]["undetected_error_median"] for p in points]
+            lo = [p[1]["undetected_error_ci"][0] for p in points]
+            hi = [p[1]["undetected_error_ci"][1] for p in points]
+            line, = ax.plot(xs, ys, marker="o", label=card["defence"])
+            ax.fill_between(xs, lo, hi, color=line.get_color(), alpha=0.15)
+    ax.set(xscale="log", xlabel="stealth_ramp rate r (m/s)", ylabel="undetected error, m (median, 95 % bootstrap)",
+           title="Undetected error against the attack's rate")
+    ax.legend(fontsize=8)
     fig.tight_layout()
     images.append(_png(fig))
     plt.close(fig)

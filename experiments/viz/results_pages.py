@@ -18,7 +18,7 @@ from typing import Callable
 
 __all__ = ["RESULT_PAGES", "PAPER", "paper_rows", "readme_table"]
 
-_METHODS = ("raw", "lidar", "ekf", "chronos", "softs", "nhits", "dlinear", "nlinear", "odca")
+_METHODS = ("raw", "lidar", "ekf", "chi2", "cusum", "chronos", "softs", "nhits", "dlinear", "nlinear", "odca")
 _ESTIMATORS = ("raw", "ekf", "chronos", "odca")
 
 #: The paper's numbers (racf-paper.tex: the real-car table, Table "attack persistence" and
@@ -285,26 +285,44 @@ def _detector(d: _Data) -> str:
     if "bench-detector" in d:
         data = d["bench-detector"]
         lines += _meta(data["meta"]) + [
-            "| detector | held-out recall [CI] (N) | held-out false-positive frames (of N) | drive recall [CI] (N) | "
-            "drive false-positive frames (of N) | ms per frame, one core, p50 / p99 |", "|---|---|---|---|---|---|"]
+            "Held-out views: rendered views with ground-truth masks (`racf detector-data`); drives: every frame of "
+            "the approach drives, recall over the frames with the sign 0.5-2.5 m away.", "",
+            "| detector | held-out recall [CI] (N) | held-out false-positive frames [CI] (of N) | drive recall [CI] (N) | "
+            "drive false-positive frames [CI] (of N) | ms per frame, one core |", "|---|---|---|---|---|---|"]
         for name, r in data["detectors"].items():
-            h, a = r["heldout"], r["drives"]
+            h = r["heldout"]
             lines.append(f"| {name} | {_rate(h['recall'], h['recall_ci'], 3)} ({h['n_positive']}) | "
-                         f"{h['fp_frames']} ({h['n_frames']}) | {_rate(a['recall'], a['recall_ci'], 3)} "
-                         f"({a['n_positive']}) | {a['fp_frames']} ({a['n_frames']}) | "
-                         f"{_num(r['ms_p50'], 2)} / {_num(r['ms_p99'], 2)} |")
+                         f"{_rate(h['fp_rate'], h['fp_rate_ci'], 4)} ({h['n_frames']}) | "
+                         f"{_rate(r['recall'], r['recall_ci'], 3)} ({r['n_positive']}) | "
+                         f"{_rate(r['fp_rate'], r['fp_rate_ci'], 4)} ({r['n_frames']}) | "
+                         f"{_num(r['ms_per_frame_one_core'], 2)} |")
         lines.append("")
     else:
         lines += _missing("bench-detector", "racf bench-detector --json")
     lines += ["## The sticker in the scene, per view", ""]
     if "bench-patch" in d:
         data = d["bench-patch"]
-        lines += _meta(data["meta"]) + ["| detector | recall, clean [CI] | recall, sticker [CI] | "
-                                         "recall, occluder of the same area [CI] | N |", "|---|---|---|---|---|"]
-        for name, r in data["detectors"].items():
-            lines.append(f"| {name} | {_rate(r['clean'], r['clean_ci'], 3)} | {_rate(r['sticker'], r['sticker_ci'], 3)} "
-                         f"| {_rate(r.get('occluder'), r.get('occluder_ci'), 3)} | {r['n']} |")
+        lines += _meta(data["meta"]) + [
+            f"The sticker ({data['texture']}, {data['size']:g} of the plate) in rendered views of a stop sign; recall "
+            "over the views with the sign resolvable, the same views clean, with the sticker, and with an occluder "
+            "of the same area.", "",
+            "| detector | recall, clean [CI] | recall, sticker [CI] | recall, occluder [CI] | N |",
+            "|---|---|---|---|---|"]
+        for name, row in data["counts"].items():
+            clean, sticker, occluder = (row.get(k, {}) for k in ("clean", "physical_patch", "patch_occlusion"))
+            lines.append(f"| {name} | {_rate(clean.get('recall'), clean.get('recall_ci'), 3)} | "
+                         f"{_rate(sticker.get('recall'), sticker.get('recall_ci'), 3)} | "
+                         f"{_rate(occluder.get('recall'), occluder.get('recall_ci'), 3)} | {clean.get('n_positive', '-')} |")
         lines.append("")
+        bands = sorted({b for row in data["by_band"].values() for r in row.values() for b in r})
+        if bands:
+            lines += ["By distance (recall, clean -> sticker):", "", "| detector | " + " | ".join(bands) + " |",
+                      "|---|" + "---|" * len(bands)]
+            for name, row in data["by_band"].items():
+                cells = [f"{_num(row['clean'][b]['recall'], 2)} -> {_num(row['physical_patch'][b]['recall'], 2)} "
+                         f"(N {row['clean'][b]['n_positive']})" for b in bands]
+                lines.append(f"| {name} | " + " | ".join(cells) + " |")
+            lines.append("")
     else:
         lines += _missing("bench-patch", "racf bench-patch -n 300 --json")
     lines += ["## The sticker in the closed loop", ""]
@@ -350,9 +368,63 @@ def _speed(d: _Data) -> str:
     return "\n".join(lines)
 
 
+def _leaderboard(d: _Data) -> str:
+    from racf.experiments.scorecard.report import card_rows
+
+    lines = ["# Leaderboard: every defence on the racf-1 battery", "", _NOTE, "",
+             "`racf scorecard --defence NAME` rates a defence, built-in or plug-in, on the same fixed battery "
+             "([the tutorial](../tutorials/scorecard.md) says what is in it). Each column is one defence's card; "
+             "its version names the code it ran (a plug-in's source included). Bold: the best value of a row "
+             "where its interval does not overlap the runner-up's.", ""]
+    if "scorecard-racf-1" not in d:
+        return "\n".join(lines + _missing("scorecard-racf-1", "racf scorecard --defence raw ekf chronos odca chi2 cusum"))
+    data = d["scorecard-racf-1"]
+    cards = data["cards"]
+    lines += _meta(data["meta"])
+    names = [c["defence"] for c in cards]
+    table: dict = {}
+    for card in cards:
+        for section, row, measure, value, ci, n, hib in card_rows(card):
+            if "timing" in measure:
+                continue
+            table.setdefault((section, row, measure), {})[card["defence"]] = (value, ci, n, hib)
+    lines += ["| section | row | measure | " + " | ".join(f"`{n}`" for n in names) + " |",
+              "|---|---|---|" + "---|" * len(names),
+              "| | | version | " + " | ".join(f"`{c['version'].rsplit('_', 1)[-1]}`" for c in cards) + " |"]
+    for (section, row, measure), cells in table.items():
+        best = _best(cells)
+        digits = 0 if measure == "trainable" else 3
+        out = []
+        for name in names:
+            if name not in cells or cells[name][0] is None:
+                out.append("-")
+                continue
+            value, ci, n, _ = cells[name]
+            text = f"{value:.{digits}f}{(' ' + _ci(ci, digits)) if ci and ci[0] is not None else ''}" + (
+                f" ({n})" if n is not None else "")
+            out.append(f"**{text}**" if name == best else text)
+        lines.append(f"| {section} | {row} | {measure} | " + " | ".join(out) + " |")
+    penalties = cards[0]["penalties"]
+    lines += ["", "N in brackets. Driving-score penalties: " + ", ".join(f"{k.replace('_', ' ')} x {v}"
+                                                                  for k, v in penalties.items()) + ".", ""]
+    return "\n".join(lines)
+
+
+def _best(cells: dict) -> str | None:
+    """The defence whose value beats every other's with non-overlapping intervals (None: no clear best)."""
+    scored = [(name, v, ci, hib) for name, (v, ci, _, hib) in cells.items() if v is not None and ci and ci[0] is not None]
+    if len(scored) < 2:
+        return None
+    scored.sort(key=lambda x: x[1], reverse=scored[0][3])
+    (name, _, ci, hib), (_, _, ci2, _) = scored[0], scored[1]
+    apart = ci[0] > ci2[1] if hib else ci[1] < ci2[0]
+    return name if apart else None
+
+
 def _index(d: _Data) -> str:
     lines = ["# Results", "", _NOTE, "",
              "| page | what |", "|---|---|",
+             "| [Leaderboard](leaderboard.md) | every built-in defence's scorecard on the racf-1 battery |",
              "| [Reproduced from the paper](paper.md) | the paper's claims beside racf's measurements |",
              "| [Closed loop](closed-loop.md) | the paper's table on three sensor set-ups |",
              "| [Sweeps](sweeps.md) | 1,000-episode random sweeps and every attack type |",
@@ -372,6 +444,6 @@ def _index(d: _Data) -> str:
 #: The generated results pages (relative to ``docs/``) and the function that writes each from the data folder.
 RESULT_PAGES: dict[str, Callable[[Path], str]] = {
     f"results/{name}.md": (lambda make: lambda root: make(_Data(root)))(make)
-    for name, make in (("index", _index), ("paper", _paper), ("closed-loop", _closed_loop), ("sweeps", _sweeps),
+    for name, make in (("index", _index), ("leaderboard", _leaderboard), ("paper", _paper), ("closed-loop", _closed_loop), ("sweeps", _sweeps),
                        ("offline-benchmark", _offline), ("adaptive-attacks", _adaptive),
                        ("detector-and-sticker", _detector), ("speed", _speed))}

@@ -110,7 +110,7 @@ def test_the_offline_benchmark_scores_an_installed_defence_step_by_step(cusum_in
     model = ODCA.load(prior=LastValuePrior())
     a = split_arrays(frame, model.config.alignment)
     estimates, _ = _estimates(frame, a, model, {})
-    assert table_order(estimates) == ["raw", "lidar", "ekf", "odca", "lidar_cusum"]
+    assert table_order(estimates) == ["raw", "lidar", "ekf", "chi2", "cusum", "odca", "lidar_cusum"]
     assert np.abs(estimates["lidar_cusum"][100:140] - d[100:140]).max() < 0.05  # the LiDAR, not the biased depth
 
 

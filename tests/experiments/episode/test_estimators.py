@@ -62,7 +62,7 @@ def test_odca_logs_its_gate_through_diagnostics():
     assert est.diagnostics() == {}
     est.estimate(_samples([1.5])[0], 1.0, 0.02, yaw_rate_radps=0.1)
     d = est.diagnostics()
-    assert set(d) == {"w", "flag", "odca_source", "d_kin"} and d["w"] in (0.0, 1.0)
+    assert set(d) == {"w", "flag", "score", "odca_source", "d_kin"} and d["w"] in (0.0, 1.0)
     assert math.isnan(d["d_kin"])  # what the vote saw: no branch before the first depth
     est.estimate(_samples([1.48])[0], 1.0, 0.02)
     assert est.diagnostics()["d_kin"] == pytest.approx(1.5 - 1.0 * 0.02)  # the first depth, advanced
