@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 import time
 from pathlib import Path
 
@@ -56,7 +57,7 @@ def _dataset(args: argparse.Namespace, quick: bool):
     if not (path / "dataset.parquet").exists():
         if args.dataset is not None:
             fail("scorecard", f"no dataset at {path} (make one with `racf collect --out {path}`)")
-        print(f"collecting the offline rows' dataset into {path} (once; later cards reuse it)")
+        print(f"collecting the offline rows' dataset into {path} (once; later cards reuse it)", file=sys.stderr)
         collect(path, drives=_QUICK_DRIVES if quick else 36, workers=args.workers, backend=args.backend,
                 address=args.address)
     try:

@@ -385,8 +385,6 @@ def _leaderboard(d: _Data) -> str:
     table: dict = {}
     for card in cards:
         for section, row, measure, value, ci, n, hib in card_rows(card):
-            if "timing" in measure:
-                continue
             table.setdefault((section, row, measure), {})[card["defence"]] = (value, ci, n, hib)
     lines += ["| section | row | measure | " + " | ".join(f"`{n}`" for n in names) + " |",
               "|---|---|---|" + "---|" * len(names),
@@ -405,6 +403,10 @@ def _leaderboard(d: _Data) -> str:
             out.append(f"**{text}**" if name == best else text)
         lines.append(f"| {section} | {row} | {measure} | " + " | ".join(out) + " |")
     penalties = cards[0]["penalties"]
+    walls = ", ".join(f"`{c['defence']}` {c['timing']['wall_s'] / 60:.1f} min" for c in cards)
+    lines += ["", f"Wall time per card on this machine (episodes, drives, offline rows; the dataset collected once "
+                  f"before them): {walls}. The first card also computes the offline reference (Chronos-only), "
+                  "which the others reuse."]
     lines += ["", "N in brackets. Driving-score penalties: " + ", ".join(f"{k.replace('_', ' ')} x {v}"
                                                                   for k, v in penalties.items()) + ".", ""]
     return "\n".join(lines)
