@@ -52,8 +52,8 @@ def _paper(setting: str) -> Callable[[str, int], list[TrialSpec]]:
 def _sweep(name: str, attack: str, *, mode: str = "random", detector: str = "classical", params: dict | None = None,
            t_atk: list | None = None, rho: list | None = None, speed: list | None = None
            ) -> Callable[[str, int], list[TrialSpec]]:
-    """Episodes of a sweep over the four signs; ``n`` is the number of draws (random) or of
-    episodes (grid: repeats over the four signs)."""
+    """Episodes of a sweep over the four signs, the same seeds for every defence (paired): ``n``
+    random draws, or (grid) ``n // 4`` repeats at each sign and each of the attack's settings."""
     def make(defence: str, n: int) -> list[TrialSpec]:
         space = {"attack": [attack], "estimator": [defence], "sign": [0, 1, 2, 3]}
         if mode == "random":

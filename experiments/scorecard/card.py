@@ -1,7 +1,7 @@
 """One defence's card on a battery: every row run (or reused) and summarised.
 
-Episodes are ordinary episodes with ids, stored under ``out/episodes/<row>/`` and shared by
-every card made in ``out``: a rerun, or a run after a SIGKILL, reuses what is stored and runs
+Episodes are ordinary episodes with ids, stored under ``out/episodes/`` and shared by every
+card made in ``out`` (an episode two rows or two batteries hold runs once): a rerun, or a run after a SIGKILL, reuses what is stored and runs
 only what is missing. The offline rows are cached under ``out/offline/`` by the defence's
 code version (its plug-in source included), the dataset's hash and the battery, so they are
 computed once per version. Wall times and per-step times sit under ``timing``, the only part
@@ -96,18 +96,24 @@ def run_card(defence: str, battery: Battery, out: Path, *, quick: bool = False, 
     card: dict = {"battery": battery.name + ("-quick" if quick else ""), "quick": quick, "defence": defence,
                   "version": card_version(defence), "sensor_profile": "qcar2", "closed_loop": {}, "drives": {}}
     timing: dict = {}
-    loop_logs: list[pd.DataFrame] = []
+    plan = []
     for row in battery.rows():
         specs = row.specs(defence, quick)
         if options:
             specs = [replace(s, estimator_options=options) for s in specs]
-        store = ResultStore(out / "episodes" / row.key)
-        t_row = time.perf_counter()
-        frame, _ = run_episodes(specs, store, backend, workers, address, log_steps=True, progress=progress,
-                                desc=f"{defence}: {row.key}")
-        timing[row.key + "_s"] = time.perf_counter() - t_row
+        plan.append((row, specs))
+    # One batch for the whole card: one pool of workers, each keeping its env and models from
+    # episode to episode, and the long drives first so that no worker idles at the end.
+    unique = {s.trial_id: s for _, specs in sorted(plan, key=lambda p: p[0] not in battery.drives) for s in specs}
+    store = ResultStore(out / "episodes")
+    t_run = time.perf_counter()
+    _, ran = run_episodes(list(unique.values()), store, backend, workers, address, log_steps=True,
+                          progress=progress, desc=f"{defence}: episodes")
+    timing.update(episodes_s=time.perf_counter() - t_run, episodes=len(unique), episodes_run=ran)
+    loop_logs: list[pd.DataFrame] = []
+    for row, specs in plan:
         ids = [s.trial_id for s in specs]
-        logs = _logs(store, ids)
+        frame, logs = store.rows(ids), _logs(store, ids)
         summary = {"title": row.title, "detector": specs[0].detector, **_loop_summary(frame, row.attacked)}
         if row.attacked:
             summary.update(_stealth(frame))

@@ -40,7 +40,7 @@ def test_a_card_fills_every_section_and_a_rerun_reuses_everything(tmp_path, data
     assert card["cost"]["parameters"] == {"trainable": 0, "frozen": 0, "from": "declared"}
     again = run_card("ekf", TINY, tmp_path, quick=True, dataset=dataset, workers=1, progress=False)
     assert strict_json(_without_timing(again)) == strict_json(_without_timing(card))
-    assert again["timing"]["paper_clean_s"] < card["timing"]["paper_clean_s"]  # reused, not run
+    assert card["timing"]["episodes_run"] == card["timing"]["episodes"] == 5 and again["timing"]["episodes_run"] == 0
     paths = write_scorecard([card], tmp_path)
     assert "NaN" not in paths["json"].read_text() and "quick battery" in paths["md"].read_text()
     assert paths["html"].read_text().count("data:image/png;base64") == 3
@@ -78,3 +78,27 @@ def test_the_example_plugin_defence_gets_a_card_with_no_edit_to_racf(cusum_insta
     card = json.loads(capsys.readouterr().out)["cards"][0]
     assert card["defence"] == "lidar_cusum" and card["detection"]["n_positive_steps"] > 0
     assert (tmp_path / "cards" / "tiny-quick" / "lidar_cusum.json").exists()
+
+
+@pytest.mark.slow
+def test_a_sigkilled_quick_battery_resumes_without_redoing_finished_episodes(tmp_path):
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    data = write_bench_dataset(tmp_path / "data", n_series=10)
+    argv = [sys.executable, "-m", "racf.experiments.cli", "scorecard", "--defence", "raw", "--quick", "--out",
+            str(tmp_path / "out"), "--dataset", str(data), "--json"]
+    proc = subprocess.Popen(argv, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
+    parts = tmp_path / "out" / "episodes"
+    deadline = time.time() + 300
+    while time.time() < deadline and sum(1 for _ in parts.rglob("parts/*.parquet")) < 10:
+        time.sleep(0.5)
+    os.killpg(proc.pid, signal.SIGKILL)
+    proc.wait()
+    done = sum(1 for _ in parts.rglob("parts/*.parquet"))
+    out = subprocess.run(argv, capture_output=True, text=True, check=True).stdout
+    timing = json.loads(out)["cards"][0]["timing"]
+    assert done >= 10 and timing["episodes_run"] == timing["episodes"] - done  # only the unfinished ran
