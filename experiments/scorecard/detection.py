@@ -7,8 +7,9 @@ Which steps count (``docs/protocol.md``, the scorecard's detection rows):
 - negatives: every step of a clean episode, and an attacked episode's steps before its attack
   began; an attacked episode's steps after its attack ended are neither (the defence may
   still be recovering);
-- only steps where the defence reported (``flag`` not NaN) count: a defence with no detector
-  has no detection rows.
+- only steps with a depth to judge (``d_meas`` finite) and where the defence reported (``flag``
+  not NaN) count: a missing depth (an occluded sign, a blackout) is plain to any defence and
+  is not a detection, and a defence with no detector has no detection rows.
 
 TPR and FPR are shares of those steps with Wilson intervals. The AUROC is over ``score``
 (higher: more suspicious) where the defence reports one, else over the binary flag (one
@@ -38,7 +39,7 @@ FALSE_ALARM_RATE = 0.01
 
 def label_steps(log: pd.DataFrame) -> pd.Series:
     """Per step: 1 (attack active), 0 (clean: no attack yet, or none at all), NaN (after the
-    attack ended, or the defence did not report)."""
+    attack ended, no depth to judge, or the defence did not report)."""
     n = len(log)
     active = log["attack_active"].to_numpy(bool) if "attack_active" in log else np.zeros(n, bool)
     label = np.zeros(n)
@@ -47,6 +48,8 @@ def label_steps(log: pd.DataFrame) -> pd.Series:
         label[active] = 1.0
     flag = log["flag"].to_numpy(float) if "flag" in log else np.full(n, np.nan)
     label[~np.isfinite(flag)] = np.nan
+    if "d_meas" in log:
+        label[~np.isfinite(log["d_meas"].to_numpy(float))] = np.nan
     return pd.Series(label, index=log.index)
 
 

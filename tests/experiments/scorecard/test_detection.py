@@ -10,9 +10,10 @@ from hypothesis import given, settings, strategies as st
 from racf.experiments.scorecard.detection import detection_rows, label_steps
 
 
-def _log(active, flag, score=None, err=None):
+def _log(active, flag, score=None, err=None, depth=None):
     n = len(active)
     log = pd.DataFrame({"t": np.arange(n) * 0.02, "attack_active": np.asarray(active, bool),
+                        "d_meas": np.ones(n) if depth is None else np.asarray(depth, float),
                         "flag": np.asarray(flag, float), "d_true": np.ones(n),
                         "d_fused": 1.0 + (np.zeros(n) if err is None else np.asarray(err, float))})
     if score is not None:
@@ -43,6 +44,13 @@ def test_the_undetected_error_is_read_at_one_percent_false_alarms_on_the_score()
     assert row["auroc_from"] == "score" and 0.98 < row["threshold"] < 1.0
     assert row["undetected_error_median_m"] == pytest.approx(0.1)  # only the first active step is below it
     assert row["detected_share"] == 0.0 and row["time_to_detect_median_s"] is None  # the flag never came
+
+
+def test_steps_without_a_depth_are_not_judged():
+    # a blackout: the attack hides the depth for 5 steps, then biases it for 5 (flagged)
+    log = _log([0] * 5 + [1] * 10, [0] * 10 + [1] * 5, depth=[1.0] * 5 + [math.nan] * 5 + [1.5] * 5)
+    row = detection_rows([log])
+    assert row["n_positive_steps"] == 5 and row["tpr"] == 1.0
 
 
 def test_a_defence_with_no_detector_has_no_detection_rows():
