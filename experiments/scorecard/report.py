@@ -44,8 +44,12 @@ def _ci(pair, digits: int = 2) -> str:
 
 def card_rows(card: dict) -> list[tuple[str, str, str, float | None, list | None, int | None, bool]]:
     """Every row of a card as (section, row, measure, value, interval, N, higher_is_better)."""
+    from racf.experiments.scorecard.battery import BATTERIES
+
     rows = []
-    for key, r in card["closed_loop"].items():
+    battery = BATTERIES.get(card["battery"].removesuffix("-quick"))
+    order = [r.key for r in battery.rows()] if battery else []
+    for key, r in sorted(card["closed_loop"].items(), key=lambda kv: order.index(kv[0]) if kv[0] in order else 99):
         rows.append(("closed loop", r["title"], "SCR", r["scr"], r["scr_ci"], r["n"], True))
         if r.get("n_attack_before_t_star"):
             rows.append(("closed loop", r["title"], "SCR, attack before t*", r["scr_attack_before_t_star"],
