@@ -5,6 +5,7 @@ import pytest
 from racf.experiments.bench.profile import PARTS, step_profile
 
 
+@pytest.mark.slow  # two whole episodes under the profiler
 def test_the_shares_are_disjoint_parts_of_the_whole_episode():
     result = step_profile("attack+odca", sign=2, speed=2.0)
     shares = result["shares"]
