@@ -16,6 +16,14 @@ import json
 from pathlib import Path
 from typing import Callable
 
+from racf.experiments.viz.leaderboard_page import leaderboard_markdown
+from racf.experiments.viz.results_format import NOTE as _NOTE
+from racf.experiments.viz.results_format import ci as _ci
+from racf.experiments.viz.results_format import meta_lines as _meta
+from racf.experiments.viz.results_format import missing as _missing
+from racf.experiments.viz.results_format import num as _num
+from racf.experiments.viz.results_format import rate as _rate
+
 __all__ = ["RESULT_PAGES", "PAPER", "paper_rows", "readme_table"]
 
 _METHODS = ("raw", "lidar", "ekf", "chi2", "cusum", "chronos", "softs", "nhits", "dlinear", "nlinear", "odca")
@@ -26,11 +34,6 @@ _ESTIMATORS = ("raw", "ekf", "chronos", "odca")
 PAPER = {"clean_scr": 1.00, "clean_dt_brake": 0.1647, "attack_scr": 0.17, "odca_scr": 0.80, "odca_dt_brake": 0.19,
          "persistence_asr": {"0.5": 0.50, "1.0": 0.90, "3.0": 1.00}, "strong_rmse_odca": 0.323,
          "strong_rmse_chronos": 0.503, "strong_rmse_lidar": 0.600, "head_parameters": 921}
-
-_NOTE = ("Written by `racf.experiments.viz.results_pages` from the stored results in `docs/results/data/`: every "
-         "number is what the command beside it printed, on the code, machine and sensors named. Intervals are "
-         "95 %: Wilson for rates, bootstrap for medians and RMSE.")
-
 
 class _Data:
     """The stored results of one folder, loaded on demand."""
@@ -43,31 +46,6 @@ class _Data:
 
     def __getitem__(self, name: str) -> dict:
         return json.loads((self.root / f"{name}.json").read_text())
-
-
-# --- formatting ------------------------------------------------------------------------------------------------
-
-def _ci(pair, digits: int = 2) -> str:
-    return "" if not pair or pair[0] is None else f"[{pair[0]:.{digits}f}, {pair[1]:.{digits}f}]"
-
-
-def _num(value, digits: int = 3) -> str:
-    return "-" if value is None else f"{value:.{digits}f}"
-
-
-def _rate(value, pair, digits: int = 2) -> str:
-    return "-" if value is None else f"{value:.{digits}f} {_ci(pair, digits)}".strip()
-
-
-def _meta(meta: dict) -> list[str]:
-    extra = ", ".join(f"{k.replace('_', ' ')} {meta[k]}" for k in ("sensor_profile", "sign_geometry", "detector",
-                                                                 "dataset", "draws") if k in meta)
-    return [f"*Measured by* `{meta['command']}` *on commit* `{meta['commit']}` (racf {meta['racf']}), "
-            f"{meta['machine']}, {meta['measured']}" + (f"; {extra}." if extra else "."), ""]
-
-
-def _missing(name: str, command: str) -> list[str]:
-    return [f"Not stored yet (`{name}`): run `{command}` and store it with `results_store`.", ""]
 
 
 # --- tables ----------------------------------------------------------------------------------------------------
@@ -368,66 +346,6 @@ def _speed(d: _Data) -> str:
     return "\n".join(lines)
 
 
-def _leaderboard(d: _Data) -> str:
-    from racf.experiments.scorecard.report import card_rows
-
-    lines = ["# Leaderboard: every defence on the racf-1 battery", "", _NOTE, "",
-             "`racf scorecard --defence NAME` rates a defence, built-in or plug-in, on the same fixed battery "
-             "([the tutorial](../tutorials/scorecard.md) says what is in it). Each column is one defence's card; "
-             "its version names the code it ran (a plug-in's source included). Bold: the best value of a row "
-             "where its interval does not overlap the runner-up's.", ""]
-    if "scorecard-racf-1" not in d:
-        return "\n".join(lines + _missing("scorecard-racf-1", "racf scorecard --defence raw ekf chronos odca chi2 cusum"))
-    data = d["scorecard-racf-1"]
-    cards = data["cards"]
-    lines += _meta(data["meta"])
-    names = [c["defence"] for c in cards]
-    table: dict = {}
-    for card in cards:
-        for section, row, measure, value, ci, n, hib in card_rows(card):
-            table.setdefault((section, row, measure), {})[card["defence"]] = (value, ci, n, hib)
-    lines += ["| section | row | measure | " + " | ".join(f"`{n}`" for n in names) + " |",
-              "|---|---|---|" + "---|" * len(names),
-              "| | | version | " + " | ".join(f"`{c['version'].rsplit('_', 1)[-1]}`" for c in cards) + " |"]
-    for (section, row, measure), cells in table.items():
-        # an undetected error is no contest: raw depth's is small where the attack hides the depth
-        best = None if measure.startswith("undetected error m, median") and section == "closed loop" else _best(cells)
-        digits = 0 if measure == "trainable" else 3
-        out = []
-        for name in names:
-            if name not in cells or cells[name][0] is None:
-                out.append("-")
-                continue
-            value, ci, n, _ = cells[name]
-            text = f"{value:.{digits}f}{(' ' + _ci(ci, digits)) if ci and ci[0] is not None else ''}" + (
-                f" ({n})" if n is not None else "")
-            out.append(f"**{text}**" if name == best else text)
-        lines.append(f"| {section} | {row} | {measure} | " + " | ".join(out) + " |")
-    penalties = cards[0]["penalties"]
-    if "scorecard-timing" in d:
-        cold = d["scorecard-timing"]
-        walls = ", ".join(f"`{name}` {t['wall_s'] / 60:.1f} min" for name, t in cold["cold_run"]["cards"].items())
-        lines += ["", f"**Time**, from a cold run with nothing stored (`{cold['meta']['command']}`, commit "
-                      f"`{cold['meta']['commit']}`, {cold['meta']['machine']}): {cold['cold_run']['total_s'] / 60:.1f} "
-                      f"min in all, {cold['cold_run']['includes']}; per card {walls}. The first card also computes "
-                      "the offline reference (Chronos-only), which the others reuse. The cards above were then "
-                      "written again from the stored episodes, which is why their own timings are short."]
-    lines += ["", "N in brackets. Driving-score penalties: " + ", ".join(f"{k.replace('_', ' ')} x {v}"
-                                                                  for k, v in penalties.items()) + ".", ""]
-    return "\n".join(lines)
-
-
-def _best(cells: dict) -> str | None:
-    """The defence whose value beats every other's with non-overlapping intervals (None: no clear best)."""
-    scored = [(name, v, ci, hib) for name, (v, ci, _, hib) in cells.items() if v is not None and ci and ci[0] is not None]
-    if len(scored) < 2:
-        return None
-    scored.sort(key=lambda x: x[1], reverse=scored[0][3])
-    (name, _, ci, hib), (_, _, ci2, _) = scored[0], scored[1]
-    apart = ci[0] > ci2[1] if hib else ci[1] < ci2[0]
-    return name if apart else None
-
-
 def _index(d: _Data) -> str:
     lines = ["# Results", "", _NOTE, "",
              "| page | what |", "|---|---|",
@@ -451,6 +369,6 @@ def _index(d: _Data) -> str:
 #: The generated results pages (relative to ``docs/``) and the function that writes each from the data folder.
 RESULT_PAGES: dict[str, Callable[[Path], str]] = {
     f"results/{name}.md": (lambda make: lambda root: make(_Data(root)))(make)
-    for name, make in (("index", _index), ("leaderboard", _leaderboard), ("paper", _paper), ("closed-loop", _closed_loop), ("sweeps", _sweeps),
+    for name, make in (("index", _index), ("leaderboard", leaderboard_markdown), ("paper", _paper), ("closed-loop", _closed_loop), ("sweeps", _sweeps),
                        ("offline-benchmark", _offline), ("adaptive-attacks", _adaptive),
                        ("detector-and-sticker", _detector), ("speed", _speed))}
