@@ -102,3 +102,14 @@ def test_a_sigkilled_quick_battery_resumes_without_redoing_finished_episodes(tmp
     out = subprocess.run(argv, capture_output=True, text=True, check=True).stdout
     timing = json.loads(out)["cards"][0]["timing"]
     assert done >= 10 and timing["episodes_run"] == timing["episodes"] - done  # only the unfinished ran
+
+
+@pytest.mark.slow
+def test_an_attack_card_runs_the_attack_against_every_defence(tmp_path, monkeypatch):
+    from racf.experiments.scorecard import attack_card
+    from racf.plugins import ESTIMATORS
+
+    monkeypatch.setattr(attack_card, "ATTACK_DRAWS", (1, 1))
+    card = attack_card.run_attack_card("stealth_ramp", tmp_path, quick=True, workers=1, progress=False)
+    assert set(card["defences"]) == set(ESTIMATORS) and all(r["n"] == 1 for r in card["defences"].values())
+    assert "stealth_ramp" in attack_card.attack_card_markdown(card) and "QUICK" in attack_card.attack_card_markdown(card)
