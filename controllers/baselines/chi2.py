@@ -9,7 +9,6 @@ defence drives on the witness; with no witness it has no distance (NaN), not a g
 
 from __future__ import annotations
 
-import math
 from collections import deque
 
 from racf.controllers.baselines.witness import Witness, valid
@@ -47,10 +46,6 @@ class Chi2Detector:
         self._z2: deque[float] = deque(maxlen=self.window)
         self.score, self.flagged, self._stepped = 0.0, False, False
 
-    def _innovation(self, depth: float, confidence: float, reference: float, ref_std: float) -> float:
-        conf = min(1.0, max(0.05, confidence if math.isfinite(confidence) else 0.0))
-        return (depth - reference) / math.sqrt(self.depth_std_m ** 2 / conf + ref_std ** 2)
-
     def _score(self, z2: deque) -> float:
         return sum(z2) / self._threshold[len(z2)] if z2 else 0.0
 
@@ -59,25 +54,19 @@ class Chi2Detector:
         depth, lidar = sample.d_meas, sample.lidar_m
         reference, ref_std = self.witness.predict(lidar, speed_mps, dt)
         if valid(depth) and valid(reference):
-            self._z2.append(self._innovation(depth, sample.c_meas, reference, ref_std) ** 2)
+            self._z2.append(self.witness.innovation(depth, sample.c_meas, self.depth_std_m, reference, ref_std) ** 2)
         self.score = self._score(self._z2)
         self.flagged = self.score > 1.0
-        on_witness = self.flagged or not valid(depth)
-        out = reference if on_witness else float(depth)
-        out = out if valid(out) else math.nan
-        self.witness.advance(lidar, speed_mps, dt, out, on_odometry=on_witness and not valid(lidar))
-        return out
+        return self.witness.step_output(depth, reference, self.flagged, lidar, speed_mps, dt)
 
     def diagnostics(self) -> dict[str, float]:
         return {"flag": float(self.flagged), "score": self.score} if self._stepped else {}
 
     def would_pass(self, *, depth: float, speed_mps: float, dt: float, yaw_rate_radps: float = 0.0,
                    lidar_shift: float = 0.0) -> bool:
-        w = self.witness
-        lidar = w.lidar - abs(speed_mps) * dt + lidar_shift if valid(w.lidar) and w.travelled_m == 0.0 else math.nan
-        reference, ref_std = w.predict(lidar, speed_mps, dt)
+        reference, ref_std = self.witness.next_reference(speed_mps, dt, lidar_shift)
         if not (valid(depth) and valid(reference)):
             return True
         z2 = deque(self._z2, maxlen=self.window)
-        z2.append(self._innovation(depth, 1.0, reference, ref_std) ** 2)
+        z2.append(self.witness.innovation(depth, 1.0, self.depth_std_m, reference, ref_std) ** 2)
         return self._score(z2) <= 1.0

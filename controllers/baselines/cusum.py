@@ -6,7 +6,6 @@ drives on the witness; the alarm clears after ``recover_steps`` innovations with
 
 from __future__ import annotations
 
-import math
 
 from racf.controllers.baselines.witness import Witness, valid
 
@@ -41,10 +40,6 @@ class CusumDetector:
         self.high = self.low = 0.0
         self.alarm, self.quiet, self._stepped = False, 0, False
 
-    def _innovation(self, depth: float, confidence: float, reference: float, ref_std: float) -> float:
-        conf = min(1.0, max(0.05, confidence if math.isfinite(confidence) else 0.0))
-        return (depth - reference) / math.sqrt(self.depth_std_m ** 2 / conf + ref_std ** 2)
-
     def _sums(self, z: float) -> tuple[float, float]:
         return max(0.0, self.high + z - self.k), max(0.0, self.low - z - self.k)
 
@@ -57,7 +52,7 @@ class CusumDetector:
         depth, lidar = sample.d_meas, sample.lidar_m
         reference, ref_std = self.witness.predict(lidar, speed_mps, dt)
         if valid(depth) and valid(reference):
-            z = self._innovation(depth, sample.c_meas, reference, ref_std)
+            z = self.witness.innovation(depth, sample.c_meas, self.depth_std_m, reference, ref_std)
             self.high, self.low = self._sums(z)
             if self.score > 1.0:
                 self.alarm, self.quiet = True, 0
@@ -65,11 +60,7 @@ class CusumDetector:
                 self.quiet = self.quiet + 1 if abs(z) <= self.k else 0
                 if self.quiet >= self.recover_steps:
                     self.alarm, self.high, self.low = False, 0.0, 0.0
-        on_witness = self.alarm or not valid(depth)
-        out = reference if on_witness else float(depth)
-        out = out if valid(out) else math.nan
-        self.witness.advance(lidar, speed_mps, dt, out, on_odometry=on_witness and not valid(lidar))
-        return out
+        return self.witness.step_output(depth, reference, self.alarm, lidar, speed_mps, dt)
 
     def diagnostics(self) -> dict[str, float]:
         return {"flag": float(self.alarm), "score": self.score} if self._stepped else {}
@@ -78,9 +69,7 @@ class CusumDetector:
                    lidar_shift: float = 0.0) -> bool:
         if self.alarm:
             return False
-        w = self.witness
-        lidar = w.lidar - abs(speed_mps) * dt + lidar_shift if valid(w.lidar) and w.travelled_m == 0.0 else math.nan
-        reference, ref_std = w.predict(lidar, speed_mps, dt)
+        reference, ref_std = self.witness.next_reference(speed_mps, dt, lidar_shift)
         if not (valid(depth) and valid(reference)):
             return True
-        return max(self._sums(self._innovation(depth, 1.0, reference, ref_std))) <= self.h
+        return max(self._sums(self.witness.innovation(depth, 1.0, self.depth_std_m, reference, ref_std))) <= self.h

@@ -46,6 +46,31 @@ class Witness:
         moved = abs(speed_mps) * dt if math.isfinite(speed_mps) else 0.0
         return max(self.last - moved, 0.0), self.lidar_std_m + self.drift_per_m * (self.travelled_m + moved)
 
+    def innovation(self, depth: float, confidence: float, depth_std_m: float, reference: float,
+                   ref_std: float) -> float:
+        """The depth's innovation against ``reference`` in standard deviations; low confidence
+        (clipped at 0.05) widens the depth's share."""
+        conf = min(1.0, max(0.05, confidence if math.isfinite(confidence) else 0.0))
+        return (depth - reference) / math.sqrt(depth_std_m ** 2 / conf + ref_std ** 2)
+
+    def next_reference(self, speed_mps: float, dt: float, lidar_shift: float = 0.0) -> tuple[float, float]:
+        """The next step's reference as a white-box attacker predicts it: the LiDAR (if it
+        reported this step) moved by the car's motion and ``lidar_shift``, else the odometry
+        carry. Changes nothing."""
+        lidar = (self.lidar - abs(speed_mps) * dt + lidar_shift if valid(self.lidar) and self.travelled_m == 0.0
+                 else math.nan)
+        return self.predict(lidar, speed_mps, dt)
+
+    def step_output(self, depth: float, reference: float, alarmed: bool, lidar: float, speed_mps: float,
+                    dt: float) -> float:
+        """What the defence puts out this step (the depth, or the witness while alarmed or with no
+        depth; NaN with neither), with the witness moved on."""
+        on_witness = alarmed or not valid(depth)
+        out = reference if on_witness else float(depth)
+        out = out if valid(out) else math.nan
+        self.advance(lidar, speed_mps, dt, out, on_odometry=on_witness and not valid(lidar))
+        return out
+
     def advance(self, lidar: float, speed_mps: float, dt: float, output: float, on_odometry: bool) -> None:
         """Moves on one step: ``output`` is what the defence put out, ``on_odometry`` whether it
         rested on the odometry-carried witness."""

@@ -326,24 +326,20 @@ def _speed(d: _Data) -> str:
     else:
         lines += _missing("bench-sim", "racf bench-sim --json")
     lines += ["## Whole episodes, as a sweep runs them (`racf bench-loop`)", ""]
-    if "bench-loop" in d:
-        data = d["bench-loop"]
-        lines += _meta(data["meta"]) + ["| measure | value |", "|---|---|"]
-        lines += [f"| {k.replace('_', ' ')} | {_num(v, 2) if isinstance(v, float) else v} |"
-                  for k, v in data["loop"].items()]
-        lines.append("")
-    else:
-        lines += _missing("bench-loop", "racf bench-loop --json")
+    lines += _measures(d, "bench-loop", "loop", "racf bench-loop --json", digits=2)
     lines += ["## ODCA's per-step cost (`racf odca-latency`)", ""]
-    if "odca-latency" in d:
-        data = d["odca-latency"]
-        lines += _meta(data["meta"]) + ["| measure | value |", "|---|---|"]
-        lines += [f"| {k.replace('_', ' ')} | {_num(v, 3) if isinstance(v, float) else v} |"
-                  for k, v in data["latency"].items()]
-        lines.append("")
-    else:
-        lines += _missing("odca-latency", "racf odca-latency --json")
+    lines += _measures(d, "odca-latency", "latency", "racf odca-latency --json", digits=3)
     return "\n".join(lines)
+
+
+def _measures(d: _Data, name: str, key: str, command: str, digits: int) -> list[str]:
+    """A stored result's flat ``{measure: value}`` (under ``key``) as a two-column table."""
+    if name not in d:
+        return _missing(name, command)
+    data = d[name]
+    return _meta(data["meta"]) + ["| measure | value |", "|---|---|"] + [
+        f"| {k.replace('_', ' ')} | {_num(v, digits) if isinstance(v, float) else v} |"
+        for k, v in data[key].items()] + [""]
 
 
 def _index(d: _Data) -> str:
