@@ -12,6 +12,7 @@ import json
 from pathlib import Path
 
 from racf.experiments.sweeps.store import atomic_write
+from racf.experiments.viz.results_format import ci
 
 #: The closed-loop rows that run the stealth ramp, whose undetected error is plotted against its rate.
 RAMP_ROWS = ("ramp_rates", "stealth_ramp")
@@ -39,7 +40,8 @@ def _f(x, digits: int = 2) -> str:
 
 
 def _ci(pair, digits: int = 2) -> str:
-    return "" if not pair or pair[0] is None else f" [{pair[0]:.{digits}f}, {pair[1]:.{digits}f}]"
+    text = ci(pair, digits)
+    return f" {text}" if text else ""
 
 
 def card_rows(card: dict) -> list[tuple[str, str, str, float | None, list | None, int | None, bool]]:

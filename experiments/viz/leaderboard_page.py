@@ -4,7 +4,7 @@ cold run's time (``scorecard-timing.json``) by :mod:`racf.experiments.viz.result
 
 from __future__ import annotations
 
-from racf.experiments.viz.results_format import NOTE as _NOTE
+from racf.experiments.viz.results_format import page_head as _page_head
 from racf.experiments.viz.results_format import ci as _ci
 from racf.experiments.viz.results_format import meta_lines as _meta
 from racf.experiments.viz.results_format import missing as _missing
@@ -15,7 +15,7 @@ def leaderboard_markdown(d) -> str:
     """The leaderboard page from the stored cards (``scorecard-racf-1``) and the cold run's time."""
     from racf.experiments.scorecard.report import card_rows
 
-    lines = ["# Leaderboard: every defence on the racf-1 battery", "", _NOTE, "",
+    lines = [*_page_head("Leaderboard: every defence on the racf-1 battery"),
              "`racf scorecard --defence NAME` rates a defence, built-in or plug-in, on the same fixed battery "
              "([the tutorial](../tutorials/scorecard.md) says what is in it). Each column is one defence's card; "
              "its version names the code it ran (a plug-in's source included). Bold: the best value of a row "

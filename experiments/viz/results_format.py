@@ -3,11 +3,19 @@ result, and what a page says where a result is not stored yet."""
 
 from __future__ import annotations
 
-__all__ = ["NOTE", "ci", "num", "rate", "meta_lines", "missing"]
+__all__ = ["NOTE", "page_head", "ci", "num", "rate", "meta_lines", "missing"]
 
 NOTE = ("Written by `racf.experiments.viz.results_pages` from the stored results in `docs/results/data/`: every "
         "number is what the command beside it printed, on the code, machine and sensors named. Intervals are "
         "95 %: Wilson for rates, bootstrap for medians and RMSE.")
+
+
+def page_head(title: str, *intro: str) -> list[str]:
+    """A results page's first lines: its title, where its numbers come from, and its intro."""
+    lines = [f"# {title}", "", NOTE, ""]
+    for paragraph in intro:
+        lines += [paragraph, ""]
+    return lines
 
 
 def ci(pair, digits: int = 2) -> str:

@@ -17,7 +17,7 @@ from pathlib import Path
 from typing import Callable
 
 from racf.experiments.viz.leaderboard_page import leaderboard_markdown
-from racf.experiments.viz.results_format import NOTE as _NOTE
+from racf.experiments.viz.results_format import page_head as _page_head
 from racf.experiments.viz.results_format import ci as _ci
 from racf.experiments.viz.results_format import meta_lines as _meta
 from racf.experiments.viz.results_format import missing as _missing
@@ -119,7 +119,7 @@ def _bench_table(data: dict) -> list[str]:
 # --- pages -----------------------------------------------------------------------------------------------------
 
 def _closed_loop(d: _Data) -> str:
-    lines = ["# ODCA in the closed loop: the paper's table", "", _NOTE, "",
+    lines = [*_page_head("ODCA in the closed loop: the paper's table"),
              "`racf trials --table`: the paper's settings, N = 30 each over the four signs and three speeds, the "
              "strong patch regime (rho ~ U(0.9, 1), T_atk ~ U(0.5, 3) s), the same episodes in every setting. "
              "Only an attack that begins before t* (the first braking command of the clean run) can test a "
@@ -140,7 +140,7 @@ _SWEEPS = {"strong-1000": "1,000 strong-regime episodes: 250 random draws, every
 
 
 def _sweeps(d: _Data) -> str:
-    lines = ["# Monte Carlo attack sweeps", "", _NOTE, "",
+    lines = [*_page_head("Monte Carlo attack sweeps"),
              "`racf sweep SPEC` runs a shipped spec (`experiments/sweeps/specs/`) on a local pool or Ray and "
              "resumes when interrupted; [the sweeps tutorial](../tutorials/sweeps.md) shows how. Each draw runs "
              "with every estimator on the same episode (paired seeds).", ""]
@@ -157,7 +157,7 @@ def _sweeps(d: _Data) -> str:
 
 
 def _offline(d: _Data) -> str:
-    lines = ["# The offline repair benchmark", "", _NOTE, "",
+    lines = [*_page_head("The offline repair benchmark"),
              "`racf bench` scores every registered estimator step by step, beside the forecasting baselines "
              "(Chronos-2 forecast-only, SOFTS, NHITS, DLinear, NLinear) and the aligned LiDAR, on the test drives "
              "of two splits under the weak, mid and strong corruption presets. Each preset is drawn several times; "
@@ -167,7 +167,7 @@ def _offline(d: _Data) -> str:
 
 
 def _adaptive(d: _Data) -> str:
-    lines = ["# Adaptive attacks: an attacker who knows the defence", "", _NOTE, "",
+    lines = [*_page_head("Adaptive attacks: an attacker who knows the defence"),
              "`racf sweep adaptive.toml`: four adaptive attacks at their strongest settings (the two ramps over "
              "their rate r), each over three durations at the four signs, two seeds per cell, every estimator on "
              "the same episode. The undetected error is the largest |d_fused - d_true| before the defence's first "
@@ -228,7 +228,7 @@ def paper_rows(d: _Data, link: str = "") -> list[str]:
 
 
 def _paper(d: _Data) -> str:
-    lines = ["# Reproduced from the paper", "", _NOTE, "",
+    lines = [*_page_head("Reproduced from the paper"),
              "The paper's numbers are from its real-car table, its attack-persistence table and its recovery table "
              "(strong preset). Here the car is simulated on the `qcar2` sensor profile.", ""]
     lines += paper_rows(d) + [""]
@@ -253,7 +253,7 @@ def readme_table(root: Path) -> str:
 
 
 def _detector(d: _Data) -> str:
-    lines = ["# The learned detector and the printed sticker", "", _NOTE, "",
+    lines = [*_page_head("The learned detector and the printed sticker"),
              "The paper detects the sign with YOLOv8-seg and attacks it with a physical patch. racf has a classical "
              "colour-and-shape detector (the default) and a small learned segmenter trained on the simulator's "
              "frames; the sticker is optimised against the segmenter and printed on the sign in the scene "
@@ -313,7 +313,7 @@ def _detector(d: _Data) -> str:
 
 
 def _speed(d: _Data) -> str:
-    lines = ["# Speed", "", _NOTE, "",
+    lines = [*_page_head("Speed"),
              "The real-time factor is simulated seconds per wall-clock second at the 50 Hz control rate. This "
              "machine's speed drifts by 10-20 % from minute to minute: compare two versions in one run, in "
              "alternation, not across pages.", ""]
@@ -343,7 +343,7 @@ def _measures(d: _Data, name: str, key: str, command: str, digits: int) -> list[
 
 
 def _index(d: _Data) -> str:
-    lines = ["# Results", "", _NOTE, "",
+    lines = [*_page_head("Results"),
              "| page | what |", "|---|---|",
              "| [Leaderboard](leaderboard.md) | every built-in defence's scorecard on the racf-1 battery |",
              "| [Reproduced from the paper](paper.md) | the paper's claims beside racf's measurements |",
