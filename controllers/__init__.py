@@ -11,6 +11,7 @@ from racf.controllers.estimators import DistanceEstimator, EKFEstimator, RawDept
 from racf.controllers.obstacle_detector import ObstacleDetector, ObstacleDetectorConfig
 from racf.controllers.lane_follower import RouteFollower, StanleyConfig, StanleyController
 from racf.controllers.perception import Perception, PerceptionSample
+from racf.controllers.size_distance import SizeDistance
 from racf.controllers.speed import SpeedPI, SpeedPIConfig, SpeedProfile
 
 __all__ = [
@@ -18,6 +19,6 @@ __all__ = [
     "DistanceEKF", "DistanceEstimator", "EKFConfig", "EKFEstimator", "LidarTargetConfig", "LidarTargetState",
     "LidarTargetTracker", "ObstacleDetector", "ObstacleDetectorConfig", "Perception", "PerceptionSample",
     "Phase", "PoseFilter", "PoseFilterConfig", "RawDepthEstimator", "RouteFollower", "scan_points",
-    "segment_scan", "SpeedPI", "SpeedPIConfig", "SpeedProfile", "StanleyConfig", "StanleyController",
+    "segment_scan", "SizeDistance", "SpeedPI", "SpeedPIConfig", "SpeedProfile", "StanleyConfig", "StanleyController",
     "StopSignBraker", "StopSignDetector", "wrap_angle",
 ]

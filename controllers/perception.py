@@ -15,6 +15,7 @@ import numpy as np
 from racf.controllers.detector import BlobDetector, Detection, StopSignDetector
 from racf.controllers.distance import CameraModel, DepthDistance
 from racf.controllers.lidar_target import TARGET_KINDS, LidarTargetTracker
+from racf.controllers.size_distance import SizeDistance
 
 __all__ = ["Perception", "PerceptionSample"]
 
@@ -35,6 +36,10 @@ class PerceptionSample:
         bearing_rad: bearing of the detection's centre, left positive (NaN: none).
         lidar_confirmed: whether the camera's depth has agreed with the LiDAR's track since it
             started (``LidarTargetTracker.depth_confirmed``).
+        d_size: the size witness: the distance the detection's box implies from the target's
+            known size, m (NaN: no size stage, no detection, or a box too broken or cut to
+            measure; :class:`~racf.controllers.size_distance.SizeDistance`).
+        size_std: its std, m.
     """
 
     detection: Detection | None
@@ -43,6 +48,8 @@ class PerceptionSample:
     lidar_m: float
     bearing_rad: float
     lidar_confirmed: bool = True
+    d_size: float = math.nan
+    size_std: float = math.nan
 
     @property
     def detected(self) -> bool:
@@ -67,11 +74,13 @@ class Perception:
             LiDAR tracker fits cluster widths to it).
         map_margin_rad: with a map bearing (``process(map_bearing=...)``), a detection
             counts only if its box, widened by this margin, holds that bearing.
+        size: the size witness's stage (the target's known size; None: no size witness).
     """
 
     def __init__(self, camera: CameraModel, detector: BlobDetector | None = None,
                  depth: DepthDistance | None = None, lidar: LidarTargetTracker | None = None,
-                 target: str = "sign", map_margin_rad: float = math.radians(3.0)) -> None:
+                 target: str = "sign", map_margin_rad: float = math.radians(3.0),
+                 size: SizeDistance | None = None) -> None:
         if target not in TARGET_KINDS:
             raise ValueError(f"target must be one of {TARGET_KINDS}, got {target!r}")
         self.camera = camera
@@ -80,6 +89,7 @@ class Perception:
         self.lidar = lidar or LidarTargetTracker()
         self.target = target
         self.map_margin_rad = float(map_margin_rad)
+        self.size = size
         #: The detector's output on the last image processed (the last new frame), before the
         #: map check (for evaluation).
         self.last_raw_detection: Detection | None = None
@@ -126,14 +136,15 @@ class Perception:
             bearing = self.camera.bearing(detection.centroid[0]) if detection is not None else math.nan
             height = self.camera.height_per_metre(detection.box[1], detection.box[3]) if detection is not None \
                 else math.nan
-            self._held = _Held(detection, d_meas, c_meas, bearing, span, height)
+            d_size, size_std = self.size.estimate(detection) if self.size is not None else (math.nan, math.nan)
+            self._held = _Held(detection, d_meas, c_meas, bearing, span, height, d_size, size_std)
         held = self._held or _NO_FRAME
         lidar_m = self.lidar.step(scan=scan, detection_bearing=held.bearing, detection_span=held.span,
                                   target=self.target, speed=speed, yaw_rate=yaw_rate, dt=dt,
                                   lateral_speed=lateral_speed, detection_depth=held.d_meas, beam_age_s=beam_age_s,
                                   detection_height=held.height)
         return PerceptionSample(held.detection, held.d_meas, held.c_meas, lidar_m, held.bearing,
-                                self.lidar.depth_confirmed)
+                                self.lidar.depth_confirmed, held.d_size, held.size_std)
 
     def _span(self, detection: Detection) -> tuple[float, float]:
         """(left, right) bearings of the detection box's outer edges, rad."""
@@ -155,6 +166,8 @@ class _Held:
     bearing: float
     span: tuple[float, float] | None
     height: float = math.nan  # the box's height per metre of depth (CameraModel.height_per_metre)
+    d_size: float = math.nan
+    size_std: float = math.nan
 
 
 _NO_FRAME = _Held(None, math.nan, 0.0, math.nan, None)

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["FEATURE_NAMES", "MAX_RANGE_M", "sanitize", "usable_forecast", "features"]
+__all__ = ["FEATURE_NAMES", "MAX_RANGE_M", "sanitize", "sanitize_size", "usable_forecast", "features"]
 
 MAX_RANGE_M = 50.0
 FEATURE_NAMES = ("base_minus_mu", "sigma", "confidence", "depth_missing", "lidar_trusted", "base_minus_lidar",
@@ -31,6 +31,14 @@ def sanitize(depth, confidence, lidar, speed, yaw_rate=0.0, bearing=np.nan):
     b = np.asarray(bearing, float)
     b = np.where(np.isfinite(b), b, np.nan)
     return d, c, l, v, w, b
+
+
+def sanitize_size(size, size_std):
+    """(d_size, size_std) as float arrays: both NaN where either is not a usable distance and std
+    (not finite, <= 0, or a distance beyond ``MAX_RANGE_M``)."""
+    s, e = np.asarray(size, float), np.asarray(size_std, float)
+    ok = np.isfinite(s) & (s > 0) & (s <= MAX_RANGE_M) & np.isfinite(e) & (e > 0)
+    return np.where(ok, s, np.nan), np.where(ok, e, np.nan)
 
 
 def usable_forecast(mean, std):

@@ -90,6 +90,7 @@ class KinematicBranch:
         self.y = 0.0
         self.std = math.nan
         self.lidar_only = False  # anchored on a LiDAR no depth has agreed with (see anchor)
+        self.size_only = False  # anchored on the size witness alone (see anchor)
         self._lose_baseline()
 
     def _lose_baseline(self) -> None:
@@ -135,15 +136,18 @@ class KinematicBranch:
         self.z, self.y = z, y
         self.std += c.travel_std * abs(speed) * dt + c.time_std_mps * dt
         if self.std > c.max_std_m or self.z <= 0.0:
-            self.z, self.y, self.std, self.lidar_only = math.nan, 0.0, math.nan, False
+            self.z, self.y, self.std, self.lidar_only, self.size_only = math.nan, 0.0, math.nan, False, False
         return change
 
     def anchor(self, distance: float, bearing: float = math.nan, confirmed: bool = True,
-               lidar_only: bool = False) -> None:
+               lidar_only: bool = False, std: float | None = None, size_only: bool = False) -> None:
         """Restarts the branch at a trusted distance (m) and, if known, the target's bearing (rad, left
         positive); a ``confirmed`` one (two witnesses agree) also starts the baseline if there is none.
-        ``lidar_only``: the anchor rests on a LiDAR track that no depth has agreed with."""
+        ``lidar_only``: the anchor rests on a LiDAR track that no depth has agreed with.
+        ``std``: the anchor's std, m (default ``anchor_std_m``, a range sensor's).
+        ``size_only``: the anchor rests on the size witness alone (:meth:`fuse` refines it)."""
         self.lidar_only = bool(lidar_only)
+        self.size_only = bool(size_only)
         if math.isfinite(bearing) and abs(bearing) < 1.5:
             self.y = distance * math.tan(bearing)
         elif self.alive and self.z > 0.0:
@@ -151,9 +155,20 @@ class KinematicBranch:
         else:
             self.y = 0.0
         self.z = distance
-        self.std = self.config.anchor_std_m
+        self.std = self.config.anchor_std_m if std is None else max(float(std), self.config.anchor_std_m)
         if confirmed and self.config.drift_travel_std is not None and not math.isfinite(self.base_z):
             self.base_z, self.base_y, self.base_std = self.z, self.y, self.std
+
+    def fuse(self, distance: float, std: float) -> None:
+        """Refines a branch that rests on the size witness alone with a new size measurement (m,
+        its std m): the two weighted by their variances, as a Kalman update. The std never
+        falls below ``anchor_std_m``: the size's calibration error does not average out."""
+        if not (self.alive and self.size_only and math.isfinite(distance) and math.isfinite(std) and std > 0):
+            return
+        w = self.std ** 2 / (self.std ** 2 + std ** 2)
+        scale = (self.z + w * (distance - self.z)) / self.z
+        self.z, self.y = self.z * scale, self.y * scale  # along the same bearing
+        self.std = max(math.sqrt((1.0 - w) * self.std ** 2), self.config.anchor_std_m)
 
 
 def advance(z: float, y: float, speed: float, yaw_rate: float, dt: float, lever_m: float) -> tuple[float, float]:

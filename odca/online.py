@@ -42,8 +42,8 @@ import numpy as np
 import pandas as pd
 
 from racf.odca.align import Alignment, fit_alignment
-from racf.odca.features import MAX_RANGE_M, features, sanitize, usable_forecast
-from racf.odca.gate import BASELINE, DEPTH, LIDAR, LIDAR_KIN, NONE, SOURCES, GateConfig, vote
+from racf.odca.features import MAX_RANGE_M, features, sanitize, sanitize_size, usable_forecast
+from racf.odca.gate import BASELINE, DEPTH, KIN, LIDAR, LIDAR_KIN, NONE, SIZE, SOURCES, GateConfig, vote
 from racf.odca.head import HeadWeights
 from racf.odca.kinematics import KinematicBranch, KinematicsConfig
 from racf.odca.prior import SHIPPED_PRIOR, Chronos2Prior, CheckpointError, TemporalPrior
@@ -154,9 +154,11 @@ class _Witnesses:
     def __init__(self, config: ODCAConfig) -> None:
         self.config = config
         self.branch = KinematicBranch(config.kinematics)
+        self.last_size = math.nan
 
     def reset(self) -> None:
         self.branch.reset()
+        self.last_size = math.nan
 
     def lidar_unconfirmed(self, l: float, lidar_confirmed: bool, branch: KinematicBranch) -> bool:
         """Whether the LiDAR side of the vote is one witness: a track no depth confirmed, or a
@@ -164,9 +166,10 @@ class _Witnesses:
         return (self.config.kinematics.enabled and branch.alive and branch.lidar_only) or (
             l == l and not lidar_confirmed)
 
-    def step(self, d, c, l, v, yaw_rate, bearing, mu, dt, lidar_confirmed=True):
+    def step(self, d, c, l, v, yaw_rate, bearing, mu, dt, lidar_confirmed=True, size=math.nan, size_std=math.nan):
         """Returns (source, base, lidar_trusted, d_kin, kin_std, motion) for one sanitised step.
-        ``lidar_confirmed``: whether a depth ever agreed with the LiDAR's track (perception's word)."""
+        ``lidar_confirmed``: whether a depth ever agreed with the LiDAR's track (perception's word).
+        ``size``, ``size_std``: the size witness and its std (NaN: none)."""
         cfg = self.config
         branch = self.branch
         on = cfg.kinematics.enabled
@@ -175,15 +178,24 @@ class _Witnesses:
             motion = -v * dt  # no branch: a straight approach's change
         k, k_std = branch.distance, branch.std
         lidar_only = on and branch.alive and branch.lidar_only
+        size_tol = cfg.gate.size_tolerance(size_std)
         source, base, lidar_trusted = vote(d, c, l, k, branch.tolerance(cfg.gate.tau_m) if k == k else math.nan, mu,
                                            cfg.gate, cfg.kinematics.witness,
-                                           lidar_unconfirmed=self.lidar_unconfirmed(l, lidar_confirmed, branch))
+                                           lidar_unconfirmed=self.lidar_unconfirmed(l, lidar_confirmed, branch),
+                                           size=size, size_tol=size_tol)
+        new_size = size == size and size != self.last_size  # perception holds a frame's box between frames
+        self.last_size = size
         if on and source in (DEPTH, LIDAR, LIDAR_KIN) and branch.drifted(base, cfg.gate.tau_m):
             source, base, lidar_trusted = BASELINE, branch.baseline, False
-        elif on and source == DEPTH and (lidar_trusted or lidar_only or not branch.alive):
+        elif on and source == DEPTH and (lidar_trusted or lidar_only or branch.size_only or not branch.alive):
             branch.anchor(d, bearing, confirmed=lidar_trusted)
         elif on and source in (LIDAR, LIDAR_KIN):
             branch.anchor(l, bearing, confirmed=source == LIDAR_KIN and lidar_confirmed, lidar_only=not lidar_confirmed)
+        elif on and source == SIZE:
+            # The size alone anchors the branch at first sight (a blackout the LiDAR cannot confirm against).
+            branch.anchor(size, bearing, confirmed=False, std=size_std, size_only=True)
+        elif on and source == KIN and branch.size_only and new_size and abs(size - k) <= size_tol:
+            branch.fuse(size, size_std)
         return source, base, lidar_trusted, k, k_std, motion
 
 
@@ -269,11 +281,12 @@ class ODCA:
         self._witnesses = _Witnesses(self.config)
         self._prev = math.nan
         self._last_lidar = math.nan
+        self._last_size = (math.nan, math.nan)
         self._lidar_confirmed = True
 
     def step(self, *, depth: float, confidence: float, lidar: float = math.nan, speed: float = 0.0,
              yaw_rate: float = 0.0, bearing: float = math.nan, dt: float | None = None,
-             lidar_confirmed: bool = True) -> FusedSample:
+             lidar_confirmed: bool = True, size: float = math.nan, size_std: float = math.nan) -> FusedSample:
         """One causal step. Any input may be NaN, inf, zero or negative (treated as missing).
 
         Args:
@@ -286,9 +299,13 @@ class ODCA:
                 depth was missing may sit on the background behind a sign the scan plane
                 misses: it counts as one witness, and a confident depth that disagrees with
                 it passes. Offline series have no such column: their LiDAR counts as confirmed.
+            size: the size witness d_size, m (``PerceptionSample.d_size``; NaN: none). It vetoes
+                any witness farther than it, and bases the repair when nothing else can
+                (:mod:`racf.odca.gate`).
+            size_std: its std, m.
         """
         for name, value in (("depth", depth), ("confidence", confidence), ("lidar", lidar), ("speed", speed),
-                            ("yaw_rate", yaw_rate), ("bearing", bearing)):
+                            ("yaw_rate", yaw_rate), ("bearing", bearing), ("size", size), ("size_std", size_std)):
             if np.ndim(value) != 0:
                 raise ValueError(f"{name} must be a scalar per step, got shape {np.shape(value)}; use run(df) for series")
         dt = self.config.dt if dt is None else float(dt)
@@ -301,11 +318,13 @@ class ODCA:
             mean, std = usable_forecast(*self.prior.forecast(self._context[None], self.config.horizon))
             self._mean, self._std = mean[0], std[0]
         d, c, l, v, w, b = (float(x) for x in sanitize(depth, confidence, lidar, speed, yaw_rate, bearing))
+        s, s_std = (float(x) for x in sanitize_size(size, size_std))
         l_al = float(self.config.alignment(l))
         mu, sigma = float(self._mean[k]), float(self._std[k])
         self._last_lidar = l_al
+        self._last_size = (s, s_std)
         self._lidar_confirmed = bool(lidar_confirmed)
-        verdict = self._witnesses.step(d, c, l_al, v, w, b, mu, dt, self._lidar_confirmed)
+        verdict = self._witnesses.step(d, c, l_al, v, w, b, mu, dt, self._lidar_confirmed, s, s_std)
         cols = self._finish(*(np.array([x], float) for x in (d, c, l_al, v, mu, sigma, *verdict)),
                             prev=self._prev)
         self._prev = float(cols[0][0])
@@ -315,12 +334,13 @@ class ODCA:
         return FusedSample(*(float(col[0]) for col in cols))
 
     def would_pass(self, *, depth: float, speed: float = 0.0, yaw_rate: float = 0.0, lidar_shift: float = 0.0,
-                   dt: float | None = None) -> bool:
+                   dt: float | None = None, size_shift: float = 0.0) -> bool:
         """Whether a next step with this depth would pass the gate unchanged (w = 0). Changes nothing.
 
         The LiDAR reference is taken as the last step's, moved by the car's motion and by
-        ``lidar_shift`` m (a spoof that moves it with the depth). The question a white-box
-        attacker asks before it picks its bias.
+        ``lidar_shift`` m (a spoof that moves it with the depth); the size witness likewise,
+        moved by ``size_shift`` m (an attack that scales the sign's image with the depth). The
+        question a white-box attacker asks before it picks its bias.
         """
         cfg = self.config
         dt = cfg.dt if dt is None else float(dt)
@@ -331,9 +351,11 @@ class ODCA:
         d = float(sanitize(depth, 1.0, math.nan, 0.0)[0])
         k = branch.distance
         l = self._last_lidar + motion + lidar_shift
+        s, s_std = self._last_size
         source, base, _ = vote(d, 1.0, l, k, branch.tolerance(cfg.gate.tau_m) if k == k else math.nan, math.nan,
                                cfg.gate, cfg.kinematics.witness,
-                               lidar_unconfirmed=self._witnesses.lidar_unconfirmed(l, self._lidar_confirmed, branch))
+                               lidar_unconfirmed=self._witnesses.lidar_unconfirmed(l, self._lidar_confirmed, branch),
+                               size=s + motion + size_shift, size_tol=cfg.gate.size_tolerance(s_std))
         return source == DEPTH and not (cfg.kinematics.enabled and branch.drifted(base, cfg.gate.tau_m))
 
     # -- batched offline path ------------------------------------------------------------------
@@ -341,30 +363,32 @@ class ODCA:
         """The same computation over whole series: one column per ``FusedSample`` field.
 
         ``df`` needs ``d_meas``, ``c_meas``, ``lidar`` and ``speed`` columns (or ``depth``/``confidence``),
-        optionally ``yaw_rate`` and ``bearing``, ``series_id`` (each series starts fresh) and ``slot``
+        optionally ``yaw_rate``, ``bearing``, ``d_size`` and ``size_std`` (the size witness), ``series_id`` (each series starts fresh) and ``slot``
         (the car resets ODCA when its track changes target: so does a new slot). Rows keep their
         order and index.
         """
         cols = {"depth": _pick(df, "d_meas", "depth"), "confidence": _pick(df, "c_meas", "confidence"),
                 "lidar": _pick(df, "lidar", None), "speed": _pick(df, "speed", None),
-                "yaw_rate": _optional(df, "yaw_rate", 0.0), "bearing": _optional(df, "bearing", np.nan)}
+                "yaw_rate": _optional(df, "yaw_rate", 0.0), "bearing": _optional(df, "bearing", np.nan),
+                "size": _optional(df, "d_size", np.nan), "size_std": _optional(df, "size_std", np.nan)}
         out = np.full((len(df), len(_COLUMNS)), np.nan)
         for idx in segments(df):
             out[idx] = np.column_stack(self.run_segment(*(cols[k][idx] for k in cols)))
         return pd.DataFrame(out, index=df.index, columns=list(_COLUMNS))
 
-    def run_segment(self, depth, confidence, lidar, speed, yaw_rate, bearing):
+    def run_segment(self, depth, confidence, lidar, speed, yaw_rate, bearing, size=None, size_std=None):
         """One fresh run over one segment's arrays; returns the ``FusedSample`` fields as arrays."""
-        inputs = self.segment_inputs(depth, confidence, lidar, speed, yaw_rate, bearing)
+        inputs = self.segment_inputs(depth, confidence, lidar, speed, yaw_rate, bearing, size, size_std)
         return self._finish(*inputs, prev=math.nan)
 
-    def segment_inputs(self, depth, confidence, lidar, speed, yaw_rate, bearing):
+    def segment_inputs(self, depth, confidence, lidar, speed, yaw_rate, bearing, size=None, size_std=None):
         """Sanitised inputs of one segment, the prior's (mu, sigma) and the gate's verdicts per step:
-        (d, c, l_al, v, mu, sigma, source, base, lidar_trusted, d_kin, kin_std, motion)."""
+        (d, c, l_al, v, mu, sigma, source, base, lidar_trusted, d_kin, kin_std, motion). ``size``,
+        ``size_std``: the size witness per step (None: none)."""
         d, c, l, v, w, b = sanitize(depth, confidence, lidar, speed, yaw_rate, bearing)
         l_al = np.asarray(self.config.alignment(l), float)
         mu, sigma = self.prior_inputs(d)
-        return (d, c, l_al, v, mu, sigma, *self.verdicts(d, c, l_al, v, w, b, mu))
+        return (d, c, l_al, v, mu, sigma, *self.verdicts(d, c, l_al, v, w, b, mu, size, size_std))
 
     def prior_inputs(self, d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The prior's (mu, sigma) at every step of one segment's sanitised depths."""
@@ -378,13 +402,16 @@ class ODCA:
         row, offset = np.arange(n) // cfg.refresh_steps, np.arange(n) % cfg.refresh_steps
         return mean[row, offset], std[row, offset]
 
-    def verdicts(self, d, c, l_al, v, w, b, mu):
+    def verdicts(self, d, c, l_al, v, w, b, mu, size=None, size_std=None):
         """The gate's verdicts over one segment (sanitised arrays), from a fresh kinematic branch:
         (source, base, lidar_trusted, d_kin, kin_std, motion)."""
         witnesses = _Witnesses(self.config)
         n = len(d)
-        rows = [witnesses.step(*args, self.config.dt) for args in
-                zip(d.tolist(), c.tolist(), l_al.tolist(), v.tolist(), w.tolist(), b.tolist(), mu.tolist())]
+        nan = np.full(n, np.nan)
+        s, s_std = sanitize_size(nan if size is None else size, nan if size_std is None else size_std)
+        rows = [witnesses.step(d_, c_, l_, v_, w_, b_, mu_, self.config.dt, True, s_, e_) for d_, c_, l_, v_, w_, b_, mu_, s_, e_
+                in zip(d.tolist(), c.tolist(), l_al.tolist(), v.tolist(), w.tolist(), b.tolist(), mu.tolist(),
+                       s.tolist(), s_std.tolist())]
         source, base, trusted, k, k_std, motion = np.array(rows, float).reshape(n, 6).T
         return source, base, trusted.astype(bool), k, k_std, motion
 

@@ -60,6 +60,7 @@ class ODCAEstimator:
         self.model = _odca(checkpoint)
         self.last = None
         self._had_depth = False
+        self._size = (math.nan, math.nan)
 
     @property
     def n_parameters(self) -> int:
@@ -75,19 +76,23 @@ class ODCAEstimator:
         """The estimator around an ODCA model already in memory (the benchmark's per-split heads)."""
         estimator = cls.__new__(cls)
         estimator.model, estimator.last, estimator._had_depth = model, None, False
+        estimator._size = (math.nan, math.nan)
         return estimator
 
     def reset(self) -> None:
         self.model.reset()
         self.last = None
         self._had_depth = False
+        self._size = (math.nan, math.nan)
 
     def estimate(self, sample: PerceptionSample, speed_mps: float, dt: float, yaw_rate_radps: float = 0.0) -> float:
         self.last = self.model.step(depth=sample.d_meas, confidence=sample.c_meas, lidar=sample.lidar_m,
                                     speed=speed_mps, yaw_rate=yaw_rate_radps, bearing=sample.bearing_rad, dt=dt,
-                                    lidar_confirmed=sample.lidar_confirmed)
+                                    lidar_confirmed=sample.lidar_confirmed, size=sample.d_size,
+                                    size_std=sample.size_std)
         self._had_depth = math.isfinite(sample.d_meas)
         self._depth = sample.d_meas
+        self._size = (sample.d_size, sample.size_std)
         return self.last.d_fused
 
     def use_calibration(self, calibration) -> None:
@@ -118,20 +123,26 @@ class ODCAEstimator:
 
     def _score(self) -> float:
         """The depth's disagreement with its closest witness, in that witness's tolerance: the
-        LiDAR's tau, the kinematic branch's tau + n_sigma x std (0: no depth, or no witness).
-        The gate votes rather than thresholds this, so it is the statistic a threshold sweep reads."""
+        LiDAR's tau, the kinematic branch's tau + n_sigma x std (0: no depth, or no witness);
+        or, if larger, how far the depth lies beyond the size witness, in its tolerance (the size
+        vetoes on its own). The gate votes rather than thresholds this, so it is the statistic a
+        threshold sweep reads."""
         last, cfg = self.last, self.model.config
         ratios = []
         if self._had_depth and math.isfinite(last.r_xs):
             ratios.append(last.r_xs / cfg.gate.tau_m)
         if self._had_depth and math.isfinite(last.d_kin) and math.isfinite(last.kin_std):
             ratios.append(abs(self._depth - last.d_kin) / (cfg.gate.tau_m + cfg.kinematics.n_sigma * last.kin_std))
-        return min(ratios) if ratios else 0.0
+        closest = min(ratios) if ratios else 0.0
+        size, size_std = self._size
+        if self._had_depth and math.isfinite(size) and math.isfinite(size_std):
+            closest = max(closest, (self._depth - size) / cfg.gate.size_tolerance(size_std))
+        return closest
 
     def would_pass(self, *, depth: float, speed_mps: float, dt: float, yaw_rate_radps: float = 0.0,
-                   lidar_shift: float = 0.0) -> bool:
+                   lidar_shift: float = 0.0, size_shift: float = 0.0) -> bool:
         return self.model.would_pass(depth=depth, speed=speed_mps, yaw_rate=yaw_rate_radps, lidar_shift=lidar_shift,
-                                     dt=dt)
+                                     dt=dt, size_shift=size_shift)
 
 
 class ChronosEstimator:

@@ -61,6 +61,9 @@ STEP_COLUMNS: tuple[Column, ...] = (
     _c(CAR, "d_meas", "m", "perception's depth distance: median valid depth in the detection's mask (NaN: none)"),
     _c(CAR, "c_meas", "1", "its confidence: detection confidence x valid-depth share"),
     _c(CAR, "lidar", "m", "the LiDAR reference: the tracked cluster's depth along the camera axis (NaN: none)"),
+    _c(CAR, "d_size", "m", "the size witness: the distance the detection's box implies from the sign's known size "
+                           "(NaN: none, or a box too broken or cut to measure)"),
+    _c(CAR, "size_std", "m", "its std"),
     _c(CAR, "d_fused", "m", "the distance the car acted on: the estimator's output (NaN: no target)"),
     _c(CAR, "w", "1", "ODCA's gate weight (NaN for other estimators)"),
     _c(CAR, "flag", "bool", "the defence's detector flagged the step (1.0; NaN: it has no detector)"),

@@ -147,6 +147,7 @@ def _run(env: gym.Env, spec: TrialSpec, plan: EpisodePlan, estimator, on_step: S
         rows.append(step_row({
             "t": info["time"], "slot": step.slot, "target": car.target.name, "control": step.control,
             "d_meas": sample.d_meas, "c_meas": sample.c_meas, "lidar": sample.lidar_m, "d_fused": step.d_fused,
+            "d_size": sample.d_size, "size_std": sample.size_std,
             "detected": sample.detected,
             "det_confidence": sample.detection_confidence, "bearing": sample.bearing_rad,
             **dict(zip(("det_x0", "det_y0", "det_x1", "det_y1"),

@@ -7,13 +7,14 @@ from __future__ import annotations
 import gymnasium as gym
 
 from racf import sim
-from racf.controllers import LidarTargetConfig, LidarTargetTracker, ObstacleDetector, Perception
+from racf.controllers import LidarTargetConfig, LidarTargetTracker, ObstacleDetector, Perception, SizeDistance
 from racf.controllers.detectors import make_detector
 from racf.experiments.episode.car import Car, CarCalibration
 from racf.experiments.episode.estimators import make_estimator
 from racf.experiments.episode.plan import DRIVE_MAX_EPISODE_S, EpisodePlan, env_settings
 from racf.experiments.episode.spec import TrialSpec
 from racf.sim.attacks import ATTACKS
+from racf.sim.world.stop_signs import SIGN_RED_FACE_ACROSS_FLATS_M
 
 __all__ = ["default_env", "plain_env", "build_car", "tracker", "DRIVE_MAX_EPISODE_S"]
 
@@ -65,7 +66,10 @@ def build_car(spec: TrialSpec, plan: EpisodePlan, estimator=None) -> Car:
     every part that needs the car's geometry (the trackers, an estimator that asks for it)."""
     calib = plan.calibration
     every = max(1, int(round(1.0 / plan.control_dt_s / spec.control_hz))) if spec.control_hz else 1
-    perceptions = {"sign": Perception(calib.camera, detector=make_detector(spec.detector), lidar=tracker(calib)),
+    # The map knows the signs' size: the size witness measures the red face against it.
+    size = SizeDistance(calib.camera, SIGN_RED_FACE_ACROSS_FLATS_M)
+    perceptions = {"sign": Perception(calib.camera, detector=make_detector(spec.detector), lidar=tracker(calib),
+                                      size=size),
                    "obstacle": Perception(calib.camera, detector=ObstacleDetector(), lidar=tracker(calib),
                                           target="obstacle")}
     estimator = estimator if estimator is not None else make_estimator(spec.estimator, spec.estimator_options)

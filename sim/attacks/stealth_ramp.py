@@ -58,6 +58,10 @@ class StealthRamp(AttackWrapper):
     threat_model = "white box"
     #: The LiDAR moves with the depth (``FrustumSpoof``): the defence is asked with the shift.
     moves_lidar = False
+    #: The sign's image is scaled with the depth (``FrustumSpoof(scale_box=True)``): the defence
+    #: is asked with the size witness moved too (``size_shift``, passed only then, so a defence
+    #: with no size witness need not take it).
+    moves_size = False
 
     def __init__(self, env: gym.Env, rate_mps: float = 1.0, direction: int = 1, margin: float = 0.9,
                  region: str = "sign", **schedule: Any) -> None:
@@ -93,8 +97,9 @@ class StealthRamp(AttackWrapper):
 
         def quiet(bias: float) -> bool:
             reserve = bias / self.margin
+            extra = {"size_shift": reserve - old} if self.moves_size else {}
             return bool(probe(depth=d_true + reserve, speed_mps=speed, dt=dt, yaw_rate_radps=yaw_rate,
-                              lidar_shift=(reserve - old) if self.moves_lidar else 0.0))
+                              lidar_shift=(reserve - old) if self.moves_lidar else 0.0, **extra))
 
         bias = quiet_bias(quiet, old, wanted)
         self.held_back += int(bias != wanted)

@@ -28,6 +28,7 @@ from racf.sim.world.stop_signs import (  # noqa: E402
     PLATE_IN_SCAN,
     SIGN_CENTRE_HEIGHT_M,
     SIGN_FACE_ACROSS_FLATS_M,
+    SIGN_RED_FACE_ACROSS_FLATS_M,
     SignGeometry,
     stop_signs,
 )
@@ -189,7 +190,7 @@ def build_scene_xml(sign_geometry: SignGeometry = PLATE_IN_SCAN) -> str:
     <material name="mat" texture="mat" texrepeat="1 1" texuniform="false" specular="0" shininess="0" reflectance="0"/>
     <material name="lab_floor" rgba="0.45 0.45 0.47 1" specular="0" reflectance="0"/>
     {_octagon_mesh("stop_octagon_border", SIGN_FACE_ACROSS_FLATS_M, _SIGN_THICKNESS_M)}
-    {_octagon_mesh("stop_octagon_face", SIGN_FACE_ACROSS_FLATS_M * 0.88, 0.0005)}
+    {_octagon_mesh("stop_octagon_face", SIGN_RED_FACE_ACROSS_FLATS_M, 0.0005)}
     {_triangle_mesh("yield_border", 0.11, _SIGN_THICKNESS_M)}
     {_triangle_mesh("yield_face", 0.075, 0.0005)}{_patch_assets()}
   </asset>

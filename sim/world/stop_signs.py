@@ -29,12 +29,16 @@ from racf.sim.world import map_facts
 from racf.sim.world.road_graph import Path, qcar2_road_graph
 
 __all__ = ["PLATE_IN_SCAN", "POLE_ONLY", "SIGN_CENTRE_HEIGHT_M", "SIGN_FACE_ACROSS_FLATS_M", "SIGN_GEOMETRIES",
+           "SIGN_RED_FACE_ACROSS_FLATS_M",
            "SignGeometry", "StopSign", "stop_signs"]
 
 #: Octagon size across flats. A 1/10-scale road sign would be ~0.075 m; Quanser's props
 #: are larger, and 0.10 m keeps the sign in the LiDAR's scan plane (z = 0.193 m) with the
 #: default geometry. The same for every geometry.
 SIGN_FACE_ACROSS_FLATS_M = 0.10
+#: The red octagon inside the plate's white border, across flats: what a detector outlines,
+#: and the known size the car's size witness measures against (``SizeDistance``).
+SIGN_RED_FACE_ACROSS_FLATS_M = 0.088
 #: Height of the octagon's centre above the floor with the default geometry
 #: (``PLATE_IN_SCAN.centre_height_m``); a sign's own is ``StopSign.centre``.
 SIGN_CENTRE_HEIGHT_M = 0.23

@@ -1,4 +1,5 @@
-"""The gate that votes: its truth table, Proposition 1, and a spoofed LiDAR that cannot move the output."""
+"""The gate that votes: its truth tables (three witnesses, and four with the size), Proposition 1, a spoofed
+LiDAR that cannot move the output, and a size witness that can only veto what lies beyond it."""
 
 import math
 
@@ -11,6 +12,8 @@ from racf.odca import SOURCES, GateConfig, vote
 NAN = math.nan
 GATE = GateConfig(tau_m=0.1, trust_confidence=0.5)
 K_TOL = 0.2
+distance = st.floats(0.2, 10.0)
+maybe = st.one_of(st.just(NAN), distance)
 
 
 # (depth, confidence, lidar, d_kin, prior) -> (source, base): the README's truth table.
@@ -43,15 +46,65 @@ def test_truth_table(inputs, expected):
     assert (math.isnan(base) and math.isnan(expected[1])) or base == expected[1]
 
 
+S_TOL = 0.15
+
+# (depth, confidence, lidar, d_kin, d_size) -> (source, base): the four-witness gate (size tolerance 0.15 m).
+SIZE_TABLE = [
+    ((1.00, 0.2, NAN, NAN, 1.05), ("depth", 1.00)),  # first sight, unsure, but the box's size confirms it
+    ((1.00, 0.2, NAN, NAN, 1.60), ("depth (unconfirmed)", 1.00)),  # nearer than the box: it may be occluded
+    ((1.60, 0.9, NAN, NAN, 1.00), ("size", 1.00)),  # first sight, beyond the box: a bias pushing it away
+    ((1.60, 0.9, 1.61, 1.58, 1.00), ("size", 1.00)),  # a frustum spoof moved all three: the box vetoes them
+    ((1.60, 0.9, 1.61, 1.00, 1.00), ("kinematics", 1.00)),  # depth and LiDAR spoofed, d_kin honest
+    ((NAN, 0.0, NAN, NAN, 1.00), ("size", 1.00)),  # blackout from first sight, the scan plane misses the plate
+    ((NAN, 0.0, 2.50, NAN, 1.00), ("size", 1.00)),  # ... and the LiDAR sees the wall behind it
+    ((NAN, 0.0, 1.02, NAN, 1.00), ("lidar", 1.02)),  # blackout, the LiDAR within the box's bound
+    ((NAN, 0.0, NAN, 1.05, 1.00), ("kinematics", 1.05)),  # blackout: the branch carries, the size agrees
+    ((1.00, 0.9, 1.05, 1.02, 1.60), ("depth", 1.00)),  # a sticker shrank the box: nothing nearer is vetoed
+    ((1.00, 0.9, 1.05, 1.02, 1.00), ("depth", 1.00)),  # all four agree
+    ((1.00, 0.9, 1.05, NAN, 0.50), ("size", 0.50)),  # depth and LiDAR both beyond a (wrongly) large box
+]
+
+
+@pytest.mark.parametrize("inputs,expected", SIZE_TABLE)
+def test_four_witness_truth_table(inputs, expected):
+    d, c, l, k, s = inputs
+    source, base, _ = vote(d, c, l, k, K_TOL, NAN, GATE, size=s, size_tol=S_TOL)
+    assert SOURCES[source] == expected[0]
+    assert base == expected[1]
+
+
+@settings(max_examples=400, deadline=None)
+@given(maybe, st.floats(0, 1), maybe, maybe, maybe, distance)
+def test_nothing_beyond_the_size_witness_is_ever_the_output(d, c, l, k, mu, s):
+    """A box only ever shrinks, so whatever the gate rests on lies within the size's tolerance
+    of d_size or nearer (the prior, used when nothing else is, aside)."""
+    source, base, _ = vote(d, c, l, k, K_TOL, mu, GATE, size=s, size_tol=S_TOL)
+    assert SOURCES[source] == "prior" or base <= s + S_TOL
+
+
+@settings(max_examples=400, deadline=None)
+@given(distance, st.floats(0, 1), maybe, maybe, maybe, st.floats(0, 1))
+def test_without_a_size_witness_the_gate_is_the_three_witness_gate(d, c, l, k, mu, share):
+    assert vote(d, c, l, k, K_TOL, mu, GATE) == vote(d, c, l, k, K_TOL, mu, GATE, size=NAN, size_tol=NAN)
+
+
+@settings(max_examples=400, deadline=None)
+@given(distance, st.floats(0, 1), maybe, st.floats(0, 1), st.floats(-1, 1))
+def test_depth_confirmed_by_the_lidar_passes_unless_beyond_the_size(d, c, k, share, size_share):
+    """Proposition 1 with four witnesses: depth within tau of the LiDAR passes unchanged while the
+    box's size allows both (neither beyond d_size + tolerance); beyond it, it never passes."""
+    l = d + 0.999 * share * GATE.tau_m
+    # size_share >= 0: the box allows both; < 0: it says nearer than the depth by more than its tolerance.
+    s = max(d, l) - 0.999 * S_TOL * size_share if size_share >= 0 else d - S_TOL * (1.001 - size_share)
+    source, base, _ = vote(d, c, l, k, K_TOL, NAN, GATE, size=s, size_tol=S_TOL)
+    assert (SOURCES[source] == "depth" and base == d) == (size_share >= 0)
+
+
 def test_the_two_witness_gate_lets_the_lidar_alone_overrule_the_depth():
     source, base, trusted = vote(1.00, 0.9, 1.80, 1.05, K_TOL, NAN, GATE, kinematics_votes=False)
     assert SOURCES[source] == "lidar" and base == 1.80 and trusted
     source, base, _ = vote(1.60, 0.2, NAN, 1.00, K_TOL, NAN, GATE, kinematics_votes=False)
     assert SOURCES[source] == "kinematics"  # unconfirmed depth: kinematics still bases the repair
-
-
-distance = st.floats(0.2, 10.0)
-maybe = st.one_of(st.just(NAN), distance)
 
 
 @settings(max_examples=400, deadline=None)
@@ -81,3 +134,5 @@ def test_bad_settings_are_clear_errors():
         GateConfig(tau_m=0.0)
     with pytest.raises(ValueError, match="trust_confidence"):
         GateConfig(trust_confidence=2.0)
+    with pytest.raises(ValueError, match="size_sigma"):
+        GateConfig(size_sigma=-1.0)

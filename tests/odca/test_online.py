@@ -255,3 +255,68 @@ def test_a_lidar_track_no_depth_confirmed_is_one_witness_against_a_confident_dep
         assert out.source_name == "depth" and out.w == 0.0
         out = m.step(depth=1.58, confidence=0.9, lidar=math.nan, speed=1.0, lidar_confirmed=confirmed)
         assert out.source_name == "depth"  # the branch now rests on the depth, not on the LiDAR
+
+
+def _size_std(d: np.ndarray) -> np.ndarray:
+    return 0.04 * d  # about a size witness's at 10-20 px
+
+
+def test_the_size_witness_carries_a_blackout_from_first_sight_with_no_lidar():
+    """dropout_timed at a sign the scan plane misses: no depth and no LiDAR ever; the box's
+    size anchors the branch, later sizes refine it, and the output follows the truth."""
+    m = _stub()
+    truth = 3.0 - 1.5 * 0.02 * np.arange(80)
+    rng = np.random.default_rng(0)
+    size = truth * (1 + rng.normal(0, 0.03, truth.size))
+    out = [m.step(depth=np.nan, confidence=0.0, speed=1.5, size=s, size_std=e)
+           for s, e in zip(size, _size_std(truth))]
+    assert out[0].source_name == "size" and {o.source_name for o in out[1:]} == {"kinematics"}
+    fused = np.array([o.d_fused for o in out])
+    assert np.abs(fused - truth)[40:].max() < 0.1  # the fused sizes beat one size's 3 % (9 cm at 3 m)
+    without = _stub()
+    assert all(np.isnan(without.step(depth=np.nan, confidence=0.0, speed=1.5).d_fused) for _ in range(10))
+
+
+@settings(max_examples=20, deadline=None)
+@given(st.floats(0.5, 5.0), st.floats(1.0, 2.0))
+def test_a_frustum_spoof_pushing_farther_is_held_by_the_size_witness(rate, speed):
+    """Depth and LiDAR pushed away together: the output never goes beyond the box's bound."""
+    m = _stub()
+    n, start = 150, 30
+    truth = 6.5 - speed * 0.02 * np.arange(n)
+    drift = rate * 0.02 * np.clip(np.arange(n) - start, 0, None)
+    out = [m.step(depth=t + b, confidence=0.9, lidar=t + b, speed=speed, size=t, size_std=e)
+           for t, b, e in zip(truth, drift, _size_std(truth))]
+    fused = np.array([o.d_fused for o in out])
+    tol = np.array([m.config.gate.size_tolerance(e) for e in _size_std(truth)])
+    assert (fused - truth <= tol + m.config.gate.tau_m + 1e-9).all()  # the head bends a repair by <= tau
+    assert all(o.w == 0.0 for o in out[:start])
+
+
+def test_clean_depth_that_the_size_allows_passes_through_exactly():
+    m = _stub()
+    truth = 4.0 - 1.5 * 0.02 * np.arange(100)
+    rng = np.random.default_rng(1)
+    size = truth * (1 + rng.normal(0, 0.03, truth.size))
+    out = [m.step(depth=t, confidence=0.9, lidar=t + 0.02, speed=1.5, size=s, size_std=e)
+           for t, s, e in zip(truth, size, _size_std(truth))]
+    assert [o.d_fused for o in out] == list(truth)
+
+
+def test_batched_run_matches_step_exactly_with_a_size_witness():
+    m = _stub()
+    df = _series(90, 2)
+    rng = np.random.default_rng(3)
+    df["d_size"] = np.where(rng.random(len(df)) < 0.8, df["d_meas"].fillna(2.0) * rng.uniform(0.9, 1.2, len(df)),
+                            np.nan)
+    df["size_std"] = 0.05 * df["d_size"]
+    batched = m.run(df)
+    m.reset()
+    rows = []
+    for r in df.itertuples():
+        if r.Index and r.slot != df["slot"].iloc[r.Index - 1]:
+            m.reset()
+        rows.append(vars(m.step(depth=r.d_meas, confidence=r.c_meas, lidar=r.lidar, speed=r.speed,
+                                yaw_rate=r.yaw_rate, bearing=r.bearing, size=r.d_size, size_std=r.size_std)))
+    pd.testing.assert_frame_equal(batched.reset_index(drop=True), pd.DataFrame(rows), check_exact=True)
+    assert not batched.equals(m.run(df.drop(columns=["d_size", "size_std"])))  # the size witness took part

@@ -6,6 +6,7 @@ import pytest
 from racf.sim.attacks import ATTACKS, FrustumSpoof
 
 SIGN_BEAM = 30  # the stub's LiDAR sees the sign on this beam
+SIGN_RGB = (200, 12, 14)  # the stub's sign colour (conftest)
 
 
 class ShiftRecorder:
@@ -43,3 +44,40 @@ def test_registered_as_a_white_box_attack_with_the_ramps_checks(stub_env):
     assert ATTACKS["frustum_spoof"] is FrustumSpoof and FrustumSpoof.threat_model == "white box"
     with pytest.raises(ValueError, match="rate_mps"):
         FrustumSpoof(stub_env(), rate_mps=-1.0)
+
+
+class SizeShiftRecorder(ShiftRecorder):
+    """A defence with a size witness: it takes ``size_shift`` too."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.size_shifts = []
+
+    def would_pass(self, *, depth, speed_mps, dt, yaw_rate_radps=0.0, lidar_shift=0.0, size_shift=0.0) -> bool:
+        self.size_shifts.append(size_shift)
+        return super().would_pass(depth=depth, speed_mps=speed_mps, dt=dt, lidar_shift=lidar_shift)
+
+
+def test_scale_box_draws_the_sign_smaller_as_if_at_the_spoofed_distance(stub_env, drive):
+    env = FrustumSpoof(stub_env(), rate_mps=2.0, duration_s=5.0, trigger="always", scale_box=True)
+    env.attach_defence(SizeShiftRecorder())
+    red = np.array(SIGN_RGB)
+    shrunk = 0
+    for obs, clean, info in drive(env, 30):
+        sign = np.all(clean["rgb"] == red, axis=-1)
+        if sign.sum() < 30 or env.bias <= 0.2:
+            continue
+        seen = np.all(np.abs(obs["rgb"].astype(int) - red) < 20, axis=-1)
+        factor = info["d_true"] / (info["d_true"] + env.bias)
+        assert seen.sum() == pytest.approx(sign.sum() * factor ** 2, rel=0.35)
+        shrunk += 1
+    assert shrunk and any(s > 0 for s in env.defence.size_shifts)
+
+
+def test_without_scale_box_the_colour_image_is_untouched_and_no_size_shift_is_asked(stub_env, drive):
+    env = FrustumSpoof(stub_env(), rate_mps=2.0, duration_s=5.0, trigger="always")
+    env.attach_defence(ShiftRecorder())  # no size_shift keyword: a TypeError if it were passed
+    for obs, clean, _ in drive(env, 10):
+        np.testing.assert_array_equal(obs["rgb"], clean["rgb"])
+    with pytest.raises(ValueError, match="scale_box"):
+        FrustumSpoof(stub_env(), scale_box="yes")
