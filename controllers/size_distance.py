@@ -7,8 +7,9 @@ its depth along the optical axis, whatever the depth camera and the LiDAR say. W
 - the box's edges are whole pixels, so its height is known to about half a pixel: the
   relative error grows as the box shrinks (``edge_px / h``), on top of a floor for what the
   pinhole model leaves out (``floor``, a share of the distance);
-- yaw narrows a sign but never makes it wider than tall, so a box wider than tall
-  (``wider_than_tall``) has lost rows to an occluder: its width speaks instead;
+- yaw narrows a sign but never makes it wider than tall, so a box clearly wider than tall
+  (by ``wider_than_tall`` and ``width_slack_px``: an octagon's slanted edges render a pixel or
+  two wider) has lost rows to an occluder: its width speaks instead;
 - a box on the image's edge (within ``edge_margin_px``) may be cut: no witness;
 - the detector's confidence falls as more of the face is hidden (a ring broken, a shape
   off): the std is divided by it, and below ``min_confidence`` there is no witness.
@@ -38,7 +39,9 @@ class SizeDistance:
             red octagon inside the white border).
         edge_px: the std of the box's height from its edges' quantisation, pixels.
         floor: the std's floor, a share of the distance.
-        wider_than_tall: a box wider than ``this x`` its height has lost rows: its width is used.
+        wider_than_tall: a box wider than ``this x`` its height (plus ``width_slack_px``) has lost
+            rows: its width is used.
+        width_slack_px: pixels a whole octagon's box may be wider than tall.
         edge_margin_px: a box this close to the image's edge may be cut: no witness.
         min_confidence: a detection below this confidence is too broken to measure.
     """
@@ -48,6 +51,7 @@ class SizeDistance:
     edge_px: float = 0.5
     floor: float = 0.02
     wider_than_tall: float = 1.1
+    width_slack_px: float = 2.0
     edge_margin_px: int = 2
     min_confidence: float = 0.5
 
@@ -55,7 +59,7 @@ class SizeDistance:
         if not (math.isfinite(self.face_m) and 0.0 < self.face_m <= 5.0):
             raise ValueError(f"face_m must be a size in (0, 5] m, got {self.face_m!r}")
         for name, lo, hi in (("edge_px", 0.0, 10.0), ("floor", 0.0, 1.0), ("wider_than_tall", 1.0, 5.0),
-                             ("min_confidence", 0.0, 1.0)):
+                             ("width_slack_px", 0.0, 50.0), ("min_confidence", 0.0, 1.0)):
             value = getattr(self, name)
             if not (math.isfinite(value) and lo <= value <= hi):
                 raise ValueError(f"{name} must be in [{lo}, {hi}], got {value!r}")
@@ -73,7 +77,7 @@ class SizeDistance:
         fy = self.camera.fy if self.camera.fy is not None else self.camera.fx
         height = float(y1 - y0)
         width_as_rows = float(x1 - x0) * fy / self.camera.fx  # the width in the height's pixels
-        extent = width_as_rows if width_as_rows > self.wider_than_tall * height else height
+        extent = width_as_rows if width_as_rows > self.wider_than_tall * height + self.width_slack_px else height
         if extent < 1.0:
             return math.nan, math.nan
         d = fy * self.face_m / extent

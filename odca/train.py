@@ -24,7 +24,7 @@ import numpy as np
 import pandas as pd
 
 from racf.odca.align import fit_alignment
-from racf.odca.features import sanitize
+from racf.odca.features import sanitize, sanitize_size
 from racf.odca.gate import DEPTH, GateConfig
 from racf.odca.head import HeadWeights, head_parameters, make_head
 from racf.odca.losses import LossWeights, odca_losses
@@ -40,13 +40,14 @@ def prepare(model: ODCA, frame: pd.DataFrame) -> dict[str, np.ndarray]:
     features X and flags, over every run ODCA makes afresh (a series, cut at a new slot)."""
     cols = {name: _column(frame, name, default) for name, default in
             (("d_meas", None), ("c_meas", None), ("lidar", None), ("speed", None), ("yaw_rate", 0.0),
-             ("bearing", np.nan))}
+             ("bearing", np.nan), ("d_size", np.nan), ("size_std", np.nan))}
     parts = []
     for idx in segments(frame):
-        d, c, l, v, w, b = sanitize(*(cols[k][idx] for k in cols))
+        d, c, l, v, w, b = sanitize(*(cols[k][idx] for k in list(cols)[:6]))
+        size, size_std = sanitize_size(cols["d_size"][idx], cols["size_std"][idx])
         mu, sigma = model.prior_inputs(d)
         parts.append({"d": d, "c": c, "l_al": np.asarray(model.config.alignment(l), float), "v": v, "yaw_rate": w,
-                      "bearing": b, "mu": mu, "sigma": sigma,
+                      "bearing": b, "mu": mu, "sigma": sigma, "size": size, "size_std": size_std,
                       "label": frame["label"].to_numpy()[idx], "d_clean": frame["d_clean"].to_numpy(float)[idx],
                       "d_true": _column(frame, "d_true", np.nan)[idx], "first": np.arange(len(idx)) == 0})
     data = {k: np.concatenate([p[k] for p in parts]) for k in parts[0]}
@@ -56,7 +57,8 @@ def prepare(model: ODCA, frame: pd.DataFrame) -> dict[str, np.ndarray]:
 def revote(model: ODCA, data: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
     """The gate's verdicts and the features under the model's current gate and kinematics (in place)."""
     starts = np.flatnonzero(data["first"])
-    verdicts = [model.verdicts(*(data[k][a:b] for k in ("d", "c", "l_al", "v", "yaw_rate", "bearing", "mu")))
+    verdicts = [model.verdicts(*(data[k][a:b] for k in ("d", "c", "l_al", "v", "yaw_rate", "bearing", "mu", "size",
+                                                        "size_std")))
                 for a, b in zip(starts, np.r_[starts[1:], len(data["d"])])]
     for i, name in enumerate(("source", "base", "trusted", "k", "k_std", "motion")):
         data[name] = np.concatenate([v[i] for v in verdicts])

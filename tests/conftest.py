@@ -81,7 +81,8 @@ def write_bench_dataset(folder, n_series=12, seed=0):
                      sign_in_view=np.isfinite(s["d_clean"]), detected=np.isfinite(s["d_clean"]),
                      scan_new=np.arange(n) % 5 == 0, scan_fov_mm=[np.zeros(4, np.uint16)] * n, steering=0.0,
                      yaw_rate=0.0, accel=0.0, x=0.0, y=0.0, yaw=0.0, dist_to_stop_line=s["d_clean"], brake=False,
-                     x_est=0.0, y_est=0.0, yaw_est=0.0, fix_x=0.0, fix_y=0.0, fix_yaw=0.0)
+                     x_est=0.0, y_est=0.0, yaw_est=0.0, fix_x=0.0, fix_y=0.0, fix_yaw=0.0,
+                     d_size=s["d_true"] * rng.normal(1.0, 0.03, n), size_std=0.04 * s["d_true"])
         frames.append(s[list(COLUMNS)])
     data = pd.concat(frames, ignore_index=True)
     folder.mkdir(parents=True, exist_ok=True)

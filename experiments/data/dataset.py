@@ -60,13 +60,14 @@ _OWN_COLUMNS: dict[str, tuple[str, str]] = {
 }
 #: Dataset columns copied from the step log (racf.experiments.episode.record): name -> its log column.
 _FROM_LOG = {"t": "t", "slot": "slot", "target": "target", "d_true": "d_true", "sign_in_view": "sign_in_view",
-             "detected": "detected", "bearing": "bearing", "lidar": "lidar", "scan_new": "scan_new",
+             "detected": "detected", "bearing": "bearing", "lidar": "lidar", "d_size": "d_size", "size_std": "size_std",
+             "scan_new": "scan_new",
              "speed": "state_speed_mps", "steering": "state_steering_rad", "yaw_rate": "state_yaw_rate_radps",
              "accel": "state_accel_mps2", "x": "x", "y": "y", "yaw": "yaw", "x_est": "x_est", "y_est": "y_est",
              "yaw_est": "yaw_est", "fix_x": "fix_x", "fix_y": "fix_y", "fix_yaw": "fix_yaw",
              "dist_to_stop_line": "dist_to_stop_line", "brake": "brake"}
 _ORDER = ("series_id", "drive_seed", "t", "slot", "target", "speed_set", "d_clean", "c_clean", "d_true", "sign_in_view",
-          "detected", "bearing", "lidar", "scan_new", "scan_fov_mm", "speed", "steering", "yaw_rate", "accel", "x", "y",
+          "detected", "bearing", "lidar", "d_size", "size_std", "scan_new", "scan_fov_mm", "speed", "steering", "yaw_rate", "accel", "x", "y",
           "yaw", "x_est", "y_est", "yaw_est", "fix_x", "fix_y", "fix_yaw", "dist_to_stop_line", "brake")
 #: Dataset columns: name -> (unit, meaning); those from the step log take the log's declaration.
 COLUMNS: dict[str, tuple[str, str]] = {
