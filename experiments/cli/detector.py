@@ -64,6 +64,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     op.add_argument("--position", type=_position, default=(0.0, 0.0),
                     help="sticker centre RIGHT,UP on the plate, across-flats units (default 0,0)")
     op.add_argument("--steps", type=count, default=None, help="optimiser steps (default 600)")
+    op.add_argument("--views", choices=("dataset", "approach"), default="dataset",
+                    help="the expectation's views: dataset, the detector's training views (any distance and "
+                         "angle; default); approach, views on the car's approaches weighted to the frames where "
+                         "detection decides the stop (rendered here, no --data needed)")
     op.add_argument("--json", action="store_true", help="print the report as one JSON object")
     op.set_defaults(handler=_optimise_patch)
 
@@ -125,11 +129,11 @@ def _optimise_patch(args: argparse.Namespace) -> int:
     from racf.experiments.detector.patch_opt import PatchConfig, optimise_patch
 
     try:
-        config = PatchConfig(seed=args.seed, size=args.size, position=args.position,
+        config = PatchConfig(seed=args.seed, size=args.size, position=args.position, views=args.views,
                              **({"steps": args.steps} if args.steps else {}))
     except ValueError as err:
         fail("optimise-patch", str(err))
-    if not (args.data / "manifest.json").is_file():
+    if config.views == "dataset" and not (args.data / "manifest.json").is_file():
         fail("optimise-patch", f"no views in {args.data}: render them with `racf detector-data --out {args.data}`")
     try:
         _, report = optimise_patch(config, args.data, args.checkpoint or SHIPPED_SEGMENTER, args.out,

@@ -44,6 +44,8 @@ _MJ_TO_OPTICAL = np.diag([1.0, -1.0, -1.0])
 #: the light's gain at that view.
 _FACE_RED = 0.80
 TEXTURE_PX = 64
+#: Where the expectation's views come from (``PatchConfig.views``).
+VIEW_SOURCES = ("dataset", "approach")
 
 
 @dataclass(frozen=True)
@@ -60,6 +62,12 @@ class PatchConfig:
         tv_weight: weight of the total-variation term.
         min_sign_px: views whose sign covers fewer pixels are left out.
         threads: torch CPU threads.
+        views: ``dataset``, the detector's training views (any distance and angle); or
+            ``approach``, views rendered on the car's approaches and weighted to the frames where
+            detection decides the stop (:mod:`racf.experiments.detector.approach_views`): the
+            expectation over the loop, not the frame.
+        n_approach: approach views rendered (``views="approach"``; about 40 % show the sign
+            large enough).
     """
 
     seed: int = 0
@@ -71,6 +79,8 @@ class PatchConfig:
     tv_weight: float = 0.02
     min_sign_px: int = 30
     threads: int = 2
+    views: str = "dataset"
+    n_approach: int = 3000
 
     def __post_init__(self) -> None:
         for name, lo, hi in (("seed", 0, 2**31), ("steps", 1, 100_000), ("batch", 1, 512), ("min_sign_px", 1, 10**6),
@@ -80,6 +90,10 @@ class PatchConfig:
                 raise ValueError(f"{name} must be an int in [{lo}, {hi}], got {value!r}")
         if not 0 < self.lr <= 10:
             raise ValueError(f"lr must be in (0, 10], got {self.lr!r}")
+        if self.views not in VIEW_SOURCES:
+            raise ValueError(f"views must be one of {VIEW_SOURCES}, got {self.views!r}")
+        if isinstance(self.n_approach, bool) or not isinstance(self.n_approach, int) or not 1 <= self.n_approach <= 10**6:
+            raise ValueError(f"n_approach must be an int in [1, 1000000], got {self.n_approach!r}")
         if not 0 <= self.tv_weight <= 10:
             raise ValueError(f"tv_weight must be in [0, 10], got {self.tv_weight!r}")
         object.__setattr__(self, "position", tuple(float(v) for v in self.position))
@@ -155,8 +169,10 @@ def _eot_views(data: dict[str, np.ndarray], config: PatchConfig, intrinsics) -> 
             keep.append(i)
             corners.append(c)
     keep = np.array(keep, int)
+    weight = data["weight"][keep] if "weight" in data else np.ones(len(keep))
     return {"index": keep, "corners": np.array(corners, np.float32),
-            "gain": np.stack([_view_gain(data["rgb"][i], data["target"][i]) for i in keep])}
+            "gain": np.stack([_view_gain(data["rgb"][i], data["target"][i]) for i in keep]),
+            "weight": np.asarray(weight, np.float32)}
 
 
 def optimise_patch(config: PatchConfig = PatchConfig(), data_root: Path = Path("data/detector"),
@@ -173,7 +189,12 @@ def optimise_patch(config: PatchConfig = PatchConfig(), data_root: Path = Path("
     net = (net or load_segmenter(checkpoint)).eval()
     for p in net.parameters():
         p.requires_grad_(False)
-    data = load_split(data_root, "train")
+    if config.views == "approach":
+        from racf.experiments.detector.approach_views import approach_views
+
+        data = approach_views(config.n_approach, config.seed, progress=progress)
+    else:
+        data = load_split(data_root, "train")
     h, w = data["rgb"].shape[1:3]
     intrinsics = CameraIntrinsics.d435_colour(w, h)
     views = _eot_views(data, config, intrinsics)
@@ -185,6 +206,7 @@ def optimise_patch(config: PatchConfig = PatchConfig(), data_root: Path = Path("
     half_targets = F.max_pool2d(targets, 2)
     corners = torch.from_numpy(views["corners"])
     gains = torch.from_numpy(views["gain"]).view(-1, 3, 1, 1)
+    weights = torch.from_numpy(views["weight"])
     logits_tex = (torch.randn(3, TEXTURE_PX, TEXTURE_PX, generator=g) * 0.5).requires_grad_(True)
     opt = torch.optim.Adam([logits_tex], lr=config.lr)
     n = len(images)
@@ -211,7 +233,8 @@ def optimise_patch(config: PatchConfig = PatchConfig(), data_root: Path = Path("
         per_cell = F.softplus(logits + 2.0) * m
         soft = per_cell.sum(dim=(1, 2, 3)) / m.sum(dim=(1, 2, 3)).clamp(min=1)
         peak = torch.logsumexp(torch.where(m > 0, logits, torch.full_like(logits, -30.0)).flatten(1), 1)
-        loss = soft.mean() + 0.5 * F.relu(peak + 2.0).mean() + config.tv_weight * _tv(texture)
+        w = weights[idx] / weights[idx].sum()
+        loss = (w * (soft + 0.5 * F.relu(peak + 2.0))).sum() + config.tv_weight * _tv(texture)
         opt.zero_grad(set_to_none=True)
         if not torch.isfinite(loss):  # a degenerate view in the batch: draw another batch
             continue

@@ -2,6 +2,10 @@
 defence is rated on. A battery never changes once released: a change is a new name
 (``racf-2``), so two cards of one battery always rate the same thing.
 
+``racf-2`` is ``racf-1`` and two rows for the size witness (issue 35): the frustum spoof that
+also scales the sign's image, and the printed sticker up from the start against the default
+detector.
+
 ``racf-1`` (N per defence; ``--quick`` keeps every row at a small N, and says so):
 
 - **closed loop**, each row a batch of ordinary episodes with ids, on the ``qcar2`` sensors:
@@ -58,7 +62,8 @@ def _sweep(name: str, attack: str, *, mode: str = "random", detector: str = "cla
         space = {"attack": [attack], "estimator": [defence], "sign": [0, 1, 2, 3]}
         if mode == "random":
             space |= {"rho": rho or [0.9, 1.0], "t_atk": t_atk or [0.5, 3.0], "speed": speed or [1.0, 2.0]}
-            spec = SweepSpec(name, mode="random", n=n, seed=0, space=space, log_steps=True, detector=detector)
+            spec = SweepSpec(name, mode="random", n=n, seed=0, space=space, params=params or {}, log_steps=True,
+                             detector=detector)
         else:
             space |= {"rho": rho or [1.0], "t_atk": t_atk or [3.0], "speed": speed or [1.5]}
             spec = SweepSpec(name, mode="grid", repeats=max(1, n // 4), seed=0, space=space, params=params or {},
@@ -122,6 +127,21 @@ _RACF_1 = Battery(
     ),
 )
 
+_RACF_2 = replace(
+    _RACF_1,
+    name="racf-2",
+    loop=_RACF_1.loop + (
+        LoopRow("frustum_scaled", "frustum_spoof that also draws the sign smaller, r 3 m/s over 3 s (white box: "
+                                  "every witness moved)", 24, 4,
+                _sweep("adaptive", "frustum_spoof", mode="grid",
+                       params={"frustum_spoof": {"rate_mps": [3.0], "scale_box": [True]}})),
+        LoopRow("sticker_default", "the printed sticker (0.6 of the plate), up from the start, against the "
+                                   "default detector", 30, 4,
+                _sweep("sticker", "physical_patch", params={"physical_patch": {"size": [0.6],
+                                                                              "from_start": [True]}})),
+    ),
+)
+
 #: Every released battery, by name.
-BATTERIES = {"racf-1": _RACF_1}
-DEFAULT_BATTERY = "racf-1"
+BATTERIES = {"racf-1": _RACF_1, "racf-2": _RACF_2}
+DEFAULT_BATTERY = "racf-2"

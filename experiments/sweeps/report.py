@@ -1,6 +1,7 @@
 """The sweep's report: a Markdown summary (N, SCR and ASR with Wilson intervals per setting, the SCR
-over the episodes whose attack began before t*, and SCR per attack x estimator) and plots of SCR
-against rho and against T_atk with Wilson bands.
+over the episodes whose attack began before t*, and SCR per attack x estimator; with kept logs,
+the detector's recall by distance band) and plots of SCR against rho and against T_atk with
+Wilson bands.
 ``racf sweep --report DIR`` redraws it from the stored parts without running anything."""
 
 from __future__ import annotations
@@ -12,6 +13,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from racf.experiments.sweeps.detection_bands import band_labels, recall_rows
 from racf.experiments.sweeps.store import ResultStore, atomic_write
 from racf.experiments.sweeps.summary import median_ci, stealth_summary, summarize_settings, wilson_interval
 
@@ -129,6 +131,24 @@ def _stealth_lines(frame: pd.DataFrame, out: Path, paths: dict) -> list[str]:
     return lines
 
 
+def _recall_lines(frame: pd.DataFrame, out: Path) -> list[str]:
+    """The detector's recall by the target's distance, from the kept per-step logs (``recall.json``)."""
+    rows = recall_rows(frame, out / "logs")
+    if not rows:
+        return []
+    atomic_write(out / "recall.json", json.dumps(rows, indent=1, allow_nan=False))
+    labels = band_labels()
+    lines = ["", "Detection recall by the target's true depth (`detection_bands`): control steps with a new frame "
+             "and the target in view (attacked settings: the steps the attack acted on); recall [95 % Wilson CI] "
+             "(frames).", "", "| attack | settings | estimator | " + " | ".join(labels) + " |",
+             "|---|---|---|" + "---|" * len(labels)]
+    for r in rows:
+        cells = [f"{_fmt(b['recall'])} {_ci(b['recall_ci'])} ({b['n']})" if b["n"] else "—"
+                 for b in (r["bands"][label] for label in labels)]
+        lines.append(f"| {r['attack']} | {r['params'] or '—'} | {r['estimator']} | " + " | ".join(cells) + " |")
+    return lines
+
+
 def _stealth_plot(frame: pd.DataFrame, column: str, label: str, path: Path, log_x: bool = False) -> Path:
     return _band_plot(frame, column, _undetected_point, path, xlabel=label, ylabel="undetected error (m)",
                       title=f"Undetected error against {label}: median, 95 % bootstrap band", log_x=log_x, log_y=True)
@@ -177,6 +197,7 @@ def write_report(frame: pd.DataFrame, out: Path, name: str = "sweep") -> dict[st
                 cells.append(f"{_fmt(r['scr'])} (N {r['n']})" if r else "—")
             lines.append(f"| {attack} | " + " | ".join(cells) + " |")
         lines += _stealth_lines(frame, out, paths)
+        lines += _recall_lines(frame, out)
         paths["scr_vs_rho"] = _plot(frame, "rho_set", "patch coverage rho", out / "scr_vs_rho.png")
         paths["scr_vs_t_atk"] = _plot(frame, "t_atk_set", "attack duration T_atk (s)", out / "scr_vs_t_atk.png")
         lines += ["", "![SCR vs rho](scr_vs_rho.png) ![SCR vs T_atk](scr_vs_t_atk.png)"]

@@ -37,7 +37,8 @@ def test_the_sticker_is_seeded(tiny_data):
 
 
 @pytest.mark.parametrize("bad, match", [({"size": 0.9}, "area_share"), ({"position": (0.5, 0.5)}, "plate"),
-                                        ({"steps": 0}, "steps"), ({"lr": -1.0}, "lr")])
+                                        ({"steps": 0}, "steps"), ({"lr": -1.0}, "lr"), ({"views": "random"}, "views"),
+                                        ({"n_approach": 0}, "n_approach")])
 def test_bad_patch_settings_fail_before_any_work(bad, match):
     with pytest.raises(ValueError, match=match):
         PatchConfig(**bad)
@@ -58,3 +59,19 @@ def test_the_warp_puts_the_texture_on_its_corners_unmirrored():
     assert out[0, 0, 40, 60] > 0.9 and out[0, 2, 40, 60] < 0.1      # top-left: red
     assert out[0, 2, 80, 100] > 0.9 and out[0, 0, 80, 100] < 0.1    # bottom-right: blue
     assert out[0, :, 10, 10].abs().max() < 1e-6                      # outside the sticker: the frame
+
+
+def test_the_sticker_can_be_optimised_over_approach_views(monkeypatch):
+    """views="approach" renders the car's approach views itself (no dataset) and weighs each."""
+    from racf.experiments.detector import approach_views as av
+
+    seen, render = {}, av.approach_views
+
+    def few(n, seed=0, progress=False):
+        seen["n"] = n
+        return render(24, seed)
+
+    monkeypatch.setattr(av, "approach_views", few)
+    config = PatchConfig(steps=2, batch=4, min_sign_px=12, threads=1, views="approach", n_approach=24)
+    texture, report = optimise_patch(config, progress=False)
+    assert seen["n"] == 24 and texture.shape == (64, 64, 3) and report["config"]["views"] == "approach"
