@@ -8,9 +8,11 @@ Per step t:
    current forecast);
 2. the kinematic branch advances the last trusted distance by the car's odometry
    (:mod:`racf.odca.kinematics`);
-3. the gate votes among depth, LiDAR and kinematics (:mod:`racf.odca.gate`): depth that agrees
-   with a witness passes unchanged; otherwise the repair rests on the witnesses that agree,
-   and the delta head adds its correction, bounded by the gate's tolerance;
+3. the gate votes among depth, LiDAR, kinematics and the sign's size (:mod:`racf.odca.gate`):
+   depth that agrees with a witness passes unchanged; otherwise the repair rests on the
+   witnesses that agree, and the delta head adds its correction, bounded by the gate's
+   tolerance. The size witness vetoes whatever lies beyond it and, when nothing else is left,
+   anchors the kinematic branch (later sizes refine a branch that rests on it alone);
 4. a trusted measurement re-anchors the kinematic branch: the LiDAR, or a depth the LiDAR
    confirms (a depth that passed on the branch's word alone does not, else a depth ramped
    inside the branch's tolerance would drag the branch along; issue 23). A depth within
@@ -363,9 +365,9 @@ class ODCA:
         """The same computation over whole series: one column per ``FusedSample`` field.
 
         ``df`` needs ``d_meas``, ``c_meas``, ``lidar`` and ``speed`` columns (or ``depth``/``confidence``),
-        optionally ``yaw_rate``, ``bearing``, ``d_size`` and ``size_std`` (the size witness), ``series_id`` (each series starts fresh) and ``slot``
-        (the car resets ODCA when its track changes target: so does a new slot). Rows keep their
-        order and index.
+        optionally ``yaw_rate``, ``bearing``, ``d_size`` and ``size_std`` (the size witness), ``series_id``
+        (each series starts fresh) and ``slot`` (the car resets ODCA when its track changes target: so
+        does a new slot). Rows keep their order and index.
         """
         cols = {"depth": _pick(df, "d_meas", "depth"), "confidence": _pick(df, "c_meas", "confidence"),
                 "lidar": _pick(df, "lidar", None), "speed": _pick(df, "speed", None),

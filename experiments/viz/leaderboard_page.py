@@ -1,6 +1,6 @@
-"""The leaderboard page: every built-in defence's scorecard on the racf-1 battery, one column a
-defence, written from the stored cards (``docs/results/data/scorecard-racf-1.json``) and the
-cold run's time (``scorecard-timing.json``) by :mod:`racf.experiments.viz.results_pages`."""
+"""The leaderboard page: the built-in defences' scorecards, one column a defence and one table a
+battery (the newest first), written from the stored cards (``docs/results/data/scorecard-<battery>.json``)
+and the cold run's time (``scorecard-timing.json``) by :mod:`racf.experiments.viz.results_pages`."""
 
 from __future__ import annotations
 
@@ -12,17 +12,38 @@ from racf.experiments.viz.results_format import missing as _missing
 __all__ = ["leaderboard_markdown"]
 
 def leaderboard_markdown(d) -> str:
-    """The leaderboard page from the stored cards (``scorecard-racf-1``) and the cold run's time."""
-    from racf.experiments.scorecard.report import card_rows
+    """The leaderboard page from the stored cards (``scorecard-<battery>``, newest battery first)
+    and the cold run's time."""
+    from racf.experiments.scorecard.battery import BATTERIES, DEFAULT_BATTERY
 
-    lines = [*_page_head("Leaderboard: every defence on the racf-1 battery"),
+    lines = [*_page_head("Leaderboard: the defences on the scorecard's batteries"),
              "`racf scorecard --defence NAME` rates a defence, built-in or plug-in, on the same fixed battery "
              "([the tutorial](../tutorials/scorecard.md) says what is in it). Each column is one defence's card; "
              "its version names the code it ran (a plug-in's source included). Bold: the best value of a row "
-             "where its interval does not overlap the runner-up's.", ""]
-    if "scorecard-racf-1" not in d:
-        return "\n".join(lines + _missing("scorecard-racf-1", "racf scorecard --defence raw ekf chronos odca chi2 cusum"))
-    data = d["scorecard-racf-1"]
+             "where its interval does not overlap the runner-up's. A battery never changes: a new row makes a "
+             "new battery, and its table stands above the older ones.", ""]
+    stored = [name for name in reversed(list(BATTERIES)) if f"scorecard-{name}" in d]
+    if not stored:
+        return "\n".join(lines + _missing(f"scorecard-{DEFAULT_BATTERY}",
+                                          "racf scorecard --defence raw ekf chronos odca chi2 cusum"))
+    for name in stored:
+        lines += [f"## `{name}`", ""] + _battery_table(d[f"scorecard-{name}"])
+    if "scorecard-timing" in d:
+        cold = d["scorecard-timing"]
+        walls = ", ".join(f"`{name}` {t['wall_s'] / 60:.1f} min" for name, t in cold["cold_run"]["cards"].items())
+        lines += ["", f"**Time**, from a cold run of `racf-1` with nothing stored (`{cold['meta']['command']}`, commit "
+                      f"`{cold['meta']['commit']}`, {cold['meta']['machine']}): {cold['cold_run']['total_s'] / 60:.1f} "
+                      f"min in all, {cold['cold_run']['includes']}; per card {walls}. The first card also computes "
+                      "the offline reference (Chronos-only), which the others reuse. The cards above were then "
+                      "written again from the stored episodes, which is why their own timings are short.", ""]
+    return "\n".join(lines)
+
+
+def _battery_table(data: dict) -> list[str]:
+    """One battery's stored cards as one table."""
+    from racf.experiments.scorecard.report import card_rows
+
+    lines = []
     cards = data["cards"]
     lines += _meta(data["meta"])
     names = [c["defence"] for c in cards]
@@ -48,17 +69,9 @@ def leaderboard_markdown(d) -> str:
             out.append(f"**{text}**" if name == best else text)
         lines.append(f"| {section} | {row} | {measure} | " + " | ".join(out) + " |")
     penalties = cards[0]["penalties"]
-    if "scorecard-timing" in d:
-        cold = d["scorecard-timing"]
-        walls = ", ".join(f"`{name}` {t['wall_s'] / 60:.1f} min" for name, t in cold["cold_run"]["cards"].items())
-        lines += ["", f"**Time**, from a cold run with nothing stored (`{cold['meta']['command']}`, commit "
-                      f"`{cold['meta']['commit']}`, {cold['meta']['machine']}): {cold['cold_run']['total_s'] / 60:.1f} "
-                      f"min in all, {cold['cold_run']['includes']}; per card {walls}. The first card also computes "
-                      "the offline reference (Chronos-only), which the others reuse. The cards above were then "
-                      "written again from the stored episodes, which is why their own timings are short."]
     lines += ["", "N in brackets. Driving-score penalties: " + ", ".join(f"{k.replace('_', ' ')} x {v}"
                                                                   for k, v in penalties.items()) + ".", ""]
-    return "\n".join(lines)
+    return lines
 
 
 def _best(cells: dict) -> str | None:

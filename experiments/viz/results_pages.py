@@ -184,6 +184,16 @@ def _adaptive(d: _Data) -> str:
     if figures:
         lines += ["| " + " | ".join(f"![](../adaptive/{f})" for f in figures) + " |",
                   "|" + "---|" * len(figures), ""]
+    lines += ["## A blackout from first sight, and the size witness", "",
+              "`dropout_timed` (black box) blacks out the sign's depth once the LiDAR has no return from the sign. "
+              "At sign 1 the A2M12's plane misses the plate on almost every approach, so no range witness is left; "
+              "the box's size still is ([ODCA](../concepts/odca.md)). 200 random draws over the four signs and "
+              "1-2 m/s.", ""]
+    if "dropout-200" in d:
+        data = d["dropout-200"]
+        lines += _meta(data["meta"]) + _stealth_table(data.get("stealth", []))
+    else:
+        lines += _missing("dropout-200", "racf sweep dropout-200.toml")
     return "\n".join(lines)
 
 
@@ -309,7 +319,35 @@ def _detector(d: _Data) -> str:
         lines += _settings_table(data) + ["SCR by estimator:", ""] + _by_estimator_table(data)
     else:
         lines += _missing("physical-patch", "racf sweep physical-patch.toml")
+    lines += ["## A sticker optimised over the loop", "",
+              "Up on the sign from the start, 0.6 of the plate, no defence: the first sticker (optimised over any "
+              "view) against the one optimised over the car's own approaches and weighted to the frames where "
+              "detection decides the stop (`racf optimise-patch --views approach`). With the sticker up from the "
+              "start every attack begins before t*.", ""]
+    for name, detector in (("sticker-loop", "the default (classical) detector"),
+                           ("sticker-loop-learned", "the learned segmenter")):
+        lines += [f"### Against {detector}", ""]
+        if name not in d:
+            lines += _missing(name, f"racf sweep {name}.toml")
+            continue
+        data = d[name]
+        lines += _meta(data["meta"]) + _sticker_rows(data)
     return "\n".join(lines)
+
+
+def _sticker_rows(data: dict) -> list[str]:
+    """Per sticker: SCR and the detector's recall by the sign's distance (a sweep's stealth and recall rows)."""
+    recall = {r["params"]: r["bands"] for r in data.get("recall", [])}
+    bands = list(next(iter(recall.values()))) if recall else []
+    lines = ["| sticker | N | SCR [95 % CI] | " + " | ".join(f"recall {b} [CI] (frames)" for b in bands) + " |",
+             "|---|---|---|" + "---|" * len(bands)]
+    for row in data.get("stealth", []):
+        texture = next((p.split("=", 1)[1] for p in row["params"].split() if p.startswith("physical_patch.texture=")),
+                       row["params"])
+        cells = [f"{_rate(c['recall'], c['recall_ci'])} ({c['n']})" if c["n"] else "-"
+                 for c in (recall.get(row["params"], {}).get(b, {"n": 0}) for b in bands)]
+        lines.append(f"| `{texture}` | {row['n']} | {_rate(row['scr'], row['scr_ci'])} | " + " | ".join(cells) + " |")
+    return lines + [""]
 
 
 def _speed(d: _Data) -> str:
@@ -345,7 +383,7 @@ def _measures(d: _Data, name: str, key: str, command: str, digits: int) -> list[
 def _index(d: _Data) -> str:
     lines = [*_page_head("Results"),
              "| page | what |", "|---|---|",
-             "| [Leaderboard](leaderboard.md) | every built-in defence's scorecard on the racf-1 battery |",
+             "| [Leaderboard](leaderboard.md) | the built-in defences' scorecards, one table per battery |",
              "| [Reproduced from the paper](paper.md) | the paper's claims beside racf's measurements |",
              "| [Closed loop](closed-loop.md) | the paper's table on three sensor set-ups |",
              "| [Sweeps](sweeps.md) | 1,000-episode random sweeps and every attack type |",
