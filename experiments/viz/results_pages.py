@@ -220,6 +220,13 @@ def paper_rows(d: _Data, link: str = "") -> list[str]:
                           (("ODCA", "attack+odca"), ("EKF", "attack+ekf"), ("Chronos-only", "attack+chronos"),
                            ("none", "attack")) if key in s)
         lines.append(f"| SCR over {s['attack']['n']} random strong draws | - | {cells} | [sweeps]({link}sweeps.md) |")
+    if "dropout-200" in d:
+        by = {r["estimator"]: r for r in d["dropout-200"].get("stealth", [])}
+        cells = ", ".join(f"{name} {_rate(by[key]['scr'], by[key]['scr_ci'])}" for name, key in
+                          (("ODCA", "odca"), ("EKF", "ekf"), ("none", "raw")) if key in by)
+        n = next(iter(by.values()))["n"] if by else 0
+        lines.append(f"| depth blacked out while the LiDAR misses the sign (`dropout_timed`), SCR over {n} draws | - | "
+                     f"{cells} | [adaptive attacks]({link}adaptive-attacks.md) |")
     if "persistence" in d:
         rows = d["persistence"]["persistence"]
         ours = " / ".join(f"{r['asr']:.2f} {_ci(r['asr_ci'])}" for r in rows)
