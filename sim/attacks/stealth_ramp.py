@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import inspect
 import math
 from typing import Any
 
@@ -12,10 +13,19 @@ from racf.sim.attacks._common import check_region
 from racf.sim.attacks.base import AttackWrapper
 from racf.sim.attacks.schedule import AttackSchedule
 
-__all__ = ["StealthRamp", "quiet_bias"]
+__all__ = ["StealthRamp", "quiet_bias", "takes_keyword"]
 
 #: Bisection steps of the search for the largest quiet bias (2^-12 of the wanted step).
 _SEARCH_STEPS = 12
+
+
+def takes_keyword(function, name: str) -> bool:
+    """Whether ``function`` accepts the keyword argument ``name`` (by name or through ``**kwargs``)."""
+    try:
+        parameters = inspect.signature(function).parameters.values()
+    except (TypeError, ValueError):
+        return False
+    return any(p.name == name or p.kind is inspect.Parameter.VAR_KEYWORD for p in parameters)
 
 
 def quiet_bias(would_pass, current: float, wanted: float, steps: int = _SEARCH_STEPS) -> float:
@@ -58,9 +68,9 @@ class StealthRamp(AttackWrapper):
     threat_model = "white box"
     #: The LiDAR moves with the depth (``FrustumSpoof``): the defence is asked with the shift.
     moves_lidar = False
-    #: The sign's image is scaled with the depth (``FrustumSpoof(scale_box=True)``): the defence
-    #: is asked with the size witness moved too (``size_shift``, passed only then, so a defence
-    #: with no size witness need not take it).
+    #: The sign's image is scaled with the depth (``FrustumSpoof(scale_box=True)``): a defence
+    #: whose ``would_pass`` takes ``size_shift`` (it has a size witness) is asked with the size
+    #: moved too; one that does not take it has nothing the scaling moves.
     moves_size = False
 
     def __init__(self, env: gym.Env, rate_mps: float = 1.0, direction: int = 1, margin: float = 0.9,
@@ -95,9 +105,11 @@ class StealthRamp(AttackWrapper):
         speed, yaw_rate = float(state[0]), float(state[2])
         old = self.bias
 
+        asks_size = self.moves_size and takes_keyword(probe, "size_shift")
+
         def quiet(bias: float) -> bool:
             reserve = bias / self.margin
-            extra = {"size_shift": reserve - old} if self.moves_size else {}
+            extra = {"size_shift": reserve - old} if asks_size else {}
             return bool(probe(depth=d_true + reserve, speed_mps=speed, dt=dt, yaw_rate_radps=yaw_rate,
                               lidar_shift=(reserve - old) if self.moves_lidar else 0.0, **extra))
 

@@ -81,3 +81,20 @@ def test_without_scale_box_the_colour_image_is_untouched_and_no_size_shift_is_as
         np.testing.assert_array_equal(obs["rgb"], clean["rgb"])
     with pytest.raises(ValueError, match="scale_box"):
         FrustumSpoof(stub_env(), scale_box="yes")
+
+
+def test_scale_box_against_a_defence_without_a_size_witness_asks_it_without_size_shift(stub_env, drive):
+    """The EKF's ``would_pass`` takes no ``size_shift``: the attack still scales the image and asks
+    it the question it can answer (a TypeError here once stopped a scorecard)."""
+    env = FrustumSpoof(stub_env(), rate_mps=2.0, duration_s=5.0, trigger="always", scale_box=True)
+    env.attach_defence(ShiftRecorder())
+    changed = [not np.array_equal(obs["rgb"], clean["rgb"]) for obs, clean, _ in drive(env, 20)]
+    assert any(changed) and any(s > 0 for s in env.defence.shifts)
+
+
+def test_takes_keyword_reads_the_signature():
+    from racf.sim.attacks.stealth_ramp import takes_keyword
+
+    assert takes_keyword(SizeShiftRecorder().would_pass, "size_shift")
+    assert not takes_keyword(ShiftRecorder().would_pass, "size_shift")
+    assert takes_keyword(lambda **kwargs: True, "size_shift") and not takes_keyword(len, "size_shift")
