@@ -46,7 +46,9 @@ class DistanceEstimator(Protocol):
                    lidar_shift: float = 0.0) -> bool:
         """Whether a next step whose depth distance is ``depth`` would leave the detector quiet,
         the LiDAR moved by the car's motion and ``lidar_shift`` m (a spoof moving it with the
-        depth). Changes nothing: the question a white-box attacker asks."""
+        depth). Changes nothing: the question a white-box attacker asks. A defence that uses
+        the size witness (``PerceptionSample.d_size``) also takes ``size_shift`` (m: an attack
+        that scales the sign's image moves it); an attack passes it only to one that does."""
 
 
 class RawDepthEstimator:
