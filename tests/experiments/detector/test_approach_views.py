@@ -22,7 +22,9 @@ def test_a_view_stands_on_an_approach_facing_along_it(seed):
     s, _ = sign.path.project(np.asarray(spec.camera_xy), s_hint=sign.stop_s - 1.0, window_m=5.0)
     x, y, heading = sign.path.pose_at(s)
     assert math.hypot(spec.camera_xy[0] - x, spec.camera_xy[1] - y) < 0.2  # a few cm off the lane's centre
-    assert abs((spec.yaw - heading + math.pi) % (2 * math.pi) - math.pi) < math.radians(12)
+    # The heading there, give or take the drawn heading error (2 deg std) and the lane's curve
+    # between the camera and the body origin: never the other way round or across the lane.
+    assert abs((spec.yaw - heading + math.pi) % (2 * math.pi) - math.pi) < math.radians(25)
     s_sign, _ = sign.path.project(np.asarray(sign.position), s_hint=sign.stop_s, window_m=0.6)
     assert APPROACH_RANGE_M[0] - 0.25 <= s_sign - s <= APPROACH_RANGE_M[1] + 0.25
 
