@@ -162,7 +162,12 @@ def _offline(d: _Data) -> str:
              "(Chronos-2 forecast-only, SOFTS, NHITS, DLinear, NLinear) and the aligned LiDAR, on the test drives "
              "of two splits under the weak, mid and strong corruption presets. Each preset is drawn several times; "
              "[the protocol](../protocol.md) fixes the presets and the scoring.", ""]
+    lines += ["## The QCar 2's sensors (`qcar2`)", ""]
     lines += _bench_table(d["offline-bench"]) if "offline-bench" in d else _missing("offline-bench", "racf bench --json")
+    lines += ["## Ideal sensors (`ideal`: a one-instant 360-beam LiDAR, a 50 Hz camera, the true pose)", ""]
+    lines += _bench_table(d["offline-bench-ideal"]) if "offline-bench-ideal" in d else _missing(
+        "offline-bench-ideal", "racf collect --sensor-profile ideal --out data/ideal && racf bench --dataset data/ideal "
+                               "--no-ablation --json")
     return "\n".join(lines)
 
 
