@@ -13,6 +13,11 @@ mask the car needs is suppressed. The texture's colours are kept printable (in [
 a sigmoid, and a small total-variation term keeps it free of single-pixel noise a camera
 would blur away.
 
+With ``views="approach"`` (``--views approach``) the views are instead the car's own approaches,
+weighted to the frames where detection decides the stop
+(:mod:`racf.experiments.detector.approach_views`): an expectation over the loop, not over
+any frame. That sticker ships as ``learned-approach``.
+
 The result is a 64x64 PNG (``assets/patches/learned.png``) that the scene prints on the sign
 (``physical_patch``); every view then renders it as the world would. Seeded: the same seed
 and thread count give the same texture.
