@@ -22,13 +22,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from racf.controllers.detectors import DETECTORS, make_detector
-from racf.experiments.detector.evaluate import DetectionCounts, score_frame
+from racf.experiments.detector.evaluate import DISTANCE_BANDS_M, DetectionCounts, band_label, score_frame
 from racf.experiments.detector.views import ViewRenderer, draw_view
 
 __all__ = ["PatchBenchResult", "bench_patch", "RENDERINGS", "DISTANCE_BANDS_M", "occluded"]
 
 RENDERINGS = ("clean", "physical_patch", "patch_occlusion")
-DISTANCE_BANDS_M = ((0.3, 1.0), (1.0, 2.0), (2.0, 4.0))
 #: The views' seed: apart from the training (0) and held-out (1000003) splits.
 SEED = 2_000_029
 
@@ -54,7 +53,7 @@ class PatchBenchResult:
 def _band(d: float) -> str | None:
     for lo, hi in DISTANCE_BANDS_M:
         if lo <= d < hi or (hi == DISTANCE_BANDS_M[-1][1] and d == hi):
-            return f"{lo:g}-{hi:g} m"
+            return band_label(lo, hi)
     return None
 
 

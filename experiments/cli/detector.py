@@ -152,6 +152,7 @@ def _optimise_patch(args: argparse.Namespace) -> int:
 
 def _bench_patch(args: argparse.Namespace) -> int:
     from racf.experiments.bench.patch_transfer import DISTANCE_BANDS_M, RENDERINGS, bench_patch
+    from racf.experiments.detector.evaluate import band_label
 
     try:
         result, examples = bench_patch(args.n, args.texture, args.size, args.position, progress=not args.json,
@@ -168,7 +169,7 @@ def _bench_patch(args: argparse.Namespace) -> int:
     any_counts = next(iter(next(iter(result.counts.values())).values()))
     print(f"sticker {args.texture!r}, {args.size:.2f} of the plate at {args.position}; {result.n_views} views, "
           f"N = {any_counts.n_positive} with the sign resolvable")
-    bands = [f"{lo:g}-{hi:g} m" for lo, hi in DISTANCE_BANDS_M]
+    bands = [band_label(lo, hi) for lo, hi in DISTANCE_BANDS_M]
     print(f"{'detector':<11}{'rendering':<17}{'recall [95 % CI]':>26}" + "".join(f"{b:>14}" for b in bands))
     for det, row in result.counts.items():
         for rendering in RENDERINGS:

@@ -72,7 +72,7 @@ def approach_views(n: int, seed: int = 0, progress: bool = False) -> dict[str, n
         raise ValueError(f"n must be a positive number of views, got {n!r}")
     rng = np.random.default_rng(seed)
     renderer = ViewRenderer()
-    offset = tuple(float(v) for v in renderer._cam_offset)
+    offset = renderer.camera_offset
     rows = []
     try:
         for _ in tqdm(range(n), desc="approach views", unit="view", disable=not progress):

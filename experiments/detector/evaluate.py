@@ -15,9 +15,16 @@ import numpy as np
 
 from racf.experiments.sweeps.summary import wilson_interval
 
-__all__ = ["DetectionCounts", "resolvable", "score_frame", "MIN_SHARE"]
+__all__ = ["DetectionCounts", "resolvable", "score_frame", "MIN_SHARE", "DISTANCE_BANDS_M", "band_label"]
 
 MIN_GT_PX, MIN_GT_SPAN_PX = 12, 3
+#: The distance bands recall is reported in (the sign's true depth, m): per view and in the loop.
+DISTANCE_BANDS_M = ((0.3, 1.0), (1.0, 2.0), (2.0, 4.0))
+
+
+def band_label(lo: float, hi: float) -> str:
+    """A band's name in tables and JSON, e.g. ``0.3-1 m``."""
+    return f"{lo:g}-{hi:g} m"
 _GROW = np.ones((5, 5), np.uint8)
 
 

@@ -156,6 +156,11 @@ class ViewRenderer:
     def intrinsics(self):
         return self.rig.intrinsics
 
+    @property
+    def camera_offset(self) -> tuple[float, float]:
+        """The camera ahead of and left of the car's root, m (its fixed mount)."""
+        return float(self._cam_offset[0]), float(self._cam_offset[1])
+
     def render(self, spec: ViewSpec) -> View:
         """The frame and ground truth of ``spec``."""
         m, d, mj = self.model, self.data, self._mujoco

@@ -12,17 +12,12 @@ from pathlib import Path
 
 import pandas as pd
 
+from racf.experiments.detector.evaluate import DISTANCE_BANDS_M as BANDS_M
+from racf.experiments.detector.evaluate import band_label
 from racf.experiments.sweeps.summary import wilson_interval
 
 __all__ = ["BANDS_M", "recall_rows", "band_labels"]
-
-#: Distance bands of the target's true depth, m.
-BANDS_M = ((0.3, 1.0), (1.0, 2.0), (2.0, 4.0))
 _COLUMNS = ["frame_new", "control", "sign_in_view", "d_true", "detected", "attack_active"]
-
-
-def _band_label(lo: float, hi: float) -> str:
-    return f"{lo:g}-{hi:g} m"
 
 
 def recall_rows(frame: pd.DataFrame, logs: Path) -> list[dict]:
@@ -50,7 +45,7 @@ def recall_rows(frame: pd.DataFrame, logs: Path) -> list[dict]:
                 hits[(lo, hi)][1] += int(in_band.sum())
         if not any(n for _, n in hits.values()):
             continue
-        bands = {_band_label(lo, hi): {"recall": k / n if n else None, "recall_ci": wilson_interval(k, n), "n": n}
+        bands = {band_label(lo, hi): {"recall": k / n if n else None, "recall_ci": wilson_interval(k, n), "n": n}
                  for (lo, hi), (k, n) in hits.items()}
         rows.append({"attack": str(attack), "params": str(params), "estimator": str(estimator), "bands": bands})
     return rows
@@ -58,4 +53,4 @@ def recall_rows(frame: pd.DataFrame, logs: Path) -> list[dict]:
 
 def band_labels() -> list[str]:
     """The bands' names, in order (the keys of a row's ``bands``)."""
-    return [_band_label(lo, hi) for lo, hi in BANDS_M]
+    return [band_label(lo, hi) for lo, hi in BANDS_M]

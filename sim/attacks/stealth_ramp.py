@@ -89,11 +89,17 @@ class StealthRamp(AttackWrapper):
         self.bias = 0.0
         self.held_back = 0  # steps the defence's room, not the rate, limited the bias
         self._last_time: float | None = None
+        self._asks_size: bool | None = None  # whether the defence is asked with size_shift (read once)
 
     def _on_reset(self) -> None:
         self.bias = 0.0
         self.held_back = 0
         self._last_time = None
+        self._asks_size = None
+
+    def attach_defence(self, defence) -> None:
+        super().attach_defence(defence)
+        self._asks_size = None  # a new defence: read its signature afresh
 
     def _next_bias(self, obs: dict, info: dict, dt: float) -> float:
         wanted = self.bias + self.direction * self.rate_mps * dt
@@ -105,7 +111,9 @@ class StealthRamp(AttackWrapper):
         speed, yaw_rate = float(state[0]), float(state[2])
         old = self.bias
 
-        asks_size = self.moves_size and takes_keyword(probe, "size_shift")
+        if self._asks_size is None:  # the defence's signature, read once an episode, not per step
+            self._asks_size = self.moves_size and takes_keyword(probe, "size_shift")
+        asks_size = self._asks_size
 
         def quiet(bias: float) -> bool:
             reserve = bias / self.margin
