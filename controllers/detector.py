@@ -109,6 +109,11 @@ class BlobDetector:
     largest one at or above ``config.min_confidence``."""
 
     config: DetectorConfig  # or any config with min_confidence
+    #: What a detection's mask outlines, for the size witness (``racf.controllers.size_distance``),
+    #: which measures the mask's box against the map's size of that part: ``red_face``, the red
+    #: octagon inside the white border (the colour detector's red pixels), or ``face``, the whole
+    #: face, border included (what the learned segmenter was trained to mark).
+    outline: str = "red_face"
 
     def candidates(self, rgb: np.ndarray) -> list[Detection]:
         raise NotImplementedError

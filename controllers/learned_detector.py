@@ -70,9 +70,18 @@ def load_segmenter(directory: Path = SHIPPED_SEGMENTER) -> SignSegmenterNet:
     if not weights.is_file() or not meta.is_file():
         raise FileNotFoundError(f"no segmenter checkpoint in {directory} (model.pt and segmenter.json); "
                                 "train one with `racf train-detector`")
-    config = SegmenterConfig(**json.loads(meta.read_text())["architecture"])
+    architecture = json.loads(meta.read_text())["architecture"]
+    try:
+        config = SegmenterConfig(**architecture)
+    except TypeError:
+        raise ValueError(f"the checkpoint in {directory} is of another segmenter architecture (widths "
+                         f"{sorted(architecture)}, this one has c1, c2, c3); retrain it with `racf train-detector`") from None
     net = SignSegmenterNet(config)
-    net.load_state_dict(torch.load(weights, map_location="cpu", weights_only=True))
+    try:
+        net.load_state_dict(torch.load(weights, map_location="cpu", weights_only=True))
+    except RuntimeError:  # the same widths, other layers
+        raise ValueError(f"the checkpoint in {directory} is of another segmenter architecture (its weights do not "
+                         f"fit this network's layers); retrain it with `racf train-detector`") from None
     return net.eval()
 
 
@@ -90,6 +99,9 @@ class LearnedSignDetector(BlobDetector):
         checkpoint: a checkpoint directory (default: the shipped one).
         net: a network to use instead of loading one (training and tests).
     """
+
+    #: It marks the whole face, white border included: the ground truth it was trained on.
+    outline = "face"
 
     def __init__(self, config: LearnedDetectorConfig | None = None, checkpoint: Path = SHIPPED_SEGMENTER,
                  net: SignSegmenterNet | None = None) -> None:

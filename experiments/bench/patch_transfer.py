@@ -1,7 +1,9 @@
 """``racf bench-patch``: the adversarial sticker in the world, against both detectors.
 
 Fresh views (seeded apart from the training and held-out splits) look at a stop sign from
-0.3-4 m, up to 60 deg off its face, in varied light. Each is rendered three ways:
+0.3-4 m, up to 60 deg off its face, in varied light; or, with ``views="approach"``, stand on
+the car's own approaches (``racf.experiments.detector.approach_views``: where a sticker's size
+and place are chosen before the loop measures them). Each is rendered three ways:
 
 - ``clean``: as the map has it;
 - ``physical_patch``: with the sticker printed on the viewed sign (the scene's own render:
@@ -24,6 +26,9 @@ import numpy as np
 from racf.controllers.detectors import DETECTORS, make_detector
 from racf.experiments.detector.evaluate import DISTANCE_BANDS_M, DetectionCounts, band_label, score_frame
 from racf.experiments.detector.views import ViewRenderer, draw_view
+
+#: Where the views stand: anywhere around the sign, or on the car's approaches.
+VIEW_SOURCES = ("sign", "approach")
 
 __all__ = ["PatchBenchResult", "bench_patch", "RENDERINGS", "DISTANCE_BANDS_M", "occluded"]
 
@@ -67,19 +72,24 @@ def occluded(rgb: np.ndarray, target: np.ndarray, share: float, rng: np.random.G
 
 
 def bench_patch(n_views: int = 400, texture: str = "learned", size: float = 0.5,
-                position: tuple[float, float] = (0.0, 0.0), detectors: tuple[str, ...] = tuple(DETECTORS),
-                seed: int = SEED, progress: bool = True, keep_examples: int = 0) -> tuple[PatchBenchResult, list]:
+                position: tuple[float, float] | str = (0.0, 0.0), detectors: tuple[str, ...] = tuple(DETECTORS),
+                seed: int = SEED, progress: bool = True, keep_examples: int = 0,
+                views: str = "sign") -> tuple[PatchBenchResult, list]:
     """Runs the transfer benchmark. Returns the result and up to ``keep_examples`` example
     (clean, patched) frame pairs of near views (for the README's picture)."""
     from tqdm import tqdm
 
+    from racf.experiments.detector.approach_views import draw_approach_view
+
+    if views not in VIEW_SOURCES:
+        raise ValueError(f"views must be one of {VIEW_SOURCES}, got {views!r}")
     from racf.sim.world.sign_patch import PatchPlacement, load_patch_texture
 
     placement = PatchPlacement(area_share=size, centre=position)
     rng = np.random.default_rng(seed)
     tex = load_patch_texture(texture, rng=np.random.default_rng([seed, 1]))
     dets = {name: make_detector(name) for name in detectors}
-    result = PatchBenchResult(texture, size, tuple(position), n_views)
+    result = PatchBenchResult(texture, size, placement.centre, n_views)
     result.counts = {d: {r: DetectionCounts() for r in RENDERINGS} for d in detectors}
     result.by_band = {d: {r: {_band(lo): DetectionCounts() for lo, _ in DISTANCE_BANDS_M} for r in RENDERINGS}
                       for d in detectors}
@@ -88,7 +98,7 @@ def bench_patch(n_views: int = 400, texture: str = "learned", size: float = 0.5,
     env = renderer.env.unwrapped
     try:
         for _ in tqdm(range(n_views), desc="bench-patch", unit="view", disable=not progress):
-            spec = draw_view(rng, "sign")
+            spec = draw_view(rng, "sign") if views == "sign" else draw_approach_view(rng, renderer.camera_offset)
             env.hide_sign_patches()
             clean = renderer.render(spec)
             env.show_sign_patch(spec.sign, tex, placement)

@@ -157,6 +157,18 @@ def _bench_detector(args: argparse.Namespace) -> int:
               f"{r.ms_per_frame_one_core / BUDGET_MS:>8.2f}")
     print("goals for the learned detector: held-out recall >= 0.99, false-positive frames <= 0.1 %, "
           "time / 3 ms <= 1")
+    kinds = list(results[0].heldout["by_kind"])
+    bands = list(results[0].heldout["by_band"])
+    print("held-out recall by kind of view and by the sign's distance [95 % CI] (N):")
+    for r in results:
+        cells = [f"{name} {c['recall']:.3f} {fmt_ci(*c['recall_ci'])} ({c['n_positive']})"
+                 for name, c in (*((k, r.heldout["by_kind"][k]) for k in kinds), *((b, r.heldout["by_band"][b]) for b in bands))
+                 if c["recall"] is not None]
+        print(f"  {r.detector:<10} " + "; ".join(cells))
+    print("false-positive frames with plain red squares pasted into views with no stop sign:")
+    for r in results:
+        q = r.red_squares
+        print(f"  {r.detector:<10} {q['n_fp']}/{q['n_frames']} = {100 * q['fp_rate']:.2f} % {fmt_ci(*q['fp_rate_ci'])}")
     for r in results:
         print(f"{r.detector}: mean confidence with a share of the sign's box occluded:")
         for side, row in r.occlusion_confidence.items():

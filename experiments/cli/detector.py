@@ -22,12 +22,16 @@ def _share(text: str) -> float:
     return value
 
 
-def _position(text: str) -> tuple[float, float]:
+def _position(text: str) -> tuple[float, float] | str:
+    from racf.sim.world.sign_patch import POSITIONS
+
+    if text in POSITIONS:
+        return text
     try:
         right, up = (float(v) for v in text.split(","))
     except ValueError:
-        raise argparse.ArgumentTypeError(f"expected RIGHT,UP (across-flats units, each in [-0.5, 0.5]), "
-                                         f"got {text!r}") from None
+        raise argparse.ArgumentTypeError(f"expected RIGHT,UP (across-flats units, each in [-0.5, 0.5]) or one of "
+                                         f"{', '.join(POSITIONS)}, got {text!r}") from None
     return right, up
 
 
@@ -36,8 +40,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                                               "(training and held-out splits; seeded, resumes)")
     dd.add_argument("--out", type=Path, default=Path("data/detector"), help="folder (default data/detector)")
     dd.add_argument("--seed", type=int, default=0, help="seed of the training split (held-out: seed + 1000003)")
-    dd.add_argument("--train", type=count, default=6000, help="training views (default 6000)")
-    dd.add_argument("--heldout", type=count, default=1500, help="held-out views (default 1500)")
+    dd.add_argument("--train", type=count, default=None, help="training views (default: the default dataset's, 10000)")
+    dd.add_argument("--heldout", type=count, default=None,
+                    help="held-out views (default: the default dataset's, 2000)")
     dd.set_defaults(handler=_detector_data)
 
     td = sub.add_parser("train-detector", help="train the stop-sign segmenter on the CPU (renders the views first "
@@ -78,7 +83,13 @@ def register(sub: argparse._SubParsersAction) -> None:
                     help="sticker: a shipped name (learned), natural, or a PNG path (default learned)")
     bp.add_argument("--size", type=_share, default=0.5, help="sticker area / plate area (default 0.5)")
     bp.add_argument("--position", type=_position, default=(0.0, 0.0),
-                    help="sticker centre RIGHT,UP on the plate, across-flats units (default 0,0)")
+                    help="sticker centre RIGHT,UP on the plate, across-flats units, or centre, top, bottom, left, "
+                         "right: as far that way as it stays on the plate (default 0,0)")
+    bp.add_argument("--views", choices=("sign", "approach"), default="sign",
+                    help="where the views stand: sign, anywhere around the sign, 0.3-4 m (default); approach, on "
+                         "the car's own approaches (to choose a sticker's size and place before the loop)")
+    bp.add_argument("--detector", nargs="+", choices=None, default=None, metavar="NAME",
+                    help="the detectors to try (default: every registered one)")
     bp.add_argument("--figure", type=Path, default=None,
                     help="also write a PNG of near views, clean and patched, with the learned detector's mask")
     bp.add_argument("--json", action="store_true", help="print one JSON object instead of the table")
@@ -86,17 +97,19 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _detector_data(args: argparse.Namespace) -> int:
-    from racf.experiments.detector.dataset import DatasetSpec, load_split, make_dataset
+    from racf.experiments.detector.dataset import VIEW_KINDS, DatasetSpec, load_split, make_dataset
 
+    sizes = {k: v for k, v in (("n_train", args.train), ("n_heldout", args.heldout)) if v is not None}
     try:
-        spec = DatasetSpec(seed=args.seed, n_train=args.train, n_heldout=args.heldout)
+        spec = DatasetSpec(seed=args.seed, **sizes)
     except ValueError as err:
         fail("detector-data", str(err))
     make_dataset(spec, args.out)
     for split in ("train", "heldout"):
         d = load_split(args.out, split)
-        print(f"{split}: {len(d['rgb'])} views, {int((d['sign'] >= 0).sum())} looking at a stop sign, "
-              f"{int(d['mask'].any(axis=(1, 2)).sum())} with a stop sign's face in view")
+        kinds = ", ".join(f"{int((d['kind'] == k).sum())} {name}" for k, name in enumerate(VIEW_KINDS))
+        print(f"{split}: {len(d['rgb'])} views ({kinds}), {int(d['mask'].any(axis=(1, 2)).sum())} with a stop "
+              f"sign's face in view")
     print(f"views in {args.out}")
     return 0
 
@@ -156,7 +169,8 @@ def _bench_patch(args: argparse.Namespace) -> int:
 
     try:
         result, examples = bench_patch(args.n, args.texture, args.size, args.position, progress=not args.json,
-                                       keep_examples=4 if args.figure else 0)
+                                       keep_examples=4 if args.figure else 0, views=args.views,
+                                       **({"detectors": tuple(args.detector)} if args.detector else {}))
     except (FileNotFoundError, ValueError) as err:
         fail("bench-patch", str(err))
     if args.figure:
@@ -167,7 +181,7 @@ def _bench_patch(args: argparse.Namespace) -> int:
         print(json.dumps(result.to_dict(), allow_nan=False))
         return 0
     any_counts = next(iter(next(iter(result.counts.values())).values()))
-    print(f"sticker {args.texture!r}, {args.size:.2f} of the plate at {args.position}; {result.n_views} views, "
+    print(f"sticker {args.texture!r}, {args.size:.2f} of the plate at {result.position}; {result.n_views} {args.views} views, "
           f"N = {any_counts.n_positive} with the sign resolvable")
     bands = [band_label(lo, hi) for lo, hi in DISTANCE_BANDS_M]
     print(f"{'detector':<11}{'rendering':<17}{'recall [95 % CI]':>26}" + "".join(f"{b:>14}" for b in bands))

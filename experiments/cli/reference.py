@@ -78,7 +78,8 @@ def battery_markdown() -> str:
              "Written from `racf.experiments.scorecard.battery.BATTERIES`. A released battery never changes: "
              "a change is a new name. `--quick` runs every row at its quick N.", ""]
     for name, battery in BATTERIES.items():
-        lines += [f"## `{name}`", "", "| row | what | N | quick N | attacked |", "|---|---|---|---|---|"]
+        lines += [f"## `{name}`", "", f"The car's stop-sign detector: `{battery.detector}`, unless a row says otherwise.",
+                  "", "| row | what | N | quick N | attacked |", "|---|---|---|---|---|"]
         lines += [f"| `{r.key}` | {r.title} | {r.n} | {r.n_quick} | {'yes' if r.attacked else 'no'} |"
                   for r in battery.rows()]
         lines += ["", f"Offline: presets {', '.join(battery.offline_presets)} on the `{battery.offline_split}` test "

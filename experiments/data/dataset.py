@@ -115,7 +115,8 @@ def collect(out_dir: Path, drives: int = DEFAULT_DRIVES, seed: int = 0, workers:
     path = atomic_write(out_dir / "dataset.parquet", data)
     splits = make_splits(data, seed)
     atomic_write(out_dir / "split.json", json.dumps({"seed": seed, "shares": SPLIT_SHARES, **splits}, indent=1))
-    made = {"drives": drives, "seed": seed, "sensor_profile": sensor_profile, "sign_geometry": sign_geometry}
+    made = {"drives": drives, "seed": seed, "sensor_profile": sensor_profile, "sign_geometry": sign_geometry,
+            "detector": specs[0].detector}
     atomic_write(out_dir / COLLECTION_FILE, json.dumps(made, indent=1))
     summary = summarize_dataset(data, splits)
     _write_card(out_dir / "dataset_card.md", summary, **made)
@@ -261,7 +262,8 @@ _PROFILE_TEXT = {
 }
 
 
-def _write_card(path: Path, summary: dict, drives: int, seed: int, sensor_profile: str, sign_geometry: str) -> None:
+def _write_card(path: Path, summary: dict, drives: int, seed: int, sensor_profile: str, sign_geometry: str,
+                detector: str) -> None:
     rows = "\n".join(f"| `{name}` | {unit} | {meaning} |" for name, (unit, meaning) in COLUMNS.items())
     ref, loc = summary["lidar_reference"], summary["localisation"]
     path.write_text(f"""# RACF QCar 2 simulated driving dataset
@@ -273,7 +275,8 @@ and the simulator's ground truth. Shaped like the RACF paper's QCar 2 benchmark 
 samples, 13 sequences of ~100 s, speeds 1.0 / 1.5 / 2.0 m/s). Simulated data, not
 recordings of a real car.
 
-**Sensors.** {_PROFILE_TEXT[sensor_profile]}. Stop signs: `{sign_geometry}` geometry.
+**Sensors.** {_PROFILE_TEXT[sensor_profile]}. Stop signs: `{sign_geometry}` geometry. The car's
+stop-sign detector: `{detector}`.
 
 **How it was made.** `racf collect --drives {drives} --seed {seed} --sensor-profile {sensor_profile}
 --sign-geometry {sign_geometry}`: {drives} continuous clean

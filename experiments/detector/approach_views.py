@@ -40,11 +40,13 @@ def view_weight(d_true: float) -> float:
     return 1.0 if lo <= d_true <= hi else OUTSIDE_WEIGHT
 
 
-def draw_approach_view(rng: np.random.Generator, camera_offset: tuple[float, float]) -> ViewSpec:
+def draw_approach_view(rng: np.random.Generator, camera_offset: tuple[float, float],
+                       sign_p: tuple[float, ...] | None = None) -> ViewSpec:
     """A camera pose on a random approach (``camera_offset``: the camera ahead of and left of the
-    car's root, m), with the room's light drawn as ``racf.experiments.detector.views.draw_view`` does."""
+    car's root, m), with the room's light drawn as ``racf.experiments.detector.views.draw_view`` does.
+    ``sign_p``: each stop sign's probability (default: all alike)."""
     signs = stop_signs()
-    index = int(rng.integers(len(signs)))
+    index = int(rng.integers(len(signs))) if sign_p is None else int(rng.choice(len(signs), p=sign_p))
     sign = signs[index]
     s_sign, _ = sign.path.project(np.asarray(sign.position), s_hint=sign.stop_s, window_m=0.6)
     lo, hi = APPROACH_RANGE_M
@@ -60,7 +62,7 @@ def draw_approach_view(rng: np.random.Generator, camera_offset: tuple[float, flo
     pitch, roll = (float(v) for v in rng.normal(0.0, math.radians(1.0), 2))
     lighting = (float(rng.uniform(0.25, 0.6)), float(rng.uniform(0.15, 0.5)), float(rng.uniform(0.2, 0.8)))
     tint = tuple(float(v) for v in rng.uniform(0.9, 1.1, 3))
-    return ViewSpec("sign", index, camera_xy, float(yaw), pitch, roll, lighting, tint)
+    return ViewSpec("approach", index, camera_xy, float(yaw), pitch, roll, lighting, tint)
 
 
 def approach_views(n: int, seed: int = 0, progress: bool = False) -> dict[str, np.ndarray]:

@@ -11,22 +11,28 @@ interrupted run resumes where it stopped).
 from __future__ import annotations
 
 import json
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 
 import numpy as np
 
-from racf.experiments.detector.views import ViewRenderer, draw_view
+from racf.experiments.detector.approach_views import draw_approach_view
+from racf.experiments.detector.evaluate import VIEW_KINDS
+from racf.experiments.detector.views import FAR_RANGE_M, ViewRenderer, ViewSpec, draw_distractors, draw_view
 from racf.experiments.sweeps.store import code_version
 
-__all__ = ["DatasetSpec", "DEFAULT_DATA_DIR", "make_dataset", "load_split", "SPLITS"]
+__all__ = ["DatasetSpec", "DEFAULT_DATA_DIR", "make_dataset", "load_split", "SPLITS", "VIEW_KINDS", "draw_dataset_view"]
 
 DEFAULT_DATA_DIR = Path("data/detector")
 SPLITS = ("train", "heldout")
 _SHARD = 500
 #: What renders a view: the world, the car, its camera and this package's view code.
 _RENDER_CODE = ("racf.sim.world", "racf.sim.env", "racf.sim.sensors", "racf.sim.vehicle", "racf.assets.qcar2_map",
-                "racf.experiments.detector.views", "racf.experiments.detector.dataset")
+                "racf.experiments.detector.views", "racf.experiments.detector.approach_views",
+                "racf.experiments.detector.dataset")
+#: Sign 1's approach has the most misses in the loop (its plate leaves the image's left edge
+#: early on the curve): it gets twice the approach views of each other sign.
+APPROACH_SIGN_P = (0.2, 0.4, 0.2, 0.2)
 
 
 @dataclass(frozen=True)
@@ -36,14 +42,20 @@ class DatasetSpec:
     Attributes:
         seed: the training split's seed; the held-out split's is ``seed + 1_000_003``.
         n_train, n_heldout: views per split.
-        sign_share: share of views that look at a stop sign (the rest stand anywhere).
+        sign_share: share of views that look at a stop sign from anywhere around it.
+        approach_share: share of views on the car's approaches (along the lane, as the car sees
+            the sign; ``racf.experiments.detector.approach_views``). The rest stand anywhere on
+            the map, looking anywhere: mostly negatives, with the map's red props.
+        far_share: share of the ``sign`` views taken from far off (``FAR_RANGE_M``).
         distractor_p: probability that a view moves props into the picture.
     """
 
     seed: int = 0
-    n_train: int = 6000
-    n_heldout: int = 1500
-    sign_share: float = 0.65
+    n_train: int = 10000
+    n_heldout: int = 2000
+    sign_share: float = 0.45
+    approach_share: float = 0.3
+    far_share: float = 0.2
     distractor_p: float = 0.5
 
     def __post_init__(self) -> None:
@@ -51,9 +63,11 @@ class DatasetSpec:
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int) or value < (0 if name == "seed" else 1):
                 raise ValueError(f"{name} must be an int >= {0 if name == 'seed' else 1}, got {value!r}")
-        for name in ("sign_share", "distractor_p"):
+        for name in ("sign_share", "approach_share", "far_share", "distractor_p"):
             if not 0.0 <= getattr(self, name) <= 1.0:
                 raise ValueError(f"{name} must be in [0, 1], got {getattr(self, name)!r}")
+        if self.sign_share + self.approach_share > 1.0:
+            raise ValueError(f"sign_share + approach_share must be <= 1, got {self.sign_share + self.approach_share!r}")
 
     def split_seed(self, split: str) -> int:
         if split not in SPLITS:
@@ -62,6 +76,20 @@ class DatasetSpec:
 
     def size(self, split: str) -> int:
         return self.n_train if split == "train" else self.n_heldout
+
+
+def draw_dataset_view(rng: np.random.Generator, spec: DatasetSpec, camera_offset: tuple[float, float]) -> ViewSpec:
+    """One view of a dataset of ``spec``: its kind, then the view, from ``rng``."""
+    u = rng.random()
+    if u < spec.sign_share:
+        far = rng.random() < spec.far_share
+        return draw_view(rng, "sign", spec.distractor_p, **({"range_m": FAR_RANGE_M} if far else {}))
+    if u < spec.sign_share + spec.approach_share:
+        view = draw_approach_view(rng, camera_offset, APPROACH_SIGN_P)
+        if rng.random() < spec.distractor_p:
+            view = replace(view, distractors=draw_distractors(rng, view.camera_xy, view.yaw))
+        return view
+    return draw_view(rng, "map", spec.distractor_p)
 
 
 def _manifest(spec: DatasetSpec) -> dict:
@@ -94,14 +122,14 @@ def make_dataset(spec: DatasetSpec = DatasetSpec(), root: Path = DEFAULT_DATA_DI
                 renderer = renderer or ViewRenderer()
                 rng = np.random.default_rng([spec.split_seed(split), k])
                 count = min(_SHARD, n - k * _SHARD)
-                views = [renderer.render(draw_view(rng, "sign" if rng.random() < spec.sign_share else "map",
-                                                   spec.distractor_p)) for _ in range(count)]
+                views = [renderer.render(draw_dataset_view(rng, spec, renderer.camera_offset)) for _ in range(count)]
                 out.parent.mkdir(parents=True, exist_ok=True)
                 tmp = out.with_suffix(".tmp.npz")
                 np.savez_compressed(
                     tmp, rgb=np.stack([v.rgb for v in views]), mask=np.packbits(np.stack([v.mask for v in views]), -1),
                     target=np.packbits(np.stack([v.target for v in views]), -1),
                     sign=np.array([v.spec.sign for v in views], np.int8),
+                    kind=np.array([VIEW_KINDS.index(v.spec.kind) for v in views], np.int8),
                     target_share=np.array([v.target_share for v in views], np.float32),
                     faces_share=np.array([v.faces_share for v in views], np.float32), d_true=np.array([v.d_true for v in views]),
                     cam_pos=np.stack([v.cam_pos for v in views]), cam_mat=np.stack([v.cam_mat for v in views]),
@@ -114,7 +142,8 @@ def make_dataset(spec: DatasetSpec = DatasetSpec(), root: Path = DEFAULT_DATA_DI
 
 
 def load_split(root: Path, split: str) -> dict[str, np.ndarray]:
-    """All shards of a split, concatenated: rgb (N, H, W, 3) uint8, mask and target (N, H, W) bool, sign (N,), target_share and faces_share (N,),
+    """All shards of a split, concatenated: rgb (N, H, W, 3) uint8, mask and target (N, H, W) bool, sign (N,), kind (N,: an index of
+    ``VIEW_KINDS``), target_share and faces_share (N,),
     d_true (N,), cam_pos (N, 3), cam_mat (N, 3, 3), sign_px (N, 4)."""
     files = sorted((Path(root) / split).glob("shard-*.npz"))
     if not files:

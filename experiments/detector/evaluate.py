@@ -15,11 +15,16 @@ import numpy as np
 
 from racf.experiments.sweeps.summary import wilson_interval
 
-__all__ = ["DetectionCounts", "resolvable", "score_frame", "MIN_SHARE", "DISTANCE_BANDS_M", "band_label"]
+__all__ = ["DetectionCounts", "SplitCounts", "evaluate_split", "resolvable", "score_frame", "MIN_SHARE",
+           "DISTANCE_BANDS_M", "VIEW_BANDS_M", "VIEW_KINDS", "band_label"]
 
 MIN_GT_PX, MIN_GT_SPAN_PX = 12, 3
 #: The distance bands recall is reported in (the sign's true depth, m): per view and in the loop.
 DISTANCE_BANDS_M = ((0.3, 1.0), (1.0, 2.0), (2.0, 4.0))
+#: What a rendered view is, as a split's ``kind`` column numbers it (``racf.experiments.detector.views``).
+VIEW_KINDS = ("sign", "approach", "map")
+#: The bands of a rendered split's recall: the loop's, and the far views' (first sight).
+VIEW_BANDS_M = (*DISTANCE_BANDS_M, (4.0, 6.0))
 
 
 def band_label(lo: float, hi: float) -> str:
@@ -88,3 +93,38 @@ def score_frame(detection, target: np.ndarray, faces: np.ndarray, share: float =
         hit = detection is not None and bool((detection.mask & grow(target)).any())
     fp = detection is not None and not bool((detection.mask & grow(faces)).any())
     return hit, fp
+
+
+@dataclass
+class SplitCounts:
+    """A detector over a split of rendered views: overall, per kind of view and per distance band."""
+
+    overall: DetectionCounts
+    by_kind: dict[str, DetectionCounts]
+    by_band: dict[str, DetectionCounts]
+
+    def to_dict(self) -> dict:
+        """The overall counts' dict, with ``by_kind`` and ``by_band`` beside them."""
+        return {**self.overall.to_dict(), "by_kind": {k: c.to_dict() for k, c in self.by_kind.items()},
+                "by_band": {b: c.to_dict() for b, c in self.by_band.items()}}
+
+
+def evaluate_split(detector, data: dict[str, np.ndarray], progress: bool = False) -> SplitCounts:
+    """Recall and false-positive frames of ``detector`` over a split's views
+    (``racf.experiments.detector.dataset.load_split``)."""
+    from tqdm import tqdm
+
+    overall = DetectionCounts()
+    by_kind = {k: DetectionCounts() for k in VIEW_KINDS}
+    by_band = {band_label(lo, hi): DetectionCounts() for lo, hi in VIEW_BANDS_M}
+    for i in tqdm(range(len(data["rgb"])), desc="evaluate", unit="view", disable=not progress):
+        outcome = score_frame(detector.detect(data["rgb"][i]), data["mask"][i], data["mask"][i],
+                              data["faces_share"][i])
+        overall.add(*outcome)
+        if "kind" in data:
+            by_kind[VIEW_KINDS[int(data["kind"][i])]].add(*outcome)
+        d = float(data["d_true"][i])
+        for lo, hi in VIEW_BANDS_M:
+            if lo <= d < hi:
+                by_band[band_label(lo, hi)].add(*outcome)
+    return SplitCounts(overall, by_kind, by_band)

@@ -60,7 +60,8 @@ class PatchConfig:
     Attributes:
         seed: initial texture, batch order and every transformation draw.
         size: the sticker's area as a share of the plate (``PatchPlacement.area_share``).
-        position: its centre on the plate, (right, up) in across-flats units.
+        position: its centre on the plate, (right, up) in across-flats units, or a name of
+            ``racf.sim.world.sign_patch.POSITIONS`` (as far that way as it stays on the plate).
         steps: optimiser steps.
         batch: views per step.
         lr: Adam's learning rate on the texture's logits.
@@ -101,6 +102,8 @@ class PatchConfig:
             raise ValueError(f"n_approach must be an int in [1, 1000000], got {self.n_approach!r}")
         if not 0 <= self.tv_weight <= 10:
             raise ValueError(f"tv_weight must be in [0, 10], got {self.tv_weight!r}")
+        if isinstance(self.position, str):  # a named place: resolved to where the sticker then sits
+            object.__setattr__(self, "position", PatchPlacement(area_share=self.size, centre=self.position).centre)
         object.__setattr__(self, "position", tuple(float(v) for v in self.position))
         self.placement  # validates size and position (the sticker must lie on the plate)
 
@@ -251,10 +254,23 @@ def optimise_patch(config: PatchConfig = PatchConfig(), data_root: Path = Path("
     texture = (torch.sigmoid(logits_tex.detach()).permute(1, 2, 0).numpy() * 255).round().astype(np.uint8)
     report = {"config": {**asdict(config), "position": list(config.position)}, "n_views": n,
               "optimise_s": time.perf_counter() - t0, "loss_first": float(np.mean(losses[:20])),
-              "loss_last": float(np.mean(losses[-20:]))}
+              "loss_last": float(np.mean(losses[-20:])),
+              # Which segmenter it was optimised against: a sticker is only adversarial to its own.
+              "segmenter_sha256": _weights_digest(net)}
     if out_dir is not None:
         save_patch(texture, Path(out_dir), report)
     return texture, report
+
+
+def _weights_digest(net: SignSegmenterNet) -> str:
+    """SHA-256 of the network's weights (the same for a checkpoint wherever it is loaded)."""
+    import hashlib
+
+    h = hashlib.sha256()
+    for name, tensor in sorted(net.state_dict().items()):
+        h.update(name.encode())
+        h.update(tensor.detach().contiguous().numpy().tobytes())
+    return h.hexdigest()
 
 
 def save_patch(texture: np.ndarray, out_dir: Path, report: dict, name: str = "learned") -> Path:

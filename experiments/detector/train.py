@@ -2,8 +2,13 @@
 
 Per-pixel binary cross-entropy plus a soft Dice term, against the ground-truth face masks
 pooled to the network's half resolution (a pixel's target is the share of its 2x2 block on
-a face). Photometric jitter (gain, offset, per-channel tint, sensor noise) and mirror flips
-widen the renderer's lighting; the learning rate follows a cosine from ``lr`` to zero.
+a face), plus a frame term on each frame's highest-scoring background cell (one such cell is a
+false-positive frame). Photometric jitter (gain, offset, per-channel tint, sensor noise) and
+mirror flips widen the renderer's lighting; the learning rate follows a cosine from ``lr`` to zero.
+
+Hard negatives: besides the map's own red props (yield signs, the traffic lights' lamps), a
+share of the frames gets plain red shapes pasted away from any sign (squares, rectangles,
+discs, triangles, 14-48 px), labelled background: red alone, or a red square, is not a stop sign.
 
 Seeded: the weights' initialisation, the batch order and every jitter come from ``seed``;
 the same seed and thread count give the same checkpoint (float tolerance across machines).
@@ -16,16 +21,15 @@ import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
-import numpy as np
 import torch
 from torch.nn import functional as F
 
 from racf.controllers.learned_detector import LearnedSignDetector, save_segmenter
 from racf.controllers.segmenter_net import SegmenterConfig, SignSegmenterNet
 from racf.experiments.detector.dataset import load_split
-from racf.experiments.detector.evaluate import DetectionCounts, score_frame
+from racf.experiments.detector.evaluate import evaluate_split
 
-__all__ = ["TrainConfig", "train_segmenter", "evaluate_detector_on_split"]
+__all__ = ["TrainConfig", "train_segmenter", "paste_red_shapes", "RED_SHAPES"]
 
 
 @dataclass(frozen=True)
@@ -40,16 +44,18 @@ class TrainConfig:
         weight_decay: AdamW's decoupled decay.
         pos_weight: weight of a face pixel in the cross-entropy (faces are a few % of pixels).
         hard_weight: weight of the frame term on each frame's highest background score.
+        red_shape_p: share of frames that get pasted red shapes (hard negatives).
         threads: torch CPU threads (the result depends on it at float precision only).
     """
 
     seed: int = 0
-    epochs: int = 30
+    epochs: int = 20
     batch: int = 16
     lr: float = 3e-3
     weight_decay: float = 1e-4
-    pos_weight: float = 3.0
-    hard_weight: float = 0.0
+    pos_weight: float = 5.0
+    hard_weight: float = 0.05
+    red_shape_p: float = 0.1
     threads: int = 2
 
     def __post_init__(self) -> None:
@@ -62,6 +68,8 @@ class TrainConfig:
                 raise ValueError(f"{name} must be in (0, 100], got {getattr(self, name)!r}")
         if not 0 <= self.hard_weight <= 100:
             raise ValueError(f"hard_weight must be in [0, 100], got {self.hard_weight!r}")
+        if not 0 <= self.red_shape_p <= 1:
+            raise ValueError(f"red_shape_p must be in [0, 1], got {self.red_shape_p!r}")
         if not 0 <= self.weight_decay < 1:
             raise ValueError(f"weight_decay must be in [0, 1), got {self.weight_decay!r}")
 
@@ -76,6 +84,60 @@ def _augment(x: torch.Tensor, g: torch.Generator) -> torch.Tensor:
     return (x * gain * tint + offset + noise).clamp_(0.0, 1.0)
 
 
+#: The pasted shapes: their kinds and their size range (full-resolution pixels).
+RED_SHAPES = ("square", "rectangle", "disc", "triangle")
+# Smaller shapes are what a far sign looks like (a few red pixels): taught as background, they
+# cost recall beyond 2 m (a first try at 5-40 px left 0.63 at 2-4 m and 0.14 at 4-6 m).
+_RED_SHAPE_PX = (14, 48)
+
+
+def _shape_mask(kind: str, h: int, w: int) -> torch.Tensor:
+    """(h, w) bool mask of a shape filling an h x w box."""
+    yy = (torch.arange(h, dtype=torch.float32) + 0.5) / h
+    xx = (torch.arange(w, dtype=torch.float32) + 0.5) / w
+    yy, xx = torch.meshgrid(yy, xx, indexing="ij")
+    if kind == "disc":
+        return (yy - 0.5) ** 2 + (xx - 0.5) ** 2 <= 0.25
+    if kind == "triangle":  # pointing down, like a yield sign
+        return (yy >= 0) & ((xx - 0.5).abs() <= 0.5 * (1 - yy))
+    return torch.ones(h, w, dtype=torch.bool)
+
+
+def paste_red_shapes(x: torch.Tensor, y: torch.Tensor, g: torch.Generator, p: float,
+                     kinds: tuple[str, ...] = RED_SHAPES) -> None:
+    """Pastes, in place, one or two plain red shapes into a share ``p`` of a batch's frames, where
+    no sign's face is within a few pixels; their cells stay background in ``y``.
+
+    Args:
+        x: (N, 3, H, W) frames in [0, 1].
+        y: (N, 1, H/2, W/2) targets (a cell's share of face).
+        kinds: the shapes drawn from (``RED_SHAPES``).
+    """
+    if unknown := set(kinds) - set(RED_SHAPES):
+        raise ValueError(f"unknown shapes {sorted(unknown)}; allowed: {', '.join(RED_SHAPES)}")
+    n, _, height, width = x.shape
+    near_face = F.max_pool2d(y, 7, stride=1, padding=3) > 0
+    lo, hi = _RED_SHAPE_PX
+    for i in range(n):
+        if torch.rand(1, generator=g).item() >= p:
+            continue
+        for _ in range(int(torch.randint(1, 3, (1,), generator=g))):
+            kind = kinds[int(torch.randint(len(kinds), (1,), generator=g))]
+            h = int(torch.randint(lo, hi + 1, (1,), generator=g))
+            w = h if kind in ("square", "disc") else int(torch.randint(lo, hi + 1, (1,), generator=g))
+            top = int(torch.randint(0, height - h + 1, (1,), generator=g))
+            left = int(torch.randint(0, width - w + 1, (1,), generator=g))
+            if near_face[i, 0, top // 2:(top + h + 1) // 2 + 1, left // 2:(left + w + 1) // 2 + 1].any():
+                continue
+            red = torch.tensor([0.35 + 0.6 * torch.rand(1, generator=g).item(),
+                                0.2 * torch.rand(1, generator=g).item(), 0.2 * torch.rand(1, generator=g).item()])
+            shade = 1.0 - 0.3 * torch.rand(1, generator=g).item() * torch.linspace(0, 1, h)[:, None]
+            colour = red[:, None, None] * shade[None]
+            region = x[i, :, top:top + h, left:left + w]
+            mask = _shape_mask(kind, h, w)
+            region[:, mask] = colour.expand(3, h, w)[:, mask]
+
+
 def _loss(logits: torch.Tensor, target: torch.Tensor, pos_weight: float, hard_weight: float) -> torch.Tensor:
     """Pixel terms (cross-entropy, Dice) and a frame term: the highest-scoring background cell of
     each frame (outside a cell's margin around the faces) pushed below the threshold, since one
@@ -87,17 +149,6 @@ def _loss(logits: torch.Tensor, target: torch.Tensor, pos_weight: float, hard_we
     background = torch.where(near_face, torch.full_like(logits, -20.0), logits)
     hard = F.relu(background.flatten(1).max(dim=1).values + 2.0).mean()
     return bce + 0.5 * dice + hard_weight * hard
-
-
-def evaluate_detector_on_split(detector, data: dict[str, np.ndarray], progress: bool = False) -> DetectionCounts:
-    """Recall and false-positive frames of ``detector`` over a split's views (see ``evaluate``)."""
-    from tqdm import tqdm
-
-    counts = DetectionCounts()
-    for i in tqdm(range(len(data["rgb"])), desc="evaluate", unit="view", disable=not progress):
-        det = detector.detect(data["rgb"][i])
-        counts.add(*score_frame(det, data["mask"][i], data["mask"][i], data["faces_share"][i]))
-    return counts
 
 
 def train_segmenter(config: TrainConfig = TrainConfig(), data_root: Path = Path("data/detector"),
@@ -137,6 +188,7 @@ def train_segmenter(config: TrainConfig = TrainConfig(), data_root: Path = Path(
             y = targets[idx]
             if torch.rand(1, generator=g).item() < 0.5:  # a stop sign mirrored is a stop sign
                 x, y = x.flip(-1), y.flip(-1)
+            paste_red_shapes(x, y, g, config.red_shape_p)
             x = _augment(x, g).contiguous(memory_format=torch.channels_last)
             loss = _loss(net(x), y, config.pos_weight, config.hard_weight)
             opt.zero_grad(set_to_none=True)
@@ -148,7 +200,7 @@ def train_segmenter(config: TrainConfig = TrainConfig(), data_root: Path = Path(
         bar.set_postfix(loss=f"{losses[-1]:.4f}")
     train_s = time.perf_counter() - t0
     net.eval()
-    counts = evaluate_detector_on_split(LearnedSignDetector(net=net), heldout, progress=progress)
+    counts = evaluate_split(LearnedSignDetector(net=net), heldout, progress=progress)
     report = {"config": asdict(config), "n_train": n, "n_heldout": len(heldout["rgb"]), "epoch_loss": losses,
               "train_s": train_s, "heldout": counts.to_dict(), "torch": torch.__version__,
               "parameters": sum(p.numel() for p in net.parameters())}

@@ -26,10 +26,14 @@ from racf.sim.env.ground_truth import face_area_px, sign_view
 from racf.sim.world import map_facts
 from racf.sim.world.stop_signs import stop_signs
 
-__all__ = ["ViewSpec", "View", "ViewRenderer", "draw_view", "DISTRACTOR_BODIES", "SIGN_RANGE_M"]
+__all__ = ["ViewSpec", "View", "ViewRenderer", "draw_view", "draw_distractors", "DISTRACTOR_BODIES", "SIGN_RANGE_M",
+           "FAR_RANGE_M"]
 
 #: Distance of a ``sign`` view's camera from the sign, m.
 SIGN_RANGE_M = (0.3, 4.0)
+#: Distance of a far ``sign`` view's camera from the sign, m: first sight on the longer run-ups,
+#: where the sign is a few pixels across and a far red prop looks most like it.
+FAR_RANGE_M = (4.0, 6.0)
 #: Largest angle between a ``sign`` view's line of sight and the sign's face normal, rad.
 MAX_OFF_NORMAL_RAD = math.radians(60.0)
 #: The props a view may move into the picture (bodies of the map).
@@ -46,8 +50,8 @@ class ViewSpec:
     """Where the camera is and what the room looks like for one frame.
 
     Attributes:
-        kind: ``sign`` or ``map``.
-        sign: the stop sign a ``sign`` view looks at (-1 for ``map``).
+        kind: ``sign``, ``approach`` (a pose on the lane towards the sign) or ``map``.
+        sign: the stop sign a ``sign`` or ``approach`` view looks at (-1 for ``map``).
         camera_xy: (x, y) of the camera in the map frame, m.
         yaw, pitch, roll: the car's attitude, rad.
         lighting: (headlight ambient, headlight diffuse, ceiling diffuse) intensities.
@@ -95,8 +99,10 @@ class View:
     d_true: float
 
 
-def draw_view(rng: np.random.Generator, kind: str, distractor_p: float = 0.5) -> ViewSpec:
-    """A random view of ``kind`` (``sign`` or ``map``) from ``rng``."""
+def draw_view(rng: np.random.Generator, kind: str, distractor_p: float = 0.5,
+              range_m: tuple[float, float] = SIGN_RANGE_M) -> ViewSpec:
+    """A random view of ``kind`` (``sign`` or ``map``) from ``rng``; a ``sign`` view's camera
+    stands ``range_m`` from the sign."""
     if kind not in ("sign", "map"):
         raise ValueError(f"kind must be 'sign' or 'map', got {kind!r}")
     signs = stop_signs()
@@ -106,7 +112,7 @@ def draw_view(rng: np.random.Generator, kind: str, distractor_p: float = 0.5) ->
     if kind == "sign":
         index = int(rng.integers(len(signs)))
         sign = signs[index]
-        d = float(rng.uniform(*SIGN_RANGE_M))
+        d = float(rng.uniform(*range_m))
         off = float(rng.uniform(-MAX_OFF_NORMAL_RAD, MAX_OFF_NORMAL_RAD))
         direction = sign.face_yaw + off
         xy = (sign.position[0] + d * math.cos(direction), sign.position[1] + d * math.sin(direction))
@@ -117,15 +123,22 @@ def draw_view(rng: np.random.Generator, kind: str, distractor_p: float = 0.5) ->
         x0, x1, y0, y1 = map_facts.WALL_BOUNDS_M
         xy = (float(rng.uniform(x0 + 0.2, x1 - 0.2)), float(rng.uniform(y0 + 0.2, y1 - 0.2)))
         yaw = float(rng.uniform(-math.pi, math.pi))
-    distractors = []
-    if rng.random() < distractor_p:
-        for name in rng.choice(DISTRACTOR_BODIES, size=int(rng.integers(1, 3)), replace=False):
-            r = float(rng.uniform(0.35, 2.5))
-            a = yaw + float(rng.uniform(-1.0, 1.0)) * _HALF_FOV_RAD
-            distractors.append((str(name), xy[0] + r * math.cos(a), xy[1] + r * math.sin(a),
-                                float(rng.uniform(-math.pi, math.pi))))
+    distractors = draw_distractors(rng, xy, yaw) if rng.random() < distractor_p else ()
     return ViewSpec(kind, index, (float(xy[0]), float(xy[1])), float(yaw), pitch, roll, lighting, tint,
-                    tuple(distractors))
+                    distractors)
+
+
+def draw_distractors(rng: np.random.Generator, camera_xy: tuple[float, float],
+                     yaw: float) -> tuple[tuple[str, float, float, float], ...]:
+    """One or two props (yield signs, traffic lights, crates) moved into the field of view of a
+    camera at ``camera_xy`` looking along ``yaw``: (body name, x, y, yaw) each."""
+    out = []
+    for name in rng.choice(DISTRACTOR_BODIES, size=int(rng.integers(1, 3)), replace=False):
+        r = float(rng.uniform(0.35, 2.5))
+        a = yaw + float(rng.uniform(-1.0, 1.0)) * _HALF_FOV_RAD
+        out.append((str(name), camera_xy[0] + r * math.cos(a), camera_xy[1] + r * math.sin(a),
+                    float(rng.uniform(-math.pi, math.pi))))
+    return tuple(out)
 
 
 class ViewRenderer:

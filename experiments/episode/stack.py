@@ -14,9 +14,23 @@ from racf.experiments.episode.estimators import make_estimator
 from racf.experiments.episode.plan import DRIVE_MAX_EPISODE_S, EpisodePlan, env_settings
 from racf.experiments.episode.spec import TrialSpec
 from racf.sim.attacks import ATTACKS
-from racf.sim.world.stop_signs import SIGN_RED_FACE_ACROSS_FLATS_M
+from racf.sim.world.stop_signs import SIGN_FACE_ACROSS_FLATS_M, SIGN_RED_FACE_ACROSS_FLATS_M
 
-__all__ = ["default_env", "plain_env", "build_car", "tracker", "DRIVE_MAX_EPISODE_S"]
+
+__all__ = ["default_env", "plain_env", "build_car", "tracker", "outlined_size_m", "OUTLINED_SIZE_M", "DRIVE_MAX_EPISODE_S"]
+
+#: The map's size, across flats, of each part of the sign a detector may outline (``BlobDetector.outline``).
+OUTLINED_SIZE_M = {"red_face": SIGN_RED_FACE_ACROSS_FLATS_M, "face": SIGN_FACE_ACROSS_FLATS_M}
+
+
+def outlined_size_m(detector) -> float:
+    """The size of what ``detector``'s masks outline (a plug-in that does not say: the red face)."""
+    outline = getattr(detector, "outline", "red_face")
+    if outline not in OUTLINED_SIZE_M:
+        raise ValueError(f"detector {type(detector).__name__} outlines {outline!r}; allowed: "
+                         f"{', '.join(OUTLINED_SIZE_M)}")
+    return OUTLINED_SIZE_M[outline]
+
 
 #: This process's plain envs by their settings. Building one (the model, the renderer's GL
 #: context) costs about as much as 20 steps; ``reset(seed=...)`` restores all an episode sees.
@@ -66,10 +80,10 @@ def build_car(spec: TrialSpec, plan: EpisodePlan, estimator=None) -> Car:
     every part that needs the car's geometry (the trackers, an estimator that asks for it)."""
     calib = plan.calibration
     every = max(1, int(round(1.0 / plan.control_dt_s / spec.control_hz))) if spec.control_hz else 1
-    # The map knows the signs' size: the size witness measures the red face against it.
-    size = SizeDistance(calib.camera, SIGN_RED_FACE_ACROSS_FLATS_M)
-    perceptions = {"sign": Perception(calib.camera, detector=make_detector(spec.detector), lidar=tracker(calib),
-                                      size=size),
+    detector = make_detector(spec.detector)
+    # The map knows the signs' size: the size witness measures what the detector outlines against it.
+    size = SizeDistance(calib.camera, outlined_size_m(detector))
+    perceptions = {"sign": Perception(calib.camera, detector=detector, lidar=tracker(calib), size=size),
                    "obstacle": Perception(calib.camera, detector=ObstacleDetector(), lidar=tracker(calib),
                                           target="obstacle")}
     estimator = estimator if estimator is not None else make_estimator(spec.estimator, spec.estimator_options)

@@ -2,9 +2,12 @@
 defence is rated on. A battery never changes once released: a change is a new name
 (``racf-2``), so two cards of one battery always rate the same thing.
 
+``racf-3`` is ``racf-2`` with the learned segmenter as the car's detector in every row (it became
+the default detector): its sticker rows attack the detector the car drives with.
+
 ``racf-2`` is ``racf-1`` and two rows for the size witness (issue 35): the frustum spoof that
 also scales the sign's image, and the printed sticker up from the start against the default
-detector.
+detector (then the classical one).
 
 ``racf-1`` (N per defence; ``--quick`` keeps every row at a small N, and says so):
 
@@ -47,13 +50,13 @@ class LoopRow:
         return self.make(defence, self.n_quick if quick else self.n)
 
 
-def _paper(setting: str) -> Callable[[str, int], list[TrialSpec]]:
+def _paper(setting: str, detector: str) -> Callable[[str, int], list[TrialSpec]]:
     def make(defence: str, n: int) -> list[TrialSpec]:
-        return batch_specs(setting + ("" if defence == "raw" else f"+{defence}"), n)
+        return batch_specs(setting + ("" if defence == "raw" else f"+{defence}"), n, detector=detector)
     return make
 
 
-def _sweep(name: str, attack: str, *, mode: str = "random", detector: str = "classical", params: dict | None = None,
+def _sweep(name: str, attack: str, *, detector: str, mode: str = "random", params: dict | None = None,
            t_atk: list | None = None, rho: list | None = None, speed: list | None = None
            ) -> Callable[[str, int], list[TrialSpec]]:
     """Episodes of a sweep over the four signs, the same seeds for every defence (paired): ``n``
@@ -72,11 +75,60 @@ def _sweep(name: str, attack: str, *, mode: str = "random", detector: str = "cla
     return make
 
 
-def _drives(attack: bool) -> Callable[[str, int], list[TrialSpec]]:
+def _drives(attack: bool, detector: str) -> Callable[[str, int], list[TrialSpec]]:
     def make(defence: str, n: int) -> list[TrialSpec]:
         setting = ("attack" if attack else "clean") + ("" if defence == "raw" else f"+{defence}")
-        return [TrialSpec(setting, 0, 1.5, seed, target="drive") for seed in range(n)]
+        return [TrialSpec(setting, 0, 1.5, seed, target="drive", detector=detector) for seed in range(n)]
     return make
+
+
+def _racf_1_loop(car: str, sticker: str) -> tuple[LoopRow, ...]:
+    """racf-1's closed-loop rows with ``car`` as the car's detector, the first sticker's row against ``sticker``."""
+    return (
+        LoopRow("paper_clean", "the paper's table: clean", 30, 4, _paper("clean", car), attacked=False),
+        LoopRow("paper_attack", "the paper's table: the strong patch", 30, 4, _paper("attack", car)),
+        LoopRow("strong_random", "random strong patch draws", 60, 4, _sweep("strong", "patch_occlusion", detector=car)),
+        LoopRow("patch_spoof", "random strong patch + LiDAR spoof", 60, 4,
+                _sweep("spoof", "patch_occlusion+lidar_spoof", detector=car)),
+        LoopRow("stealth_ramp", "stealth_ramp, r 3 m/s over 3 s (white box)", 24, 4,
+                _sweep("adaptive", "stealth_ramp", detector=car, mode="grid",
+                       params={"stealth_ramp": {"rate_mps": [3.0]}})),
+        LoopRow("ramp_rates", "stealth_ramp at r 0.1, 0.3 and 1 m/s over 3 s (for the undetected error against r)",
+                8, 4, _sweep("adaptive", "stealth_ramp", detector=car, mode="grid",
+                             params={"stealth_ramp": {"rate_mps": [0.1, 0.3, 1.0]}})),
+        LoopRow("frustum_spoof", "frustum_spoof, r 3 m/s over 3 s (white box)", 24, 4,
+                _sweep("adaptive", "frustum_spoof", detector=car, mode="grid",
+                       params={"frustum_spoof": {"rate_mps": [3.0]}})),
+        LoopRow("dropout_timed", "dropout_timed, blackout after 1 empty scan (black box)", 24, 4,
+                _sweep("adaptive", "dropout_timed", detector=car, mode="grid",
+                       params={"dropout_timed": {"scans": [1], "effect": ["blackout"]}})),
+        LoopRow("delay", "delay, the depth frozen for 3 s (black box)", 24, 4,
+                _sweep("adaptive", "delay", detector=car, mode="grid",
+                       params={"delay": {"sensor": ["depth"], "frames": [50]}})),
+        LoopRow("sticker", "the printed sticker against the learned detector", 30, 4,
+                _sweep("sticker", "physical_patch", detector=sticker)),
+    )
+
+
+def _racf_2_rows(car: str) -> tuple[LoopRow, ...]:
+    """The two rows racf-2 adds, with ``car`` as the car's (default) detector."""
+    return (
+        LoopRow("frustum_scaled", "frustum_spoof that also draws the sign smaller, r 3 m/s over 3 s (white box: "
+                                  "every witness moved)", 24, 4,
+                _sweep("adaptive", "frustum_spoof", detector=car, mode="grid",
+                       params={"frustum_spoof": {"rate_mps": [3.0], "scale_box": [True]}})),
+        LoopRow("sticker_default", "the sticker optimised over the approaches (0.6 of the plate), up from the "
+                                   "start, against the default detector", 30, 4,
+                _sweep("sticker", "physical_patch", detector=car, params={"physical_patch": {
+                    "texture": ["learned-approach"], "size": [0.6], "from_start": [True]}})),
+    )
+
+
+def _drive_rows(car: str) -> tuple[LoopRow, ...]:
+    return (
+        LoopRow("drives_clean", "seeded drives, clean", 6, 1, _drives(False, car), attacked=False),
+        LoopRow("drives_attack", "seeded drives, the strong patch at the first target", 6, 1, _drives(True, car)),
+    )
 
 
 @dataclass(frozen=True)
@@ -86,6 +138,7 @@ class Battery:
     name: str
     loop: tuple[LoopRow, ...]
     drives: tuple[LoopRow, ...]
+    detector: str = "classical"  # the car's detector in its rows (a row's title names any other)
     offline_presets: tuple[str, ...] = ("weak", "mid", "strong")
     offline_split: str = "by_series"
     offline_draws: int = 5
@@ -98,50 +151,12 @@ class Battery:
         return replace(self, name=f"{self.name}-quick")
 
 
-_RACF_1 = Battery(
-    name="racf-1",
-    loop=(
-        LoopRow("paper_clean", "the paper's table: clean", 30, 4, _paper("clean"), attacked=False),
-        LoopRow("paper_attack", "the paper's table: the strong patch", 30, 4, _paper("attack")),
-        LoopRow("strong_random", "random strong patch draws", 60, 4, _sweep("strong", "patch_occlusion")),
-        LoopRow("patch_spoof", "random strong patch + LiDAR spoof", 60, 4,
-                _sweep("spoof", "patch_occlusion+lidar_spoof")),
-        LoopRow("stealth_ramp", "stealth_ramp, r 3 m/s over 3 s (white box)", 24, 4,
-                _sweep("adaptive", "stealth_ramp", mode="grid", params={"stealth_ramp": {"rate_mps": [3.0]}})),
-        LoopRow("ramp_rates", "stealth_ramp at r 0.1, 0.3 and 1 m/s over 3 s (for the undetected error against r)",
-                8, 4, _sweep("adaptive", "stealth_ramp", mode="grid",
-                             params={"stealth_ramp": {"rate_mps": [0.1, 0.3, 1.0]}})),
-        LoopRow("frustum_spoof", "frustum_spoof, r 3 m/s over 3 s (white box)", 24, 4,
-                _sweep("adaptive", "frustum_spoof", mode="grid", params={"frustum_spoof": {"rate_mps": [3.0]}})),
-        LoopRow("dropout_timed", "dropout_timed, blackout after 1 empty scan (black box)", 24, 4,
-                _sweep("adaptive", "dropout_timed", mode="grid",
-                       params={"dropout_timed": {"scans": [1], "effect": ["blackout"]}})),
-        LoopRow("delay", "delay, the depth frozen for 3 s (black box)", 24, 4,
-                _sweep("adaptive", "delay", mode="grid", params={"delay": {"sensor": ["depth"], "frames": [50]}})),
-        LoopRow("sticker", "the printed sticker against the learned detector", 30, 4,
-                _sweep("sticker", "physical_patch", detector="learned")),
-    ),
-    drives=(
-        LoopRow("drives_clean", "seeded drives, clean", 6, 1, _drives(False), attacked=False),
-        LoopRow("drives_attack", "seeded drives, the strong patch at the first target", 6, 1, _drives(True)),
-    ),
-)
-
-_RACF_2 = replace(
-    _RACF_1,
-    name="racf-2",
-    loop=_RACF_1.loop + (
-        LoopRow("frustum_scaled", "frustum_spoof that also draws the sign smaller, r 3 m/s over 3 s (white box: "
-                                  "every witness moved)", 24, 4,
-                _sweep("adaptive", "frustum_spoof", mode="grid",
-                       params={"frustum_spoof": {"rate_mps": [3.0], "scale_box": [True]}})),
-        LoopRow("sticker_default", "the sticker optimised over the approaches (0.6 of the plate), up from the "
-                                   "start, against the default detector", 30, 4,
-                _sweep("sticker", "physical_patch", params={"physical_patch": {
-                    "texture": ["learned-approach"], "size": [0.6], "from_start": [True]}})),
-    ),
-)
+# racf-1 and racf-2 were released with the classical detector as the car's default: they keep it.
+_RACF_1 = Battery(name="racf-1", loop=_racf_1_loop("classical", sticker="learned"), drives=_drive_rows("classical"))
+_RACF_2 = replace(_RACF_1, name="racf-2", loop=_RACF_1.loop + _racf_2_rows("classical"))
+_RACF_3 = Battery(name="racf-3", loop=_racf_1_loop("learned", sticker="learned") + _racf_2_rows("learned"),
+                  drives=_drive_rows("learned"), detector="learned")
 
 #: Every released battery, by name.
-BATTERIES = {"racf-1": _RACF_1, "racf-2": _RACF_2}
-DEFAULT_BATTERY = "racf-2"
+BATTERIES = {"racf-1": _RACF_1, "racf-2": _RACF_2, "racf-3": _RACF_3}
+DEFAULT_BATTERY = "racf-3"

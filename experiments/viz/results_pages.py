@@ -297,6 +297,7 @@ def _detector(d: _Data) -> str:
                          f"{_rate(r['fp_rate'], r['fp_rate_ci'], 4)} ({r['n_frames']}) | "
                          f"{_num(r['ms_per_frame_one_core'], 2)} |")
         lines.append("")
+        lines += _heldout_breakdown(data["detectors"])
     else:
         lines += _missing("bench-detector", "racf bench-detector --json")
     lines += ["## The sticker in the scene, per view", ""]
@@ -345,6 +346,30 @@ def _detector(d: _Data) -> str:
         data = d[name]
         lines += _meta(data["meta"]) + _sticker_rows(data)
     return "\n".join(lines)
+
+
+def _heldout_breakdown(detectors: dict) -> list[str]:
+    """Held-out recall per kind of view and per distance band, and the red-square negatives (stored
+    by ``racf bench-detector`` since the size witness's issue; older results have neither)."""
+    first = next(iter(detectors.values()))
+    if "by_kind" not in first["heldout"]:
+        return []
+    columns = [*first["heldout"]["by_kind"], *first["heldout"]["by_band"]]
+    lines = ["Held-out recall by kind of view (`sign`: anywhere around a sign, 0.3-6 m; `approach`: on the "
+             "car's lane towards it) and by the sign's distance, [95 % CI] (N):", "",
+             "| detector | " + " | ".join(columns) + " |", "|---|" + "---|" * len(columns)]
+    for name, r in detectors.items():
+        cells = {**r["heldout"]["by_kind"], **r["heldout"]["by_band"]}
+        lines.append(f"| {name} | " + " | ".join(
+            f"{_rate(cells[c]['recall'], cells[c]['recall_ci'], 3)} ({cells[c]['n_positive']})"
+            if cells[c]["recall"] is not None else "-" for c in columns) + " |")
+    lines += ["", "False-positive frames with plain red squares (14-48 px) pasted into held-out views with no stop "
+              "sign: red alone is not a stop sign.", "", "| detector | false-positive frames [95 % CI] (of N) |",
+              "|---|---|"]
+    for name, r in detectors.items():
+        q = r["red_squares"]
+        lines.append(f"| {name} | {_rate(q['fp_rate'], q['fp_rate_ci'], 4)} ({q['n_frames']}) |")
+    return lines + [""]
 
 
 def _sticker_rows(data: dict) -> list[str]:

@@ -416,6 +416,15 @@ class QCar2Env(gym.Env):
         """The episode's lane-centre path (an approach's route, or a drive's)."""
         return self._path
 
+    def frame_sign_masks(self) -> list[np.ndarray]:
+        """Every stop sign's visible face in the held camera frame, (H, W) bool each (ground truth).
+
+        For evaluation, like ``info``: the masks belong to the frame the observation's ``rgb``
+        shows, which is older than the step when the camera runs slower than the loop.
+        """
+        return [sign_view(s, *self._frame_cam, self.rig.intrinsics, self._frame_depth).mask
+                for s in stop_signs(self.config.sign)]
+
     def sensor_observation(self) -> dict[str, np.ndarray]:
         """The current sensor readings as the env returned them, before any wrapper changed them.
 

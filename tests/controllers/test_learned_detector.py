@@ -68,6 +68,44 @@ def test_a_checkpoint_round_trips_and_a_missing_one_says_how_to_make_one(tmp_pat
         LearnedSignDetector(checkpoint=tmp_path / "none")
 
 
+def test_a_checkpoint_of_another_architecture_says_to_retrain(tmp_path):
+    import json
+
+    save_segmenter(SignSegmenterNet(), tmp_path / "old")
+    meta = tmp_path / "old" / "segmenter.json"
+    old = json.loads(meta.read_text())
+    old["architecture"]["decoder"] = 8  # the concatenating decoder's width, before the lateral sum
+    meta.write_text(json.dumps(old))
+    with pytest.raises(ValueError, match="another segmenter architecture.*racf train-detector"):
+        load_segmenter(tmp_path / "old")
+    state = SignSegmenterNet().state_dict()
+    state["head.weight"] = state["head.weight"][:, :, :1, :1]  # the same widths, another layer
+    torch.save(state, tmp_path / "ck2.pt")
+    save_segmenter(SignSegmenterNet(), tmp_path / "other")
+    (tmp_path / "ck2.pt").replace(tmp_path / "other" / "model.pt")
+    with pytest.raises(ValueError, match="do not fit this network's layers.*racf train-detector"):
+        load_segmenter(tmp_path / "other")
+
+
+def test_the_segmenter_stays_within_its_multiply_adds():
+    """The 3 ms budget on one core (timed by ``racf bench-detector``) rests on the net's size: a
+    frame costs at most 65 M multiply-adds (the first segmenter's wide 3x3 decoder at half resolution
+    brought it to 73 M and 5 ms)."""
+    net = SignSegmenterNet().eval()
+    macs = []
+
+    def count(module, _, out):
+        k = module.kernel_size[0] * module.kernel_size[1] * module.in_channels // module.groups
+        macs.append(out.numel() * k)
+
+    for m in net.modules():
+        if isinstance(m, torch.nn.Conv2d):
+            m.register_forward_hook(count)
+    with torch.inference_mode():
+        net(torch.zeros(1, 3, 240, 320))
+    assert 20e6 < sum(macs) <= 65e6
+
+
 def test_every_registered_detector_is_built_by_name():
     for name in DETECTORS:
         assert hasattr(make_detector(name), "detect")

@@ -232,6 +232,23 @@ def test_sign_mask_is_the_red_octagon(cam_env, index, run_up):
     assert np.all(np.abs(depth - np.median(depth)) < 0.15)
 
 
+def test_every_signs_mask_belongs_to_the_held_frame(cam_env):
+    """At 2 m/s the camera's 30 Hz frame is held over 50 Hz steps: the frame's masks, not masks
+    from the pose now, are what the frame shows (a near sign moves pixels between the two)."""
+    obs, info = cam_env.reset(seed=0, options={"sign": 0, "cruise_speed": 2.0, "run_up_m": 1.2})
+    u = cam_env.unwrapped
+    held = 0
+    for _ in range(40):
+        obs, _, terminated, truncated, info = cam_env.step(np.array([0.3, 0.0], np.float32))
+        masks = u.frame_sign_masks()
+        assert len(masks) == 4 and all(m.shape == obs["rgb"].shape[:2] for m in masks)
+        assert np.array_equal(masks[info["target_sign"]], info["sign_mask"])
+        held += u.sensor_observation()["timestamps"][0] < info["time"] - 1e-9
+        if terminated or truncated:
+            break
+    assert held > 0  # some steps showed an older frame, and the masks still matched it
+
+
 def test_sign_out_of_view_has_empty_mask(cam_env):
     # Sign 2 from 2 m: the car is still in the bend and the sign is outside the image.
     obs, info = cam_env.reset(seed=0, options={"sign": 2, "cruise_speed": 0.0, "run_up_m": 2.0})

@@ -75,3 +75,26 @@ def test_the_sticker_can_be_optimised_over_approach_views(monkeypatch):
     config = PatchConfig(steps=2, batch=4, min_sign_px=12, threads=1, views="approach", n_approach=24)
     texture, report = optimise_patch(config, progress=False)
     assert seen["n"] == 24 and texture.shape == (64, 64, 3) and report["config"]["views"] == "approach"
+
+
+def test_pasted_red_shapes_are_red_away_from_every_face_and_seeded():
+    from torch.nn import functional as F
+
+    from racf.experiments.detector.train import paste_red_shapes
+
+    x = torch.full((6, 3, 96, 128), 0.8)
+    faces = torch.zeros(6, 1, 96, 128)
+    faces[:, :, 10:30, 10:30] = 1.0
+    y = F.avg_pool2d(faces, 2)
+    a, b = x.clone(), x.clone()
+    paste_red_shapes(a, y, torch.Generator().manual_seed(3), 1.0)
+    paste_red_shapes(b, y, torch.Generator().manual_seed(3), 1.0)
+    assert torch.equal(a, b)
+    changed = (a != x).any(dim=1)
+    assert changed.any()
+    near = F.max_pool2d(faces, 5, stride=1, padding=2)[:, 0] > 0
+    assert not (changed & near).any()  # a face and its surround are never painted over
+    red = a.permute(0, 2, 3, 1)[changed]
+    assert (red[:, 0] > red[:, 1] + 0.1).all() and (red[:, 0] > red[:, 2] + 0.1).all()
+    with pytest.raises(ValueError, match="unknown shapes.*square"):
+        paste_red_shapes(a, y, torch.Generator(), 1.0, kinds=("star",))

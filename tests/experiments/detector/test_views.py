@@ -64,3 +64,21 @@ def test_a_dataset_is_written_in_shards_and_resumes(tmp_path):
     assert shard.stat().st_mtime_ns == stamp
     make_dataset(DatasetSpec(seed=4, n_train=6, n_heldout=4), tmp_path, progress=False)  # another spec: rendered anew
     assert not np.array_equal(load_split(tmp_path, "train")["rgb"], train["rgb"])
+
+
+def test_a_dataset_mixes_its_kinds_of_view_and_far_views_stand_far(renderer):
+    from racf.experiments.detector.dataset import draw_dataset_view
+    from racf.experiments.detector.evaluate import VIEW_KINDS
+    from racf.experiments.detector.views import FAR_RANGE_M
+
+    rng = np.random.default_rng(11)
+    specs = [draw_dataset_view(rng, DatasetSpec(far_share=0.5), renderer.camera_offset) for _ in range(300)]
+    kinds = [s.kind for s in specs]
+    assert set(kinds) == set(VIEW_KINDS)
+    assert 0.3 < kinds.count("sign") / 300 < 0.6 and 0.2 < kinds.count("approach") / 300 < 0.4
+    approach_signs = [s.sign for s in specs if s.kind == "approach"]
+    assert approach_signs.count(1) > max(approach_signs.count(k) for k in (0, 2, 3))  # sign 1's geometry, twice
+    far = [v for v in (renderer.render(s) for s in specs[:60] if s.kind == "sign") if v.d_true > SIGN_RANGE_M[1] + 0.2]
+    assert far and all(v.d_true <= FAR_RANGE_M[1] + 0.1 for v in far)
+    with pytest.raises(ValueError, match="sign_share \\+ approach_share"):
+        DatasetSpec(sign_share=0.8, approach_share=0.3)

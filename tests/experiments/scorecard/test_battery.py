@@ -1,0 +1,28 @@
+"""The released batteries: each keeps its episodes, and each names the car's detector in its rows."""
+
+from racf.experiments.scorecard.battery import BATTERIES, DEFAULT_BATTERY
+
+
+def _detectors(battery, defence="odca"):
+    return {row.key: {spec.detector for spec in row.specs(defence, quick=True)} for row in battery.rows()}
+
+
+def test_every_row_runs_the_batterys_detector_unless_it_says_otherwise():
+    for name, battery in BATTERIES.items():
+        for key, detectors in _detectors(battery).items():
+            if key == "sticker":  # the first sticker's row attacks the learned segmenter by its title
+                assert detectors == {"learned"}
+            else:
+                assert detectors == {battery.detector}, (name, key)
+
+
+def test_racf_2_is_racf_1_and_two_rows_and_racf_3_the_same_rows_with_the_learned_detector():
+    one, two, three = (BATTERIES[n] for n in ("racf-1", "racf-2", "racf-3"))
+    assert [r.key for r in two.rows()] == [r.key for r in one.loop] + ["frustum_scaled", "sticker_default"] + \
+        [r.key for r in one.drives]
+    for row in one.rows():  # racf-1's episodes are racf-2's (ids included): a battery never changes
+        same = next(r for r in two.rows() if r.key == row.key)
+        assert [s.trial_id for s in row.specs("raw", quick=True)] == [s.trial_id for s in same.specs("raw", quick=True)]
+    assert [r.key for r in three.rows()] == [r.key for r in two.rows()]
+    assert three.detector == "learned" and two.detector == one.detector == "classical"
+    assert DEFAULT_BATTERY == "racf-3"
