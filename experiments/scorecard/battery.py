@@ -2,8 +2,9 @@
 defence is rated on. A battery never changes once released: a change is a new name
 (``racf-2``), so two cards of one battery always rate the same thing.
 
-``racf-3`` is ``racf-2`` with the learned segmenter as the car's detector in every row (it became
-the default detector): its sticker rows attack the detector the car drives with.
+``racf-3`` is ``racf-2`` and one row: a smaller sticker placed where it breaks the sign's outline
+(0.4 of the plate at its top edge, the place chosen on rendered approach views with
+``racf bench-patch --views approach``), against the default detector.
 
 ``racf-2`` is ``racf-1`` and two rows for the size witness (issue 35): the frustum spoof that
 also scales the sign's image, and the printed sticker up from the start against the default
@@ -151,11 +152,15 @@ class Battery:
         return replace(self, name=f"{self.name}-quick")
 
 
-# racf-1 and racf-2 were released with the classical detector as the car's default: they keep it.
+# Every battery so far runs the car with the classical detector, the default (the learned segmenter
+# did not beat it on both recall and false positives: ``racf bench-detector``).
 _RACF_1 = Battery(name="racf-1", loop=_racf_1_loop("classical", sticker="learned"), drives=_drive_rows("classical"))
 _RACF_2 = replace(_RACF_1, name="racf-2", loop=_RACF_1.loop + _racf_2_rows("classical"))
-_RACF_3 = Battery(name="racf-3", loop=_racf_1_loop("learned", sticker="learned") + _racf_2_rows("learned"),
-                  drives=_drive_rows("learned"), detector="learned")
+_RACF_3 = replace(_RACF_2, name="racf-3", loop=_RACF_2.loop + (
+    LoopRow("sticker_placed", "a smaller sticker placed where it breaks the sign's outline (0.4 of the plate, at its "
+                              "top edge), up from the start, against the default detector", 30, 4,
+            _sweep("sticker", "physical_patch", detector="classical", params={"physical_patch": {
+                "texture": ["learned-approach"], "size": [0.4], "position": ["top"], "from_start": [True]}})),))
 
 #: Every released battery, by name.
 BATTERIES = {"racf-1": _RACF_1, "racf-2": _RACF_2, "racf-3": _RACF_3}

@@ -16,13 +16,13 @@ def test_every_row_runs_the_batterys_detector_unless_it_says_otherwise():
                 assert detectors == {battery.detector}, (name, key)
 
 
-def test_racf_2_is_racf_1_and_two_rows_and_racf_3_the_same_rows_with_the_learned_detector():
+def test_each_battery_is_the_one_before_and_its_new_rows():
     one, two, three = (BATTERIES[n] for n in ("racf-1", "racf-2", "racf-3"))
     assert [r.key for r in two.rows()] == [r.key for r in one.loop] + ["frustum_scaled", "sticker_default"] + \
         [r.key for r in one.drives]
     for row in one.rows():  # racf-1's episodes are racf-2's (ids included): a battery never changes
         same = next(r for r in two.rows() if r.key == row.key)
         assert [s.trial_id for s in row.specs("raw", quick=True)] == [s.trial_id for s in same.specs("raw", quick=True)]
-    assert [r.key for r in three.rows()] == [r.key for r in two.rows()]
-    assert three.detector == "learned" and two.detector == one.detector == "classical"
+    assert [r.key for r in three.rows()] == [r.key for r in two.loop] + ["sticker_placed"] + [r.key for r in two.drives]
+    assert three.detector == two.detector == one.detector == "classical"
     assert DEFAULT_BATTERY == "racf-3"
