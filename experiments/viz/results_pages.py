@@ -345,7 +345,45 @@ def _detector(d: _Data) -> str:
             continue
         data = d[name]
         lines += _meta(data["meta"]) + _sticker_rows(data)
+    lines += _placement(d)
     return "\n".join(lines)
+
+
+#: The placement study's stored results: (name, the sticker in words, its bench-patch flags).
+_PLACEMENTS = (("sticker-place-centre", "0.6 of the plate, in the middle", "--size 0.6 --position centre"),
+               ("sticker-place-top", "0.4 of the plate, at its top edge", "--size 0.4 --position top"))
+
+
+def _placement(d: _Data) -> list[str]:
+    """Where the sticker sits: recall on rendered approach views, then the chosen place in the loop."""
+    lines = ["## Where the sticker sits", "",
+             "The sticker `learned-approach` at two places, in rendered views on the car's approaches "
+             "(`racf bench-patch --views approach`): the colour detector looks for a red octagon in a light ring, "
+             "and a sticker at the plate's edge breaks the outline it tests, where one in the middle leaves the "
+             "red rim whole. Recall [95 % CI] over the views with the sign resolvable, by its distance:", ""]
+    rows = []
+    for name, words, flags in _PLACEMENTS:
+        if name not in d:
+            lines += _missing(name, f"racf bench-patch -n 200 --views approach --texture learned-approach {flags} --json")
+            continue
+        data = d[name]
+        bands = sorted({b for row in data["by_band"].values() for r in row.values() for b in r})
+        for det, row in data["counts"].items():
+            cells = [f"{_num(data['by_band'][det]['physical_patch'][b]['recall'], 2)} "
+                     f"(N {data['by_band'][det]['physical_patch'][b]['n_positive']})" for b in bands]
+            rows.append(f"| {words} | {det} | {_rate(row['clean']['recall'], row['clean']['recall_ci'])} | "
+                        f"{_rate(row['physical_patch']['recall'], row['physical_patch']['recall_ci'])} | "
+                        + " | ".join(cells) + " |")
+    if rows:
+        lines += _meta(d[_PLACEMENTS[-1][0]]["meta"]) + [
+            "| sticker | detector | recall, clean | recall, sticker | " + " | ".join(f"sticker, {b}" for b in bands)
+            + " |", "|---|---|---|---|" + "---|" * len(bands), *rows, ""]
+    lines += ["### The placed sticker in the loop, against the default detector", "",
+              "Chosen on the views above, then measured on fresh episodes: up on the sign from the start, no "
+              "defence, random draws of the sign and the speed. Every attack begins before t*.", ""]
+    if "sticker-placed" not in d:
+        return lines + _missing("sticker-placed", "racf sweep sticker-placed.toml")
+    return lines + _meta(d["sticker-placed"]["meta"]) + _sticker_rows(d["sticker-placed"])
 
 
 def _heldout_breakdown(detectors: dict) -> list[str]:
@@ -379,8 +417,10 @@ def _sticker_rows(data: dict) -> list[str]:
     lines = ["| sticker | N | SCR [95 % CI] | " + " | ".join(f"recall {b} [CI] (frames)" for b in bands) + " |",
              "|---|---|---|" + "---|" * len(bands)]
     for row in data.get("stealth", []):
-        texture = next((p.split("=", 1)[1] for p in row["params"].split() if p.startswith("physical_patch.texture=")),
-                       row["params"])
+        sticker = dict(p.split("=", 1) for p in row["params"].split() if p.startswith("physical_patch."))
+        texture = sticker.get("physical_patch.texture", row["params"])
+        if "physical_patch.size" in sticker or "physical_patch.position" in sticker:
+            texture += f"`, {sticker.get('physical_patch.size', '')} at {sticker.get('physical_patch.position', 'centre')}`"
         cells = [f"{_rate(c['recall'], c['recall_ci'])} ({c['n']})" if c["n"] else "-"
                  for c in (recall.get(row["params"], {}).get(b, {"n": 0}) for b in bands)]
         lines.append(f"| `{texture}` | {row['n']} | {_rate(row['scr'], row['scr_ci'])} | " + " | ".join(cells) + " |")
