@@ -232,6 +232,13 @@ def paper_rows(d: _Data, link: str = "") -> list[str]:
         n = next(iter(by.values()))["n"] if by else 0
         lines.append(f"| depth blacked out while the LiDAR misses the sign (`dropout_timed`), SCR over {n} draws | - | "
                      f"{cells} | [adaptive attacks]({link}adaptive-attacks.md) |")
+    if "sticker-placed" in d:
+        rows = d["sticker-placed"].get("stealth", [])
+        if rows:
+            r = rows[0]
+            lines.append(f"| a printed sticker (0.4 of the plate, at its top edge), no defence: SCR | "
+                         f"{PAPER['attack_scr']:.2f} (the paper's patch) | {_rate(r['scr'], r['scr_ci'])} (N {r['n']}, every "
+                         f"attack before t*) | [the sticker]({link}detector-and-sticker.md) |")
     if "persistence" in d:
         rows = d["persistence"]["persistence"]
         ours = " / ".join(f"{r['asr']:.2f} {_ci(r['asr_ci'])}" for r in rows)
@@ -297,7 +304,7 @@ def _detector(d: _Data) -> str:
                          f"{_rate(r['fp_rate'], r['fp_rate_ci'], 4)} ({r['n_frames']}) | "
                          f"{_num(r['ms_per_frame_one_core'], 2)} |")
         lines.append("")
-        lines += _heldout_breakdown(data["detectors"])
+        lines += _default_verdict(data["detectors"]) + _heldout_breakdown(data["detectors"])
     else:
         lines += _missing("bench-detector", "racf bench-detector --json")
     lines += ["## The sticker in the scene, per view", ""]
@@ -384,6 +391,25 @@ def _placement(d: _Data) -> list[str]:
     if "sticker-placed" not in d:
         return lines + _missing("sticker-placed", "racf sweep sticker-placed.toml")
     return lines + _meta(d["sticker-placed"]["meta"]) + _sticker_rows(d["sticker-placed"])
+
+
+def _default_verdict(detectors: dict) -> list[str]:
+    """Whether the learned segmenter earns the default: it must beat the classical detector on recall
+    and on false-positive frames, on the held-out views and on the approach drives."""
+    if not {"classical", "learned"} <= set(detectors):
+        return []
+    c, l = detectors["classical"], detectors["learned"]
+    checks = {"held-out recall": (l["heldout"]["recall"], c["heldout"]["recall"], True),
+              "held-out false-positive frames": (l["heldout"]["fp_rate"], c["heldout"]["fp_rate"], False),
+              "drive recall": (l["recall"], c["recall"], True),
+              "drive false-positive frames": (l["fp_rate"], c["fp_rate"], False)}
+    lost = [name for name, (learned, classical, higher) in checks.items()
+            if (learned <= classical if higher else learned >= classical)]
+    if not lost:
+        return ["The learned segmenter beats the classical detector on all four counts.", ""]
+    return ["The learned segmenter becomes the default detector only when it beats the classical one on recall "
+            "and on false-positive frames, on the held-out views and on the drives. Here it does not on: "
+            + ", ".join(lost) + "; the classical detector stays the default.", ""]
 
 
 def _heldout_breakdown(detectors: dict) -> list[str]:
