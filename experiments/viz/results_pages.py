@@ -365,9 +365,11 @@ def _placement(d: _Data) -> list[str]:
     """Where the sticker sits: recall on rendered approach views, then the chosen place in the loop."""
     lines = ["## Where the sticker sits", "",
              "The sticker `learned-approach` at two places, in rendered views on the car's approaches "
-             "(`racf bench-patch --views approach`): the colour detector looks for a red octagon in a light ring, "
-             "and a sticker at the plate's edge breaks the outline it tests, where one in the middle leaves the "
-             "red rim whole. Recall [95 % CI] over the views with the sign resolvable, by its distance:", ""]
+             "(`racf bench-patch --views approach`). Which place works depends on the detector: the colour "
+             "detector tests the red octagon's outline, which a sticker at the plate's edge breaks and one in the "
+             "middle leaves whole; the segmenter, against which the texture was optimised in the middle, sees "
+             "the whole face and what the sticker leaves of it. Recall [95 % CI] over the views with the sign "
+             "resolvable, by its distance:", ""]
     rows = []
     for name, words, flags in _PLACEMENTS:
         if name not in d:

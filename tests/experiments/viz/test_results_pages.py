@@ -69,3 +69,30 @@ def test_bad_sources_are_one_line_and_exit_2(tmp_path, capsys):
     err = capsys.readouterr().err.strip()
     assert err.count("\n") == 0 and "a result is a JSON object" in err
     assert not (tmp_path / "x.json").exists()
+
+
+def _counts(recall, fp_rate, n=100):
+    return {"n_frames": n, "n_positive": n, "n_hit": int(recall * n), "n_fp": int(fp_rate * n), "recall": recall,
+            "recall_ci": [recall - 0.05, min(1.0, recall + 0.05)], "fp_rate": fp_rate, "fp_rate_ci": [0.0, fp_rate + 0.01]}
+
+
+def _detector_row(recall, fp_rate):
+    held = {**_counts(recall, fp_rate), "by_kind": {"sign": _counts(recall, fp_rate)},
+            "by_band": {"0.3-1 m": _counts(recall, fp_rate)}}
+    return {"heldout": held, "red_squares": _counts(0.0, fp_rate), "recall": recall, "recall_ci": [0.9, 1.0],
+            "n_positive": 450, "fp_rate": fp_rate, "fp_rate_ci": [0.0, 0.01], "n_frames": 2572,
+            "ms_per_frame_one_core": 2.5}
+
+
+def test_the_detector_page_says_whether_the_segmenter_earns_the_default(tmp_path, monkeypatch):
+    monkeypatch.setattr(results_store, "commit", lambda root=None: "abc1234")
+    rows = {"classical": _detector_row(0.95, 0.005), "learned": _detector_row(0.94, 0.003)}
+    results_store.store_result("bench-detector", {"detectors": rows}, command="racf bench-detector --json",
+                               data_dir=tmp_path)
+    page = RESULT_PAGES["results/detector-and-sticker.md"](tmp_path)
+    assert "does not on: held-out recall, drive recall; the classical detector stays the default" in page
+    assert "| learned | 0.940 [0.890, 0.990] (100) | 0.940 [0.890, 0.990] (100) |" in page  # by kind, by band
+    rows["learned"] = _detector_row(0.97, 0.001)
+    results_store.store_result("bench-detector", {"detectors": rows}, command="racf bench-detector --json",
+                               data_dir=tmp_path)
+    assert "beats the classical detector on all four counts" in RESULT_PAGES["results/detector-and-sticker.md"](tmp_path)
