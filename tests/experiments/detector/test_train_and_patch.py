@@ -12,7 +12,7 @@ from racf.experiments.detector.train import TrainConfig, train_segmenter
 @pytest.fixture(scope="module")
 def tiny_data(tmp_path_factory):
     root = tmp_path_factory.mktemp("views")
-    make_dataset(DatasetSpec(seed=7, n_train=24, n_heldout=4, sign_share=1.0), root, progress=False)
+    make_dataset(DatasetSpec(seed=7, n_train=24, n_heldout=4, sign_share=1.0, approach_share=0.0), root, progress=False)
     return root
 
 
