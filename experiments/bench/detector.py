@@ -175,9 +175,7 @@ def bench_detector(detector_name: str = "classical", seed: int = 0, speeds: tupl
             if det is not None:
                 # The held frame's faces: the camera runs slower than the loop, so masks from the
                 # car's pose now would miss a near sign that has moved across the image since.
-                faces = target.copy()
-                for m in env.unwrapped.frame_sign_masks():
-                    faces |= m
+                faces = np.logical_or.reduce(env.unwrapped.frame_sign_masks())
                 if not (det.mask & cv2.dilate(faces.view(np.uint8), kernel).astype(bool)).any():
                     n_fp += 1
             if 0.5 <= info["d_true"] <= 2.5 and resolvable(target):

@@ -97,7 +97,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _detector_data(args: argparse.Namespace) -> int:
-    from racf.experiments.detector.dataset import VIEW_KINDS, DatasetSpec, load_split, make_dataset
+    from racf.experiments.detector.dataset import DatasetSpec, load_split, make_dataset
+    from racf.experiments.detector.evaluate import VIEW_KINDS
 
     sizes = {k: v for k, v in (("n_train", args.train), ("n_heldout", args.heldout)) if v is not None}
     try:

@@ -21,7 +21,7 @@ from racf.experiments.detector.evaluate import VIEW_KINDS
 from racf.experiments.detector.views import FAR_RANGE_M, ViewRenderer, ViewSpec, draw_distractors, draw_view
 from racf.experiments.sweeps.store import code_version
 
-__all__ = ["DatasetSpec", "DEFAULT_DATA_DIR", "make_dataset", "load_split", "SPLITS", "VIEW_KINDS", "draw_dataset_view"]
+__all__ = ["DatasetSpec", "DEFAULT_DATA_DIR", "make_dataset", "load_split", "SPLITS", "draw_dataset_view"]
 
 DEFAULT_DATA_DIR = Path("data/detector")
 SPLITS = ("train", "heldout")

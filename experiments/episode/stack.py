@@ -16,8 +16,8 @@ from racf.experiments.episode.spec import TrialSpec
 from racf.sim.attacks import ATTACKS
 from racf.sim.world.stop_signs import SIGN_FACE_ACROSS_FLATS_M, SIGN_RED_FACE_ACROSS_FLATS_M
 
-
-__all__ = ["default_env", "plain_env", "build_car", "tracker", "outlined_size_m", "OUTLINED_SIZE_M", "DRIVE_MAX_EPISODE_S"]
+__all__ = ["default_env", "plain_env", "build_car", "tracker", "outlined_size_m", "OUTLINED_SIZE_M",
+           "DRIVE_MAX_EPISODE_S"]
 
 #: The map's size, across flats, of each part of the sign a detector may outline (``BlobDetector.outline``).
 OUTLINED_SIZE_M = {"red_face": SIGN_RED_FACE_ACROSS_FLATS_M, "face": SIGN_FACE_ACROSS_FLATS_M}

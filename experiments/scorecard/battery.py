@@ -51,13 +51,18 @@ class LoopRow:
         return self.make(defence, self.n_quick if quick else self.n)
 
 
-def _paper(setting: str, detector: str) -> Callable[[str, int], list[TrialSpec]]:
+#: The car's detector in every battery so far: the classical one, the default when each was
+#: released. Pinned here, so that no row follows a later default silently.
+_CAR = "classical"
+
+
+def _paper(setting: str) -> Callable[[str, int], list[TrialSpec]]:
     def make(defence: str, n: int) -> list[TrialSpec]:
-        return batch_specs(setting + ("" if defence == "raw" else f"+{defence}"), n, detector=detector)
+        return batch_specs(setting + ("" if defence == "raw" else f"+{defence}"), n, detector=_CAR)
     return make
 
 
-def _sweep(name: str, attack: str, *, detector: str, mode: str = "random", params: dict | None = None,
+def _sweep(name: str, attack: str, *, mode: str = "random", detector: str = _CAR, params: dict | None = None,
            t_atk: list | None = None, rho: list | None = None, speed: list | None = None
            ) -> Callable[[str, int], list[TrialSpec]]:
     """Episodes of a sweep over the four signs, the same seeds for every defence (paired): ``n``
@@ -76,60 +81,11 @@ def _sweep(name: str, attack: str, *, detector: str, mode: str = "random", param
     return make
 
 
-def _drives(attack: bool, detector: str) -> Callable[[str, int], list[TrialSpec]]:
+def _drives(attack: bool) -> Callable[[str, int], list[TrialSpec]]:
     def make(defence: str, n: int) -> list[TrialSpec]:
         setting = ("attack" if attack else "clean") + ("" if defence == "raw" else f"+{defence}")
-        return [TrialSpec(setting, 0, 1.5, seed, target="drive", detector=detector) for seed in range(n)]
+        return [TrialSpec(setting, 0, 1.5, seed, target="drive", detector=_CAR) for seed in range(n)]
     return make
-
-
-def _racf_1_loop(car: str, sticker: str) -> tuple[LoopRow, ...]:
-    """racf-1's closed-loop rows with ``car`` as the car's detector, the first sticker's row against ``sticker``."""
-    return (
-        LoopRow("paper_clean", "the paper's table: clean", 30, 4, _paper("clean", car), attacked=False),
-        LoopRow("paper_attack", "the paper's table: the strong patch", 30, 4, _paper("attack", car)),
-        LoopRow("strong_random", "random strong patch draws", 60, 4, _sweep("strong", "patch_occlusion", detector=car)),
-        LoopRow("patch_spoof", "random strong patch + LiDAR spoof", 60, 4,
-                _sweep("spoof", "patch_occlusion+lidar_spoof", detector=car)),
-        LoopRow("stealth_ramp", "stealth_ramp, r 3 m/s over 3 s (white box)", 24, 4,
-                _sweep("adaptive", "stealth_ramp", detector=car, mode="grid",
-                       params={"stealth_ramp": {"rate_mps": [3.0]}})),
-        LoopRow("ramp_rates", "stealth_ramp at r 0.1, 0.3 and 1 m/s over 3 s (for the undetected error against r)",
-                8, 4, _sweep("adaptive", "stealth_ramp", detector=car, mode="grid",
-                             params={"stealth_ramp": {"rate_mps": [0.1, 0.3, 1.0]}})),
-        LoopRow("frustum_spoof", "frustum_spoof, r 3 m/s over 3 s (white box)", 24, 4,
-                _sweep("adaptive", "frustum_spoof", detector=car, mode="grid",
-                       params={"frustum_spoof": {"rate_mps": [3.0]}})),
-        LoopRow("dropout_timed", "dropout_timed, blackout after 1 empty scan (black box)", 24, 4,
-                _sweep("adaptive", "dropout_timed", detector=car, mode="grid",
-                       params={"dropout_timed": {"scans": [1], "effect": ["blackout"]}})),
-        LoopRow("delay", "delay, the depth frozen for 3 s (black box)", 24, 4,
-                _sweep("adaptive", "delay", detector=car, mode="grid",
-                       params={"delay": {"sensor": ["depth"], "frames": [50]}})),
-        LoopRow("sticker", "the printed sticker against the learned detector", 30, 4,
-                _sweep("sticker", "physical_patch", detector=sticker)),
-    )
-
-
-def _racf_2_rows(car: str) -> tuple[LoopRow, ...]:
-    """The two rows racf-2 adds, with ``car`` as the car's (default) detector."""
-    return (
-        LoopRow("frustum_scaled", "frustum_spoof that also draws the sign smaller, r 3 m/s over 3 s (white box: "
-                                  "every witness moved)", 24, 4,
-                _sweep("adaptive", "frustum_spoof", detector=car, mode="grid",
-                       params={"frustum_spoof": {"rate_mps": [3.0], "scale_box": [True]}})),
-        LoopRow("sticker_default", "the sticker optimised over the approaches (0.6 of the plate), up from the "
-                                   "start, against the default detector", 30, 4,
-                _sweep("sticker", "physical_patch", detector=car, params={"physical_patch": {
-                    "texture": ["learned-approach"], "size": [0.6], "from_start": [True]}})),
-    )
-
-
-def _drive_rows(car: str) -> tuple[LoopRow, ...]:
-    return (
-        LoopRow("drives_clean", "seeded drives, clean", 6, 1, _drives(False, car), attacked=False),
-        LoopRow("drives_attack", "seeded drives, the strong patch at the first target", 6, 1, _drives(True, car)),
-    )
 
 
 @dataclass(frozen=True)
@@ -139,7 +95,7 @@ class Battery:
     name: str
     loop: tuple[LoopRow, ...]
     drives: tuple[LoopRow, ...]
-    detector: str = "classical"  # the car's detector in its rows (a row's title names any other)
+    detector: str = _CAR  # the car's detector in its rows (a row's title names any other)
     offline_presets: tuple[str, ...] = ("weak", "mid", "strong")
     offline_split: str = "by_series"
     offline_draws: int = 5
@@ -152,14 +108,54 @@ class Battery:
         return replace(self, name=f"{self.name}-quick")
 
 
-# Every battery so far runs the car with the classical detector, the default (the learned segmenter
-# did not beat it on both recall and false positives: ``racf bench-detector``).
-_RACF_1 = Battery(name="racf-1", loop=_racf_1_loop("classical", sticker="learned"), drives=_drive_rows("classical"))
-_RACF_2 = replace(_RACF_1, name="racf-2", loop=_RACF_1.loop + _racf_2_rows("classical"))
+_RACF_1 = Battery(
+    name="racf-1",
+    loop=(
+        LoopRow("paper_clean", "the paper's table: clean", 30, 4, _paper("clean"), attacked=False),
+        LoopRow("paper_attack", "the paper's table: the strong patch", 30, 4, _paper("attack")),
+        LoopRow("strong_random", "random strong patch draws", 60, 4, _sweep("strong", "patch_occlusion")),
+        LoopRow("patch_spoof", "random strong patch + LiDAR spoof", 60, 4,
+                _sweep("spoof", "patch_occlusion+lidar_spoof")),
+        LoopRow("stealth_ramp", "stealth_ramp, r 3 m/s over 3 s (white box)", 24, 4,
+                _sweep("adaptive", "stealth_ramp", mode="grid", params={"stealth_ramp": {"rate_mps": [3.0]}})),
+        LoopRow("ramp_rates", "stealth_ramp at r 0.1, 0.3 and 1 m/s over 3 s (for the undetected error against r)",
+                8, 4, _sweep("adaptive", "stealth_ramp", mode="grid",
+                             params={"stealth_ramp": {"rate_mps": [0.1, 0.3, 1.0]}})),
+        LoopRow("frustum_spoof", "frustum_spoof, r 3 m/s over 3 s (white box)", 24, 4,
+                _sweep("adaptive", "frustum_spoof", mode="grid", params={"frustum_spoof": {"rate_mps": [3.0]}})),
+        LoopRow("dropout_timed", "dropout_timed, blackout after 1 empty scan (black box)", 24, 4,
+                _sweep("adaptive", "dropout_timed", mode="grid",
+                       params={"dropout_timed": {"scans": [1], "effect": ["blackout"]}})),
+        LoopRow("delay", "delay, the depth frozen for 3 s (black box)", 24, 4,
+                _sweep("adaptive", "delay", mode="grid", params={"delay": {"sensor": ["depth"], "frames": [50]}})),
+        LoopRow("sticker", "the printed sticker against the learned detector", 30, 4,
+                _sweep("sticker", "physical_patch", detector="learned")),
+    ),
+    drives=(
+        LoopRow("drives_clean", "seeded drives, clean", 6, 1, _drives(False), attacked=False),
+        LoopRow("drives_attack", "seeded drives, the strong patch at the first target", 6, 1, _drives(True)),
+    ),
+)
+
+_RACF_2 = replace(
+    _RACF_1,
+    name="racf-2",
+    loop=_RACF_1.loop + (
+        LoopRow("frustum_scaled", "frustum_spoof that also draws the sign smaller, r 3 m/s over 3 s (white box: "
+                                  "every witness moved)", 24, 4,
+                _sweep("adaptive", "frustum_spoof", mode="grid",
+                       params={"frustum_spoof": {"rate_mps": [3.0], "scale_box": [True]}})),
+        LoopRow("sticker_default", "the sticker optimised over the approaches (0.6 of the plate), up from the "
+                                   "start, against the default detector", 30, 4,
+                _sweep("sticker", "physical_patch", params={"physical_patch": {
+                    "texture": ["learned-approach"], "size": [0.6], "from_start": [True]}})),
+    ),
+)
+
 _RACF_3 = replace(_RACF_2, name="racf-3", loop=_RACF_2.loop + (
     LoopRow("sticker_placed", "a smaller sticker placed where it breaks the sign's outline (0.4 of the plate, at its "
                               "top edge), up from the start, against the default detector", 30, 4,
-            _sweep("sticker", "physical_patch", detector="classical", params={"physical_patch": {
+            _sweep("sticker", "physical_patch", params={"physical_patch": {
                 "texture": ["learned-approach"], "size": [0.4], "position": ["top"], "from_start": [True]}})),))
 
 #: Every released battery, by name.

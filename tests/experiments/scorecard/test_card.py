@@ -15,10 +15,10 @@ from racf.experiments.scorecard.report import compare_markdown, strict_json, wri
 from tests.conftest import write_bench_dataset
 
 TINY = Battery(name="tiny", loop=(
-    LoopRow("paper_clean", "clean", 1, 1, _paper("clean", "classical"), attacked=False),
+    LoopRow("paper_clean", "clean", 1, 1, _paper("clean"), attacked=False),
     LoopRow("stealth_ramp", "stealth_ramp", 1, 1,
-            _sweep("adaptive", "stealth_ramp", detector="classical", mode="grid",
-                   params={"stealth_ramp": {"rate_mps": [3.0]}}, speed=[2.0])),
+            _sweep("adaptive", "stealth_ramp", mode="grid", params={"stealth_ramp": {"rate_mps": [3.0]}},
+                   speed=[2.0])),
 ), drives=(), offline_presets=("strong",), offline_draws=1, offline_draws_quick=1)
 
 
