@@ -6,13 +6,13 @@ from __future__ import annotations
 import argparse
 import sys
 
-from racf.experiments.cli import bench, data, detector, odca, scorecard, sweep, trials, view
+from racf.experiments.cli import bench, data, detector, falsify, odca, scorecard, sweep, trials, view
 from racf.experiments.cli.common import UsageError, fail, load_plugins_from_argv
 
 __all__ = ["main", "build_parser", "GROUPS"]
 
 #: The command groups, in the order ``racf --help`` lists their commands.
-GROUPS = (view, trials, sweep, scorecard, data, odca, detector, bench)
+GROUPS = (view, trials, sweep, scorecard, falsify, data, odca, detector, bench)
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -29,11 +29,11 @@ from racf.experiments.episode.car import CarCalibration, Mission
 from racf.experiments.episode.spec import TrialSpec
 from racf.sim.env.config import EnvConfig
 from racf.sim.sensors.camera import CameraIntrinsics
-from racf.sim.world.route_plan import plan_route
+from racf.sim.world.route_plan import longest_run_up_m, plan_route
 from racf.sim.world.stop_signs import SIGN_GEOMETRIES
 
 __all__ = ["EpisodePlan", "plan_episode", "reset_options", "env_settings", "car_calibration",
-           "DRIVE_MAX_EPISODE_S"]
+           "longest_run_up", "DRIVE_MAX_EPISODE_S"]
 
 #: A drive's episode time limit, s.
 DRIVE_MAX_EPISODE_S = 120.0
@@ -75,7 +75,10 @@ def reset_options(spec: TrialSpec) -> dict:
     drive = spec.drive
     if drive is not None:
         return drive.reset_options()
-    return {spec.target: spec.sign, "cruise_speed": spec.speed}
+    options = {spec.target: spec.sign, "cruise_speed": spec.speed}
+    if spec.run_up_m is not None:
+        options["run_up_m"] = float(spec.run_up_m)
+    return options
 
 
 def plan_episode(spec: TrialSpec, **env_kwargs) -> EpisodePlan:
@@ -92,6 +95,13 @@ def plan_episode(spec: TrialSpec, **env_kwargs) -> EpisodePlan:
     dt = 1.0 / config.control_hz
     return EpisodePlan(kwargs, options, mission, calibration, dt, config.localisation,
                        int(round(config.max_episode_s / dt)))
+
+
+def longest_run_up(target: str, index: int, sign_geometry: str = "plate") -> float:
+    """The longest ``TrialSpec.run_up_m`` an approach to this target allows, m."""
+    config = EnvConfig.from_kwargs(sign=SIGN_GEOMETRIES[sign_geometry])
+    calibration = car_calibration(config.camera.width, config.camera.height)
+    return longest_run_up_m(target, index, config.sign, calibration.bumper_x_m)
 
 
 @lru_cache(maxsize=8)

@@ -30,6 +30,7 @@ from racf.controllers import DistanceEstimator, Phase
 from racf.experiments.episode.record import step_row
 from racf.experiments.episode.referee import Referee
 from racf.experiments.episode.scoring import largest_jump, score_log, stealth
+from racf.experiments.episode.robustness import robustness
 from racf.experiments.episode.spec import TrialSpec
 from racf.experiments.episode.plan import EpisodePlan, plan_episode
 from racf.experiments.episode.stack import build_car, default_env
@@ -66,7 +67,8 @@ class TrialResult:
     ``fused_jump_m``: the largest step change of the distance the car acted on beyond its own
     motion (``scoring.largest_jump``). ``undetected_error_m``, ``detection_delay_s`` and
     ``detected``: how far the attack pushed that distance before the defence flagged it, and
-    when it did (``scoring.stealth``).
+    when it did (``scoring.stealth``). ``robustness_m``: the stop rule's signal-temporal-logic
+    robustness, the lowest over the targets (``robustness``; negative: the rule was broken).
     """
 
     trial_id: str
@@ -95,6 +97,7 @@ class TrialResult:
     undetected_error_m: float = math.nan
     detection_delay_s: float = math.nan
     detected: bool = False
+    robustness_m: float = math.nan
 
     def to_dict(self) -> dict:
         """Strict-JSON-ready: NaN becomes None."""
@@ -196,7 +199,7 @@ def _result(spec: TrialSpec, plan: EpisodePlan, env: gym.Env, log: pd.DataFrame)
         stop_distance_m=first.rest_distance_m, t_star_s=first.t_star_s, t_brake_s=first.t_brake_s,
         trigger_delay_s=first.trigger_delay_s, dt_brake_s=first.dt_brake_s, failure=first.failure,
         duration_s=float(log["t"].iloc[-1]), n_targets=n_targets, targets_served=served,
-        fused_jump_m=largest_jump(log), **asdict(stealth(log)))
+        fused_jump_m=largest_jump(log), robustness_m=robustness(log), **asdict(stealth(log)))
 
 
 def _first_attack_windows(env: gym.Env) -> list[tuple[float, float]]:

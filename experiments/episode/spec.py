@@ -123,6 +123,8 @@ class TrialSpec:
             ``classical`` (colour and shape, the default), ``learned`` (the segmenter) or a plug-in.
         estimator_options: keyword arguments for the setting's estimator (e.g.
             ``{"checkpoint": "outputs/odca-head"}``); a path's content enters the trial id.
+        run_up_m: how far before the stop line the front bumper starts an approach, m (None: 3 m,
+            or the longest the lane allows); not for a drive.
     """
 
     setting: str
@@ -142,6 +144,7 @@ class TrialSpec:
     attack_params: dict = field(default_factory=dict)
     detector: str = "classical"
     estimator_options: dict = field(default_factory=dict)
+    run_up_m: float | None = None
 
     def __post_init__(self) -> None:
         attacks, estimator = parse_setting(self.setting)
@@ -179,6 +182,11 @@ class TrialSpec:
             raise ValueError(f"stable_steps must be an int in [1, 500] or None, got {self.stable_steps!r}")
         if not 0.0 <= self.delay_ms <= 1000.0:
             raise ValueError(f"delay_ms must be in [0, 1000] ms, got {self.delay_ms!r}")
+        if self.run_up_m is not None and (self.target == "drive" or isinstance(self.run_up_m, bool)
+                                          or not isinstance(self.run_up_m, (int, float))
+                                          or not 0.3 <= self.run_up_m <= 10.0):
+            raise ValueError(f"run_up_m must be None or a number of metres in [0.3, 10] for an approach (not a "
+                             f"drive), got {self.run_up_m!r} with target {self.target!r}")
         if self.control_hz is not None and not 1.0 <= self.control_hz <= 50.0:
             raise ValueError(f"control_hz must be in [1, 50] Hz (the env steps at 50 Hz) or None, "
                              f"got {self.control_hz!r}")

@@ -8,7 +8,10 @@ cause; the largest step change of the acted-on distance beyond the car's motion 
 episodes (the no-jump bound); under an attack, the stealth measures (``scoring.stealth``):
 the undetected error's median with a 95 % bootstrap interval (seeded: the same rows give the
 same interval) and its largest value, the share of episodes whose attack the defence flagged
-(Wilson interval) and the median detection delay. Strict JSON: None, never NaN.
+(Wilson interval) and the median detection delay; the stop rule's STL robustness
+(``episode.robustness``): its median with a bootstrap interval, 5th percentile and lowest value,
+and the share of episodes that broke the rule (robustness < 0, Wilson interval). Strict JSON:
+None, never NaN.
 """
 
 from __future__ import annotations
@@ -20,7 +23,7 @@ from scipy.stats import binomtest
 from racf.experiments.episode.scoring import FAILURES
 from racf.experiments.episode.spec import parse_setting
 
-__all__ = ["wilson_interval", "summarize", "summarize_settings", "stealth_summary", "median_ci"]
+__all__ = ["wilson_interval", "summarize", "summarize_settings", "stealth_summary", "robustness_summary", "median_ci"]
 
 
 def wilson_interval(successes: int, n: int, confidence: float = 0.95) -> tuple[float, float]:
@@ -61,6 +64,7 @@ def summarize(results: pd.DataFrame, attack: bool | None = None) -> dict:
     summary["failures"] = {f: int((results["failure"] == f).sum()) for f in FAILURES} if n else {}
     jumps = pd.to_numeric(results["fused_jump_m"], errors="coerce").dropna() if "fused_jump_m" in results else []
     summary["max_fused_jump_m"] = float(jumps.max()) if len(jumps) else None
+    summary.update(robustness_summary(results))
     if attack:
         summary["asr_ci"] = [1.0 - summary["scr_ci"][1], 1.0 - summary["scr_ci"][0]]
         early = results[pd.to_numeric(results["attack_start_s"], errors="coerce")
@@ -85,6 +89,19 @@ def median_ci(values, confidence: float = 0.95, resamples: int = 2000) -> tuple[
     medians = np.median(rng.choice(values, (resamples, values.size)), axis=1)
     alpha = (1.0 - confidence) / 2
     return float(np.median(values)), [float(np.quantile(medians, alpha)), float(np.quantile(medians, 1 - alpha))]
+
+
+def robustness_summary(results: pd.DataFrame) -> dict:
+    """The distribution of the stop rule's robustness over the episodes that have one (none for
+    results stored before it was logged)."""
+    values = pd.to_numeric(results["robustness_m"], errors="coerce").dropna() if "robustness_m" in results else []
+    if not len(values):
+        return {}
+    median, ci = median_ci(values)
+    broken = int((values < 0).sum())
+    return {"n_robustness": int(len(values)), "robustness_median_m": median, "robustness_ci": ci,
+            "robustness_p5_m": float(np.quantile(values, 0.05)), "robustness_min_m": float(values.min()),
+            "violation_share": broken / len(values), "violation_share_ci": list(wilson_interval(broken, len(values)))}
 
 
 def stealth_summary(results: pd.DataFrame) -> dict:

@@ -21,7 +21,7 @@ from racf.sim.world.obstacles import Obstacle, obstacles
 from racf.sim.world.road_graph import Path, qcar2_road_graph
 from racf.sim.world.stop_signs import SignGeometry, stop_signs
 
-__all__ = ["RoutePlan", "plan_route", "current_slot", "PASS_LINE_M", "DRIVE_OPTIONS"]
+__all__ = ["RoutePlan", "plan_route", "current_slot", "longest_run_up_m", "PASS_LINE_M", "DRIVE_OPTIONS"]
 
 #: On a drive, the next target becomes current once the front bumper is this far past the
 #: current one's stop line (the car has served it and driven on), m.
@@ -72,6 +72,16 @@ def current_slot(targets: tuple[RouteTarget, ...], slot: int, bumper_s: float) -
     return slot
 
 
+def _longest(target, bumper_ahead_m: float) -> float:
+    return target.stop_s - target.earliest_start_s - bumper_ahead_m
+
+
+def longest_run_up_m(target: str, index: int, geometry: SignGeometry, bumper_ahead_m: float) -> float:
+    """The longest run-up an approach to this ``sign`` or ``obstacle`` allows, m (its lane's length)."""
+    targets = obstacles() if target == "obstacle" else stop_signs(geometry)
+    return _longest(targets[index], bumper_ahead_m)
+
+
 def _approach(options: dict[str, Any], geometry: SignGeometry, bumper_ahead_m: float, cruise,
               rng: np.random.Generator) -> RoutePlan:
     extra = sorted(set(options) & set(DRIVE_OPTIONS))
@@ -86,7 +96,7 @@ def _approach(options: dict[str, Any], geometry: SignGeometry, bumper_ahead_m: f
         raise ValueError(f"options[{key!r}] must be an int in 0..{len(targets) - 1}, got {index!r}")
     sign = targets[int(index)]
     speed = cruise()
-    longest = sign.stop_s - sign.earliest_start_s - bumper_ahead_m
+    longest = _longest(sign, bumper_ahead_m)
     run_up = options.get("run_up_m", min(3.0, longest))
     if not (_is_real(run_up) and 0.3 <= run_up <= longest + 1e-9):
         raise ValueError(f"options['run_up_m'] for sign {sign.index} must be in [0.3, {longest:.2f}] m, got {run_up!r}")

@@ -59,6 +59,17 @@ CORPUS = [
     ("view {tmp}/nowhere.rrd", "nowhere.rrd"),
     ("view {bad.rrd}", "bad.rrd"),
     ("evaluate --checkpoint {tmp}/nowhere --dataset {tmp}/nowhere", "nowhere"),
+    ("falsify --defence tinfoil", "unknown defence 'tinfoil'"),
+    ("falsify --defence odca --attack laser", "unknown attack"),
+    ("falsify --defence odca --space {bad.toml}", "not valid TOML"),
+    ("falsify --defence odca --space {tmp}/nowhere.toml", "cannot read the space"),
+    ("falsify --defence odca --budget 0", "budget must be"),
+    ("falsify --defence odca --seeds 0", "--seeds must be"),
+    ("falsify --defence odca --sampler annealing", "invalid choice"),
+    ("replay-case {tmp}/nowhere.json", "no case file"),
+    ("replay-case {bad.toml}", "not a racf case file"),
+    ("replay-case {tmp}", "no case files"),
+    ("replay-case --defence tinfoil {bad.toml}", "unknown defence"),
 ]
 
 

@@ -1,0 +1,138 @@
+"""Counterexamples that stay: a violation saved as a replayable episode spec, and its replay.
+
+A case file (JSON) holds the episode's full ``TrialSpec``, the robustness and failure it gave,
+the code it ran on (``code_version`` of the episode's packages) and what found it. Replaying
+runs the same episode in this process, pinned to one thread as the search's workers are: on
+the same code the robustness comes back to the bit. With another defence (``defence=``) the
+same scenario and attack meet that defence instead, which is how the suite in
+``experiments/falsify/cases/`` says which of the known failures an improved defence survives.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import asdict, dataclass, replace
+from pathlib import Path
+
+from racf.controllers import BrakingConfig
+from racf.experiments.episode.spec import EPISODE_CODE, TrialSpec, setting_name
+from racf.experiments.sweeps.store import atomic_write, code_version
+
+__all__ = ["Case", "save_case", "load_case", "replay_case", "Replay", "SUITE", "distinct", "spec_from_json"]
+
+#: The shipped regression suite.
+SUITE = Path(__file__).with_name("cases")
+_VERSION = 1
+_RANGES = ("rho", "t_atk", "drive_s")
+
+
+def spec_from_json(raw: dict) -> TrialSpec:
+    """A ``TrialSpec`` from its ``asdict`` form (JSON lists back to the tuples and configs it holds)."""
+    raw = dict(raw)
+    raw["braking"] = BrakingConfig(**raw.get("braking", {}))
+    for key in _RANGES:
+        if key in raw:
+            raw[key] = tuple(raw[key])
+    return TrialSpec(**raw)
+
+
+@dataclass(frozen=True)
+class Case:
+    """One stored counterexample."""
+
+    spec: TrialSpec
+    robustness_m: float
+    failure: str | None
+    code: str
+    found_by: dict
+    name: str
+
+    def to_json(self) -> dict:
+        return {"version": _VERSION, "name": self.name, "setting": self.spec.setting, "trial_id": self.spec.trial_id,
+                "robustness_m": self.robustness_m, "failure": self.failure, "code": self.code,
+                "found_by": self.found_by, "spec": asdict(self.spec)}
+
+
+def save_case(folder: str | Path, spec: TrialSpec, row: dict, found_by: dict) -> Path:
+    """Writes the case of one violating episode (its result ``row``) into ``folder``; returns the file."""
+    value = float(row["robustness_m"])
+    name = f"{spec.estimator}-sign{spec.sign}-{row.get('failure') or 'violation'}-{spec.trial_id.rsplit('_', 1)[-1]}"
+    case = Case(spec, value, row.get("failure"), code_version(*EPISODE_CODE), found_by, name)
+    Path(folder).mkdir(parents=True, exist_ok=True)
+    return atomic_write(Path(folder) / f"{name}.json", json.dumps(case.to_json(), indent=1, allow_nan=False))
+
+
+def load_case(path: str | Path) -> Case:
+    """Reads a case file; ValueError names what is wrong with it."""
+    path = Path(path)
+    try:
+        raw = json.loads(path.read_text())
+        if raw.get("version") != _VERSION:
+            raise ValueError(f"case format {raw.get('version')!r}, this racf reads {_VERSION}")
+        spec = spec_from_json(raw["spec"])
+        return Case(spec, float(raw["robustness_m"]), raw.get("failure"), str(raw["code"]), dict(raw.get("found_by", {})),
+                    str(raw.get("name", path.stem)))
+    except OSError as err:
+        raise ValueError(f"cannot read the case {path}: {err.strerror or err}") from None
+    except (json.JSONDecodeError, KeyError, TypeError) as err:
+        raise ValueError(f"{path} is not a racf case file ({type(err).__name__}: {err})") from None
+
+
+@dataclass(frozen=True)
+class Replay:
+    """A case run again.
+
+    Attributes:
+        case: the case.
+        spec: the episode that ran (the case's, or its scenario and attacks against ``defence``).
+        robustness_m: what it gave now.
+        same_code: whether this is the code the case was found on (and the same defence).
+        identical: on the same code, whether the robustness came back to the bit (None otherwise).
+        survived: whether the stop rule held this time (robustness >= 0).
+    """
+
+    case: Case
+    spec: TrialSpec
+    robustness_m: float
+    same_code: bool
+    identical: bool | None
+    survived: bool
+    failure: str | None
+
+
+def replay_case(case: Case, defence: str | None = None, rerun: str | Path | None = None) -> Replay:
+    """Runs ``case`` again (against ``defence`` instead of its own, if given); with ``rerun``,
+    records it to that ``.rrd`` file."""
+    from racf.experiments.episode import run_trial
+    from racf.experiments.sweeps.executors import single_thread
+
+    single_thread()  # as the search's workers ran it: the same arithmetic, to the bit
+    spec = case.spec
+    if defence is not None and defence != spec.estimator:
+        spec = replace(spec, setting=setting_name(spec.attacks, defence), estimator_options={})
+    recorder = None
+    if rerun is not None:
+        from racf.experiments.viz.rerun_log import FrameRecorder
+
+        recorder = FrameRecorder()
+    result, log = run_trial(spec, on_step=recorder, clean_pass=recorder is not None)
+    if recorder is not None:
+        from racf.experiments.viz.rerun_log import write_rrd
+
+        write_rrd(Path(rerun), log, recorder, title=f"racf case {case.name}")
+    value = result.robustness_m
+    same = spec == case.spec and code_version(*EPISODE_CODE) == case.code
+    identical = (value == case.robustness_m) if same else None
+    return Replay(case, spec, value, same, identical, bool(math.isfinite(value) and value >= 0), result.failure)
+
+
+def distinct(rows: list[dict]) -> list[dict]:
+    """The distinct failures among violating episodes' rows: one per (setting, sign, failure),
+    the lowest robustness of each."""
+    best: dict[tuple, dict] = {}
+    for row in rows:
+        key = (row["setting"], row["sign"], row.get("failure"))
+        if key not in best or row["robustness_m"] < best[key]["robustness_m"]:
+            best[key] = row
+    return [best[k] for k in sorted(best, key=str)]

@@ -1,0 +1,130 @@
+"""``racf falsify`` end to end: the searches, the report (JSON, table, convergence plot) and the
+distinct violations recorded as cases (spec + rerun recording), in one results folder:
+
+    out/episodes/      every evaluated episode (a sweep's store: reused by id)
+    out/studies/       one Optuna journal per search (resumed after a kill)
+    out/report.json    the report (strict JSON)
+    out/convergence.png
+    out/cases/         a case file and its .rrd recording per distinct violation
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+from pathlib import Path
+
+from racf.experiments.falsify.cases import distinct, save_case
+from racf.experiments.falsify.pool import EpisodePool
+from racf.experiments.falsify.report import plot_convergence, summarize_searches
+from racf.experiments.falsify.search import SearchConfig, episode_seed, run_searches
+from racf.experiments.falsify.space import load_space
+from racf.experiments.sweeps.store import ResultStore, atomic_write
+
+__all__ = ["falsify", "render"]
+
+
+def falsify(defence: str, attacks: tuple[str, ...], out: str | Path, budget: int = 100,
+            samplers: tuple[str, ...] = ("tpe", "cmaes", "random"), seeds: tuple[int, ...] = tuple(range(10)),
+            batch: int = 4, space_path: str | Path | None = None, fixed: dict | None = None,
+            stop_at_violation: bool = False, backend: str = "local", workers: int = 2, address: str | None = None,
+            cases: bool = True, progress: bool = True) -> dict:
+    """Runs (or resumes) the searches and writes the report; returns it."""
+    t0 = time.perf_counter()
+    out = Path(out)
+    space = load_space(defence, attacks, space_path, fixed)
+    cfg = SearchConfig(space, tuple(samplers), tuple(seeds), budget, batch, stop_at_violation)
+    store = ResultStore(out / "episodes")
+    with EpisodePool(store, backend, workers, address) as pool:
+        searches = run_searches(cfg, out, pool, progress)
+        ran = pool.ran
+    values, violations = {}, []
+    for (sampler, seed), search in searches.items():
+        trials = search.trials()
+        values[(sampler, seed)] = [value for _, _, value in trials]
+        for number, params, value in trials:
+            if value < 0:
+                violations.append((sampler, seed, number, params, value))
+    report = {"defence": defence, "attacks": list(attacks), "setting": space.setting, "space": space.to_json(),
+              "budget": budget, "batch": batch, "seeds": list(seeds), "stop_at_violation": stop_at_violation,
+              "samplers": summarize_searches(values, budget), "episodes_run": ran,
+              "episodes_evaluated": sum(len(v) for v in values.values())}
+    plot_convergence(values, budget, out / "convergence.png", f"{space.setting}: {len(seeds)} seeds per sampler")
+    report["convergence_png"] = "convergence.png"
+    report["cases"] = _record_cases(space, violations, store, out / "cases", backend, workers, address) if cases else []
+    report["wall_s"] = time.perf_counter() - t0
+    report["worst"] = _worst(space, values, searches)
+    atomic_write(out / "report.json", json.dumps(report, indent=1, allow_nan=False))
+    return report
+
+
+def _worst(space, values: dict, searches: dict) -> dict | None:
+    """The lowest-robustness episode over every search: its parameters and result."""
+    best = None
+    for key, search in searches.items():
+        for number, params, value in search.trials():
+            if best is None or value < best[3]:
+                best = (key, number, params, value)
+    if best is None:
+        return None
+    (sampler, seed), number, params, value = best
+    spec = space.trial_spec(params, episode_seed(seed, number))
+    return {"sampler": sampler, "seed": seed, "trial": number, "params": params, "robustness_m": value,
+            "trial_id": spec.trial_id}
+
+
+def _record_cases(space, violations: list, store: ResultStore, folder: Path, backend: str, workers: int,
+                  address: str | None) -> list[dict]:
+    """The distinct violations, each run again with a rerun recording into ``folder`` and saved as a case."""
+    if not violations:
+        return []
+    rows = []
+    for sampler, seed, number, params, value in violations:
+        spec = space.trial_spec(params, episode_seed(seed, number))
+        rows.append({"setting": spec.setting, "sign": spec.sign, "robustness_m": value, "spec": spec,
+                     "found_by": {"sampler": sampler, "seed": seed, "trial": number},
+                     "failure": store.rows([spec.trial_id]).iloc[0].get("failure")})
+    keep = distinct(rows)
+    recordings = ResultStore(folder, logs_dir=".")
+    with EpisodePool(recordings, backend, workers, address, rerun=True) as pool:
+        replayed = pool.run([r["spec"] for r in keep])
+    saved = []
+    for row, (_, result) in zip(keep, replayed.iterrows()):
+        value = float(result["robustness_m"])
+        path = save_case(folder, row["spec"], result.to_dict(), row["found_by"])
+        saved.append({"case": path.name, "recording": f"{row['spec'].trial_id}.rrd", "robustness_m": value,
+                      "failure": result.get("failure"), "sign": row["sign"],
+                      "replayed_identical": bool(value == row["robustness_m"])})
+    return saved
+
+
+def render(report: dict) -> str:
+    """The report as the table ``racf falsify`` prints."""
+    lines = [f"racf falsify: {report['setting']}, budget {report['budget']} episodes per search, "
+             f"{len(report['seeds'])} seeds per sampler ({report['episodes_run']} episodes run now, "
+             f"{report['episodes_evaluated']} evaluated, {report['wall_s']:.0f} s)", "",
+             "| sampler | falsified (rate, 95 % CI) | median episodes to first violation | lowest robustness m |",
+             "|---|---|---|---|"]
+    for name, s in report["samplers"].items():
+        median = s["episodes_to_first_median"]
+        median = f"{median:g}" if median is not None else f"> {s['budget']} (under half the seeds)"
+        lo, hi = s["falsification_rate_ci"]
+        lowest = s["lowest_robustness_m"]
+        lines.append(f"| {name} | {s['falsified']}/{s['n_seeds']} = {s['falsification_rate']:.2f} [{lo:.2f}, {hi:.2f}] "
+                     f"| {median} | {lowest:+.3f} |" if lowest is not None and math.isfinite(lowest) else
+                     f"| {name} | {s['falsified']}/{s['n_seeds']} | {median} | - |")
+    worst = report.get("worst")
+    if worst:
+        lines += ["", f"worst case: robustness {worst['robustness_m']:+.3f} m ({worst['sampler']}, seed {worst['seed']}, "
+                      f"trial {worst['trial']}): " + ", ".join(f"{k}={_fmt(v)}" for k, v in worst["params"].items())]
+    if report["cases"]:
+        lines += ["", f"{len(report['cases'])} distinct violation(s) recorded as cases (racf replay-case FILE):"]
+        lines += [f"  cases/{c['case']}  robustness {c['robustness_m']:+.3f} m, {c['failure']}, "
+                  f"replayed {'to the bit' if c['replayed_identical'] else 'DIFFERENTLY'}" for c in report["cases"]]
+    lines += ["", "convergence plot: convergence.png in the results folder"]
+    return "\n".join(lines)
+
+
+def _fmt(value) -> str:
+    return f"{value:.3g}" if isinstance(value, float) else str(value)

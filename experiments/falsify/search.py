@@ -1,0 +1,178 @@
+"""Falsification: Optuna searches the space for the episodes with the lowest stop-rule robustness.
+
+Each search is one Optuna study (a sampler and a search seed) kept in a journal file under
+``out/studies/``, so a search killed at any point resumes from its stored trials. Searches run in
+rounds: every unfinished study asks for ``batch`` trials, all their episodes run on one pool,
+and the values are told in trial order. The order never depends on which episode finished first,
+so the same command gives the same searches on any machine, with any number of workers.
+
+A trial's episode seed is ``search seed * 100000 + trial number``: what the evaluation is, so
+every sampler meets the same noise at the same step of its budget. The objective is the
+episode's robustness (``episode.robustness``; negative: the stop rule was broken).
+
+A study's file is named by what made its values: the space, the defence and attacks, the
+sampler and seed, the batch, racf's episode code and the plug-ins' sources. Other code makes a
+new study; a stale one is never resumed.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from racf.experiments.episode.spec import EPISODE_CODE, plugin_sources
+from racf.experiments.falsify.pool import EpisodePool
+from racf.experiments.falsify.space import SearchSpace
+from racf.experiments.sweeps.store import code_version
+
+__all__ = ["SAMPLERS", "SearchConfig", "make_sampler", "run_searches", "episode_seed", "study_key"]
+
+#: The samplers: Optuna's TPE and CMA-ES (guided) and random search (the baseline).
+SAMPLERS = ("tpe", "cmaes", "random")
+#: Random trials before the guided samplers model the space.
+STARTUP_TRIALS = 10
+
+
+def episode_seed(search_seed: int, number: int) -> int:
+    """The episode seed of trial ``number`` of the search with ``search_seed``."""
+    return int(search_seed) * 100_000 + int(number)
+
+
+def make_sampler(name: str, seed: int):
+    """Optuna's sampler ``name`` (``SAMPLERS``), seeded. CMA-ES models the numeric dimensions and
+    draws the categorical ones (sign, effect) at random, as Optuna's CmaEsSampler does."""
+    import optuna
+
+    if name == "tpe":
+        return optuna.samplers.TPESampler(seed=seed, n_startup_trials=STARTUP_TRIALS, multivariate=True,
+                                          constant_liar=True)
+    if name == "cmaes":
+        return optuna.samplers.CmaEsSampler(seed=seed, n_startup_trials=STARTUP_TRIALS, warn_independent_sampling=False,
+                                            independent_sampler=optuna.samplers.RandomSampler(seed=seed))
+    if name == "random":
+        return optuna.samplers.RandomSampler(seed=seed)
+    raise ValueError(f"sampler must be one of {SAMPLERS}, got {name!r}")
+
+
+@dataclass(frozen=True)
+class SearchConfig:
+    """A set of searches: every sampler x every seed, each with ``budget`` episodes."""
+
+    space: SearchSpace
+    samplers: tuple[str, ...] = ("tpe",)
+    seeds: tuple[int, ...] = (0,)
+    budget: int = 100
+    batch: int = 4
+    stop_at_violation: bool = False
+    extra: dict = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        bad = [s for s in self.samplers if s not in SAMPLERS]
+        if not self.samplers or bad:
+            raise ValueError(f"samplers must be a non-empty subset of {SAMPLERS}, got {list(self.samplers)}")
+        if not self.seeds or not all(isinstance(s, int) and 0 <= s < 10_000 for s in self.seeds):
+            raise ValueError(f"seeds must be integers in [0, 10000), got {list(self.seeds)}")
+        if not (isinstance(self.budget, int) and 1 <= self.budget <= 100_000):
+            raise ValueError(f"budget must be an integer number of episodes in [1, 100000], got {self.budget!r}")
+        if not (isinstance(self.batch, int) and 1 <= self.batch <= 64):
+            raise ValueError(f"batch must be an integer in [1, 64], got {self.batch!r}")
+
+
+def study_key(space: SearchSpace, sampler: str, seed: int, batch: int) -> str:
+    """What a study's values depend on, hashed: a new key is a new study."""
+    probe = space.trial_spec({d.name: (d.choices[0] if d.choices is not None else d.low) for d in space.dimensions}, 0)
+    payload = {"space": space.to_json(), "sampler": sampler, "seed": seed, "batch": batch,
+               "code": code_version(*EPISODE_CODE), "plugins": plugin_sources(probe),
+               "startup": STARTUP_TRIALS}
+    return hashlib.sha256(json.dumps(payload, sort_keys=True, default=str).encode()).hexdigest()[:12]
+
+
+class _Search:
+    """One study and its bookkeeping."""
+
+    def __init__(self, cfg: SearchConfig, sampler: str, seed: int, folder: Path) -> None:
+        import optuna
+        from optuna.storages.journal import JournalFileBackend, JournalStorage
+
+        self.cfg, self.sampler, self.seed = cfg, sampler, seed
+        key = study_key(cfg.space, sampler, seed, cfg.batch)
+        self.name = f"{sampler}-seed{seed}-{key}"
+        folder.mkdir(parents=True, exist_ok=True)
+        storage = JournalStorage(JournalFileBackend(str(folder / f"{self.name}.jsonl")))
+        self.study = optuna.create_study(study_name=self.name, storage=storage, direction="minimize",
+                                         sampler=make_sampler(sampler, seed), load_if_exists=True)
+
+    def trials(self) -> list[tuple[int, dict, float]]:
+        """(number, parameters, robustness) of the told trials, in order, up to the budget."""
+        from optuna.trial import TrialState
+
+        done = sorted(self.study.get_trials(deepcopy=False, states=(TrialState.COMPLETE,)), key=lambda t: t.number)
+        return [(t.number, dict(t.params), float(t.value)) for t in done][: self.cfg.budget]
+
+    def values(self) -> list[float]:
+        return [value for *_, value in self.trials()]
+
+    @property
+    def done(self) -> bool:
+        values = self.values()
+        return len(values) >= self.cfg.budget or (self.cfg.stop_at_violation and any(v < 0 for v in values))
+
+    def pending(self) -> list:
+        """This round's trials: those asked and never told (a killed run's) first, then new ones."""
+        from optuna.trial import TrialState
+
+        space = self.cfg.space
+        names = {d.name for d in space.dimensions}
+        trials = []
+        for frozen in sorted(self.study.get_trials(deepcopy=False, states=(TrialState.RUNNING,)),
+                             key=lambda t: t.number):
+            if set(frozen.params) == names:
+                trials.append((frozen.number, dict(frozen.params)))
+            else:  # killed while its parameters were drawn: it never ran
+                self.study.tell(frozen.number, state=TrialState.FAIL)
+        room = min(self.cfg.batch, self.cfg.budget - len(self.values())) - len(trials)
+        # A sampler's random state is not stored with the study: seed it afresh each round from
+        # what the round is, so a resumed search asks what an uninterrupted one would have.
+        self.study.sampler = make_sampler(self.sampler, self.seed * 100_003 + len(self.study.trials))
+        for _ in range(max(room, 0)):
+            trial = self.study.ask()
+            trials.append((trial.number, space.suggest(trial)))
+        return trials
+
+    def tell(self, number: int, value: float) -> None:
+        from optuna.trial import TrialState
+
+        if math.isfinite(value):
+            self.study.tell(number, value)
+        else:  # no robustness (no stop line): not a point of the search
+            self.study.tell(number, state=TrialState.FAIL)
+
+
+def run_searches(cfg: SearchConfig, out: str | Path, pool: EpisodePool, progress: bool = True) -> dict:
+    """Runs (or resumes) every search of ``cfg``; returns ``{(sampler, seed): [(trial, episode_id, value)]}``."""
+    import optuna
+    from tqdm import tqdm
+
+    optuna.logging.set_verbosity(optuna.logging.WARNING)
+    folder = Path(out) / "studies"
+    searches = [_Search(cfg, sampler, seed, folder) for sampler in cfg.samplers for seed in cfg.seeds]
+    total = len(searches) * cfg.budget
+    bar = tqdm(total=total, initial=sum(min(len(s.values()), cfg.budget) for s in searches), desc="falsify",
+               unit="episode", disable=not progress)
+    while True:
+        live = [s for s in searches if not s.done]
+        if not live:
+            break
+        rounds = [(s, number, params, cfg.space.trial_spec(params, episode_seed(s.seed, number)))
+                  for s in live for number, params in s.pending()]
+        rows = pool.run([spec for *_, spec in rounds])
+        for (search, number, _, _), (_, row) in zip(rounds, rows.iterrows()):
+            value = row.get("robustness_m")
+            search.tell(number, float(value) if value is not None and value == value else math.nan)
+        bar.update(len(rounds))
+        bar.set_postfix_str(f"lowest {min(min(s.values(), default=math.inf) for s in searches):+.3f} m")
+    bar.close()
+    return {(s.sampler, s.seed): s for s in searches}

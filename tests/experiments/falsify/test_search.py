@@ -1,0 +1,82 @@
+"""The searches: deterministic, resumable without redoing an episode, and guided ones find what random search misses."""
+
+import pandas as pd
+import pytest
+
+from racf.experiments.falsify.report import best_so_far, first_violation, sampler_summary
+from racf.experiments.falsify.search import SearchConfig, episode_seed, run_searches
+from racf.experiments.falsify.space import load_space
+
+
+class FakePool:
+    """Stands in for the episode pool: a smooth robustness over the space, no simulator. It
+    counts every episode it is asked to run that it has not run before (the store's reuse)."""
+
+    def __init__(self):
+        self.seen, self.ran = {}, 0
+
+    def run(self, specs):
+        rows = []
+        for spec in specs:
+            key = spec.trial_id
+            if key not in self.seen:
+                self.ran += 1
+                params = spec.attack_params.get("dropout_timed", {})
+                # Violations only in a small corner: fast, short run-up, late strike.
+                value = 0.3 * (2.0 - spec.speed) + 0.2 * (spec.run_up_m - 1.2) + 0.02 * (8 - params.get("scans", 1)) - 0.05
+                self.seen[key] = value
+            rows.append({"robustness_m": self.seen[key]})
+        return pd.DataFrame(rows)
+
+
+def _space():
+    return load_space("odca", ("dropout_timed",))
+
+
+def test_the_same_search_gives_the_same_trials_and_a_killed_one_resumes_without_rerunning(tmp_path):
+    cfg = SearchConfig(_space(), ("tpe", "random"), (0, 1), budget=12, batch=4)
+    a, b = FakePool(), FakePool()
+    first = run_searches(cfg, tmp_path / "a", a, progress=False)
+    again = run_searches(cfg, tmp_path / "b", b, progress=False)
+    assert {k: s.trials() for k, s in first.items()} == {k: s.trials() for k, s in again.items()}
+    # "Killed" after 8 episodes per search: a longer budget on the same folder goes on from there.
+    # TPE starts as random search with the same seed: the two share those episodes (one run each).
+    assert [t[1] for t in first[("tpe", 0)].trials()[:8]] == [t[1] for t in first[("random", 0)].trials()[:8]]
+    c = FakePool()
+    short = SearchConfig(_space(), ("tpe",), (0, 1), budget=8, batch=4)
+    run_searches(short, tmp_path / "c", c, progress=False)
+    assert c.ran == 2 * 8
+    longer = SearchConfig(_space(), ("tpe",), (0, 1), budget=12, batch=4)
+    resumed = run_searches(longer, tmp_path / "c", c, progress=False)
+    assert c.ran == 2 * 12  # only the 4 new episodes per search ran
+    assert {k: s.trials() for k, s in resumed.items()} == {k: first[k].trials() for k in resumed}
+
+
+def test_trials_asked_but_never_told_are_evaluated_on_resume(tmp_path):
+    cfg = SearchConfig(_space(), ("random",), (3,), budget=6, batch=3)
+    pool = FakePool()
+    searches = run_searches(SearchConfig(_space(), ("random",), (3,), budget=3, batch=3), tmp_path, pool, progress=False)
+    search = searches[("random", 3)]
+    asked = search.study.ask()  # a kill between ask and tell leaves a RUNNING trial
+    _space().suggest(asked)
+    resumed = run_searches(cfg, tmp_path, pool, progress=False)[("random", 3)]
+    numbers = [n for n, *_ in resumed.trials()]
+    assert numbers == sorted(numbers) and asked.number in numbers and len(numbers) == 6
+
+
+def test_episode_seeds_come_from_the_search_and_the_trial():
+    assert episode_seed(0, 7) == 7 and episode_seed(3, 7) == 300_007
+    spec = _space().trial_spec({"sign": 3, "speed": 1.5, "run_up_m": 9.0, "stable_steps": 10,
+                                "attack.dropout_timed.scans": 2, "attack.dropout_timed.effect": "bias",
+                                "attack.dropout_timed.bias_m": 0.5}, episode_seed(1, 2))
+    assert spec.seed == 100_002 and spec.run_up_m == pytest.approx(2.36, abs=0.01)  # cut to sign 3's lane
+    assert spec.attack_params == {"dropout_timed": {"scans": 2, "effect": "bias", "bias_m": 0.5}}
+
+
+def test_the_report_counts_first_violations_and_censors_seeds_that_found_none():
+    assert first_violation([0.3, 0.1, -0.2, -0.5]) == 3 and first_violation([0.1]) is None
+    assert list(best_so_far([0.3, 0.5, 0.1], 5)) == [0.3, 0.3, 0.1, 0.1, 0.1]
+    s = sampler_summary({0: [0.1, -0.1], 1: [0.2, 0.1], 2: [-0.3]}, budget=2)
+    assert s["falsified"] == 2 and s["episodes_to_first_median"] == 2.0 and s["lowest_robustness_m"] == -0.3
+    none = sampler_summary({0: [0.1, 0.2], 1: [0.2, 0.1], 2: [-0.3]}, budget=2)
+    assert none["episodes_to_first_median"] is None  # under half the seeds found one: beyond the budget
