@@ -22,6 +22,7 @@ the same step of its budget.
 
 from __future__ import annotations
 
+import math
 import tomllib
 from dataclasses import dataclass
 from pathlib import Path
@@ -131,7 +132,7 @@ class SearchSpace:
         sign = int(fields.pop("sign", 0))
         if fields.get("run_up_m") is not None:  # no longer than the sign's lane allows
             longest = longest_run_up("sign", sign, fields.get("sign_geometry", "plate"))
-            fields["run_up_m"] = round(min(float(fields["run_up_m"]), longest), 6)
+            fields["run_up_m"] = min(float(fields["run_up_m"]), math.floor(longest * 1e6) / 1e6)
         return TrialSpec(self.setting, speed=float(fields.pop("speed", 1.5)), sign=sign, seed=int(seed),
                          attack_params=attack_params, **fields)
 

@@ -70,6 +70,9 @@ def test_episode_seeds_come_from_the_search_and_the_trial():
                                 "attack.dropout_timed.scans": 2, "attack.dropout_timed.effect": "bias",
                                 "attack.dropout_timed.bias_m": 0.5}, episode_seed(1, 2))
     assert spec.seed == 100_002 and spec.run_up_m == pytest.approx(2.36, abs=0.01)  # cut to sign 3's lane
+    from racf.experiments.episode.plan import plan_episode
+
+    plan_episode(spec)  # and the lane takes it
     assert spec.attack_params == {"dropout_timed": {"scans": 2, "effect": "bias", "bias_m": 0.5}}
 
 
