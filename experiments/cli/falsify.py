@@ -43,7 +43,9 @@ def register(sub: argparse._SubParsersAction) -> None:
 
     r = sub.add_parser("replay-case", help="rerun saved counterexamples (a case file or a folder of them): on the "
                                            "same code to the bit; with --defence, against another defence")
-    r.add_argument("cases", nargs="+", type=Path, help="case files, or folders of them (e.g. experiments/falsify/cases)")
+    r.add_argument("cases", nargs="*", type=Path, help="case files, or folders of them")
+    r.add_argument("--suite", action="store_true",
+                   help="replay racf's shipped regression suite (experiments/falsify/cases) too")
     r.add_argument("--defence", default=None, metavar="NAME",
                    help="replay the cases' scenario and attacks against this defence instead of their own")
     r.add_argument("--rerun", type=Path, default=None, metavar="FILE.rrd",
@@ -81,8 +83,12 @@ def _replay(args: argparse.Namespace) -> int:
 
     if args.defence is not None and args.defence not in ESTIMATORS:
         fail("replay-case", f"unknown defence {args.defence!r}; choose from {', '.join(ESTIMATORS)}")
+    from racf.experiments.falsify.cases import SUITE
+
+    if not args.cases and not args.suite:
+        fail("replay-case", "name case files or folders, or --suite for racf's shipped regression suite")
     files = []
-    for path in args.cases:
+    for path in [*args.cases, *([SUITE] if args.suite else [])]:
         if path.is_dir():
             files += sorted(path.glob("*.json"))
         elif path.exists():

@@ -5,6 +5,7 @@ distinct violations recorded as cases (spec + rerun recording), in one results f
     out/studies/       one Optuna journal per search (resumed after a kill)
     out/report.json    the report (strict JSON)
     out/convergence.png
+    out/worst.png      the worst case found: the camera as the attack struck, and the trace
     out/cases/         a case file and its .rrd recording per distinct violation
 """
 
@@ -53,8 +54,16 @@ def falsify(defence: str, attacks: tuple[str, ...], out: str | Path, budget: int
     plot_convergence(values, budget, out / "convergence.png", f"{space.setting}: {len(seeds)} seeds per sampler")
     report["convergence_png"] = "convergence.png"
     report["cases"] = _record_cases(space, violations, store, out / "cases", backend, workers, address) if cases else []
-    report["wall_s"] = time.perf_counter() - t0
     report["worst"] = _worst(space, values, searches)
+    if report["worst"] is not None:
+        from racf.experiments.falsify.figure import worst_case_figure
+
+        worst = report["worst"]
+        spec = space.trial_spec(worst["params"], episode_seed(worst["seed"], worst["trial"]))
+        worst_case_figure(spec, out / "worst.png", f"{space.setting}: the lowest robustness of {len(seeds)} x "
+                                                   f"{len(samplers)} searches")
+        report["worst_png"] = "worst.png"
+    report["wall_s"] = time.perf_counter() - t0
     atomic_write(out / "report.json", json.dumps(report, indent=1, allow_nan=False))
     return report
 
@@ -122,7 +131,7 @@ def render(report: dict) -> str:
         lines += ["", f"{len(report['cases'])} distinct violation(s) recorded as cases (racf replay-case FILE):"]
         lines += [f"  cases/{c['case']}  robustness {c['robustness_m']:+.3f} m, {c['failure']}, "
                   f"replayed {'to the bit' if c['replayed_identical'] else 'DIFFERENTLY'}" for c in report["cases"]]
-    lines += ["", "convergence plot: convergence.png in the results folder"]
+    lines += ["", "convergence plot: convergence.png; the worst case's picture and trace: worst.png (results folder)"]
     return "\n".join(lines)
 
 

@@ -37,7 +37,9 @@ def card_version(defence: str) -> str:
 def _loop_summary(rows: pd.DataFrame, attacked: bool) -> dict:
     s = summarize(rows, attack=attacked)
     keep = ("n", "scr", "scr_ci", "asr", "asr_ci", "n_attack_before_t_star", "scr_attack_before_t_star",
-            "scr_attack_before_t_star_ci", "dt_brake_mean", "dt_brake_std", "n_latency", "failures")
+            "scr_attack_before_t_star_ci", "dt_brake_mean", "dt_brake_std", "n_latency", "failures",
+            "robustness_median_m", "robustness_ci", "robustness_p5_m", "robustness_min_m", "violation_share",
+            "violation_share_ci")
     return {k: s.get(k) for k in keep if k in s}
 
 

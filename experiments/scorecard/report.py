@@ -59,6 +59,9 @@ def card_rows(card: dict) -> list[tuple[str, str, str, float | None, list | None
         if r.get("undetected_error_median") is not None:
             rows.append(("closed loop", r["title"], "undetected error m, median", r["undetected_error_median"],
                          r["undetected_error_ci"], r["n"], False))
+        if r.get("robustness_median_m") is not None:  # the stop rule's STL robustness (episode.robustness)
+            rows.append(("closed loop", r["title"], "STL robustness m, median", r["robustness_median_m"],
+                         r["robustness_ci"], r["n"], True))
     for key, r in card["drives"].items():
         rows.append(("drives", r["title"], "driving score", r["driving_score"], r["driving_score_ci"], r["n"], True))
         rows.append(("drives", r["title"], "route completion", r["route_completion"], None, r["n"], True))

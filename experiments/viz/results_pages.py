@@ -16,6 +16,7 @@ import json
 from pathlib import Path
 from typing import Callable
 
+from racf.experiments.viz.falsify_page import falsification_markdown
 from racf.experiments.viz.leaderboard_page import leaderboard_markdown
 from racf.experiments.viz.results_format import page_head as _page_head
 from racf.experiments.viz.results_format import ci as _ci
@@ -495,6 +496,7 @@ def _index(d: _Data) -> str:
              "| [Offline benchmark](offline-benchmark.md) | repair RMSE against forecasting baselines |",
              "| [Adaptive attacks](adaptive-attacks.md) | white- and black-box attacks that know the defence |",
              "| [Detector and sticker](detector-and-sticker.md) | the learned segmenter and the printed sticker |",
+             "| [Falsification](falsification.md) | searched worst cases per defence, and the regression suite |",
              "| [Speed](speed.md) | the simulator, whole episodes and ODCA's per-step cost |", "",
              "## Every stored result", "",
              "| result | command | commit | measured | machine |", "|---|---|---|---|---|"]
@@ -511,3 +513,4 @@ RESULT_PAGES: dict[str, Callable[[Path], str]] = {
     for name, make in (("index", _index), ("leaderboard", leaderboard_markdown), ("paper", _paper), ("closed-loop", _closed_loop), ("sweeps", _sweeps),
                        ("offline-benchmark", _offline), ("adaptive-attacks", _adaptive),
                        ("detector-and-sticker", _detector), ("speed", _speed))}
+RESULT_PAGES["results/falsification.md"] = falsification_markdown

@@ -1,0 +1,120 @@
+"""The falsification results page (``docs/results/falsification.md``), from the stored reports of
+``racf falsify`` (``falsify-*`` in ``docs/results/data``) and their figures in ``docs/falsify/``."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from racf.experiments.episode.robustness import STOP_RULE
+from racf.experiments.viz.results_format import meta_lines, page_head
+
+__all__ = ["falsification_markdown", "FALSIFY_RESULTS", "guided_verdict"]
+
+#: The stored searches the page shows: (result name, what it is, the command).
+FALSIFY_RESULTS = (
+    ("falsify-odca-dropout_timed", "ODCA under the timed dropout",
+     "racf falsify --defence odca --attack dropout_timed --budget 100 --seeds 10"),
+    ("falsify-raw-patch", "raw depth under the patch (the sanity check)",
+     "racf falsify --defence raw --attack patch_occlusion --budget 20 --seeds 10"),
+)
+
+
+def guided_verdict(samplers: dict) -> str:
+    """Whether TPE or CMA-ES beat random search: a median at least 3 x lower, or a higher falsification rate."""
+    rnd = samplers.get("random")
+    if rnd is None:
+        return "No random-search baseline was run."
+    words = []
+    for name in ("tpe", "cmaes"):
+        s = samplers.get(name)
+        if s is None:
+            continue
+        med, base = s["episodes_to_first_median"], rnd["episodes_to_first_median"]
+        faster = med is not None and (base is None or base >= 3 * med)
+        oftener = s["falsified"] > rnd["falsified"]
+        verdict = ("beats random search" if faster or oftener else "does not beat random search")
+        words.append(f"{name.upper()} {verdict} (median episodes to the first violation {_fmt(med)} against "
+                     f"{_fmt(base)}; found one in {s['falsified']}/{s['n_seeds']} seeds against "
+                     f"{rnd['falsified']}/{rnd['n_seeds']})")
+    return "; ".join(words) + "."
+
+
+def _fmt(median) -> str:
+    return "beyond the budget" if median is None else f"{median:g}"
+
+
+def _table(samplers: dict) -> list[str]:
+    lines = ["| sampler | seeds | falsified at the budget (95 % CI) | median episodes to first violation | "
+             "lowest robustness m (median over seeds) |", "|---|---|---|---|---|"]
+    for name, s in samplers.items():
+        lo, hi = s["falsification_rate_ci"]
+        low, med_low = s["lowest_robustness_m"], s["lowest_robustness_median_m"]
+        lines.append(f"| {name} | {s['n_seeds']} | {s['falsified']}/{s['n_seeds']} = {s['falsification_rate']:.2f} "
+                     f"[{lo:.2f}, {hi:.2f}] | {_fmt(s['episodes_to_first_median'])} | "
+                     f"{low:+.3f} ({med_low:+.3f}) |")
+    return lines + [""]
+
+
+def _worst(report: dict) -> list[str]:
+    worst = report.get("worst")
+    if not worst:
+        return []
+    lines = [f"**The worst case found**: robustness {worst['robustness_m']:+.3f} m ({worst['sampler']}, search seed "
+             f"{worst['seed']}, trial {worst['trial']}; episode `{worst['trial_id']}`).", "",
+             "| parameter | value |", "|---|---|"]
+    lines += [f"| {k} | {v:.3g} |" if isinstance(v, float) else f"| {k} | {v} |" for k, v in worst["params"].items()]
+    return lines + [""]
+
+
+def _cases(report: dict) -> list[str]:
+    cases = report.get("cases") or []
+    if not cases:
+        return ["No violation was found, so no case was recorded.", ""]
+    lines = [f"{len(cases)} distinct violation(s) (one per sign and failure), each replayed to the same robustness "
+             "to the bit when recorded:", "", "| case | sign | failure | robustness m | replayed to the bit |",
+             "|---|---|---|---|---|"]
+    lines += [f"| `{c['case']}` | {c['sign']} | {c['failure']} | {c['robustness_m']:+.3f} | "
+              f"{'yes' if c['replayed_identical'] else 'NO'} |" for c in cases]
+    return lines + [""]
+
+
+def falsification_markdown(root: Path) -> str:
+    """The page from the stored results in ``root`` (``docs/results/data``)."""
+    root = Path(root)
+    figures = root.parent.parent / "falsify"
+    lines = page_head(
+        "Falsification: each defence's worst case",
+        "`racf falsify` searches the attack and scenario space (the sign, the speed, the run-up, when the attack may "
+        "start after first sight, and the attack's own settings) for the episodes that break the stop rule, written "
+        "in signal temporal logic and scored by [rtamt](https://github.com/nickovic/rtamt):",
+        f"`{STOP_RULE}`",
+        "over each approach (until the car first rests): the bumper never crosses the line, and once within 0.60 m of "
+        "it the car is at rest within 3 s (`rest` is 20 s x (0.05 m/s - speed), so both clauses read in metres). "
+        "Robustness is signed: negative is a violation, and its size says by how much. Every episode of racf now "
+        "logs it (`robustness_m`), and sweep summaries report its distribution.",
+        "Each search is an Optuna study: TPE and CMA-ES (guided) and random search (the baseline), 10 search seeds "
+        "each. A trial's episode seed comes from the search seed and the trial number, so every sampler meets the "
+        "same noise at the same step; TPE and CMA-ES start with the same 10 random trials as random search.")
+    for name, what, command in FALSIFY_RESULTS:
+        lines += [f"## {what}", ""]
+        path = root / f"{name}.json"
+        if not path.exists():
+            lines += [f"Not stored yet (`{name}`): run `{command}` and store its `report.json` with `results_store`.", ""]
+            continue
+        report = json.loads(path.read_text())
+        lines += meta_lines(report["meta"])
+        lines += [f"Budget {report['budget']} episodes per search, rounds of {report['batch']}; "
+                  f"{report['episodes_evaluated']} evaluations, {report['episodes_run']} distinct episodes run "
+                  f"(the others were shared or read back), {report['wall_s'] / 60:.1f} min.", ""]
+        lines += _table(report["samplers"]) + [guided_verdict(report["samplers"]), ""]
+        for suffix, caption in (("convergence", "the lowest robustness so far, median over seeds and quartiles"),
+                                ("worst", "the worst case: the camera as the attack struck, and its trace")):
+            if (figures / f"{name}-{suffix}.png").exists():
+                lines += [f"![{caption}](../falsify/{name}-{suffix}.png)", ""]
+        lines += _worst(report) + _cases(report)
+    lines += ["## The regression suite", "",
+              "The distinct failures found for the built-in defences are shipped in `experiments/falsify/cases/`; a "
+              "test replays each. After a change to a defence, `racf replay-case --suite` (or `--suite --defence NAME` "
+              "for another defence) says which of them it now survives.", ""]
+    return "\n".join(lines)
