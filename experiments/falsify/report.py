@@ -82,7 +82,7 @@ def plot_convergence(values: dict[tuple[str, int], list[float]], budget: int, pa
         ax.plot(x, med, label=f"{sampler} (median of {len(curves)} seeds)", color=colour)
         ax.fill_between(x, q1, q3, alpha=0.2, color=colour)
     ax.axhline(0.0, color="tab:red", lw=0.8, ls="--")
-    ax.text(budget, 0.0, " violation below", va="bottom", ha="right", color="tab:red", fontsize=8)
+    ax.text(1, 0.0, "below: a violation", va="top", ha="left", color="tab:red", fontsize=8)
     ax.set(xlabel="episodes", ylabel="lowest robustness so far (m)", title=title)
     ax.legend(fontsize=8)
     fig.tight_layout()

@@ -13,7 +13,7 @@ __all__ = ["falsification_markdown", "FALSIFY_RESULTS", "guided_verdict"]
 
 #: The stored searches the page shows: (result name, what it is, the command).
 FALSIFY_RESULTS = (
-    ("falsify-odca-dropout_timed", "ODCA under the timed dropout",
+    ("falsify-odca-dropout", "ODCA under the timed dropout",
      "racf falsify --defence odca --attack dropout_timed --budget 100 --seeds 10"),
     ("falsify-raw-patch", "raw depth under the patch (the sanity check)",
      "racf falsify --defence raw --attack patch_occlusion --budget 20 --seeds 10"),
