@@ -15,7 +15,7 @@ __all__ = ["falsification_markdown", "FALSIFY_RESULTS", "guided_verdict"]
 FALSIFY_RESULTS = (
     ("falsify-odca-dropout", "ODCA under the timed dropout",
      "racf falsify --defence odca --attack dropout_timed --budget 100 --seeds 10"),
-    ("falsify-raw-patch", "raw depth under the patch (the sanity check)",
+    ("falsify-raw-patch", "Raw depth under the patch (the sanity check)",
      "racf falsify --defence raw --attack patch_occlusion --budget 20 --seeds 10"),
 )
 
@@ -34,10 +34,29 @@ def guided_verdict(samplers: dict) -> str:
         faster = med is not None and (base is None or base >= 3 * med)
         oftener = s["falsified"] > rnd["falsified"]
         verdict = ("beats random search" if faster or oftener else "does not beat random search")
-        words.append(f"{name.upper()} {verdict} (median episodes to the first violation {_fmt(med)} against "
+        words.append(f"{_NAMES.get(name, name)} {verdict} (median episodes to the first violation {_fmt(med)} against "
                      f"{_fmt(base)}; found one in {s['falsified']}/{s['n_seeds']} seeds against "
                      f"{rnd['falsified']}/{rnd['n_seeds']})")
     return "; ".join(words) + "."
+
+
+_NAMES = {"tpe": "TPE", "cmaes": "CMA-ES", "random": "random search"}
+
+
+def _why(samplers: dict) -> list[str]:
+    """Why guided search did not beat random here, from the numbers: a flat landscape with a cliff."""
+    guided = [samplers[n] for n in ("tpe", "cmaes") if n in samplers]
+    rnd = samplers.get("random")
+    if not guided or rnd is None or any(g["falsified"] > rnd["falsified"] for g in guided):
+        return []
+    lows = [s["lowest_robustness_median_m"] for s in samplers.values()]
+    return [f"Why: every sampler's lowest robustness per seed has a median of {min(lows):+.3f} to {max(lows):+.3f} m, "
+            "so each search soon finds episodes that stop within a few centimetres of the line; but the violations "
+            "it rarely finds lie a metre below (the car loses the sign, or brakes late, and runs the line). The "
+            "rule's robustness is flat just above zero and falls off a cliff where the attack wins: a model of the "
+            "landscape has no slope to follow, and each failure is an isolated point that random draws hit as "
+            "often as a guided search. A smoother objective (how close the acted-on distance came to hiding the "
+            "line) would give the guided samplers something to climb.", ""]
 
 
 def _fmt(median) -> str:
@@ -88,7 +107,7 @@ def falsification_markdown(root: Path) -> str:
         "`racf falsify` searches the attack and scenario space (the sign, the speed, the run-up, when the attack may "
         "start after first sight, and the attack's own settings) for the episodes that break the stop rule, written "
         "in signal temporal logic and scored by [rtamt](https://github.com/nickovic/rtamt):",
-        f"`{STOP_RULE}`",
+        f"`{STOP_RULE}` (discrete time at 50 Hz: 150 steps are 3 s)",
         "over each approach (until the car first rests): the bumper never crosses the line, and once within 0.60 m of "
         "it the car is at rest within 3 s (`rest` is 20 s x (0.05 m/s - speed), so both clauses read in metres). "
         "Robustness is signed: negative is a violation, and its size says by how much. Every episode of racf now "
@@ -107,12 +126,18 @@ def falsification_markdown(root: Path) -> str:
         lines += [f"Budget {report['budget']} episodes per search, rounds of {report['batch']}; "
                   f"{report['episodes_evaluated']} evaluations, {report['episodes_run']} distinct episodes run "
                   f"(the others were shared or read back), {report['wall_s'] / 60:.1f} min.", ""]
-        lines += _table(report["samplers"]) + [guided_verdict(report["samplers"]), ""]
+        lines += _table(report["samplers"]) + [guided_verdict(report["samplers"]), ""] + _why(report["samplers"])
         for suffix, caption in (("convergence", "the lowest robustness so far, median over seeds and quartiles"),
                                 ("worst", "the worst case: the camera as the attack struck, and its trace")):
             if (figures / f"{name}-{suffix}.png").exists():
                 lines += [f"![{caption}](../falsify/{name}-{suffix}.png)", ""]
         lines += _worst(report) + _cases(report)
+    speed = root / "falsify-speed-500.json"
+    if speed.exists():
+        report = json.loads(speed.read_text())
+        lines += ["## Cost", ""] + meta_lines(report["meta"])
+        lines += [f"{report['episodes_evaluated']} evaluations ({report['episodes_run']} distinct ODCA episodes run, "
+                  f"nothing reused) took {report['wall_s'] / 60:.1f} min of wall time on this machine's 2 cores.", ""]
     lines += ["## The regression suite", "",
               "The distinct failures found for the built-in defences are shipped in `experiments/falsify/cases/`; a "
               "test replays each. After a change to a defence, `racf replay-case --suite` (or `--suite --defence NAME` "
