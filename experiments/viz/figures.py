@@ -16,7 +16,7 @@ from racf.sim.world.mat_texture import render_mat  # noqa: E402
 from racf.sim.world.road_graph import qcar2_road_graph  # noqa: E402
 from racf.sim.world.stop_signs import stop_signs  # noqa: E402
 
-__all__ = ["top_view", "camera_views"]
+__all__ = ["top_view", "camera_views", "save_figure"]
 
 
 def top_view(path: Path, pose: tuple[float, float, float] | None = None,
@@ -72,7 +72,7 @@ def camera_views(out_dir: Path, rgb: np.ndarray, depth: np.ndarray, lidar: np.nd
         ax.contour(sign_mask, levels=[0.5], colors="cyan", linewidths=1)
     ax.set_title("D435 colour (cyan: ground-truth sign mask)")
     ax.axis("off")
-    paths.append(_save(fig, out_dir / f"{prefix}camera_rgb.png"))
+    paths.append(save_figure(fig, out_dir / f"{prefix}camera_rgb.png"))
 
     fig, ax = plt.subplots(figsize=(6.8, 4.8))
     shown = np.where(depth > 0, depth, np.nan)
@@ -80,7 +80,7 @@ def camera_views(out_dir: Path, rgb: np.ndarray, depth: np.ndarray, lidar: np.nd
     fig.colorbar(im, ax=ax, label="depth (m), white = no return")
     ax.set_title("D435 aligned depth")
     ax.axis("off")
-    paths.append(_save(fig, out_dir / f"{prefix}camera_depth.png"))
+    paths.append(save_figure(fig, out_dir / f"{prefix}camera_depth.png"))
 
     angles = np.arange(len(lidar)) * (2 * np.pi / len(lidar))
     ok = np.isfinite(lidar)
@@ -92,11 +92,14 @@ def camera_views(out_dir: Path, rgb: np.ndarray, depth: np.ndarray, lidar: np.nd
     ax.set_ylabel("y left (m)")
     ax.set_title(f"RPLIDAR A2M12 scan ({ok.sum()}/{len(lidar)} returns), body frame")
     ax.grid(alpha=0.3)
-    paths.append(_save(fig, out_dir / f"{prefix}lidar.png"))
+    paths.append(save_figure(fig, out_dir / f"{prefix}lidar.png"))
     return paths
 
 
-def _save(fig, path: Path, dpi: int = 100) -> Path:
+def save_figure(fig, path: Path, dpi: int = 100) -> Path:
+    """Lays ``fig`` out, writes it to ``path`` (making its folder) and closes it."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
     fig.tight_layout()
     fig.savefig(path, dpi=dpi)
     plt.close(fig)

@@ -19,6 +19,7 @@ def patched_sign_figure(examples: list[tuple[np.ndarray, np.ndarray, np.ndarray]
     import matplotlib.pyplot as plt
 
     from racf.controllers.detectors import make_detector
+    from racf.experiments.viz.figures import save_figure
 
     if not examples:
         raise ValueError("no example views to draw (none came near enough)")
@@ -38,9 +39,4 @@ def patched_sign_figure(examples: list[tuple[np.ndarray, np.ndarray, np.ndarray]
             ax.set_title(f"{title}: {'found' if d is not None else 'missed'}", fontsize=9)
             ax.axis("off")
     fig.suptitle("Learned detector (green: its mask), sticker printed in the scene", fontsize=10)
-    fig.tight_layout()
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return save_figure(fig, path, dpi=110)
