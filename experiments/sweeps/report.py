@@ -166,6 +166,14 @@ def _ci(ci: list[float]) -> str:
     return f"[{_fmt(ci[0])}, {_fmt(ci[1])}]"
 
 
+def _robustness_cells(r: dict) -> str:
+    """The stop rule's robustness cells of a setting's summary ('—' for rows stored before it was logged)."""
+    if r.get("robustness_median_m") is None:
+        return "— | —"
+    return (f"{_fmt(r['robustness_median_m'], 3)} {_ci3(r['robustness_ci'])} ({_fmt(r['robustness_min_m'], 3)}) | "
+            f"{_fmt(r['violation_share'])} {_ci(r['violation_share_ci'])}")
+
+
 def write_report(frame: pd.DataFrame, out: Path, name: str = "sweep") -> dict[str, Path]:
     """Writes ``summary.md``, ``summary.json`` and the two plots under ``out``."""
     out = Path(out)
@@ -175,15 +183,19 @@ def write_report(frame: pd.DataFrame, out: Path, name: str = "sweep") -> dict[st
     lines = [f"# Sweep `{name}`", "", f"{len(frame)} episodes. SCR with its 95 % Wilson interval; ASR = 1 - SCR "
              "under an attack; SCR, attack before t*: over the episodes whose attack began before t* (only "
              "those can test a defence), with their count; dt_brake over successful stops; largest jump: the "
-             "largest step change of the distance the car acted on beyond its own motion, over all episodes.", "",
-             "| setting | N | SCR [95 % CI] | ASR | SCR, attack before t* (N) | dt_brake s (n) | largest jump m |",
-             "|---|---|---|---|---|---|---|"]
+             "largest step change of the distance the car acted on beyond its own motion, over all episodes; "
+             "STL robustness: the stop rule's (negative: broken), its median [95 % CI] and lowest, and the "
+             "share of episodes that broke it.", "",
+             "| setting | N | SCR [95 % CI] | ASR | SCR, attack before t* (N) | dt_brake s (n) | largest jump m | "
+             "robustness m, median (lowest) | rule broken [95 % CI] |",
+             "|---|---|---|---|---|---|---|---|---|"]
     for setting, r in summary.items():
         early = "—" if r.get("n_attack_before_t_star") is None else (
             f"{_fmt(r['scr_attack_before_t_star'])} {_ci(r['scr_attack_before_t_star_ci'])} "
             f"({r['n_attack_before_t_star']})")
         lines.append(f"| {setting} | {r['n']} | {_fmt(r['scr'])} {_ci(r['scr_ci'])} | {_fmt(r['asr'])} | {early} | "
-                     f"{_fmt(r['dt_brake_mean'], 3)} ({r['n_latency']}) | {_fmt(r['max_fused_jump_m'], 3)} |")
+                     f"{_fmt(r['dt_brake_mean'], 3)} ({r['n_latency']}) | {_fmt(r['max_fused_jump_m'], 3)} | "
+                     f"{_robustness_cells(r)} |")
     if not frame.empty:
         frame = frame.assign(estimator=frame["estimator"].astype(str))
         lines += ["", "By attack and estimator (columns):", ""]
