@@ -20,7 +20,7 @@ from __future__ import annotations
 import hashlib
 import json
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 from racf.experiments.episode.spec import EPISODE_CODE, plugin_sources
@@ -67,7 +67,6 @@ class SearchConfig:
     budget: int = 100
     batch: int = 4
     stop_at_violation: bool = False
-    extra: dict = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         bad = [s for s in self.samplers if s not in SAMPLERS]
