@@ -1,7 +1,8 @@
 """The stop rule as signal temporal logic, and its robustness over an episode's step log.
 
 Per target (a ``slot`` of the log), over its approach (from the slot's first step to the car's
-first rest after it has moved; after a stop the car may lawfully go on):
+first rest after it has moved, and on while it stays at rest; after a stop the car may lawfully
+go on):
 
     always (gap >= 0)  and  always ((gap <= W) -> eventually[0:T] (speed <= V))
 
@@ -37,18 +38,25 @@ WINDOW_M = SUCCESS_BAND_M[1]
 REST_WITHIN_S = 3.0
 #: The rest clause's speed margin (m/s) times this reads in metres.
 REST_SCALE_S = 20.0
+_STEPS_PER_S = 50  # the log's rate: rtamt counts discrete time in samples
 #: The stop rule as rtamt reads it (``rest`` is REST_SCALE_S * (V - speed), in metres).
 STOP_RULE = (f"always(gap >= 0) and always((gap <= {WINDOW_M}) -> "
-             f"eventually[0:{int(REST_WITHIN_S * 50)}](rest >= 0))")
-_STEP_S = 0.02
+             f"eventually[0:{int(REST_WITHIN_S * _STEPS_PER_S)}](rest >= 0))")
 
 
 def _approach(steps: pd.DataFrame) -> pd.DataFrame:
-    """The slot's steps up to the car's first rest after it has moved (all of them if it never rests)."""
+    """The slot's steps until the car moves off again after its first rest (all of them if it never
+    rests or never moves off). The rest itself stays in: cut at its first step, the rule's
+    eventually would see only a speed just under the threshold, and the robustness of every stop
+    inside the window would be that noise instead of its gap."""
     speed = np.abs(steps["speed"].to_numpy(float))
-    moved = np.maximum.accumulate(speed >= AT_REST_MPS)
-    rest = np.flatnonzero(moved & (speed < AT_REST_MPS))
-    return steps.iloc[: rest[0] + 1] if rest.size else steps
+    moving = speed >= AT_REST_MPS
+    moved = np.maximum.accumulate(moving)
+    rest = np.flatnonzero(moved & ~moving)
+    if not rest.size:
+        return steps
+    off = np.flatnonzero(moving[rest[0]:])
+    return steps.iloc[: rest[0] + off[0]] if off.size else steps
 
 
 def target_robustness(steps: pd.DataFrame) -> float:

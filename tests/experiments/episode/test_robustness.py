@@ -35,6 +35,15 @@ def test_a_stop_before_the_line_is_robust_by_its_gap_and_a_run_past_it_violates_
     assert (robustness(log) < 0) == (rest < 0)
 
 
+def test_a_stop_in_the_window_is_robust_by_its_gap_however_the_speed_crosses_the_rest_threshold():
+    """The rest clause sees the car at rest, not only the first step under 0.05 m/s: a stop 0.3 m
+    before the line reads 0.3 m whether the speed fell to 0.049 or to 0 at that step."""
+    for last in (0.049, 0.0):
+        gap = np.r_[np.linspace(2.0, 0.3, 80), np.full(30, 0.3)]
+        speed = np.r_[np.linspace(1.5, 0.2, 79), [last], np.zeros(30)]
+        assert robustness(_log(gap, speed)) == pytest.approx(0.3)
+
+
 def test_crawling_in_the_window_longer_than_the_rule_allows_is_a_violation():
     n_in = int((REST_WITHIN_S + 1.0) / STEP)
     gap = np.r_[np.linspace(2.0, WINDOW_M - 0.1, 60), np.full(n_in, WINDOW_M - 0.1), [WINDOW_M - 0.1]]
