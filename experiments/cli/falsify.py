@@ -14,7 +14,7 @@ __all__ = ["register"]
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    from racf.experiments.falsify.search import SAMPLERS
+    from racf.experiments.falsify.search import OBJECTIVES, SAMPLERS
 
     f = sub.add_parser("falsify", help="search the attack and scenario space for a defence's worst case "
                                        "(Optuna TPE, CMA-ES, random) on the stop rule's STL robustness")
@@ -30,6 +30,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     f.add_argument("--space", type=Path, default=None, help="the search space, TOML (default the shipped one: "
                                                             "experiments/falsify/spaces/default.toml)")
     f.add_argument("--sensor-profile", choices=("qcar2", "ideal"), default="qcar2", help="the car's sensors")
+    f.add_argument("--objective", choices=OBJECTIVES, default="rule",
+                   help="what the samplers minimise: rule, the stop rule's robustness (default); rule-undetected, "
+                        "that minus the attack's undetected error (a slope towards attacks the defence misses). "
+                        "A violation is always the rule's robustness below zero")
     f.add_argument("--stop-at-violation", action="store_true",
                    help="end each search at its first violation (faster; the lowest robustness is then not the "
                         "budget's)")
@@ -64,13 +68,14 @@ def _falsify(args: argparse.Namespace) -> int:
     attacks = tuple(a for a in args.attack.split(",") if a)
     if not 1 <= args.seeds <= 1000:
         fail("falsify", f"--seeds must be in [1, 1000], got {args.seeds}")
-    out = args.out or Path("outputs/falsify") / f"{args.defence}-{'+'.join(attacks)}"
+    suffix = "" if args.objective == "rule" else f"-{args.objective}"
+    out = args.out or Path("outputs/falsify") / f"{args.defence}-{'+'.join(attacks)}{suffix}"
     try:
         report = falsify(args.defence, attacks, out, budget=args.budget, samplers=tuple(args.sampler),
                          seeds=tuple(range(args.seeds)), batch=args.batch, space_path=args.space,
                          fixed={"sensor_profile": args.sensor_profile}, stop_at_violation=args.stop_at_violation,
                          backend=args.backend, workers=args.workers, address=args.address,
-                         cases=not args.no_cases)
+                         cases=not args.no_cases, objective=args.objective)
     except ValueError as err:
         fail("falsify", str(err))
     print(json.dumps(report, indent=1, allow_nan=False) if args.json else render(report))

@@ -30,12 +30,12 @@ def falsify(defence: str, attacks: tuple[str, ...], out: str | Path, budget: int
             samplers: tuple[str, ...] = ("tpe", "cmaes", "random"), seeds: tuple[int, ...] = tuple(range(10)),
             batch: int = 4, space_path: str | Path | None = None, fixed: dict | None = None,
             stop_at_violation: bool = False, backend: str = "local", workers: int = 2, address: str | None = None,
-            cases: bool = True, progress: bool = True) -> dict:
+            cases: bool = True, progress: bool = True, objective: str = "rule") -> dict:
     """Runs (or resumes) the searches and writes the report; returns it."""
     t0 = time.perf_counter()
     out = Path(out)
     space = load_space(defence, attacks, space_path, fixed)
-    cfg = SearchConfig(space, tuple(samplers), tuple(seeds), budget, batch, stop_at_violation)
+    cfg = SearchConfig(space, tuple(samplers), tuple(seeds), budget, batch, stop_at_violation, objective)
     store = ResultStore(out / "episodes")
     with EpisodePool(store, backend, workers, address) as pool:
         searches = run_searches(cfg, out, pool, progress)
@@ -49,6 +49,7 @@ def falsify(defence: str, attacks: tuple[str, ...], out: str | Path, budget: int
                 violations.append((sampler, seed, number, params, value))
     report = {"defence": defence, "attacks": list(attacks), "setting": space.setting, "space": space.to_json(),
               "budget": budget, "batch": batch, "seeds": list(seeds), "stop_at_violation": stop_at_violation,
+              "objective": objective,
               "samplers": summarize_searches(values, budget), "episodes_run": ran,
               "episodes_evaluated": sum(len(v) for v in values.values())}
     plot_convergence(values, budget, out / "convergence.png", f"{space.setting}: {len(seeds)} seeds per sampler")
@@ -110,7 +111,8 @@ def _record_cases(space, violations: list, store: ResultStore, folder: Path, bac
 
 def render(report: dict) -> str:
     """The report as the table ``racf falsify`` prints."""
-    lines = [f"racf falsify: {report['setting']}, budget {report['budget']} episodes per search, "
+    lines = [f"racf falsify: {report['setting']}, objective {report.get('objective', 'rule')}, "
+             f"budget {report['budget']} episodes per search, "
              f"{len(report['seeds'])} seeds per sampler ({report['episodes_run']} episodes run now, "
              f"{report['episodes_evaluated']} evaluated, {report['wall_s']:.0f} s)", "",
              "| sampler | falsified (rate, 95 % CI) | median episodes to first violation | lowest robustness m |",

@@ -8,7 +8,8 @@ so the same command gives the same searches on any machine, with any number of w
 
 A trial's episode seed is ``search seed * 100000 + trial number``: what the evaluation is, so
 every sampler meets the same noise at the same step of its budget. The objective is the
-episode's robustness (``episode.robustness``; negative: the stop rule was broken).
+episode's robustness (``episode.robustness``; negative: the stop rule was broken), or with
+``objective="rule-undetected"`` that minus the attack's undetected error (``OBJECTIVES``).
 
 A study's file is named by what made its values: the space, the defence and attacks, the
 sampler and seed, the batch, racf's episode code and the plug-ins' sources. Other code makes a
@@ -28,10 +29,16 @@ from racf.experiments.falsify.pool import EpisodePool
 from racf.experiments.falsify.space import SearchSpace
 from racf.experiments.sweeps.store import code_version
 
-__all__ = ["SAMPLERS", "SearchConfig", "make_sampler", "run_searches", "episode_seed", "study_key"]
+__all__ = ["SAMPLERS", "OBJECTIVES", "SearchConfig", "make_sampler", "run_searches", "episode_seed", "study_key",
+           "objective_value"]
 
 #: The samplers: Optuna's TPE and CMA-ES (guided) and random search (the baseline).
 SAMPLERS = ("tpe", "cmaes", "random")
+#: What a search minimises: ``rule``, the stop rule's robustness; ``rule-undetected``, that minus
+#: the attack's undetected error (the referee's largest |acted-on - true distance| before the
+#: defence flagged it): a slope towards attacks the defence does not see, where the rule's
+#: robustness alone is flat. Either way a violation is the rule's robustness below zero.
+OBJECTIVES = ("rule", "rule-undetected")
 #: Random trials before the guided samplers model the space.
 STARTUP_TRIALS = 10
 
@@ -67,8 +74,11 @@ class SearchConfig:
     budget: int = 100
     batch: int = 4
     stop_at_violation: bool = False
+    objective: str = "rule"
 
     def __post_init__(self) -> None:
+        if self.objective not in OBJECTIVES:
+            raise ValueError(f"objective must be one of {OBJECTIVES}, got {self.objective!r}")
         bad = [s for s in self.samplers if s not in SAMPLERS]
         if not self.samplers or bad:
             raise ValueError(f"samplers must be a non-empty subset of {SAMPLERS}, got {list(self.samplers)}")
@@ -80,24 +90,37 @@ class SearchConfig:
             raise ValueError(f"batch must be an integer in [1, 64], got {self.batch!r}")
 
 
-def study_key(space: SearchSpace, sampler: str, seed: int, batch: int) -> str:
+def objective_value(row, objective: str) -> float:
+    """What the search minimises for one episode's result row (NaN: not a point of the search)."""
+    value = _finite(row.get("robustness_m"))
+    if objective == "rule-undetected":
+        value -= _finite(row.get("undetected_error_m"), 0.0)
+    return value
+
+
+def _finite(value, default: float = math.nan) -> float:
+    return float(value) if value is not None and value == value else default
+
+
+def study_key(space: SearchSpace, sampler: str, seed: int, batch: int, objective: str = "rule") -> str:
     """What a study's values depend on, hashed: a new key is a new study."""
     probe = space.trial_spec({d.name: (d.choices[0] if d.choices is not None else d.low) for d in space.dimensions}, 0)
     payload = {"space": space.to_json(), "sampler": sampler, "seed": seed, "batch": batch,
                "code": code_version(*EPISODE_CODE), "plugins": plugin_sources(probe),
-               "startup": STARTUP_TRIALS}
+               "startup": STARTUP_TRIALS, **({"objective": objective} if objective != "rule" else {})}
     return hashlib.sha256(json.dumps(payload, sort_keys=True, default=str).encode()).hexdigest()[:12]
 
 
 class _Search:
     """One study and its bookkeeping."""
 
-    def __init__(self, cfg: SearchConfig, sampler: str, seed: int, folder: Path) -> None:
+    def __init__(self, cfg: SearchConfig, sampler: str, seed: int, folder: Path, store=None) -> None:
         import optuna
         from optuna.storages.journal import JournalFileBackend, JournalStorage
 
-        self.cfg, self.sampler, self.seed = cfg, sampler, seed
-        key = study_key(cfg.space, sampler, seed, cfg.batch)
+        self.cfg, self.sampler, self.seed, self.store = cfg, sampler, seed, store
+        self._robustness: dict[int, float] = {}
+        key = study_key(cfg.space, sampler, seed, cfg.batch, cfg.objective)
         self.name = f"{sampler}-seed{seed}-{key}"
         folder.mkdir(parents=True, exist_ok=True)
         storage = JournalStorage(JournalFileBackend(str(folder / f"{self.name}.jsonl")))
@@ -108,8 +131,16 @@ class _Search:
         """(number, parameters, robustness) of the told trials, in order, up to the budget."""
         from optuna.trial import TrialState
 
-        done = sorted(self.study.get_trials(deepcopy=False, states=(TrialState.COMPLETE,)), key=lambda t: t.number)
-        return [(t.number, dict(t.params), float(t.value)) for t in done][: self.cfg.budget]
+        done = sorted(self.study.get_trials(deepcopy=False, states=(TrialState.COMPLETE,)),
+                      key=lambda t: t.number)[: self.cfg.budget]
+        if self.cfg.objective == "rule":
+            return [(t.number, dict(t.params), float(t.value)) for t in done]
+        missing = [t for t in done if t.number not in self._robustness]
+        if missing:  # a resumed search: the rule's robustness is in the episodes' rows
+            ids = [self.cfg.space.trial_spec(t.params, episode_seed(self.seed, t.number)).trial_id for t in missing]
+            for t, (_, row) in zip(missing, self.store.rows(ids).iterrows()):
+                self._robustness[t.number] = _finite(row.get("robustness_m"))
+        return [(t.number, dict(t.params), self._robustness[t.number]) for t in done]
 
     def values(self) -> list[float]:
         return [value for *_, value in self.trials()]
@@ -141,9 +172,11 @@ class _Search:
             trials.append((trial.number, space.suggest(trial)))
         return trials
 
-    def tell(self, number: int, value: float) -> None:
+    def tell(self, number: int, row) -> None:
         from optuna.trial import TrialState
 
+        value = objective_value(row, self.cfg.objective)
+        self._robustness[number] = _finite(row.get("robustness_m"))
         if math.isfinite(value):
             self.study.tell(number, value)
         else:  # no robustness (no stop line): not a point of the search
@@ -157,7 +190,8 @@ def run_searches(cfg: SearchConfig, out: str | Path, pool: EpisodePool, progress
 
     optuna.logging.set_verbosity(optuna.logging.WARNING)
     folder = Path(out) / "studies"
-    searches = [_Search(cfg, sampler, seed, folder) for sampler in cfg.samplers for seed in cfg.seeds]
+    searches = [_Search(cfg, sampler, seed, folder, getattr(pool, "store", None))
+                for sampler in cfg.samplers for seed in cfg.seeds]
     total = len(searches) * cfg.budget
     bar = tqdm(total=total, initial=sum(min(len(s.values()), cfg.budget) for s in searches), desc="falsify",
                unit="episode", disable=not progress)
@@ -169,8 +203,7 @@ def run_searches(cfg: SearchConfig, out: str | Path, pool: EpisodePool, progress
                   for s in live for number, params in s.pending()]
         rows = pool.run([spec for *_, spec in rounds])
         for (search, number, _, _), (_, row) in zip(rounds, rows.iterrows()):
-            value = row.get("robustness_m")
-            search.tell(number, float(value) if value is not None and value == value else math.nan)
+            search.tell(number, row)
         bar.update(len(rounds))
         bar.set_postfix_str(f"lowest {min(min(s.values(), default=math.inf) for s in searches):+.3f} m")
     bar.close()

@@ -15,6 +15,8 @@ __all__ = ["falsification_markdown", "FALSIFY_RESULTS", "guided_verdict"]
 FALSIFY_RESULTS = (
     ("falsify-odca-dropout", "ODCA under the timed dropout",
      "racf falsify --defence odca --attack dropout_timed --budget 100 --seeds 10"),
+    ("falsify-odca-dropout-undetected", "ODCA under the timed dropout, the samplers steered by the undetected error",
+     "racf falsify --defence odca --attack dropout_timed --budget 100 --seeds 10 --objective rule-undetected"),
     ("falsify-raw-strong-patch", "Raw depth under the paper's strong patch (the sanity check)",
      "racf falsify --defence raw --attack patch_occlusion --space experiments/falsify/spaces/strong-patch.toml "
      "--budget 20 --seeds 10"),
@@ -124,7 +126,12 @@ def falsification_markdown(root: Path) -> str:
         "logs it (`robustness_m`), and sweep summaries report its distribution.",
         "Each search is an Optuna study: TPE and CMA-ES (guided) and random search (the baseline), 10 search seeds "
         "each. A trial's episode seed comes from the search seed and the trial number, so every sampler meets the "
-        "same noise at the same step; TPE and CMA-ES start with the same 10 random trials as random search.")
+        "same noise at the same step; TPE and CMA-ES start with the same 10 random trials as random search.",
+        "By default the samplers minimise the rule's robustness. With `--objective rule-undetected` they minimise it "
+        "minus the attack's undetected error (the referee's largest gap between the distance the car acted on and "
+        "the truth before the defence flagged the attack): a slope towards attacks the defence does not see. A "
+        "violation is always the rule's robustness below zero, and the tables report the rule's robustness; random "
+        "search ignores the objective, so its rows are the same episodes either way.")
     for name, what, command in FALSIFY_RESULTS:
         lines += [f"## {what}", ""]
         path = root / f"{name}.json"
@@ -133,7 +140,8 @@ def falsification_markdown(root: Path) -> str:
             continue
         report = json.loads(path.read_text())
         lines += meta_lines(report["meta"])
-        lines += [f"Budget {report['budget']} episodes per search, rounds of {report['batch']}; "
+        lines += [f"Objective `{report.get('objective', 'rule')}`. Budget {report['budget']} episodes per search, "
+                  f"rounds of {report['batch']}; "
                   f"{report['episodes_evaluated']} evaluations, {report['episodes_run']} distinct episodes run "
                   f"(the others were shared or read back), {report['wall_s'] / 60:.1f} min.", ""]
         lines += _table(report["samplers"]) + [guided_verdict(report["samplers"]), ""] + _why(report["samplers"])

@@ -83,3 +83,25 @@ def test_the_report_counts_first_violations_and_censors_seeds_that_found_none():
     assert s["falsified"] == 2 and s["episodes_to_first_median"] == 2.0 and s["lowest_robustness_m"] == -0.3
     none = sampler_summary({0: [0.1, 0.2], 1: [0.2, 0.1], 2: [-0.3]}, budget=2)
     assert none["episodes_to_first_median"] is None  # under half the seeds found one: beyond the budget
+
+
+def test_the_undetected_objective_steers_the_samplers_but_a_violation_is_still_the_rules(tmp_path):
+    from racf.experiments.falsify.search import objective_value
+
+    row = {"robustness_m": 0.2, "undetected_error_m": 0.5}
+    assert objective_value(row, "rule") == 0.2 and objective_value(row, "rule-undetected") == pytest.approx(-0.3)
+    assert objective_value({"robustness_m": 0.2, "undetected_error_m": None}, "rule-undetected") == 0.2
+
+    class Shaped(FakePool):
+        def run(self, specs):
+            rows = super().run(specs)
+            return rows.assign(undetected_error_m=1.0)  # every value the samplers see is 1 m lower
+
+    cfg = SearchConfig(_space(), ("tpe",), (0,), budget=8, batch=4, objective="rule-undetected")
+    pool = Shaped()
+    search = run_searches(cfg, tmp_path, pool, progress=False)[("tpe", 0)]
+    assert [v for *_, v in search.trials()] == [pool.seen[s] for s in list(pool.seen)[:8]]  # the rule's, reported
+    assert all(t.value == pytest.approx(v - 1.0) for t, (*_, v) in zip(search.study.trials, search.trials()))
+    with pytest.raises(ValueError, match="objective must be one of"):
+        SearchConfig(_space(), objective="fastest")
+
