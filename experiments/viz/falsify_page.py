@@ -67,8 +67,7 @@ def _why(samplers: dict) -> list[str]:
             "points below them (a brake a little late at one sign and speed, or a track lost and the line run by "
             "a metre). Off those points the rule's robustness is the stop's gap, which says little about how near "
             "the attack came to winning, so a model of the landscape has little slope to follow, and CMA-ES draws "
-            "the sign and the attack's effect at random. A smoother objective (how close the acted-on distance "
-            "came to hiding the line) would give the guided samplers a slope; the referee would have to log it.", ""]
+            "the sign and the attack's effect at random.", ""]
 
 
 def _fmt(median) -> str:
