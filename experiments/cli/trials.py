@@ -66,7 +66,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _trial(args: argparse.Namespace) -> int:
-    from racf.experiments.episode import TrialSpec, parse_setting, run_trial
+    from racf.experiments.episode import TrialSpec, parse_setting
     from racf.experiments.sweeps.store import atomic_write
 
     setting, params = episode_params(args, "trial")
@@ -75,16 +75,9 @@ def _trial(args: argparse.Namespace) -> int:
         spec = TrialSpec(setting, args.sign, args.speed, args.seed, target=args.target, **params)
     except ValueError as err:
         fail("trial", str(err))
-    recorder = None
-    if args.rerun is not None:
-        from racf.experiments.viz.rerun_log import FrameRecorder
+    from racf.experiments.viz.rerun_log import recorded_trial
 
-        recorder = FrameRecorder()
-    result, log = run_trial(spec, on_step=recorder)
-    if recorder is not None:
-        from racf.experiments.viz.rerun_log import write_rrd
-
-        write_rrd(args.rerun, log, recorder, title=f"racf trial {spec.trial_id}")
+    result, log = recorded_trial(spec, args.rerun, f"racf trial {spec.trial_id}")
     args.out.mkdir(parents=True, exist_ok=True)
     log_path = atomic_write(args.out / f"{spec.trial_id}.parquet", log)
     atomic_write(args.out / f"{spec.trial_id}.json", json.dumps(result.to_dict(), indent=2, allow_nan=False))

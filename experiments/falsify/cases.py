@@ -104,23 +104,14 @@ class Replay:
 def replay_case(case: Case, defence: str | None = None, rerun: str | Path | None = None) -> Replay:
     """Runs ``case`` again (against ``defence`` instead of its own, if given); with ``rerun``,
     records it to that ``.rrd`` file."""
-    from racf.experiments.episode import run_trial
     from racf.experiments.sweeps.executors import single_thread
+    from racf.experiments.viz.rerun_log import recorded_trial
 
     single_thread()  # as the search's workers ran it: the same arithmetic, to the bit
     spec = case.spec
     if defence is not None and defence != spec.estimator:
         spec = replace(spec, setting=setting_name(spec.attacks, defence), estimator_options={})
-    recorder = None
-    if rerun is not None:
-        from racf.experiments.viz.rerun_log import FrameRecorder
-
-        recorder = FrameRecorder()
-    result, log = run_trial(spec, on_step=recorder, clean_pass=recorder is not None)
-    if recorder is not None:
-        from racf.experiments.viz.rerun_log import write_rrd
-
-        write_rrd(Path(rerun), log, recorder, title=f"racf case {case.name}")
+    result, _ = recorded_trial(spec, rerun, f"racf case {case.name}", clean_pass=rerun is not None)
     value = result.robustness_m
     same = spec == case.spec and code_version(*EPISODE_CODE) == case.code
     identical = (value == case.robustness_m) if same else None

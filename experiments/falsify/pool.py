@@ -55,7 +55,7 @@ class EpisodePool:
         ids = [spec.trial_id for spec in specs]
         done = self.store.done_ids()
         todo = {i: spec for spec, i in zip(specs, ids) if i not in done}  # an episode asked twice runs once
-        kwargs = {"logs_dir": self.store.logs.name, "rerun": self.rerun}
+        kwargs = {"logs_dir": str(self.store.logs.relative_to(self.store.out)), "rerun": self.rerun}
         out = str(self.store.out)
         if todo and self._remote is not None:
             import ray

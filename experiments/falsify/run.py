@@ -40,13 +40,10 @@ def falsify(defence: str, attacks: tuple[str, ...], out: str | Path, budget: int
     with EpisodePool(store, backend, workers, address) as pool:
         searches = run_searches(cfg, out, pool, progress)
         ran = pool.ran
-    values, violations = {}, []
-    for (sampler, seed), search in searches.items():
-        trials = search.trials()
-        values[(sampler, seed)] = [value for _, _, value in trials]
-        for number, params, value in trials:
-            if value < 0:
-                violations.append((sampler, seed, number, params, value))
+    trials = {key: search.trials() for key, search in searches.items()}  # (number, params, robustness)
+    values = {key: [value for *_, value in told] for key, told in trials.items()}
+    violations = [(sampler, seed, number, params, value) for (sampler, seed), told in trials.items()
+                  for number, params, value in told if value < 0]
     report = {"defence": defence, "attacks": list(attacks), "setting": space.setting, "space": space.to_json(),
               "budget": budget, "batch": batch, "seeds": list(seeds), "stop_at_violation": stop_at_violation,
               "objective": objective,
@@ -55,7 +52,7 @@ def falsify(defence: str, attacks: tuple[str, ...], out: str | Path, budget: int
     plot_convergence(values, budget, out / "convergence.png", f"{space.setting}: {len(seeds)} seeds per sampler")
     report["convergence_png"] = "convergence.png"
     report["cases"] = _record_cases(space, violations, store, out / "cases", backend, workers, address) if cases else []
-    report["worst"] = _worst(space, values, searches)
+    report["worst"] = _worst(space, trials)
     if report["worst"] is not None:
         from racf.experiments.falsify.figure import worst_case_figure
 
@@ -69,16 +66,12 @@ def falsify(defence: str, attacks: tuple[str, ...], out: str | Path, budget: int
     return report
 
 
-def _worst(space, values: dict, searches: dict) -> dict | None:
+def _worst(space, trials: dict) -> dict | None:
     """The lowest-robustness episode over every search: its parameters and result."""
-    best = None
-    for key, search in searches.items():
-        for number, params, value in search.trials():
-            if best is None or value < best[3]:
-                best = (key, number, params, value)
-    if best is None:
+    told = [(key, number, params, value) for key, rows in trials.items() for number, params, value in rows]
+    if not told:
         return None
-    (sampler, seed), number, params, value = best
+    (sampler, seed), number, params, value = min(told, key=lambda t: t[3])
     spec = space.trial_spec(params, episode_seed(seed, number))
     return {"sampler": sampler, "seed": seed, "trial": number, "params": params, "robustness_m": value,
             "trial_id": spec.trial_id}
@@ -89,12 +82,11 @@ def _record_cases(space, violations: list, store: ResultStore, folder: Path, bac
     """The distinct violations, each run again with a rerun recording into ``folder`` and saved as a case."""
     if not violations:
         return []
-    rows = []
-    for sampler, seed, number, params, value in violations:
-        spec = space.trial_spec(params, episode_seed(seed, number))
-        rows.append({"setting": spec.setting, "sign": spec.sign, "robustness_m": value, "spec": spec,
-                     "found_by": {"sampler": sampler, "seed": seed, "trial": number},
-                     "failure": store.rows([spec.trial_id]).iloc[0].get("failure")})
+    specs = [space.trial_spec(params, episode_seed(seed, number)) for _, seed, number, params, _ in violations]
+    failures = store.rows([spec.trial_id for spec in specs])["failure"].tolist()
+    rows = [{"setting": spec.setting, "sign": spec.sign, "robustness_m": value, "spec": spec, "failure": failure,
+             "found_by": {"sampler": sampler, "seed": seed, "trial": number}}
+            for spec, failure, (sampler, seed, number, _, value) in zip(specs, failures, violations)]
     keep = distinct(rows)
     recordings = ResultStore(folder, logs_dir=".")
     with EpisodePool(recordings, backend, workers, address, rerun=True) as pool:

@@ -184,7 +184,8 @@ class _Search:
 
 
 def run_searches(cfg: SearchConfig, out: str | Path, pool: EpisodePool, progress: bool = True) -> dict:
-    """Runs (or resumes) every search of ``cfg``; returns ``{(sampler, seed): [(trial, episode_id, value)]}``."""
+    """Runs (or resumes) every search of ``cfg``; returns each search by ``(sampler, seed)`` (its ``trials()``:
+    number, parameters and the rule's robustness of every told trial)."""
     import optuna
     from tqdm import tqdm
 

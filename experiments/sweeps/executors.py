@@ -66,24 +66,16 @@ def run_episode(spec: TrialSpec, out: str, log_steps: bool = False, logs_dir: st
         expected_id: the id the batch computed; a worker that computes another refuses to run
             (:class:`CodeChangedError`).
     """
-    from racf.experiments.episode import run_trial
     from racf.experiments.sweeps.store import ResultStore
+    from racf.experiments.viz.rerun_log import recorded_trial
 
     if expected_id is not None and spec.trial_id != expected_id:
         raise CodeChangedError(f"racf's code or a plug-in changed on disk while the batch ran (episode "
                                f"{expected_id} is now {spec.trial_id}); run the command again")
     store = ResultStore(out, logs_dir)
-    recorder = None
-    if rerun:
-        from racf.experiments.viz.rerun_log import FrameRecorder
-
-        recorder, log_steps = FrameRecorder(), True
-    result, log = run_trial(spec, on_step=recorder, clean_pass=log_steps)
-    if recorder is not None:
-        from racf.experiments.viz.rerun_log import write_rrd
-
-        store.logs.mkdir(parents=True, exist_ok=True)
-        write_rrd(store.log_path(spec.trial_id, ".rrd"), log, recorder, title=f"racf trial {spec.trial_id}")
+    log_steps = log_steps or rerun
+    result, log = recorded_trial(spec, store.log_path(spec.trial_id, ".rrd") if rerun else None,
+                                 f"racf trial {spec.trial_id}", clean_pass=log_steps)
     row = {**result.to_dict(), "attack": "+".join(spec.attacks) or "none", "rho_set": spec.rho[0],
            "t_atk_set": spec.t_atk[0], "attack_params": params_label(spec.attack_params),
            **{f"param_{key}": value for table in spec.attack_params.values() for key, value in table.items()}}

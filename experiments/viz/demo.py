@@ -32,19 +32,18 @@ def run_demo(out_dir: Path, sign: int = 1, speed: float = 1.5, seed: int = 0,
     """Runs the settings at one sign and writes ``<setting>.rrd``, ``<setting>.parquet`` and ``demo_traces.png``."""
     from tqdm import tqdm
 
-    from racf.experiments.episode import TrialSpec, run_trial
-    from racf.experiments.viz.rerun_log import FrameRecorder, write_rrd
+    from racf.experiments.episode import TrialSpec
+    from racf.experiments.viz.rerun_log import recorded_trial
 
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     rows, logs = [], {}
     for setting in tqdm(settings, desc=f"demo: stop sign {sign} at {speed} m/s", unit="run", disable=not progress):
         spec = TrialSpec(setting, sign, speed, seed, sensor_profile=sensor_profile, sign_geometry=sign_geometry)
-        recorder = FrameRecorder()
-        result, log = run_trial(spec, on_step=recorder)
         name = setting.replace("+", "_")
+        rrd = out_dir / f"{name}.rrd"
+        result, log = recorded_trial(spec, rrd, f"racf demo: {setting}")
         log.to_parquet(out_dir / f"{name}.parquet", index=False)
-        rrd = write_rrd(out_dir / f"{name}.rrd", log, recorder, title=f"racf demo: {setting}")
         logs[setting] = log
         r = result.to_dict()
         rows.append({"setting": setting, "stopped": r["stopped"], "success": r["success"],

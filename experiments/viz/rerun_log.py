@@ -138,6 +138,19 @@ def _map_px(xy: np.ndarray) -> np.ndarray:
     return np.column_stack([(xy[:, 0] - x0) * _MAP_PX_PER_M, (y1 - xy[:, 1]) * _MAP_PX_PER_M])
 
 
+def recorded_trial(spec, rrd: str | Path | None = None, title: str = "racf episode", clean_pass: bool = True):
+    """``run_trial(spec)``, recorded to the rerun file ``rrd`` (its folder made) unless it is None;
+    returns (result, log)."""
+    from racf.experiments.episode import run_trial
+
+    recorder = FrameRecorder() if rrd is not None else None
+    result, log = run_trial(spec, on_step=recorder, clean_pass=clean_pass)
+    if recorder is not None:
+        Path(rrd).parent.mkdir(parents=True, exist_ok=True)
+        write_rrd(rrd, log, recorder, title=title)
+    return result, log
+
+
 def write_rrd(path: str | Path, log: pd.DataFrame, recorder: FrameRecorder | None = None,
               title: str = "racf episode") -> Path:
     """Writes the episode (``log`` from ``run_trial``, frames from ``recorder``) to ``path``; returns it."""
