@@ -81,7 +81,7 @@ class GateConfig:
 
 def vote(d: float, c: float, l: float, k: float, k_tol: float, mu: float, gate: GateConfig,
          kinematics_votes: bool = True, lidar_unconfirmed: bool = False, size: float = math.nan,
-         size_tol: float = math.nan) -> tuple[int, float, bool]:
+         size_tol: float = math.nan, k_echoes_depth: bool = False) -> tuple[int, float, bool]:
     """One step's verdict: (source, base, lidar_trusted).
 
     Args:
@@ -93,6 +93,9 @@ def vote(d: float, c: float, l: float, k: float, k_tol: float, mu: float, gate: 
             misses. Then it is one witness, not two, and a confident depth that disagrees
             with it passes (and takes over the branch).
         size, size_tol: d_size (NaN: no size witness) and how far a witness may lie from it.
+        k_echoes_depth: d_kin rests on a depth nothing confirmed (anchored at a first sight with
+            no other witness). Against a confirmed LiDAR it is no second witness for the depth:
+            depth and LiDAR meet one to one, as they would had they arrived together.
 
     Returns the source code (``SOURCES``), the value the output rests on (the depth itself
     when it passes; NaN when there is no target) and whether the LiDAR counts as a trusted
@@ -109,7 +112,8 @@ def vote(d: float, c: float, l: float, k: float, k_tol: float, mu: float, gate: 
     k_ok = k == k
     k_votes = k_ok and kinematics_votes
     agree_dl = d_ok and l_ok and abs(d - l) <= gate.tau_m
-    agree_dk = d_ok and k_votes and abs(d - k) <= k_tol
+    echo = k_echoes_depth and l_ok and not lidar_unconfirmed
+    agree_dk = d_ok and k_votes and abs(d - k) <= k_tol and not echo
     agree_lk = l_ok and k_ok and abs(l - k) <= k_tol
     # LiDAR and kinematics agree; the depth is off the LiDAR and off d_kin by more than tau.
     outvoted = agree_lk and not agree_dl and abs(d - k) > gate.tau_m
@@ -120,7 +124,7 @@ def vote(d: float, c: float, l: float, k: float, k_tol: float, mu: float, gate: 
             return DEPTH, d, False
         if d_ok and not l_ok and not k_votes and (c >= gate.trust_confidence or (s_ok and abs(d - size) <= size_tol)):
             return DEPTH, d, False
-    lidar_trusted = l_ok and (agree_lk or not k_votes)
+    lidar_trusted = l_ok and (agree_lk or not k_votes or echo)
     if lidar_trusted:
         return (LIDAR_KIN if agree_lk else LIDAR), l, True
     if k_ok:

@@ -13,13 +13,21 @@ straight approach it falls by exactly v dt whatever the bearing; on a curve the 
 the anchor (y = z tan(bearing)) sets how the turn moves it.
 
 Its standard deviation starts at ``anchor_std_m`` when the branch is anchored and grows
-with the distance travelled (encoder scale, slip) and with time (what the model leaves
-out). Past ``max_std_m``, or once the target would be behind the camera, the branch is
-lost and says nothing (NaN) until the next trusted measurement.
+with the distance travelled (encoder scale, slip), with time (what the model leaves out) and,
+for a branch anchored with no bearing (a LiDAR return while the camera detects nothing), with
+the angle turned times how far its guessed lateral place may be off: without a bearing a turn
+moves d_kin by an unknown amount, so in turns such a branch soon says nothing. Past ``max_std_m``, or once the target would be behind the camera, the branch is lost
+and says nothing (NaN) until the next trusted measurement.
+
+Once the target's bearing passes ``max_bearing_rad`` the car has passed it: the branch is lost
+too. Else a LiDAR return beside the car could re-anchor a point carried metres to the side, and
+the next left turn swung it metres "ahead" (seen offline: a 6 m phantom that outvoted the next
+sign's depth).
 
 Beside it runs the **baseline**: the same point, anchored at the target's first
-*confirmed* measurement (two witnesses agreeing: a depth alone may already be corrupted)
-and then moved by odometry alone, never re-anchored until it is lost (its std grows by
+*confirmed* measurement with a bearing (two witnesses agreeing: a depth alone may already be
+corrupted; a bearing, because a point placed at a guessed one leaves the target in the first
+hard turn) and then moved by odometry alone, never re-anchored until it is lost (its std grows by
 ``drift_travel_std`` per metre; it is lost with the branch, since a point model carried
 through long unseen turns drifts past its std). Re-anchoring is what lets the branch follow the
 target, and also what a slow, consistent drift of depth and LiDAR together (a frustum
@@ -55,6 +63,12 @@ class KinematicsConfig:
         n_sigma: a witness agrees with the branch within ``tau + n_sigma * std``.
         drift_travel_std: the baseline's std growth per metre travelled (None: no baseline,
             the branch as it was before issue 23).
+        camera_frame_s: the camera's frame period, s (30 Hz on the QCar 2). The loop steps at
+            50 Hz, so perception holds a frame's depth over a step; a depth repeated within one
+            period is that old, and :meth:`drifted` gives it the distance driven since.
+        max_bearing_rad: past this bearing the target has been passed and the branch is lost
+            (None: only once it is behind the camera). Twice the RGB camera's half field of view
+            (34.7 deg, qcar2.md): a 360-degree LiDAR may track a sign a turn is bringing into view.
     """
 
     enabled: bool = True
@@ -66,13 +80,19 @@ class KinematicsConfig:
     max_std_m: float = 0.4
     n_sigma: float = 3.0
     drift_travel_std: float | None = 0.02
+    camera_frame_s: float = 1.0 / 30.0
+    max_bearing_rad: float | None = 1.2
 
     def __post_init__(self) -> None:
+        if self.max_bearing_rad is not None and not (
+                isinstance(self.max_bearing_rad, (int, float)) and 0.0 < self.max_bearing_rad < math.pi / 2):
+            raise ValueError(f"kinematics max_bearing_rad must be in (0, pi/2) or None, got {self.max_bearing_rad!r}")
         if self.drift_travel_std is not None and not (
                 isinstance(self.drift_travel_std, (int, float)) and 0.0 <= self.drift_travel_std <= 1.0):
             raise ValueError(f"kinematics drift_travel_std must be in [0, 1] or None, got {self.drift_travel_std!r}")
         for name, lo, hi in (("camera_lever_m", -2.0, 2.0), ("anchor_std_m", 0.0, 1.0), ("travel_std", 0.0, 1.0),
-                             ("time_std_mps", 0.0, 1.0), ("max_std_m", 0.01, 10.0), ("n_sigma", 0.0, 10.0)):
+                             ("time_std_mps", 0.0, 1.0), ("max_std_m", 0.01, 10.0), ("n_sigma", 0.0, 10.0),
+                             ("camera_frame_s", 0.0, 1.0)):
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and math.isfinite(value) and lo <= value <= hi):
                 raise ValueError(f"kinematics {name} must be in [{lo}, {hi}], got {value!r}")
@@ -91,6 +111,8 @@ class KinematicBranch:
         self.std = math.nan
         self.lidar_only = False  # anchored on a LiDAR no depth has agreed with (see anchor)
         self.size_only = False  # anchored on the size witness alone (see anchor)
+        self.depth_only = False  # anchored on a depth no other witness confirmed (see anchor)
+        self.y_std = 0.0  # how far the lateral place may be off: an anchor with no bearing guesses it
         self._lose_baseline()
 
     def _lose_baseline(self) -> None:
@@ -114,11 +136,12 @@ class KinematicBranch:
         """The baseline's distance, m (NaN without one)."""
         return self.base_z
 
-    def drifted(self, distance: float, tau_m: float) -> bool:
-        """Whether a measurement lies off the baseline by more than its tolerance (False without one)."""
+    def drifted(self, distance: float, tau_m: float, age_m: float = 0.0) -> bool:
+        """Whether a measurement lies off the baseline by more than its tolerance (False without one).
+        ``age_m``: the distance driven since the measurement was taken (a held camera frame)."""
         if not math.isfinite(self.base_z) or not math.isfinite(distance):
             return False
-        return abs(distance - self.base_z) > tau_m + self.config.n_sigma * self.base_std
+        return abs(distance - self.base_z) > tau_m + self.config.n_sigma * self.base_std + age_m
 
     def predict(self, speed: float, yaw_rate: float, dt: float) -> float:
         """Moves the target by the car's motion over ``dt``; returns the change of d_kin (NaN when lost)."""
@@ -134,29 +157,42 @@ class KinematicBranch:
         z, y = advance(self.z, self.y, speed, yaw_rate, dt, c.camera_lever_m)
         change = z - self.z
         self.z, self.y = z, y
-        self.std += c.travel_std * abs(speed) * dt + c.time_std_mps * dt
-        if self.std > c.max_std_m or self.z <= 0.0:
-            self.z, self.y, self.std, self.lidar_only, self.size_only = math.nan, 0.0, math.nan, False, False
+        # A turn moves d_kin by about its angle times the lateral place: an unknown place, an unknown change.
+        self.std += c.travel_std * abs(speed) * dt + c.time_std_mps * dt + abs(yaw_rate * dt) * self.y_std
+        if self.std > c.max_std_m or self.z <= 0.0 or self._passed():
+            self.z, self.y, self.std = math.nan, 0.0, math.nan
+            self.lidar_only = self.size_only = self.depth_only = False
         return change
 
+    def _passed(self) -> bool:
+        limit = self.config.max_bearing_rad
+        return limit is not None and abs(math.atan2(self.y, self.z)) > limit
+
     def anchor(self, distance: float, bearing: float = math.nan, confirmed: bool = True,
-               lidar_only: bool = False, std: float | None = None, size_only: bool = False) -> None:
+               lidar_only: bool = False, std: float | None = None, size_only: bool = False,
+               depth_only: bool = False) -> None:
         """Restarts the branch at a trusted distance (m) and, if known, the target's bearing (rad, left
-        positive); a ``confirmed`` one (two witnesses agree) also starts the baseline if there is none.
-        ``lidar_only``: the anchor rests on a LiDAR track that no depth has agreed with.
+        positive); a ``confirmed`` one (two witnesses agree) with a bearing also starts the baseline
+        if there is none. ``lidar_only``: the anchor rests on a LiDAR track that no depth has agreed with.
         ``std``: the anchor's std, m (default ``anchor_std_m``, a range sensor's).
-        ``size_only``: the anchor rests on the size witness alone (:meth:`fuse` refines it)."""
+        ``size_only``: the anchor rests on the size witness alone (:meth:`fuse` refines it).
+        ``depth_only``: the anchor rests on a depth that nothing confirmed (a first sight): d_kin
+        then only echoes that depth and is no witness against it."""
         self.lidar_only = bool(lidar_only)
         self.size_only = bool(size_only)
-        if math.isfinite(bearing) and abs(bearing) < 1.5:
-            self.y = distance * math.tan(bearing)
-        elif self.alive and self.z > 0.0:
-            self.y = distance * self.y / self.z  # keep the bearing the branch had
-        else:
-            self.y = 0.0
+        self.depth_only = bool(depth_only)
+        located = math.isfinite(bearing) and abs(bearing) < 1.5
+        if located:
+            self.y, self.y_std = distance * math.tan(bearing), 0.0
+        elif self.alive and self.z > 0.0:  # keep the bearing the branch had, and its doubt
+            self.y, self.y_std = distance * self.y / self.z, self.y_std * distance / self.z
+        else:  # straight ahead, as a guess: anywhere the limit allows
+            self.y, self.y_std = 0.0, distance * math.tan(self.config.max_bearing_rad or 1.2)
         self.z = distance
         self.std = self.config.anchor_std_m if std is None else max(float(std), self.config.anchor_std_m)
-        if confirmed and self.config.drift_travel_std is not None and not math.isfinite(self.base_z):
+        # The baseline is a place, so it starts only where the bearing was measured: a point placed
+        # at a guessed bearing drifts off the target in the first hard turn (seen offline).
+        if confirmed and located and self.config.drift_travel_std is not None and not math.isfinite(self.base_z):
             self.base_z, self.base_y, self.base_std = self.z, self.y, self.std
 
     def fuse(self, distance: float, std: float) -> None:

@@ -20,13 +20,16 @@ Per step t:
    is held within about 2 tau (anchoring on the LiDAR instead would hold it to tau, but
    would outvote the clean depth-LiDAR residual's tail: 99.1 % of clean depth unchanged,
    not 99.9 %). A
-   measurement off the branch's odometry-only baseline (``KinematicBranch.drifted``) is
+   measurement off the branch's odometry-only baseline (``KinematicBranch.drifted``; a depth
+   repeated from a held camera frame is compared as of its frame) is
    outvoted instead, depth and LiDAR together: the step rests on the baseline. A LiDAR
    track that no depth ever confirmed (``lidar_confirmed=False``: perception started it while
    the depth was missing) counts as one witness, and so does a branch anchored on it alone:
    a confident depth that disagrees with them passes;
-5. the output moves no further per step than the car's motion plus the tolerance of a
-   fresh measurement (``step_bound_m``); it is NaN when there is no target at all.
+5. a repair moves the output no further per step than the car's motion plus the tolerance of
+   a fresh measurement (``step_bound_m``); a depth that passed is output as it is, and the
+   head corrects only repairs that rest on a witness (``corrected``). The output is NaN when
+   there is no target at all.
 
 ``run(df)`` computes the same numbers for whole series (the prior's windows batched in the
 same fixed-size batches, the head row by row), so it matches ``step`` exactly.
@@ -45,7 +48,7 @@ import pandas as pd
 
 from racf.odca.align import Alignment, fit_alignment
 from racf.odca.features import MAX_RANGE_M, features, sanitize, sanitize_size, usable_forecast
-from racf.odca.gate import BASELINE, DEPTH, KIN, LIDAR, LIDAR_KIN, NONE, SIZE, SOURCES, GateConfig, vote
+from racf.odca.gate import BASELINE, DEPTH, DEPTH_UNCONFIRMED, KIN, LIDAR, LIDAR_KIN, SIZE, SOURCES, GateConfig, vote
 from racf.odca.head import HeadWeights
 from racf.odca.kinematics import KinematicBranch, KinematicsConfig
 from racf.odca.prior import SHIPPED_PRIOR, Chronos2Prior, CheckpointError, TemporalPrior
@@ -157,10 +160,24 @@ class _Witnesses:
         self.config = config
         self.branch = KinematicBranch(config.kinematics)
         self.last_size = math.nan
+        self.last_depth, self.held_s, self.held_m = math.nan, 0.0, 0.0
 
     def reset(self) -> None:
         self.branch.reset()
         self.last_size = math.nan
+        self.last_depth, self.held_s, self.held_m = math.nan, 0.0, 0.0
+
+    def depth_age(self, d: float, motion: float, dt: float) -> float:
+        """The distance driven since this depth's frame, m: perception holds a camera frame's
+        depth over the loop's faster steps, so a depth equal to the last step's is that frame's,
+        as long as it has been held for less than one frame period (longer: not a frame's hold)."""
+        if d == d and d == self.last_depth:
+            self.held_s += dt
+            self.held_m += abs(motion)
+        else:
+            self.held_s, self.held_m = 0.0, 0.0
+        self.last_depth = d
+        return self.held_m if self.held_s < self.config.kinematics.camera_frame_s else 0.0
 
     def lidar_unconfirmed(self, l: float, lidar_confirmed: bool, branch: KinematicBranch) -> bool:
         """Whether the LiDAR side of the vote is one witness: a track no depth confirmed, or a
@@ -184,13 +201,16 @@ class _Witnesses:
         source, base, lidar_trusted = vote(d, c, l, k, branch.tolerance(cfg.gate.tau_m) if k == k else math.nan, mu,
                                            cfg.gate, cfg.kinematics.witness,
                                            lidar_unconfirmed=self.lidar_unconfirmed(l, lidar_confirmed, branch),
-                                           size=size, size_tol=size_tol)
+                                           size=size, size_tol=size_tol, k_echoes_depth=on and branch.depth_only)
         new_size = size == size and size != self.last_size  # perception holds a frame's box between frames
         self.last_size = size
-        if on and source in (DEPTH, LIDAR, LIDAR_KIN) and branch.drifted(base, cfg.gate.tau_m):
+        age_m = self.depth_age(d, motion, dt)
+        if on and source in (DEPTH, LIDAR, LIDAR_KIN) and branch.drifted(base, cfg.gate.tau_m,
+                                                                           age_m if source == DEPTH else 0.0):
             source, base, lidar_trusted = BASELINE, branch.baseline, False
         elif on and source == DEPTH and (lidar_trusted or lidar_only or branch.size_only or not branch.alive):
-            branch.anchor(d, bearing, confirmed=lidar_trusted)
+            by_size = size == size and abs(d - size) <= size_tol
+            branch.anchor(d, bearing, confirmed=lidar_trusted, depth_only=not (lidar_trusted or by_size))
         elif on and source in (LIDAR, LIDAR_KIN):
             branch.anchor(l, bearing, confirmed=source == LIDAR_KIN and lidar_confirmed, lidar_only=not lidar_confirmed)
         elif on and source == SIZE:
@@ -201,16 +221,18 @@ class _Witnesses:
         return source, base, lidar_trusted, k, k_std, motion
 
 
-def _bounded(values: np.ndarray, motion: np.ndarray, bound: float, prev: float, first: np.ndarray | None = None
-             ) -> np.ndarray:
+def _bounded(values: np.ndarray, motion: np.ndarray, bound: float, prev: float, first: np.ndarray | None = None,
+             free: np.ndarray | None = None) -> np.ndarray:
     """Each value kept within ``bound`` of (the previous output + the car's motion); a NaN
-    (no target) or a segment's ``first`` step starts afresh."""
+    (no target) or a segment's ``first`` step starts afresh. ``free`` steps (a depth the gate
+    passed) are kept as they are and the bound restarts from them: Proposition 1 holds for the
+    output, not only for the vote (bounding them changed clean depth just after a repair)."""
     out = values.copy()
     for t in range(len(out)):
         if first is not None and first[t]:
             prev = math.nan
         x = out[t]
-        if x == x and prev == prev:
+        if x == x and prev == prev and not (free is not None and free[t]):
             centre = prev + motion[t]
             x = min(max(x, centre - bound), centre + bound)
             out[t] = min(max(x, 0.0), MAX_RANGE_M)
@@ -357,8 +379,12 @@ class ODCA:
         source, base, _ = vote(d, 1.0, l, k, branch.tolerance(cfg.gate.tau_m) if k == k else math.nan, math.nan,
                                cfg.gate, cfg.kinematics.witness,
                                lidar_unconfirmed=self._witnesses.lidar_unconfirmed(l, self._lidar_confirmed, branch),
-                               size=s + motion + size_shift, size_tol=cfg.gate.size_tolerance(s_std))
-        return source == DEPTH and not (cfg.kinematics.enabled and branch.drifted(base, cfg.gate.tau_m))
+                               size=s + motion + size_shift, size_tol=cfg.gate.size_tolerance(s_std),
+                               k_echoes_depth=cfg.kinematics.enabled and branch.depth_only)
+        held = self._witnesses
+        age_m = held.held_m + abs(motion) if d == held.last_depth and held.held_s + dt < cfg.kinematics.camera_frame_s \
+            else 0.0
+        return source == DEPTH and not (cfg.kinematics.enabled and branch.drifted(base, cfg.gate.tau_m, age_m))
 
     # -- batched offline path ------------------------------------------------------------------
     def run(self, df: pd.DataFrame) -> pd.DataFrame:
@@ -434,13 +460,22 @@ class ODCA:
         tau = self.config.gate.tau_m
         delta = np.clip(self.head(x), -tau, tau) if len(x) else np.zeros(0)
         passed = source == DEPTH
-        d_rep = np.clip(base + np.where(passed, 0.0, delta), 0.0, MAX_RANGE_M)  # NaN stays NaN: no target
+        delta = np.where(corrected(source), delta, 0.0)
+        d_rep = np.clip(base + delta, 0.0, MAX_RANGE_M)  # NaN stays NaN: no target
         d_fused = np.where(passed, d, d_rep)
-        d_fused = _bounded(d_fused, motion, self.config.step_bound_m, prev, first)
+        d_fused = _bounded(d_fused, motion, self.config.step_bound_m, prev, first, free=passed)
         n = len(d_fused)
-        return (d_fused, (~passed).astype(float), d_rep, np.abs(d - l_al), np.abs(np.where(passed, 0.0, delta)),
+        return (d_fused, (~passed).astype(float), d_rep, np.abs(d - l_al), np.abs(delta),
                 np.abs(d_fused - l_al), np.broadcast_to(mu, n), np.broadcast_to(sigma, n), k, k_std,
                 np.asarray(source, float))
+
+
+def corrected(source: np.ndarray) -> np.ndarray:
+    """The steps the head corrects: repairs that rest on a witness. A depth that passed is output
+    as it is (Proposition 1), and so is an unconfirmed one: with no witness to measure it
+    against, a correction would be a guess (on clean first sights it only moved the depth)."""
+    source = np.asarray(source)
+    return (source != DEPTH) & (source != DEPTH_UNCONFIRMED)
 
 
 def segments(df: pd.DataFrame) -> list[np.ndarray]:

@@ -166,7 +166,7 @@ def _trained_odca(ds: QCarDataset, prior, cfg: BenchConfig, weights: dict, tag: 
     from racf.odca import ODCA
     from racf.odca.losses import LossWeights
     from racf.odca.prior import SHIPPED_PRIOR
-    from racf.odca.train import fit, initial_model, prepare_clean, prepare_split
+    from racf.odca.train import clean_series, fit, initial_model, prepare_clean, prepare_split
 
     code = code_version("racf.odca", "racf.experiments.data")
     key = hashlib.sha256(json.dumps({"data": frame_hash(ds.clean("train"), ds.clean("val")), "weights": weights,
@@ -184,10 +184,10 @@ def _trained_odca(ds: QCarDataset, prior, cfg: BenchConfig, weights: dict, tag: 
     if cache.get("key") != data_key:  # the prior's features on train/val, shared by the ablation's heads
         cache.clear()
         cache.update(key=data_key, train=prepare_split(model, ds, "train"), val=prepare_split(model, ds, "val"),
-                     clean_val=prepare_clean(model, ds.clean("val")))
+                     clean=prepare_clean(model, clean_series(ds)))
     t0 = time.perf_counter()
     report = fit(model, cache["train"], cache["val"], epochs=cfg.odca_epochs, seed=cfg.seed,
-                 weights=LossWeights(**weights), progress=False, clean_val=cache["clean_val"])
+                 weights=LossWeights(**weights), progress=False, clean=cache["clean"])
     report["train_s"] = time.perf_counter() - t0
     model.save(folder)
     (folder / "report.json").write_text(json.dumps(report, indent=1, allow_nan=False))

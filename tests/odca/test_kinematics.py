@@ -48,8 +48,8 @@ def test_on_a_curve_d_kin_follows_the_geometry(yaw_rate):
         pose = pose + np.array([v * dt * math.cos(yaw + yaw_rate * dt / 2), v * dt * math.sin(yaw + yaw_rate * dt / 2),
                                 yaw_rate * dt])
         branch.predict(v, yaw_rate, dt)
-        z, _ = _camera_frame(sign, pose, cfg.camera_lever_m)
-        if z < 0.2:
+        z, y = _camera_frame(sign, pose, cfg.camera_lever_m)
+        if z < 0.2 or abs(math.atan2(y, z)) > cfg.max_bearing_rad:  # passed: the branch is lost by design
             break
         assert branch.distance == pytest.approx(z, abs=2e-3)
 
@@ -75,11 +75,35 @@ def test_bad_settings_are_clear_errors():
         KinematicsConfig(travel_std=-0.1)
     with pytest.raises(ValueError, match="max_std_m"):
         KinematicsConfig(max_std_m=float("nan"))
+    with pytest.raises(ValueError, match="max_bearing_rad"):
+        KinematicsConfig(max_bearing_rad=2.0)
+
+
+@pytest.mark.parametrize("side", [-1.0, 1.0])
+def test_the_branch_is_lost_once_the_car_has_passed_the_target(side):
+    """Driving past a sign 0.4 m to the side: once its bearing passes the limit the branch (and
+    at the next step its baseline) says nothing, so no later return beside the car re-anchors a
+    point carried far to the side."""
+    cfg = KinematicsConfig(max_std_m=10.0)
+    branch = KinematicBranch(cfg)
+    branch.anchor(2.0, math.atan2(side * 0.4, 2.0))
+    steps = 0
+    while branch.alive:
+        assert abs(math.atan2(branch.y, branch.z)) <= cfg.max_bearing_rad
+        branch.predict(1.5, 0.0, 0.02)
+        steps += 1
+    z_passed = 0.4 / math.tan(cfg.max_bearing_rad)
+    assert 2.0 - 1.5 * 0.02 * steps == pytest.approx(z_passed, abs=0.03)  # lost as the bearing passed the limit
+    free = KinematicBranch(KinematicsConfig(max_std_m=10.0, max_bearing_rad=None))
+    free.anchor(2.0, math.atan2(side * 0.4, 2.0))
+    for _ in range(steps):
+        free.predict(1.5, 0.0, 0.02)
+    assert free.alive  # without the limit: only once it is behind the camera
 
 
 def test_the_baseline_is_anchored_once_and_moved_by_odometry_alone():
     b = KinematicBranch(KinematicsConfig())
-    b.anchor(3.0)
+    b.anchor(3.0, 0.0)
     for _ in range(10):
         b.predict(1.0, 0.0, 0.02)
     b.anchor(2.5)  # a re-anchor moves the branch, not the baseline
@@ -93,8 +117,11 @@ def test_only_a_confirmed_anchor_starts_the_baseline_and_it_is_lost_with_the_bra
     b = KinematicBranch(KinematicsConfig())
     b.anchor(3.0, confirmed=False)  # a depth alone may already be corrupted: no baseline from it
     assert b.alive and math.isnan(b.baseline) and not b.drifted(9.0, 0.1)
-    b.anchor(3.0, confirmed=True)
+    b.anchor(3.0, confirmed=True)  # no bearing: no place to start from
+    assert math.isnan(b.baseline)
+    b.anchor(3.0, 0.0, confirmed=True)
     assert b.baseline == 3.0
     while b.alive:  # the target unseen: the branch's std grows until it is lost
         b.predict(1.0, 0.5, 0.02)
+    b.predict(1.0, 0.5, 0.02)  # the baseline goes at the next step (an anchor in between keeps it)
     assert math.isnan(b.baseline)  # a point carried through long unseen turns is not trusted

@@ -109,7 +109,8 @@ def test_kinematics_carries_a_blackout_without_lidar():
 def test_a_spoofed_lidar_that_disagrees_with_depth_and_kinematics_cannot_move_the_output(start, length, bias,
                                                                                           blackout, spoof):
     """The same drive with the LiDAR silent, and with it spoofed (far from the depth and from d_kin,
-    a depth that is blacked out or honest): d_fused is the same number."""
+    a depth that is blacked out or honest): d_fused is the same number. Perception reports the
+    spoofed track as one no depth ever confirmed, as it is."""
     truth, depth = _approach(n=100, blackout=(start, start + length) if blackout else (0, 0))
     quiet, spoofed = _stub(), _stub()
     for t, (d, true_d) in enumerate(zip(depth, truth)):
@@ -121,20 +122,75 @@ def test_a_spoofed_lidar_that_disagrees_with_depth_and_kinematics_cannot_move_th
             expected_k = k.distance - 1.5 * 0.02 if k.alive else np.nan
             if abs(l - expected_k) <= k.tolerance(spoofed.config.gate.tau_m) + 0.01 or abs(l - d) <= 0.2:
                 l = float("nan")
-        b = spoofed.step(depth=d, confidence=conf, lidar=l, speed=1.5)
+        b = spoofed.step(depth=d, confidence=conf, lidar=l, speed=1.5, lidar_confirmed=False)
         assert a.d_fused == b.d_fused or (np.isnan(a.d_fused) and np.isnan(b.d_fused))
+
+
+
+@pytest.mark.parametrize("lidar_from", [0, 1, 15])
+@pytest.mark.parametrize("bias", [-0.8, 0.6])
+def test_a_depth_biased_from_first_sight_loses_to_a_confirmed_lidar_whenever_it_arrives(lidar_from, bias):
+    """A depth wrong from the first frame anchors a d_kin that only echoes it: that is no second
+    witness. Whether the LiDAR reports with the first frame or later, the output rests on it."""
+    m = _stub()
+    truth = 2.5 - 1.5 * 0.02 * np.arange(40)
+    outs = [m.step(depth=d + bias, confidence=0.95, lidar=d if t >= lidar_from else math.nan, speed=1.5)
+            for t, d in enumerate(truth)]
+    after = outs[lidar_from + 12:]
+    assert all(o.source_name.startswith("lidar") for o in outs[lidar_from + 1:])
+    assert max(abs(o.d_fused - d) for o, d in zip(after, truth[lidar_from + 12:])) <= m.config.gate.tau_m
+
+
+def test_an_unconfirmed_lidar_track_does_not_outvote_a_first_sight_depth():
+    """The same, but perception says no depth ever agreed with the track (the scan plane may miss
+    the plate and range the wall behind): the confident depth goes on passing."""
+    m = _stub()
+    truth = 2.5 - 1.5 * 0.02 * np.arange(40)
+    outs = [m.step(depth=d, confidence=0.95, lidar=d + 0.9 if t >= 10 else math.nan, speed=1.5,
+                   lidar_confirmed=False) for t, d in enumerate(truth)]
+    assert all(o.source_name == "depth" and o.d_fused == d for o, d in zip(outs, truth))
 
 
 @settings(max_examples=60, deadline=None)
 @given(st.lists(st.tuples(wild, st.floats(0, 1), wild, st.floats(0, 3)), min_size=2, max_size=60))
-def test_the_output_moves_no_further_per_step_than_the_car_plus_the_tolerance(rows):
+def test_a_repair_moves_no_further_per_step_than_the_car_plus_the_tolerance_and_a_pass_is_the_depth(rows):
     m = _stub()
     prev = float("nan")
     for depth, conf, lidar, speed in rows:
         out = m.step(depth=depth, confidence=conf, lidar=lidar, speed=speed)
-        if math.isfinite(prev) and out.has_target:
+        if out.w == 0.0:
+            assert out.d_fused == depth  # Proposition 1 holds for the output, not only the vote
+        elif math.isfinite(prev) and out.has_target:
             assert abs(out.d_fused - (prev - speed * 0.02)) <= m.config.step_bound_m + 1e-9
         prev = out.d_fused
+
+
+def test_a_depth_that_passes_right_after_a_repair_is_not_bounded_towards_it():
+    """A blackout long enough to lose the kinematic branch, so the repair rests on the prior's
+    stale forecast; then the depth is back and the LiDAR confirms it. That first passing depth
+    is output as it is, though it lies far beyond the step bound from the repair before it."""
+    m = _stub()
+    m.config = ODCAConfig.from_json({**m.config.to_json(), "kinematics": {"max_std_m": 0.05}})
+    d = 2.0
+    for _ in range(10):
+        m.step(depth=d, confidence=0.9, lidar=d, speed=1.0)
+        d -= 0.02
+    for _ in range(30):
+        before = m.step(depth=float("nan"), confidence=0.0, speed=1.0)
+        d -= 0.02
+    assert before.source_name == "prior" and abs(before.d_fused - d) > m.config.step_bound_m
+    back = m.step(depth=d, confidence=0.9, lidar=d, speed=1.0)
+    assert back.w == 0.0 and back.d_fused == d
+
+
+def test_an_unconfirmed_depth_is_flagged_but_not_corrected():
+    """First sight with a confidence under the gate's trust: nothing to vote against, so the
+    step is flagged (w = 1) and rests on the depth; the head does not guess a correction."""
+    m = _stub()
+    low = m.config.gate.trust_confidence / 2
+    out = m.step(depth=1.7, confidence=low, speed=1.0)
+    assert out.source_name == "depth (unconfirmed)" and out.w == 1.0
+    assert out.d_fused == 1.7 and out.r_delta == 0.0
 
 
 def test_wrong_shapes_and_columns_are_clear_errors():
@@ -216,7 +272,7 @@ def test_a_drift_of_depth_and_lidar_together_is_caught_by_the_kinematic_baseline
     n, start = 150, 30
     truth = 6.5 - speed * 0.02 * np.arange(n)  # >= 0.5 m to the end
     drift = rate * 0.02 * np.clip(np.arange(n) - start, 0, None)
-    out = [m.step(depth=t + b, confidence=0.9, lidar=t + b, speed=speed) for t, b in zip(truth, drift)]
+    out = [m.step(depth=t + b, confidence=0.9, lidar=t + b, speed=speed, bearing=0.0) for t, b in zip(truth, drift)]
     flagged = np.array([o.w for o in out]) == 1.0
     assert flagged.any() and not flagged[:start].any()
     first = int(np.argmax(flagged))
@@ -224,7 +280,10 @@ def test_a_drift_of_depth_and_lidar_together_is_caught_by_the_kinematic_baseline
     travelled = speed * 0.02 * first
     bound = m.config.gate.tau_m + kin.n_sigma * (kin.anchor_std_m + kin.drift_travel_std * travelled
                                                  + kin.time_std_mps * 0.02 * first)
-    assert drift[first] <= bound + rate * 0.02 + 1e-9  # caught within one step of the tolerance
+    # Caught within one step of the tolerance; where the drift cancels the car's motion the
+    # depth repeats exactly, which reads as a held camera frame: one frame's travel more.
+    held = speed * kin.camera_frame_s if rate == speed else 0.0
+    assert drift[first] <= bound + rate * 0.02 + held + 1e-9
     assert {out[i].source_name for i in np.flatnonzero(flagged)} == {"kinematic baseline"}
     fused = np.array([o.d_fused for o in out])
     assert np.abs(fused - truth)[flagged].max() <= bound + m.config.gate.tau_m + 1e-6
@@ -320,3 +379,17 @@ def test_batched_run_matches_step_exactly_with_a_size_witness():
                                 yaw_rate=r.yaw_rate, bearing=r.bearing, size=r.d_size, size_std=r.size_std)))
     pd.testing.assert_frame_equal(batched.reset_index(drop=True), pd.DataFrame(rows), check_exact=True)
     assert not batched.equals(m.run(df.drop(columns=["d_size", "size_std"])))  # the size witness took part
+
+
+def test_a_depth_held_from_the_last_frame_is_as_old_as_its_frame_and_no_older():
+    """The camera runs at 30 Hz, the loop at 50 Hz: a depth equal to the last step's is that
+    frame's, and the drift check gives it the distance driven since. A depth frozen for longer
+    than a frame period is not a held frame (a freeze attack gets nothing)."""
+    from racf.odca.online import _Witnesses
+
+    w = _Witnesses(_stub().config)
+    assert w.depth_age(1.50, -0.04, 0.02) == 0.0  # a fresh frame
+    assert w.depth_age(1.50, -0.04, 0.02) == pytest.approx(0.04)  # held one step: 0.04 m driven since
+    assert w.depth_age(1.50, -0.04, 0.02) == 0.0  # held past the 33 ms frame: a freeze, no allowance
+    assert w.depth_age(1.46, -0.04, 0.02) == 0.0
+    assert w.depth_age(float("nan"), -0.04, 0.02) == 0.0 and w.depth_age(float("nan"), -0.04, 0.02) == 0.0
