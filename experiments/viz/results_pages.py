@@ -114,7 +114,18 @@ def _bench_table(data: dict) -> list[str]:
             cells = [f"{per_preset[p][m]['rmse']:.3f} {_ci(per_preset[p][m]['rmse_ci'], 3)}" for p in presets]
             lines.append(f"| {m} | " + " | ".join(cells) + f" | {per_preset['strong'][m]['n']} |")
         lines.append("")
-    return lines
+    return lines + _pass_through(data.get("clean") or {})
+
+
+def _pass_through(clean: dict) -> list[str]:
+    """ODCA's clean pass-through per split (Proposition 1: clean depth comes out unchanged)."""
+    rows = [(split, row) for split, row in clean.items() if isinstance(row, dict) and "unchanged_share" in row]
+    if not rows:
+        return []
+    cells = "; ".join(f"{split.replace('_', ' ')} {100 * row['unchanged_share']:.2f} % of {row['n_depth']:,} steps"
+                      for split, row in rows)
+    return [f"**Clean pass-through** (ODCA fed the clean test drives; the share of steps with a depth that come out "
+            f"unchanged): {cells}.", ""]
 
 
 # --- pages -----------------------------------------------------------------------------------------------------

@@ -41,6 +41,17 @@ def test_the_paper_table_quotes_the_paper_beside_the_measurement(data_dir):
     assert "docs/results/closed-loop.md" in table
 
 
+
+def test_the_offline_page_shows_the_clean_pass_through_of_each_split(data_dir):
+    cell = {"rmse": 0.05, "rmse_ci": [0.04, 0.06], "n": 100}
+    per_preset = {p: {"odca": cell} for p in ("weak", "mid", "strong")}
+    clean = {"by_series": {"unchanged_share": 0.99875, "n_depth": 2794},
+             "leave_target_out": {"unchanged_share": 1.0, "n_depth": 7201}, "odca_rmse_vs_input": 0.0}
+    results_store.store_result("offline-bench", {"results": {"by_series": per_preset}, "clean": clean},
+                               command="racf bench --json", data_dir=data_dir, sensor_profile="qcar2")
+    page = RESULT_PAGES["results/offline-benchmark.md"](data_dir)
+    assert "by series 99.88 % of 2,794 steps; leave target out 100.00 % of 7,201 steps" in page
+
 def test_every_page_renders_from_an_empty_folder(tmp_path):
     for name, make in RESULT_PAGES.items():
         assert make(tmp_path).startswith("# "), name
