@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import statistics
 import sys
 import time
 from pathlib import Path
@@ -54,6 +55,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="replay the cases' scenario and attacks against this defence instead of their own")
     r.add_argument("--rerun", type=Path, default=None, metavar="FILE.rrd",
                    help="record the replay to this rerun file (one case only)")
+    r.add_argument("--reseed", type=int, default=0, metavar="N",
+                   help="also run each case's parameters under N other noise seeds and count the violations: "
+                        "whether the failure belongs to the parameters or to one draw of the noise")
     r.add_argument("--json", action="store_true", help="print the replays as one JSON object")
     plugin_flag(r)
     r.set_defaults(handler=_replay)
@@ -84,7 +88,7 @@ def _falsify(args: argparse.Namespace) -> int:
 
 def _replay(args: argparse.Namespace) -> int:
     from racf.experiments.episode.estimators import ESTIMATORS
-    from racf.experiments.falsify.cases import load_case, replay_case
+    from racf.experiments.falsify.cases import load_case, replay_case, reseed_case
 
     if args.defence is not None and args.defence not in ESTIMATORS:
         fail("replay-case", f"unknown defence {args.defence!r}; choose from {', '.join(ESTIMATORS)}")
@@ -102,6 +106,8 @@ def _replay(args: argparse.Namespace) -> int:
             fail("replay-case", f"no case file or folder at {path}")
     if not files:
         fail("replay-case", f"no case files (*.json) in {', '.join(map(str, args.cases))}")
+    if not 0 <= args.reseed <= 1000:
+        fail("replay-case", f"--reseed must be in [0, 1000] other seeds, got {args.reseed}")
     if args.rerun is not None and len(files) != 1:
         fail("replay-case", f"--rerun records one case; {len(files)} given")
     try:
@@ -117,6 +123,11 @@ def _replay(args: argparse.Namespace) -> int:
                      "robustness_now_m": replay.robustness_m, "same_code": replay.same_code,
                      "identical": replay.identical, "verdict": "survives" if replay.survived else "violates",
                      "failure": replay.failure, "wall_s": round(time.perf_counter() - t0, 2)})
+        if args.reseed:
+            others = reseed_case(case, args.reseed, args.defence)
+            rows[-1]["reseeded"] = {"n": len(others), "violations": sum(v < 0 for v in others),
+                                    "robustness_median_m": float(statistics.median(others)),
+                                    "robustness_min_m": min(others)}
         if not args.json:
             print(_replay_line(rows[-1]), flush=True)
     if args.json:
@@ -133,5 +144,10 @@ def _replay(args: argparse.Namespace) -> int:
 def _replay_line(row: dict) -> str:
     now = row["robustness_now_m"]
     same = {True: "identical", False: "DIFFERS", None: "other code or defence"}[row["identical"]]
-    return (f"{row['case']:<48} {row['defence']:<6} then {row['robustness_then_m']:+.4f} m  "
+    line = (f"{row['case']:<48} {row['defence']:<6} then {row['robustness_then_m']:+.4f} m  "
             f"now {now:+.4f} m  {row['verdict']:<9} ({same})")
+    other = row.get("reseeded")
+    if other:
+        line += (f"\n{'':<48} other seeds: {other['violations']}/{other['n']} violate, median "
+                 f"{other['robustness_median_m']:+.3f} m, lowest {other['robustness_min_m']:+.3f} m")
+    return line

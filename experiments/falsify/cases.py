@@ -6,6 +6,8 @@ runs the same episode in this process, pinned to one thread as the search's work
 the same code the robustness comes back to the bit. With another defence (``defence=``) the
 same scenario and attack meet that defence instead, which is how the suite in
 ``experiments/falsify/cases/`` says which of the known failures an improved defence survives.
+:func:`reseed_case` runs a case's parameters under other noise seeds: whether the failure belongs
+to the parameters a search controls, or to one draw of the noise.
 """
 
 from __future__ import annotations
@@ -19,7 +21,8 @@ from racf.controllers import BrakingConfig
 from racf.experiments.episode.spec import EPISODE_CODE, TrialSpec, setting_name
 from racf.experiments.sweeps.store import atomic_write, code_version
 
-__all__ = ["Case", "save_case", "load_case", "replay_case", "Replay", "SUITE", "distinct", "spec_from_json"]
+__all__ = ["Case", "save_case", "load_case", "replay_case", "reseed_case", "Replay", "SUITE", "distinct",
+           "spec_from_json"]
 
 #: The shipped regression suite.
 SUITE = Path(__file__).with_name("cases")
@@ -116,6 +119,32 @@ def replay_case(case: Case, defence: str | None = None, rerun: str | Path | None
     same = spec == case.spec and code_version(*EPISODE_CODE) == case.code
     identical = (value == case.robustness_m) if same else None
     return Replay(case, spec, value, same, identical, bool(math.isfinite(value) and value >= 0), result.failure)
+
+
+#: The other noise seeds of :func:`reseed_case`: ``case seed + RESEED_STRIDE * k`` for k = 1..n, clear of
+#: the seeds a search gives its neighbouring trials (search seed x 100000 + trial number).
+RESEED_STRIDE = 1_000_003
+
+
+def reseed_case(case: Case, n: int, defence: str | None = None) -> list[float]:
+    """The case's scenario and attack settings under ``n`` other noise seeds (the sensors' noise, the
+    detector's draws: everything the episode seed decides): each episode's robustness, m. A
+    failure that the parameters make recurs under most seeds; one that only its draw made
+    recurs rarely, and no search over the parameters can aim at it."""
+    from racf.experiments.episode import run_trial
+    from racf.experiments.sweeps.executors import single_thread
+
+    if not (isinstance(n, int) and 1 <= n <= 1000):
+        raise ValueError(f"the number of other seeds must be an integer in [1, 1000], got {n!r}")
+    single_thread()
+    spec = case.spec
+    if defence is not None and defence != spec.estimator:
+        spec = replace(spec, setting=setting_name(spec.attacks, defence), estimator_options={})
+    values = []
+    for k in range(1, n + 1):
+        result, _ = run_trial(replace(spec, seed=spec.seed + RESEED_STRIDE * k))
+        values.append(float(result.robustness_m))
+    return values
 
 
 def distinct(rows: list[dict]) -> list[dict]:

@@ -70,6 +70,7 @@ CORPUS = [
     ("replay-case {bad.toml}", "not a racf case file"),
     ("replay-case {tmp}", "no case files"),
     ("replay-case --defence tinfoil {bad.toml}", "unknown defence"),
+    ("replay-case --suite --reseed -1", "--reseed must be in"),
 ]
 
 
