@@ -9,7 +9,7 @@ from pathlib import Path
 from racf.experiments.episode.robustness import STOP_RULE
 from racf.experiments.viz.results_format import meta_lines, page_head
 
-__all__ = ["falsification_markdown", "FALSIFY_RESULTS", "guided_verdict"]
+__all__ = ["falsification_markdown", "FALSIFY_RESULTS", "RESEED_RESULT", "guided_verdict"]
 
 #: The stored searches the page shows: (result name, what it is, the command).
 FALSIFY_RESULTS = (
@@ -159,4 +159,32 @@ def falsification_markdown(root: Path) -> str:
               "The distinct failures found for the built-in defences are shipped in `experiments/falsify/cases/`; a "
               "test replays each. After a change to a defence, `racf replay-case --suite` (or `--suite --defence NAME` "
               "for another defence) says which of them it now survives.", ""]
+    reseed = root / f"{RESEED_RESULT}.json"
+    if reseed.exists():
+        lines += _reseeded(json.loads(reseed.read_text()))
     return "\n".join(lines)
+
+
+#: The stored ``racf replay-case --suite --reseed N --json``.
+RESEED_RESULT = "falsify-suite-reseed"
+
+
+def _reseeded(stored: dict) -> list[str]:
+    """Each suite case's parameters under other noise seeds: the parameters' failure, or one draw's."""
+    from racf.experiments.sweeps.summary import wilson_interval
+
+    rows = [r for r in stored.get("replays", []) if r.get("reseeded")]
+    if not rows:
+        return []
+    lines = ["### The parameters' failure, or one draw's?", ""] + meta_lines(stored["meta"]) + [
+        "A search controls the scenario and the attack's settings; the episode's seed draws the sensors' noise and the "
+        "detector's. Each case's parameters run again under other seeds: a failure the parameters make recurs, one "
+        "that only its draw made does not, and no sampler can aim at it.", "",
+        "| case | defence | robustness found m | other seeds that violate [95 % CI] | their median m | their lowest m |",
+        "|---|---|---|---|---|---|"]
+    for r in rows:
+        o = r["reseeded"]
+        lo, hi = wilson_interval(o["violations"], o["n"])
+        lines.append(f"| `{r['case']}` | {r['defence']} | {r['robustness_then_m']:+.3f} | {o['violations']}/{o['n']} "
+                     f"[{lo:.2f}, {hi:.2f}] | {o['robustness_median_m']:+.3f} | {o['robustness_min_m']:+.3f} |")
+    return lines + [""]
