@@ -187,4 +187,11 @@ def _reseeded(stored: dict) -> list[str]:
         lo, hi = wilson_interval(o["violations"], o["n"])
         lines.append(f"| `{r['case']}` | {r['defence']} | {r['robustness_then_m']:+.3f} | {o['violations']}/{o['n']} "
                      f"[{lo:.2f}, {hi:.2f}] | {o['robustness_median_m']:+.3f} | {o['robustness_min_m']:+.3f} |")
+    lines.append("")
+    for defence in sorted({r["defence"] for r in rows}):
+        mine = [r["reseeded"] for r in rows if r["defence"] == defence]
+        hits, n = sum(o["violations"] for o in mine), sum(o["n"] for o in mine)
+        lo, hi = wilson_interval(hits, n)
+        lines.append(f"- {defence}: its cases' parameters fail again in {hits} of {n} other draws "
+                     f"({hits / n:.2f} [{lo:.2f}, {hi:.2f}]).")
     return lines + [""]

@@ -21,6 +21,7 @@ def test_the_reseeded_suite_shows_how_often_each_cases_parameters_fail_again(tmp
     assert "| `odca-sign1-confirmed_lost-x` | odca | -1.128 | 0/20 [0.00, 0.16] | +0.293 | +0.157 |" in page
     assert "| `raw-sign0-confirmed_lost-y` | raw | -1.114 | 20/20 [0.84, 1.00] |" in page
     assert "`racf replay-case --suite --reseed 20 --json`" in page and "`abc1234`" in page
+    assert "- odca: its cases' parameters fail again in 0 of 20 other draws (0.00 [0.00, 0.16])." in page
 
 
 def test_guided_search_wins_only_outside_the_intervals():
