@@ -104,6 +104,13 @@ class Replay:
     failure: str | None
 
 
+def _against(spec: TrialSpec, defence: str | None) -> TrialSpec:
+    """The spec's scenario and attacks against ``defence`` (the spec itself when None or its own)."""
+    if defence is None or defence == spec.estimator:
+        return spec
+    return replace(spec, setting=setting_name(spec.attacks, defence), estimator_options={})
+
+
 def replay_case(case: Case, defence: str | None = None, rerun: str | Path | None = None) -> Replay:
     """Runs ``case`` again (against ``defence`` instead of its own, if given); with ``rerun``,
     records it to that ``.rrd`` file."""
@@ -111,9 +118,7 @@ def replay_case(case: Case, defence: str | None = None, rerun: str | Path | None
     from racf.experiments.viz.rerun_log import recorded_trial
 
     single_thread()  # as the search's workers ran it: the same arithmetic, to the bit
-    spec = case.spec
-    if defence is not None and defence != spec.estimator:
-        spec = replace(spec, setting=setting_name(spec.attacks, defence), estimator_options={})
+    spec = _against(case.spec, defence)
     result, _ = recorded_trial(spec, rerun, f"racf case {case.name}", clean_pass=rerun is not None)
     value = result.robustness_m
     same = spec == case.spec and code_version(*EPISODE_CODE) == case.code
@@ -121,8 +126,8 @@ def replay_case(case: Case, defence: str | None = None, rerun: str | Path | None
     return Replay(case, spec, value, same, identical, bool(math.isfinite(value) and value >= 0), result.failure)
 
 
-#: The other noise seeds of :func:`reseed_case`: ``case seed + RESEED_STRIDE * k`` for k = 1..n, clear of
-#: the seeds a search gives its neighbouring trials (search seed x 100000 + trial number).
+#: The other noise seeds of :func:`reseed_case`: ``case seed + RESEED_STRIDE * k`` for k = 1..n. A prime
+#: stride past any budget, so none is another trial's of the same search (search seed x 100000 + trial).
 RESEED_STRIDE = 1_000_003
 
 
@@ -137,9 +142,7 @@ def reseed_case(case: Case, n: int, defence: str | None = None) -> list[float]:
     if not (isinstance(n, int) and 1 <= n <= 1000):
         raise ValueError(f"the number of other seeds must be an integer in [1, 1000], got {n!r}")
     single_thread()
-    spec = case.spec
-    if defence is not None and defence != spec.estimator:
-        spec = replace(spec, setting=setting_name(spec.attacks, defence), estimator_options={})
+    spec = _against(case.spec, defence)
     values = []
     for k in range(1, n + 1):
         result, _ = run_trial(replace(spec, seed=spec.seed + RESEED_STRIDE * k))
