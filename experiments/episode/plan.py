@@ -25,14 +25,15 @@ from functools import lru_cache
 import numpy as np
 
 from racf.controllers import CameraModel
-from racf.experiments.episode.car import CarCalibration, Mission
+from racf.experiments.episode.car import CarCalibration, Mission, route_follower
 from racf.experiments.episode.spec import TrialSpec
 from racf.sim.env.config import EnvConfig
 from racf.sim.sensors.camera import CameraIntrinsics
 from racf.sim.world.route_plan import longest_run_up_m, plan_route
 from racf.sim.world.stop_signs import SIGN_GEOMETRIES
+from racf.sim.world.traffic import ConflictPoint, TrafficCar, conflict_of, cross_traffic
 
-__all__ = ["EpisodePlan", "plan_episode", "reset_options", "env_settings", "car_calibration",
+__all__ = ["EpisodePlan", "plan_episode", "reset_options", "env_settings", "car_calibration", "arrival_s",
            "longest_run_up", "DRIVE_MAX_EPISODE_S"]
 
 #: A drive's episode time limit, s.
@@ -51,6 +52,8 @@ class EpisodePlan:
         control_dt_s: the car's loop period, s (the env's step).
         localisation: how the car localises (``qcar2``: its own filter; ``true``: the ablation).
         max_steps: the episode's step limit.
+        traffic: the other cars (empty: none), as the env's reset options hold them.
+        conflict: where they meet the ego car's path (None without traffic).
     """
 
     env_kwargs: dict
@@ -60,6 +63,8 @@ class EpisodePlan:
     control_dt_s: float
     localisation: str
     max_steps: int
+    traffic: tuple[TrafficCar, ...] = ()
+    conflict: ConflictPoint | None = None
 
 
 def env_settings(spec: TrialSpec) -> dict:
@@ -67,6 +72,8 @@ def env_settings(spec: TrialSpec) -> dict:
     kwargs = {"sensor_profile": spec.sensor_profile, "sign": SIGN_GEOMETRIES[spec.sign_geometry]}
     if spec.target == "drive":
         kwargs["max_episode_s"] = DRIVE_MAX_EPISODE_S
+    if spec.traffic_cars:
+        kwargs["traffic_cars"] = spec.traffic_cars
     return kwargs
 
 
@@ -93,8 +100,27 @@ def plan_episode(spec: TrialSpec, **env_kwargs) -> EpisodePlan:
                        rng=np.random.default_rng(0))
     mission = Mission(route.path, route.targets, route.cruise_mps, options.get("start_s_m"))
     dt = 1.0 / config.control_hz
+    traffic, conflict = (), None
+    if spec.traffic_cars:
+        # Timed from the plan: where the ego car starts and how fast it goes.
+        conflict = conflict_of(spec.sign)
+        t_ego = arrival_s(route.path, route.start_s, route.cruise_mps, conflict.ego_s)
+        traffic = cross_traffic(spec.sign, t_ego, gap_s=spec.traffic_gap_s, speed_mps=spec.traffic_speed,
+                                cars=spec.traffic_cars)
+        options = {**options, "traffic": [car.to_options() for car in traffic]}
     return EpisodePlan(kwargs, options, mission, calibration, dt, config.localisation,
-                       int(round(config.max_episode_s / dt)))
+                       int(round(config.max_episode_s / dt)), traffic, conflict)
+
+
+def arrival_s(path, start_s: float, cruise_mps: float, s_target: float) -> float:
+    """When a car that never brakes for the sign would bring its body origin from ``start_s`` to
+    ``s_target`` along ``path``, s: at the car's own speed reference (the cruise speed, capped in
+    curves by its lane follower's profile)."""
+    profile = route_follower(path, cruise_mps, start_s).profile
+    s = path.arclength[(path.arclength > start_s) & (path.arclength < s_target)]
+    knots = np.concatenate([[start_s], s, [s_target]])
+    speeds = np.array([profile.at(k, cruise_mps) for k in knots])
+    return float(np.sum(np.diff(knots) / np.maximum(0.5 * (speeds[1:] + speeds[:-1]), 0.05)))
 
 
 def longest_run_up(target: str, index: int, sign_geometry: str = "plate") -> float:

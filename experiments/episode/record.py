@@ -21,6 +21,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from racf.sim.sensors.state import STATE_FIELDS
+from racf.sim.world.traffic import MAX_TRAFFIC_CARS
 
 __all__ = ["Column", "STEP_COLUMNS", "STEP_LOG", "CAR", "REFEREE", "step_row", "columns_of"]
 
@@ -109,6 +110,15 @@ STEP_COLUMNS: tuple[Column, ...] = (
     _c(REFEREE, "lateral_error", "m", "ground truth: distance from the lane's centre line"),
     _c(REFEREE, "attack_active", "bool", "some attack acted on this step's observation"),
     _c(REFEREE, "attack", "", "the attacks active this step, '+'-joined"),
+    _c(REFEREE, "collision_with", "", "ground truth: what the car touched (traffic0.. another car, else the "
+                                      "geom's name; '' nothing)"),
+    _c(REFEREE, "conflict_x", "m", "the conflict point where cross-traffic meets the route, map frame (NaN: no "
+                                   "traffic)"),
+    _c(REFEREE, "conflict_y", "m", "the conflict point, map frame (NaN: no traffic)"),
+    *(_c(REFEREE, f"traffic{k}_{field}", unit, f"ground truth: other car {k}'s {meaning} (NaN: no such car)")
+      for k in range(MAX_TRAFFIC_CARS)
+      for field, unit, meaning in (("x", "m", "position, map frame"), ("y", "m", "position, map frame"),
+                                   ("yaw", "rad", "heading, map frame"), ("speed", "m/s", "speed"))),
 )
 #: The columns by name.
 STEP_LOG: dict[str, Column] = {c.name: c for c in STEP_COLUMNS}

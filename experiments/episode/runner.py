@@ -27,6 +27,7 @@ import numpy as np
 import pandas as pd
 
 from racf.controllers import DistanceEstimator, Phase
+from racf.experiments.episode.conflict import NEAR_MISS_S, score_conflict
 from racf.experiments.episode.record import step_row
 from racf.experiments.episode.referee import Referee
 from racf.experiments.episode.scoring import largest_jump, score_log, stealth
@@ -39,10 +40,12 @@ from racf.sim.attacks.base import AttackWrapper
 from racf.sim.sensors import STATE_FIELDS
 
 __all__ = ["TrialResult", "StepHook", "run_trial", "scan_fov", "SCAN_FOV_HALF_BEAMS",
-           "RUN_THROUGH_M"]
+           "RUN_THROUGH_M", "run_through_m"]
 
-#: An episode ends once the bumper is this far past the last target's line.
+#: An episode ends once the bumper is this far past the last target's line (without traffic).
 RUN_THROUGH_M = 0.5
+#: The QCar 2's length, bumper to bumper, m (its MJCF).
+CAR_LENGTH_M = 0.425
 #: Half-width of the LiDAR sector kept in the logs, in beams of the 360-beam scan (1 deg each).
 SCAN_FOV_HALF_BEAMS = 40
 
@@ -69,6 +72,9 @@ class TrialResult:
     ``detected``: how far the attack pushed that distance before the defence flagged it, and
     when it did (``scoring.stealth``). ``robustness_m``: the stop rule's signal-temporal-logic
     robustness, the lowest over the targets (``robustness``; negative: the rule was broken).
+    ``conflict``, ``collision``, ``collision_with``, ``min_ttc_s``, ``pet_s``: what the episode came
+    to with cross-traffic (``conflict.score_conflict``; a contact with anything counts, traffic or
+    not); ``traffic_cars``: how many other cars drove.
     """
 
     trial_id: str
@@ -98,6 +104,12 @@ class TrialResult:
     detection_delay_s: float = math.nan
     detected: bool = False
     robustness_m: float = math.nan
+    conflict: str | None = None
+    collision: bool = False
+    collision_with: str | None = None
+    min_ttc_s: float = math.nan
+    pet_s: float = math.nan
+    traffic_cars: int = 0
 
     def to_dict(self) -> dict:
         """Strict-JSON-ready: NaN becomes None."""
@@ -138,7 +150,10 @@ def _run(env: gym.Env, spec: TrialSpec, plan: EpisodePlan, estimator, on_step: S
     car = build_car(spec, plan, estimator)
     _grant_white_box(env, car.estimator)
     targets = car.mission.targets
-    referee = Referee(car.calibration, spec.braking, dt, _find_wrapper(env, AttackWrapper) is not None, clean_pass)
+    referee = Referee(car.calibration, spec.braking, dt, _find_wrapper(env, AttackWrapper) is not None, clean_pass,
+                      plan.conflict.xy if plan.conflict is not None else None)
+    run_through = run_through_m(plan)
+    linger = round(NEAR_MISS_S / dt) if plan.traffic else 0
     pending: deque = deque()
     rows: list[dict] = []
     for _ in range(plan.max_steps):
@@ -172,14 +187,31 @@ def _run(env: gym.Env, spec: TrialSpec, plan: EpisodePlan, estimator, on_step: S
         if on_step is not None:
             on_step(env, obs, info, rows[-1])
         last = step.slot == len(targets) - 1
-        if last and (decision.phase is Phase.DONE or info["dist_to_stop_line"] < -RUN_THROUGH_M):
+        if last and decision.phase is Phase.DONE:
             break
+        if last and info["dist_to_stop_line"] < -run_through:
+            # Past the line (and the conflict point): with traffic, watch on for the post-encroachment time.
+            if linger <= 0:
+                break
+            linger -= 1
         obs, _, terminated, truncated, info = env.step(applied)
         if terminated or truncated:
+            if info.get("collision_with"):  # the contact that ended it belongs to the last row's step
+                rows[-1]["collision_with"] = info["collision_with"]
             break
     log = pd.DataFrame(rows)
     log.insert(0, "trial_id", spec.trial_id)
     return log
+
+
+def run_through_m(plan: EpisodePlan) -> float:
+    """How far past the last line the bumper runs before the episode ends, m: ``RUN_THROUGH_M``,
+    or with cross-traffic far enough for the whole car to clear the conflict point (a missed stop
+    there is scored by what it meets, not by the line)."""
+    if plan.conflict is None:
+        return RUN_THROUGH_M
+    past_line = plan.conflict.ego_s - plan.mission.targets[-1].stop_s
+    return max(RUN_THROUGH_M, past_line + CAR_LENGTH_M + 0.1)
 
 
 def _result(spec: TrialSpec, plan: EpisodePlan, env: gym.Env, log: pd.DataFrame) -> TrialResult:
@@ -199,7 +231,8 @@ def _result(spec: TrialSpec, plan: EpisodePlan, env: gym.Env, log: pd.DataFrame)
         stop_distance_m=first.rest_distance_m, t_star_s=first.t_star_s, t_brake_s=first.t_brake_s,
         trigger_delay_s=first.trigger_delay_s, dt_brake_s=first.dt_brake_s, failure=first.failure,
         duration_s=float(log["t"].iloc[-1]), n_targets=n_targets, targets_served=served,
-        fused_jump_m=largest_jump(log), robustness_m=robustness(log), **asdict(stealth(log)))
+        fused_jump_m=largest_jump(log), robustness_m=robustness(log), **asdict(stealth(log)),
+        **score_conflict(log).to_dict(), traffic_cars=len(plan.traffic))
 
 
 def _first_attack_windows(env: gym.Env) -> list[tuple[float, float]]:

@@ -31,6 +31,7 @@ from racf.sim.attacks.schedule import as_range
 from racf.sim.env.config import SENSOR_PROFILES
 from racf.sim.world.stop_signs import SIGN_GEOMETRIES
 from racf.sim.world.drives import DriveSpec, draw_drive
+from racf.sim.world.traffic import MAX_TRAFFIC_CARS
 
 __all__ = ["TrialSpec", "parse_setting", "setting_name", "EPISODE_CODE", "TARGETS", "DRIVE_S", "STRONG_RHO",
            "STRONG_T_ATK_S", "extra_attacks", "TABLE_SETTINGS", "plugin_sources"]
@@ -125,6 +126,11 @@ class TrialSpec:
             ``{"checkpoint": "outputs/odca-head"}``); a path's content enters the trial id.
         run_up_m: how far before the stop line the front bumper starts an approach, m (None: 3 m,
             or the longest the lane allows); not for a drive.
+        traffic_cars: other cars crossing at the stop sign's conflict point (0: an empty map; up to
+            ``MAX_TRAFFIC_CARS``); only for an approach to a stop sign (``racf.sim.world.traffic``).
+        traffic_gap_s: when the first other car passes the conflict point, after the ego car would
+            have, had it not stopped, s (0: together; the next follow ``HEADWAY_S`` apart).
+        traffic_speed: the other cars' speed, m/s.
     """
 
     setting: str
@@ -145,6 +151,9 @@ class TrialSpec:
     detector: str = "classical"
     estimator_options: dict = field(default_factory=dict)
     run_up_m: float | None = None
+    traffic_cars: int = 0
+    traffic_gap_s: float = 0.0
+    traffic_speed: float = 1.0
 
     def __post_init__(self) -> None:
         attacks, estimator = parse_setting(self.setting)
@@ -187,6 +196,15 @@ class TrialSpec:
                                           or not 0.3 <= self.run_up_m <= 10.0):
             raise ValueError(f"run_up_m must be None or a number of metres in [0.3, 10] for an approach (not a "
                              f"drive), got {self.run_up_m!r} with target {self.target!r}")
+        if not (isinstance(self.traffic_cars, int) and not isinstance(self.traffic_cars, bool)
+                and 0 <= self.traffic_cars <= MAX_TRAFFIC_CARS):
+            raise ValueError(f"traffic_cars must be an int in 0..{MAX_TRAFFIC_CARS}, got {self.traffic_cars!r}")
+        if self.traffic_cars and self.target != "sign":
+            raise ValueError(f"traffic crosses at a stop sign: traffic_cars needs target 'sign', got {self.target!r}")
+        for name, low, high in (("traffic_gap_s", -5.0, 5.0), ("traffic_speed", 0.1, 3.0)):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not low <= value <= high:
+                raise ValueError(f"{name} must be a number in [{low}, {high}], got {value!r}")
         if self.control_hz is not None and not 1.0 <= self.control_hz <= 50.0:
             raise ValueError(f"control_hz must be in [1, 50] Hz (the env steps at 50 Hz) or None, "
                              f"got {self.control_hz!r}")

@@ -174,6 +174,26 @@ def _robustness_cells(r: dict) -> str:
             f"{_fmt(r['violation_share'])} {_ci(r['violation_share_ci'])}")
 
 
+def _traffic_lines(summary: dict) -> list[str]:
+    """The cross-traffic table: collision rate, conflict outcomes, smallest TTC (only with traffic)."""
+    rows = {k: r for k, r in summary.items() if r.get("n_traffic")}
+    if not rows:
+        return []
+    lines = ["", "With cross-traffic (`episode.conflict`): collision rate [95 % Wilson CI] over all episodes and "
+             "over those whose attack began before t*; the conflict outcomes; the median smallest "
+             "time-to-collision.", "",
+             "| setting | N | collision rate | collision rate, attack before t* (N) | collision / crash / near miss / "
+             "passed / yielded | min TTC s, median |", "|---|---|---|---|---|---|"]
+    for key, r in rows.items():
+        early = "—" if r.get("n_traffic_attack_before_t_star") is None else (
+            f"{_fmt(r['collision_rate_attack_before_t_star'])} {_ci(r['collision_rate_attack_before_t_star_ci'])} "
+            f"({r['n_traffic_attack_before_t_star']})")
+        outcomes = " / ".join(str(v) for v in r["conflicts"].values())
+        lines.append(f"| {key} | {r['n_traffic']} | {_fmt(r['collision_rate'])} {_ci(r['collision_rate_ci'])} | "
+                     f"{early} | {outcomes} | {_fmt(r['min_ttc_median_s'])} |")
+    return lines
+
+
 def write_report(frame: pd.DataFrame, out: Path, name: str = "sweep") -> dict[str, Path]:
     """Writes ``summary.md``, ``summary.json`` and the two plots under ``out``."""
     out = Path(out)
@@ -196,6 +216,7 @@ def write_report(frame: pd.DataFrame, out: Path, name: str = "sweep") -> dict[st
         lines.append(f"| {setting} | {r['n']} | {_fmt(r['scr'])} {_ci(r['scr_ci'])} | {_fmt(r['asr'])} | {early} | "
                      f"{_fmt(r['dt_brake_mean'], 3)} ({r['n_latency']}) | {_fmt(r['max_fused_jump_m'], 3)} | "
                      f"{_robustness_cells(r)} |")
+    lines += _traffic_lines(summary)
     if not frame.empty:
         frame = frame.assign(estimator=frame["estimator"].astype(str))
         lines += ["", "By attack and estimator (columns):", ""]

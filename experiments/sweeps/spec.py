@@ -24,11 +24,16 @@ Example (``experiments/sweeps/specs/smoke.toml``)::
     [estimators.odca]                # optional: an estimator's options (one value each)
     checkpoint = "outputs/odca-head" # a trained head instead of the shipped one
 
+    [traffic]                        # optional: cross-traffic at the stop sign (racf.sim.world.traffic)
+    cars = [0, 1]                    # each episode without and with one other car: the same seed
+    gap_s = 0.0                      # it passes the conflict point this long after the ego car would
+    speed = 1.0                      # its speed, m/s
+
 Attacks: any in ``racf.sim.attacks.ATTACKS`` (``patch_occlusion``, ``lidar_spoof``, ...) and
 ``+``-combinations of them; estimators: any in ``racf.experiments.episode.estimators.ESTIMATORS``
 (``raw``, ``odca``, ``ekf``, ``chronos``), plug-ins included. An episode's seed depends on its cell and repeat but not on the
 estimator or the attack's ``[params]``, so estimators (and the settings of an attack) meet
-identical episodes (paired comparisons). Everything is
+identical episodes (paired comparisons); so do the ``[traffic]`` table's car counts. Everything is
 checked, with an error naming the field and what is allowed, before any episode runs.
 
 The same fields come as command-line flags (``racf sweep --mode random --n 50 --attack patch_occlusion
@@ -54,6 +59,7 @@ from racf.experiments.episode.spec import setting_name
 from racf.sim.attacks import ATTACKS
 from racf.sim.env.config import SENSOR_PROFILES
 from racf.sim.world.stop_signs import SIGN_GEOMETRIES
+from racf.sim.world.traffic import MAX_TRAFFIC_CARS
 
 __all__ = ["SweepSpec", "load_spec", "parse_spec", "spec_text", "spec_path", "SPACE_KEYS", "SPECS_DIR"]
 
@@ -63,7 +69,8 @@ SPACE_KEYS = {"attack": None, "estimator": None, "rho": (0.0, 1.0), "t_atk": (0.
 _DEFAULTS = {"attack": ["patch_occlusion"], "estimator": ["raw"], "rho": [0.95], "t_atk": [1.75], "speed": [1.5],
              "sign": [0, 1, 2, 3]}
 _TOP_KEYS = {"name", "mode", "repeats", "n", "seed", "space", "params", "estimators", "log_steps", "sensor_profile",
-             "sign_geometry", "detector"}
+             "sign_geometry", "detector", "traffic"}
+_TRAFFIC_KEYS = {"cars": [0], "gap_s": 0.0, "speed": 1.0}
 #: The example specs shipped with the project.
 SPECS_DIR = Path(__file__).resolve().parent / "specs"
 
@@ -84,6 +91,7 @@ class SweepSpec:
     sign_geometry: str = "plate"
     detector: str = "classical"
     estimators: dict = field(default_factory=dict)
+    traffic: dict = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         if self.detector not in DETECTORS:
@@ -127,8 +135,27 @@ class SweepSpec:
             if self.mode == "random" and key in ("rho", "t_atk", "speed") and len(vals) != 2:
                 raise ValueError(f"space.{key} must be [low, high] in random mode, got {vals!r}")
         object.__setattr__(self, "space", space)
+        self._check_traffic()
         self._check_params()
         self._check_estimators()
+
+    def _check_traffic(self) -> None:
+        if not isinstance(self.traffic, dict):
+            raise ValueError("traffic must be a table ([traffic] with cars, gap_s, speed)")
+        unknown = sorted(set(self.traffic) - set(_TRAFFIC_KEYS))
+        if unknown:
+            raise ValueError(f"unknown field(s) {unknown} in [traffic]; allowed: {sorted(_TRAFFIC_KEYS)}")
+        cars = self.traffic.get("cars", [0])
+        if not isinstance(cars, list) or not cars or not all(
+                isinstance(c, int) and not isinstance(c, bool) and 0 <= c <= MAX_TRAFFIC_CARS for c in cars):
+            raise ValueError(f"traffic.cars must be a non-empty list of car counts in 0..{MAX_TRAFFIC_CARS}, got {cars!r}")
+        for key, low, high in (("gap_s", -5.0, 5.0), ("speed", 0.1, 3.0)):
+            value = self.traffic.get(key, _TRAFFIC_KEYS[key])
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not low <= value <= high:
+                raise ValueError(f"traffic.{key} must be a number in [{low}, {high}], got {value!r}")
+
+    def _traffic_counts(self) -> list[int]:
+        return list(self.traffic.get("cars", [0]))
 
     def _check_estimators(self) -> None:
         if not isinstance(self.estimators, dict):
@@ -177,7 +204,8 @@ class SweepSpec:
                                                         "sensor_profile", "sign_geometry")}
                          | ({"params": self.params} if self.params else {})
                          | ({"estimators": self.estimators} if self.estimators else {})
-                         | ({"detector": self.detector} if self.detector != "classical" else {}), sort_keys=True)
+                         | ({"detector": self.detector} if self.detector != "classical" else {})
+                         | ({"traffic": self.traffic} if self.traffic else {}), sort_keys=True)
         return hashlib.sha256(raw.encode()).hexdigest()[:12]
 
     def episodes(self) -> list[TrialSpec]:
@@ -190,8 +218,9 @@ class SweepSpec:
                 for repeat in range(self.repeats):
                     seed = self._episode_seed(cell, repeat)
                     for params in self._param_combos(cell[0]):
-                        for estimator in s["estimator"]:
-                            out.append(_trial(cell, estimator, seed, self, params))
+                        for cars in self._traffic_counts():
+                            for estimator in s["estimator"]:
+                                out.append(_trial(cell, estimator, seed, self, params, cars))
         else:
             rng = np.random.default_rng(self.seed)
             for i in range(self.n):
@@ -201,8 +230,9 @@ class SweepSpec:
                 seed = self._episode_seed(cell, i)
                 combos = self._param_combos(cell[0])
                 params = combos[rng.integers(len(combos))] if len(combos) > 1 else combos[0]
-                for estimator in s["estimator"]:
-                    out.append(_trial(cell, estimator, seed, self, params))
+                for cars in self._traffic_counts():
+                    for estimator in s["estimator"]:
+                        out.append(_trial(cell, estimator, seed, self, params, cars))
         return out
 
     def _episode_seed(self, cell: tuple, repeat: int) -> int:
@@ -222,13 +252,16 @@ def _attacks(value) -> tuple[str, ...]:
     return parts
 
 
-def _trial(cell: tuple, estimator: str, seed: int, sweep: SweepSpec, params: dict | None = None) -> TrialSpec:
+def _trial(cell: tuple, estimator: str, seed: int, sweep: SweepSpec, params: dict | None = None,
+           traffic_cars: int = 0) -> TrialSpec:
     attack, rho, t_atk, speed, sign = cell
+    traffic = {"traffic_cars": traffic_cars, "traffic_gap_s": float(sweep.traffic.get("gap_s", 0.0)),
+               "traffic_speed": float(sweep.traffic.get("speed", 1.0))} if traffic_cars else {}
     return TrialSpec(setting_name(_attacks(attack), estimator), int(sign), float(speed), seed,
                      rho=(float(rho), float(rho)), t_atk=(float(t_atk), float(t_atk)),
                      sensor_profile=sweep.sensor_profile, sign_geometry=sweep.sign_geometry,
                      attack_params=params or {}, detector=sweep.detector,
-                     estimator_options=sweep.estimators.get(estimator, {}))
+                     estimator_options=sweep.estimators.get(estimator, {}), **traffic)
 
 
 def spec_path(path: str | Path) -> Path:
@@ -268,7 +301,8 @@ def parse_spec(text: str, source: str = "spec", default_name: str = "sweep") -> 
                          log_steps=bool(raw.get("log_steps", False)),
                          sensor_profile=raw.get("sensor_profile", "qcar2"),
                          sign_geometry=raw.get("sign_geometry", "plate"),
-                         detector=raw.get("detector", "classical"), estimators=raw.get("estimators", {}))
+                         detector=raw.get("detector", "classical"), estimators=raw.get("estimators", {}),
+                         traffic=raw.get("traffic", {}))
         episodes = spec.episodes()
     except ValueError as err:
         raise ValueError(f"{source}: {err}") from None

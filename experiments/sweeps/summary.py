@@ -10,8 +10,10 @@ the undetected error's median with a 95 % bootstrap interval (seeded: the same r
 same interval) and its largest value, the share of episodes whose attack the defence flagged
 (Wilson interval) and the median detection delay; the stop rule's STL robustness
 (``episode.robustness``): its median with a bootstrap interval, 5th percentile and lowest value,
-and the share of episodes that broke the rule (robustness < 0, Wilson interval). Strict JSON:
-None, never NaN.
+and the share of episodes that broke the rule (robustness < 0, Wilson interval); with
+cross-traffic (``episode.conflict``), the collision rate (Wilson interval; under an attack also
+over the episodes whose attack began before t*), the conflict outcomes and the smallest
+time-to-collision. Strict JSON: None, never NaN.
 """
 
 from __future__ import annotations
@@ -20,10 +22,12 @@ import numpy as np
 import pandas as pd
 from scipy.stats import binomtest
 
+from racf.experiments.episode.conflict import CONFLICT_OUTCOMES
 from racf.experiments.episode.scoring import FAILURES
 from racf.experiments.episode.spec import parse_setting
 
-__all__ = ["wilson_interval", "summarize", "summarize_settings", "stealth_summary", "robustness_summary", "median_ci"]
+__all__ = ["wilson_interval", "summarize", "summarize_settings", "stealth_summary", "robustness_summary", "median_ci",
+           "conflict_summary", "setting_key"]
 
 
 def wilson_interval(successes: int, n: int, confidence: float = 0.95) -> tuple[float, float]:
@@ -65,6 +69,7 @@ def summarize(results: pd.DataFrame, attack: bool | None = None) -> dict:
     jumps = pd.to_numeric(results["fused_jump_m"], errors="coerce").dropna() if "fused_jump_m" in results else []
     summary["max_fused_jump_m"] = float(jumps.max()) if len(jumps) else None
     summary.update(robustness_summary(results))
+    summary.update(conflict_summary(results))
     if attack:
         summary["asr_ci"] = [1.0 - summary["scr_ci"][1], 1.0 - summary["scr_ci"][0]]
         early = results[pd.to_numeric(results["attack_start_s"], errors="coerce")
@@ -76,6 +81,12 @@ def summarize(results: pd.DataFrame, attack: bool | None = None) -> dict:
         summary["lost_frames_mean"] = float(results["lost_frames"].mean()) if n else None
         summary["attacked_share"] = float(results["attack_start_s"].notna().mean()) if n else None
         summary.update(stealth_summary(results))
+        if summary.get("n_traffic"):
+            early = early[pd.to_numeric(early["traffic_cars"], errors="coerce").fillna(0) > 0]
+            k_hit = int(early["collision"].fillna(False).astype(bool).sum())
+            summary["n_traffic_attack_before_t_star"] = int(len(early))
+            summary["collision_rate_attack_before_t_star"] = k_hit / len(early) if len(early) else None
+            summary["collision_rate_attack_before_t_star_ci"] = list(wilson_interval(k_hit, len(early)))
     return summary
 
 
@@ -120,8 +131,31 @@ def stealth_summary(results: pd.DataFrame) -> dict:
             "detection_delay_median": float(delays.median()) if len(delays) else None}
 
 
+def conflict_summary(results: pd.DataFrame) -> dict:
+    """Collisions and conflicts over the episodes that drove with other cars (none without)."""
+    if "traffic_cars" not in results or not len(results):
+        return {}
+    with_traffic = results[pd.to_numeric(results["traffic_cars"], errors="coerce").fillna(0) > 0]
+    if not len(with_traffic):
+        return {}
+    n = int(len(with_traffic))
+    hit = int(with_traffic["collision"].fillna(False).astype(bool).sum())
+    ttc = pd.to_numeric(with_traffic["min_ttc_s"], errors="coerce").dropna()
+    return {"n_traffic": n, "collision_rate": hit / n, "collision_rate_ci": list(wilson_interval(hit, n)),
+            "conflicts": {c: int((with_traffic["conflict"] == c).sum()) for c in CONFLICT_OUTCOMES},
+            "min_ttc_median_s": float(ttc.median()) if len(ttc) else None}
+
+
+def setting_key(setting: str, traffic_cars: int = 0) -> str:
+    """How summaries name a setting: with other cars, ``SETTING@trafficN``."""
+    return f"{setting}@traffic{int(traffic_cars)}" if traffic_cars else str(setting)
+
+
 def summarize_settings(frame: pd.DataFrame) -> dict[str, dict]:
-    """:func:`summarize` per setting, settings in sorted order."""
+    """:func:`summarize` per setting (and per traffic, ``setting_key``), in sorted order."""
     if frame.empty:
         return {}
-    return {str(setting): summarize(rows) for setting, rows in frame.groupby("setting", sort=True)}
+    cars = pd.to_numeric(frame["traffic_cars"], errors="coerce").fillna(0).astype(int) if "traffic_cars" in frame \
+        else pd.Series(0, index=frame.index)
+    keys = [setting_key(s, c) for s, c in zip(frame["setting"], cars)]
+    return {key: summarize(rows) for key, rows in frame.groupby(pd.Series(keys, index=frame.index), sort=True)}

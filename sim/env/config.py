@@ -13,6 +13,7 @@ from racf.sim.sensors.localiser import LOCALISATIONS, LocaliserConfig
 from racf.sim.sensors.state import OdometryConfig
 from racf.sim.vehicle.qcar2 import VehicleConfig
 from racf.sim.world.stop_signs import SignGeometry
+from racf.sim.world.traffic import MAX_TRAFFIC_CARS
 
 __all__ = ["EnvConfig", "RESET_OPTIONS", "LOCALISATIONS", "SENSOR_PROFILES"]
 
@@ -28,7 +29,7 @@ SENSOR_PROFILES: dict[str, dict[str, Any]] = {
 
 #: Keys ``reset(options=...)`` accepts.
 RESET_OPTIONS = ("sign", "obstacle", "cruise_speed", "run_up_m", "route", "start_s_m", "lateral_offset_m",
-                 "heading_error_rad", "crate")
+                 "heading_error_rad", "crate", "traffic")
 
 
 @dataclass(frozen=True)
@@ -58,6 +59,8 @@ class EnvConfig:
         max_episode_s: episode time limit (truncation).
         off_road_m: lateral distance from the route's lane centre that ends the episode.
         render_width, render_height: size of ``render()`` frames.
+        traffic_cars: how many other cars the model holds (0..``MAX_TRAFFIC_CARS``); an episode
+            drives as many as its ``options["traffic"]`` lists and parks the rest out of sight.
     """
 
     sensor_profile: str = "qcar2"
@@ -79,6 +82,7 @@ class EnvConfig:
     off_road_m: float = 0.30
     render_width: int = 640
     render_height: int = 480
+    traffic_cars: int = 0
 
     def __post_init__(self) -> None:
         if not isinstance(self.sensor_profile, str) or self.sensor_profile not in SENSOR_PROFILES:
@@ -107,6 +111,9 @@ class EnvConfig:
             raise ValueError(f"max_episode_s must be in [0.1, 3600] s, got {self.max_episode_s}")
         if not 0.05 <= self.off_road_m <= 2.0:
             raise ValueError(f"off_road_m must be in [0.05, 2] m, got {self.off_road_m}")
+        if not (isinstance(self.traffic_cars, int) and not isinstance(self.traffic_cars, bool)
+                and 0 <= self.traffic_cars <= MAX_TRAFFIC_CARS):
+            raise ValueError(f"traffic_cars must be an int in 0..{MAX_TRAFFIC_CARS}, got {self.traffic_cars!r}")
         if not (16 <= self.render_width <= 1280 and 12 <= self.render_height <= 960):
             raise ValueError(f"render size must be within 1280x960 px, got {self.render_width}x{self.render_height}")
 

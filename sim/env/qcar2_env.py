@@ -37,7 +37,9 @@ from racf.sim.vehicle import QCar2
 from racf.sim.world.drives import RouteTarget
 from racf.sim.world.route_plan import current_slot, plan_route
 from racf.sim.world.road_graph import Path
-from racf.sim.world.scene import HIDDEN_GEOM_GROUP, PROP_GEOM_GROUP, load_model, patch_geom, patch_texture
+from racf.sim.world.scene import (HIDDEN_GEOM_GROUP, PARKED_Z_M, PROP_GEOM_GROUP, load_model, patch_geom, patch_texture,
+                                  traffic_body, traffic_paint_geoms)
+from racf.sim.world.traffic import TRAFFIC_COLOURS, TrafficCar
 from racf.sim.world.sign_patch import PatchPlacement
 from racf.sim.world.obstacles import Obstacle, obstacles
 from racf.sim.world.stop_signs import StopSign, stop_signs
@@ -116,7 +118,7 @@ class QCar2Env(gym.Env):
         self.render_mode = render_mode
         self.metadata = {**self.metadata, "render_fps": self.config.control_hz}
 
-        self.model = load_model(sign_geometry=self.config.sign)
+        self.model = load_model(sign_geometry=self.config.sign, traffic_cars=self.config.traffic_cars)
         self.model.opt.timestep = self.config.physics_dt_s
         self.data = mujoco.MjData(self.model)
         self.car = QCar2(self.model, self.config.vehicle)
@@ -152,6 +154,14 @@ class QCar2Env(gym.Env):
         self._patch_geoms = [self.model.geom(patch_geom(i)).id for i in range(n_signs)]
         self._patch_textures = [self.model.texture(patch_texture(i)).id for i in range(n_signs)]
         self._viewer = None
+        # Other cars: mocap bodies, driven along their lanes as functions of time (sim.world.traffic).
+        self._traffic: tuple[TrafficCar, ...] = ()
+        self._traffic_mocap = [int(self.model.body_mocapid[self.model.body(traffic_body(k)).id])
+                               for k in range(self.config.traffic_cars)]
+        self._traffic_paint = [[self.model.geom(g).id for g in traffic_paint_geoms(k)]
+                               for k in range(self.config.traffic_cars)]
+        self._traffic_of_body = {self.model.body(traffic_body(k)).id: k for k in range(self.config.traffic_cars)}
+        self._collision_with: str | None = None
         # Crates stand on the map only in their own episodes (as a test operator would place one).
         self._crates = [(self.model.body(f"obstacle_{o.index}").id, self.model.body(f"obstacle_{o.index}").pos.copy())
                         for o in obstacles()]
@@ -194,7 +204,13 @@ class QCar2Env(gym.Env):
         for i, (body, home) in enumerate(self._crates):
             self.model.body_pos[body] = home if crate == i else home + np.array([0.0, 0.0, -5.0])
         self.hide_sign_patches()  # an env shared by episodes: no sticker outlives its episode
+        self._traffic = self._traffic_of(options.get("traffic", ()))
         mujoco.mj_resetData(self.model, self.data)
+        self._collision_with = None
+        for k, paint in enumerate(self._traffic_paint):
+            if k < len(self._traffic):
+                self.model.geom_rgba[paint] = TRAFFIC_COLOURS[self._traffic[k].colour]
+        self._move_traffic(0.0)
         self.rig.invalidate()  # the crates may have moved; the car may start where it started before
         self._route_s = start_s
         self.car.place(self.data, *pose, speed=float(speed))
@@ -289,15 +305,49 @@ class QCar2Env(gym.Env):
         return float(progress_m - 0.1 * abs(self._lateral) - 10.0 * (collision or off_road))
 
     def _collided(self) -> bool:
-        """A contact of the chassis with anything, or of a wheel with anything but the floor."""
+        """A contact of the chassis with anything, or of a wheel with anything but the floor; the
+        first such contact's other party is kept for ``info["collision_with"]``."""
         for i in range(self.data.ncon):
-            g1, g2 = self.data.contact.geom1[i], self.data.contact.geom2[i]
-            if self._chassis_geom in (g1, g2):
-                return True
-            if (g1 in self._wheel_geoms and g2 not in self._floor_geoms) or (
-                    g2 in self._wheel_geoms and g1 not in self._floor_geoms):
+            g1, g2 = int(self.data.contact.geom1[i]), int(self.data.contact.geom2[i])
+            other = g2 if g1 == self._chassis_geom or g1 in self._wheel_geoms else g1
+            if self._chassis_geom in (g1, g2) or (
+                    (g1 in self._wheel_geoms or g2 in self._wheel_geoms) and other not in self._floor_geoms):
+                self._collision_with = self._collision_with or self._name_of(other)
                 return True
         return False
+
+    def _name_of(self, geom: int) -> str:
+        """What a geom belongs to: ``traffic0``.. for an other car, else the geom's (or its body's) name."""
+        body = int(self.model.geom_bodyid[geom])
+        root = int(self.model.body_rootid[body])
+        if root in self._traffic_of_body:
+            return f"traffic{self._traffic_of_body[root]}"
+        return self.model.geom(geom).name or self.model.body(body).name or f"geom{geom}"
+
+    # -- other cars (sim.world.traffic) ------------------------------------------------------
+    def _traffic_of(self, raw: Any) -> tuple[TrafficCar, ...]:
+        if isinstance(raw, (str, bytes, dict)) or not hasattr(raw, "__len__"):
+            raise ValueError(f"options['traffic'] must be a list of other cars (dicts), got {raw!r}")
+        if len(raw) > self.config.traffic_cars:
+            raise ValueError(f"options['traffic'] lists {len(raw)} cars; this env holds {self.config.traffic_cars} "
+                             "(make it with traffic_cars=N)")
+        return tuple(TrafficCar.from_options(car) for car in raw)
+
+    def _move_traffic(self, t: float) -> None:
+        """Puts every other car where its lane follower has it at time ``t`` s (unused ones stay parked)."""
+        for k, mocap in enumerate(self._traffic_mocap):
+            if k < len(self._traffic):
+                x, y, yaw, _ = self._traffic[k].state_at(t)
+                self.data.mocap_pos[mocap] = (x, y, 0.0)
+                self.data.mocap_quat[mocap] = (math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2))
+            else:
+                self.data.mocap_pos[mocap] = (0.0, 0.0, PARKED_Z_M)
+                self.data.mocap_quat[mocap] = (1.0, 0.0, 0.0, 0.0)
+
+    def traffic_states(self) -> np.ndarray:
+        """(n, 4) x, y, yaw, speed of each driven other car now (ground truth, like ``info``)."""
+        t = self._substep * self.config.physics_dt_s
+        return np.array([car.state_at(t) for car in self._traffic], np.float64).reshape(-1, 4)
 
     # -- internals ------------------------------------------------------------------------
     def _rng_of(self, sensor: Sensor) -> np.random.Generator:
@@ -314,9 +364,11 @@ class QCar2Env(gym.Env):
         while self._substep < end:
             # Step to the next physics step where a sensor acts (every one while the LiDAR sweeps).
             nxt = self._substep + 1
-            if not self._sweeping:
+            if not self._sweeping and not self._traffic:  # other cars move every physics step
                 while nxt < end and (not frames or self._frames_due(nxt) == self._frames):
                     nxt += 1
+            if self._traffic:
+                self._move_traffic(self._substep * self.config.physics_dt_s)
             mujoco.mj_step(self.model, self.data, nstep=nxt - self._substep)
             self._substep = nxt
             if self._sweeping:
@@ -392,6 +444,8 @@ class QCar2Env(gym.Env):
             "lateral_error": self._lateral,
             "dist_to_stop_line": self._targets[self._slot].stop_s - (self._route_s + self._bumper_ahead_m),
             "collision": collision,
+            "collision_with": self._collision_with,
+            "traffic": self.traffic_states(),
             "off_road": off_road,
             "time": self._step / self.config.control_hz,
         }

@@ -9,6 +9,7 @@ referee's columns (d_true, the reference braker) are the only ones allowed to ch
 import gymnasium as gym
 import numpy as np
 import pandas as pd
+import pytest
 
 from racf.experiments.episode import TrialSpec, run_trial
 from racf.experiments.episode.stack import default_env
@@ -52,8 +53,10 @@ class ScrambledInfo(gym.Wrapper):
         return obs, reward, terminated, truncated, self._scramble(info)
 
 
-def test_the_car_does_the_same_with_info_scrambled():
-    spec = TrialSpec("attack+odca", 0, 1.5, 1)
+@pytest.mark.parametrize("spec", [TrialSpec("attack+odca", 0, 1.5, 1),
+                                  # Two other cars crossing: their states in info are scrambled too.
+                                  TrialSpec("attack+odca", 3, 1.5, 1, traffic_cars=2)], ids=["empty", "traffic"])
+def test_the_car_does_the_same_with_info_scrambled(spec):
     result, log = run_trial(spec, clean_pass=False)
     _, blind = run_trial(spec, make_env=lambda s: ScrambledInfo(default_env(s)), clean_pass=False)
     assert len(log) > 50 and log["attack_active"].any()
@@ -61,3 +64,5 @@ def test_the_car_does_the_same_with_info_scrambled():
     # The scrambler did reach the runner: the referee's ground truth differs.
     assert not np.allclose(blind["d_true"].fillna(-1), log["d_true"].fillna(-1))
     assert not np.allclose(blind["x"], log["x"])
+    if spec.traffic_cars:
+        assert not np.allclose(blind["traffic1_x"], log["traffic1_x"])
