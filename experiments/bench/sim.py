@@ -4,6 +4,10 @@ Prints control steps per second and the real-time factor (simulated seconds per 
 second) for physics only, physics + LiDAR, and the full sensor set (RGB-D camera, LiDAR,
 state, ground truth) at three camera resolutions. The car drives a stop-sign approach at
 1 m/s with Stanley lane following, so the camera sees a changing scene.
+
+``bench_traffic`` (``racf bench-sim --traffic-cars N``) times the full sensor set at the
+default 320 x 240 with and without N other cars crossing at the sign, in alternation in one
+process (the machine's drift hits both alike), and prints the ratio of the real-time factors.
 """
 
 from __future__ import annotations
@@ -17,7 +21,7 @@ import numpy as np
 from racf import sim
 from racf.controllers import StanleyController
 
-__all__ = ["BenchRow", "bench_sim"]
+__all__ = ["BenchRow", "bench_sim", "bench_traffic", "TrafficBench"]
 
 RESOLUTIONS = ((160, 120), (320, 240), (640, 480))
 
@@ -29,7 +33,7 @@ class BenchRow:
     real_time_factor: float
 
 
-def _drive(env, steps: int, step_fn) -> float:
+def _drive(env, steps: int, step_fn, options: dict | None = None) -> float:
     """Runs ``steps`` control steps through ``step_fn`` and returns wall seconds."""
     base = env.unwrapped
     sign = base.target_sign
@@ -38,7 +42,7 @@ def _drive(env, steps: int, step_fn) -> float:
     for _ in range(steps):
         state = base.car.state(base.data)
         if base.target_sign.path.length - base._route_s < 0.6:  # loop the approach
-            env.reset(options={"sign": sign.index, "cruise_speed": 1.0})
+            env.reset(options=options or {"sign": sign.index, "cruise_speed": 1.0})
             follower.reset()
         step_fn(np.array([1.0, follower.steer(state.x, state.y, state.yaw, state.speed)], np.float32))
     return time.perf_counter() - t0
@@ -84,3 +88,41 @@ def bench_sim(steps: int = 250, sign: int = 3, sensor_profile: str = "qcar2") ->
         rows.append(BenchRow(f"full sensors {width}x{height}", steps / wall, steps / wall / control_hz))
         env.close()
     return rows
+
+
+@dataclass(frozen=True)
+class TrafficBench:
+    """Paired real-time factors of the full sensor set without and with other cars."""
+
+    cars: int
+    rtf_empty: tuple[float, ...]
+    rtf_traffic: tuple[float, ...]
+
+    @property
+    def ratio(self) -> float:
+        """Median over the pairs of RTF with traffic / RTF without."""
+        return float(np.median(np.array(self.rtf_traffic) / np.array(self.rtf_empty)))
+
+
+def bench_traffic(cars: int = 2, steps: int = 250, repeats: int = 3, sign: int = 3,
+                  sensor_profile: str = "qcar2") -> TrafficBench:
+    """The full sensor set (320 x 240) on an approach to ``sign``, without and with ``cars`` other
+    cars crossing at its conflict point, timed in alternation ``repeats`` times."""
+    from racf.sim.world.traffic import cross_traffic
+
+    traffic = [c.to_options() for c in cross_traffic(sign, 1.5, cars=cars)]
+    envs = {}
+    for n in (0, cars):
+        env = gym.make(sim.ENV_ID, sensor_profile=sensor_profile, traffic_cars=n)
+        options = {"sign": sign, "cruise_speed": 1.0, **({"traffic": traffic} if n else {})}
+        env.reset(seed=0, options=options)
+        env.step(np.zeros(2, np.float32))  # GL context creation is not part of the rate
+        envs[n] = (env, options)
+    rtf: dict[int, list[float]] = {0: [], cars: []}
+    for _ in range(repeats):
+        for n, (env, options) in envs.items():
+            env.reset(seed=0, options=options)
+            rtf[n].append(steps / _drive(env, steps, env.step, options) / 50.0)
+    for env, _ in envs.values():
+        env.close()
+    return TrafficBench(cars, tuple(rtf[0]), tuple(rtf[cars]))

@@ -17,6 +17,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     b = sub.add_parser("bench-sim", help="simulator steps per second and real-time factor at 50 Hz")
     b.add_argument("--steps", type=int, default=250, help="control steps per setting (default 250)")
     b.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
+    b.add_argument("--traffic-cars", type=int, default=0, metavar="N",
+                   help="instead: time the full sensor set without and with N other cars crossing at the sign, "
+                        "in alternation, and print the ratio of the real-time factors (1-4)")
+    b.add_argument("--repeats", type=int, default=3, help="with --traffic-cars: timed pairs (default 3)")
     sensor_flags(b, geometry_default=None)
     b.set_defaults(handler=_bench_sim)
 
@@ -70,6 +74,8 @@ def _bench_sim(args: argparse.Namespace) -> int:
         fail("bench-sim", "--steps must be >= 10")
     if args.sign_geometry is not None:
         fail("bench-sim", "--sign-geometry does not apply here: the benchmark times the default signs")
+    if args.traffic_cars:
+        return _bench_traffic(args)
     rows = bench_sim(steps=args.steps, sensor_profile=args.sensor_profile)
     if args.json:
         print(json.dumps({r.setting: {"steps_per_s": round(r.steps_per_s, 1),
@@ -79,6 +85,25 @@ def _bench_sim(args: argparse.Namespace) -> int:
     for r in rows:
         print(f"{r.setting:<28}{r.steps_per_s:>10.1f}{r.real_time_factor:>18.2f}")
     print("real-time factor = simulated seconds per wall-clock second at the 50 Hz control rate")
+    return 0
+
+
+def _bench_traffic(args: argparse.Namespace) -> int:
+    from racf.experiments.bench.sim import bench_traffic
+    from racf.sim.world.traffic import MAX_TRAFFIC_CARS
+
+    if not 1 <= args.traffic_cars <= MAX_TRAFFIC_CARS:
+        fail("bench-sim", f"--traffic-cars must be in 1..{MAX_TRAFFIC_CARS}, got {args.traffic_cars}")
+    if args.repeats < 1:
+        fail("bench-sim", "--repeats must be >= 1")
+    r = bench_traffic(args.traffic_cars, steps=args.steps, repeats=args.repeats, sensor_profile=args.sensor_profile)
+    if args.json:
+        print(json.dumps({"cars": r.cars, "rtf_empty": r.rtf_empty, "rtf_traffic": r.rtf_traffic, "ratio": r.ratio}))
+        return 0
+    print(f"full sensors 320x240, {args.steps} steps a run, {args.repeats} pairs in alternation")
+    print(f"real-time factor, empty map:   {', '.join(f'{v:.2f}' for v in r.rtf_empty)}")
+    print(f"real-time factor, {r.cars} other cars: {', '.join(f'{v:.2f}' for v in r.rtf_traffic)}")
+    print(f"ratio (with / without), median over the pairs: {r.ratio:.3f} (a drop of {100 * (1 - r.ratio):.1f} %)")
     return 0
 
 

@@ -26,7 +26,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     what.add_argument("--attack", metavar="NAME", help="rate an attack against every registered defence")
     what.add_argument("--compare", nargs=2, metavar=("A", "B"),
                       help="two stored cards side by side (a defence's name in --out, or a card's JSON file)")
-    sc.add_argument("--battery", default=None, help="the battery (default: the newest, racf-3)")
+    sc.add_argument("--battery", default=None, help="the battery (default: the newest, racf-4)")
     sc.add_argument("--quick", action="store_true",
                     help="every row at a small N, for development: marked as quick in every output")
     sc.add_argument("--out", type=Path, default=_DEFAULT_OUT, help=f"results folder (default {_DEFAULT_OUT}); "

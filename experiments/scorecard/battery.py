@@ -2,6 +2,11 @@
 defence is rated on. A battery never changes once released: a change is a new name
 (``racf-2``), so two cards of one battery always rate the same thing.
 
+``racf-4`` is ``racf-3`` and one row with cross-traffic (issue 37): random strong patch draws
+over the four signs, each with another car timed to reach the sign's conflict point when the
+ego car would (``racf.sim.world.traffic``). The row reports its collision rate, and a driving
+score with CARLA's vehicle-collision penalty (x 0.60) beside the stop-sign run's (x 0.80).
+
 ``racf-3`` is ``racf-2`` and one row: a smaller sticker placed where it breaks the sign's outline
 (0.4 of the plate at its top edge, the place chosen on rendered approach views with
 ``racf bench-patch --views approach``), against the default detector.
@@ -33,7 +38,7 @@ from racf.experiments.sweeps.spec import SweepSpec
 __all__ = ["LoopRow", "Battery", "BATTERIES", "DEFAULT_BATTERY", "PENALTIES"]
 
 #: The driving score's penalties (CARLA's leaderboard coefficients): one factor per infraction.
-PENALTIES = {"ran_stop_sign": 0.80, "hit_static_object": 0.65}
+PENALTIES = {"ran_stop_sign": 0.80, "hit_static_object": 0.65, "hit_vehicle": 0.60}
 
 
 @dataclass(frozen=True)
@@ -46,6 +51,7 @@ class LoopRow:
     n_quick: int
     make: Callable[[str, int], list[TrialSpec]] = field(compare=False, repr=False)
     attacked: bool = True
+    driving: bool = False  # also a driving score (route completion x penalties), as the drives rows have
 
     def specs(self, defence: str, quick: bool = False) -> list[TrialSpec]:
         return self.make(defence, self.n_quick if quick else self.n)
@@ -63,7 +69,7 @@ def _paper(setting: str) -> Callable[[str, int], list[TrialSpec]]:
 
 
 def _sweep(name: str, attack: str, *, mode: str = "random", detector: str = _CAR, params: dict | None = None,
-           t_atk: list | None = None, rho: list | None = None, speed: list | None = None
+           t_atk: list | None = None, rho: list | None = None, speed: list | None = None, traffic: dict | None = None
            ) -> Callable[[str, int], list[TrialSpec]]:
     """Episodes of a sweep over the four signs, the same seeds for every defence (paired): ``n``
     random draws, or (grid) ``n // 4`` repeats at each sign and each of the attack's settings."""
@@ -72,11 +78,11 @@ def _sweep(name: str, attack: str, *, mode: str = "random", detector: str = _CAR
         if mode == "random":
             space |= {"rho": rho or [0.9, 1.0], "t_atk": t_atk or [0.5, 3.0], "speed": speed or [1.0, 2.0]}
             spec = SweepSpec(name, mode="random", n=n, seed=0, space=space, params=params or {}, log_steps=True,
-                             detector=detector)
+                             detector=detector, traffic=traffic or {})
         else:
             space |= {"rho": rho or [1.0], "t_atk": t_atk or [3.0], "speed": speed or [1.5]}
             spec = SweepSpec(name, mode="grid", repeats=max(1, n // 4), seed=0, space=space, params=params or {},
-                             log_steps=True, detector=detector)
+                             log_steps=True, detector=detector, traffic=traffic or {})
         return spec.episodes()
     return make
 
@@ -158,6 +164,10 @@ _RACF_3 = replace(_RACF_2, name="racf-3", loop=_RACF_2.loop + (
             _sweep("sticker", "physical_patch", params={"physical_patch": {
                 "texture": ["learned-approach"], "size": [0.4], "position": ["top"], "from_start": [True]}})),))
 
+_RACF_4 = replace(_RACF_3, name="racf-4", loop=_RACF_3.loop + (
+    LoopRow("traffic_strong", "random strong patch draws with cross-traffic timed to the conflict point", 60, 4,
+            _sweep("strong", "patch_occlusion", traffic={"cars": [1], "gap_s": 0.0, "speed": 1.0}), driving=True),))
+
 #: Every released battery, by name.
-BATTERIES = {"racf-1": _RACF_1, "racf-2": _RACF_2, "racf-3": _RACF_3}
-DEFAULT_BATTERY = "racf-3"
+BATTERIES = {"racf-1": _RACF_1, "racf-2": _RACF_2, "racf-3": _RACF_3, "racf-4": _RACF_4}
+DEFAULT_BATTERY = "racf-4"

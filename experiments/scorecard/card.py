@@ -39,7 +39,9 @@ def _loop_summary(rows: pd.DataFrame, attacked: bool) -> dict:
     keep = ("n", "scr", "scr_ci", "asr", "asr_ci", "n_attack_before_t_star", "scr_attack_before_t_star",
             "scr_attack_before_t_star_ci", "dt_brake_mean", "dt_brake_std", "n_latency", "failures",
             "robustness_median_m", "robustness_ci", "robustness_p5_m", "robustness_min_m", "violation_share",
-            "violation_share_ci")
+            "violation_share_ci", "n_traffic", "collision_rate", "collision_rate_ci", "conflicts",
+            "n_traffic_attack_before_t_star", "collision_rate_attack_before_t_star",
+            "collision_rate_attack_before_t_star_ci")
     return {k: s.get(k) for k in keep if k in s}
 
 
@@ -121,6 +123,9 @@ def run_card(defence: str, battery: Battery, out: Path, *, quick: bool = False, 
             summary.update(_stealth(frame))
         if row in battery.drives:
             card["drives"][row.key] = {**summary, **driving_rows(frame, logs, PENALTIES)}
+        elif row.driving:  # a closed-loop row scored as drives too (cross-traffic: the vehicle-hit penalty)
+            card["closed_loop"][row.key] = {**summary, **driving_rows(frame, logs, PENALTIES)}
+            loop_logs += logs
         else:
             card["closed_loop"][row.key] = summary
             loop_logs += logs

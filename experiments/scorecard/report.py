@@ -62,6 +62,16 @@ def card_rows(card: dict) -> list[tuple[str, str, str, float | None, list | None
         if r.get("robustness_median_m") is not None:  # the stop rule's STL robustness (episode.robustness)
             rows.append(("closed loop", r["title"], "STL robustness m, median", r["robustness_median_m"],
                          r["robustness_ci"], r["n"], True))
+        if r.get("n_traffic"):  # cross-traffic: what a missed stop cost
+            rows.append(("closed loop", r["title"], "collision rate", r["collision_rate"], r["collision_rate_ci"],
+                         r["n_traffic"], False))
+            if r.get("n_traffic_attack_before_t_star"):
+                rows.append(("closed loop", r["title"], "collision rate, attack before t*",
+                             r["collision_rate_attack_before_t_star"], r["collision_rate_attack_before_t_star_ci"],
+                             r["n_traffic_attack_before_t_star"], False))
+        if r.get("driving_score") is not None:
+            rows.append(("closed loop", r["title"], "driving score", r["driving_score"], r["driving_score_ci"], r["n"],
+                         True))
     for key, r in card["drives"].items():
         rows.append(("drives", r["title"], "driving score", r["driving_score"], r["driving_score_ci"], r["n"], True))
         rows.append(("drives", r["title"], "route completion", r["route_completion"], None, r["n"], True))

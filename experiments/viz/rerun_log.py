@@ -9,7 +9,9 @@ then replays the log and those frames into a recording on the ``sim_time`` timel
   and, while active, the patch) and ``depth`` (``DepthImage``);
 - ``world/car/lidar``: the LiDAR returns in the car's frame, the tracked reference's
   cluster in red, and ``world/car/lidar/track`` the tracked point;
-- ``map``: a top view of the mat with the car's trajectory and its current position;
+- ``map``: a top view of the mat with the car's trajectory and its current position, and with
+  cross-traffic the other cars' paths, their current positions and the conflict point;
+- ``world/traffic/k``: each other car's body (ground truth from the referee's columns);
 - ``series/*`` (d_true, d_clean, d_meas, lidar, d_fused, and ODCA's d_kin; NaN, where an
   estimator has no target, is a gap), ``control/*`` (gate w, the defence's flag, brake, attack
   active) and ``estimator/*`` (whatever else the estimator, a plug-in's too, reports in
@@ -26,7 +28,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-__all__ = ["FrameRecorder", "write_rrd", "SERIES", "CONTROL", "STYLE", "CAR_HALF_SIZE_M"]
+__all__ = ["FrameRecorder", "write_rrd", "SERIES", "CONTROL", "STYLE", "CAR_HALF_SIZE_M", "TRAFFIC_RGB"]
 
 #: Distance series (metres) and control series, as logged (entity name -> log column).
 SERIES = {"d_true": "d_true", "d_clean": "d_clean", "d_meas": "d_meas", "lidar": "lidar", "d_fused": "d_fused",
@@ -47,6 +49,8 @@ STYLE: dict[str, tuple[tuple[int, int, int], str]] = {
 }
 #: The car's body (QCar 2: 0.425 x 0.192 x 0.20 m), centred over the axles' midpoint, m.
 CAR_HALF_SIZE_M = (0.2125, 0.096, 0.10)
+#: The other cars' colours on the map and in 3D, in the order of ``sim.world.traffic.TRAFFIC_COLOURS``.
+TRAFFIC_RGB = ((200, 20, 20), (25, 65, 190), (230, 190, 25), (235, 235, 235))
 _CAR_CENTRE_Z_M = 0.10
 
 
@@ -177,6 +181,14 @@ def write_rrd(path: str | Path, log: pd.DataFrame, recorder: FrameRecorder | Non
     xy = log[["x", "y"]].to_numpy(float)
     rec.log("map/trajectory", rr.LineStrips2D([_map_px(xy)], colors=[30, 120, 230], radii=1.5,
                                               labels=["true pose"]), static=True)
+    cars = _traffic_cars(log)
+    for k in cars:
+        rec.log(f"map/traffic/{k}/path", rr.LineStrips2D([_map_px(log[[f"traffic{k}_x", f"traffic{k}_y"]].to_numpy(float))],
+                                                         colors=[TRAFFIC_RGB[k % len(TRAFFIC_RGB)]], radii=1.0,
+                                                         labels=[f"traffic{k}"]), static=True)
+    if cars and np.isfinite(log["conflict_x"].iloc[0]):
+        rec.log("map/conflict", rr.Points2D(_map_px([log["conflict_x"].iloc[0], log["conflict_y"].iloc[0]]), radii=6,
+                                            colors=[255, 200, 0], labels=["conflict point"]), static=True)
     if {"x_est", "y_est"} <= set(log.columns):  # the car's own pose estimate, beside the truth
         est = log[["x_est", "y_est"]].to_numpy(float)
         rec.log("map/trajectory_estimate", rr.LineStrips2D([_map_px(est)], colors=[240, 120, 20], radii=1.0,
@@ -227,10 +239,32 @@ def write_rrd(path: str | Path, log: pd.DataFrame, recorder: FrameRecorder | Non
             rec.log("world/car", rr.Transform3D(translation=[x, y, 0.0],
                                                 rotation=rr.RotationAxisAngle(axis=[0, 0, 1], radians=yaw)))
             rec.log("map/car", rr.Points2D(_map_px([x, y]), radii=5, colors=[255, 160, 0]))
+            _log_traffic(rec, row, cars)
             _log_lidar(rec, frame.lidar, row, lidar_cfg)
     rec.flush()
     rec.disconnect()
     return path
+
+
+def _traffic_cars(log: pd.DataFrame) -> list[int]:
+    """The other cars an episode drove (their columns hold states)."""
+    from racf.sim.world.traffic import MAX_TRAFFIC_CARS
+
+    return [k for k in range(MAX_TRAFFIC_CARS)
+            if f"traffic{k}_x" in log and np.isfinite(log[f"traffic{k}_x"].to_numpy(float)).any()]
+
+
+def _log_traffic(rec, row, cars: list[int]) -> None:
+    """Each other car's body in the world and its place on the map, at this step."""
+    import rerun as rr
+
+    for k in cars:
+        x, y, yaw = (float(row[f"traffic{k}_{f}"]) for f in ("x", "y", "yaw"))
+        colour = TRAFFIC_RGB[k % len(TRAFFIC_RGB)]
+        rec.log(f"world/traffic/{k}", rr.Boxes3D(half_sizes=[CAR_HALF_SIZE_M], centers=[[x, y, _CAR_CENTRE_Z_M]],
+                                                 rotation_axis_angles=[rr.RotationAxisAngle(axis=[0, 0, 1], radians=yaw)],
+                                                 colors=[colour], labels=[f"traffic{k}"]))
+        rec.log(f"map/traffic/{k}/car", rr.Points2D(_map_px([x, y]), radii=5, colors=[colour]))
 
 
 def _log_lidar(rec, ranges: np.ndarray, row, cfg) -> None:

@@ -156,6 +156,7 @@ class QCar2Env(gym.Env):
         self._viewer = None
         # Other cars: mocap bodies, driven along their lanes as functions of time (sim.world.traffic).
         self._traffic: tuple[TrafficCar, ...] = ()
+        self._traffic_table = np.empty((0, 1, 4))
         self._traffic_mocap = [int(self.model.body_mocapid[self.model.body(traffic_body(k)).id])
                                for k in range(self.config.traffic_cars)]
         self._traffic_paint = [[self.model.geom(g).id for g in traffic_paint_geoms(k)]
@@ -205,12 +206,16 @@ class QCar2Env(gym.Env):
             self.model.body_pos[body] = home if crate == i else home + np.array([0.0, 0.0, -5.0])
         self.hide_sign_patches()  # an env shared by episodes: no sticker outlives its episode
         self._traffic = self._traffic_of(options.get("traffic", ()))
+        # Each car's state at every physics step of the episode, tabulated once (they read no one).
+        steps = np.arange(int(round(self.config.max_episode_s / self.config.physics_dt_s)) + 2)
+        self._traffic_table = np.stack([car.states(steps * self.config.physics_dt_s) for car in self._traffic]) \
+            if self._traffic else np.empty((0, len(steps), 4))
         mujoco.mj_resetData(self.model, self.data)
         self._collision_with = None
         for k, paint in enumerate(self._traffic_paint):
             if k < len(self._traffic):
                 self.model.geom_rgba[paint] = TRAFFIC_COLOURS[self._traffic[k].colour]
-        self._move_traffic(0.0)
+        self._move_traffic(0)
         self.rig.invalidate()  # the crates may have moved; the car may start where it started before
         self._route_s = start_s
         self.car.place(self.data, *pose, speed=float(speed))
@@ -333,11 +338,11 @@ class QCar2Env(gym.Env):
                              "(make it with traffic_cars=N)")
         return tuple(TrafficCar.from_options(car) for car in raw)
 
-    def _move_traffic(self, t: float) -> None:
-        """Puts every other car where its lane follower has it at time ``t`` s (unused ones stay parked)."""
+    def _move_traffic(self, substep: int) -> None:
+        """Puts every other car where its lane follower has it at physics step ``substep`` (unused ones stay parked)."""
         for k, mocap in enumerate(self._traffic_mocap):
             if k < len(self._traffic):
-                x, y, yaw, _ = self._traffic[k].state_at(t)
+                x, y, yaw, _ = self._traffic_table[k, min(substep, self._traffic_table.shape[1] - 1)]
                 self.data.mocap_pos[mocap] = (x, y, 0.0)
                 self.data.mocap_quat[mocap] = (math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2))
             else:
@@ -346,8 +351,7 @@ class QCar2Env(gym.Env):
 
     def traffic_states(self) -> np.ndarray:
         """(n, 4) x, y, yaw, speed of each driven other car now (ground truth, like ``info``)."""
-        t = self._substep * self.config.physics_dt_s
-        return np.array([car.state_at(t) for car in self._traffic], np.float64).reshape(-1, 4)
+        return self._traffic_table[:, min(self._substep, self._traffic_table.shape[1] - 1)].copy()
 
     # -- internals ------------------------------------------------------------------------
     def _rng_of(self, sensor: Sensor) -> np.random.Generator:
@@ -368,7 +372,7 @@ class QCar2Env(gym.Env):
                 while nxt < end and (not frames or self._frames_due(nxt) == self._frames):
                     nxt += 1
             if self._traffic:
-                self._move_traffic(self._substep * self.config.physics_dt_s)
+                self._move_traffic(self._substep)
             mujoco.mj_step(self.model, self.data, nstep=nxt - self._substep)
             self._substep = nxt
             if self._sweeping:

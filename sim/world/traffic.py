@@ -142,26 +142,36 @@ class TrafficCar:
     def s_at(self, t: float) -> tuple[float, float]:
         """(arclength m, speed m/s) at time ``t`` s: cruise from ``depart_t_s``, then a constant-deceleration
         stop at ``stop_s`` (before it sets off: at ``start_s``, at rest)."""
-        if t < self.depart_t_s:
-            return self.start_s, 0.0
-        t -= self.depart_t_s
-        v, a = self.speed_mps, TRAFFIC_BRAKE_MPS2
-        room, braking = self.stop_s - self.start_s, self.speed_mps ** 2 / (2 * TRAFFIC_BRAKE_MPS2)
-        if room <= braking:  # too close to its stop to reach cruise: it brakes from the start
-            v0 = math.sqrt(2 * a * room)
-            tau = min(t, v0 / a)
-            return self.start_s + v0 * tau - 0.5 * a * tau * tau, v0 - a * tau
-        t_cruise = (room - braking) / v
-        if t <= t_cruise:
-            return self.start_s + v * t, v
-        tau = min(t - t_cruise, v / a)
-        return self.start_s + room - braking + v * tau - 0.5 * a * tau * tau, v - a * tau
+        s, v = self._profile(np.array([float(t)]))
+        return float(s[0]), float(v[0])
 
     def state_at(self, t: float) -> tuple[float, float, float, float]:
         """(x m, y m, yaw rad, speed m/s) in the map frame at time ``t`` s."""
-        s, v = self.s_at(t)
-        x, y, yaw = self.path.pose_at(s)
-        return x, y, yaw, v
+        return tuple(float(v) for v in self.states(np.array([float(t)]))[0])
+
+    def states(self, times: np.ndarray) -> np.ndarray:
+        """(n, 4) x, y, yaw, speed at each of ``times`` (s), at once: the env tabulates an episode's
+        worth at its reset and reads one row a physics step."""
+        s, v = self._profile(np.asarray(times, float))
+        path = self.path
+        unwrapped = _unwrapped_headings(self.route)
+        yaw = np.interp(s, path.arclength, unwrapped)
+        return np.column_stack([np.interp(s, path.arclength, path.points[:, 0]),
+                                np.interp(s, path.arclength, path.points[:, 1]),
+                                (yaw + np.pi) % (2 * np.pi) - np.pi, v])
+
+    def _profile(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        a = TRAFFIC_BRAKE_MPS2
+        room = self.stop_s - self.start_s
+        # Too close to its stop to reach cruise: it brakes from the start, from the speed that stops it there.
+        v = min(self.speed_mps, math.sqrt(2 * a * room))
+        braking = v * v / (2 * a)
+        t_cruise = (room - braking) / v if v > 0 else 0.0
+        tau = np.clip(t - self.depart_t_s, 0.0, None)
+        brake = np.clip(tau - t_cruise, 0.0, v / a)
+        s = self.start_s + v * np.minimum(tau, t_cruise) + v * brake - 0.5 * a * brake * brake
+        speed = np.where(tau >= t_cruise, v - a * brake, v)
+        return s, np.where(t < self.depart_t_s, 0.0, speed)
 
     def to_options(self) -> dict:
         """The env's reset option for this car (``options["traffic"]`` holds a list of them)."""
@@ -187,6 +197,11 @@ class TrafficCar:
 @lru_cache(maxsize=64)
 def _route_path(route: tuple[int, ...]) -> Path:
     return qcar2_road_graph().route_path(list(route))
+
+
+@lru_cache(maxsize=64)
+def _unwrapped_headings(route: tuple[int, ...]) -> np.ndarray:
+    return np.unwrap(_route_path(route).headings)
 
 
 def cross_traffic(sign: int, t_ego_s: float, *, gap_s: float = 0.0, speed_mps: float = 1.0,

@@ -25,4 +25,12 @@ def test_each_battery_is_the_one_before_and_its_new_rows():
         assert [s.trial_id for s in row.specs("raw", quick=True)] == [s.trial_id for s in same.specs("raw", quick=True)]
     assert [r.key for r in three.rows()] == [r.key for r in two.loop] + ["sticker_placed"] + [r.key for r in two.drives]
     assert three.detector == two.detector == one.detector == "classical"
-    assert DEFAULT_BATTERY == "racf-3"
+    four = BATTERIES["racf-4"]
+    assert [r.key for r in four.rows()] == [r.key for r in three.loop] + ["traffic_strong"] + \
+        [r.key for r in three.drives]
+    for row in three.rows():  # racf-3's episodes are racf-4's
+        same = next(r for r in four.rows() if r.key == row.key)
+        assert [s.trial_id for s in row.specs("raw", quick=True)] == [s.trial_id for s in same.specs("raw", quick=True)]
+    traffic = next(r for r in four.loop if r.key == "traffic_strong")
+    assert traffic.driving and all(s.traffic_cars == 1 for s in traffic.specs("odca"))
+    assert DEFAULT_BATTERY == "racf-4"

@@ -94,3 +94,16 @@ def _views(container):
             yield from _views(item)
         else:
             yield item
+
+
+def test_other_cars_appear_in_the_world_and_on_the_map(tmp_path):
+    recorder = FrameRecorder(every=10)
+    _, log = run_trial(TrialSpec("clean", 3, 1.5, 0, traffic_cars=2), on_step=recorder, clean_pass=False)
+    rows: dict[str, int] = {}
+    for chunk in _chunks(write_rrd(tmp_path / "traffic.rrd", log, recorder)):
+        rows[str(chunk.entity_path)] = rows.get(str(chunk.entity_path), 0) + chunk.num_rows
+    for k in (0, 1):
+        assert rows[f"/world/traffic/{k}"] == len(recorder.frames)
+        assert rows[f"/map/traffic/{k}/car"] == len(recorder.frames)
+        assert f"/map/traffic/{k}/path" in rows
+    assert "/map/conflict" in rows and "/world/traffic/2" not in rows
