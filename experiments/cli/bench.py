@@ -66,6 +66,17 @@ def register(sub: argparse._SubParsersAction) -> None:
     bd.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
     bd.set_defaults(handler=_bench_detector)
 
+    bt = sub.add_parser("bench-traffic", help="perception under cross-traffic: a car between the ego car and the "
+                                              "sign, one crossing behind it, a red car in view; each paired with "
+                                              "the same clean approach on the empty map")
+    bt.add_argument("--seeds", type=int, default=10, help="paired approaches per case and estimator (default 10)")
+    bt.add_argument("--estimator", nargs="+", default=["raw", "odca"], metavar="NAME",
+                    help="estimators to run (default raw odca)")
+    bt.add_argument("--case", nargs="+", default=None, metavar="CASE",
+                    help="cases to run (default all: between, behind_sign, red_car)")
+    bt.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
+    bt.set_defaults(handler=_bench_traffic_views)
+
 
 def _bench_sim(args: argparse.Namespace) -> int:
     from racf.experiments.bench.sim import bench_sim
@@ -152,6 +163,35 @@ def _bench_loop(args: argparse.Namespace) -> int:
         print(f"{key:<22}{value:.2f}" if isinstance(value, float) else f"{key:<22}{value}")
     print(f"against the goals: rtf_attack_odca / 5 = {r['rtf_attack_odca'] / 5:.2f}, "
           f"scaling_efficiency / 0.9 = {r['scaling_efficiency'] / 0.9:.2f} (>= 1 meets each)")
+    return 0
+
+
+def _bench_traffic_views(args: argparse.Namespace) -> int:
+    from racf.experiments.bench.traffic_views import CASES, OFF_M, measure_case
+    from racf.experiments.episode.estimators import ESTIMATORS
+
+    cases = args.case or list(CASES)
+    bad = [c for c in cases if c not in CASES]
+    if bad:
+        fail("bench-traffic", f"unknown case(s) {bad}; allowed: {', '.join(CASES)}")
+    bad = [e for e in args.estimator if e not in ESTIMATORS]
+    if bad:
+        fail("bench-traffic", f"unknown estimator(s) {bad}; allowed: {', '.join(ESTIMATORS)}")
+    if args.seeds < 1:
+        fail("bench-traffic", "--seeds must be >= 1")
+    rows = [measure_case(CASES[c], seeds=args.seeds, estimator=e) for c in cases for e in args.estimator]
+    if args.json:
+        print(json.dumps({"seeds": args.seeds, "off_m": OFF_M, "rows": rows}, allow_nan=False))
+        return 0
+    print(f"clean approaches at 1 m/s, {args.seeds} seeds per row, each run on the empty map and with the other car; "
+          f"'off': share of the in-view steps more than {OFF_M} m from d_true")
+    print(f"{'case':<12}{'estimator':<10}{'map':<9}{'SCR [95 % CI]':>22}{'collisions':>11}{'recall':>8}"
+          f"{'depth off':>11}{'LiDAR off':>11}")
+    for r in rows:
+        for name in ("empty", "traffic"):
+            x = r[name]
+            print(f"{r['case']:<12}{r['estimator']:<10}{name:<9}{x['scr']:>8.2f} {fmt_ci(*x['scr_ci']):>13}"
+                  f"{x['collisions']:>11}{x['recall']:>8.3f}{x['depth_off_share']:>11.3f}{x['lidar_off_share']:>11.3f}")
     return 0
 
 

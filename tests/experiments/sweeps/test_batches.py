@@ -65,3 +65,26 @@ def test_a_sweeps_report_gives_the_scr_of_episodes_attacked_before_t_star(tmp_pa
     assert summary["n_attack_before_t_star"] == 2 and summary["scr_attack_before_t_star"] == 0.5
     assert "| attack | 4 | 0.75 [" in (tmp_path / "summary.md").read_text()
     assert "0.50 [" in (tmp_path / "summary.md").read_text()
+
+
+def test_with_traffic_the_summary_gives_the_collision_rate_and_keys_settings_apart():
+    from racf.experiments.sweeps.summary import summarize_settings
+
+    base = {"setting": "attack", "trigger_delay_s": math.nan, "dt_brake_s": math.nan, "lost_frames": 0,
+            "t_star_s": 1.5}
+    traffic = pd.DataFrame([{**base, "success": ok, "failure": None if ok else "confirmed_lost",
+                             "attack_start_s": start, "traffic_cars": 1, "collision": hit,
+                             "conflict": "collision" if hit else "yielded", "min_ttc_s": 0.0 if hit else 1.2}
+                            for ok, start, hit in [(True, 1.0, False), (False, 1.0, True), (False, 2.0, True),
+                                                   (True, 2.0, False)]])
+    empty = traffic.assign(traffic_cars=0, collision=False, conflict=None, min_ttc_s=math.nan)
+    out = summarize_settings(pd.concat([traffic, empty], ignore_index=True))
+    assert set(out) == {"attack", "attack@traffic1"}
+    s = out["attack@traffic1"]
+    assert s["n_traffic"] == 4 and s["collision_rate"] == 0.5
+    assert s["collision_rate_ci"] == pytest.approx(list(wilson_interval(2, 4)))
+    assert s["conflicts"]["collision"] == 2 and s["conflicts"]["yielded"] == 2
+    # Over the attacks that began before t* (1.0 < 1.5 s): one of two hit the other car.
+    assert s["n_traffic_attack_before_t_star"] == 2 and s["collision_rate_attack_before_t_star"] == 0.5
+    assert "n_traffic" not in out["attack"]
+    json.dumps(out, allow_nan=False)

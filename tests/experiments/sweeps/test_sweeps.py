@@ -103,6 +103,9 @@ def test_report_redraws_from_the_store_without_running(uninterrupted, capsys):
     ("budget = 3\n" + TINY, "unknown field"),
     ('sensor_profile = "real"\n' + TINY, r"sensor_profile must be one of \('qcar2', 'ideal'\)"),
     ('sign_geometry = "post"\n' + TINY, r"sign_geometry must be one of \('plate', 'pole'\)"),
+    (TINY + "\n[traffic]\ncars = [0, 9]\n", r"traffic.cars must be a non-empty list of car counts in 0..4"),
+    (TINY + "\n[traffic]\nlanes = 2\n", r"unknown field\(s\) \['lanes'\] in \[traffic\]"),
+    (TINY + "\n[traffic]\ncars = [1]\ngap_s = 9\n", r"traffic.gap_s must be a number in \[-5.0, 5.0\]"),
 ])
 def test_bad_specs_are_refused_before_any_work(tmp_path, capsys, text, message):
     path = _spec_file(tmp_path, text, "bad.toml")
@@ -155,6 +158,15 @@ def test_shipped_specs_load_and_the_big_one_has_1000_paired_episodes():
     assert len(load_spec("attack-types.toml").episodes()) == 144
     with pytest.raises(ValueError, match="mode"):
         SweepSpec(name="x", mode="sobol")
+
+
+def test_the_cross_traffic_spec_pairs_each_episode_with_and_without_another_car():
+    episodes = load_spec("cross-traffic.toml").episodes()
+    assert len(episodes) == len({e.trial_id for e in episodes}) == 512
+    by_key = pd.DataFrame([{"seed": e.seed, "setting": e.setting, "cars": e.traffic_cars} for e in episodes])
+    # Every seed and setting runs once on the empty map and once with one other car.
+    assert by_key.groupby(["seed", "setting"])["cars"].apply(lambda cars: sorted(cars) == [0, 1]).all()
+    assert (by_key.groupby("setting").size() == 64).all()
 
 
 def test_a_folder_of_another_sweep_is_refused(uninterrupted):
