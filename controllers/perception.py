@@ -127,11 +127,8 @@ class Perception:
                 :meth:`LidarTargetTracker.step`); None = all now.
         """
         if new_frame:
-            detection = self.last_raw_detection = self.detector.detect(rgb)
+            detection = self._detect(rgb, map_bearing)
             span = self._span(detection) if detection is not None else None
-            if span is not None and map_bearing is not None and not (
-                    math.isfinite(map_bearing) and self._on_map(span, map_bearing)):
-                detection, span = None, None
             d_meas, c_meas = self.depth.estimate(depth, detection)
             bearing = self.camera.bearing(detection.centroid[0]) if detection is not None else math.nan
             height = self.camera.height_per_metre(detection.box[1], detection.box[3]) if detection is not None \
@@ -145,6 +142,25 @@ class Perception:
                                   detection_height=held.height)
         return PerceptionSample(held.detection, held.d_meas, held.c_meas, lidar_m, held.bearing,
                                 self.lidar.depth_confirmed, held.d_size, held.size_std)
+
+    def _detect(self, rgb: np.ndarray, map_bearing: float | None) -> Detection | None:
+        """The frame's detection of the target. Without a map, the detector's own pick. With one, the
+        largest passing candidate whose box holds the map's bearing: a red car, a traffic light or a
+        sign for another lane elsewhere in the frame must not crowd out the sign the map says is
+        there (the detector's own pick, the largest, may be one of them). A detector that lists no
+        ``candidates`` (a plug-in's ``detect`` only) has its pick kept only if it holds the bearing."""
+        # Only where ``detect`` is the largest passing candidate (``BlobDetector``'s) is a choice among them its equal.
+        candidates = self.detector.candidates if type(self.detector).detect is BlobDetector.detect else None
+        if map_bearing is None or candidates is None:
+            detection = self.last_raw_detection = self.detector.detect(rgb)
+            if detection is not None and map_bearing is not None and not (
+                    math.isfinite(map_bearing) and self._on_map(self._span(detection), map_bearing)):
+                return None
+            return detection
+        passing = [d for d in candidates(rgb) if d.confidence >= self.detector.config.min_confidence]
+        self.last_raw_detection = max(passing, key=lambda d: d.area_px) if passing else None
+        on_map = [d for d in passing if math.isfinite(map_bearing) and self._on_map(self._span(d), map_bearing)]
+        return max(on_map, key=lambda d: d.area_px) if on_map else None
 
     def _span(self, detection: Detection) -> tuple[float, float]:
         """(left, right) bearings of the detection box's outer edges, rad."""

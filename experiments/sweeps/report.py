@@ -174,6 +174,30 @@ def _robustness_cells(r: dict) -> str:
             f"{_fmt(r['violation_share'])} {_ci(r['violation_share_ci'])}")
 
 
+def traffic_pairs(frame: pd.DataFrame) -> dict:
+    """Per setting, the episodes run on both maps (same seed and cell), and how their outcomes differ:
+    ``traffic.json``, the evidence for explaining every difference between the two."""
+    if "traffic_cars" not in frame or not (frame["traffic_cars"].fillna(0) > 0).any():
+        return {}
+    keys = ["setting", "seed", "sign", "speed"]
+    empty = frame[frame["traffic_cars"].fillna(0) == 0].set_index(keys)
+    crossed = frame[frame["traffic_cars"].fillna(0) > 0].set_index(keys)
+    both = empty.join(crossed, how="inner", lsuffix="_empty", rsuffix="_traffic")
+    out = {}
+    for setting, rows in both.groupby(level="setting", sort=True):
+        changed = rows[(rows["success_empty"] != rows["success_traffic"])
+                       | (rows["failure_empty"].fillna("") != rows["failure_traffic"].fillna(""))]
+        out[str(setting)] = {
+            "n_pairs": int(len(rows)), "n_outcome_changed": int(len(changed)),
+            "changed": [{"seed": int(i[1]), "sign": int(i[2]), "speed": float(i[3]),
+                         "empty": r["failure_empty"] or "success", "traffic": r["failure_traffic"] or "success",
+                         "conflict": r["conflict_traffic"], "collision_with": r["collision_with_traffic"]}
+                        for i, r in changed.iterrows()],
+            "stop_distance_change_max_m": float((rows["stop_distance_m_traffic"] - rows["stop_distance_m_empty"])
+                                                .abs().max()) if rows["stop_distance_m_traffic"].notna().any() else None}
+    return out
+
+
 def _traffic_lines(summary: dict) -> list[str]:
     """The cross-traffic table: collision rate, conflict outcomes, smallest TTC (only with traffic)."""
     rows = {k: r for k, r in summary.items() if r.get("n_traffic")}
@@ -217,6 +241,13 @@ def write_report(frame: pd.DataFrame, out: Path, name: str = "sweep") -> dict[st
                      f"{_fmt(r['dt_brake_mean'], 3)} ({r['n_latency']}) | {_fmt(r['max_fused_jump_m'], 3)} | "
                      f"{_robustness_cells(r)} |")
     lines += _traffic_lines(summary)
+    pairs = traffic_pairs(frame) if not frame.empty else {}
+    if pairs:
+        atomic_write(out / "traffic.json", json.dumps(pairs, indent=1, allow_nan=False))
+        lines += ["", "The same episodes on both maps (`traffic.json` lists each whose outcome changed):", "",
+                  "| setting | pairs | outcome changed | largest change of the stop distance m |", "|---|---|---|---|"]
+        lines += [f"| {k} | {p['n_pairs']} | {p['n_outcome_changed']} | {_fmt(p['stop_distance_change_max_m'], 3)} |"
+                  for k, p in pairs.items()]
     if not frame.empty:
         frame = frame.assign(estimator=frame["estimator"].astype(str))
         lines += ["", "By attack and estimator (columns):", ""]

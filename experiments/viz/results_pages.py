@@ -18,6 +18,7 @@ from typing import Callable
 
 from racf.experiments.viz.falsify_page import falsification_markdown
 from racf.experiments.viz.leaderboard_page import leaderboard_markdown
+from racf.experiments.viz.traffic_page import traffic_markdown
 from racf.experiments.viz.results_format import page_head as _page_head
 from racf.experiments.viz.results_format import ci as _ci
 from racf.experiments.viz.results_format import meta_lines as _meta
@@ -508,6 +509,7 @@ def _index(d: _Data) -> str:
              "| [Adaptive attacks](adaptive-attacks.md) | white- and black-box attacks that know the defence |",
              "| [Detector and sticker](detector-and-sticker.md) | the learned segmenter and the printed sticker |",
              "| [Falsification](falsification.md) | searched worst cases per defence, and the regression suite |",
+             "| [Cross-traffic](traffic.md) | the paper's settings with another car at the conflict point |",
              "| [Speed](speed.md) | the simulator, whole episodes and ODCA's per-step cost |", "",
              "## Every stored result", "",
              "| result | command | commit | measured | machine |", "|---|---|---|---|---|"]
@@ -525,3 +527,4 @@ RESULT_PAGES: dict[str, Callable[[Path], str]] = {
                        ("offline-benchmark", _offline), ("adaptive-attacks", _adaptive),
                        ("detector-and-sticker", _detector), ("speed", _speed))}
 RESULT_PAGES["results/falsification.md"] = falsification_markdown
+RESULT_PAGES["results/traffic.md"] = traffic_markdown

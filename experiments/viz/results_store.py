@@ -1,11 +1,11 @@
 """Stores a measurement for the results pages: what a command printed (``--json``) or wrote (a
-sweep's ``summary.json``, ``stealth.json`` and ``recall.json``), under ``docs/results/data/NAME.json`` with what
+sweep's ``summary.json``, ``stealth.json``, ``recall.json`` and ``traffic.json``), under ``docs/results/data/NAME.json`` with what
 produced it: the command, the commit, racf's version, the date and the machine.
 
     python -m racf.experiments.viz.results_store NAME SOURCE [SOURCE ...] --command "racf ..."
 
 A SOURCE is a JSON file, or a sweep's folder (its ``summary.json`` becomes ``settings`` and its
-``stealth.json`` and ``recall.json``, if any, ``stealth`` and ``recall``). Several sources are merged key by key, in order. The
+``stealth.json``, ``recall.json`` and ``traffic.json``, if any, ``stealth``, ``recall`` and ``traffic``). Several sources are merged key by key, in order. The
 pages are then rewritten by ``make docs`` (``racf.experiments.viz.results_pages``).
 """
 
@@ -60,7 +60,7 @@ def load_source(path: Path) -> dict:
         if not summary.exists():
             raise ValueError(f"{path} is a folder without summary.json; give a sweep's folder or a JSON file")
         data = {"settings": json.loads(summary.read_text())}
-        for part in ("stealth", "recall"):
+        for part in ("stealth", "recall", "traffic"):
             if (path / f"{part}.json").exists():
                 data[part] = json.loads((path / f"{part}.json").read_text())
         return data

@@ -109,6 +109,22 @@ def test_no_map_bearing_keeps_every_detection(frame):
     assert none.c_meas == default.c_meas
 
 
+def test_a_larger_red_shape_off_the_map_bearing_does_not_crowd_out_the_sign(frame):
+    """A red car's body at the frame's edge (a red box cut by the border, larger than the sign, passing the
+    detector's tests) is the detector's own pick; the map says where the sign is, and perception keeps it."""
+    rgb, det, left, right = frame
+    crowded = rgb.copy()
+    crowded[46:72, 0:30] = (200, 12, 14)  # 30 x 26 px of red body at the left edge, light all round
+    raw = StopSignDetector().detect(crowded)
+    assert raw is not None and raw.box != det.box and raw.area_px > det.area_px
+    perception, sample = _process(crowded, map_bearing=(left + right) / 2)
+    _assert_kept(sample, det)
+    assert perception.last_raw_detection.box == raw.box  # what the detector alone would have said
+    # With the map saying the target is where the red shape is, the shape is what perception reports.
+    perception, sample = _process(crowded, map_bearing=CAMERA.bearing(15.0))
+    assert sample.detected and sample.detection.box == raw.box
+
+
 # -- the camera is slower than the loop: held frames ------------------------------------------
 LIDAR_XY = np.array([-0.012, 0.0])  # the tracker's default LiDAR and camera positions, body frame
 CAMERA_XY = np.array([0.095, 0.032])
