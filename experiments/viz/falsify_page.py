@@ -15,6 +15,9 @@ __all__ = ["falsification_markdown", "FALSIFY_RESULTS", "RESEED_RESULT", "guided
 FALSIFY_RESULTS = (
     ("falsify-odca-dropout", "ODCA under the timed dropout",
      "racf falsify --defence odca --attack dropout_timed --budget 100 --seeds 10"),
+    ("falsify-odca-dropout-frustum", "ODCA under the timed dropout and the frustum spoof together (the space "
+     "with dropout_timed, widened by the white-box spoof, which may also draw the sign smaller)",
+     "racf falsify --defence odca --attack dropout_timed,frustum_spoof --budget 100 --seeds 10"),
     ("falsify-odca-dropout-undetected", "ODCA under the timed dropout, the samplers steered by the undetected error",
      "racf falsify --defence odca --attack dropout_timed --budget 100 --seeds 10 --objective rule-undetected"),
     ("falsify-raw-strong-patch", "Raw depth under the paper's strong patch (the sanity check)",

@@ -252,6 +252,16 @@ def paper_rows(d: _Data, link: str = "") -> list[str]:
             lines.append(f"| a printed sticker (0.4 of the plate, at its top edge), no defence: SCR | "
                          f"{PAPER['attack_scr']:.2f} (the paper's patch) | {_rate(r['scr'], r['scr_ci'])} (N {r['n']}, every "
                          f"attack before t*) | [the sticker]({link}detector-and-sticker.md) |")
+    if "cross-traffic" in d:
+        s = d["cross-traffic"]["settings"]
+        none, odca = s.get("attack@traffic1"), s.get("attack+odca@traffic1")
+        if none and odca and none.get("n_traffic_attack_before_t_star"):
+            lines.append(
+                f"| with cross-traffic at the conflict point, patch attack: collision rate | - (the paper's scenario; "
+                f"not measured there) | none {_rate(none['collision_rate_attack_before_t_star'], none['collision_rate_attack_before_t_star_ci'])} "
+                f"attacked before t* (N {none['n_traffic_attack_before_t_star']}), ODCA "
+                f"{_rate(odca['collision_rate'], odca['collision_rate_ci'])} (N {odca['n_traffic']}) | "
+                f"[cross-traffic]({link}traffic.md) |")
     if "persistence" in d:
         rows = d["persistence"]["persistence"]
         ours = " / ".join(f"{r['asr']:.2f} {_ci(r['asr_ci'])}" for r in rows)
