@@ -240,6 +240,13 @@ def episode_flags(p: argparse.ArgumentParser) -> None:
     p.add_argument("--stable-steps", type=int, default=None,
                    help="steps the sign must be visible before an attack may start (default: the braking "
                         "controller's confirm_frames + 3 = 6)")
+    p.add_argument("--traffic-cars", type=int, default=0, metavar="N",
+                   help="other cars crossing at the stop sign's conflict point, 0-4 (default 0: an empty map)")
+    p.add_argument("--traffic-gap", type=float, default=0.0, metavar="S",
+                   help="with --traffic-cars: the first passes the conflict point this long after the ego car "
+                        "would have, had it not stopped, s in [-5, 5] (default 0)")
+    p.add_argument("--traffic-speed", type=float, default=1.0, metavar="V",
+                   help="with --traffic-cars: their speed, m/s in [0.1, 3] (default 1.0)")
     estimator_option_flag(p)
     plugin_flag(p)
     sensor_flags(p)
@@ -280,6 +287,11 @@ def episode_params(args: argparse.Namespace, command: str, table: bool = False) 
                   "delay_ms": args.delay_ms, "control_hz": args.control_hz, "stable_steps": args.stable_steps,
                   "sensor_profile": args.sensor_profile, "sign_geometry": args.sign_geometry,
                   "detector": args.detector or "classical", "estimator_options": options}
+        if args.traffic_cars:
+            params |= {"traffic_cars": args.traffic_cars, "traffic_gap_s": args.traffic_gap,
+                       "traffic_speed": args.traffic_speed}
+        elif args.traffic_gap != 0.0 or args.traffic_speed != 1.0:
+            flag_error(command, "--traffic-gap and --traffic-speed need --traffic-cars N (N >= 1)")
     except ValueError as err:
         flag_error(command, str(err))
     return setting, params

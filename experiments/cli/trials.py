@@ -154,6 +154,17 @@ def table_text(table: dict[str, dict]) -> str:
         lines.append(f"{name:<32}{r['n']:>4}{r['scr']:>6.2f} {fmt_ci(*r['scr_ci']):>13}{asr:>20}"
                      f"{ms(r['trigger_delay_mean'], r['trigger_delay_std']):>18}"
                      f"{ms(r['dt_brake_mean'], r['dt_brake_std']):>18}{r['n_latency']:>4}{early:>28}  {fails}")
+    crossed = {name: r for name, r in table.items() if r.get("n_traffic")}
+    if crossed:
+        lines.append(f"{'with cross-traffic':<32}{'N':>4}{'collision rate [95% Wilson]':>30}"
+                     f"{'attack before t* (N)':>32}  conflicts")
+        for name, r in crossed.items():
+            early = "-" if not r.get("n_traffic_attack_before_t_star") else (
+                f"{r['collision_rate_attack_before_t_star']:.2f} {fmt_ci(*r['collision_rate_attack_before_t_star_ci'])} "
+                f"({r['n_traffic_attack_before_t_star']})")
+            conflicts = ", ".join(f"{k} {v}" for k, v in r["conflicts"].items() if v) or "-"
+            lines.append(f"{name:<32}{r['n_traffic']:>4}{r['collision_rate']:>16.2f} "
+                         f"{fmt_ci(*r['collision_rate_ci']):>13}{early:>32}  {conflicts}")
     paper = "; ".join(f"{name} SCR {p['scr']:.2f}, dt {p['dt_brake_s']:.3f} s"
                       for name, p in PAPER_TABLE["rows"].items())
     lines.append("trigger delay = t(brake) - t*; dt_brake = t* to braking within 0.60 m of the line (the paper's "

@@ -35,3 +35,14 @@ def test_cli_attack_trials_json_has_lost_frames(tmp_path, capsys):
         main(["trials", "--setting", "clean", "--rho", "0.5", "-n", "1"])
     with pytest.raises(SystemExit):
         main(["trials", "--setting", "attack", "--rho", "1.5"])
+
+
+def test_cli_trial_with_traffic_reports_the_conflict(tmp_path, capsys):
+    assert main(["trial", "--sign", "3", "--speed", "1.5", "--seed", "0", "--traffic-cars", "1",
+                 "--out", str(tmp_path)]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["traffic_cars"] == 1 and out["conflict"] == "yielded" and out["collision"] is False
+    assert pd.read_parquet(out["log"])["traffic0_x"].notna().all()
+    with pytest.raises(SystemExit, match="2"):
+        main(["trial", "--traffic-gap", "1.0"])
+    assert "need --traffic-cars" in capsys.readouterr().err
