@@ -145,9 +145,10 @@ class Perception:
 
     def _detect(self, rgb: np.ndarray, map_bearing: float | None) -> Detection | None:
         """The frame's detection of the target. Without a map, the detector's own pick. With one, the
-        largest passing candidate whose box holds the map's bearing: a red car, a traffic light or a
-        sign for another lane elsewhere in the frame must not crowd out the sign the map says is
-        there (the detector's own pick, the largest, may be one of them). A detector that lists no
+        passing candidate whose box (widened by the margin) holds the map's bearing, the one centred
+        nearest it: a red car, a traffic light or a sign for another lane elsewhere in the frame must not
+        crowd out the sign the map says is there (the detector's own pick, the largest, may be one of
+        them). A detector that lists no
         ``candidates`` (a plug-in's ``detect`` only) has its pick kept only if it holds the bearing."""
         # Only where ``detect`` is the largest passing candidate (``BlobDetector``'s) is a choice among them its equal.
         candidates = self.detector.candidates if type(self.detector).detect is BlobDetector.detect else None
@@ -160,7 +161,10 @@ class Perception:
         passing = [d for d in candidates(rgb) if d.confidence >= self.detector.config.min_confidence]
         self.last_raw_detection = max(passing, key=lambda d: d.area_px) if passing else None
         on_map = [d for d in passing if math.isfinite(map_bearing) and self._on_map(self._span(d), map_bearing)]
-        return max(on_map, key=lambda d: d.area_px) if on_map else None
+        # The one centred nearest the map's bearing: a red car just beside (or below) the sign in the
+        # image is within the margin too, and may be the larger.
+        return min(on_map, key=lambda d: (abs(self.camera.bearing(d.centroid[0]) - map_bearing), -d.area_px)) \
+            if on_map else None
 
     def _span(self, detection: Detection) -> tuple[float, float]:
         """(left, right) bearings of the detection box's outer edges, rad."""
