@@ -74,7 +74,8 @@ def _place_s(case: TrafficCase, spec: TrialSpec) -> tuple[float, float]:
     when = arrival_s(plan.mission.path, start_s, plan.mission.cruise_mps, at_s)
     x, y, yaw = plan.mission.path.pose_at(at_s)
     c, s = np.cos(yaw), np.sin(yaw)
-    cam = np.array([x + c * cal.camera_xy_m[0] - s * cal.camera_xy_m[1], y + s * cal.camera_xy_m[0] + c * cal.camera_xy_m[1]])
+    (cx, cy) = cal.camera_xy_m
+    cam = np.array([x + c * cx - s * cy, y + s * cx + c * cy])
     sight = np.asarray(target.target.position) - cam
     turn = np.radians(case.turn_deg)
     sight = np.array([[np.cos(turn), -np.sin(turn)], [np.sin(turn), np.cos(turn)]]) @ sight

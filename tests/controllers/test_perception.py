@@ -125,6 +125,18 @@ def test_a_larger_red_shape_off_the_map_bearing_does_not_crowd_out_the_sign(fram
     assert sample.detected and sample.detection.box == raw.box
 
 
+def test_of_two_candidates_the_map_allows_the_one_centred_nearer_its_bearing_is_kept(frame):
+    """A red body just below the sign in the image (a car beyond it), larger than the sign: both boxes hold
+    the map's bearing, and the sign, centred on it, is the one kept."""
+    rgb, det, left, right = frame
+    crowded = rgb.copy()
+    crowded[82:112, 96:140] = (200, 12, 14)  # 44 x 30 px below the sign, its left edge inside the sign's span
+    raw = StopSignDetector().detect(crowded)
+    assert raw is not None and raw.box != det.box and raw.area_px > det.area_px
+    bearing = CAMERA.bearing(det.centroid[0])
+    _assert_kept(_process(crowded, map_bearing=bearing)[1], det)
+
+
 # -- the camera is slower than the loop: held frames ------------------------------------------
 LIDAR_XY = np.array([-0.012, 0.0])  # the tracker's default LiDAR and camera positions, body frame
 CAMERA_XY = np.array([0.095, 0.032])
