@@ -270,14 +270,22 @@ def write_report(frame: pd.DataFrame, out: Path, name: str = "sweep") -> dict[st
 
 
 def report_from_store(out: str | Path) -> dict[str, Path]:
-    """Redraws the report of a stored sweep (no episode runs)."""
+    """Redraws the report of a stored sweep (no episode runs): from the episodes of its spec as this
+    code makes them (a folder also holds the results of older code, under other ids: never mixed in).
+    ValueError when some were never run by this code (run the sweep again: it runs only those)."""
+    from racf.experiments.sweeps.spec import parse_spec
+
     out = Path(out)
     if not (out / "sweep.json").exists():
         raise ValueError(f"{out} is not a sweep folder (no sweep.json; `racf sweep SPEC --out {out}` makes one)")
-    name = out.name
     spec_file = out / "spec.toml"
-    if spec_file.exists():
-        import tomllib
-
-        name = tomllib.loads(spec_file.read_text()).get("name", name)
-    return write_report(ResultStore(out).rows(), out, name)
+    if not spec_file.exists():
+        raise ValueError(f"{out} has no spec.toml: cannot tell which of its results the sweep is")
+    spec = parse_spec(spec_file.read_text(), str(spec_file))
+    store = ResultStore(out)
+    ids = [e.trial_id for e in spec.episodes()]
+    missing = [i for i in ids if not (store.parts / f"{i}.parquet").exists()]
+    if missing:
+        raise ValueError(f"{out}: {len(missing)} of its {len(ids)} episodes were not run by this code (e.g. "
+                         f"{missing[0]}); `racf sweep {spec_file} --out {out}` runs just those")
+    return write_report(store.rows(ids).sort_values("trial_id", ignore_index=True), out, spec.name)

@@ -85,12 +85,26 @@ def test_ray_backend_gives_the_local_pool_rows(uninterrupted, tmp_path):
     pd.testing.assert_frame_equal(ResultStore(tmp_path / "ray").rows(), reference)
 
 
-def test_report_redraws_from_the_store_without_running(uninterrupted, capsys):
-    folder, _, _ = uninterrupted
+def test_report_redraws_from_the_store_without_running(uninterrupted, capsys, tmp_path):
+    folder, _, rows = uninterrupted
     (folder / "a" / "summary.md").unlink()
     assert main(["sweep", "--report", str(folder / "a")]) == 0
     assert "| attack | 2 |" in (folder / "a" / "summary.md").read_text()
     assert main(["sweep", "--report", str(folder)]) == 2
+    # A result older code left in the folder (another id) is not mixed into the redrawn report.
+    import shutil
+
+    copy = tmp_path / "a"
+    shutil.copytree(folder / "a", copy)
+    stale = rows.iloc[[0]].assign(trial_id="attack_sign1_v1.50_seed0_000000000000", success=False)
+    stale.to_parquet(copy / "parts" / "attack_sign1_v1.50_seed0_000000000000.parquet")
+    assert main(["sweep", "--report", str(copy)]) == 0
+    assert "| attack | 2 |" in (copy / "summary.md").read_text()
+    # Results this code never made: the report says to run the sweep, and draws nothing.
+    (copy / "parts" / f"{rows['trial_id'].iloc[0]}.parquet").unlink()
+    capsys.readouterr()
+    assert main(["sweep", "--report", str(copy)]) == 2
+    assert "were not run by this code" in capsys.readouterr().err
 
 
 @pytest.mark.parametrize("text, message", [
