@@ -73,7 +73,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     bt.add_argument("--estimator", nargs="+", default=["raw", "odca"], metavar="NAME",
                     help="estimators to run (default raw odca)")
     bt.add_argument("--case", nargs="+", default=None, metavar="CASE",
-                    help="cases to run (default all: between, behind_sign, red_car)")
+                    help="cases to run (default all: between, behind_sign, red_behind, red_car)")
     bt.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
     bt.set_defaults(handler=_bench_traffic_views)
 
