@@ -258,7 +258,8 @@ def build_scene_xml(sign_geometry: SignGeometry = PLATE_IN_SCAN, traffic_cars: i
 
 
 @lru_cache(maxsize=8)
-def _compiled_xml_and_assets(sign_geometry: SignGeometry, traffic_cars: int) -> tuple[str, tuple[tuple[str, bytes], ...]]:
+def _compiled_xml_and_assets(sign_geometry: SignGeometry,
+                             traffic_cars: int) -> tuple[str, tuple[tuple[str, bytes], ...]]:
     car = (ASSETS_DIR / "qcar2.xml").read_bytes()
     return build_scene_xml(sign_geometry, traffic_cars), (("qcar2.xml", car), ("mat.png", mat_png_bytes()))
 

@@ -12,8 +12,8 @@ time (``TrafficCar.state_at``). Why kinematic: the scenario needs a car at the c
 planned time, to the millisecond and the same on every machine; a dynamic car would need its
 own controller and wheel contacts, whose cost the real-time factor pays, to do no better at the
 one thing it must do. They keep their own right of way: no stop sign faces them before the
-conflict (``cross_traffic`` refuses such a route), and one that faces them after it stops them
-at its line. Nothing in them reads the ego car, its sensing or its decisions.
+conflict (``cross_traffic`` builds their routes around them), and one that faces them after it
+stops them at its line. Nothing in them reads the ego car, its sensing or its decisions.
 
 Pure numpy: nothing here knows MuJoCo.
 """
@@ -49,7 +49,7 @@ TRAFFIC_COLOURS: dict[str, tuple[float, float, float, float]] = {
 TRAFFIC_BRAKE_MPS2 = 2.0
 #: Time between two other cars that follow one another through the conflict, s.
 HEADWAY_S = 1.5
-#: Each sign's cross-traffic lane (a road-graph edge) and, after it, the lane it leaves by.
+#: Each sign's cross-traffic lane, a road-graph edge (the conflict point is found on it).
 _CROSS_LANES: dict[int, tuple[int, int]] = {0: (20, 22), 1: (8, 10), 2: (7, 14), 3: (7, 14)}
 #: Where no lane meets the ego car's, its conflict point lies this far past the stop line, m.
 _ADJACENT_PAST_M = 0.6
