@@ -15,7 +15,8 @@ import numpy as np
 
 from racf.experiments.sweeps.summary import median_ci, wilson_interval
 
-__all__ = ["first_violation", "sampler_summary", "summarize_searches", "plot_convergence", "best_so_far"]
+__all__ = ["first_violation", "sampler_summary", "summarize_searches", "plot_convergence", "best_so_far",
+           "violations_by_value"]
 
 
 def first_violation(values: list[float]) -> int | None:
@@ -55,6 +56,26 @@ def sampler_summary(per_seed: dict[int, list[float]], budget: int) -> dict:
             "lowest_robustness_m": min(lows) if lows else None,
             "lowest_robustness_median_m": float(np.median(lows)) if lows else None,
             "lowest_per_seed": {str(s): lowest[s] for s in seeds}}
+
+
+def violations_by_value(trials: dict[tuple[str, int], list[tuple[int, dict, float]]], choices: dict[str, list],
+                        sampler: str = "random") -> dict[str, dict[str, dict]]:
+    """Where in the space the violations lie: for each choice dimension (the sign, an attack's effect,
+    ...), per value, the draws of ``sampler`` (random search's draws map the space without a bias),
+    their violations and the share with its Wilson interval. Empty when that sampler did not run.
+
+    ``trials``: (sampler, seed) -> (number, params, robustness) told; ``choices``: dimension -> values."""
+    told = [(params, value) for (name, _), rows in trials.items() if name == sampler for _, params, value in rows]
+    out: dict[str, dict[str, dict]] = {}
+    for dim, values in choices.items():
+        per = {}
+        for v in values:
+            hits = [value < 0 for params, value in told if params.get(dim) == v]
+            k, n = int(sum(hits)), len(hits)
+            per[str(v)] = {"n": n, "violations": k, "share": k / n if n else None,
+                           "share_ci": list(wilson_interval(k, n))}
+        out[dim] = per
+    return out if told else {}
 
 
 def summarize_searches(values: dict[tuple[str, int], list[float]], budget: int) -> dict[str, dict]:

@@ -18,7 +18,7 @@ from pathlib import Path
 
 from racf.experiments.falsify.cases import distinct, save_case
 from racf.experiments.falsify.pool import EpisodePool
-from racf.experiments.falsify.report import plot_convergence, summarize_searches
+from racf.experiments.falsify.report import plot_convergence, summarize_searches, violations_by_value
 from racf.experiments.falsify.search import SearchConfig, episode_seed, run_searches
 from racf.experiments.falsify.space import load_space
 from racf.experiments.sweeps.store import ResultStore, atomic_write
@@ -52,6 +52,8 @@ def falsify(defence: str, attacks: tuple[str, ...], out: str | Path, budget: int
     plot_convergence(values, budget, out / "convergence.png", f"{space.setting}: {len(seeds)} seeds per sampler")
     report["convergence_png"] = "convergence.png"
     report["cases"] = _record_cases(space, violations, store, out / "cases", backend, workers, address) if cases else []
+    report["violations_by_value"] = violations_by_value(
+        trials, {d.name: list(d.choices) for d in space.dimensions if d.choices is not None})
     report["worst"] = _worst(space, trials)
     if report["worst"] is not None:
         from racf.experiments.falsify.figure import worst_case_figure

@@ -73,6 +73,24 @@ def _why(samplers: dict) -> list[str]:
             "the sign and the attack's effect at random.", ""]
 
 
+def _regions(report: dict) -> list[str]:
+    """Where random search's draws broke the rule, per value of each choice (an unbiased map of the space)."""
+    by = report.get("violations_by_value") or {}
+    if not by:
+        return []
+    first = next(iter(by.values()))
+    k, n = sum(v["violations"] for v in first.values()), sum(v["n"] for v in first.values())
+    lines = [f"**Where the violations are.** Random search's {n} draws broke the rule {k} times "
+             f"({100 * k / n:.1f} %); per value of each choice (violations / draws, share [95 % CI]):", "",
+             "| parameter | value | violations / draws | share [95 % CI] |", "|---|---|---|---|"]
+    for dim, per in by.items():
+        for value, v in per.items():
+            lo, hi = v["share_ci"]
+            share = "-" if v["share"] is None else f"{v['share']:.3f} [{lo:.3f}, {hi:.3f}]"
+            lines.append(f"| {dim} | {value} | {v['violations']} / {v['n']} | {share} |")
+    return lines + [""]
+
+
 def _fmt(median) -> str:
     return "beyond the budget" if median is None else f"{median:g}"
 
@@ -147,6 +165,7 @@ def falsification_markdown(root: Path) -> str:
                   f"{report['episodes_evaluated']} evaluations, {report['episodes_run']} distinct episodes run "
                   f"(the others were shared or read back), {report['wall_s'] / 60:.1f} min.", ""]
         lines += _table(report["samplers"]) + [guided_verdict(report["samplers"]), ""] + _why(report["samplers"])
+        lines += _regions(report)
         for suffix, caption in (("convergence", "the lowest robustness so far, median over seeds and quartiles"),
                                 ("worst", "the worst case: the camera as the attack struck, and its trace")):
             if (figures / f"{name}-{suffix}.png").exists():

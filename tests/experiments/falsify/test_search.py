@@ -85,6 +85,20 @@ def test_the_report_counts_first_violations_and_censors_seeds_that_found_none():
     assert none["episodes_to_first_median"] is None  # under half the seeds found one: beyond the budget
 
 
+def test_violations_by_value_maps_random_search_draws_only():
+    from racf.experiments.falsify.report import violations_by_value
+
+    trials = {("random", 0): [(0, {"sign": 0, "effect": "bias"}, -0.2), (1, {"sign": 1, "effect": "bias"}, 0.3)],
+              ("random", 1): [(0, {"sign": 0, "effect": "blackout"}, 0.1)],
+              ("tpe", 0): [(0, {"sign": 0, "effect": "bias"}, -0.5)] * 5}  # a guided sampler's draws are biased
+    by = violations_by_value(trials, {"sign": [0, 1, 2], "effect": ["blackout", "bias"]})
+    assert by["sign"]["0"] == {"n": 2, "violations": 1, "share": 0.5, "share_ci": pytest.approx([0.0945, 0.9055],
+                                                                                               abs=1e-3)}
+    assert by["sign"]["2"]["n"] == 0 and by["sign"]["2"]["share"] is None
+    assert by["effect"]["bias"]["violations"] == 1 and by["effect"]["bias"]["n"] == 2
+    assert violations_by_value({("tpe", 0): trials[("tpe", 0)]}, {"sign": [0]}) == {}
+
+
 def test_the_undetected_objective_steers_the_samplers_but_a_violation_is_still_the_rules(tmp_path):
     from racf.experiments.falsify.search import objective_value
 

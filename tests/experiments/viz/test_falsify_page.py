@@ -32,3 +32,14 @@ def test_guided_search_wins_only_outside_the_intervals():
     assert "not a clear win" in guided_verdict(close)
     faster = {"tpe": row(10, 2.0, [0.72, 1.0]), "random": row(10, 8.0, [0.72, 1.0])}
     assert "TPE beats random search" in guided_verdict(faster)
+
+
+def test_where_random_search_found_violations_is_a_table():
+    from racf.experiments.viz.falsify_page import _regions
+
+    report = {"violations_by_value": {"sign": {"0": {"n": 10, "violations": 3, "share": 0.3, "share_ci": [0.1, 0.6]},
+                                               "1": {"n": 0, "violations": 0, "share": None, "share_ci": [0.0, 1.0]}}}}
+    lines = _regions(report)
+    assert "Random search's 10 draws broke the rule 3 times (30.0 %)" in lines[0]
+    assert "| sign | 0 | 3 / 10 | 0.300 [0.100, 0.600] |" in lines and "| sign | 1 | 0 / 0 | - |" in lines
+    assert _regions({}) == []
