@@ -90,3 +90,17 @@ def test_bad_traffic_options_name_the_problem(env):
         env.reset(options={"sign": 2, "traffic": {"route": [4, 14]}})
     with pytest.raises(ValueError, match="traffic_cars"):
         gym.make(sim.ENV_ID, traffic_cars=9)
+
+
+def test_the_ideal_lidar_sees_another_car_too():
+    env = gym.make(sim.ENV_ID, traffic_cars=1, sensor_profile="ideal", camera_width=160, camera_height=120)
+    try:
+        obs0, _ = env.reset(seed=0, options={**SIGN1, "cruise_speed": 0.0})
+        obs1, info = env.reset(seed=0, options={**SIGN1, "cruise_speed": 0.0, "traffic": [_parked_ahead()]})
+    finally:
+        env.close()
+    x, y = info["traffic"][0][:2]
+    ahead = float(np.hypot(x - info["pose"][0], y - info["pose"][1]))
+    front = lambda scan: np.concatenate([scan[-3:], scan[:4]])  # noqa: E731
+    assert np.nanmin(front(obs1["lidar"])) == pytest.approx(ahead - 0.038, abs=0.04)
+    assert np.nanmin(front(obs0["lidar"])) > ahead + 0.5
