@@ -90,7 +90,13 @@ class QCar2Env(gym.Env):
     crate; ``target_kind`` says which): ``d_true`` (target depth along the camera axis, m),
     ``d_true_euclid``, ``sign_bearing``, ``sign_mask``, ``sign_in_view``, ``pose``,
     ``speed``, ``route_s``, ``lateral_error``, ``dist_to_stop_line`` (front bumper to the
-    stop line along the route, m; negative once past it), ``collision``, ``off_road``.
+    stop line along the route, m; negative once past it), ``collision``, ``collision_with``
+    (what the car first touched: ``traffic0``.. or a geom's name; None), ``traffic`` ((n, 4) x,
+    y, yaw, speed of each other car), ``off_road``.
+
+    Other cars (``racf.sim.world.traffic``): the model holds ``traffic_cars`` of them, and the
+    reset option ``traffic`` (a list of ``TrafficCar.to_options()`` dicts) drives as many; the
+    rest wait out of every sensor's sight.
     ``info["lidar_time"]`` repeats the LiDAR's timestamp (the LiDAR scans at ``lidar_hz``,
     10 Hz by default, like the A2M12). ``sign_mask`` and ``sign_in_view`` describe the
     held camera frame, ``d_true`` and ``sign_bearing`` the car's pose now. The car's side
