@@ -12,7 +12,7 @@ from contextlib import redirect_stdout
 import pandas as pd
 import pytest
 
-from conftest import EXAMPLES
+from tests.conftest import EXAMPLES
 from racf.controllers import PerceptionSample
 from racf.experiments.cli import main
 
@@ -116,7 +116,7 @@ def test_the_offline_benchmark_scores_an_installed_defence_step_by_step(cusum_in
 
 @pytest.mark.slow
 def test_racf_bench_quick_scores_the_installed_defence(cusum_installed, tmp_path):
-    from conftest import write_bench_dataset
+    from tests.conftest import write_bench_dataset
 
     data = write_bench_dataset(tmp_path / "data")
     code, out = _run(["bench", "--quick", "--dataset", str(data), "--out", str(tmp_path / "bench"), "--json"])

@@ -7,7 +7,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from conftest import write_bench_dataset
+from tests.conftest import write_bench_dataset
 from racf.experiments.cli import main
 from racf.experiments.offline.benchmark import BenchConfig
 from racf.experiments.offline.methods import METHODS
