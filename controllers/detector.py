@@ -118,10 +118,18 @@ class BlobDetector:
     def candidates(self, rgb: np.ndarray) -> list[Detection]:
         raise NotImplementedError
 
+    def passing(self, rgb: np.ndarray) -> list[Detection]:
+        """The candidates with confidence >= ``min_confidence``."""
+        return [d for d in self.candidates(rgb) if d.confidence >= self.config.min_confidence]
+
+    @staticmethod
+    def largest(detections: list[Detection]) -> Detection | None:
+        """The detector's pick among ``detections``: the largest, or None."""
+        return max(detections, key=lambda d: d.area_px) if detections else None
+
     def detect(self, rgb: np.ndarray) -> Detection | None:
         """The largest candidate with confidence >= ``min_confidence``, or None."""
-        passing = [d for d in self.candidates(rgb) if d.confidence >= self.config.min_confidence]
-        return max(passing, key=lambda d: d.area_px) if passing else None
+        return self.largest(self.passing(rgb))
 
 
 class StopSignDetector(BlobDetector):

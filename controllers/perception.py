@@ -151,15 +151,15 @@ class Perception:
         them). A detector that lists no
         ``candidates`` (a plug-in's ``detect`` only) has its pick kept only if it holds the bearing."""
         # Only where ``detect`` is the largest passing candidate (``BlobDetector``'s) is a choice among them its equal.
-        candidates = self.detector.candidates if type(self.detector).detect is BlobDetector.detect else None
-        if map_bearing is None or candidates is None:
+        blob = type(self.detector).detect is BlobDetector.detect
+        if map_bearing is None or not blob:
             detection = self.last_raw_detection = self.detector.detect(rgb)
             if detection is not None and map_bearing is not None and not (
                     math.isfinite(map_bearing) and self._on_map(self._span(detection), map_bearing)):
                 return None
             return detection
-        passing = [d for d in candidates(rgb) if d.confidence >= self.detector.config.min_confidence]
-        self.last_raw_detection = max(passing, key=lambda d: d.area_px) if passing else None
+        passing = self.detector.passing(rgb)
+        self.last_raw_detection = self.detector.largest(passing)
         on_map = [d for d in passing if math.isfinite(map_bearing) and self._on_map(self._span(d), map_bearing)]
         # The one centred nearest the map's bearing: a red car just beside (or below) the sign in the
         # image is within the margin too, and may be the larger.

@@ -16,8 +16,9 @@ Its standard deviation starts at ``anchor_std_m`` when the branch is anchored an
 with the distance travelled (encoder scale, slip), with time (what the model leaves out) and,
 for a branch anchored with no bearing (a LiDAR return while the camera detects nothing), with
 the angle turned times how far its guessed lateral place may be off: without a bearing a turn
-moves d_kin by an unknown amount, so in turns such a branch soon says nothing. Past ``max_std_m``, or once the target would be behind the camera, the branch is lost
-and says nothing (NaN) until the next trusted measurement.
+moves d_kin by an unknown amount, so in turns such a branch soon says nothing. Past
+``max_std_m``, or once the target would be behind the camera, the branch is lost and says
+nothing (NaN) until the next trusted measurement.
 
 Once the target's bearing passes ``max_bearing_rad`` the car has passed it: the branch is lost
 too. Else a LiDAR return beside the car could re-anchor a point carried metres to the side, and

@@ -171,13 +171,22 @@ class _Witnesses:
         """The distance driven since this depth's frame, m: perception holds a camera frame's
         depth over the loop's faster steps, so a depth equal to the last step's is that frame's,
         as long as it has been held for less than one frame period (longer: not a frame's hold)."""
-        if d == d and d == self.last_depth:
-            self.held_s += dt
-            self.held_m += abs(motion)
-        else:
-            self.held_s, self.held_m = 0.0, 0.0
+        self.held_s, self.held_m = self._held_after(d, motion, dt)
         self.last_depth = d
-        return self.held_m if self.held_s < self.config.kinematics.camera_frame_s else 0.0
+        return self._age(self.held_s, self.held_m)
+
+    def peek_depth_age(self, d: float, motion: float, dt: float) -> float:
+        """:meth:`depth_age` for a step that may not happen: changes nothing."""
+        return self._age(*self._held_after(d, motion, dt))
+
+    def _held_after(self, d: float, motion: float, dt: float) -> tuple[float, float]:
+        """(seconds, metres) the depth will have been held after a step with depth ``d``."""
+        if d == d and d == self.last_depth:
+            return self.held_s + dt, self.held_m + abs(motion)
+        return 0.0, 0.0
+
+    def _age(self, held_s: float, held_m: float) -> float:
+        return held_m if held_s < self.config.kinematics.camera_frame_s else 0.0
 
     def lidar_unconfirmed(self, l: float, lidar_confirmed: bool, branch: KinematicBranch) -> bool:
         """Whether the LiDAR side of the vote is one witness: a track no depth confirmed, or a
@@ -381,9 +390,7 @@ class ODCA:
                                lidar_unconfirmed=self._witnesses.lidar_unconfirmed(l, self._lidar_confirmed, branch),
                                size=s + motion + size_shift, size_tol=cfg.gate.size_tolerance(s_std),
                                k_echoes_depth=cfg.kinematics.enabled and branch.depth_only)
-        held = self._witnesses
-        age_m = held.held_m + abs(motion) if d == held.last_depth and held.held_s + dt < cfg.kinematics.camera_frame_s \
-            else 0.0
+        age_m = self._witnesses.peek_depth_age(d, motion, dt)
         return source == DEPTH and not (cfg.kinematics.enabled and branch.drifted(base, cfg.gate.tau_m, age_m))
 
     # -- batched offline path ------------------------------------------------------------------

@@ -30,9 +30,8 @@ from racf.odca.head import HeadWeights, head_parameters, make_head
 from racf.odca.losses import LossWeights, odca_losses
 from racf.odca.online import ODCA, ODCAConfig, corrected, segments
 
-__all__ = ["prepare", "prepare_split", "prepare_clean", "clean_series", "revote", "initial_model", "fit", "train_head", "calibrate_gate",
-           "unchanged_share", "score", "pass_through",
-           "evaluate", "train_odca"]
+__all__ = ["prepare", "prepare_split", "prepare_clean", "clean_series", "revote", "initial_model", "fit", "train_head",
+           "calibrate_gate", "unchanged_share", "score", "pass_through", "evaluate", "train_odca"]
 
 
 def prepare(model: ODCA, frame: pd.DataFrame) -> dict[str, np.ndarray]:

@@ -26,13 +26,11 @@ from dataclasses import asdict, dataclass
 import numpy as np
 import pandas as pd
 
-from racf.sim.world.traffic import MAX_TRAFFIC_CARS
+from racf.sim.world.traffic import CAR_FOOTPRINT_M, MAX_TRAFFIC_CARS
 
 __all__ = ["ConflictOutcome", "score_conflict", "CONFLICT_OUTCOMES", "CAR_FOOTPRINT_M", "CONFLICT_ZONE_M",
            "TTC_HORIZON_S", "NEAR_MISS_S"]
 
-#: A QCar 2's footprint, length x width, m (its MJCF), centred on its body origin.
-CAR_FOOTPRINT_M = (0.425, 0.192)
 #: The conflict zone's radius around the conflict point, m: a footprint inside it blocks the other lane.
 CONFLICT_ZONE_M = 0.15
 #: How far ahead TTC looks, s.

@@ -38,14 +38,13 @@ from racf.experiments.episode.stack import build_car, default_env
 from racf.sim.attacks import PatchOcclusion
 from racf.sim.attacks.base import AttackWrapper
 from racf.sim.sensors import STATE_FIELDS
+from racf.sim.world.traffic import CAR_FOOTPRINT_M
 
 __all__ = ["TrialResult", "StepHook", "run_trial", "scan_fov", "SCAN_FOV_HALF_BEAMS",
            "RUN_THROUGH_M", "run_through_m"]
 
 #: An episode ends once the bumper is this far past the last target's line (without traffic).
 RUN_THROUGH_M = 0.5
-#: The QCar 2's length, bumper to bumper, m (its MJCF).
-CAR_LENGTH_M = 0.425
 #: Half-width of the LiDAR sector kept in the logs, in beams of the 360-beam scan (1 deg each).
 SCAN_FOV_HALF_BEAMS = 40
 
@@ -211,7 +210,7 @@ def run_through_m(plan: EpisodePlan) -> float:
     if plan.conflict is None:
         return RUN_THROUGH_M
     past_line = plan.conflict.ego_s - plan.mission.targets[-1].stop_s
-    return max(RUN_THROUGH_M, past_line + CAR_LENGTH_M + 0.1)
+    return max(RUN_THROUGH_M, past_line + CAR_FOOTPRINT_M[0] + 0.1)
 
 
 def _result(spec: TrialSpec, plan: EpisodePlan, env: gym.Env, log: pd.DataFrame) -> TrialResult:

@@ -28,6 +28,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from racf.sim.world.traffic import CAR_FOOTPRINT_M
+
 __all__ = ["FrameRecorder", "write_rrd", "SERIES", "CONTROL", "STYLE", "CAR_HALF_SIZE_M", "TRAFFIC_RGB"]
 
 #: Distance series (metres) and control series, as logged (entity name -> log column).
@@ -47,8 +49,8 @@ STYLE: dict[str, tuple[tuple[int, int, int], str]] = {
     "brake": ((140, 86, 75), "brake"),
     "attack_active": ((188, 189, 34), "attack active"),
 }
-#: The car's body (QCar 2: 0.425 x 0.192 x 0.20 m), centred over the axles' midpoint, m.
-CAR_HALF_SIZE_M = (0.2125, 0.096, 0.10)
+#: The car's body (QCar 2: its footprint, 0.20 m tall), centred over the axles' midpoint, m.
+CAR_HALF_SIZE_M = (CAR_FOOTPRINT_M[0] / 2, CAR_FOOTPRINT_M[1] / 2, 0.10)
 #: The other cars' colours on the map and in 3D, in the order of ``sim.world.traffic.TRAFFIC_COLOURS``.
 TRAFFIC_RGB = ((200, 20, 20), (25, 65, 190), (230, 190, 25), (235, 235, 235))
 _CAR_CENTRE_Z_M = 0.10

@@ -32,7 +32,11 @@ from racf.sim.world.road_graph import Path, qcar2_road_graph
 from racf.sim.world.stop_signs import StopSign, stop_signs
 
 __all__ = ["TrafficCar", "ConflictPoint", "conflict_of", "cross_traffic", "TRAFFIC_COLOURS", "CONFLICT_RADIUS_M",
-           "MAX_TRAFFIC_CARS", "TRAFFIC_BRAKE_MPS2", "HEADWAY_S"]
+           "MAX_TRAFFIC_CARS", "TRAFFIC_BRAKE_MPS2", "HEADWAY_S", "CAR_FOOTPRINT_M"]
+
+#: A QCar 2's footprint, length x width, m (its MJCF: bumper to bumper, wheel to wheel), centred
+#: on its body origin, which sits midway between the axles.
+CAR_FOOTPRINT_M = (0.425, 0.192)
 
 #: Two lane centres this close meet (a QCar 2 is 0.192 m wide: two side by side touch at 0.19 m).
 CONFLICT_RADIUS_M = 0.12
@@ -274,5 +278,5 @@ def _first_stop_line(path: Path, after_s: float) -> float | None:
     for target in targets_on_path(path, None, 0.0):
         if target.stop_s < after_s:
             raise ValueError(f"a stop sign ({target.name}) faces this car's route before its conflict point")
-        return max(after_s, target.stop_s - 0.2125)
+        return max(after_s, target.stop_s - CAR_FOOTPRINT_M[0] / 2)  # its front bumper on the line
     return None
