@@ -15,6 +15,8 @@ that want throughput pass a larger ``batch_size``.
 
 from __future__ import annotations
 
+from racf.errors import UserError
+
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Iterator, Protocol, runtime_checkable
@@ -29,7 +31,7 @@ SHIPPED_PRIOR = asset_path("checkpoints", "chronos2-racf-tiny")
 _Z90 = 1.2815515655446004  # standard normal 90 % quantile
 
 
-class CheckpointError(ValueError):
+class CheckpointError(UserError):
     """A checkpoint that is missing, incomplete or corrupt."""
 
 

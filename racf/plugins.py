@@ -41,6 +41,8 @@ from importlib.metadata import entry_points
 from pathlib import Path
 from typing import Any
 
+from racf.errors import UserError
+
 __all__ = ["Plugin", "PluginError", "Registry", "ESTIMATORS", "ATTACKS", "DETECTORS", "REGISTRIES",
            "load_plugin_file", "plugin_files", "PLUGIN_ENV"]
 
@@ -49,7 +51,7 @@ PLUGIN_ENV = "RACF_PLUGINS"
 _OWN = "racf"
 
 
-class PluginError(ValueError):
+class PluginError(UserError):
     """A plug-in that cannot be loaded or used: the message names it and what is wrong."""
 
 
@@ -231,7 +233,7 @@ def _code_hash(obj: Any) -> str:
 # --- the kinds --------------------------------------------------------------------------------
 def _is_estimator(obj: Any) -> bool:
     return inspect.isclass(obj) and isinstance(getattr(obj, "name", None), str) and all(
-        callable(getattr(obj, m, None)) for m in ("reset", "estimate", "diagnostics", "would_pass"))
+        callable(getattr(obj, m, None)) for m in _ESTIMATOR_METHODS)
 
 
 def _is_attack(obj: Any) -> bool:
@@ -245,6 +247,26 @@ def _is_detector(obj: Any) -> bool:
         return callable(getattr(obj, "detect", None))
     return callable(obj)
 
+
+def _near_misses(module_name: str) -> str:
+    """What the file's classes with a ``name`` lack, for the message: ``: class Foo (an estimator?)
+    lacks would_pass()``; or the three shapes when none of its classes has a name."""
+    module = sys.modules[module_name]
+    said = []
+    for cls_name, obj in inspect.getmembers(module, inspect.isclass):
+        if obj.__module__ != module_name or not isinstance(getattr(obj, "name", None), str):
+            continue
+        missing = [m for m in _ESTIMATOR_METHODS if not callable(getattr(obj, m, None))]
+        if len(missing) < len(_ESTIMATOR_METHODS):
+            said.append(f"class {cls_name} (an estimator?) lacks {', '.join(m + '()' for m in missing)}")
+        else:
+            said.append(f"class {cls_name} has a 'name' but is none of: {'; '.join(_SHAPES.values())}")
+    if not said:
+        return f": it has no class with a 'name' attribute (one is needed, as in: {'; '.join(_SHAPES.values())})"
+    return ": " + "; ".join(said)
+
+
+_ESTIMATOR_METHODS = ("reset", "estimate", "diagnostics", "would_pass")
 
 _SHAPES = {
     "estimator": "a class with a 'name' and reset(), estimate(sample, speed_mps, dt, yaw_rate_radps), "
@@ -276,9 +298,11 @@ def load_plugin_file(path: str | os.PathLike) -> list[Plugin]:
     worker processes load it too. PluginError: no such file, it fails to import, or it defines
     nothing racf can use."""
     file = Path(path).expanduser().resolve()
-    if not file.is_file() or file.suffix != ".py":
-        raise PluginError(f"--plugin {path}: no such Python file (give the path of a .py file that defines "
-                          f"an estimator, an attack or a detector)")
+    what = ("no such file" if not file.exists() else "is a folder, not a file" if file.is_dir()
+            else "is not a Python file (.py)" if file.suffix != ".py" else None)
+    if what is not None:
+        raise PluginError(f"--plugin {path}: {what}; give the path of a .py file that defines an estimator, an "
+                          f"attack or a detector")
     module_name = f"racf_plugin_{file.stem}_{hashlib.sha256(str(file).encode()).hexdigest()[:8]}"
     if module_name not in sys.modules:
         spec = importlib.util.spec_from_file_location(module_name, file)
@@ -300,8 +324,7 @@ def load_plugin_file(path: str | os.PathLike) -> list[Plugin]:
                 found.append(registry.register(obj, origin=str(file)))
                 break
     if not found:
-        raise PluginError(f"--plugin {path} defines no estimator, attack or detector (a class with a 'name' "
-                          f"that is one of: {'; '.join(_SHAPES.values())})")
+        raise PluginError(f"--plugin {path} defines no estimator, attack or detector{_near_misses(module_name)}")
     listed = plugin_files()
     if str(file) not in listed:
         os.environ[PLUGIN_ENV] = os.pathsep.join([*listed, str(file)])

@@ -1,53 +1,115 @@
 """The ``racf`` command line: one module per command group, each registering its subcommands
-and their handlers. Parsing and printing only; the work lives in the packages beside this one."""
+and their handlers. Parsing and printing only; the work lives in the packages beside this one.
+
+What goes wrong reaches the user through one path, :func:`main` (``racf.errors``): a user's
+mistake is one line and exit 2, episodes whose code raised are one line and exit 1 (the
+tracebacks in a log), an interrupt is one line and exit 130. Only a bug of racf's own shows a
+traceback."""
 
 from __future__ import annotations
 
 import argparse
+import signal
 import sys
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Iterator
 
+from racf.errors import EpisodeFailed, Interrupted, UserError
 from racf.experiments.cli import bench, data, detector, falsify, odca, scorecard, sweep, trials, view
-from racf.experiments.cli.common import UsageError, fail, load_plugins_from_argv
+from racf.experiments.cli.common import Parser, fail, load_plugins_from_argv
 
 __all__ = ["main", "build_parser", "GROUPS"]
 
 #: The command groups, in the order ``racf --help`` lists their commands.
 GROUPS = (view, trials, sweep, scorecard, falsify, data, odca, detector, bench)
 
+#: Exit codes: a user's mistake, episodes that failed, an interrupt (128 + SIGINT, as shells use).
+EXIT_USAGE, EXIT_FAILED, EXIT_INTERRUPTED = 2, 1, 130
+
 
 def build_parser() -> argparse.ArgumentParser:
     import racf
 
-    p = argparse.ArgumentParser(prog="racf", description="RACF testbed: QCar 2 simulation, attacks and ODCA.")
+    p = Parser(prog="racf", description="RACF testbed: QCar 2 simulation, attacks and ODCA.")
     p.add_argument("--version", action="version", version=f"racf {racf.__version__}")
-    sub = p.add_subparsers(dest="command", required=True)
+    sub = p.add_subparsers(dest="command", required=True, parser_class=Parser)
     for group in GROUPS:
         group.register(sub)
     return p
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Runs one command; returns its exit code (2: bad input, nothing run)."""
-    from racf.experiments.sweeps.executors import CodeChangedError
-    from racf.odca.prior import CheckpointError
-    from racf.plugins import PluginError
-
+    """Runs one command; returns its exit code (0 done, 1 episodes failed, 2 bad input, 130 interrupted)."""
     argv = sys.argv[1:] if argv is None else list(argv)
+    command = next((a for a in argv if not a.startswith("-")), "")
+    args = None
     try:
-        load_plugins_from_argv(argv)  # plug-ins first: the parser's choices and help list them
-        args = build_parser().parse_args(argv)
-        if getattr(args, "address", None) is not None and args.backend != "ray":
-            fail(args.command, "--address joins a Ray cluster: it needs --backend ray")
-        return args.handler(args)
-    except UsageError as err:
-        print(err, file=sys.stderr)
-        return 2
-    except PluginError as err:  # a user's plug-in that cannot load, or a name no registry knows
-        print(f"racf: {err}", file=sys.stderr)
-        return 2
-    except CodeChangedError as err:  # the source was edited mid-run: nothing stale is stored
-        print(f"racf {argv[0] if argv else ''}: {err}".replace(" :", ":"), file=sys.stderr)
-        return 2
-    except CheckpointError as err:  # a checkpoint a user named that is missing or corrupt
-        print(f"racf {argv[0] if argv else ''}: {err}".replace(" :", ":"), file=sys.stderr)
-        return 2
+        with _sigterm_as_interrupt():
+            load_plugins_from_argv(argv)  # plug-ins first: the parser's choices and help list them
+            args, extra = build_parser().parse_known_args(argv)
+            if extra:
+                fail(args.command, f"unrecognized arguments: {' '.join(extra)} (`racf {args.command} --help` "
+                                   f"lists what is allowed)")
+            if getattr(args, "address", None) is not None and args.backend != "ray":
+                fail(args.command, "--address joins a Ray cluster: it needs --backend ray")
+            return args.handler(args)
+    except (UserError, OSError) as err:  # a path, value, spec, plug-in, checkpoint or dataset that cannot be used
+        _say(command, _words(err))
+        return EXIT_USAGE
+    except EpisodeFailed as err:
+        _say(command, str(err))
+        return EXIT_FAILED
+    except Interrupted as err:
+        _say(command, str(err))
+        return EXIT_INTERRUPTED
+    except KeyboardInterrupt:
+        _say(command, "interrupted; nothing half-written was kept")
+        return EXIT_INTERRUPTED
+    except Exception as err:
+        from racf.experiments.sweeps.failures import plugin_fault
+
+        fault = plugin_fault(err)
+        if fault is None:
+            raise  # a bug of racf's own: its traceback is what a report needs
+        log = _write_log(args, fault)
+        _say(command, f"{fault.where} raised {fault.error}; traceback in {log}")
+        return EXIT_FAILED
+
+
+def _say(command: str, message: str) -> None:
+    prefix = f"racf {command}:" if command else "racf:"
+    message = " ".join(str(message).split())  # one line, whatever the message held
+    print(message if message.startswith("racf ") else f"{prefix} {message}", file=sys.stderr)
+
+
+def _words(err: BaseException) -> str:
+    if isinstance(err, OSError) and not isinstance(err, UserError):
+        where = f": {err.filename}" if err.filename else ""
+        return f"{err.strerror or err}{where}"
+    return str(err)
+
+
+def _write_log(args, fault) -> Path:
+    from racf.experiments.sweeps.failures import append_log
+
+    out = getattr(args, "out", None) if args is not None else None
+    folder = Path(out) if out is not None else Path("outputs")
+    return append_log(folder, fault, first=True)
+
+
+@contextmanager
+def _sigterm_as_interrupt() -> Iterator[None]:
+    """SIGTERM stops a command as Ctrl-C does: what is stored stays, and the line says how to resume."""
+    def interrupt(signum, frame):
+        raise KeyboardInterrupt
+
+    try:
+        old = signal.signal(signal.SIGTERM, interrupt)
+    except ValueError:  # not the main thread (a test's runner): leave SIGTERM as it is
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, old)

@@ -5,12 +5,15 @@ from __future__ import annotations
 import argparse
 import os
 import sys
+import tempfile
+from pathlib import Path
 from typing import NoReturn
 
+from racf.errors import UserError
 from racf.experiments.episode.estimators import ESTIMATORS
 from racf.sim.attacks import ATTACKS
 
-__all__ = ["UsageError", "sign", "positive", "speed", "share", "duration", "count", "pair", "fail", "flag_error",
+__all__ = ["UsageError", "Parser", "output_dir", "unwritable", "sign", "positive", "speed", "share", "duration", "count", "pair", "fail", "flag_error",
            "fmt_ci", "DEFAULT_WORKERS",
            "episode_flags", "episode_params", "backend_flags", "sensor_flags", "attack_help", "estimator_help",
            "registry_rows", "registry_markdown", "plugin_flag", "estimator_option_flag", "estimator_options",
@@ -71,8 +74,50 @@ def pair(command: str, name: str, values: list[float] | None, default: tuple[flo
     return (values[0], values[-1])
 
 
-class UsageError(Exception):
+class UsageError(UserError):
     """Bad input a handler found before any work: ``main`` prints it and returns 2."""
+
+
+class Parser(argparse.ArgumentParser):
+    """racf's parsers: an option is taken only by its whole name. argparse's default accepts any
+    unique prefix, so ``racf trials --sign 3`` (trials has no ``--sign``) became
+    ``--sign-geometry 3`` and was refused with a message about sign geometry."""
+
+    def __init__(self, *args, **kwargs) -> None:
+        kwargs.setdefault("allow_abbrev", False)
+        super().__init__(*args, **kwargs)
+
+    def error(self, message: str) -> NoReturn:
+        """One line, not argparse's usage wall: what is wrong, and where the options are listed."""
+        self.exit(2, f"{self.prog}: {message} (`{self.prog} --help` lists what is allowed)\n")
+
+
+def unwritable(path: Path) -> str | None:
+    """Why results cannot be written into folder ``path`` (made later if missing), or None.
+
+    The nearest folder that exists must be a folder racf can create files in: a path under a
+    regular file, under ``/proc``, or in a folder the user may not write is refused before any
+    work, not after the first episode."""
+    path = Path(path).expanduser()
+    existing = path
+    while not existing.exists() and existing != existing.parent:
+        existing = existing.parent
+    if not existing.is_dir():
+        return f"{path} cannot be a results folder: {existing} is a file, not a folder"
+    try:
+        with tempfile.TemporaryFile(dir=existing):
+            pass
+    except OSError as err:
+        return f"{path} cannot be a results folder: {existing} is not writable ({err.strerror or err})"
+    return None
+
+
+def output_dir(value: str) -> Path:
+    """An argparse type: a results folder racf can write (see :func:`unwritable`)."""
+    problem = unwritable(Path(value))
+    if problem:
+        raise argparse.ArgumentTypeError(problem)
+    return Path(value).expanduser()
 
 
 def fail(command: str, message: str) -> NoReturn:

@@ -6,14 +6,14 @@ import argparse
 import json
 from pathlib import Path
 
-from racf.experiments.cli.common import backend_flags, count, sensor_flags
+from racf.experiments.cli.common import output_dir, backend_flags, count, sensor_flags
 
 __all__ = ["register"]
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     co = sub.add_parser("collect", help="record the multi-sensor dataset of drives (Parquet, splits, card); resumes")
-    co.add_argument("--out", type=Path, default=Path("data/qcar2"), help="dataset folder (default data/qcar2)")
+    co.add_argument("--out", type=output_dir, default=Path("data/qcar2"), help="dataset folder (default data/qcar2)")
     co.add_argument("--drives", type=count, default=None,
                     help="drives of 20-60 s, each meeting >= 2 targets (default 36: > 67,821 samples)")
     co.add_argument("--seed", type=int, default=0, help="collection seed (drive seeds and the splits)")

@@ -7,7 +7,7 @@ import argparse
 import json
 from pathlib import Path
 
-from racf.experiments.cli.common import count, fail, fmt_ci
+from racf.experiments.cli.common import output_dir, count, fail, fmt_ci
 
 __all__ = ["register"]
 
@@ -38,7 +38,7 @@ def _position(text: str) -> tuple[float, float] | str:
 def register(sub: argparse._SubParsersAction) -> None:
     dd = sub.add_parser("detector-data", help="render the learned detector's views with ground-truth sign masks "
                                               "(training and held-out splits; seeded, resumes)")
-    dd.add_argument("--out", type=Path, default=Path("data/detector"), help="folder (default data/detector)")
+    dd.add_argument("--out", type=output_dir, default=Path("data/detector"), help="folder (default data/detector)")
     dd.add_argument("--seed", type=int, default=0, help="seed of the training split (held-out: seed + 1000003)")
     dd.add_argument("--train", type=count, default=None, help="training views (default: the default dataset's, 10000)")
     dd.add_argument("--heldout", type=count, default=None,
@@ -48,7 +48,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     td = sub.add_parser("train-detector", help="train the stop-sign segmenter on the CPU (renders the views first "
                                                "if missing); writes a checkpoint")
     td.add_argument("--data", type=Path, default=Path("data/detector"), help="views folder (racf detector-data)")
-    td.add_argument("--out", type=Path, default=Path("outputs/sign-segmenter"),
+    td.add_argument("--out", type=output_dir, default=Path("outputs/sign-segmenter"),
                     help="checkpoint folder (default outputs/sign-segmenter; the shipped one is "
                          "assets/checkpoints/sign-segmenter)")
     td.add_argument("--seed", type=int, default=0, help="initialisation, batch order and augmentation seed")
@@ -61,7 +61,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                                                "(EOT over rendered views, differentiable warp); writes a PNG")
     op.add_argument("--data", type=Path, default=Path("data/detector"), help="views folder (racf detector-data)")
     op.add_argument("--checkpoint", type=Path, default=None, help="segmenter checkpoint (default: the shipped one)")
-    op.add_argument("--out", type=Path, default=Path("outputs/patches"),
+    op.add_argument("--out", type=output_dir, default=Path("outputs/patches"),
                     help="folder for learned.png and learned.json (default outputs/patches; the shipped one is "
                          "assets/patches)")
     op.add_argument("--seed", type=int, default=0, help="initial texture and transformation seed")

@@ -9,7 +9,7 @@ import sys
 import time
 from pathlib import Path
 
-from racf.experiments.cli.common import backend_flags, fail, plugin_flag
+from racf.experiments.cli.common import output_dir, backend_flags, fail, plugin_flag
 
 __all__ = ["register"]
 
@@ -38,7 +38,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     f.add_argument("--stop-at-violation", action="store_true",
                    help="end each search at its first violation (faster; the lowest robustness is then not the "
                         "budget's)")
-    f.add_argument("--out", type=Path, default=None,
+    f.add_argument("--out", type=output_dir, default=None,
                    help="results folder (default outputs/falsify/DEFENCE-ATTACKS); a rerun resumes it")
     f.add_argument("--no-cases", action="store_true", help="do not record the distinct violations as cases")
     backend_flags(f, workers_help="parallel episodes (local processes, or a local Ray's CPUs)")

@@ -7,7 +7,7 @@ import json
 import sys
 from pathlib import Path
 
-from racf.experiments.cli.common import count
+from racf.experiments.cli.common import output_dir, count
 
 __all__ = ["register"]
 
@@ -17,7 +17,7 @@ _SPLITS = ("by_series", "leave_target_out")
 def register(sub: argparse._SubParsersAction) -> None:
     pp = sub.add_parser("pretrain-prior",
                         help="pretrain the small Chronos-2 prior on synthetic series (writes a model card)")
-    pp.add_argument("--out", type=Path, default=Path("outputs/chronos2-prior"),
+    pp.add_argument("--out", type=output_dir, default=Path("outputs/chronos2-prior"),
                     help="checkpoint folder (default outputs/chronos2-prior; name "
                          "assets/checkpoints/chronos2-racf-tiny to replace the shipped prior)")
     pp.add_argument("--steps", type=count, default=3000, help="training steps (default 3000)")
@@ -31,7 +31,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     tr.add_argument("--dataset", type=Path, default=Path("data/qcar2"), help="dataset folder (racf collect)")
     tr.add_argument("--split", choices=_SPLITS, default="by_series",
                     help="split scheme to train on and score (default by_series)")
-    tr.add_argument("--out", type=Path, default=Path("outputs/odca-head"),
+    tr.add_argument("--out", type=output_dir, default=Path("outputs/odca-head"),
                     help="checkpoint folder (default outputs/odca-head; name assets/checkpoints/odca-head to replace "
                          "the shipped head)")
     tr.add_argument("--epochs", type=count, default=800)

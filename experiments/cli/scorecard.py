@@ -8,7 +8,7 @@ import sys
 import time
 from pathlib import Path
 
-from racf.experiments.cli.common import backend_flags, estimator_option_flag, estimator_options, fail, plugin_flag
+from racf.experiments.cli.common import output_dir, backend_flags, estimator_option_flag, estimator_options, fail, plugin_flag
 
 __all__ = ["register"]
 
@@ -29,7 +29,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     sc.add_argument("--battery", default=None, help="the battery (default: the newest, racf-4)")
     sc.add_argument("--quick", action="store_true",
                     help="every row at a small N, for development: marked as quick in every output")
-    sc.add_argument("--out", type=Path, default=_DEFAULT_OUT, help=f"results folder (default {_DEFAULT_OUT}); "
+    sc.add_argument("--out", type=output_dir, default=_DEFAULT_OUT, help=f"results folder (default {_DEFAULT_OUT}); "
                                                                    "episodes there are reused")
     sc.add_argument("--dataset", type=Path, default=None,
                     help=f"the offline rows' dataset (default {_DATASET}, collected first if missing; "

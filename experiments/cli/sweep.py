@@ -6,7 +6,7 @@ import argparse
 import json
 from pathlib import Path
 
-from racf.experiments.cli.common import (attack_help, backend_flags, count, estimator_help, estimator_option_flag,
+from racf.experiments.cli.common import (output_dir, attack_help, backend_flags, count, estimator_help, estimator_option_flag,
                                          estimator_options, fail, plugin_flag, sensor_flags)
 
 __all__ = ["register"]
@@ -23,7 +23,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     sw.add_argument("spec", nargs="?", type=Path, default=None,
                     help=f"the sweep spec (TOML); shipped: {', '.join(_shipped_specs())}. "
                          "Without one, the flags below make the sweep")
-    sw.add_argument("--out", type=Path, default=None, help="results folder (default outputs/sweeps/<spec name>)")
+    sw.add_argument("--out", type=output_dir, default=None, help="results folder (default outputs/sweeps/<spec name>)")
     backend_flags(sw, workers_help="parallel episodes (local processes, or a local Ray's CPUs)")
     sw.add_argument("--json", action="store_true", help='print {"n", "done", "reused", "wall_s", "scr"} as JSON')
     sw.add_argument("--report", type=Path, default=None, metavar="DIR",

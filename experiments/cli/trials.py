@@ -6,7 +6,7 @@ import argparse
 import json
 from pathlib import Path
 
-from racf.experiments.cli.common import (backend_flags, count, episode_flags, episode_params, fail, fmt_ci,
+from racf.experiments.cli.common import (output_dir, backend_flags, count, episode_flags, episode_params, fail, fmt_ci,
                                          plugin_flag, registry_markdown, registry_rows, sensor_flags, sign, speed)
 
 __all__ = ["register"]
@@ -21,7 +21,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="approach a stop sign (default) or an obstacle crate, or a random 20-60 s drive (--sign 0)")
     t.add_argument("--speed", type=speed, default=1.0, help="cruise speed m/s, 0.1-3.0 (default 1.0)")
     t.add_argument("--seed", type=int, default=0)
-    t.add_argument("--out", type=Path, default=Path("outputs/trial"), help="output folder")
+    t.add_argument("--out", type=output_dir, default=Path("outputs/trial"), help="output folder")
     t.add_argument("--rerun", type=Path, default=None, metavar="PATH",
                    help="also record the episode to a rerun file (.rrd; open it with `racf view PATH`)")
     t.set_defaults(handler=_trial)
@@ -38,7 +38,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     ts.add_argument("-n", type=count, default=30, help="number of trials (default 30; 12 cover every sign x speed)")
     ts.add_argument("--seed", type=int, default=0, help="seed of the first trial; trial i uses seed + i")
     backend_flags(ts)
-    ts.add_argument("--out", type=Path, default=None,
+    ts.add_argument("--out", type=output_dir, default=None,
                     help="output folder (default outputs/trials/<setting>, outputs/table with --table); finished "
                          "trials there are reused (their ids hash the spec, configs and code version)")
     ts.add_argument("--json", action="store_true", help="print one JSON summary object instead of tables")
@@ -54,7 +54,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     st.add_argument("--seed", type=int, default=0)
     sensor_flags(st)
     backend_flags(st)
-    st.add_argument("--out", type=Path, default=Path("outputs/attack_study"), help="output folder (trials are reused)")
+    st.add_argument("--out", type=output_dir, default=Path("outputs/attack_study"), help="output folder (trials are reused)")
     st.add_argument("--json", action="store_true", help="print one JSON object instead of tables")
     st.set_defaults(handler=_attack_study)
 
@@ -75,9 +75,18 @@ def _trial(args: argparse.Namespace) -> int:
         spec = TrialSpec(setting, args.sign, args.speed, args.seed, target=args.target, **params)
     except ValueError as err:
         fail("trial", str(err))
+    from racf.errors import EpisodeFailed
+    from racf.experiments.episode.preflight import check_specs
+    from racf.experiments.sweeps.failures import LOG_NAME, append_log, describe
     from racf.experiments.viz.rerun_log import recorded_trial
 
-    result, log = recorded_trial(spec, args.rerun, f"racf trial {spec.trial_id}")
+    check_specs([spec])
+    try:
+        result, log = recorded_trial(spec, args.rerun, f"racf trial {spec.trial_id}")
+    except Exception as err:  # the episode's code raised: one line naming the part, the traceback in a log
+        failure = describe(spec, err)
+        append_log(args.out, failure, first=True)
+        raise EpisodeFailed([failure], 0, 1, args.out / LOG_NAME) from None
     args.out.mkdir(parents=True, exist_ok=True)
     log_path = atomic_write(args.out / f"{spec.trial_id}.parquet", log)
     atomic_write(args.out / f"{spec.trial_id}.json", json.dumps(result.to_dict(), indent=2, allow_nan=False))

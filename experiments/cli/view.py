@@ -7,7 +7,7 @@ import os
 import sys
 from pathlib import Path
 
-from racf.experiments.cli.common import positive, sensor_flags, sign, speed
+from racf.experiments.cli.common import output_dir, positive, sensor_flags, sign, speed
 
 __all__ = ["register"]
 
@@ -19,7 +19,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--width", type=int, default=320, help="camera width px (default 320)")
     s.add_argument("--height", type=int, default=240, help="camera height px (default 240)")
     s.add_argument("--seed", type=int, default=0)
-    s.add_argument("--out", type=Path, default=Path("outputs/snapshot"), help="output folder")
+    s.add_argument("--out", type=output_dir, default=Path("outputs/snapshot"), help="output folder")
     s.set_defaults(handler=_snapshot)
 
     d = sub.add_parser("demo", help="the story at one stop sign: clean, patch attack, attack + ODCA; a table, "
@@ -27,7 +27,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     d.add_argument("--sign", type=sign, default=1, help="stop sign 0-3 (default 1)")
     d.add_argument("--speed", type=speed, default=1.5, help="cruise speed m/s, 0.1-3.0 (default 1.5)")
     d.add_argument("--seed", type=int, default=0)
-    d.add_argument("--out", type=Path, default=Path("outputs/demo"), help="output folder")
+    d.add_argument("--out", type=output_dir, default=Path("outputs/demo"), help="output folder")
     sensor_flags(d)
     d.set_defaults(handler=_demo)
 

@@ -27,6 +27,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from racf.errors import UserError
 from racf.experiments.data.corruption import corrupt_series, draw_seed
 from racf.experiments.episode import DRIVE_S, TrialSpec
 from racf.experiments.episode.record import STEP_LOG
@@ -420,13 +421,17 @@ def load_dataset(path: Path, split: str = "by_series", held_out: str | None = No
         raise ValueError("held_out applies to split='leave_target_out' only")
     data_file, split_file = path / "dataset.parquet", path / "split.json"
     if not data_file.exists() or not split_file.exists():
-        raise FileNotFoundError(f"{path} is not a racf dataset folder (need dataset.parquet and split.json; "
-                                f"make one with `racf collect --out {path}`)")
-    frame = pd.read_parquet(data_file)
+        raise UserError(f"{path} is not a racf dataset folder (need dataset.parquet and split.json; "
+                        f"make one with `racf collect --out {path}`)")
+    try:
+        frame = pd.read_parquet(data_file)
+        raw = json.loads(split_file.read_text())
+    except (OSError, ValueError) as err:  # pyarrow's and json's errors for a file that is not theirs
+        raise UserError(f"{path} holds a corrupt dataset ({type(err).__name__}: {err}); recollect it with "
+                        f"`racf collect --out {path}`") from None
     missing = sorted(set(COLUMNS) - set(frame.columns))
-    raw = json.loads(split_file.read_text())
-    if missing or "by_series" not in raw:
-        raise ValueError(f"{path} is a dataset of an older racf (lacks columns {missing} or both splits); "
+    if missing or not isinstance(raw, dict) or "by_series" not in raw:
+        raise UserError(f"{path} is a dataset of an older racf (lacks columns {missing} or both splits); "
                          f"recollect it with `racf collect --out {path}`")
     splits = {k: raw[k] for k in SPLITS}
     if held_out is not None and held_out != splits["leave_target_out"]["held_out"]:

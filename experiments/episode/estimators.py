@@ -244,3 +244,28 @@ def check_options(name: str, options: dict[str, Any]) -> None:
     unknown = sorted(set(options) - set(allowed))
     if unknown:
         raise ValueError(f"estimator {name!r} has no option(s) {unknown}; it takes {list(allowed) or 'none'}")
+    defaults = inspect.signature(ESTIMATORS.plugin(name).obj.__init__).parameters
+    for key, value in options.items():
+        kind = _kind(defaults[key].default)
+        if kind is not None and not _is(kind, value):
+            raise ValueError(f"estimator {name!r} option {key} must be {kind} (its default is "
+                             f"{defaults[key].default!r}), got {value!r}")
+
+
+def _kind(default: Any) -> str | None:
+    """What an option's default says its values are: a number, true/false or text (None: anything)."""
+    if isinstance(default, bool):
+        return "true or false"
+    if isinstance(default, (int, float)):
+        return "a number"
+    if isinstance(default, str):
+        return "text"
+    return None
+
+
+def _is(kind: str, value: Any) -> bool:
+    if kind == "true or false":
+        return isinstance(value, bool)
+    if kind == "a number":
+        return isinstance(value, (int, float)) and not isinstance(value, bool)
+    return isinstance(value, str)

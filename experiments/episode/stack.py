@@ -16,7 +16,7 @@ from racf.experiments.episode.spec import TrialSpec
 from racf.sim.attacks import ATTACKS
 from racf.sim.world.stop_signs import SIGN_FACE_ACROSS_FLATS_M, SIGN_RED_FACE_ACROSS_FLATS_M
 
-__all__ = ["default_env", "plain_env", "build_car", "tracker", "outlined_size_m", "OUTLINED_SIZE_M",
+__all__ = ["default_env", "wrap_attacks", "plain_env", "build_car", "tracker", "outlined_size_m", "OUTLINED_SIZE_M",
            "DRIVE_MAX_EPISODE_S"]
 
 #: The map's size, across flats, of each part of the sign a detector may outline (``BlobDetector.outline``).
@@ -59,7 +59,11 @@ def default_env(spec: TrialSpec, **env_kwargs) -> gym.Env:
     detection, inside the braking window; each draws its own duration). An attack's
     ``episode_params`` come from the spec's fields of those names (the patch's ``rho``), its
     other settings from ``spec.attack_params``."""
-    env = plain_env(**{**env_settings(spec), **env_kwargs})
+    return wrap_attacks(plain_env(**{**env_settings(spec), **env_kwargs}), spec)
+
+
+def wrap_attacks(env: gym.Env, spec: TrialSpec) -> gym.Env:
+    """``env`` under the spec's attacks, each on the protocol's schedule (:func:`default_env`)."""
     schedule = {"duration_s": spec.t_atk, "stable_steps": spec.attack_stable_steps}
     for name in spec.attacks:
         attack = ATTACKS[name]

@@ -1,16 +1,16 @@
-"""Where a search's episodes run: one pool (local spawned processes or Ray) kept for the whole
-search, fed in rounds. Every episode is an ordinary one: stored in a :class:`ResultStore` by its
-id, so a resumed search, or another sampler that asks for the same episode, reads it back."""
+"""Where a search's episodes run: one set of workers (local spawned processes or Ray) kept for the
+whole search, fed in rounds. Every episode is an ordinary one: stored in a :class:`ResultStore` by
+its id, so a resumed search, or another sampler that asks for the same episode, reads it back.
+A round runs through :func:`~racf.experiments.sweeps.run.run_episodes`, so its episodes are
+checked, interrupted and reported as any batch's."""
 
 from __future__ import annotations
-
-from concurrent.futures import as_completed
-from contextlib import ExitStack
 
 import pandas as pd
 
 from racf.experiments.episode import TrialSpec
-from racf.experiments.sweeps.executors import BACKENDS, ray_session, run_episode, spawn_pool
+from racf.experiments.sweeps.executors import Workers
+from racf.experiments.sweeps.run import run_episodes
 from racf.experiments.sweeps.store import ResultStore
 
 __all__ = ["EpisodePool"]
@@ -24,49 +24,21 @@ class EpisodePool:
 
     def __init__(self, store: ResultStore, backend: str = "local", workers: int = 2, address: str | None = None,
                  rerun: bool = False) -> None:
-        if backend not in BACKENDS:
-            raise ValueError(f"backend must be one of {BACKENDS}, got {backend!r}")
-        if not (isinstance(workers, int) and workers >= 1):
-            raise ValueError(f"workers must be an int >= 1, got {workers!r}")
-        if address is not None and backend != "ray":
-            raise ValueError("--address joins a Ray cluster: it needs --backend ray")
-        self.store, self.backend, self.workers, self.address, self.rerun = store, backend, workers, address, rerun
-        self._stack = ExitStack()
-        self._pool = None
-        self._remote = None
+        self._workers = Workers(backend, workers, address)  # checks the three
+        self.store, self.rerun = store, rerun
         self.ran = 0
 
     def __enter__(self) -> "EpisodePool":
         self.store.prepare()
-        if self.backend == "ray":
-            import ray
-
-            self._stack.enter_context(ray_session(self.workers, self.address))
-            self._remote = ray.remote(num_cpus=1)(run_episode)
-        elif self.workers > 1:
-            self._pool = self._stack.enter_context(spawn_pool(self.workers))
+        self._workers.__enter__()
         return self
 
     def __exit__(self, *exc) -> None:
-        self._stack.close()
+        self._workers.__exit__(*exc)
 
     def run(self, specs: list[TrialSpec]) -> pd.DataFrame:
         """The rows of ``specs`` in their order: stored ones read back, the others run now."""
-        ids = [spec.trial_id for spec in specs]
-        done = self.store.done_ids()
-        todo = {i: spec for spec, i in zip(specs, ids) if i not in done}  # an episode asked twice runs once
-        kwargs = {"logs_dir": str(self.store.logs.relative_to(self.store.out)), "rerun": self.rerun}
-        out = str(self.store.out)
-        if todo and self._remote is not None:
-            import ray
-
-            ray.get([self._remote.remote(spec, out, expected_id=i, **kwargs) for i, spec in todo.items()])
-        elif todo and self._pool is not None:
-            futures = [self._pool.submit(run_episode, spec, out, expected_id=i, **kwargs) for i, spec in todo.items()]
-            for future in as_completed(futures):
-                future.result()
-        else:
-            for i, spec in todo.items():
-                run_episode(spec, out, expected_id=i, **kwargs)
-        self.ran += len(todo)
-        return self.store.rows(ids)
+        unique = list({spec.trial_id: spec for spec in specs}.values())  # an episode asked twice runs once
+        _, ran = run_episodes(unique, self.store, rerun=self.rerun, progress=False, pool=self._workers)
+        self.ran += ran
+        return self.store.rows([spec.trial_id for spec in specs])

@@ -18,14 +18,19 @@ from __future__ import annotations
 import math
 import multiprocessing as mp
 import os
-from concurrent.futures import ProcessPoolExecutor, as_completed
+import signal
+from collections import Counter, deque
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from concurrent.futures.process import BrokenProcessPool
 from contextlib import contextmanager, nullcontext
+from pathlib import Path
 from typing import Callable, Iterator
 
+from racf.errors import EpisodeFailed, UserError
 from racf.experiments.episode import TrialSpec
 
-__all__ = ["BACKENDS", "SINGLE_THREAD_ENV", "CodeChangedError", "single_thread", "spawn_pool", "run_episode", "local_executor",
-           "ray_executor", "ray_session", "backend_session", "executor"]
+__all__ = ["BACKENDS", "SINGLE_THREAD_ENV", "CodeChangedError", "Workers", "single_thread", "spawn_pool", "run_episode",
+           "episode_task", "local_executor", "ray_executor", "ray_session", "backend_session", "executor"]
 
 #: Where episodes can run.
 BACKENDS = ("local", "ray")
@@ -42,11 +47,11 @@ def single_thread() -> None:
 
 
 def spawn_pool(workers: int) -> ProcessPoolExecutor:
-    """A pool of ``workers`` spawned, single-threaded processes."""
-    return ProcessPoolExecutor(max_workers=workers, mp_context=mp.get_context("spawn"), initializer=single_thread)
+    """A pool of ``workers`` spawned, single-threaded processes that leave Ctrl-C to the driver."""
+    return ProcessPoolExecutor(max_workers=workers, mp_context=mp.get_context("spawn"), initializer=_worker_init)
 
 
-class CodeChangedError(ValueError):
+class CodeChangedError(UserError):
     """A worker's episode id differs from the one the batch computed: racf's code, or a
     plug-in's, changed on disk while the batch ran, so the stored episode would not be the
     one asked for."""
@@ -90,17 +95,169 @@ def params_label(params: dict) -> str:
                     for key, value in sorted(table.items()))
 
 
+def episode_task(spec: TrialSpec, out: str, **episode) -> dict:
+    """:func:`run_episode` as a worker runs it: ``{"row": row}``, or ``{"failure": Failure}`` when
+    the episode's code raised (a user's plug-in, or a bug of racf's). A failure is returned, not
+    raised, so that one episode's fault never aborts the batch. :class:`CodeChangedError` is
+    raised: the batch must stop."""
+    try:
+        return {"row": run_episode(spec, out, **episode)}
+    except CodeChangedError:
+        raise
+    except Exception as err:  # the fault of the code an episode runs, reported by episode, never a traceback
+        from racf.experiments.sweeps.failures import describe
+
+        return {"failure": describe(spec, err)}
+
+
+def _worker_init() -> None:
+    """A pool worker: one thread, and deaf to Ctrl-C (the terminal sends SIGINT to the whole
+    process group; the driver alone decides, and stops its workers itself)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    single_thread()
+
+
+class Workers:
+    """Where a batch's episodes run, started once and kept for several batches (a context manager).
+
+    ``backend="local"``: ``workers`` spawned processes (this process for 1); ``"ray"``: a Ray
+    cluster at ``address``, or a local Ray of ``workers`` CPUs. :meth:`run` yields each episode's
+    outcome (:func:`episode_task`) as it finishes.
+
+    A local worker that dies mid-episode (SIGKILL, out of memory) breaks the pool: a new pool
+    starts and the episodes it was running run again (those that had stored their part are
+    read back, not run). An episode that was running when workers died twice is reported as a
+    failure. Ray retries a task whose worker died once (``max_retries=1``) on another worker.
+
+    Leaving the block on an exception (Ctrl-C included) kills the workers at once: nothing
+    pending starts, and a killed episode stores nothing (parts are written atomically).
+    """
+
+    def __init__(self, backend: str = "local", workers: int = 2, address: str | None = None) -> None:
+        if backend not in BACKENDS:
+            raise UserError(f"backend must be one of {BACKENDS}, got {backend!r}")
+        if not (isinstance(workers, int) and workers >= 1):
+            raise UserError(f"workers must be an int >= 1, got {workers!r}")
+        if address is not None and backend != "ray":
+            raise UserError("--address joins a Ray cluster: it needs --backend ray")
+        self.backend, self.workers, self.address = backend, workers, address
+        self._pool: ProcessPoolExecutor | None = None
+        self._ray = None
+        self._refs: list = []
+
+    def __enter__(self) -> "Workers":
+        if self.backend == "ray":
+            self._ray = ray_session(self.workers, self.address)
+            self._ray.__enter__()
+        return self
+
+    def __exit__(self, kind, value, tb) -> None:
+        if kind is not None:
+            self.stop()
+        elif self._pool is not None:
+            self._pool.shutdown(wait=True)
+        self._pool = None
+        if self._ray is not None:
+            self._ray.__exit__(None, None, None)
+            self._ray = None
+
+    def run(self, specs: list[TrialSpec], out: str, **episode) -> Iterator[dict]:
+        """The outcome of each of ``specs`` as it finishes; ``episode`` holds :func:`run_episode`'s keywords."""
+        if self.backend == "ray":
+            yield from self._run_ray(specs, out, **episode)
+        elif self.workers <= 1:
+            for spec in specs:
+                yield episode_task(spec, out, **episode)
+        else:
+            yield from self._run_local(specs, out, **episode)
+
+    def stop(self) -> None:
+        """Kills the workers now: pending episodes never start, running ones store nothing."""
+        if self._pool is not None:
+            for process in list((getattr(self._pool, "_processes", None) or {}).values()):
+                process.kill()
+            self._pool.shutdown(wait=False, cancel_futures=True)
+            self._pool = None
+        if self._refs:
+            import ray
+
+            for ref in self._refs:
+                ray.cancel(ref, force=True)
+            self._refs = []
+
+    def _run_local(self, specs: list[TrialSpec], out: str, **episode) -> Iterator[dict]:
+        # At most `workers` episodes are handed out at a time, so those in flight when a worker
+        # dies are known, and an interrupt has nothing queued in the pool to drain.
+        queue, running, deaths = deque(specs), {}, Counter()
+        while queue or running:
+            if self._pool is None:
+                self._pool = spawn_pool(self.workers)
+            while queue and len(running) < self.workers:
+                spec = queue.popleft()
+                running[self._pool.submit(episode_task, spec, out, expected_id=spec.trial_id, **episode)] = spec
+            done, _ = wait(running, return_when=FIRST_COMPLETED)
+            lost = []
+            for future in done:
+                spec = running.pop(future)
+                try:
+                    yield future.result()
+                except BrokenProcessPool:
+                    lost.append(spec)
+            if lost:  # a worker died: every episode in flight is lost with the pool
+                lost += list(running.values())
+                running.clear()
+                self._pool.shutdown(wait=False, cancel_futures=True)
+                self._pool = None
+                yield from self._after_death(lost, queue, deaths, out, episode.get("logs_dir", "logs"))
+
+    @staticmethod
+    def _after_death(lost: list[TrialSpec], queue: deque, deaths: Counter, out: str, logs_dir: str) -> Iterator[dict]:
+        from racf.experiments.sweeps.failures import worker_died
+        from racf.experiments.sweeps.store import ResultStore
+
+        store = ResultStore(out, logs_dir)
+        done = store.done_ids()
+        for spec in reversed(lost):
+            if spec.trial_id in done:  # it stored its part before the pool broke
+                yield {"row": store.rows([spec.trial_id]).iloc[0].to_dict()}
+                continue
+            deaths[spec.trial_id] += 1
+            if deaths[spec.trial_id] >= 2:
+                yield {"failure": worker_died(spec)}
+            else:
+                queue.appendleft(spec)  # retried first, on a new worker
+
+    def _run_ray(self, specs: list[TrialSpec], out: str, **episode) -> Iterator[dict]:
+        import ray
+        from ray.exceptions import WorkerCrashedError
+
+        from racf.experiments.sweeps.failures import worker_died
+
+        remote: Callable = ray.remote(num_cpus=1, max_retries=1)(episode_task)
+        refs = {remote.remote(spec, out, expected_id=spec.trial_id, **episode): spec for spec in specs}
+        self._refs = list(refs)
+        while refs:
+            ready, _ = ray.wait(list(refs), num_returns=1)
+            spec = refs.pop(ready[0])
+            self._refs = list(refs)
+            try:
+                yield ray.get(ready[0])
+            except WorkerCrashedError:  # it died on two workers
+                yield {"failure": worker_died(spec)}
+
+
 def local_executor(specs: list[TrialSpec], out: str, workers: int, **episode) -> Iterator[dict]:
     """Rows as episodes finish, from ``workers`` spawned processes (in this process for 1).
-    ``episode`` holds :func:`run_episode`'s keywords."""
-    if workers <= 1:
-        for spec in specs:
-            yield run_episode(spec, out, **episode)
-        return
-    with spawn_pool(workers) as pool:
-        futures = [pool.submit(run_episode, spec, out, expected_id=spec.trial_id, **episode) for spec in specs]
-        for future in as_completed(futures):
-            yield future.result()
+    ``episode`` holds :func:`run_episode`'s keywords. A failed episode raises (:class:`EpisodeFailed`)."""
+    with Workers("local", workers) as pool:
+        yield from _rows(pool.run(specs, out, **episode), len(specs), out)
+
+
+def _rows(outcomes: Iterator[dict], total: int, out: str) -> Iterator[dict]:
+    for outcome in outcomes:
+        if "failure" in outcome:
+            raise EpisodeFailed([outcome["failure"]], 0, total, Path(out) / "failures.log")
+        yield outcome["row"]
 
 
 @contextmanager
@@ -143,14 +300,8 @@ def backend_session(backend: str, workers: int, address: str | None = None):
 def ray_executor(specs: list[TrialSpec], out: str, workers: int, address: str | None = None,
                  **episode) -> Iterator[dict]:
     """Rows as episodes finish on Ray: a cluster at ``address``, or a local Ray with ``workers`` CPUs."""
-    import ray
-
-    with ray_session(workers, address):
-        remote: Callable = ray.remote(num_cpus=1)(run_episode)
-        pending = [remote.remote(spec, out, expected_id=spec.trial_id, **episode) for spec in specs]
-        while pending:
-            ready, pending = ray.wait(pending, num_returns=1)
-            yield ray.get(ready[0])
+    with Workers("ray", workers, address) as pool:
+        yield from _rows(pool.run(specs, out, **episode), len(specs), out)
 
 
 def executor(backend: str, specs: list[TrialSpec], out: str, workers: int, address: str | None = None,
@@ -159,5 +310,5 @@ def executor(backend: str, specs: list[TrialSpec], out: str, workers: int, addre
     if backend == "ray":
         return ray_executor(specs, out, workers, address, **episode)
     if address is not None:
-        raise ValueError("--address joins a Ray cluster: it needs --backend ray")
+        raise UserError("--address joins a Ray cluster: it needs --backend ray")
     return local_executor(specs, out, workers, **episode)

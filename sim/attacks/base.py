@@ -10,7 +10,7 @@ import numpy as np
 
 from racf.sim.attacks.schedule import AttackSchedule
 
-__all__ = ["AttackWrapper"]
+__all__ = ["AttackWrapper", "blank_env"]
 
 
 class AttackWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
@@ -133,6 +133,12 @@ class AttackWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
         if not beams.any():
             beams[int(np.argmin(np.abs(diff)))] = True
         return beams
+
+
+def blank_env() -> gym.Env:
+    """The smallest env an attack can be built on (its observation space only): to check an
+    attack's parameters and schedule by building it, before any episode."""
+    return _BlankEnv()
 
 
 class _BlankEnv(gym.Env):

@@ -4,6 +4,7 @@ from pathlib import Path
 
 import pytest
 
+from racf.errors import UserError
 from racf.experiments.cli import main
 
 ROOT = Path(__file__).resolve().parents[3]
@@ -70,5 +71,5 @@ def test_odca_commands_are_listed_and_latency_prints_json(capsys):
 
 
 def test_train_without_a_dataset_is_a_clear_error(tmp_path):
-    with pytest.raises(FileNotFoundError, match="racf collect"):
+    with pytest.raises(UserError, match="racf collect"):
         main(["train", "--dataset", str(tmp_path / "none")])

@@ -7,6 +7,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from racf.errors import UserError
 from racf.experiments.cli import main
 from racf.experiments.data.dataset import (COLUMNS, SPLIT_SHARES, collect, collection_specs, load_dataset, make_split,
                                  make_target_split)
@@ -149,5 +150,5 @@ def test_cli_summary_json_and_missing_dataset_error(small, capsys, tmp_path, mon
             "lidar_reference", "split"} <= set(summary)
     assert summary["n_series"] == 3 and summary["distinct_start_poses"] == 3
     assert set(summary["split"]) == {"by_series", "leave_target_out"}
-    with pytest.raises(FileNotFoundError, match="racf collect"):
+    with pytest.raises(UserError, match="racf collect"):
         load_dataset(tmp_path / "nothing")

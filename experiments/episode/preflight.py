@@ -1,0 +1,52 @@
+"""Everything a batch of episodes names, built once before any episode is dispatched: a value
+that racf or a user's plug-in refuses stops the batch with one line (a
+:class:`~racf.errors.UserError`), not a worker's traceback after minutes of episodes."""
+
+from __future__ import annotations
+
+import json
+
+from racf.errors import UserError
+from racf.experiments.episode.estimators import make_estimator
+from racf.experiments.episode.spec import TrialSpec
+from racf.experiments.episode.stack import wrap_attacks
+from racf.plugins import PluginError
+from racf.sim.attacks.base import blank_env
+
+__all__ = ["check_specs"]
+
+
+def check_specs(specs: list[TrialSpec]) -> None:
+    """Builds each distinct estimator (with its options) and attack stack (with its parameters and
+    schedule) of ``specs``; UserError names the first that fails and why."""
+    estimators, attacks = {}, {}
+    for spec in specs:
+        estimators.setdefault(_key(spec.estimator, spec.estimator_options), spec)
+        if spec.attacks:
+            attacks.setdefault(_key(spec.attacks, spec.attack_params, spec.t_atk, spec.rho,
+                                    spec.attack_stable_steps), spec)
+    for spec in estimators.values():
+        try:
+            make_estimator(spec.estimator, spec.estimator_options)
+        except PluginError:
+            raise
+        except Exception as err:  # a plug-in's constructor may raise anything: name it, one line
+            raise UserError(f"estimator {spec.estimator!r} with options {spec.estimator_options} cannot be built: "
+                            f"{_words(err)}") from None
+    for spec in attacks.values():
+        try:
+            wrap_attacks(blank_env(), spec).close()
+        except PluginError:
+            raise
+        except Exception as err:
+            params = f" with {spec.attack_params}" if spec.attack_params else ""
+            raise UserError(f"attack(s) {'+'.join(spec.attacks)}{params} and schedule (duration_s={spec.t_atk}, "
+                            f"stable_steps={spec.attack_stable_steps}) cannot be built: {_words(err)}") from None
+
+
+def _key(*parts) -> str:
+    return json.dumps(parts, sort_keys=True, default=str)
+
+
+def _words(err: Exception) -> str:
+    return str(err) if isinstance(err, ValueError) else f"{type(err).__name__}: {err}"
