@@ -47,7 +47,10 @@ def main(argv: list[str] | None = None) -> int:
     try:
         with _sigterm_as_interrupt():
             load_plugins_from_argv(argv)  # plug-ins first: the parser's choices and help list them
-            args, extra = build_parser().parse_known_args(argv)
+            try:
+                args, extra = build_parser().parse_known_args(argv)
+            except SystemExit as done:  # --help, --version, or argparse's one line for a bad flag
+                return int(done.code or 0)
             if extra:
                 fail(args.command, f"unrecognized arguments: {' '.join(extra)} (`racf {args.command} --help` "
                                    f"lists what is allowed)")

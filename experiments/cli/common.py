@@ -16,7 +16,7 @@ from racf.sim.attacks import ATTACKS
 __all__ = ["UsageError", "Parser", "output_dir", "unwritable", "sign", "positive", "speed", "share", "duration", "count", "pair", "fail", "flag_error",
            "fmt_ci", "DEFAULT_WORKERS",
            "episode_flags", "episode_params", "backend_flags", "sensor_flags", "attack_help", "estimator_help",
-           "registry_rows", "registry_markdown", "plugin_flag", "estimator_option_flag", "estimator_options",
+           "keyed_values", "registry_rows", "registry_markdown", "plugin_flag", "estimator_option_flag", "estimator_options",
            "load_plugins_from_argv"]
 
 #: Parallel episodes by default: two, or one on a single-core machine.
@@ -126,9 +126,8 @@ def fail(command: str, message: str) -> NoReturn:
 
 
 def flag_error(command: str, message: str) -> NoReturn:
-    """Exits with code 2 as argparse does for a bad flag (the episode flags are checked together)."""
-    print(f"racf {command}: {message}", file=sys.stderr)
-    raise SystemExit(2)
+    """A bad flag the handler found (the episode flags are checked together): as :func:`fail`."""
+    fail(command, message)
 
 
 def fmt_ci(lo: float, hi: float, digits: int = 2) -> str:
@@ -207,6 +206,24 @@ def estimator_options(command: str, values: list[str], estimators: tuple[str, ..
             make_estimator(name, options)  # a checkpoint that is missing or corrupt fails here, before any work
         except ValueError as err:
             flag_error(command, f"--estimator-option: {err}")
+    return out
+
+
+def keyed_values(command: str, flag: str, values: list[str]) -> dict[str, dict]:
+    """``NAME.KEY=VALUE`` items as {NAME: {KEY: value}}, values read as TOML (else text)."""
+    import tomllib
+
+    out: dict[str, dict] = {}
+    for item in values:
+        key, sep, raw = item.partition("=")
+        name, dot, key = key.strip().partition(".")
+        if not (sep and dot and name and key):
+            flag_error(command, f"{flag} takes NAME.KEY=VALUE, got {item!r}")
+        try:
+            value = tomllib.loads(f"v = {raw}")["v"]
+        except tomllib.TOMLDecodeError:
+            value = raw
+        out.setdefault(name, {})[key] = value
     return out
 
 
@@ -292,13 +309,17 @@ def episode_flags(p: argparse.ArgumentParser) -> None:
                         "would have, had it not stopped, s in [-5, 5] (default 0)")
     p.add_argument("--traffic-speed", type=float, default=1.0, metavar="V",
                    help="with --traffic-cars: their speed, m/s in [0.1, 3] (default 1.0)")
+    p.add_argument("--attack-param", action="append", default=[], metavar="ATTACK.KEY=VALUE",
+                   help="a setting of one of the attacks (repeatable; values are TOML), e.g. "
+                        "depth_bias.bias_m=1.5, or its schedule: depth_bias.trigger=at_time depth_bias.start_s=2.0 "
+                        "starts it 2 s into the episode (the attack page lists each attack's settings and ranges)")
     estimator_option_flag(p)
     plugin_flag(p)
     sensor_flags(p)
 
 
 def episode_params(args: argparse.Namespace, command: str, table: bool = False) -> tuple[str | None, dict]:
-    """The setting and the spec fields the episode flags give; SystemExit(2) naming what is wrong.
+    """The setting and the spec fields the episode flags give; UsageError naming what is wrong.
     With ``table`` the settings are the table's own: none may be given, and the setting is None.
     ``estimator_options`` is by estimator name ({"odca": {"checkpoint": ...}}): a batch gives each
     setting its own estimator's."""
@@ -327,7 +348,11 @@ def episode_params(args: argparse.Namespace, command: str, table: bool = False) 
         else:
             options = estimator_options(command, args.estimator_option, (parse_setting(setting)[1],),
                                         default=parse_setting(setting)[1])
-        params = {"rho": pair(command, "--rho", args.rho, STRONG_RHO),
+        attack_params = keyed_values(command, "--attack-param", args.attack_param)
+        if attack_params and (table or not set(attack_params) <= set(parse_setting(setting)[0])):
+            flag_error(command, f"--attack-param names attack(s) {sorted(attack_params)}; this command runs "
+                                f"{'its table' if table else list(parse_setting(setting)[0]) or 'no attack'}")
+        params = {"rho": pair(command, "--rho", args.rho, STRONG_RHO), "attack_params": attack_params,
                   "t_atk": pair(command, "--t-atk", args.t_atk, STRONG_T_ATK_S),
                   "delay_ms": args.delay_ms, "control_hz": args.control_hz, "stable_steps": args.stable_steps,
                   "sensor_profile": args.sensor_profile, "sign_geometry": args.sign_geometry,

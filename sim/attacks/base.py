@@ -8,7 +8,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from racf.sim.attacks.schedule import AttackSchedule
+from racf.sim.attacks.schedule import SCHEDULE_PARAMS, AttackSchedule
 
 __all__ = ["AttackWrapper", "blank_env"]
 
@@ -37,10 +37,14 @@ class AttackWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
     @classmethod
     def settable_params(cls) -> tuple[str, ...]:
         """The constructor arguments an experiment may set (``TrialSpec.attack_params``): every
-        named one but the env, the schedule's and the ``episode_params``."""
+        named one but the env and the ``episode_params``, and, for an attack that takes the
+        schedule's keywords, the schedule's :data:`~racf.sim.attacks.schedule.SCHEDULE_PARAMS`."""
         skip = {"self", "env", *cls.episode_params}
-        return tuple(name for name, p in inspect.signature(cls.__init__).parameters.items()
-                     if name not in skip and p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY))
+        params = inspect.signature(cls.__init__).parameters
+        own = tuple(name for name, p in params.items()
+                    if name not in skip and p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY))
+        takes_schedule = any(p.kind == p.VAR_KEYWORD for p in params.values())
+        return own + tuple(name for name in SCHEDULE_PARAMS if takes_schedule and name not in own)
 
     @classmethod
     def check_params(cls, params: dict[str, Any]) -> None:

@@ -6,7 +6,12 @@ paper's threat model allows). An attack window opens once the sign has been visi
 is inside the braking window: the car would reach the stop line within ``window_s`` at
 its current speed. The window lasts a duration drawn from ``duration_s`` (a fixed value or
 a (low, high) uniform range), then a cooldown of ``cooldown_s`` follows before the next
-window may open. ``trigger="always"`` opens the first window at the first step instead.
+window may open. ``trigger="always"`` opens the first window at the first step instead, and
+``trigger="at_time"`` at the first step at or after ``start_s`` seconds into the episode.
+
+An experiment sets these per attack (``TrialSpec.attack_params``, ``--attack-param``, a
+sweep's ``[params.NAME]``) by the names in :data:`SCHEDULE_PARAMS`; ``duration_s`` is the
+episode's ``t_atk`` and ``stable_steps`` its ``stable_steps``.
 """
 
 from __future__ import annotations
@@ -17,9 +22,11 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["AttackSchedule", "as_range"]
+__all__ = ["AttackSchedule", "as_range", "TRIGGERS", "SCHEDULE_PARAMS"]
 
-TRIGGERS = ("braking_window", "always")
+TRIGGERS = ("braking_window", "always", "at_time")
+#: The schedule's fields an experiment may set per attack (the others come from the episode).
+SCHEDULE_PARAMS = ("trigger", "start_s", "window_s", "cooldown_s", "max_windows", "min_sign_px")
 
 
 def as_range(name: str, value: Any, lo: float, hi: float) -> tuple[float, float]:
@@ -44,7 +51,10 @@ class AttackSchedule:
         window_s: the braking window, as time to the stop line at the current speed.
         stable_steps: consecutive steps with the sign visible before an attack may start.
         min_sign_px: ground-truth mask pixels that count as visible.
-        trigger: ``"braking_window"`` (the protocol) or ``"always"`` (from the first step).
+        trigger: ``"braking_window"`` (the protocol), ``"always"`` (from the first step) or
+            ``"at_time"`` (from ``start_s``).
+        start_s: with ``trigger="at_time"``: when the first window opens, s into the episode, in
+            [0, 120].
         max_windows: most windows per episode.
     """
 
@@ -55,13 +65,14 @@ class AttackSchedule:
     min_sign_px: int = 12
     trigger: str = "braking_window"
     max_windows: int = 1
+    start_s: float = 0.0
     windows: list[tuple[float, float]] = field(default_factory=list, init=False)
 
     def __post_init__(self) -> None:
         self.duration_s = as_range("duration_s", self.duration_s, 0.0, 60.0)
-        for name, lo, hi in (("cooldown_s", 0.0, 60.0), ("window_s", 0.0, 60.0)):
+        for name, lo, hi in (("cooldown_s", 0.0, 60.0), ("window_s", 0.0, 60.0), ("start_s", 0.0, 120.0)):
             value = getattr(self, name)
-            if not (isinstance(value, numbers.Real) and lo <= value <= hi):
+            if not (isinstance(value, numbers.Real) and not isinstance(value, bool) and lo <= value <= hi):
                 raise ValueError(f"{name} must be in [{lo}, {hi}] s, got {value!r}")
         for name in ("stable_steps", "min_sign_px", "max_windows"):
             value = getattr(self, name)
@@ -69,6 +80,8 @@ class AttackSchedule:
                 raise ValueError(f"{name} must be a non-negative integer, got {value!r}")
         if self.trigger not in TRIGGERS:
             raise ValueError(f"trigger must be one of {TRIGGERS}, got {self.trigger!r}")
+        if self.start_s and self.trigger != "at_time":
+            raise ValueError(f"start_s applies to trigger 'at_time', not {self.trigger!r}")
         self.reset(np.random.default_rng(0))
 
     def reset(self, rng: np.random.Generator) -> None:
@@ -96,5 +109,7 @@ class AttackSchedule:
     def _should_open(self, info: dict) -> bool:
         if self.trigger == "always":
             return True
+        if self.trigger == "at_time":
+            return float(info["time"]) >= self.start_s - 1e-6
         speed = max(float(info["speed"]), 1e-3)
         return self._visible >= self.stable_steps and 0.0 < float(info["dist_to_stop_line"]) <= self.window_s * speed

@@ -1,98 +1,89 @@
-"""The corpus of a user's mistakes: every one exits 2 with one line naming the problem and what is
-allowed, before any work, and never with a traceback."""
+"""The corpus of a user's mistakes (``racf.experiments.cli.mistakes``): every one exits 2 with one
+line naming the problem and what is allowed, before any work, and never with a traceback; a
+plug-in's fault exits 1, an interrupt 130, each with one line."""
 
 from __future__ import annotations
 
 import io
 from contextlib import redirect_stderr, redirect_stdout
-from pathlib import Path
-
 import pytest
 
 from racf.experiments.cli import main
+from racf.experiments.cli.mistakes import MISTAKES, make_files
 
 
-def _files(root: Path) -> dict[str, str]:
-    (root / "corrupt.parquet").write_bytes(b"not parquet")
-    (root / "data_corrupt").mkdir()
-    (root / "data_corrupt" / "dataset.parquet").write_bytes(b"PAR1 garbage")
-    (root / "ckpt").mkdir()
-    (root / "ckpt" / "odca.json").write_text("{not json")
-    (root / "ckpt" / "head.npz").write_bytes(b"no weights")
-    (root / "bad.toml").write_text("name = [unclosed\n")
-    (root / "empty.toml").write_text("")
-    (root / "nospace.toml").write_text('name = "x"\nmode = "grid"\n')
-    (root / "wrongtype.toml").write_text('name = "x"\nrepeats = "two"\n[space]\nattack = ["none"]\n')
-    (root / "bad.rrd").write_bytes(b"not a recording")
-    (root / "plugin_broken.py").write_text("raise RuntimeError('boom')\n")
-    return {k: str(root / k) for k in ("corrupt.parquet", "data_corrupt", "ckpt", "bad.toml", "empty.toml",
-                                       "nospace.toml", "wrongtype.toml", "bad.rrd", "plugin_broken.py")}
-
-
-#: (command line with {placeholders}, words the message must hold)
-CORPUS = [
-    ("trial --speed fast", "speed"),
-    ("trial --sign 9", "sign"),
-    ("trials -n 0", ">= 1"),
-    ("trial --rho 2", "rho"),
-    ("trial --estimator kalman", "estimator must be one of"),
-    ("trial --attack laser", "unknown attack"),
-    ("trial --detector yolo", "invalid choice"),
-    ("trial --setting attack --target obstacle --sign 0", "cannot act on target 'obstacle'"),
-    ("trial --estimator odca --estimator-option flavour=1", "no option(s) ['flavour']"),
-    ("trial --estimator odca --estimator-option checkpoint={tmp}/nowhere", "no ODCA checkpoint"),
-    ("trial --estimator odca --estimator-option checkpoint={ckpt}", "corrupt"),
-    ("trial --estimator-option checkpoint=x", "raw"),
-    ("trials --table --estimator-option checkpoint=x", "name the estimator"),
-    ("trial --plugin {tmp}/nowhere.py", "no such Python file"),
-    ("trial --plugin {plugin_broken.py}", "failed to import: RuntimeError: boom"),
-    ("list --plugin", "--plugin needs a file"),
-    ("sweep {tmp}/nowhere.toml", "no sweep spec"),
-    ("sweep {bad.toml}", "not valid TOML"),
-    ("sweep {empty.toml}", "no [space]"),
-    ("sweep {nospace.toml}", "no [space]"),
-    ("sweep {wrongtype.toml}", "repeats must be an int"),
-    ("sweep --attack patch_occlusion --estimator kalman", "space.estimator"),
-    ("sweep --attack none --estimator odca --estimator-option odca.checkpoint={ckpt}", "corrupt"),
-    ("bench --dataset {tmp}/nowhere", "nowhere"),
-    ("bench --dataset {data_corrupt}", "data_corrupt"),
-    ("view {tmp}/nowhere.rrd", "nowhere.rrd"),
-    ("view {bad.rrd}", "bad.rrd"),
-    ("evaluate --checkpoint {tmp}/nowhere --dataset {tmp}/nowhere", "nowhere"),
-    ("falsify --defence tinfoil", "unknown defence 'tinfoil'"),
-    ("falsify --defence odca --attack laser", "unknown attack"),
-    ("falsify --defence odca --space {bad.toml}", "not valid TOML"),
-    ("falsify --defence odca --space {tmp}/nowhere.toml", "cannot read the space"),
-    ("falsify --defence odca --budget 0", "budget must be"),
-    ("falsify --defence odca --seeds 0", "--seeds must be"),
-    ("falsify --defence odca --sampler annealing", "invalid choice"),
-    ("replay-case {tmp}/nowhere.json", "no case file"),
-    ("replay-case {bad.toml}", "not a racf case file"),
-    ("replay-case {tmp}", "no case files"),
-    ("replay-case --defence tinfoil {bad.toml}", "unknown defence"),
-    ("replay-case --suite --reseed -1", "--reseed must be in"),
-]
-
-
-@pytest.mark.parametrize("command, words", CORPUS, ids=[c for c, _ in CORPUS])
-def test_a_mistake_exits_2_with_one_line(command, words, tmp_path, plugin_env):
-    names = _files(tmp_path)
-    line = command.replace("{tmp}", str(tmp_path))
-    for key, path in names.items():
-        line = line.replace("{" + key + "}", path)
-    argv = line.split()
+def _run(argv: list[str]) -> tuple[int, str, str]:
     err, out = io.StringIO(), io.StringIO()
     with redirect_stderr(err), redirect_stdout(out):
         try:
             code = main(argv)
         except SystemExit as exit_:  # argparse's own errors
             code = exit_.code
-    message = err.getvalue().strip()
-    assert code == 2, (command, message, out.getvalue()[-300:])
+    return code, err.getvalue().strip(), out.getvalue()
+
+
+def test_the_corpus_is_large_and_names_each_mistake_once():
+    commands = [c for c, _ in MISTAKES]
+    assert len(commands) >= 40 and len(set(commands)) == len(commands)
+
+
+@pytest.mark.parametrize("command, words", MISTAKES, ids=[c for c, _ in MISTAKES])
+def test_a_mistake_exits_2_with_one_line(command, words, tmp_path, plugin_env):
+    names = make_files(tmp_path)
+    line = command.replace("{tmp}", str(tmp_path))
+    for key, path in names.items():
+        line = line.replace("{" + key + "}", path)
+    code, message, out = _run(line.split() + (["--out", str(tmp_path / "out")] if _runs(line) else []))
+    assert code == 2, (command, message, out[-300:])
     assert "Traceback" not in message
-    last = message.splitlines()[-1] if message else ""
-    assert words in last, (command, message)
-    assert len([line for line in message.splitlines() if line.startswith("racf")]) == 1, message
+    assert len(message.splitlines()) == 1 and message.startswith("racf"), message
+    assert words in message, (command, message)
+    assert not (tmp_path / "out" / "parts").exists()  # refused before any episode
+
+
+def _runs(line: str) -> bool:
+    """Whether the command runs episodes into a default folder the test must not write."""
+    return line.split()[0] in ("trial", "trials", "sweep") and "--out" not in line
+
+
+def test_a_folder_the_user_cannot_write_is_refused_before_any_work(tmp_path, monkeypatch, capsys):
+    import tempfile
+
+    def refused(*args, **kwargs):
+        raise PermissionError(13, "Permission denied")
+
+    monkeypatch.setattr(tempfile, "TemporaryFile", refused)  # as for a user without write access (tests run as root)
+    assert main(["trials", "-n", "1", "--out", str(tmp_path / "results")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.splitlines() == [err] and f"{tmp_path} is not writable (Permission denied)" in err
+    assert not (tmp_path / "results").exists()
+
+
+def test_a_plugin_that_raises_in_an_episode_exits_1_naming_it_with_the_traceback_in_a_log(tmp_path, plugin_env):
+    plugin = tmp_path / "flaky.py"
+    plugin.write_text(
+        "from racf.controllers.estimators import RawDepthEstimator\n\n\n"
+        "class Flaky(RawDepthEstimator):\n    name = 'flaky'\n\n"
+        "    def estimate(self, sample, speed_mps, dt, yaw_rate_radps=0.0):\n"
+        "        raise ZeroDivisionError('flaky divided by zero')\n")
+    code, message, _ = _run(["trial", "--plugin", str(plugin), "--estimator", "flaky", "--sign", "1",
+                             "--out", str(tmp_path / "out")])
+    assert code == 1 and len(message.splitlines()) == 1, message
+    for words in ("estimator plug-in 'flaky'", "ZeroDivisionError: flaky divided by zero", "clean+flaky sign1",
+                  str(tmp_path / "out" / "failures.log")):
+        assert words in message, message
+    assert "Traceback (most recent call last)" in (tmp_path / "out" / "failures.log").read_text()
+
+
+def test_an_interrupt_exits_130_with_one_line(monkeypatch, tmp_path):
+    import racf.experiments.cli.trials as trials
+
+    def interrupted(args):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(trials, "_trials", interrupted)
+    code, message, _ = _run(["trials", "-n", "1", "--out", str(tmp_path)])
+    assert code == 130 and message == "racf trials: interrupted; nothing half-written was kept"
 
 
 def test_random_mode_without_rho_runs_on_its_own_valid_default():

@@ -128,8 +128,7 @@ def test_bad_trial_inputs_are_clear_errors(capsys):
         TrialSpec("attack+kalman", 0, 1.0, 0)
     with pytest.raises(ValueError, match="speed"):
         TrialSpec("clean", 0, 9.0, 0)
-    with pytest.raises(SystemExit):
-        main(["trials", "-n", "0"])
+    assert main(["trials", "-n", "0"]) == 2
     assert "must be >= 1" in capsys.readouterr().err
 
 

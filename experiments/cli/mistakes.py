@@ -1,0 +1,166 @@
+"""The corpus of a user's mistakes and what racf says to each: one line and exit 2, before any
+episode runs, never a traceback. The tests run every one (``tests/experiments/cli/test_bad_inputs.py``)
+and the CLI reference page lists them, so the page shows what the tests check.
+
+A command holds ``{placeholders}``: ``{tmp}`` is a scratch folder, the others files that
+:func:`make_files` writes into it (a corrupt dataset, a broken plug-in, ...)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+__all__ = ["MISTAKES", "make_files", "mistakes_markdown"]
+
+#: (command line, words the one line holds)
+MISTAKES: list[tuple[str, str]] = [
+    # values
+    ("trial --speed fast", "speed"),
+    ("trial --sign 9", "sign"),
+    ("trials -n 0", ">= 1"),
+    ("trial --rho 2", "rho"),
+    ("trial --estimator kalman", "estimator must be one of"),
+    ("trial --attack laser", "unknown attack"),
+    ("trial --detector yolo", "invalid choice"),
+    ("trial --setting attack --target obstacle --sign 0", "cannot act on target 'obstacle'"),
+    ("trials --sign 3", "unrecognized arguments: --sign 3"),
+    ("trial --sped 1.0", "unrecognized arguments: --sped"),
+    # estimator options
+    ("trial --estimator odca --estimator-option flavour=1", "no option(s) ['flavour']"),
+    ("trial --estimator odca --estimator-option checkpoint={tmp}/nowhere", "no ODCA checkpoint"),
+    ("trial --estimator odca --estimator-option checkpoint={ckpt}", "corrupt"),
+    ("trial --estimator-option checkpoint=x", "raw"),
+    ("trials --table --estimator-option checkpoint=x", "name the estimator"),
+    ("trials --plugin {defences.py} --estimator tolerant --estimator-option tol_m=abc",
+     "option tol_m must be a number"),
+    ("trials --plugin {defences.py} --estimator picky", "cannot be built: RuntimeError: no GPU here"),
+    # attack settings and schedules
+    ("trial --attack depth_bias --attack-param depth_bias.trigger=at_time --attack-param depth_bias.start_s=1000",
+     "start_s must be in [0.0, 120.0]"),
+    ("trial --attack depth_bias --attack-param depth_bias.start_s=2", "start_s applies to trigger 'at_time'"),
+    ("trial --attack depth_bias --attack-param depth_bias.trigger=sometimes", "trigger must be one of"),
+    ("trial --attack frustum_spoof --attack-param frustum_spoof.scale_box=3", "scale_box must be true or false"),
+    ("trial --attack depth_bias --attack-param bias_m=1", "takes NAME.KEY=VALUE"),
+    ("trial --attack-param depth_bias.bias_m=1", "this command runs no attack"),
+    ("trials --plugin {defences.py} --attack slow_start", "slow_start"),
+    # plug-ins
+    ("trial --plugin {tmp}/nowhere.py", "no such file"),
+    ("trial --plugin {tmp}", "is a folder, not a file"),
+    ("trial --plugin {bad.toml}", "is not a Python file"),
+    ("trial --plugin {plugin_broken.py}", "failed to import: RuntimeError: boom"),
+    ("trial --plugin {incomplete.py}", "class Incomplete (an estimator?) lacks would_pass()"),
+    ("list --plugin", "--plugin needs a file"),
+    # specs
+    ("sweep {tmp}/nowhere.toml", "no sweep spec"),
+    ("sweep {bad.toml}", "not valid TOML"),
+    ("sweep {empty.toml}", "no [space]"),
+    ("sweep {nospace.toml}", "no [space]"),
+    ("sweep {wrongtype.toml}", "repeats must be an int"),
+    ("sweep --attack patch_occlusion --estimator kalman", "space.estimator"),
+    ("sweep --attack none --estimator odca --estimator-option odca.checkpoint={ckpt}", "corrupt"),
+    ("sweep {schedule.toml}", "start_s must be in"),
+    # output folders
+    ("trials -n 1 --out {plugin_broken.py}/results", "is a file, not a folder"),
+    ("sweep smoke.toml --out /proc/racf-results", "/proc is not writable"),
+    ("falsify --defence odca --out /proc/racf-results", "/proc is not writable"),
+    ("collect --out {bad.toml}/data", "is a file, not a folder"),
+    # datasets, checkpoints, recordings, cases
+    ("bench --dataset {tmp}/nowhere", "nowhere"),
+    ("bench --dataset {data_corrupt}", "data_corrupt"),
+    ("train --dataset {tmp}/nowhere", "is not a racf dataset folder"),
+    ("evaluate --dataset {tmp}/nowhere", "is not a racf dataset folder"),
+    ("train --dataset {data_corrupt}", "corrupt dataset"),
+    ("evaluate --checkpoint {tmp}/nowhere --dataset {tmp}/nowhere", "nowhere"),
+    ("view {tmp}/nowhere.rrd", "nowhere.rrd"),
+    ("view {bad.rrd}", "bad.rrd"),
+    ("replay-case {tmp}/nowhere.json", "no case file"),
+    ("replay-case {bad.toml}", "not a racf case file"),
+    ("replay-case {tmp}", "no case files"),
+    ("replay-case --defence tinfoil {bad.toml}", "unknown defence"),
+    ("replay-case --suite --reseed -1", "--reseed must be in"),
+    # searches
+    ("falsify --defence tinfoil", "unknown defence 'tinfoil'"),
+    ("falsify --defence odca --attack laser", "unknown attack"),
+    ("falsify --defence odca --space {bad.toml}", "not valid TOML"),
+    ("falsify --defence odca --space {tmp}/nowhere.toml", "cannot read the space"),
+    ("falsify --defence odca --budget 0", "budget must be"),
+    ("falsify --defence odca --seeds 0", "--seeds must be"),
+    ("falsify --defence odca --sampler annealing", "invalid choice"),
+]
+
+#: Plug-ins for the corpus: a defence with a typed option, one whose constructor fails, and an
+#: attack whose schedule the episode cannot take.
+_DEFENCES = '''
+from racf.controllers.estimators import RawDepthEstimator
+from racf.sim.attacks.base import AttackWrapper
+from racf.sim.attacks.schedule import AttackSchedule
+
+
+class Tolerant(RawDepthEstimator):
+    name = "tolerant"
+
+    def __init__(self, tol_m: float = 0.3):
+        super().__init__()
+        self.tol_m = tol_m
+
+
+class Picky(RawDepthEstimator):
+    name = "picky"
+
+    def __init__(self):
+        raise RuntimeError("no GPU here")
+
+
+class SlowStart(AttackWrapper):
+    """Opens its window 200 s in: more than any episode lasts, and more than the schedule takes."""
+    name = "slow_start"
+
+    def __init__(self, env, **schedule):
+        super().__init__(env, AttackSchedule(**{**schedule, "trigger": "at_time", "start_s": 200.0}))
+'''
+
+_INCOMPLETE = '''
+class Incomplete:
+    name = "incomplete"
+
+    def reset(self):
+        pass
+
+    def estimate(self, sample, speed_mps, dt, yaw_rate_radps=0.0):
+        return sample.d_meas
+
+    def diagnostics(self):
+        return {}
+'''
+
+
+def make_files(root: Path) -> dict[str, str]:
+    """Writes the corpus's files into ``root``; returns {placeholder: path}."""
+    (root / "data_corrupt").mkdir()
+    (root / "data_corrupt" / "dataset.parquet").write_bytes(b"PAR1 garbage")
+    (root / "data_corrupt" / "split.json").write_text("{}")
+    (root / "ckpt").mkdir()
+    (root / "ckpt" / "odca.json").write_text("{not json")
+    (root / "ckpt" / "head.npz").write_bytes(b"no weights")
+    texts = {"bad.toml": "name = [unclosed\n", "empty.toml": "", "nospace.toml": 'name = "x"\nmode = "grid"\n',
+             "wrongtype.toml": 'name = "x"\nrepeats = "two"\n[space]\nattack = ["none"]\n',
+             "schedule.toml": 'name = "x"\n[space]\nattack = ["depth_bias"]\n[params.depth_bias]\n'
+                              'trigger = ["at_time"]\nstart_s = [500.0]\n',
+             "bad.rrd": "not a recording", "plugin_broken.py": "raise RuntimeError('boom')\n",
+             "defences.py": _DEFENCES, "incomplete.py": _INCOMPLETE}
+    for name, text in texts.items():
+        (root / name).write_text(text)
+    return {name: str(root / name) for name in ["data_corrupt", "ckpt", *texts]}
+
+
+def mistakes_markdown() -> str:
+    """The corpus as the CLI reference page's table."""
+    lines = ["## What racf says to a mistake", "",
+             "Each of these exits with code 2 and one line on stderr that holds the words shown, before any "
+             "episode runs (the tests run every one). `{tmp}` is a scratch folder; the other placeholders are "
+             "files the tests write there (`racf.experiments.cli.mistakes.make_files`). An episode whose code "
+             "raises (a plug-in's fault) exits 1 with one line naming the part, the exception and the episode, "
+             "the traceback in `failures.log` under the results folder; Ctrl-C or SIGTERM exits 130 with "
+             "\"N of M episodes stored; run the same command again to resume\".", "",
+             "| command | the line says |", "|---|---|"]
+    lines += [f"| `racf {command}` | {words.replace('|', '/')} |" for command, words in MISTAKES]
+    return "\n".join(lines)
