@@ -38,7 +38,9 @@ def _cli_markdown(parser: argparse.ArgumentParser) -> str:
         command.prog = f"racf {name}"
         lines += [f"## `racf {name}`", "", helps.get(name) or "", "", "```text",
                   command.format_help().rstrip(), "```", ""]
-    return "\n".join(lines)
+    from racf.experiments.cli.mistakes import mistakes_markdown
+
+    return "\n".join([*lines, mistakes_markdown(), ""])
 
 
 def parts_markdown() -> str:
