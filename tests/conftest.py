@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import shutil
+import subprocess
 import sys
 from pathlib import Path
 
@@ -26,24 +27,29 @@ def _forget_plugins() -> None:
         registry._plugins = None
 
 
-def install_cusum(site: Path) -> Path:
-    """The example defence as pip would install it (its package beside a dist-info with its entry
-    point) in ``site``, a folder to put on the path: importlib.metadata finds it as it finds any
-    installed distribution. Returns the installed package's folder."""
-    package = site / "racf_cusum"
-    shutil.copytree(EXAMPLES / "racf-cusum" / "src" / "racf_cusum", package)
-    info = site / "racf_cusum-0.1.0.dist-info"
-    info.mkdir()
-    (info / "METADATA").write_text("Metadata-Version: 2.1\nName: racf-cusum\nVersion: 0.1.0\n")
-    (info / "entry_points.txt").write_text("[racf.estimators]\nlidar_cusum = racf_cusum:CusumDefence\n")
-    return package
+@pytest.fixture(scope="session")
+def cusum_wheel_site(tmp_path_factory) -> Path:
+    """The example defence installed once by pip from its own ``pyproject.toml`` (its entry point
+    included) into a folder of its own: what ``pip install examples/racf-cusum`` puts in site-packages."""
+    site = tmp_path_factory.mktemp("cusum-site")
+    done = subprocess.run([sys.executable, "-m", "pip", "install", "--quiet", "--no-deps", "--no-build-isolation",
+                           "--target", str(site), str(EXAMPLES / "racf-cusum")], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr[-2000:]
+    return site
+
+
+def install_cusum(site: Path, installed: Path) -> Path:
+    """A copy of the pip-installed example in ``site``, a folder to put on the path (a test may edit
+    it); importlib.metadata finds it as it finds any installed distribution. Returns the package's folder."""
+    shutil.copytree(installed, site)
+    return site / "racf_cusum"
 
 
 @pytest.fixture
-def cusum_installed(tmp_path, monkeypatch):
+def cusum_installed(tmp_path, monkeypatch, cusum_wheel_site):
     """The example defence installed for one test (and the worker processes it spawns)."""
     site = tmp_path / "site"
-    package = install_cusum(site)
+    package = install_cusum(site, cusum_wheel_site)
     for name in [m for m in sys.modules if m.split(".")[0] == "racf_cusum"]:  # another test's copy
         monkeypatch.delitem(sys.modules, name)
     monkeypatch.syspath_prepend(str(site))

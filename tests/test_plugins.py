@@ -67,7 +67,7 @@ def test_a_taken_name_and_a_non_part_are_refused(plugin_env):
 
 
 @pytest.mark.parametrize("text, message", [
-    (None, "no such Python file"),
+    (None, "no such file"),
     ("import not_a_module_anywhere\n", "failed to import: ModuleNotFoundError"),
     ("x = 1\n", "defines no estimator, attack or detector"),
 ])
