@@ -4,31 +4,49 @@ marked ``<!-- illustrative: why -->`` (and ``<!-- slow -->`` ones, which run wit
 
 from __future__ import annotations
 
+import io
 import os
 import re
 import subprocess
 import sys
+from contextlib import redirect_stdout
 from pathlib import Path
 
 import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
 PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").rglob("*.md"))]
-_FENCE = re.compile(r"(?:^<!-- (illustrative|slow)[^>]*-->\n)?^```(\w*)\n(.*?)^```", re.M | re.S)
+_FENCE = re.compile(r"(?:^<!-- (illustrative|slow|prints)[^>]*-->\n)?^```(\w*)\n(.*?)^```", re.M | re.S)
 _RUN = ("python", "bash")
 
 
 def blocks(page: Path) -> list[tuple[str, str, str]]:
-    """(mark: '' | 'illustrative' | 'slow', language, code) of each fenced block of a page."""
+    """(mark: '' | 'illustrative' | 'slow' | 'prints', language, code) of each fenced block of a page."""
     return [(m.group(1) or "", m.group(2), m.group(3)) for m in _FENCE.finditer(page.read_text())]
 
 
-def _runnable(page: Path, slow: bool) -> dict[str, list[str]]:
-    out: dict[str, list[str]] = {"python": [], "bash": []}
-    for mark, lang, code in blocks(page):
-        if lang in _RUN and mark != "illustrative" and (slow or mark != "slow"):
-            out[lang].append(code)
+def _runnable(page: Path, slow: bool) -> dict[str, list[tuple[str, str | None]]]:
+    """The blocks to run by language, each with what the page says it prints: a block marked
+    ``<!-- prints -->`` right after it (``...`` stands for any text, as in doctest), or None."""
+    out: dict[str, list[tuple[str, str | None]]] = {"python": [], "bash": []}
+    found = blocks(page)
+    for i, (mark, lang, code) in enumerate(found):
+        if lang in _RUN and mark not in ("illustrative", "prints") and (slow or mark != "slow"):
+            after = found[i + 1] if i + 1 < len(found) else None
+            out[lang].append((code, after[2] if after is not None and after[0] == "prints" else None))
     return out
+
+
+def _prints(expected: str | None, got: str, where: str) -> None:
+    """The output a page states, against what its block printed (``...`` matches anything)."""
+    import doctest
+
+    if expected is None:
+        return
+    checker = doctest.OutputChecker()
+    flags = doctest.ELLIPSIS | doctest.NORMALIZE_WHITESPACE
+    assert checker.check_output(expected, got, flags), (
+        f"{where} prints other than the page says:\n--- the page\n{expected}--- printed\n{got}")
 
 
 def test_the_readme_is_short():
@@ -54,6 +72,15 @@ def test_the_readmes_results_table_is_written_from_the_stored_results():
     assert readme_with_table(text) == text, "run `make docs` to rewrite the README's results table"
 
 
+def test_every_stated_output_follows_a_block_that_runs():
+    for page in PAGES:
+        found = blocks(page)
+        for i, (mark, _, _) in enumerate(found):
+            if mark == "prints":
+                before = found[i - 1] if i else ("", "", "")
+                assert i and before[1] in _RUN and before[0] != "illustrative", f"{page.name}: block {i + 1}"
+
+
 def test_every_block_is_run_or_marked():
     counted = {"run": 0, "slow": 0, "illustrative": 0}
     for page in PAGES:
@@ -70,18 +97,22 @@ def _run_page(page: Path, tmp_path: Path, slow: bool, monkeypatch) -> None:
     (tmp_path / "examples").symlink_to(ROOT / "examples")  # pages name the examples from the checkout's root
     monkeypatch.chdir(tmp_path)
     namespace: dict = {"__name__": "__docs__"}  # a page's Python blocks share one namespace, in order
-    for i, block in enumerate(code["python"]):
+    for i, (block, expected) in enumerate(code["python"]):
+        printed = io.StringIO()
         try:
-            exec(compile(block, f"{page.name}:python block {i + 1}", "exec"), namespace)
+            with redirect_stdout(printed):
+                exec(compile(block, f"{page.name}:python block {i + 1}", "exec"), namespace)
         except Exception as err:  # name the page and the block
             pytest.fail(f"{page.name}: Python block {i + 1} failed: {type(err).__name__}: {err}\n{block}")
+        _prints(expected, printed.getvalue(), f"{page.name}: Python block {i + 1}")
     import gymnasium as gym
 
     for made in [v for v in namespace.values() if isinstance(v, (gym.Env, gym.vector.VectorEnv))]:
         made.close()  # the pages' envs
-    for block in code["bash"]:
+    for block, expected in code["bash"]:
         done = subprocess.run(["bash", "-e", "-c", block], cwd=tmp_path, env=env, capture_output=True, text=True)
         assert done.returncode == 0, f"{page.name}: a shell block failed:\n{block}\n{done.stderr[-2000:]}"
+        _prints(expected, done.stdout, f"{page.name}: shell block")
 
 
 @pytest.mark.parametrize("page", [p for p in PAGES if any(_runnable(p, False).values())],
