@@ -96,7 +96,9 @@ def _run_page(page: Path, tmp_path: Path, slow: bool, monkeypatch) -> None:
            "PATH": f"{Path(sys.executable).parent}{os.pathsep}{os.environ.get('PATH', '')}"}
     (tmp_path / "examples").symlink_to(ROOT / "examples")  # pages name the examples from the checkout's root
     monkeypatch.chdir(tmp_path)
-    namespace: dict = {"__name__": "__docs__"}  # a page's Python blocks share one namespace, in order
+    # A page's Python blocks share one namespace, in order, run as a script is (a spawned worker's
+    # __main__ guard holds, as it does when a user pastes the block into a file).
+    namespace: dict = {"__name__": "__main__"}
     for i, (block, expected) in enumerate(code["python"]):
         printed = io.StringIO()
         try:

@@ -80,6 +80,21 @@ def test_the_example_plugin_defence_gets_a_card_with_no_edit_to_racf(cusum_insta
     assert (tmp_path / "cards" / "tiny-quick" / "lidar_cusum.json").exists()
 
 
+#: A battery of one row of 12 episodes, for the kill-and-resume test's subprocess.
+_SMALL_BATTERY = """
+import sys
+
+from racf.experiments.cli import main
+from racf.experiments.scorecard import battery as b
+
+b.BATTERIES["small"] = b.Battery(name="small", loop=(b.LoopRow("paper_clean", "clean", 12, 12, b._paper("clean"),
+                                                               attacked=False),),
+                                 drives=(), offline_presets=("strong",), offline_draws=1, offline_draws_quick=1)
+if __name__ == "__main__":  # the pool's spawned workers import this file again
+    sys.exit(main(sys.argv[1:]))
+"""
+
+
 @pytest.mark.slow
 def test_a_sigkilled_quick_battery_resumes_without_redoing_finished_episodes(tmp_path):
     import os
@@ -89,19 +104,22 @@ def test_a_sigkilled_quick_battery_resumes_without_redoing_finished_episodes(tmp
     import time
 
     data = write_bench_dataset(tmp_path / "data", n_series=10)
-    argv = [sys.executable, "-m", "racf.experiments.cli", "scorecard", "--defence", "raw", "--quick", "--out",
+    script = tmp_path / "small_battery.py"
+    script.write_text(_SMALL_BATTERY)
+    argv = [sys.executable, str(script), "scorecard", "--defence", "raw", "--battery", "small", "--quick", "--out",
             str(tmp_path / "out"), "--dataset", str(data), "--json"]
     proc = subprocess.Popen(argv, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
     parts = tmp_path / "out" / "episodes"
-    deadline = time.time() + 300
-    while time.time() < deadline and sum(1 for _ in parts.rglob("parts/*.parquet")) < 10:
-        time.sleep(0.5)
+    deadline = time.time() + 600
+    while time.time() < deadline and sum(1 for _ in parts.rglob("parts/*.parquet")) < 4:
+        assert proc.poll() is None, "the battery ended before it was killed"
+        time.sleep(0.2)
     os.killpg(proc.pid, signal.SIGKILL)
     proc.wait()
     done = sum(1 for _ in parts.rglob("parts/*.parquet"))
     out = subprocess.run(argv, capture_output=True, text=True, check=True).stdout
     timing = json.loads(out)["cards"][0]["timing"]
-    assert done >= 10 and timing["episodes_run"] == timing["episodes"] - done  # only the unfinished ran
+    assert 4 <= done < 12 and timing["episodes_run"] == timing["episodes"] - done  # only the unfinished ran
 
 
 @pytest.mark.slow
