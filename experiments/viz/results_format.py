@@ -36,8 +36,10 @@ def meta_lines(meta: dict) -> list[str]:
     """The provenance line of a stored result: its command, commit, version, machine and date."""
     extra = ", ".join(f"{k.replace('_', ' ')} {meta[k]}" for k in ("sensor_profile", "sign_geometry", "detector",
                                                                  "dataset", "draws") if k in meta)
+    caveat = (" **Measured on uncommitted changes: no commit reproduces it exactly.**"
+              if str(meta["commit"]).endswith("+changes") else "")
     return [f"*Measured by* `{meta['command']}` *on commit* `{meta['commit']}` (racf {meta['racf']}), "
-            f"{meta['machine']}, {meta['measured']}" + (f"; {extra}." if extra else "."), ""]
+            f"{meta['machine']}, {meta['measured']}" + (f"; {extra}." if extra else ".") + caveat, ""]
 
 
 def missing(name: str, command: str) -> list[str]:

@@ -73,12 +73,24 @@ def load_source(path: Path) -> dict:
     return data
 
 
-def store_result(name: str, payload: dict, *, command: str, data_dir: Path = DATA_DIR, **extra) -> Path:
-    """Writes ``data_dir/NAME.json``: ``{"meta": {...}, **payload}`` as strict JSON."""
+def store_result(name: str, payload: dict, *, command: str, data_dir: Path = DATA_DIR, force: bool = False,
+                 **extra) -> Path:
+    """Writes ``data_dir/NAME.json``: ``{"meta": {...}, **payload}`` as strict JSON.
+
+    A result is identified by the commit that made it, so one measured on a tree whose tracked
+    code differs from its commit (``+changes``) is refused: no commit reproduces it. ``force``
+    stores it all the same, marked ``"uncommitted": true`` (the pages say so)."""
     if not name.replace("-", "").isalnum():
         raise ValueError(f"name {name!r}: use letters, digits and '-'")
-    meta = {"commit": commit(), "racf": __version__, "measured": dt.date.today().isoformat(),
+    made_by = commit()
+    if made_by.endswith("+changes") and not force:
+        raise ValueError(f"the checkout's tracked code differs from its commit ({made_by}): no commit would "
+                         f"reproduce {name!r}. Commit, measure again, then store (or pass --force-uncommitted to "
+                         f"store it marked as uncommitted)")
+    meta = {"commit": made_by, "racf": __version__, "measured": dt.date.today().isoformat(),
             "machine": machine(), "command": command, **extra}
+    if made_by.endswith("+changes"):
+        meta["uncommitted"] = True
     return atomic_write(Path(data_dir) / f"{name}.json",
                         json.dumps({"meta": meta, **payload}, indent=1, allow_nan=False) + "\n")
 
@@ -100,13 +112,17 @@ def main(argv: list[str] | None = None) -> int:
                         help="more facts for the page (sensor_profile=qcar2, detector=learned, ...)")
     parser.add_argument("--under", metavar="KEY", help="nest each source under KEY (for a command's bare --json)")
     parser.add_argument("--data-dir", type=Path, default=DATA_DIR, help=f"where to store (default {DATA_DIR})")
+    parser.add_argument("--force-uncommitted", action="store_true",
+                        help="store a result measured on a tree with uncommitted changes to tracked code, marked so "
+                             "(refused without it)")
     args = parser.parse_args(argv)
     try:
         payload: dict = {}
         for source in args.sources:
             data = load_source(source)
             payload.update({args.under: data} if args.under else data)
-        path = store_result(args.name, payload, command=args.command, data_dir=args.data_dir, **dict(args.meta))
+        path = store_result(args.name, payload, command=args.command, data_dir=args.data_dir,
+                            force=args.force_uncommitted, **dict(args.meta))
     except ValueError as err:
         print(f"results_store: {err}", file=sys.stderr)
         return 2

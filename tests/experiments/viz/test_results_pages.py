@@ -57,7 +57,8 @@ def test_every_page_renders_from_an_empty_folder(tmp_path):
         assert make(tmp_path).startswith("# "), name
 
 
-def test_the_store_writes_strict_json_with_its_provenance(tmp_path):
+def test_the_store_writes_strict_json_with_its_provenance(tmp_path, monkeypatch):
+    monkeypatch.setattr(results_store, "commit", lambda root=None: "abc1234")  # whatever the checkout holds now
     path = results_store.store_result("x", {"v": 1.5}, command="racf x", data_dir=tmp_path, detector="learned")
     data = json.loads(path.read_text())
     assert data["v"] == 1.5 and data["meta"]["command"] == "racf x" and data["meta"]["detector"] == "learned"
@@ -107,3 +108,24 @@ def test_the_detector_page_says_whether_the_segmenter_earns_the_default(tmp_path
     results_store.store_result("bench-detector", {"detectors": rows}, command="racf bench-detector --json",
                                data_dir=tmp_path)
     assert "beats the classical detector on all four counts" in RESULT_PAGES["results/detector-and-sticker.md"](tmp_path)
+
+
+def test_a_result_from_uncommitted_code_is_refused_unless_forced_and_then_marked(tmp_path, monkeypatch):
+    import json
+
+    from racf.experiments.viz.results_format import meta_lines
+
+    monkeypatch.setattr(results_store, "commit", lambda root=None: "abc1234+changes")
+    with pytest.raises(ValueError, match="differs from its commit"):
+        results_store.store_result("x", {"a": 1}, command="racf trials", data_dir=tmp_path)
+    assert not (tmp_path / "x.json").exists()
+    assert results_store.main(["x", str(_json(tmp_path)), "--command", "racf trials", "--data-dir", str(tmp_path)]) == 2
+    path = results_store.store_result("x", {"a": 1}, command="racf trials", data_dir=tmp_path, force=True)
+    meta = json.loads(path.read_text())["meta"]
+    assert meta["uncommitted"] is True and "uncommitted changes" in meta_lines(meta)[0]
+
+
+def _json(folder):
+    path = folder / "source.json"
+    path.write_text('{"a": 1}')
+    return path
