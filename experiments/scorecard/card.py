@@ -31,7 +31,10 @@ __all__ = ["run_card", "card_version"]
 def card_version(defence: str) -> str:
     """The code a card depends on: racf's episode code and, for a plug-in, its own source (as a
     trial id holds it)."""
-    return TrialSpec("clean" + ("" if defence == "raw" else f"+{defence}"), 0, 1.0, 0).trial_id
+    import racf
+
+    digest = TrialSpec("clean" + ("" if defence == "raw" else f"+{defence}"), 0, 1.0, 0).trial_id.rsplit("_", 1)[1]
+    return f"racf {racf.__version__}, code {digest}"
 
 
 def _loop_summary(rows: pd.DataFrame, attacked: bool) -> dict:

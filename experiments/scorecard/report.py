@@ -117,6 +117,9 @@ def card_markdown(card: dict) -> str:
         lines.append(f"| {section} | {row} | {measure} | {_f(value, digits)}{_ci(ci, digits)} | {n if n is not None else '-'} |")
     lines += ["", "Driving-score penalties: " + ", ".join(f"{k.replace('_', ' ')} x {v}" for k, v in card["penalties"].items())
               + ".", ""]
+    if card["quick"] and card["defence"] != "raw":  # a quick card alone says little: set it beside no defence
+        lines += [f"To compare: `racf scorecard --defence raw --quick` into the same `--out`, then "
+                  f"`racf scorecard --compare {card['defence']} raw --quick` (the same episodes, paired).", ""]
     return "\n".join(lines)
 
 
@@ -203,12 +206,16 @@ def _plots(cards: list[dict]) -> list[str]:
     return images
 
 
-def _html(cards: list[dict], markdown: str) -> str:
+def _html(cards: list[dict], text: str) -> str:
+    """The page: the plots, then the Markdown's tables rendered as HTML tables (Python-Markdown)."""
+    import markdown
+
     images = "".join(f'<img alt="plot" src="data:image/png;base64,{png}">' for png in _plots(cards))
+    body = markdown.markdown(html.escape(text, quote=False), extensions=["tables"])
     return ("<!doctype html><html><head><meta charset='utf-8'><title>racf scorecard</title>"
             "<style>body{font-family:sans-serif;max-width:1100px;margin:auto}img{max-width:48%}"
-            "pre{white-space:pre-wrap}</style></head><body><h1>racf scorecard</h1>" + images +
-            f"<pre>{html.escape(markdown)}</pre></body></html>\n")
+            "table{border-collapse:collapse;margin:1em 0}th,td{border:1px solid #ccc;padding:2px 8px;"
+            "text-align:left}th{background:#f3f3f3}</style></head><body>" + images + body + "</body></html>\n")
 
 
 def write_scorecard(cards: list[dict], out: Path) -> dict[str, Path]:
