@@ -86,7 +86,8 @@ def traces_figure(logs: dict, path: Path, sign: int, speed: float) -> Path:
             ax.axvspan(t[a], t[min(b, len(t) - 1)], color="red", alpha=0.12, label="attack active" if k == 0 else None)
         ax.plot(t, log["d_true"].where(log["sign_in_view"]), color="black", lw=1.8, label="d_true (sign in view)")
         ax.plot(t, log["d_meas"], ".", color="gray", ms=3, label="d~ (depth in the detection)")
-        ax.plot(t, log["lidar"], "x", color="#17becf", ms=3, label="LiDAR reference")
+        if np.isfinite(log["lidar"].to_numpy(float)).any():  # no entry for a series with no point to show
+            ax.plot(t, log["lidar"], "x", color="#17becf", ms=3, label="LiDAR reference")
         if "odca" in setting:  # from the first measurement on (before it ODCA reports its 0 m fallback)
             started = np.cumsum(np.isfinite(log["d_meas"].to_numpy())) > 0
             ax.plot(t, log["d_fused"].where(started), color="#1f77b4", lw=1.6, label="ODCA d_fused")
@@ -99,9 +100,15 @@ def traces_figure(logs: dict, path: Path, sign: int, speed: float) -> Path:
         ax.set_xlabel("t (s)")
         ax.grid(alpha=0.3)
     axes[0, 0].set_ylabel("distance (m)")
-    axes[0, -1].legend(fontsize=7, loc="upper right")
+    # One legend for every panel, below them: inside a panel it covered that panel's traces.
+    entries: dict = {}
+    for ax in axes[0]:
+        for handle, label in zip(*ax.get_legend_handles_labels()):
+            entries.setdefault(label, handle)
+    fig.legend(entries.values(), entries.keys(), loc="lower center", ncol=min(4, len(entries)), fontsize=8,
+               frameon=False)
     fig.suptitle(f"Stop sign {sign} at {speed} m/s: clean, patch attack, patch attack + ODCA", fontsize=11)
-    fig.tight_layout()
+    fig.tight_layout(rect=(0, 0.05 + 0.045 * ((len(entries) - 1) // 4), 1, 1))
     fig.savefig(path, dpi=110)
     plt.close(fig)
     return Path(path)
