@@ -24,9 +24,9 @@ $(STAMP): pyproject.toml | $(PY)
 demo: $(STAMP)
 	$(VENV)/bin/racf demo --out outputs/demo
 
-# The default run leaves out the checks marked slow (Ray, kill-and-resume, bench-loop, full
-# collection, PPO, the wheel in a fresh venv); `make test-all` runs everything, `make check-slow`
-# only those. It runs one test file per core (pytest-xdist), each process on one thread: left to
+# The default run leaves out the checks marked slow (Ray, kill-and-resume, killed workers, the
+# shipped cases replayed, bench-loop, full collection, PPO, the wheel in a fresh venv, the docs'
+# slow blocks); `make test-all` runs everything, `make check-slow` only those. CI runs both. It runs one test file per core (pytest-xdist), each process on one thread: left to
 # their defaults, torch, OpenMP and Mesa start a thread per core in every process.
 SINGLE_THREAD := OMP_NUM_THREADS=1 MKL_NUM_THREADS=1 LP_NUM_THREADS=0
 test: $(STAMP)
@@ -35,8 +35,9 @@ test: $(STAMP)
 test-all: $(STAMP)
 	$(PY) -m pytest -q -m "" --durations=10
 
+# The slow checks, spread test by test over the cores (a page's slow blocks are one test each).
 check-slow: $(STAMP)
-	$(PY) -m pytest -q -m slow --durations=10
+	$(SINGLE_THREAD) $(PY) -m pytest -q -m slow -n auto --dist load --durations=15
 
 # The documentation site into site/ (the reference pages are written from the code first).
 # Serve it with: .venv/bin/mkdocs serve (http://127.0.0.1:8000), or open site/index.html.
