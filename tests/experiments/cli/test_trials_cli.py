@@ -41,6 +41,5 @@ def test_cli_trial_with_traffic_reports_the_conflict(tmp_path, capsys):
     out = json.loads(capsys.readouterr().out)
     assert out["traffic_cars"] == 1 and out["conflict"] == "yielded" and out["collision"] is False
     assert pd.read_parquet(out["log"])["traffic0_x"].notna().all()
-    with pytest.raises(SystemExit, match="2"):
-        main(["trial", "--traffic-gap", "1.0"])
+    assert main(["trial", "--traffic-gap", "1.0"]) == 2
     assert "need --traffic-cars" in capsys.readouterr().err
