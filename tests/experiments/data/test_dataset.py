@@ -19,7 +19,7 @@ SHORT = (10.0, 20.0)
 @pytest.fixture(scope="module")
 def small(tmp_path_factory):
     out = tmp_path_factory.mktemp("ds")
-    collect(out, drives=3, seed=3, workers=2, progress=False, duration_s=SHORT)
+    collect(out, drives=3, seed=3, workers=1, progress=False, duration_s=SHORT)  # in this process: no spawn
     return out
 
 

@@ -43,7 +43,7 @@ def _spec_file(tmp_path, text=TINY, name="tiny.toml"):
 def uninterrupted(tmp_path_factory):
     folder = tmp_path_factory.mktemp("sweep")
     path = _spec_file(folder)
-    summary = run_sweep(load_spec(path), TINY, folder / "a", workers=2, progress=False)
+    summary = run_sweep(load_spec(path), TINY, folder / "a", workers=1, progress=False)  # spawning costs more than 4 episodes
     return folder, summary, ResultStore(folder / "a").rows()
 
 
