@@ -35,6 +35,7 @@ def test_both_plugins_show_up_in_racf_list(cusum_installed, plugin_env):
     assert listed["estimator"]["odca"]["origin"] == "racf"
 
 
+@pytest.mark.slow  # two spawned workers start racf and torch: CI's slow stage runs it
 def test_the_defence_and_the_attack_run_in_trials_on_spawned_workers(cusum_installed, plugin_env, tmp_path):
     code, out = _run(["trials", "--plugin", ATTACK, "--attack", "depth_scale", "--estimator", "lidar_cusum",
                       "--estimator-option", "h_m=0.2", "--seed", "0", "-n", "2",
