@@ -8,6 +8,9 @@ PY := $(VENV)/bin/python
 STAMP := $(VENV)/.racf-installed
 TORCH := torch==2.13.0
 export MUJOCO_GL ?= egl
+# Python caches compiled modules: a machine that turns that off (PYTHONDONTWRITEBYTECODE) makes
+# every test process, spawned worker and `racf` subprocess compile racf and the tests again.
+unexport PYTHONDONTWRITEBYTECODE
 
 .PHONY: demo test test-all check-slow docs bench bench-sim snapshot trials bench-detector clean
 
