@@ -9,9 +9,9 @@ from racf.experiments.cli import main
 ROOT = Path(__file__).resolve().parents[3]
 
 
-def test_help_lists_the_commands():
-    out = subprocess.run([sys.executable, "-m", "racf.experiments.cli", "--help"], cwd=ROOT,
-                         capture_output=True, text=True, check=True).stdout
+def test_help_lists_the_commands(capsys):
+    assert main(["--help"]) == 0
+    out = capsys.readouterr().out
     for command in ("snapshot", "bench-sim", "demo", "trial", "trials", "bench-detector"):
         assert command in out
 
