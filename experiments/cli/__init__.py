@@ -58,16 +58,16 @@ def main(argv: list[str] | None = None) -> int:
                 fail(args.command, "--address joins a Ray cluster: it needs --backend ray")
             return args.handler(args)
     except (UserError, OSError) as err:  # a path, value, spec, plug-in, checkpoint or dataset that cannot be used
-        _say(command, _words(err))
+        _say(args, command, _words(err))
         return EXIT_USAGE
     except EpisodeFailed as err:
-        _say(command, str(err))
+        _say(args, command, str(err))
         return EXIT_FAILED
     except Interrupted as err:
-        _say(command, str(err))
+        _say(args, command, str(err))
         return EXIT_INTERRUPTED
     except KeyboardInterrupt:
-        _say(command, "interrupted; nothing half-written was kept")
+        _say(args, command, "interrupted; nothing half-written was kept")
         return EXIT_INTERRUPTED
     except Exception as err:
         from racf.experiments.sweeps.failures import plugin_fault
@@ -76,18 +76,20 @@ def main(argv: list[str] | None = None) -> int:
         if fault is None:
             raise  # a bug of racf's own: its traceback is what a report needs
         log = _write_log(args, fault)
-        _say(command, f"{fault.where} raised {fault.error}; traceback in {log}")
+        _say(args, command, f"{fault.where} raised {fault.error}; traceback in {log}")
         return EXIT_FAILED
 
 
-def _say(command: str, message: str) -> None:
+def _say(args, guess: str, message: str) -> None:
+    """``racf COMMAND: MESSAGE`` on one line (the command as parsed, else the first word given)."""
+    command = getattr(args, "command", None) or guess
     prefix = f"racf {command}:" if command else "racf:"
     message = " ".join(str(message).split())  # one line, whatever the message held
     print(message if message.startswith("racf ") else f"{prefix} {message}", file=sys.stderr)
 
 
 def _words(err: BaseException) -> str:
-    if isinstance(err, OSError) and not isinstance(err, UserError):
+    if isinstance(err, OSError):
         where = f": {err.filename}" if err.filename else ""
         return f"{err.strerror or err}{where}"
     return str(err)

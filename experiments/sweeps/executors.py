@@ -254,9 +254,12 @@ def local_executor(specs: list[TrialSpec], out: str, workers: int, **episode) ->
 
 
 def _rows(outcomes: Iterator[dict], total: int, out: str) -> Iterator[dict]:
+    """The rows of the outcomes; the first failure stops them (its traceback logged under ``out``)."""
+    from racf.experiments.sweeps.failures import append_log
+
     for outcome in outcomes:
         if "failure" in outcome:
-            raise EpisodeFailed([outcome["failure"]], 0, total, Path(out) / "failures.log")
+            raise EpisodeFailed([outcome["failure"]], 0, total, append_log(Path(out), outcome["failure"], first=True))
         yield outcome["row"]
 
 
