@@ -18,9 +18,11 @@ $(PY):
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
 
+# -qq: errors only. Setuptools warns on every editable install that a folder named like the
+# package (racf/, which is that package's own source) may shadow it; nothing there to act on.
 $(STAMP): pyproject.toml | $(PY)
-	$(PY) -m pip install --quiet $(TORCH)
-	$(PY) -m pip install --quiet -e ".[test]"
+	$(PY) -m pip install -qq $(TORCH)
+	$(PY) -m pip install -qq -e ".[test]"
 	touch $(STAMP)
 
 # The story at one stop sign: clean, patch attack, attack + ODCA (table, three .rrd, one PNG).
