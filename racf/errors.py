@@ -70,8 +70,10 @@ class EpisodeFailed(RuntimeError):
 
 
 class Interrupted(KeyboardInterrupt):
-    """Ctrl-C or SIGTERM stopped a batch after ``stored`` of its ``total`` episodes were stored."""
+    """Ctrl-C or SIGTERM stopped a batch after ``stored`` of its ``total`` episodes were stored
+    (``total`` None: a search, whose size is its budget, not a count of episodes)."""
 
-    def __init__(self, stored: int, total: int) -> None:
+    def __init__(self, stored: int, total: int | None) -> None:
         self.stored, self.total = stored, total
-        super().__init__(f"interrupted: {stored} of {total} episodes stored; run the same command again to resume")
+        what = f"{stored} of {total} episodes stored" if total is not None else f"{stored} episodes stored"
+        super().__init__(f"interrupted: {what}; run the same command again to resume")

@@ -16,6 +16,7 @@ import math
 import time
 from pathlib import Path
 
+from racf.errors import Interrupted
 from racf.experiments.falsify.cases import distinct, save_case
 from racf.experiments.falsify.pool import EpisodePool
 from racf.experiments.falsify.report import plot_convergence, summarize_searches, violations_by_value
@@ -37,9 +38,12 @@ def falsify(defence: str, attacks: tuple[str, ...], out: str | Path, budget: int
     space = load_space(defence, attacks, space_path, fixed)
     cfg = SearchConfig(space, tuple(samplers), tuple(seeds), budget, batch, stop_at_violation, objective)
     store = ResultStore(out / "episodes")
-    with EpisodePool(store, backend, workers, address) as pool:
-        searches = run_searches(cfg, out, pool, progress)
-        ran = pool.ran
+    try:
+        with EpisodePool(store, backend, workers, address) as pool:
+            searches = run_searches(cfg, out, pool, progress)
+            ran = pool.ran
+    except Interrupted:  # a round's counts say little of a search: count what the whole search has stored
+        raise Interrupted(len(store.done_ids()), None) from None
     trials = {key: search.trials() for key, search in searches.items()}  # (number, params, robustness)
     values = {key: [value for *_, value in told] for key, told in trials.items()}
     violations = [(sampler, seed, number, params, value) for (sampler, seed), told in trials.items()
