@@ -91,6 +91,7 @@ def store_result(name: str, payload: dict, *, command: str, data_dir: Path = DAT
             "machine": machine(), "command": command, **extra}
     if made_by.endswith("+changes"):
         meta["uncommitted"] = True
+    Path(data_dir).mkdir(parents=True, exist_ok=True)
     return atomic_write(Path(data_dir) / f"{name}.json",
                         json.dumps({"meta": meta, **payload}, indent=1, allow_nan=False) + "\n")
 
