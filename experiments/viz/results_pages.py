@@ -469,12 +469,12 @@ def _sticker_rows(data: dict) -> list[str]:
              "|---|---|---|" + "---|" * len(bands)]
     for row in data.get("stealth", []):
         sticker = dict(p.split("=", 1) for p in row["params"].split() if p.startswith("physical_patch."))
-        texture = sticker.get("physical_patch.texture", row["params"])
+        texture = f"`{sticker.get('physical_patch.texture', row['params'])}`"
         if "physical_patch.size" in sticker or "physical_patch.position" in sticker:
-            texture += f"`, {sticker.get('physical_patch.size', '')} at {sticker.get('physical_patch.position', 'centre')}`"
+            texture += f", {sticker.get('physical_patch.size', '')} at {sticker.get('physical_patch.position', 'centre')}"
         cells = [f"{_rate(c['recall'], c['recall_ci'])} ({c['n']})" if c["n"] else "-"
                  for c in (recall.get(row["params"], {}).get(b, {"n": 0}) for b in bands)]
-        lines.append(f"| `{texture}` | {row['n']} | {_rate(row['scr'], row['scr_ci'])} | " + " | ".join(cells) + " |")
+        lines.append(f"| {texture} | {row['n']} | {_rate(row['scr'], row['scr_ci'])} | " + " | ".join(cells) + " |")
     return lines + [""]
 
 
