@@ -8,7 +8,7 @@ import json
 from pathlib import Path
 
 from racf.controllers.detectors import DETECTORS
-from racf.experiments.cli.common import output_dir, count, fail, fmt_ci, plugin_flag, sensor_flags
+from racf.experiments.cli.common import count, fail, fmt_ci, output_dir, plugin_flag, sensor_flags
 
 __all__ = ["register"]
 
@@ -29,7 +29,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                                       "NHITS, DLinear, NLinear) on both splits and presets (tables, figures, "
                                       "results.json)")
     ob.add_argument("--dataset", type=Path, default=Path("data/qcar2"), help="dataset folder (racf collect)")
-    ob.add_argument("--out", type=output_dir, default=Path("outputs/bench"), help="results folder (default outputs/bench)")
+    ob.add_argument("--out", type=output_dir, default=Path("outputs/bench"),
+                    help="results folder (default outputs/bench)")
     ob.add_argument("--split", choices=("by_series", "leave_target_out", "both"), default="both",
                     help="split scheme(s) to run (default both)")
     ob.add_argument("--seed", type=int, default=0, help="training and bootstrap seed (default 0)")

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import sys
 import tempfile
 from pathlib import Path
 from typing import NoReturn
@@ -13,10 +12,10 @@ from racf.errors import UserError
 from racf.experiments.episode.estimators import ESTIMATORS
 from racf.sim.attacks import ATTACKS
 
-__all__ = ["UsageError", "Parser", "output_dir", "unwritable", "sign", "positive", "speed", "share", "duration", "count", "pair", "fail", "flag_error",
-           "fmt_ci", "DEFAULT_WORKERS",
-           "episode_flags", "episode_params", "backend_flags", "sensor_flags", "attack_help", "estimator_help",
-           "keyed_values", "registry_rows", "registry_markdown", "plugin_flag", "estimator_option_flag", "estimator_options",
+__all__ = ["UsageError", "Parser", "output_dir", "unwritable", "sign", "positive", "speed", "share",
+           "duration", "count", "pair", "fail", "flag_error", "fmt_ci", "DEFAULT_WORKERS", "episode_flags",
+           "episode_params", "backend_flags", "sensor_flags", "attack_help", "estimator_help", "keyed_values",
+           "registry_rows", "registry_markdown", "plugin_flag", "estimator_option_flag", "estimator_options",
            "load_plugins_from_argv"]
 
 #: Parallel episodes by default: two, or one on a single-core machine.

@@ -6,7 +6,7 @@ import argparse
 import json
 from pathlib import Path
 
-from racf.experiments.cli.common import output_dir, backend_flags, count, sensor_flags
+from racf.experiments.cli.common import backend_flags, count, output_dir, sensor_flags
 
 __all__ = ["register"]
 

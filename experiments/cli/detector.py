@@ -7,7 +7,7 @@ import argparse
 import json
 from pathlib import Path
 
-from racf.experiments.cli.common import output_dir, count, fail, fmt_ci
+from racf.experiments.cli.common import count, fail, fmt_ci, output_dir
 
 __all__ = ["register"]
 

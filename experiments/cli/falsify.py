@@ -9,7 +9,7 @@ import sys
 import time
 from pathlib import Path
 
-from racf.experiments.cli.common import output_dir, backend_flags, fail, plugin_flag
+from racf.experiments.cli.common import backend_flags, fail, output_dir, plugin_flag
 
 __all__ = ["register"]
 

@@ -7,7 +7,7 @@ import json
 import sys
 from pathlib import Path
 
-from racf.experiments.cli.common import output_dir, count
+from racf.experiments.cli.common import count, output_dir
 
 __all__ = ["register"]
 

@@ -8,7 +8,8 @@ import sys
 import time
 from pathlib import Path
 
-from racf.experiments.cli.common import output_dir, backend_flags, estimator_option_flag, estimator_options, fail, plugin_flag
+from racf.experiments.cli.common import (backend_flags, estimator_option_flag, estimator_options, fail, output_dir,
+                                         plugin_flag)
 
 __all__ = ["register"]
 

@@ -6,8 +6,8 @@ import argparse
 import json
 from pathlib import Path
 
-from racf.experiments.cli.common import (output_dir, attack_help, backend_flags, count, estimator_help, estimator_option_flag,
-                                         estimator_options, fail, plugin_flag, sensor_flags)
+from racf.experiments.cli.common import (attack_help, backend_flags, count, estimator_help, estimator_option_flag,
+                                         estimator_options, fail, output_dir, plugin_flag, sensor_flags)
 
 __all__ = ["register"]
 

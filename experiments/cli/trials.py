@@ -6,8 +6,9 @@ import argparse
 import json
 from pathlib import Path
 
-from racf.experiments.cli.common import (output_dir, backend_flags, count, episode_flags, episode_params, fail, fmt_ci,
-                                         plugin_flag, registry_markdown, registry_rows, sensor_flags, sign, speed)
+from racf.experiments.cli.common import (backend_flags, count, episode_flags, episode_params, fail, fmt_ci,
+                                         output_dir, plugin_flag, registry_markdown, registry_rows, sensor_flags,
+                                         sign, speed)
 
 __all__ = ["register"]
 
@@ -54,7 +55,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     st.add_argument("--seed", type=int, default=0)
     sensor_flags(st)
     backend_flags(st)
-    st.add_argument("--out", type=output_dir, default=Path("outputs/attack_study"), help="output folder (trials are reused)")
+    st.add_argument("--out", type=output_dir, default=Path("outputs/attack_study"),
+                    help="output folder (trials are reused)")
     st.add_argument("--json", action="store_true", help="print one JSON object instead of tables")
     st.set_defaults(handler=_attack_study)
 

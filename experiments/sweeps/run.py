@@ -26,7 +26,8 @@ __all__ = ["run_episodes", "run_sweep"]
 
 def run_episodes(specs: list[TrialSpec], store: ResultStore, backend: str = "local", workers: int = 2,
                  address: str | None = None, log_steps: bool = False, rerun: bool = False,
-                 progress: bool = True, desc: str = "episodes", pool: Workers | None = None) -> tuple[pd.DataFrame, int]:
+                 progress: bool = True, desc: str = "episodes",
+                 pool: Workers | None = None) -> tuple[pd.DataFrame, int]:
     """Runs (or resumes) ``specs`` into ``store``; returns their rows in spec order and how many ran.
 
     Everything the specs name is built once first (estimators with their options, the attack
