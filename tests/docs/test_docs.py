@@ -130,6 +130,7 @@ def test_the_pages_slow_code_runs(page, tmp_path, monkeypatch, plugin_env):
     _run_page(page, tmp_path, slow=True, monkeypatch=monkeypatch)
 
 
+@pytest.mark.slow  # mkdocs and mkdocstrings read the whole package: CI's slow stage builds it
 def test_the_site_builds_strictly(tmp_path):
     mkdocs = Path(sys.executable).parent / "mkdocs"
     done = subprocess.run([str(mkdocs), "build", "--strict", "--site-dir", str(tmp_path / "site")], cwd=ROOT,
