@@ -16,7 +16,7 @@ unexport PYTHONDONTWRITEBYTECODE
 
 $(PY):
 	$(PYTHON) -m venv $(VENV)
-	$(PY) -m pip install --quiet --upgrade pip
+	$(PY) -m pip install -qq --upgrade pip
 
 # -qq: errors only. Setuptools warns on every editable install that a folder named like the
 # package (racf/, which is that package's own source) may shadow it; nothing there to act on.
