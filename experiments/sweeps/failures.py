@@ -25,16 +25,19 @@ def episode_words(spec: TrialSpec) -> str:
 def describe(spec: TrialSpec, err: BaseException) -> Failure:
     """The failure of ``spec``'s episode that ``err`` ended: the part named is the innermost frame
     of the traceback that lies in one of the episode's parts (its estimator, attacks, detector)."""
-    text = "".join(traceback.format_exception(err))
+    where = _innermost(err, _parts(spec)) or "racf"
+    return Failure(spec.trial_id, where, f"{type(err).__name__}: {err}", "".join(traceback.format_exception(err)),
+                   episode_words(spec))
+
+
+def _innermost(err: BaseException, parts: list[tuple[str, Path]]) -> str | None:
+    """The label of the part whose code holds the innermost frame of ``err``'s traceback, if any."""
     files = [Path(frame.f_code.co_filename).resolve() for frame, _ in traceback.walk_tb(err.__traceback__)]
-    parts = _parts(spec)
-    where = "racf"
     for file in reversed(files):
-        found = next((label for label, home in parts if file == home or home in file.parents), None)
-        if found:
-            where = found
-            break
-    return Failure(spec.trial_id, where, f"{type(err).__name__}: {err}", text, episode_words(spec))
+        for label, home in parts:
+            if file == home or home in file.parents:
+                return label
+    return None
 
 
 def worker_died(spec: TrialSpec) -> Failure:
@@ -92,10 +95,8 @@ def plugin_fault(err: BaseException) -> Failure | None:
             home = None if plugin.builtin else _home(plugin)
             if home is not None:
                 homes.append((f"{kind} plug-in {name!r} ({plugin.origin})", home))
-    files = [Path(frame.f_code.co_filename).resolve() for frame, _ in traceback.walk_tb(err.__traceback__)]
-    for file in reversed(files):
-        for label, home in homes:
-            if file == home or home in file.parents:
-                return Failure("", label, f"{type(err).__name__}: {err}", "".join(traceback.format_exception(err)),
-                               "outside an episode")
-    return None
+    label = _innermost(err, homes)
+    if label is None:
+        return None
+    return Failure("", label, f"{type(err).__name__}: {err}", "".join(traceback.format_exception(err)),
+                   "outside an episode")
