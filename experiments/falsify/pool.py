@@ -24,7 +24,7 @@ class EpisodePool:
 
     def __init__(self, store: ResultStore, backend: str = "local", workers: int = 2, address: str | None = None,
                  rerun: bool = False) -> None:
-        self._workers = Workers(backend, workers, address)  # checks the three
+        self._workers = Workers(backend, workers, address)  # checks them
         self.store, self.rerun = store, rerun
         self.ran = 0
 

@@ -29,8 +29,9 @@ from typing import Callable, Iterator
 from racf.errors import EpisodeFailed, UserError
 from racf.experiments.episode import TrialSpec
 
-__all__ = ["BACKENDS", "SINGLE_THREAD_ENV", "CodeChangedError", "Workers", "single_thread", "spawn_pool", "run_episode",
-           "episode_task", "local_executor", "ray_executor", "ray_session", "backend_session", "executor"]
+__all__ = ["BACKENDS", "SINGLE_THREAD_ENV", "CodeChangedError", "Workers", "check_backend", "single_thread",
+           "spawn_pool", "run_episode", "episode_task", "local_executor", "ray_executor", "ray_session",
+           "backend_session", "executor"]
 
 #: Where episodes can run.
 BACKENDS = ("local", "ray")
@@ -117,6 +118,16 @@ def _worker_init() -> None:
     single_thread()
 
 
+def check_backend(backend: str, workers: int, address: str | None = None) -> None:
+    """UserError names a backend, worker count or address racf cannot run episodes on."""
+    if backend not in BACKENDS:
+        raise UserError(f"backend must be one of {BACKENDS}, got {backend!r}")
+    if not (isinstance(workers, int) and workers >= 1):
+        raise UserError(f"workers must be an int >= 1, got {workers!r}")
+    if address is not None and backend != "ray":
+        raise UserError("--address joins a Ray cluster: it needs --backend ray")
+
+
 class Workers:
     """Where a batch's episodes run, started once and kept for several batches (a context manager).
 
@@ -134,12 +145,7 @@ class Workers:
     """
 
     def __init__(self, backend: str = "local", workers: int = 2, address: str | None = None) -> None:
-        if backend not in BACKENDS:
-            raise UserError(f"backend must be one of {BACKENDS}, got {backend!r}")
-        if not (isinstance(workers, int) and workers >= 1):
-            raise UserError(f"workers must be an int >= 1, got {workers!r}")
-        if address is not None and backend != "ray":
-            raise UserError("--address joins a Ray cluster: it needs --backend ray")
+        check_backend(backend, workers, address)
         self.backend, self.workers, self.address = backend, workers, address
         self._pool: ProcessPoolExecutor | None = None
         self._ray = None

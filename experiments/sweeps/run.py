@@ -14,7 +14,7 @@ import pandas as pd
 from racf.errors import EpisodeFailed, Failure, Interrupted, UserError
 from racf.experiments.episode import TrialSpec
 from racf.experiments.episode.preflight import check_specs
-from racf.experiments.sweeps.executors import Workers
+from racf.experiments.sweeps.executors import Workers, check_backend
 from racf.experiments.sweeps.failures import LOG_NAME, append_log
 from racf.experiments.sweeps.report import write_report
 from racf.experiments.sweeps.spec import SweepSpec
@@ -82,7 +82,7 @@ def run_sweep(spec: SweepSpec, spec_text: str, out: str | Path, backend: str = "
               address: str | None = None, progress: bool = True) -> dict:
     """Runs (or resumes) ``spec`` into ``out`` and writes its report; returns ``{n, done, reused, wall_s, scr}``."""
     t0 = time.perf_counter()
-    Workers(backend, workers, address)  # checks them
+    check_backend(backend, workers, address)
     episodes = spec.episodes()
     store = ResultStore(out)
     store.prepare(spec_text, spec.spec_hash)
