@@ -42,6 +42,7 @@ from pathlib import Path
 from typing import Any
 
 from racf.errors import UserError
+from racf.provenance import source_version
 
 __all__ = ["Plugin", "PluginError", "Registry", "ESTIMATORS", "ATTACKS", "DETECTORS", "REGISTRIES",
            "load_plugin_file", "plugin_files", "PLUGIN_ENV"]
@@ -124,7 +125,6 @@ class Registry(Mapping[str, Any]):
             return None
         if plugin.source.startswith(_CODE):  # defined where no file holds it: versioned by its compiled code
             return f"{plugin.origin}:{plugin.source[len(_CODE):]}"
-        from racf.experiments.sweeps.store import source_version
 
         return f"{plugin.origin}:{source_version(plugin.source)}"
 
@@ -236,10 +236,17 @@ def _is_estimator(obj: Any) -> bool:
         callable(getattr(obj, m, None)) for m in _ESTIMATOR_METHODS)
 
 
-def _is_attack(obj: Any) -> bool:
-    from racf.sim.attacks.base import AttackWrapper
+def _subclass_of(module: str, base_name: str) -> Callable[[Any], bool]:
+    """Whether an object is a proper subclass of ``module.base_name``, read from the modules already
+    imported: the floor never imports the packages above it, and a class cannot derive from a base
+    whose module was never imported."""
+    def accepts(obj: Any) -> bool:
+        base = getattr(sys.modules.get(module), base_name, None)
+        return base is not None and inspect.isclass(obj) and issubclass(obj, base) and obj is not base
+    return accepts
 
-    return inspect.isclass(obj) and issubclass(obj, AttackWrapper) and obj is not AttackWrapper
+
+_is_attack = _subclass_of("racf.sim.attacks.base", "AttackWrapper")
 
 
 def _is_detector(obj: Any) -> bool:

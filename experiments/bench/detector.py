@@ -39,7 +39,7 @@ from racf import sim
 from racf.controllers.detectors import make_detector
 from racf.experiments.detector.evaluate import DetectionCounts, evaluate_split, resolvable, score_frame
 from racf.experiments.episode.car import route_follower
-from racf.experiments.sweeps.summary import wilson_interval
+from racf.stats import wilson_interval
 
 __all__ = ["DetectorBenchResult", "bench_detector", "occlude", "FRAME_PERIOD_MS", "BUDGET_MS"]
 

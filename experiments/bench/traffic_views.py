@@ -27,7 +27,7 @@ import pandas as pd
 from racf.experiments.episode import TrialSpec, run_trial
 from racf.experiments.episode.plan import arrival_s, plan_episode
 from racf.experiments.episode.stack import default_env
-from racf.experiments.sweeps.summary import wilson_interval
+from racf.stats import wilson_interval
 from racf.sim.world.road_graph import qcar2_road_graph
 from racf.sim.world.traffic import TrafficCar
 

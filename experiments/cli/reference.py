@@ -102,7 +102,7 @@ _DOCS = Path(__file__).resolve().parents[2] / "docs"
 
 
 def _results_pages() -> None:
-    from racf.experiments.viz.results_pages import RESULT_PAGES
+    from racf.experiments.pages.results_pages import RESULT_PAGES
 
     for name, make in RESULT_PAGES.items():
         PAGES[name] = (lambda make: lambda: make(_DOCS / "results" / "data"))(make)
@@ -132,7 +132,7 @@ README_MARKERS = ("<!-- results table: written from docs/results/data by `make d
 
 def readme_with_table(text: str) -> str:
     """The README's text with its headline table written afresh from the stored results."""
-    from racf.experiments.viz.results_pages import readme_table
+    from racf.experiments.pages.results_pages import readme_table
 
     begin, end = README_MARKERS
     if begin not in text or end not in text:

@@ -104,7 +104,7 @@ def _scorecard(args: argparse.Namespace) -> int:
                if args.estimator_option else {})
     from racf.experiments.scorecard.card import run_card
     from racf.experiments.sweeps.executors import backend_session
-    from racf.experiments.sweeps.store import atomic_write
+    from racf.provenance import atomic_write
 
     t0 = time.perf_counter()
     dataset = _dataset(args, args.quick)
@@ -135,7 +135,7 @@ def _scorecard(args: argparse.Namespace) -> int:
 def _attack_card(args: argparse.Namespace, battery) -> int:
     from racf.experiments.scorecard.attack_card import attack_card_markdown, run_attack_card
     from racf.experiments.scorecard.report import strict_json
-    from racf.experiments.sweeps.store import atomic_write
+    from racf.provenance import atomic_write
 
     try:
         card = run_attack_card(args.attack, args.out, quick=args.quick, backend=args.backend, workers=args.workers,

@@ -69,7 +69,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def _trial(args: argparse.Namespace) -> int:
     from racf.experiments.episode import TrialSpec, parse_setting
-    from racf.experiments.sweeps.store import atomic_write
+    from racf.provenance import atomic_write
 
     setting, params = episode_params(args, "trial")
     params["estimator_options"] = params["estimator_options"].get(parse_setting(setting)[1], {})

@@ -33,7 +33,7 @@ from racf.experiments.episode import DRIVE_S, TrialSpec
 from racf.experiments.episode.record import STEP_LOG
 from racf.experiments.episode.runner import SCAN_FOV_HALF_BEAMS
 from racf.experiments.sweeps.batches import SPEEDS_MPS, TRIALS_LOGS, run_batch
-from racf.experiments.sweeps.store import atomic_write
+from racf.provenance import atomic_write
 
 __all__ = ["COLUMNS", "DEFAULT_DRIVES", "SPLITS", "collection_specs", "collect", "summarize_dataset",
            "reference_quality", "load_dataset", "QCarDataset", "SPLIT_SHARES", "make_split",

@@ -19,7 +19,7 @@ import numpy as np
 from racf.experiments.detector.approach_views import draw_approach_view
 from racf.experiments.detector.evaluate import VIEW_KINDS
 from racf.experiments.detector.views import FAR_RANGE_M, ViewRenderer, ViewSpec, draw_distractors, draw_view
-from racf.experiments.sweeps.store import code_version
+from racf.provenance import code_version
 
 __all__ = ["DatasetSpec", "DEFAULT_DATA_DIR", "make_dataset", "load_split", "SPLITS", "draw_dataset_view"]
 

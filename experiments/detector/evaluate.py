@@ -13,7 +13,7 @@ from dataclasses import asdict, dataclass
 import cv2
 import numpy as np
 
-from racf.experiments.sweeps.summary import wilson_interval
+from racf.stats import wilson_interval
 
 __all__ = ["DetectionCounts", "SplitCounts", "evaluate_split", "resolvable", "score_frame", "MIN_SHARE",
            "DISTANCE_BANDS_M", "VIEW_BANDS_M", "VIEW_KINDS", "band_label"]

@@ -28,7 +28,7 @@ from racf.controllers import CameraModel
 from racf.experiments.episode.car import CarCalibration, Mission, route_follower
 from racf.experiments.episode.spec import TrialSpec
 from racf.sim.env.config import EnvConfig
-from racf.sim.sensors.camera import CameraIntrinsics
+from racf.sim.vehicle.calibration import car_build
 from racf.sim.world.route_plan import longest_run_up_m, plan_route
 from racf.sim.world.stop_signs import SIGN_GEOMETRIES
 from racf.sim.world.traffic import ConflictPoint, TrafficCar, conflict_of, cross_traffic
@@ -133,17 +133,9 @@ def longest_run_up(target: str, index: int, sign_geometry: str = "plate") -> flo
 @lru_cache(maxsize=8)
 def car_calibration(width_px: int, height_px: int) -> CarCalibration:
     """The car's build as its software is configured with it: the camera's intrinsics at this
-    resolution and the mounts of the camera, the LiDAR, the front bumper and the rear axle,
-    read from the car's MJCF (the model the simulator drives)."""
-    import mujoco
-
-    from racf.sim.world.scene import ASSETS_DIR
-
-    car = (ASSETS_DIR / "qcar2.xml").read_bytes()
-    model = mujoco.MjModel.from_xml_string('<mujoco model="qcar2"><include file="qcar2.xml"/></mujoco>',
-                                           {"qcar2.xml": car})
-    k = CameraIntrinsics.d435_colour(width_px, height_px)
-    camera, lidar = model.camera("d435").pos, model.site("lidar").pos
-    return CarCalibration(CameraModel(width=k.width, fx=k.fx, cx=k.cx, fy=k.fy), (float(camera[0]), float(camera[1])),
-                          float(model.site("front_bumper").pos[0]), float(model.body("wheel_rl").pos[0]),
-                          (float(lidar[0]), float(lidar[1])))
+    resolution and the mounts of the camera, the LiDAR, the front bumper and the rear axle
+    (``racf.sim.vehicle.calibration``: read from the model the simulator drives)."""
+    build = car_build(width_px, height_px)
+    k = build.intrinsics
+    return CarCalibration(CameraModel(width=k.width, fx=k.fx, cx=k.cx, fy=k.fy), build.camera_xy_m, build.bumper_x_m,
+                          build.rear_axle_x_m, build.lidar_xy_m)

@@ -25,7 +25,7 @@ import numpy as np
 from racf.controllers import BrakingConfig
 from racf.controllers.detectors import DETECTORS
 from racf.experiments.episode.estimators import ESTIMATORS, check_options
-from racf.experiments.sweeps.store import code_version
+from racf.provenance import code_version
 from racf.sim.attacks import ATTACKS
 from racf.sim.attacks.schedule import as_range
 from racf.sim.env.config import SENSOR_PROFILES
@@ -260,7 +260,7 @@ def plugin_sources(spec: TrialSpec) -> dict[str, str]:
     """What versions a spec's plug-ins and option files: ``{"estimator:NAME": hash, ...}`` for each
     part from outside racf, and each estimator option naming a file or folder (a checkpoint)."""
     from racf.controllers.detectors import DETECTORS
-    from racf.experiments.sweeps.store import source_version
+    from racf.provenance import source_version
 
     parts = [("estimator", ESTIMATORS, spec.estimator), ("detector", DETECTORS, spec.detector),
              *(("attack", ATTACKS, name) for name in spec.attacks)]

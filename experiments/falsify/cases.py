@@ -19,7 +19,7 @@ from pathlib import Path
 
 from racf.controllers import BrakingConfig
 from racf.experiments.episode.spec import EPISODE_CODE, TrialSpec, setting_name
-from racf.experiments.sweeps.store import atomic_write, code_version
+from racf.provenance import atomic_write, code_version
 
 __all__ = ["Case", "save_case", "load_case", "replay_case", "reseed_case", "Replay", "SUITE", "distinct",
            "spec_from_json"]

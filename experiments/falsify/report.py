@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from racf.experiments.sweeps.summary import median_ci, wilson_interval
+from racf.stats import median_ci, wilson_interval
 
 __all__ = ["first_violation", "sampler_summary", "summarize_searches", "plot_convergence", "best_so_far",
            "violations_by_value"]

@@ -22,7 +22,8 @@ from racf.experiments.falsify.pool import EpisodePool
 from racf.experiments.falsify.report import plot_convergence, summarize_searches, violations_by_value
 from racf.experiments.falsify.search import SearchConfig, episode_seed, run_searches
 from racf.experiments.falsify.space import load_space
-from racf.experiments.sweeps.store import ResultStore, atomic_write
+from racf.provenance import atomic_write
+from racf.experiments.sweeps.store import ResultStore
 
 __all__ = ["falsify", "render"]
 

@@ -27,7 +27,7 @@ from pathlib import Path
 from racf.experiments.episode.spec import EPISODE_CODE, plugin_sources
 from racf.experiments.falsify.pool import EpisodePool
 from racf.experiments.falsify.space import SearchSpace
-from racf.experiments.sweeps.store import code_version
+from racf.provenance import code_version
 
 __all__ = ["SAMPLERS", "OBJECTIVES", "SearchConfig", "make_sampler", "run_searches", "episode_seed", "study_key",
            "objective_value"]

@@ -25,7 +25,7 @@ from racf.experiments.offline.forecasters import NF_MODELS, ChronosForecaster, N
 from racf.experiments.offline.methods import (FORECASTERS, estimator_estimate, forecast_at, lidar_estimate,
                                               offline_estimators, split_arrays, table_order, with_fallback)
 from racf.experiments.offline.metrics import bounded_degradation, resilience_gain
-from racf.experiments.sweeps.store import code_version
+from racf.provenance import code_version
 from racf.experiments.offline.scoring import (bootstrap_rmse_draws, diagnostic_scores, error_sources, horizon_scores,
                                          mean_over_draws, recovery_scores, series_sse)
 

@@ -28,7 +28,7 @@ import numpy as np
 import pandas as pd
 
 from racf.experiments.offline.metrics import hold_last
-from racf.experiments.sweeps.store import atomic_write, code_version
+from racf.provenance import atomic_write, code_version
 
 __all__ = ["NF_MODELS", "NFSettings", "context_windows", "train_nf", "NFForecaster", "ChronosForecaster",
            "training_frame"]

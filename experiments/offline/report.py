@@ -9,7 +9,7 @@ from pathlib import Path
 import pandas as pd
 
 from racf.experiments.offline.methods import FORECASTERS, table_order
-from racf.experiments.sweeps.store import atomic_write
+from racf.provenance import atomic_write
 
 __all__ = ["write_report", "main_table", "strict", "PAPER_RECOVERY"]
 

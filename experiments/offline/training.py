@@ -6,7 +6,7 @@ import json
 from pathlib import Path
 
 from racf.experiments.data.dataset import COLLECTION_FILE, load_dataset
-from racf.experiments.sweeps.store import atomic_write
+from racf.provenance import atomic_write
 
 __all__ = ["train_checkpoint", "pretrain_checkpoint"]
 

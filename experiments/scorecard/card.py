@@ -22,7 +22,8 @@ from racf.experiments.episode import TrialSpec
 from racf.experiments.scorecard.battery import PENALTIES, Battery
 from racf.experiments.scorecard.detection import detection_rows
 from racf.experiments.scorecard.drives import driving_rows
-from racf.experiments.sweeps.store import ResultStore, atomic_write
+from racf.provenance import atomic_write
+from racf.experiments.sweeps.store import ResultStore
 from racf.experiments.sweeps.summary import stealth_summary, summarize
 
 __all__ = ["run_card", "card_version"]

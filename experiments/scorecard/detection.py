@@ -29,7 +29,7 @@ import math
 import numpy as np
 import pandas as pd
 
-from racf.experiments.sweeps.summary import median_ci, wilson_interval
+from racf.stats import median_ci, wilson_interval
 
 __all__ = ["FALSE_ALARM_RATE", "label_steps", "detection_rows", "roc_points"]
 

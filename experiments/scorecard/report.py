@@ -11,8 +11,8 @@ import io
 import json
 from pathlib import Path
 
-from racf.experiments.sweeps.store import atomic_write
-from racf.experiments.viz.results_format import ci
+from racf.provenance import atomic_write
+from racf.stats import ci
 
 #: The closed-loop rows that run the stealth ramp, whose undetected error is plotted against its rate.
 RAMP_ROWS = ("ramp_rates", "stealth_ramp")

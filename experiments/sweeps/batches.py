@@ -16,7 +16,8 @@ import pandas as pd
 from racf.experiments.episode import TABLE_SETTINGS, TrialSpec, parse_setting
 from racf.experiments.sweeps.executors import backend_session
 from racf.experiments.sweeps.run import run_episodes
-from racf.experiments.sweeps.store import ResultStore, atomic_write
+from racf.provenance import atomic_write
+from racf.experiments.sweeps.store import ResultStore
 from racf.experiments.sweeps.summary import summarize
 
 __all__ = ["SIGNS", "SPEEDS_MPS", "TRIALS_LOGS", "batch_specs", "run_batch", "run_table", "PHYSICAL_TABLE_ROWS",

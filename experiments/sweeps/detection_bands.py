@@ -14,7 +14,7 @@ import pandas as pd
 
 from racf.experiments.detector.evaluate import DISTANCE_BANDS_M as BANDS_M
 from racf.experiments.detector.evaluate import band_label
-from racf.experiments.sweeps.summary import wilson_interval
+from racf.stats import wilson_interval
 
 __all__ = ["BANDS_M", "recall_rows", "band_labels"]
 _COLUMNS = ["frame_new", "control", "sign_in_view", "d_true", "detected", "attack_active"]

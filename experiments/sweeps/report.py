@@ -14,8 +14,10 @@ import numpy as np
 import pandas as pd
 
 from racf.experiments.sweeps.detection_bands import band_labels, recall_rows
-from racf.experiments.sweeps.store import ResultStore, atomic_write
-from racf.experiments.sweeps.summary import median_ci, stealth_summary, summarize_settings, wilson_interval
+from racf.provenance import atomic_write
+from racf.experiments.sweeps.store import ResultStore
+from racf.stats import median_ci, wilson_interval
+from racf.experiments.sweeps.summary import stealth_summary, summarize_settings
 
 __all__ = ["write_report", "report_from_store", "stealth_rows"]
 

@@ -1,4 +1,4 @@
-"""Results that survive a crash and say what made them: the store, the atomic writer and the code version.
+"""Results that survive a crash: the store of finished episodes (what made them: :mod:`racf.provenance`).
 
 :class:`ResultStore` keeps one Parquet part file per finished episode: ``<out>/parts/<id>.parquet``
 holds the episode's result row, and ``<out>/<logs_dir>/`` its per-step log when asked for. A
@@ -10,96 +10,14 @@ is never mistaken for this code's.
 
 from __future__ import annotations
 
-import hashlib
-import importlib.util
 import json
-import os
-from functools import lru_cache
 from pathlib import Path
-from typing import Callable
 
 import pandas as pd
 
-__all__ = ["ResultStore", "atomic_write", "code_version", "source_version"]
+from racf.provenance import atomic_write
 
-_CODE_SUFFIXES = (".py", ".xml", ".json", ".npz", ".safetensors", ".png", ".bin", ".pt", ".toml")
-
-
-@lru_cache(maxsize=None)
-def code_version(*roots: str) -> str:
-    """A hash of the source and assets under ``roots``, cached per process (racf's own code does
-    not change under a running process; a user's plug-in is hashed afresh by :func:`source_version`).
-
-    Each root is a dotted module or package name (``racf.sim``, ``racf.experiments.episode``,
-    ``racf.assets``: every file under a package's folder) or a filesystem path (a file or a
-    folder, e.g. a checkpoint). It changes with any edit, committed or not; file names count
-    too, so a moved file changes it. The names hashed are relative to each root, so an editable
-    checkout and an installed wheel of the same code agree. Episodes hash
-    ``racf.experiments.episode.spec.EPISODE_CODE``.
-    """
-    return source_version(*roots)
-
-
-def source_version(*roots: str) -> str:
-    """:func:`code_version` without the cache: for sources that may change while a process runs
-    (a plug-in a user is editing). ValueError names a root that does not exist."""
-    if not roots:
-        raise ValueError("code_version needs at least one module, folder or file")
-    h = hashlib.sha256()
-    for root in roots:
-        base = _locate(root)
-        h.update(root.encode() if not Path(root).is_absolute() else b"<path>")
-        for path in [base] if base.is_file() else sorted(base.rglob("*")):
-            if path.is_file() and path.suffix in _CODE_SUFFIXES and "__pycache__" not in path.parts:
-                h.update(str(path.relative_to(base)).encode() if path != base else path.name.encode())
-                h.update(path.read_bytes())
-    return h.hexdigest()[:16]
-
-
-def _locate(root: str) -> Path:
-    """The file or folder a root names: a path that exists, else a module's file or a package's folder."""
-    path = Path(root)
-    if path.is_absolute() or os.sep in root:
-        if not path.exists():
-            raise ValueError(f"code_version: no file or folder {root!r}")
-        return path.resolve()
-    try:
-        spec = importlib.util.find_spec(root)
-    except (ImportError, ValueError):
-        spec = None
-    if spec is None:
-        raise ValueError(f"code_version: no module or package {root!r}")
-    if spec.submodule_search_locations:
-        return Path(next(iter(spec.submodule_search_locations))).resolve()
-    if spec.origin is None or not Path(spec.origin).exists():
-        raise ValueError(f"code_version: module {root!r} has no source file")
-    return Path(spec.origin).resolve()
-
-
-def atomic_write(path: str | Path, data: str | bytes | pd.DataFrame | Callable[[Path], None]) -> Path:
-    """Writes ``path`` whole or not at all: to a temporary name beside it, then renamed.
-
-    ``data`` is text, bytes, a DataFrame (Parquet) or a function that writes a given path
-    (e.g. ``lambda p: torch.save(state, p)``). The temporary name carries the process id, so
-    workers writing the same folder never share one.
-    """
-    path = Path(path)
-    tmp = path.with_name(f"{path.name}.{os.getpid()}.tmp")
-    try:
-        if isinstance(data, str):
-            tmp.write_text(data)
-        elif isinstance(data, bytes):
-            tmp.write_bytes(data)
-        elif isinstance(data, pd.DataFrame):
-            data.to_parquet(tmp, index=False)
-        elif callable(data):
-            data(tmp)
-        else:
-            raise TypeError(f"atomic_write takes str, bytes, a DataFrame or a writer function, got {type(data)}")
-        os.replace(tmp, path)
-    finally:
-        tmp.unlink(missing_ok=True)
-    return path
+__all__ = ["ResultStore"]
 
 
 class ResultStore:

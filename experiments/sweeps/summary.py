@@ -20,24 +20,14 @@ from __future__ import annotations
 
 import numpy as np
 import pandas as pd
-from scipy.stats import binomtest
 
+from racf.stats import median_ci, wilson_interval
 from racf.experiments.episode.conflict import CONFLICT_OUTCOMES
 from racf.experiments.episode.scoring import FAILURES
 from racf.experiments.episode.spec import parse_setting
 
-__all__ = ["wilson_interval", "summarize", "summarize_settings", "stealth_summary", "robustness_summary", "median_ci",
-           "conflict_summary", "setting_key"]
-
-
-def wilson_interval(successes: int, n: int, confidence: float = 0.95) -> tuple[float, float]:
-    """Wilson score interval of ``successes`` out of ``n``; (0, 1) when n = 0."""
-    if n < 0 or not 0 <= successes <= max(n, 0):
-        raise ValueError(f"need 0 <= successes <= n, got successes={successes}, n={n}")
-    if n == 0:
-        return 0.0, 1.0
-    ci = binomtest(int(successes), int(n)).proportion_ci(confidence_level=confidence, method="wilson")
-    return float(ci.low), float(ci.high)
+__all__ = ["summarize", "summarize_settings", "stealth_summary", "robustness_summary", "conflict_summary",
+           "setting_key"]
 
 
 def _mean_std(values: pd.Series) -> tuple[float | None, float | None]:
@@ -88,18 +78,6 @@ def summarize(results: pd.DataFrame, attack: bool | None = None) -> dict:
             summary["collision_rate_attack_before_t_star"] = k_hit / len(early) if len(early) else None
             summary["collision_rate_attack_before_t_star_ci"] = list(wilson_interval(k_hit, len(early)))
     return summary
-
-
-def median_ci(values, confidence: float = 0.95, resamples: int = 2000) -> tuple[float | None, list]:
-    """The median and its percentile-bootstrap interval (a fixed generator: same values, same
-    interval); (None, [None, None]) without values."""
-    values = np.asarray(pd.to_numeric(pd.Series(values), errors="coerce").dropna(), float)
-    if not values.size:
-        return None, [None, None]
-    rng = np.random.default_rng(0)
-    medians = np.median(rng.choice(values, (resamples, values.size)), axis=1)
-    alpha = (1.0 - confidence) / 2
-    return float(np.median(values)), [float(np.quantile(medians, alpha)), float(np.quantile(medians, 1 - alpha))]
 
 
 def robustness_summary(results: pd.DataFrame) -> dict:

@@ -7,7 +7,8 @@ import pandas as pd
 import pytest
 
 from racf.experiments.sweeps.batches import batch_specs, run_batch
-from racf.experiments.sweeps.summary import summarize, wilson_interval
+from racf.stats import wilson_interval
+from racf.experiments.sweeps.summary import summarize
 
 
 def test_batch_covers_every_sign_and_speed_and_resumes(tmp_path, monkeypatch):

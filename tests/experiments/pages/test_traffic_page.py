@@ -2,7 +2,7 @@
 
 import json
 
-from racf.experiments.viz.traffic_page import TRAFFIC_RESULTS, traffic_markdown
+from racf.experiments.pages.traffic_page import TRAFFIC_RESULTS, traffic_markdown
 
 META = {"commit": "abc", "racf": "0.1.0", "measured": "2026-11-26", "machine": "2 CPU cores, no GPU",
         "command": "racf sweep cross-traffic.toml", "sensor_profile": "qcar2"}

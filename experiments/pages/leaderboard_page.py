@@ -1,13 +1,13 @@
 """The leaderboard page: the built-in defences' scorecards, one column a defence and one table a
 battery (the newest first), written from the stored cards (``docs/results/data/scorecard-<battery>.json``)
-and the cold run's time (``scorecard-timing.json``) by :mod:`racf.experiments.viz.results_pages`."""
+and the cold run's time (``scorecard-timing.json``) by :mod:`racf.experiments.pages.results_pages`."""
 
 from __future__ import annotations
 
-from racf.experiments.viz.results_format import page_head as _page_head
-from racf.experiments.viz.results_format import ci as _ci
-from racf.experiments.viz.results_format import meta_lines as _meta
-from racf.experiments.viz.results_format import missing as _missing
+from racf.experiments.pages.results_format import page_head as _page_head
+from racf.experiments.pages.results_format import ci as _ci
+from racf.experiments.pages.results_format import meta_lines as _meta
+from racf.experiments.pages.results_format import missing as _missing
 
 __all__ = ["leaderboard_markdown"]
 

@@ -7,7 +7,7 @@ import json
 from pathlib import Path
 
 from racf.experiments.episode.robustness import STOP_RULE
-from racf.experiments.viz.results_format import meta_lines, page_head
+from racf.experiments.pages.results_format import meta_lines, page_head
 
 __all__ = ["falsification_markdown", "FALSIFY_RESULTS", "RESEED_RESULT", "guided_verdict"]
 
@@ -193,7 +193,7 @@ RESEED_RESULT = "falsify-suite-reseed"
 
 def _reseeded(stored: dict) -> list[str]:
     """Each suite case's parameters under other noise seeds: the parameters' failure, or one draw's."""
-    from racf.experiments.sweeps.summary import wilson_interval
+    from racf.stats import wilson_interval
 
     rows = [r for r in stored.get("replays", []) if r.get("reseeded")]
     if not rows:

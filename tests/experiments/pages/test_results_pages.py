@@ -5,8 +5,8 @@ import json
 
 import pytest
 
-from racf.experiments.viz import results_store
-from racf.experiments.viz.results_pages import RESULT_PAGES, readme_table
+from racf.experiments.pages import results_store
+from racf.experiments.pages.results_pages import RESULT_PAGES, readme_table
 
 
 def _settings(scr):
@@ -113,7 +113,7 @@ def test_the_detector_page_says_whether_the_segmenter_earns_the_default(tmp_path
 def test_a_result_from_uncommitted_code_is_refused_unless_forced_and_then_marked(tmp_path, monkeypatch):
     import json
 
-    from racf.experiments.viz.results_format import meta_lines
+    from racf.experiments.pages.results_format import meta_lines
 
     monkeypatch.setattr(results_store, "commit", lambda root=None: "abc1234+changes")
     with pytest.raises(ValueError, match="differs from its commit"):

@@ -3,9 +3,11 @@ result, and what a page says where a result is not stored yet."""
 
 from __future__ import annotations
 
+from racf.stats import ci, num, rate
+
 __all__ = ["NOTE", "page_head", "ci", "num", "rate", "meta_lines", "missing"]
 
-NOTE = ("Written by `racf.experiments.viz.results_pages` from the stored results in `docs/results/data/`: every "
+NOTE = ("Written by `racf.experiments.pages.results_pages` from the stored results in `docs/results/data/`: every "
         "number is what the command beside it printed, on the code, machine and sensors named. Intervals are "
         "95 %: Wilson for rates, bootstrap for medians and RMSE.")
 
@@ -16,20 +18,6 @@ def page_head(title: str, *intro: str) -> list[str]:
     for paragraph in intro:
         lines += [paragraph, ""]
     return lines
-
-
-def ci(pair, digits: int = 2) -> str:
-    """``[lo, hi]``, or nothing where the interval is undefined."""
-    return "" if not pair or pair[0] is None else f"[{pair[0]:.{digits}f}, {pair[1]:.{digits}f}]"
-
-
-def num(value, digits: int = 3) -> str:
-    return "-" if value is None else f"{value:.{digits}f}"
-
-
-def rate(value, pair, digits: int = 2) -> str:
-    """A value with its interval (``-`` where there is none)."""
-    return "-" if value is None else f"{value:.{digits}f} {ci(pair, digits)}".strip()
 
 
 def meta_lines(meta: dict) -> list[str]:

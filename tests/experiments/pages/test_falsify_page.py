@@ -1,7 +1,7 @@
 """The falsification page: written from stored searches only; the suite's reseeding, when stored."""
 
-from racf.experiments.viz import results_store
-from racf.experiments.viz.falsify_page import RESEED_RESULT, falsification_markdown, guided_verdict
+from racf.experiments.pages import results_store
+from racf.experiments.pages.falsify_page import RESEED_RESULT, falsification_markdown, guided_verdict
 
 
 def test_an_empty_folder_says_how_to_make_each_result(tmp_path):
@@ -35,7 +35,7 @@ def test_guided_search_wins_only_outside_the_intervals():
 
 
 def test_where_random_search_found_violations_is_a_table():
-    from racf.experiments.viz.falsify_page import _regions
+    from racf.experiments.pages.falsify_page import _regions
 
     report = {"violations_by_value": {"sign": {"0": {"n": 10, "violations": 3, "share": 0.3, "share_ci": [0.1, 0.6]},
                                                "1": {"n": 0, "violations": 0, "share": None, "share_ci": [0.0, 1.0]}}}}

@@ -2,11 +2,11 @@
 sweep's ``summary.json``, ``stealth.json``, ``recall.json`` and ``traffic.json``), under ``docs/results/data/NAME.json`` with what
 produced it: the command, the commit, racf's version, the date and the machine.
 
-    python -m racf.experiments.viz.results_store NAME SOURCE [SOURCE ...] --command "racf ..."
+    python -m racf.experiments.pages.results_store NAME SOURCE [SOURCE ...] --command "racf ..."
 
 A SOURCE is a JSON file, or a sweep's folder (its ``summary.json`` becomes ``settings`` and its
 ``stealth.json``, ``recall.json`` and ``traffic.json``, if any, ``stealth``, ``recall`` and ``traffic``). Several sources are merged key by key, in order. The
-pages are then rewritten by ``make docs`` (``racf.experiments.viz.results_pages``).
+pages are then rewritten by ``make docs`` (``racf.experiments.pages.results_pages``).
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ import sys
 from pathlib import Path
 
 from racf import __version__
-from racf.experiments.sweeps.store import atomic_write
+from racf.provenance import atomic_write
 
 __all__ = ["DATA_DIR", "machine", "commit", "load_source", "store_result", "main"]
 
@@ -104,7 +104,7 @@ def _meta_pair(text: str) -> tuple[str, str]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m racf.experiments.viz.results_store",
+    parser = argparse.ArgumentParser(prog="python -m racf.experiments.pages.results_store",
                                      description="store a measurement for the results pages")
     parser.add_argument("name", help="the result's name (docs/results/data/NAME.json)")
     parser.add_argument("sources", nargs="+", type=Path, help="JSON files or sweep folders, merged in order")

@@ -1,13 +1,13 @@
 """The results pages, written from stored results so that no number on them is typed by hand.
 
 ``docs/results/data/*.json`` holds what the commands printed, each with its ``meta`` (command,
-commit, racf version, date, machine, sensor profile; ``racf.experiments.viz.results_store``
+commit, racf version, date, machine, sensor profile; ``racf.experiments.pages.results_store``
 writes them), and :data:`RESULT_PAGES` lays each page out. The docs build writes the pages; a
 test checks that the committed pages are the ones the data gives. The only numbers not from a
 stored result are the paper's own, quoted with the table they come from.
 
 To add a measurement: run its command with ``--json`` (or a sweep), store it with
-``python -m racf.experiments.viz.results_store NAME SOURCE --command "..."``, and rebuild the docs.
+``python -m racf.experiments.pages.results_store NAME SOURCE --command "..."``, and rebuild the docs.
 """
 
 from __future__ import annotations
@@ -16,15 +16,15 @@ import json
 from pathlib import Path
 from typing import Callable
 
-from racf.experiments.viz.falsify_page import falsification_markdown
-from racf.experiments.viz.leaderboard_page import leaderboard_markdown
-from racf.experiments.viz.traffic_page import traffic_markdown
-from racf.experiments.viz.results_format import page_head as _page_head
-from racf.experiments.viz.results_format import ci as _ci
-from racf.experiments.viz.results_format import meta_lines as _meta
-from racf.experiments.viz.results_format import missing as _missing
-from racf.experiments.viz.results_format import num as _num
-from racf.experiments.viz.results_format import rate as _rate
+from racf.experiments.pages.falsify_page import falsification_markdown
+from racf.experiments.pages.leaderboard_page import leaderboard_markdown
+from racf.experiments.pages.traffic_page import traffic_markdown
+from racf.experiments.pages.results_format import page_head as _page_head
+from racf.experiments.pages.results_format import ci as _ci
+from racf.experiments.pages.results_format import meta_lines as _meta
+from racf.experiments.pages.results_format import missing as _missing
+from racf.experiments.pages.results_format import num as _num
+from racf.experiments.pages.results_format import rate as _rate
 
 __all__ = ["RESULT_PAGES", "PAPER", "paper_rows", "readme_table"]
 

@@ -8,7 +8,7 @@ import json
 from pathlib import Path
 
 from racf.experiments.episode.conflict import CONFLICT_OUTCOMES
-from racf.experiments.viz.results_format import meta_lines, missing, page_head, rate
+from racf.experiments.pages.results_format import meta_lines, missing, page_head, rate
 
 __all__ = ["traffic_markdown", "TRAFFIC_RESULTS"]
 
