@@ -1,5 +1,5 @@
 """The registries of racf's parts that a user can bring their own of: estimators (defences),
-attacks and stop-sign detectors.
+attacks, stop-sign detectors and scenarios.
 
 Each registry is filled from one entry-point group of the installed distributions, racf's own
 parts registering the same way as a user's:
@@ -10,6 +10,7 @@ group                  an entry point names                                     
 ``racf.estimators``    a ``DistanceEstimator`` class (``racf.controllers``)         ESTIMATORS
 ``racf.attacks``       an ``AttackWrapper`` subclass (``racf.sim.attacks``)         ATTACKS
 ``racf.detectors``     a class or factory whose objects have ``detect(rgb)``        DETECTORS
+``racf.scenarios``     a ``Scenario`` subclass (``racf.experiments.scenarios``)     SCENARIOS
 =====================  ==========================================================  ==========
 
 A user who has not packaged their code loads a file instead (``--plugin path/to/file.py`` on the
@@ -44,7 +45,7 @@ from typing import Any
 from racf.errors import UserError
 from racf.provenance import source_version
 
-__all__ = ["Plugin", "PluginError", "Registry", "ESTIMATORS", "ATTACKS", "DETECTORS", "REGISTRIES",
+__all__ = ["Plugin", "PluginError", "Registry", "ESTIMATORS", "ATTACKS", "DETECTORS", "SCENARIOS", "REGISTRIES",
            "load_plugin_file", "plugin_files", "PLUGIN_ENV"]
 
 #: The environment variable that lists the plug-in files this process and its workers load.
@@ -247,6 +248,7 @@ def _subclass_of(module: str, base_name: str) -> Callable[[Any], bool]:
 
 
 _is_attack = _subclass_of("racf.sim.attacks.base", "AttackWrapper")
+_is_scenario = _subclass_of("racf.experiments.scenarios.base", "Scenario")
 
 
 def _is_detector(obj: Any) -> bool:
@@ -280,13 +282,16 @@ _SHAPES = {
                  "diagnostics() and would_pass(...) (racf.controllers.DistanceEstimator)",
     "attack": "a subclass of racf.sim.attacks.AttackWrapper with a 'name'",
     "detector": "a class (or factory) whose objects have detect(rgb) -> Detection | None",
+    "scenario": "a subclass of racf.experiments.scenarios.Scenario with a 'name'",
 }
 
 #: Every part a user can bring, by name.
 ESTIMATORS = Registry("racf.estimators", "estimator", _is_estimator)
 ATTACKS = Registry("racf.attacks", "attack", _is_attack)
 DETECTORS = Registry("racf.detectors", "detector", _is_detector)
-REGISTRIES: dict[str, Registry] = {"estimator": ESTIMATORS, "attack": ATTACKS, "detector": DETECTORS}
+SCENARIOS = Registry("racf.scenarios", "scenario", _is_scenario)
+REGISTRIES: dict[str, Registry] = {"estimator": ESTIMATORS, "attack": ATTACKS, "detector": DETECTORS,
+                                   "scenario": SCENARIOS}
 
 _INTERACTIVE = "interactive"
 _CODE = "code:"

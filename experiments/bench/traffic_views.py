@@ -25,7 +25,8 @@ import numpy as np
 import pandas as pd
 
 from racf.experiments.episode import TrialSpec, run_trial
-from racf.experiments.episode.plan import arrival_s, plan_episode
+from racf.experiments.episode.plan import plan_episode
+from racf.experiments.scenarios.builtin import arrival_s
 from racf.experiments.episode.stack import default_env
 from racf.stats import wilson_interval
 from racf.sim.world.road_graph import qcar2_road_graph

@@ -226,6 +226,22 @@ def keyed_values(command: str, flag: str, values: list[str]) -> dict[str, dict]:
     return out
 
 
+def plain_values(command: str, flag: str, values: list[str]) -> dict:
+    """``KEY=VALUE`` items as {KEY: value}, values read as TOML (else text)."""
+    import tomllib
+
+    out: dict = {}
+    for item in values:
+        key, sep, raw = item.partition("=")
+        if not (sep and key.strip().isidentifier()):
+            flag_error(command, f"{flag} takes KEY=VALUE, got {item!r}")
+        try:
+            out[key.strip()] = tomllib.loads(f"v = {raw}")["v"]
+        except tomllib.TOMLDecodeError:
+            out[key.strip()] = raw
+    return out
+
+
 def registry_rows(registry: dict) -> list[tuple[str, str]]:
     """(name, one-line description) of each registered class, from its docstring's first sentence."""
     rows = []
@@ -308,6 +324,9 @@ def episode_flags(p: argparse.ArgumentParser) -> None:
                         "would have, had it not stopped, s in [-5, 5] (default 0)")
     p.add_argument("--traffic-speed", type=float, default=1.0, metavar="V",
                    help="with --traffic-cars: their speed, m/s in [0.1, 3] (default 1.0)")
+    p.add_argument("--scenario-param", action="append", default=[], metavar="KEY=VALUE",
+                   help="a parameter of the scenario (--target; `racf list scenarios` lists each one's, with "
+                        "ranges); repeatable, values are TOML, e.g. leave_s=2.5")
     p.add_argument("--attack-param", action="append", default=[], metavar="ATTACK.KEY=VALUE",
                    help="a setting of one of the attacks (repeatable; values are TOML), e.g. "
                         "depth_bias.bias_m=1.5, or its schedule: depth_bias.trigger=at_time depth_bias.start_s=2.0 "
@@ -356,11 +375,16 @@ def episode_params(args: argparse.Namespace, command: str, table: bool = False) 
                   "delay_ms": args.delay_ms, "control_hz": args.control_hz, "stable_steps": args.stable_steps,
                   "sensor_profile": args.sensor_profile, "sign_geometry": args.sign_geometry,
                   "detector": args.detector or "classical", "estimator_options": options}
-        if args.traffic_cars:
-            params |= {"traffic_cars": args.traffic_cars, "traffic_gap_s": args.traffic_gap,
-                       "traffic_speed": args.traffic_speed}
+        target = getattr(args, "target", "sign")
+        situation = plain_values(command, "--scenario-param", args.scenario_param)
+        if args.traffic_cars:  # the cross-traffic scenario's parameters, by their own flags
+            if target != "sign":
+                flag_error(command, f"--traffic-cars crosses at a stop sign; --target {target} cannot take it")
+            target = "cross_traffic"
+            situation = {"cars": args.traffic_cars, "gap_s": args.traffic_gap, "speed": args.traffic_speed} | situation
         elif args.traffic_gap != 0.0 or args.traffic_speed != 1.0:
             flag_error(command, "--traffic-gap and --traffic-speed need --traffic-cars N (N >= 1)")
+        params |= {"target": target, "scenario_params": situation}
     except ValueError as err:
         flag_error(command, str(err))
     return setting, params

@@ -7,7 +7,8 @@ intrinsics). The env's reset reads the same route source (``racf.sim.world.route
 nothing is read back out of the env: the runner hands the mission and the calibration to the
 car and the referee.
 
-A new scenario kind is a new branch of :func:`reset_options` (and of the env's reset hook).
+A scenario (``racf.experiments.scenarios``) adds to the route's plan: env settings, world managers the
+env runs, reset options, other actors.
 
 Example:
     >>> from racf.experiments.episode import TrialSpec
@@ -25,15 +26,15 @@ from functools import lru_cache
 import numpy as np
 
 from racf.controllers import CameraModel
-from racf.experiments.episode.car import CarCalibration, Mission, route_follower
+from racf.experiments.episode.car import CarCalibration, Mission
 from racf.experiments.episode.spec import TrialSpec
 from racf.sim.env.config import EnvConfig
 from racf.sim.vehicle.calibration import car_build
 from racf.sim.world.route_plan import longest_run_up_m, plan_route
 from racf.sim.world.stop_signs import SIGN_GEOMETRIES
-from racf.sim.world.traffic import ConflictPoint, TrafficCar, conflict_of, cross_traffic
+from racf.sim.world.traffic import ConflictPoint, TrafficCar
 
-__all__ = ["EpisodePlan", "plan_episode", "reset_options", "env_settings", "car_calibration", "arrival_s",
+__all__ = ["EpisodePlan", "plan_episode", "reset_options", "env_settings", "car_calibration",
            "longest_run_up", "DRIVE_MAX_EPISODE_S"]
 
 #: A drive's episode time limit, s.
@@ -54,6 +55,7 @@ class EpisodePlan:
         max_steps: the episode's step limit.
         traffic: the other cars (empty: none), as the env's reset options hold them.
         conflict: where they meet the ego car's path (None without traffic).
+        start_s_m: where the ego car starts along the mission's path, m.
     """
 
     env_kwargs: dict
@@ -65,31 +67,37 @@ class EpisodePlan:
     max_steps: int
     traffic: tuple[TrafficCar, ...] = ()
     conflict: ConflictPoint | None = None
+    start_s_m: float = 0.0
 
 
 def env_settings(spec: TrialSpec) -> dict:
-    """The env's settings for ``spec``: its sensors, its stop signs and (a drive) a longer limit."""
+    """The env's settings for ``spec``: its sensors, its stop signs, (a drive) a longer limit, and
+    what its scenario adds: settings and world managers (``Scenario.env_settings``, ``Scenario.world``)."""
+    scenario, values = spec.scenario, spec.scenario_params
     kwargs = {"sensor_profile": spec.sensor_profile, "sign": SIGN_GEOMETRIES[spec.sign_geometry]}
-    if spec.target == "drive":
+    if scenario.target == "drive":
         kwargs["max_episode_s"] = DRIVE_MAX_EPISODE_S
-    if spec.traffic_cars:
-        kwargs["traffic_cars"] = spec.traffic_cars
+    kwargs.update(scenario.env_settings(spec, values))
+    world = scenario.world(spec, values)
+    if world:
+        kwargs["world"] = tuple(world)
     return kwargs
 
 
 def reset_options(spec: TrialSpec) -> dict:
-    """The env's reset options for a spec: an approach to one target, or a drive."""
+    """The env's reset options for the route of a spec: an approach to one target, or a drive."""
     drive = spec.drive
     if drive is not None:
         return drive.reset_options()
-    options = {spec.target: spec.sign, "cruise_speed": spec.speed}
+    options = {spec.scenario.target: spec.sign, "cruise_speed": spec.speed}
     if spec.run_up_m is not None:
         options["run_up_m"] = float(spec.run_up_m)
     return options
 
 
 def plan_episode(spec: TrialSpec, **env_kwargs) -> EpisodePlan:
-    """The plan of one episode (``env_kwargs`` override the spec's env settings)."""
+    """The plan of one episode (``env_kwargs`` override the spec's env settings): the route's, then
+    what the spec's scenario makes of it (``Scenario.plan``)."""
     kwargs = {**env_settings(spec), **env_kwargs}
     config = EnvConfig.from_kwargs(**kwargs)
     options = reset_options(spec)
@@ -100,27 +108,9 @@ def plan_episode(spec: TrialSpec, **env_kwargs) -> EpisodePlan:
                        rng=np.random.default_rng(0))
     mission = Mission(route.path, route.targets, route.cruise_mps, options.get("start_s_m"))
     dt = 1.0 / config.control_hz
-    traffic, conflict = (), None
-    if spec.traffic_cars:
-        # Timed from the plan: where the ego car starts and how fast it goes.
-        conflict = conflict_of(spec.sign)
-        t_ego = arrival_s(route.path, route.start_s, route.cruise_mps, conflict.ego_s)
-        traffic = cross_traffic(spec.sign, t_ego, gap_s=spec.traffic_gap_s, speed_mps=spec.traffic_speed,
-                                cars=spec.traffic_cars)
-        options = {**options, "traffic": [car.to_options() for car in traffic]}
-    return EpisodePlan(kwargs, options, mission, calibration, dt, config.localisation,
-                       int(round(config.max_episode_s / dt)), traffic, conflict)
-
-
-def arrival_s(path, start_s: float, cruise_mps: float, s_target: float) -> float:
-    """When a car that never brakes for the sign would bring its body origin from ``start_s`` to
-    ``s_target`` along ``path``, s: at the car's own speed reference (the cruise speed, capped in
-    curves by its lane follower's profile)."""
-    profile = route_follower(path, cruise_mps, start_s).profile
-    s = path.arclength[(path.arclength > start_s) & (path.arclength < s_target)]
-    knots = np.concatenate([[start_s], s, [s_target]])
-    speeds = np.array([profile.at(k, cruise_mps) for k in knots])
-    return float(np.sum(np.diff(knots) / np.maximum(0.5 * (speeds[1:] + speeds[:-1]), 0.05)))
+    draft = EpisodePlan(kwargs, options, mission, calibration, dt, config.localisation,
+                        int(round(config.max_episode_s / dt)), start_s_m=route.start_s)
+    return spec.scenario.plan(spec, spec.scenario_params, draft)
 
 
 def longest_run_up(target: str, index: int, sign_geometry: str = "plate") -> float:

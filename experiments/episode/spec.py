@@ -31,13 +31,14 @@ from racf.sim.attacks.schedule import as_range
 from racf.sim.env.config import SENSOR_PROFILES
 from racf.sim.world.stop_signs import SIGN_GEOMETRIES
 from racf.sim.world.drives import DriveSpec, draw_drive
-from racf.sim.world.traffic import MAX_TRAFFIC_CARS
+from racf.plugins import SCENARIOS
 
 __all__ = ["TrialSpec", "parse_setting", "setting_name", "EPISODE_CODE", "TARGETS", "DRIVE_S", "STRONG_RHO",
            "STRONG_T_ATK_S", "extra_attacks", "TABLE_SETTINGS", "plugin_sources"]
 
-#: What a trial approaches (``TrialSpec.sign`` is the index): the four stop signs or the two
-#: crates; or a ``drive`` (index 0), a random route drawn from the seed that meets >= 2 targets.
+#: What a route is built around (``TrialSpec.sign`` is the index): the four stop signs or the
+#: two crates; or a ``drive`` (index 0), a random route drawn from the seed that meets >= 2 targets.
+#: A scenario (``TrialSpec.target``) names one of these kinds as its ``target``.
 TARGETS = {"sign": 4, "obstacle": 2, "drive": 1}
 #: How long a drive is drawn to last, s.
 DRIVE_S = (20.0, 60.0)
@@ -103,7 +104,8 @@ class TrialSpec:
         speed: cruise speed (a drive's nominal speed), m/s.
         seed: the episode's seed (env noise, attack draws, a drive's route).
         rho, t_atk: the patch's coverage share and duration, s: (low, high) uniform ranges.
-        target: ``sign``, ``obstacle`` or ``drive``.
+        target: the scenario (``racf.plugins.SCENARIOS``): ``sign``, ``obstacle``, ``drive``,
+            ``cross_traffic`` or a plug-in's.
         drive_s: how long a drive is drawn to last, s.
         stable_steps: env steps the sign must be visible before an attack may start; None:
             ``confirm_frames + 3`` controller steps (and the delay), so that the controller
@@ -126,11 +128,8 @@ class TrialSpec:
             ``{"checkpoint": "outputs/odca-head"}``); a path's content enters the trial id.
         run_up_m: how far before the stop line the front bumper starts an approach, m (None: 3 m,
             or the longest the lane allows); not for a drive.
-        traffic_cars: other cars crossing at the stop sign's conflict point (0: an empty map; up to
-            ``MAX_TRAFFIC_CARS``); only for an approach to a stop sign (``racf.sim.world.traffic``).
-        traffic_gap_s: when the first other car passes the conflict point, after the ego car would
-            have, had it not stopped, s (0: together; the next follow ``HEADWAY_S`` apart).
-        traffic_speed: the other cars' speed, m/s.
+        scenario_params: the scenario's parameters (its ``params`` declare them); the spec holds
+            every one, the defaults filled in.
     """
 
     setting: str
@@ -151,9 +150,7 @@ class TrialSpec:
     detector: str = "classical"
     estimator_options: dict = field(default_factory=dict)
     run_up_m: float | None = None
-    traffic_cars: int = 0
-    traffic_gap_s: float = 0.0
-    traffic_speed: float = 1.0
+    scenario_params: dict = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         attacks, estimator = parse_setting(self.setting)
@@ -168,8 +165,13 @@ class TrialSpec:
                 raise ValueError(f"attack_params names {name!r}, which setting {self.setting!r} does not run "
                                  f"(its attacks: {list(attacks)})")
             ATTACKS[name].check_params(params)
+        if self.target not in SCENARIOS:
+            raise ValueError(f"target must be a scenario, one of {tuple(SCENARIOS)}, got {self.target!r}")
+        scenario = self.scenario
+        object.__setattr__(self, "scenario_params", scenario.values(self.scenario_params))
+        kind = scenario.target
         for name in attacks:
-            if self.target in TARGETS and self.target not in ATTACKS[name].targets:
+            if kind not in ATTACKS[name].targets:
                 raise ValueError(f"attack {name!r} cannot act on target {self.target!r}: it acts on "
                                  f"{list(ATTACKS[name].targets)}")
         if self.sensor_profile not in SENSOR_PROFILES:
@@ -178,10 +180,8 @@ class TrialSpec:
             raise ValueError(f"sign_geometry must be one of {tuple(SIGN_GEOMETRIES)}, got {self.sign_geometry!r}")
         if self.detector not in DETECTORS:
             raise ValueError(f"detector must be one of {tuple(DETECTORS)}, got {self.detector!r}")
-        if self.target not in TARGETS:
-            raise ValueError(f"target must be one of {tuple(TARGETS)}, got {self.target!r}")
-        if self.sign not in range(TARGETS[self.target]):
-            raise ValueError(f"{self.target} index must be 0..{TARGETS[self.target] - 1}, got {self.sign!r}")
+        if self.sign not in range(TARGETS[kind]):
+            raise ValueError(f"{kind} index must be 0..{TARGETS[kind] - 1}, got {self.sign!r}")
         if not 0.1 <= self.speed <= 3.0:
             raise ValueError(f"speed must be in [0.1, 3.0] m/s, got {self.speed!r}")
         object.__setattr__(self, "rho", as_range("rho", self.rho, 0.0, 1.0))
@@ -191,23 +191,20 @@ class TrialSpec:
             raise ValueError(f"stable_steps must be an int in [1, 500] or None, got {self.stable_steps!r}")
         if not 0.0 <= self.delay_ms <= 1000.0:
             raise ValueError(f"delay_ms must be in [0, 1000] ms, got {self.delay_ms!r}")
-        if self.run_up_m is not None and (self.target == "drive" or isinstance(self.run_up_m, bool)
+        if self.run_up_m is not None and (kind == "drive" or isinstance(self.run_up_m, bool)
                                           or not isinstance(self.run_up_m, (int, float))
                                           or not 0.3 <= self.run_up_m <= 10.0):
             raise ValueError(f"run_up_m must be None or a number of metres in [0.3, 10] for an approach (not a "
                              f"drive), got {self.run_up_m!r} with target {self.target!r}")
-        if not (isinstance(self.traffic_cars, int) and not isinstance(self.traffic_cars, bool)
-                and 0 <= self.traffic_cars <= MAX_TRAFFIC_CARS):
-            raise ValueError(f"traffic_cars must be an int in 0..{MAX_TRAFFIC_CARS}, got {self.traffic_cars!r}")
-        if self.traffic_cars and self.target != "sign":
-            raise ValueError(f"traffic crosses at a stop sign: traffic_cars needs target 'sign', got {self.target!r}")
-        for name, low, high in (("traffic_gap_s", -5.0, 5.0), ("traffic_speed", 0.1, 3.0)):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, (int, float)) or not low <= value <= high:
-                raise ValueError(f"{name} must be a number in [{low}, {high}], got {value!r}")
+        scenario.check(self, self.scenario_params)
         if self.control_hz is not None and not 1.0 <= self.control_hz <= 50.0:
             raise ValueError(f"control_hz must be in [1, 50] Hz (the env steps at 50 Hz) or None, "
                              f"got {self.control_hz!r}")
+
+    @property
+    def scenario(self):
+        """The scenario ``target`` names (a fresh object of its class)."""
+        return SCENARIOS[self.target]()
 
     @property
     def attacks(self) -> tuple[str, ...]:
@@ -230,7 +227,7 @@ class TrialSpec:
     @property
     def drive(self) -> DriveSpec | None:
         """The drive this spec's seed draws (``target == "drive"``; ``speed`` is the nominal speed)."""
-        if self.target != "drive":
+        if self.scenario.target != "drive":
             return None
         return draw_drive(np.random.default_rng(self.seed), *self.drive_s, nominal_speed_mps=self.speed)
 
@@ -263,6 +260,7 @@ def plugin_sources(spec: TrialSpec) -> dict[str, str]:
     from racf.provenance import source_version
 
     parts = [("estimator", ESTIMATORS, spec.estimator), ("detector", DETECTORS, spec.detector),
+             ("scenario", SCENARIOS, spec.target),
              *(("attack", ATTACKS, name) for name in spec.attacks)]
     out = {}
     for kind, registry, name in parts:

@@ -37,6 +37,10 @@ def spec_from_json(raw: dict) -> TrialSpec:
     for key in _RANGES:
         if key in raw:
             raw[key] = tuple(raw[key])
+    # Specs written before scenarios were plug-ins held cross-traffic as three fields of their own.
+    cars, gap_s, speed = (raw.pop(k, d) for k, d in (("traffic_cars", 0), ("traffic_gap_s", 0.0), ("traffic_speed", 1.0)))
+    if cars:
+        raw["target"], raw["scenario_params"] = "cross_traffic", {"cars": cars, "gap_s": gap_s, "speed": speed}
     return TrialSpec(**raw)
 
 

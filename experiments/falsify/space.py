@@ -29,6 +29,7 @@ from pathlib import Path
 from typing import Any
 
 from racf.experiments.episode.plan import longest_run_up
+from racf.plugins import SCENARIOS
 from racf.experiments.episode.spec import TARGETS, TrialSpec, setting_name
 from racf.sim.attacks import ATTACKS
 
@@ -121,7 +122,9 @@ class SearchSpace:
         dims = {d.name: d for d in self.dimensions}
         for name, value in params.items():
             value = dims[name].cast(value) if name in dims else value
-            if name.startswith("attack."):
+            if name.startswith("scenario."):  # a parameter the scenario declares
+                fields.setdefault("scenario_params", {})[name.split(".", 2)[2]] = value
+            elif name.startswith("attack."):
                 _, attack, key = name.split(".", 2)
                 if attack == "patch_occlusion" and key in _PATCH_FIELDS:
                     fields[key] = (float(value), float(value))
@@ -131,7 +134,8 @@ class SearchSpace:
                 fields[name] = value
         sign = int(fields.pop("sign", 0))
         if fields.get("run_up_m") is not None:  # no longer than the sign's lane allows
-            longest = longest_run_up("sign", sign, fields.get("sign_geometry", "plate"))
+            kind = SCENARIOS[fields.get("target", "sign")].target
+            longest = longest_run_up(kind, sign, fields.get("sign_geometry", "plate"))
             fields["run_up_m"] = min(float(fields["run_up_m"]), math.floor(longest * 1e6) / 1e6)
         return TrialSpec(self.setting, speed=float(fields.pop("speed", 1.5)), sign=sign, seed=int(seed),
                          attack_params=attack_params, **fields)
@@ -162,11 +166,24 @@ def load_space(defence: str, attacks: tuple[str, ...], path: str | Path | None =
     unknown = [a for a in attacks if a not in ATTACKS]
     if unknown:
         raise ValueError(f"unknown attack(s) {unknown}; choose from {list(ATTACKS)}")
-    scenario = raw.get("scenario", {})
+    scenario = dict(raw.get("scenario", {}))
+    target = scenario.pop("target", (fixed or {}).get("target", "sign"))
+    if target not in SCENARIOS:
+        raise ValueError(f"[scenario] target of {path} must be a scenario, one of {list(SCENARIOS)}, got {target!r}")
+    # [scenario.NAME]: the parameters a scenario declares (a field such as sign = {low, high} is a range).
+    tables = {k: scenario.pop(k) for k in list(scenario)
+              if k not in SCENARIO_FIELDS and k in SCENARIOS and isinstance(scenario[k], dict)}
+    if set(tables) - {target}:
+        raise ValueError(f"[scenario.{sorted(set(tables) - {target})[0]}] of {path} names a scenario the search "
+                         f"does not run (target = {target!r})")
+    for key, value in tables.get(target, {}).items():
+        SCENARIOS[target].param(key)  # a parameter the scenario does not declare is an error now
+    fixed = {**(fixed or {}), **({"target": target} if target != "sign" else {})}
     bad = sorted(set(scenario) - set(SCENARIO_FIELDS))
     if bad:
         raise ValueError(f"[scenario] of {path} names {bad}; it may search {list(SCENARIO_FIELDS)}")
     dims = [Dimension.parse(name, value) for name, value in scenario.items()]
+    dims += [Dimension.parse(f"scenario.{target}.{key}", value) for key, value in tables.get(target, {}).items()]
     sections = raw.get("attack", {})
     bad = sorted(set(sections) - set(ATTACKS))
     if bad:
@@ -183,6 +200,7 @@ def load_space(defence: str, attacks: tuple[str, ...], path: str | Path | None =
     if "sign" in scenario:
         signs = Dimension.parse("sign", scenario["sign"])
         values = signs.choices if signs.choices is not None else (signs.low, signs.high)
-        if not all(0 <= int(v) < TARGETS["sign"] for v in values):
-            raise ValueError(f"[scenario] sign must lie in 0..{TARGETS['sign'] - 1}, got {scenario['sign']!r}")
+        count = TARGETS[SCENARIOS[target].target]
+        if not all(0 <= int(v) < count for v in values):
+            raise ValueError(f"[scenario] sign must lie in 0..{count - 1}, got {scenario['sign']!r}")
     return space

@@ -112,9 +112,9 @@ def card_markdown(card: dict) -> str:
              f"Version `{card['version']}`, sensor profile `{card['sensor_profile']}`; "
              f"wall time {card['timing']['wall_s']:.0f} s. Intervals are 95 % (Wilson for rates, bootstrap otherwise).",
              "", "| section | row | measure | value [95% CI] | N |", "|---|---|---|---|---|"]
-    for section, row, measure, value, ci, n, _ in card_rows(card):
+    for section, row, measure, value, interval, n, _ in card_rows(card):
         digits = 0 if measure == "trainable" else 3
-        lines.append(f"| {section} | {row} | {measure} | {_f(value, digits)}{_ci(ci, digits)} | {n if n is not None else '-'} |")
+        lines.append(f"| {section} | {row} | {measure} | {_f(value, digits)}{_ci(interval, digits)} | {n if n is not None else '-'} |")
     lines += ["", "Driving-score penalties: " + ", ".join(f"{k.replace('_', ' ')} x {v}" for k, v in card["penalties"].items())
               + ".", ""]
     if card["quick"] and card["defence"] != "raw":  # a quick card alone says little: set it beside no defence

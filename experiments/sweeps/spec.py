@@ -29,6 +29,10 @@ Example (``experiments/sweeps/specs/smoke.toml``)::
     gap_s = 0.0                      # it passes the conflict point this long after the ego car would
     speed = 1.0                      # its speed, m/s
 
+    target = "parked_car"            # optional: the scenario (racf.plugins.SCENARIOS; default "sign")
+    [scenario.parked_car]            # its parameters (what the scenario declares), each a list of values
+    leave_s = [1.0, 3.0]             # grid: every combination; random: crossed with each draw
+
 Attacks: any in ``racf.sim.attacks.ATTACKS`` (``patch_occlusion``, ``lidar_spoof``, ...) and
 ``+``-combinations of them; estimators: any in ``racf.experiments.episode.estimators.ESTIMATORS``
 (``raw``, ``odca``, ``ekf``, ``chronos``), plug-ins included. An episode's seed depends on its cell and repeat but not on the
@@ -53,6 +57,7 @@ from pathlib import Path
 import numpy as np
 
 from racf.controllers.detectors import DETECTORS
+from racf.plugins import SCENARIOS
 from racf.experiments.episode import TrialSpec
 from racf.experiments.episode.estimators import ESTIMATORS, check_options, make_estimator
 from racf.experiments.episode.spec import setting_name
@@ -69,7 +74,7 @@ SPACE_KEYS = {"attack": None, "estimator": None, "rho": (0.0, 1.0), "t_atk": (0.
 _DEFAULTS = {"attack": ["patch_occlusion"], "estimator": ["raw"], "rho": [0.95], "t_atk": [1.75], "speed": [1.5],
              "sign": [0, 1, 2, 3]}
 _TOP_KEYS = {"name", "mode", "repeats", "n", "seed", "space", "params", "estimators", "log_steps", "sensor_profile",
-             "sign_geometry", "detector", "traffic"}
+             "sign_geometry", "detector", "traffic", "target", "scenario"}
 _TRAFFIC_KEYS = {"cars": [0], "gap_s": 0.0, "speed": 1.0}
 #: The example specs shipped with the project.
 SPECS_DIR = Path(__file__).resolve().parent / "specs"
@@ -92,6 +97,8 @@ class SweepSpec:
     detector: str = "classical"
     estimators: dict = field(default_factory=dict)
     traffic: dict = field(default_factory=dict)
+    target: str = "sign"
+    scenario: dict = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         if self.detector not in DETECTORS:
@@ -136,6 +143,7 @@ class SweepSpec:
                 raise ValueError(f"space.{key} must be [low, high] in random mode, got {vals!r}")
         object.__setattr__(self, "space", space)
         self._check_traffic()
+        self._check_scenario()
         self._check_params()
         self._check_estimators()
 
@@ -156,6 +164,30 @@ class SweepSpec:
 
     def _traffic_counts(self) -> list[int]:
         return list(self.traffic.get("cars", [0]))
+
+    def _check_scenario(self) -> None:
+        """``target`` names a scenario; ``[scenario.<target>]`` gives lists of its parameters' values."""
+        if self.target not in SCENARIOS:
+            raise ValueError(f"target must be a scenario, one of {tuple(SCENARIOS)}, got {self.target!r}")
+        if not isinstance(self.scenario, dict) or any(not isinstance(v, dict) for v in self.scenario.values()):
+            raise ValueError("scenario must hold tables: [scenario.NAME] with lists of parameter values")
+        other = sorted(set(self.scenario) - {self.target})
+        if other:
+            raise ValueError(f"[scenario.{other[0]}] names a scenario the sweep does not run (target = {self.target!r})")
+        scenario = SCENARIOS[self.target]
+        for name, values in self.scenario.get(self.target, {}).items():
+            param = scenario.param(name)
+            if not isinstance(values, list) or not values:
+                raise ValueError(f"scenario.{self.target}.{name} must be a non-empty list of values, got {values!r}")
+            for value in values:
+                param.check(value, self.target)
+        if self.target != "sign" and self.traffic and max(self._traffic_counts()) > 0:
+            raise ValueError(f"[traffic] crosses at a stop sign (scenario 'cross_traffic'); target {self.target!r} "
+                             "cannot take it")
+
+    def _scenario_combos(self) -> list[dict]:
+        table = self.scenario.get(self.target, {})
+        return [dict(zip(table, combo)) for combo in itertools.product(*table.values())]
 
     def _check_estimators(self) -> None:
         if not isinstance(self.estimators, dict):
@@ -205,7 +237,9 @@ class SweepSpec:
                          | ({"params": self.params} if self.params else {})
                          | ({"estimators": self.estimators} if self.estimators else {})
                          | ({"detector": self.detector} if self.detector != "classical" else {})
-                         | ({"traffic": self.traffic} if self.traffic else {}), sort_keys=True)
+                         | ({"traffic": self.traffic} if self.traffic else {})
+                         | ({"target": self.target} if self.target != "sign" else {})
+                         | ({"scenario": self.scenario} if self.scenario else {}), sort_keys=True)
         return hashlib.sha256(raw.encode()).hexdigest()[:12]
 
     def episodes(self) -> list[TrialSpec]:
@@ -219,8 +253,9 @@ class SweepSpec:
                     seed = self._episode_seed(cell, repeat)
                     for params in self._param_combos(cell[0]):
                         for cars in self._traffic_counts():
-                            for estimator in s["estimator"]:
-                                out.append(_trial(cell, estimator, seed, self, params, cars))
+                            for situation in self._scenario_combos():
+                                for estimator in s["estimator"]:
+                                    out.append(_trial(cell, estimator, seed, self, params, cars, situation))
         else:
             rng = np.random.default_rng(self.seed)
             for i in range(self.n):
@@ -231,8 +266,9 @@ class SweepSpec:
                 combos = self._param_combos(cell[0])
                 params = combos[rng.integers(len(combos))] if len(combos) > 1 else combos[0]
                 for cars in self._traffic_counts():
-                    for estimator in s["estimator"]:
-                        out.append(_trial(cell, estimator, seed, self, params, cars))
+                    for situation in self._scenario_combos():
+                        for estimator in s["estimator"]:
+                            out.append(_trial(cell, estimator, seed, self, params, cars, situation))
         return out
 
     def _episode_seed(self, cell: tuple, repeat: int) -> int:
@@ -253,10 +289,13 @@ def _attacks(value) -> tuple[str, ...]:
 
 
 def _trial(cell: tuple, estimator: str, seed: int, sweep: SweepSpec, params: dict | None = None,
-           traffic_cars: int = 0) -> TrialSpec:
+           traffic_cars: int = 0, situation: dict | None = None) -> TrialSpec:
     attack, rho, t_atk, speed, sign = cell
-    traffic = {"traffic_cars": traffic_cars, "traffic_gap_s": float(sweep.traffic.get("gap_s", 0.0)),
-               "traffic_speed": float(sweep.traffic.get("speed", 1.0))} if traffic_cars else {}
+    # [traffic] is the cross-traffic scenario's table by another name (cars = 0: the plain approach).
+    traffic = {"target": "cross_traffic", "scenario_params": {
+        "cars": traffic_cars, "gap_s": float(sweep.traffic.get("gap_s", 0.0)),
+        "speed": float(sweep.traffic.get("speed", 1.0))}} if traffic_cars else {
+        "target": sweep.target, "scenario_params": situation or {}}
     return TrialSpec(setting_name(_attacks(attack), estimator), int(sign), float(speed), seed,
                      rho=(float(rho), float(rho)), t_atk=(float(t_atk), float(t_atk)),
                      sensor_profile=sweep.sensor_profile, sign_geometry=sweep.sign_geometry,
@@ -302,7 +341,8 @@ def parse_spec(text: str, source: str = "spec", default_name: str = "sweep") -> 
                          sensor_profile=raw.get("sensor_profile", "qcar2"),
                          sign_geometry=raw.get("sign_geometry", "plate"),
                          detector=raw.get("detector", "classical"), estimators=raw.get("estimators", {}),
-                         traffic=raw.get("traffic", {}))
+                         traffic=raw.get("traffic", {}), target=raw.get("target", "sign"),
+                         scenario=raw.get("scenario", {}))
         episodes = spec.episodes()
     except ValueError as err:
         raise ValueError(f"{source}: {err}") from None

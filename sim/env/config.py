@@ -61,6 +61,8 @@ class EnvConfig:
         render_width, render_height: size of ``render()`` frames.
         traffic_cars: how many other cars the model holds (0..``MAX_TRAFFIC_CARS``); an episode
             drives as many as its ``options["traffic"]`` lists and parks the rest out of sight.
+        world: a scenario's world managers (``racf.sim.env.world.WorldManager``): bodies added to the
+            map and driven at each reset and physics step; each may read one more reset option.
     """
 
     sensor_profile: str = "qcar2"
@@ -83,6 +85,7 @@ class EnvConfig:
     render_width: int = 640
     render_height: int = 480
     traffic_cars: int = 0
+    world: tuple = ()
 
     def __post_init__(self) -> None:
         if not isinstance(self.sensor_profile, str) or self.sensor_profile not in SENSOR_PROFILES:
@@ -114,6 +117,7 @@ class EnvConfig:
         if not (isinstance(self.traffic_cars, int) and not isinstance(self.traffic_cars, bool)
                 and 0 <= self.traffic_cars <= MAX_TRAFFIC_CARS):
             raise ValueError(f"traffic_cars must be an int in 0..{MAX_TRAFFIC_CARS}, got {self.traffic_cars!r}")
+        _check_world(self.world)
         if not (16 <= self.render_width <= 1280 and 12 <= self.render_height <= 960):
             raise ValueError(f"render size must be within 1280x960 px, got {self.render_width}x{self.render_height}")
 
@@ -165,3 +169,14 @@ class EnvConfig:
         if "cruise_speeds_mps" in values:
             values["cruise_speeds_mps"] = tuple(float(v) for v in values["cruise_speeds_mps"])
         return cls(**values)
+
+
+def _check_world(world: Any) -> None:
+    from racf.sim.env.world import WorldManager
+
+    if not isinstance(world, tuple) or not all(isinstance(m, WorldManager) for m in world):
+        raise ValueError(f"world must be a tuple of racf.sim.env.world.WorldManager, got {world!r}")
+    options = [m.option for m in world if m.option]
+    taken = sorted({o for o in options if options.count(o) > 1 or o in RESET_OPTIONS})
+    if taken:
+        raise ValueError(f"world managers read reset option(s) {taken} that another part reads; give each its own")

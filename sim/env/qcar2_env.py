@@ -29,6 +29,7 @@ from gymnasium import spaces
 
 from racf.sim._gl import ensure_gl_backend, gl_context_class
 from racf.sim.env.config import RESET_OPTIONS, EnvConfig
+from racf.sim.env.world import TrafficManager, WorldManager
 from racf.sim.env.ground_truth import SignView, obstacle_view, sign_view, with_centre_from
 from racf.sim.sensors import (TIMESTAMP_FIELDS, DepthCamera, Lidar2D, LocalisationFix, RGBCamera, RGBDCameraRig, Sensor,
                          VehicleStateSensor)
@@ -37,9 +38,7 @@ from racf.sim.vehicle import QCar2
 from racf.sim.world.drives import RouteTarget
 from racf.sim.world.route_plan import current_slot, plan_route
 from racf.sim.world.road_graph import Path
-from racf.sim.world.scene import (HIDDEN_GEOM_GROUP, PARKED_Z_M, PROP_GEOM_GROUP, load_model, patch_geom, patch_texture,
-                                  traffic_body, traffic_paint_geoms)
-from racf.sim.world.traffic import TRAFFIC_COLOURS, TrafficCar
+from racf.sim.world.scene import HIDDEN_GEOM_GROUP, PROP_GEOM_GROUP, load_model, patch_geom, patch_texture
 from racf.sim.world.sign_patch import PatchPlacement
 from racf.sim.world.obstacles import Obstacle, obstacles
 from racf.sim.world.stop_signs import StopSign, stop_signs
@@ -124,7 +123,14 @@ class QCar2Env(gym.Env):
         self.render_mode = render_mode
         self.metadata = {**self.metadata, "render_fps": self.config.control_hz}
 
-        self.model = load_model(sign_geometry=self.config.sign, traffic_cars=self.config.traffic_cars)
+        # The world's managers: other cars, then what the env's ``world`` setting brings (a scenario's).
+        self.traffic = TrafficManager(self.config.traffic_cars)
+        self.world: tuple[WorldManager, ...] = (self.traffic, *self.config.world)
+        self.model = load_model(sign_geometry=self.config.sign,
+                                world_xml="".join(manager.scene_xml() for manager in self.world))
+        for manager in self.world:
+            manager.bind(self.model)
+        self._reset_options = (*RESET_OPTIONS, *(m.option for m in self.config.world if m.option))
         self.model.opt.timestep = self.config.physics_dt_s
         self.data = mujoco.MjData(self.model)
         self.car = QCar2(self.model, self.config.vehicle)
@@ -160,15 +166,8 @@ class QCar2Env(gym.Env):
         self._patch_geoms = [self.model.geom(patch_geom(i)).id for i in range(n_signs)]
         self._patch_textures = [self.model.texture(patch_texture(i)).id for i in range(n_signs)]
         self._viewer = None
-        # Other cars: mocap bodies, driven along their lanes as functions of time (sim.world.traffic).
-        self._traffic: tuple[TrafficCar, ...] = ()
-        self._traffic_table = np.empty((0, 1, 4))
-        self._traffic_mocap = [int(self.model.body_mocapid[self.model.body(traffic_body(k)).id])
-                               for k in range(self.config.traffic_cars)]
-        self._traffic_paint = [[self.model.geom(g).id for g in traffic_paint_geoms(k)]
-                               for k in range(self.config.traffic_cars)]
-        self._traffic_of_body = {self.model.body(traffic_body(k)).id: k for k in range(self.config.traffic_cars)}
         self._collision_with: str | None = None
+        self._moving: tuple[WorldManager, ...] = ()
         # Crates stand on the map only in their own episodes (as a test operator would place one).
         self._crates = [(self.model.body(f"obstacle_{o.index}").id, self.model.body(f"obstacle_{o.index}").pos.copy())
                         for o in obstacles()]
@@ -193,9 +192,9 @@ class QCar2Env(gym.Env):
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
         super().reset(seed=seed)
         options = dict(options or {})
-        unknown = sorted(set(options) - set(RESET_OPTIONS))
+        unknown = sorted(set(options) - set(self._reset_options))
         if unknown:
-            raise ValueError(f"unknown reset option(s) {unknown}; allowed: {list(RESET_OPTIONS)}")
+            raise ValueError(f"unknown reset option(s) {unknown}; allowed: {list(self._reset_options)}")
         plan = plan_route(options, sign_geometry=self.config.sign, bumper_ahead_m=self._bumper_ahead_m,
                           max_speed_mps=self.config.vehicle.max_speed_mps,
                           cruise_speeds_mps=self.config.cruise_speeds_mps, rng=self.np_random)
@@ -211,17 +210,12 @@ class QCar2Env(gym.Env):
         for i, (body, home) in enumerate(self._crates):
             self.model.body_pos[body] = home if crate == i else home + np.array([0.0, 0.0, -5.0])
         self.hide_sign_patches()  # an env shared by episodes: no sticker outlives its episode
-        self._traffic = self._traffic_of(options.get("traffic", ()))
-        # Each car's state at every physics step of the episode, tabulated once (they read no one).
-        steps = np.arange(int(round(self.config.max_episode_s / self.config.physics_dt_s)) + 2)
-        self._traffic_table = np.stack([car.states(steps * self.config.physics_dt_s) for car in self._traffic]) \
-            if self._traffic else np.empty((0, len(steps), 4))
         mujoco.mj_resetData(self.model, self.data)
         self._collision_with = None
-        for k, paint in enumerate(self._traffic_paint):
-            if k < len(self._traffic):
-                self.model.geom_rgba[paint] = TRAFFIC_COLOURS[self._traffic[k].colour]
-        self._move_traffic(0)
+        for manager in self.world:
+            manager.reset(self.model, self.data, options.get(manager.option) if manager.option else None,
+                          self.config.physics_dt_s, self.config.max_episode_s)
+        self._moving = tuple(manager for manager in self.world if manager.moving)
         self.rig.invalidate()  # the crates may have moved; the car may start where it started before
         self._route_s = start_s
         self.car.place(self.data, *pose, speed=float(speed))
@@ -331,33 +325,15 @@ class QCar2Env(gym.Env):
         """What a geom belongs to: ``traffic0``.. for an other car, else the geom's (or its body's) name."""
         body = int(self.model.geom_bodyid[geom])
         root = int(self.model.body_rootid[body])
-        if root in self._traffic_of_body:
-            return f"traffic{self._traffic_of_body[root]}"
+        for manager in self.world:
+            owner = manager.owner_of(root)
+            if owner is not None:
+                return owner
         return self.model.geom(geom).name or self.model.body(body).name or f"geom{geom}"
-
-    # -- other cars (sim.world.traffic) ------------------------------------------------------
-    def _traffic_of(self, raw: Any) -> tuple[TrafficCar, ...]:
-        if isinstance(raw, (str, bytes, dict)) or not hasattr(raw, "__len__"):
-            raise ValueError(f"options['traffic'] must be a list of other cars (dicts), got {raw!r}")
-        if len(raw) > self.config.traffic_cars:
-            raise ValueError(f"options['traffic'] lists {len(raw)} cars; this env holds {self.config.traffic_cars} "
-                             "(make it with traffic_cars=N)")
-        return tuple(TrafficCar.from_options(car) for car in raw)
-
-    def _move_traffic(self, substep: int) -> None:
-        """Puts every other car where its lane follower has it at physics step ``substep`` (unused ones stay parked)."""
-        for k, mocap in enumerate(self._traffic_mocap):
-            if k < len(self._traffic):
-                x, y, yaw, _ = self._traffic_table[k, min(substep, self._traffic_table.shape[1] - 1)]
-                self.data.mocap_pos[mocap] = (x, y, 0.0)
-                self.data.mocap_quat[mocap] = (math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2))
-            else:
-                self.data.mocap_pos[mocap] = (0.0, 0.0, PARKED_Z_M)
-                self.data.mocap_quat[mocap] = (1.0, 0.0, 0.0, 0.0)
 
     def traffic_states(self) -> np.ndarray:
         """(n, 4) x, y, yaw, speed of each driven other car now (ground truth, like ``info``)."""
-        return self._traffic_table[:, min(self._substep, self._traffic_table.shape[1] - 1)].copy()
+        return self.traffic.states(self._substep)
 
     # -- internals ------------------------------------------------------------------------
     def _rng_of(self, sensor: Sensor) -> np.random.Generator:
@@ -374,11 +350,11 @@ class QCar2Env(gym.Env):
         while self._substep < end:
             # Step to the next physics step where a sensor acts (every one while the LiDAR sweeps).
             nxt = self._substep + 1
-            if not self._sweeping and not self._traffic:  # other cars move every physics step
+            if not self._sweeping and not self._moving:  # a moving world (other cars) acts every physics step
                 while nxt < end and (not frames or self._frames_due(nxt) == self._frames):
                     nxt += 1
-            if self._traffic:
-                self._move_traffic(self._substep)
+            for manager in self._moving:
+                manager.before_physics(self.data, self._substep)
             mujoco.mj_step(self.model, self.data, nstep=nxt - self._substep)
             self._substep = nxt
             if self._sweeping:
@@ -458,6 +434,7 @@ class QCar2Env(gym.Env):
             "traffic": self.traffic_states(),
             "off_road": off_road,
             "time": self._step / self.config.control_hz,
+            **{key: value for manager in self.config.world for key, value in manager.info(self._substep).items()},
         }
 
     # Route and sign, for controllers and experiments that plan on the road graph.

@@ -36,7 +36,7 @@ from racf.sim.world.stop_signs import (  # noqa: E402
 
 __all__ = ["ASSETS_DIR", "build_scene_xml", "load_model", "PROP_GEOM_GROUP", "CAR_GEOM_GROUP", "HIDDEN_GEOM_GROUP",
            "patch_geom", "patch_texture", "TRAFFIC_GEOM_GROUP", "traffic_body", "traffic_paint_geoms",
-           "PARKED_Z_M"]
+           "traffic_xml", "PARKED_Z_M"]
 
 ASSETS_DIR = Path(os.environ["RACF_ASSETS"]) if "RACF_ASSETS" in os.environ else asset_path("qcar2_map")
 #: Geom groups: 0 map and props (seen by camera and LiDAR), 3 the car (skipped by the LiDAR).
@@ -179,7 +179,7 @@ def traffic_paint_geoms(index: int) -> tuple[str, ...]:
     return tuple(f"traffic_{index}_{name}" for name in _PAINTED)
 
 
-def _traffic_xml(index: int, car_xml: bytes) -> str:
+def traffic_xml(index: int, car_xml: bytes) -> str:
     """Other car ``index``: the QCar 2's own bodies and geoms (from its MJCF), welded to one mocap
     body, renamed, in a group every sensor sees, colliding with the ego car's chassis only."""
     root = ET.fromstring(car_xml)
@@ -208,18 +208,17 @@ def _traffic_xml(index: int, car_xml: bytes) -> str:
     return "\n    " + ET.tostring(body, encoding="unicode")
 
 
-def build_scene_xml(sign_geometry: SignGeometry = PLATE_IN_SCAN, traffic_cars: int = 0) -> str:
+def build_scene_xml(sign_geometry: SignGeometry = PLATE_IN_SCAN, world_xml: str = "") -> str:
     """The full MJCF text of the map with the car (the car's file is an include), the stop
-    signs built to ``sign_geometry``, and ``traffic_cars`` other cars (parked below the floor
-    until an episode drives them)."""
+    signs built to ``sign_geometry``, and the bodies the env's world managers add
+    (``world_xml``: ``racf.sim.env.world``; other cars, a scenario's props)."""
     x0, x1, y0, y1 = map_facts.WALL_BOUNDS_M
     cx, cy, sx, sy = (x0 + x1) / 2, (y0 + y1) / 2, (x1 - x0) / 2, (y1 - y0) / 2
     props = "".join(_stop_sign_xml(s.index, *s.position, s.face_yaw, s.geometry) for s in stop_signs(sign_geometry))
     props += "".join(_traffic_light_xml(i, *p) for i, p in enumerate(map_facts.TRAFFIC_LIGHTS))
     props += "".join(_yield_sign_xml(i, *p) for i, p in enumerate(map_facts.YIELD_SIGNS))
     props += "".join(_obstacle_xml(o.index, *o.body_centre, o.yaw) for o in obstacles())
-    car_xml = (ASSETS_DIR / "qcar2.xml").read_bytes()
-    props += "".join(_traffic_xml(k, car_xml) for k in range(traffic_cars))
+    props += world_xml
     w, h = MAX_IMAGE_SIZE
     # numstacks: a cylinder's side is straight, so it needs no stacks along its axis, and the
     # scene has no spheres or capsules (which would). With MuJoCo's default of 16, the poles
@@ -258,19 +257,21 @@ def build_scene_xml(sign_geometry: SignGeometry = PLATE_IN_SCAN, traffic_cars: i
 
 
 @lru_cache(maxsize=8)
-def _compiled_xml_and_assets(sign_geometry: SignGeometry,
-                             traffic_cars: int) -> tuple[str, tuple[tuple[str, bytes], ...]]:
+def _compiled_xml_and_assets(sign_geometry: SignGeometry, world_xml: str) -> tuple[str, tuple[tuple[str, bytes], ...]]:
     car = (ASSETS_DIR / "qcar2.xml").read_bytes()
-    return build_scene_xml(sign_geometry, traffic_cars), (("qcar2.xml", car), ("mat.png", mat_png_bytes()))
+    return build_scene_xml(sign_geometry, world_xml), (("qcar2.xml", car), ("mat.png", mat_png_bytes()))
 
 
-def load_model(sign_geometry: SignGeometry = PLATE_IN_SCAN, traffic_cars: int = 0) -> mujoco.MjModel:
+def load_model(sign_geometry: SignGeometry = PLATE_IN_SCAN, traffic_cars: int = 0, world_xml: str = "") -> mujoco.MjModel:
     """Compiles a fresh ``MjModel`` of the map with the car (each caller gets its own copy),
-    the stop signs built to ``sign_geometry`` and ``traffic_cars`` other cars (the MJCF text is
-    cached per geometry and count)."""
+    the stop signs built to ``sign_geometry``, ``traffic_cars`` other cars and the bodies of
+    ``world_xml`` (the MJCF text is cached per geometry and world)."""
     if not isinstance(sign_geometry, SignGeometry):
         raise TypeError(f"sign_geometry must be a SignGeometry, got {type(sign_geometry).__name__}")
     if not isinstance(traffic_cars, int) or isinstance(traffic_cars, bool) or traffic_cars < 0:
         raise ValueError(f"traffic_cars must be an int >= 0, got {traffic_cars!r}")
-    xml, assets = _compiled_xml_and_assets(sign_geometry, traffic_cars)
+    if traffic_cars:
+        car_xml = (ASSETS_DIR / "qcar2.xml").read_bytes()
+        world_xml = "".join(traffic_xml(k, car_xml) for k in range(traffic_cars)) + world_xml
+    xml, assets = _compiled_xml_and_assets(sign_geometry, world_xml)
     return mujoco.MjModel.from_xml_string(xml, assets=dict(assets))

@@ -55,7 +55,7 @@ class ScrambledInfo(gym.Wrapper):
 
 @pytest.mark.parametrize("spec", [TrialSpec("attack+odca", 0, 1.5, 1),
                                   # Two other cars crossing: their states in info are scrambled too.
-                                  TrialSpec("attack+odca", 3, 1.5, 1, traffic_cars=2)], ids=["empty", "traffic"])
+                                  TrialSpec("attack+odca", 3, 1.5, 1, target="cross_traffic", scenario_params={"cars": 2})], ids=["empty", "traffic"])
 def test_the_car_does_the_same_with_info_scrambled(spec):
     result, log = run_trial(spec, clean_pass=False)
     _, blind = run_trial(spec, make_env=lambda s: ScrambledInfo(default_env(s)), clean_pass=False)
@@ -64,5 +64,5 @@ def test_the_car_does_the_same_with_info_scrambled(spec):
     # The scrambler did reach the runner: the referee's ground truth differs.
     assert not np.allclose(blind["d_true"].fillna(-1), log["d_true"].fillna(-1))
     assert not np.allclose(blind["x"], log["x"])
-    if spec.traffic_cars:
+    if spec.target == "cross_traffic":
         assert not np.allclose(blind["traffic1_x"], log["traffic1_x"])

@@ -32,5 +32,5 @@ def test_each_battery_is_the_one_before_and_its_new_rows():
         same = next(r for r in four.rows() if r.key == row.key)
         assert [s.trial_id for s in row.specs("raw", quick=True)] == [s.trial_id for s in same.specs("raw", quick=True)]
     traffic = next(r for r in four.loop if r.key == "traffic_strong")
-    assert traffic.driving and all(s.traffic_cars == 1 for s in traffic.specs("odca"))
+    assert traffic.driving and all(s.scenario_params.get("cars") == 1 for s in traffic.specs("odca"))
     assert DEFAULT_BATTERY == "racf-4"

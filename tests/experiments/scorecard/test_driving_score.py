@@ -8,7 +8,7 @@ from racf.experiments.scorecard.drives import drive_score
 
 
 def test_a_missed_stop_into_cross_traffic_pays_both_penalties():
-    spec = TrialSpec("attack", 3, 1.5, 2, rho=(1.0, 1.0), t_atk=(20.0, 20.0), traffic_cars=1, stable_steps=3)
+    spec = TrialSpec("attack", 3, 1.5, 2, rho=(1.0, 1.0), t_atk=(20.0, 20.0), target="cross_traffic", scenario_params={"cars": 1}, stable_steps=3)
     _, log = run_trial(spec, clean_pass=False)
     score = drive_score(log, 1, PENALTIES)
     assert score["infractions"] == {"ran_stop_sign": 1, "hit_static_object": 0, "hit_vehicle": 1}

@@ -177,7 +177,7 @@ def test_shipped_specs_load_and_the_big_one_has_1000_paired_episodes():
 def test_the_cross_traffic_spec_pairs_each_episode_with_and_without_another_car():
     episodes = load_spec("cross-traffic.toml").episodes()
     assert len(episodes) == len({e.trial_id for e in episodes}) == 512
-    by_key = pd.DataFrame([{"seed": e.seed, "setting": e.setting, "cars": e.traffic_cars} for e in episodes])
+    by_key = pd.DataFrame([{"seed": e.seed, "setting": e.setting, "cars": e.scenario_params.get("cars", 0)} for e in episodes])
     # Every seed and setting runs once on the empty map and once with one other car.
     assert by_key.groupby(["seed", "setting"])["cars"].apply(lambda cars: sorted(cars) == [0, 1]).all()
     assert (by_key.groupby("setting").size() == 64).all()

@@ -98,7 +98,7 @@ def _views(container):
 
 def test_other_cars_appear_in_the_world_and_on_the_map(tmp_path):
     recorder = FrameRecorder(every=10)
-    _, log = run_trial(TrialSpec("clean", 3, 1.5, 0, traffic_cars=2), on_step=recorder, clean_pass=False)
+    _, log = run_trial(TrialSpec("clean", 3, 1.5, 0, target="cross_traffic", scenario_params={"cars": 2}), on_step=recorder, clean_pass=False)
     rows: dict[str, int] = {}
     for chunk in _chunks(write_rrd(tmp_path / "traffic.rrd", log, recorder)):
         rows[str(chunk.entity_path)] = rows.get(str(chunk.entity_path), 0) + chunk.num_rows

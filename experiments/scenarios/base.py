@@ -1,0 +1,145 @@
+"""What a scenario is: the situation an episode puts the car in, declared once.
+
+A scenario declares its parameters (:class:`Param`: type, range, default, unit and meaning);
+``TrialSpec.scenario_params``, the CLI's ``--scenario-param``, a sweep spec's
+``[scenario.<name>]`` table, a falsification space and ``racf list`` all read that one
+declaration. It plans the episode: pure, from the spec and the map to the env's settings, its
+world (managers the env runs without knowing them: ``racf.sim.env.world``), its reset options
+and the car's mission. The referee scores what it asks for (:attr:`Scenario.metrics`).
+
+A scenario registers under the entry-point group ``racf.scenarios`` (or is loaded with
+``--plugin FILE.py``), racf's own the same way as a user's; ``TrialSpec.target`` names it.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, ClassVar
+
+from racf.experiments.episode.spec import TARGETS
+from racf.sim.env.world import WorldManager
+
+if TYPE_CHECKING:  # the plan is made by racf.experiments.episode, which reads scenarios
+    from racf.experiments.episode.plan import EpisodePlan
+
+__all__ = ["Param", "Scenario", "TARGET_KINDS"]
+
+#: What a route is built around, and how many of each the map holds (``TrialSpec.sign`` indexes them).
+TARGET_KINDS = TARGETS
+
+
+@dataclass(frozen=True)
+class Param:
+    """One parameter of a scenario.
+
+    Attributes:
+        name: its key (an identifier).
+        default: its value when not given; its type is the parameter's (int, float, bool or str).
+        low, high: the range of a number (inclusive).
+        choices: the values a str (or any) parameter may take.
+        unit: what a number counts (``m``, ``s``, ``m/s``, ``cars``).
+        meaning: one line for ``racf list`` and the docs.
+    """
+
+    name: str
+    default: Any
+    low: float | None = None
+    high: float | None = None
+    choices: tuple | None = None
+    unit: str = ""
+    meaning: str = ""
+
+    @property
+    def type(self) -> type:
+        return type(self.default)
+
+    def check(self, value: Any, owner: str) -> Any:
+        """The value as the parameter's type; ValueError names the scenario, the parameter and what is allowed."""
+        allowed = self.allowed()
+        kind = self.type
+        ok = (isinstance(value, bool) if kind is bool else
+              isinstance(value, (int, float)) and not isinstance(value, bool) and (kind is float or float(value).is_integer())
+              if kind in (int, float) else isinstance(value, kind))
+        if ok and kind in (int, float):
+            value = kind(value)
+            ok = math.isfinite(value) and (self.low is None or value >= self.low) and (self.high is None or value <= self.high)
+        if ok and self.choices is not None:
+            ok = value in self.choices
+        if not ok:
+            raise ValueError(f"scenario {owner!r} parameter {self.name!r} must be {allowed}, got {value!r}")
+        return value
+
+    def allowed(self) -> str:
+        if self.choices is not None:
+            return f"one of {list(self.choices)}"
+        kind = self.type.__name__
+        if self.low is not None or self.high is not None:
+            return f"{'an' if kind == 'int' else 'a'} {kind} in [{self.low}, {self.high}]{' ' + self.unit if self.unit else ''}"
+        return f"a {kind}"
+
+    def describe(self) -> str:
+        """``name (range, default): meaning`` for listings."""
+        return f"{self.name} ({self.allowed()}, default {self.default!r}): {self.meaning}"
+
+
+class Scenario:
+    """A situation. Subclass it, set the class attributes, and override what the situation changes.
+
+    Attributes:
+        name: its key (``TrialSpec.target``, ``--target``, a sweep's ``target``).
+        meaning: one line for ``racf list``.
+        target: what the route is built around (``TARGET_KINDS``: ``sign``, ``obstacle`` or ``drive``);
+            the attacks that can act on it are those whose ``targets`` list it.
+        params: the scenario's parameters.
+        metrics: what the referee scores beyond the metrics every episode has (``racf.metrics``).
+    """
+
+    name: ClassVar[str] = "scenario"
+    meaning: ClassVar[str] = ""
+    target: ClassVar[str] = "sign"
+    params: ClassVar[tuple[Param, ...]] = ()
+    metrics: ClassVar[tuple[str, ...]] = ()
+
+    @classmethod
+    def values(cls, given: dict[str, Any]) -> dict[str, Any]:
+        """Every parameter's value: ``given``, checked, over the defaults, in declaration order.
+        ValueError names an unknown parameter and the declared ones."""
+        if not isinstance(given, dict):
+            raise ValueError(f"scenario_params must be a dict of parameter -> value, got {given!r}")
+        declared = {p.name: p for p in cls.params}
+        unknown = sorted(set(given) - set(declared))
+        if unknown:
+            raise ValueError(f"scenario {cls.name!r} has no parameter(s) {unknown}; its parameters: "
+                             f"{list(declared) or 'none'}")
+        return {name: param.check(given[name], cls.name) if name in given else param.default
+                for name, param in declared.items()}
+
+    @classmethod
+    def param(cls, name: str) -> Param:
+        for p in cls.params:
+            if p.name == name:
+                return p
+        raise ValueError(f"scenario {cls.name!r} has no parameter {name!r}; its parameters: "
+                         f"{[p.name for p in cls.params] or 'none'}")
+
+    def check(self, spec: Any, values: dict[str, Any]) -> None:
+        """Refuses (ValueError) a spec this scenario cannot run beyond its parameters' ranges."""
+
+    def env_settings(self, spec: Any, values: dict[str, Any]) -> dict[str, Any]:
+        """Env settings this scenario needs beyond the spec's sensors and signs."""
+        return {}
+
+    def world(self, spec: Any, values: dict[str, Any]) -> tuple[WorldManager, ...]:
+        """The world managers the env runs for this scenario (bodies added, moved or hidden)."""
+        return ()
+
+    def plan(self, spec: Any, values: dict[str, Any], draft: "EpisodePlan") -> "EpisodePlan":
+        """The episode's plan from the route's (``draft``): add reset options, other actors, or
+        change the car's mission. Pure: the same spec gives the same plan."""
+        return draft
+
+    @staticmethod
+    def replace(plan: "EpisodePlan", **changes: Any) -> "EpisodePlan":
+        return dataclasses.replace(plan, **changes)
