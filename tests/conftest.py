@@ -66,6 +66,30 @@ def cusum_installed(tmp_path, monkeypatch, cusum_wheel_site):
     _forget_plugins()
 
 
+@pytest.fixture(scope="session")
+def parked_car_site(tmp_path_factory) -> Path:
+    """The example scenario installed once by pip from its own ``pyproject.toml`` into a folder of its own."""
+    site = tmp_path_factory.mktemp("parked-car-site")
+    done = subprocess.run([sys.executable, "-m", "pip", "install", "--quiet", "--no-deps", "--no-build-isolation",
+                           "--target", str(site), str(EXAMPLES / "racf-parked-car")], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr[-2000:]
+    return site
+
+
+@pytest.fixture
+def parked_car_installed(tmp_path, monkeypatch, parked_car_site):
+    """The example scenario installed for one test (and the worker processes it spawns); its package folder."""
+    site = tmp_path / "parked-site"
+    shutil.copytree(parked_car_site, site)
+    for name in [m for m in sys.modules if m.split(".")[0] == "racf_parked_car"]:
+        monkeypatch.delitem(sys.modules, name)
+    monkeypatch.syspath_prepend(str(site))
+    monkeypatch.setenv("PYTHONPATH", str(site))
+    _forget_plugins()
+    yield site / "racf_parked_car"
+    _forget_plugins()
+
+
 @pytest.fixture
 def plugin_env(monkeypatch):
     """Plug-in files loaded by a test are forgotten after it."""

@@ -246,7 +246,8 @@ def registry_rows(registry: dict) -> list[tuple[str, str]]:
     """(name, one-line description) of each registered class, from its docstring's first sentence."""
     rows = []
     for name, cls in registry.items():
-        doc = " ".join((getattr(cls, "description", None) or cls.__doc__ or "").strip().split("\n\n")[0].split())
+        doc = " ".join((getattr(cls, "description", None) or getattr(cls, "meaning", None) or cls.__doc__
+                        or "").strip().split("\n\n")[0].split())
         first = doc.replace("``", "`").split(". ")[0].split(" (:mod:")[0].rstrip(".")
         rows.append((name, first))
     return rows

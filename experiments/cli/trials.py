@@ -62,7 +62,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     st.add_argument("--json", action="store_true", help="print one JSON object instead of tables")
     st.set_defaults(handler=_attack_study)
 
-    ls = sub.add_parser("list", help="the registered attacks, estimators (defences) and detectors, plug-ins included")
+    ls = sub.add_parser("list", help="the registered attacks, estimators (defences), detectors and scenarios (with "
+                                     "their parameters), plug-ins included")
     ls.add_argument("--markdown", action="store_true", help="print the README's Markdown tables")
     ls.add_argument("--json", action="store_true", help="print {kind: {name: {origin, description}}} as JSON")
     plugin_flag(ls)
@@ -212,15 +213,18 @@ def _attack_study(args: argparse.Namespace) -> int:
 
 
 def _list(args: argparse.Namespace) -> int:
-    from racf.plugins import ATTACKS, DETECTORS, ESTIMATORS, REGISTRIES
+    from racf.plugins import ATTACKS, DETECTORS, ESTIMATORS, REGISTRIES, SCENARIOS
 
     if args.markdown:
         print(registry_markdown())
         return 0
     if args.json:
-        print(json.dumps({kind: {name: {"origin": registry.plugin(name).origin, "description": text}
-                                 for name, text in registry_rows(registry)}
-                          for kind, registry in REGISTRIES.items()}))
+        listed = {kind: {name: {"origin": registry.plugin(name).origin, "description": text}
+                         for name, text in registry_rows(registry)} for kind, registry in REGISTRIES.items()}
+        for name, entry in listed["scenario"].items():
+            entry["params"] = {p.name: {"default": p.default, "low": p.low, "high": p.high, "choices": p.choices,
+                                        "unit": p.unit, "meaning": p.meaning} for p in SCENARIOS[name].params}
+        print(json.dumps(listed))
         return 0
     for title, registry in (("attacks (--attack, joined by ',' or '+')", ATTACKS),
                             ("estimators (--estimator)", ESTIMATORS), ("detectors (--detector)", DETECTORS)):
@@ -228,4 +232,10 @@ def _list(args: argparse.Namespace) -> int:
         for name, text in registry_rows(registry):
             origin = registry.plugin(name).origin
             print(f"  {name:<24}{text}" + ("" if origin == "racf" else f"  [plug-in: {origin}]"))
+    print("scenarios (--target; parameters: --scenario-param KEY=VALUE)")
+    for name, text in registry_rows(SCENARIOS):
+        origin = SCENARIOS.plugin(name).origin
+        print(f"  {name:<24}{text}" + ("" if origin == "racf" else f"  [plug-in: {origin}]"))
+        for param in SCENARIOS[name].params:
+            print(f"    {param.describe()}")
     return 0
