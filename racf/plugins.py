@@ -314,7 +314,7 @@ def load_plugin_file(path: str | os.PathLike) -> list[Plugin]:
             else "is not a Python file (.py)" if file.suffix != ".py" else None)
     if what is not None:
         raise PluginError(f"--plugin {path}: {what}; give the path of a .py file that defines an estimator, an "
-                          f"attack or a detector")
+                          f"attack, a detector or a scenario")
     module_name = f"racf_plugin_{file.stem}_{hashlib.sha256(str(file).encode()).hexdigest()[:8]}"
     if module_name not in sys.modules:
         spec = importlib.util.spec_from_file_location(module_name, file)
@@ -336,7 +336,7 @@ def load_plugin_file(path: str | os.PathLike) -> list[Plugin]:
                 found.append(registry.register(obj, origin=str(file)))
                 break
     if not found:
-        raise PluginError(f"--plugin {path} defines no estimator, attack or detector{_near_misses(module_name)}")
+        raise PluginError(f"--plugin {path} defines no estimator, attack, detector or scenario{_near_misses(module_name)}")
     listed = plugin_files()
     if str(file) not in listed:
         os.environ[PLUGIN_ENV] = os.pathsep.join([*listed, str(file)])

@@ -147,7 +147,7 @@ def plugin_flag(p: argparse.ArgumentParser) -> None:
     """``--plugin FILE``: a user's estimator, attack or detector from a Python file (read before
     the parser is built, by :func:`load_plugins_from_argv`, so the choices include it)."""
     p.add_argument("--plugin", action="append", default=[], metavar="FILE.py",
-                   help="load an estimator, attack or detector from a Python file (repeatable); it is then valid "
+                   help="load an estimator, attack, detector or scenario from a Python file (repeatable); it is then valid "
                         "wherever a built-in one is, and its source enters the result ids")
 
 
