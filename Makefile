@@ -53,10 +53,10 @@ docs: $(STAMP)
 # The offline repair benchmark on the default dataset (collected first if missing).
 bench: $(STAMP)
 	test -f data/qcar2/dataset.parquet || $(VENV)/bin/racf collect
-	$(VENV)/bin/racf bench
+	$(VENV)/bin/racf bench offline
 
 bench-sim: $(STAMP)
-	$(VENV)/bin/racf bench-sim
+	$(VENV)/bin/racf bench sim
 
 snapshot: $(STAMP)
 	$(VENV)/bin/racf snapshot --out outputs/snapshot
@@ -65,7 +65,7 @@ trials: $(STAMP)
 	$(VENV)/bin/racf trials --setting clean -n 30
 
 bench-detector: $(STAMP)
-	$(VENV)/bin/racf bench-detector
+	$(VENV)/bin/racf bench detector
 
 clean:
 	rm -rf $(VENV) outputs site build

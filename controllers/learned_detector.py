@@ -7,7 +7,7 @@ colour-and-shape detector (``detect`` / ``candidates`` -> :class:`~racf.controll
 so perception, the referee and the benchmarks take either by name (``racf.controllers.detectors``).
 
 The network's weights are the project's own checkpoint (``assets/checkpoints/sign-segmenter``),
-trained on the simulator's frames by ``racf train-detector``; nothing is downloaded.
+trained on the simulator's frames by ``racf detector train``; nothing is downloaded.
 """
 
 from __future__ import annotations
@@ -69,19 +69,19 @@ def load_segmenter(directory: Path = SHIPPED_SEGMENTER) -> SignSegmenterNet:
     weights, meta = directory / "model.pt", directory / "segmenter.json"
     if not weights.is_file() or not meta.is_file():
         raise FileNotFoundError(f"no segmenter checkpoint in {directory} (model.pt and segmenter.json); "
-                                "train one with `racf train-detector`")
+                                "train one with `racf detector train`")
     architecture = json.loads(meta.read_text())["architecture"]
     try:
         config = SegmenterConfig(**architecture)
     except TypeError:
         raise ValueError(f"the checkpoint in {directory} is of another segmenter architecture (widths "
-                         f"{sorted(architecture)}, this one has c1, c2, c3); retrain it with `racf train-detector`") from None
+                         f"{sorted(architecture)}, this one has c1, c2, c3); retrain it with `racf detector train`") from None
     net = SignSegmenterNet(config)
     try:
         net.load_state_dict(torch.load(weights, map_location="cpu", weights_only=True))
     except RuntimeError:  # the same widths, other layers
         raise ValueError(f"the checkpoint in {directory} is of another segmenter architecture (its weights do not "
-                         f"fit this network's layers); retrain it with `racf train-detector`") from None
+                         f"fit this network's layers); retrain it with `racf detector train`") from None
     return net.eval()
 
 

@@ -273,14 +273,14 @@ class ODCA:
         folder = Path(path) if path is not None else SHIPPED_HEAD
         cfg_file, weights_file = folder / "odca.json", folder / "head.npz"
         if not cfg_file.exists() or not weights_file.exists():
-            raise CheckpointError(f"no ODCA checkpoint at {folder} (need odca.json and head.npz; `racf train` makes one)")
+            raise CheckpointError(f"no ODCA checkpoint at {folder} (need odca.json and head.npz; `racf odca train` makes one)")
         try:
             config = ODCAConfig.from_json(json.loads(cfg_file.read_text()))
             with np.load(weights_file) as z:
                 head = HeadWeights({k: z[k] for k in z.files})
         except (ValueError, TypeError, KeyError, OSError, json.JSONDecodeError) as err:
             raise CheckpointError(f"the ODCA checkpoint at {folder} is corrupt or from an older racf "
-                                  f"({type(err).__name__}: {err}); retrain it with `racf train`") from None
+                                  f"({type(err).__name__}: {err}); retrain it with `racf odca train`") from None
         if prior is None:
             if config.prior == "shipped":
                 prior = Chronos2Prior(SHIPPED_PRIOR)

@@ -95,7 +95,7 @@ def _write_card(path: Path, meta: dict) -> None:
 exists so the testbed runs where the Hugging Face hub is unreachable. `Chronos2Prior("amazon/chronos-2")`
 loads the real model for users who can reach the hub.
 
-**How it was made.** `racf pretrain-prior --steps {meta['steps']} --seed {meta['seed']}`: random
+**How it was made.** `racf odca pretrain-prior --steps {meta['steps']} --seed {meta['seed']}`: random
 initialisation, then `Chronos2Pipeline.fit` for {meta['steps']} steps (batch 64, learning rate 2e-3)
 on {meta['n_series']} synthetic series (`odca/synthetic.py`: kinematic approach curves with depth-like
 noise and dropouts, kernel-synth style sums of smooth/periodic/trend parts, steps, AR(1)).

@@ -9,7 +9,7 @@ Forecasts run in fixed-size batches (padded), so a window gets bit-identical num
 whether it is forecast alone (online) or with others (offline): CPU kernels compute the
 rows of a fixed-shape batch independently, but pick different paths for other shapes.
 The default batch is one window: the online module forecasts one window per refresh, and
-a padded batch of 8 cost it 2.0 ms against 1.1 ms (``racf odca-latency``); offline callers
+a padded batch of 8 cost it 2.0 ms against 1.1 ms (``racf bench odca-latency``); offline callers
 that want throughput pass a larger ``batch_size``.
 """
 
@@ -80,7 +80,7 @@ class Chronos2Prior:
         looks_local = path.is_absolute() or str(checkpoint).startswith(".") or path.exists()
         if looks_local and not (path / "config.json").exists():
             raise CheckpointError(f"no Chronos-2 checkpoint at {path} (need config.json and model weights; "
-                                  "`racf pretrain-prior` makes one)")
+                                  "`racf odca pretrain-prior` makes one)")
         try:
             with _quiet_transformers():
                 pipeline = Chronos2Pipeline.from_pretrained(str(checkpoint))

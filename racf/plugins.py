@@ -1,5 +1,5 @@
 """The registries of racf's parts that a user can bring their own of: estimators (defences),
-attacks, stop-sign detectors and scenarios.
+attacks, stop-sign detectors, scenarios and metrics.
 
 Each registry is filled from one entry-point group of the installed distributions, racf's own
 parts registering the same way as a user's:
@@ -11,6 +11,7 @@ group                  an entry point names                                     
 ``racf.attacks``       an ``AttackWrapper`` subclass (``racf.sim.attacks``)         ATTACKS
 ``racf.detectors``     a class or factory whose objects have ``detect(rgb)``        DETECTORS
 ``racf.scenarios``     a ``Scenario`` subclass (``racf.experiments.scenarios``)     SCENARIOS
+``racf.metrics``       a ``Metric`` subclass (``racf.experiments.metrics``)         METRICS
 =====================  ==========================================================  ==========
 
 A user who has not packaged their code loads a file instead (``--plugin path/to/file.py`` on the
@@ -45,7 +46,7 @@ from typing import Any
 from racf.errors import UserError
 from racf.provenance import source_version
 
-__all__ = ["Plugin", "PluginError", "Registry", "ESTIMATORS", "ATTACKS", "DETECTORS", "SCENARIOS", "REGISTRIES",
+__all__ = ["Plugin", "PluginError", "Registry", "ESTIMATORS", "ATTACKS", "DETECTORS", "SCENARIOS", "METRICS", "REGISTRIES",
            "load_plugin_file", "plugin_files", "PLUGIN_ENV"]
 
 #: The environment variable that lists the plug-in files this process and its workers load.
@@ -249,6 +250,7 @@ def _subclass_of(module: str, base_name: str) -> Callable[[Any], bool]:
 
 _is_attack = _subclass_of("racf.sim.attacks.base", "AttackWrapper")
 _is_scenario = _subclass_of("racf.experiments.scenarios.base", "Scenario")
+_is_metric = _subclass_of("racf.experiments.metrics.base", "Metric")
 
 
 def _is_detector(obj: Any) -> bool:
@@ -283,6 +285,7 @@ _SHAPES = {
     "attack": "a subclass of racf.sim.attacks.AttackWrapper with a 'name'",
     "detector": "a class (or factory) whose objects have detect(rgb) -> Detection | None",
     "scenario": "a subclass of racf.experiments.scenarios.Scenario with a 'name'",
+    "metric": "a subclass of racf.experiments.metrics.Metric with a 'name'",
 }
 
 #: Every part a user can bring, by name.
@@ -290,8 +293,9 @@ ESTIMATORS = Registry("racf.estimators", "estimator", _is_estimator)
 ATTACKS = Registry("racf.attacks", "attack", _is_attack)
 DETECTORS = Registry("racf.detectors", "detector", _is_detector)
 SCENARIOS = Registry("racf.scenarios", "scenario", _is_scenario)
+METRICS = Registry("racf.metrics", "metric", _is_metric)
 REGISTRIES: dict[str, Registry] = {"estimator": ESTIMATORS, "attack": ATTACKS, "detector": DETECTORS,
-                                   "scenario": SCENARIOS}
+                                   "scenario": SCENARIOS, "metric": METRICS}
 
 _INTERACTIVE = "interactive"
 _CODE = "code:"
@@ -314,7 +318,7 @@ def load_plugin_file(path: str | os.PathLike) -> list[Plugin]:
             else "is not a Python file (.py)" if file.suffix != ".py" else None)
     if what is not None:
         raise PluginError(f"--plugin {path}: {what}; give the path of a .py file that defines an estimator, an "
-                          f"attack, a detector or a scenario")
+                          f"attack, a detector, a scenario or a metric")
     module_name = f"racf_plugin_{file.stem}_{hashlib.sha256(str(file).encode()).hexdigest()[:8]}"
     if module_name not in sys.modules:
         spec = importlib.util.spec_from_file_location(module_name, file)
@@ -336,7 +340,8 @@ def load_plugin_file(path: str | os.PathLike) -> list[Plugin]:
                 found.append(registry.register(obj, origin=str(file)))
                 break
     if not found:
-        raise PluginError(f"--plugin {path} defines no estimator, attack, detector or scenario{_near_misses(module_name)}")
+        raise PluginError(f"--plugin {path} defines no estimator, attack, detector, scenario or metric"
+                          f"{_near_misses(module_name)}")
     listed = plugin_files()
     if str(file) not in listed:
         os.environ[PLUGIN_ENV] = os.pathsep.join([*listed, str(file)])

@@ -66,27 +66,48 @@ def cusum_installed(tmp_path, monkeypatch, cusum_wheel_site):
     _forget_plugins()
 
 
-@pytest.fixture(scope="session")
-def parked_car_site(tmp_path_factory) -> Path:
-    """The example scenario installed once by pip from its own ``pyproject.toml`` into a folder of its own."""
-    site = tmp_path_factory.mktemp("parked-car-site")
+def _pip_install_example(tmp_path_factory, folder: str) -> Path:
+    """An example package installed by pip from its own ``pyproject.toml`` (its entry points included)
+    into a folder of its own: what ``pip install examples/FOLDER`` puts in site-packages."""
+    site = tmp_path_factory.mktemp(folder)
     done = subprocess.run([sys.executable, "-m", "pip", "install", "--quiet", "--no-deps", "--no-build-isolation",
-                           "--target", str(site), str(EXAMPLES / "racf-parked-car")], capture_output=True, text=True)
+                           "--target", str(site), str(EXAMPLES / folder)], capture_output=True, text=True)
     assert done.returncode == 0, done.stderr[-2000:]
     return site
+
+
+def _use_example(site: Path, installed: Path, module: str, monkeypatch) -> Path:
+    """A copy of an installed example on the path of this process and its workers; the package's folder."""
+    shutil.copytree(installed, site)
+    for name in [m for m in sys.modules if m.split(".")[0] == module]:  # another test's copy
+        monkeypatch.delitem(sys.modules, name)
+    monkeypatch.syspath_prepend(str(site))
+    monkeypatch.setenv("PYTHONPATH", os.pathsep.join(filter(None, [str(site), os.environ.get("PYTHONPATH")])))
+    _forget_plugins()
+    return site / module
+
+
+@pytest.fixture(scope="session")
+def parked_car_site(tmp_path_factory) -> Path:
+    return _pip_install_example(tmp_path_factory, "racf-parked-car")
 
 
 @pytest.fixture
 def parked_car_installed(tmp_path, monkeypatch, parked_car_site):
     """The example scenario installed for one test (and the worker processes it spawns); its package folder."""
-    site = tmp_path / "parked-site"
-    shutil.copytree(parked_car_site, site)
-    for name in [m for m in sys.modules if m.split(".")[0] == "racf_parked_car"]:
-        monkeypatch.delitem(sys.modules, name)
-    monkeypatch.syspath_prepend(str(site))
-    monkeypatch.setenv("PYTHONPATH", str(site))
+    yield _use_example(tmp_path / "parked-site", parked_car_site, "racf_parked_car", monkeypatch)
     _forget_plugins()
-    yield site / "racf_parked_car"
+
+
+@pytest.fixture(scope="session")
+def time_to_line_site(tmp_path_factory) -> Path:
+    return _pip_install_example(tmp_path_factory, "racf-time-to-line")
+
+
+@pytest.fixture
+def time_to_line_installed(tmp_path, monkeypatch, time_to_line_site):
+    """The example metric installed for one test (and the worker processes it spawns); its package folder."""
+    yield _use_example(tmp_path / "ttl-site", time_to_line_site, "racf_time_to_line", monkeypatch)
     _forget_plugins()
 
 

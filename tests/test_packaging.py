@@ -23,7 +23,12 @@ TOPS = {"racf": "racf", "racf.assets": "assets", "racf.sim": "sim", "racf.odca":
 
 def test_every_package_folder_installs_under_racf_and_nothing_else():
     setuptools = PYPROJECT["tool"]["setuptools"]
-    assert setuptools["package-dir"] == TOPS
+    assert setuptools["package-dir"] == {"": "."}
+    # The one folder mapping: racf/NAME links to the design card's top-level folder.
+    for name, folder in TOPS.items():
+        if name != "racf":
+            link = ROOT / "racf" / name.split(".")[1]
+            assert link.is_symlink() and link.resolve() == (ROOT / folder).resolve()
     found = {"racf", "racf.assets"}
     for name, folder in TOPS.items():
         if name in ("racf", "racf.assets"):

@@ -1,8 +1,8 @@
-"""``racf bench-detector``: a stop-sign detector against the simulator's ground truth.
+"""``racf bench detector``: a stop-sign detector against the simulator's ground truth.
 
 Two sets of frames, neither seen in training:
 
-- *Held-out views* (``racf detector-data``'s held-out split): 0.3-6 m from a sign, up to
+- *Held-out views* (``racf detector data``'s held-out split): 0.3-6 m from a sign, up to
   60 deg off its face; poses on the car's approaches; views from anywhere on the map; varied
   lighting and moved props. Recall and false-positive frames as in
   ``racf.experiments.detector.evaluate``, overall, per kind of view and per distance band.

@@ -1,4 +1,4 @@
-"""``racf bench-loop``: closed-loop throughput, as ratios a user can compare across machines.
+"""``racf bench loop``: closed-loop throughput, as ratios a user can compare across machines.
 
 - ``rtf_clean``, ``rtf_attack_odca``: simulated seconds per wall second of whole episodes
   (reset included) on one core (torch on one thread, the rasteriser on the calling thread),

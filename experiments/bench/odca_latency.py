@@ -1,4 +1,4 @@
-"""``racf odca-latency``: per-step time of the online ODCA module on the CPU with the shipped prior.
+"""``racf bench odca-latency``: per-step time of the online ODCA module on the CPU with the shipped prior.
 
 Feeds a 50 Hz approach series (depth with noise, dropouts and a blackout, LiDAR, speed)
 through ``ODCA.step`` and times every call. The prior forecasts every ``refresh_steps``

@@ -1,4 +1,4 @@
-"""``racf bench-patch``: the adversarial sticker in the world, against both detectors.
+"""``racf bench patch``: the adversarial sticker in the world, against both detectors.
 
 Fresh views (seeded apart from the training and held-out splits) look at a stop sign from
 0.3-4 m, up to 60 deg off its face, in varied light; or, with ``views="approach"``, stand on

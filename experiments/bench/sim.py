@@ -1,11 +1,11 @@
-"""``racf bench-sim``: simulator throughput at the 50 Hz control rate.
+"""``racf bench sim``: simulator throughput at the 50 Hz control rate.
 
 Prints control steps per second and the real-time factor (simulated seconds per wall
 second) for physics only, physics + LiDAR, and the full sensor set (RGB-D camera, LiDAR,
 state, ground truth) at three camera resolutions. The car drives a stop-sign approach at
 1 m/s with Stanley lane following, so the camera sees a changing scene.
 
-``bench_traffic`` (``racf bench-sim --traffic-cars N``) times the full sensor set at the
+``bench_traffic`` (``racf bench sim --traffic-cars N``) times the full sensor set at the
 default 320 x 240 with and without N other cars crossing at the sign, in alternation in one
 process (the machine's drift hits both alike), and prints the ratio of the real-time factors.
 """

@@ -1,4 +1,4 @@
-"""``racf bench-traffic``: what another car does to the clean pipeline, paired with the empty map.
+"""``racf bench traffic``: what another car does to the clean pipeline, paired with the empty map.
 
 Three placements (issue 37), each an ordinary clean approach run twice on the same seed, once
 with one other car driven past the place that tests the pipeline and once without it:

@@ -18,6 +18,7 @@ from typing import Iterator
 from racf.errors import EpisodeFailed, Interrupted, UserError
 from racf.experiments.cli import bench, data, detector, falsify, odca, scorecard, sweep, trials, view
 from racf.experiments.cli.common import Parser, fail, load_plugins_from_argv
+from racf.experiments.cli.groups import add_groups, canonical_argv
 
 __all__ = ["main", "build_parser", "GROUPS"]
 
@@ -33,15 +34,16 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = Parser(prog="racf", description="RACF testbed: QCar 2 simulation, attacks and ODCA.")
     p.add_argument("--version", action="version", version=f"racf {racf.__version__}")
-    sub = p.add_subparsers(dest="command", required=True, parser_class=Parser)
+    sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND", parser_class=Parser)
     for group in GROUPS:
         group.register(sub)
+    add_groups(sub)
     return p
 
 
 def main(argv: list[str] | None = None) -> int:
     """Runs one command; returns its exit code (0 done, 1 episodes failed, 2 bad input, 130 interrupted)."""
-    argv = sys.argv[1:] if argv is None else list(argv)
+    argv = canonical_argv(sys.argv[1:] if argv is None else list(argv))
     command = next((a for a in argv if not a.startswith("-")), "")
     args = None
     try:
@@ -52,8 +54,8 @@ def main(argv: list[str] | None = None) -> int:
             except SystemExit as done:  # --help, --version, or argparse's one line for a bad flag
                 return int(done.code or 0)
             if extra:
-                fail(args.command, f"unrecognized arguments: {' '.join(extra)} (`racf {args.command} --help` "
-                                   f"lists what is allowed)")
+                fail(_name(args), f"unrecognized arguments: {' '.join(extra)} (`racf {_name(args)} --help` "
+                                  f"lists what is allowed)")
             if getattr(args, "address", None) is not None and args.backend != "ray":
                 fail(args.command, "--address joins a Ray cluster: it needs --backend ray")
             return args.handler(args)
@@ -82,10 +84,17 @@ def main(argv: list[str] | None = None) -> int:
 
 def _say(args, guess: str, message: str) -> None:
     """``racf COMMAND: MESSAGE`` on one line (the command as parsed, else the first word given)."""
-    command = getattr(args, "command", None) or guess
+    command = _name(args) or guess
     prefix = f"racf {command}:" if command else "racf:"
     message = " ".join(str(message).split())  # one line, whatever the message held
     print(message if message.startswith("racf ") else f"{prefix} {message}", file=sys.stderr)
+
+
+def _name(args) -> str | None:
+    """The command as parsed: ``trials``, or a group's ``bench sim``."""
+    command = getattr(args, "command", None)
+    sub = getattr(args, "subcommand", None)
+    return f"{command} {sub}" if command and sub else command
 
 
 def _words(err: BaseException) -> str:

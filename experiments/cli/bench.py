@@ -1,4 +1,4 @@
-"""``racf bench`` (the offline repair benchmark) and the speed benchmarks: ``bench-sim``,
+"""``racf bench offline`` (the offline repair benchmark) and the speed benchmarks: ``bench-sim``,
 ``bench-loop`` and ``bench-detector``."""
 
 from __future__ import annotations
@@ -24,7 +24,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     sensor_flags(b, geometry_default=None)
     b.set_defaults(handler=_bench_sim)
 
-    ob = sub.add_parser("bench", help="the offline repair benchmark: every registered estimator (raw, EKF, ODCA, "
+    ob = sub.add_parser("bench-offline", help="the offline repair benchmark: every registered estimator (raw, EKF, ODCA, "
                                       "plug-ins) beside the LiDAR reference and the forecasters (Chronos-2, SOFTS, "
                                       "NHITS, DLinear, NLinear) on both splits and presets (tables, figures, "
                                       "results.json)")

@@ -328,6 +328,9 @@ def episode_flags(p: argparse.ArgumentParser) -> None:
     p.add_argument("--scenario-param", action="append", default=[], metavar="KEY=VALUE",
                    help="a parameter of the scenario (--target; `racf list scenarios` lists each one's, with "
                         "ranges); repeatable, values are TOML, e.g. leave_s=2.5")
+    p.add_argument("--metric", action="append", default=[], metavar="NAME",
+                   help="also score this metric (repeatable; `racf list` lists them: those not scored on every "
+                        "episode are marked 'asked')")
     p.add_argument("--attack-param", action="append", default=[], metavar="ATTACK.KEY=VALUE",
                    help="a setting of one of the attacks (repeatable; values are TOML), e.g. "
                         "depth_bias.bias_m=1.5, or its schedule: depth_bias.trigger=at_time depth_bias.start_s=2.0 "
@@ -385,7 +388,7 @@ def episode_params(args: argparse.Namespace, command: str, table: bool = False) 
             situation = {"cars": args.traffic_cars, "gap_s": args.traffic_gap, "speed": args.traffic_speed} | situation
         elif args.traffic_gap != 0.0 or args.traffic_speed != 1.0:
             flag_error(command, "--traffic-gap and --traffic-speed need --traffic-cars N (N >= 1)")
-        params |= {"target": target, "scenario_params": situation}
+        params |= {"target": target, "scenario_params": situation, "metrics": tuple(args.metric)}
     except ValueError as err:
         flag_error(command, str(err))
     return setting, params

@@ -47,7 +47,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
     td = sub.add_parser("train-detector", help="train the stop-sign segmenter on the CPU (renders the views first "
                                                "if missing); writes a checkpoint")
-    td.add_argument("--data", type=Path, default=Path("data/detector"), help="views folder (racf detector-data)")
+    td.add_argument("--data", type=Path, default=Path("data/detector"), help="views folder (racf detector data)")
     td.add_argument("--out", type=output_dir, default=Path("outputs/sign-segmenter"),
                     help="checkpoint folder (default outputs/sign-segmenter; the shipped one is "
                          "assets/checkpoints/sign-segmenter)")
@@ -59,7 +59,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
     op = sub.add_parser("optimise-patch", help="optimise an adversarial sticker against the learned segmenter "
                                                "(EOT over rendered views, differentiable warp); writes a PNG")
-    op.add_argument("--data", type=Path, default=Path("data/detector"), help="views folder (racf detector-data)")
+    op.add_argument("--data", type=Path, default=Path("data/detector"), help="views folder (racf detector data)")
     op.add_argument("--checkpoint", type=Path, default=None, help="segmenter checkpoint (default: the shipped one)")
     op.add_argument("--out", type=output_dir, default=Path("outputs/patches"),
                     help="folder for learned.png and learned.json (default outputs/patches; the shipped one is "
@@ -148,7 +148,7 @@ def _optimise_patch(args: argparse.Namespace) -> int:
     except ValueError as err:
         fail("optimise-patch", str(err))
     if config.views == "dataset" and not (args.data / "manifest.json").is_file():
-        fail("optimise-patch", f"no views in {args.data}: render them with `racf detector-data --out {args.data}`")
+        fail("optimise-patch", f"no views in {args.data}: render them with `racf detector data --out {args.data}`")
     try:
         _, report = optimise_patch(config, args.data, args.checkpoint or SHIPPED_SEGMENTER, args.out,
                                    progress=not args.json)
@@ -159,7 +159,7 @@ def _optimise_patch(args: argparse.Namespace) -> int:
         return 0
     print(f"optimised over {report['n_views']} views in {report['optimise_s']:.0f} s: loss "
           f"{report['loss_first']:.3f} -> {report['loss_last']:.3f}")
-    print(f"sticker in {args.out / 'learned.png'}; try it in the scene with `racf bench-patch --texture "
+    print(f"sticker in {args.out / 'learned.png'}; try it in the scene with `racf bench patch --texture "
           f"{args.out / 'learned.png'}`")
     return 0
 

@@ -1,4 +1,4 @@
-"""``racf pretrain-prior``, ``racf train``, ``racf evaluate`` and ``racf odca-latency``: ODCA's checkpoints."""
+"""``racf odca pretrain-prior``, ``racf odca train``, ``racf odca evaluate`` and ``racf bench odca-latency``: ODCA's checkpoints."""
 
 from __future__ import annotations
 

@@ -34,10 +34,24 @@ def _cli_markdown(parser: argparse.ArgumentParser) -> str:
     lines = ["# The `racf` command line", "",
              "Made from the argparse parsers (`racf COMMAND --help` prints the same). Every command "
              "that runs episodes takes `--plugin FILE.py`.", ""]
-    for name, command in sub.choices.items():
+    from racf.experiments.cli.groups import GROUPS
+
+    for name in helps:  # the commands --help lists, in its order; a group's commands under it
+        command = sub.choices[name]
         command.prog = f"racf {name}"
-        lines += [f"## `racf {name}`", "", helps.get(name) or "", "", "```text",
-                  command.format_help().rstrip(), "```", ""]
+        lines += [f"## `racf {name}`", "", helps.get(name) or "", "", "```text", command.format_help().rstrip(), "```",
+                  ""]
+        if name in GROUPS:
+            inner = next(a for a in command._actions if isinstance(a, argparse._SubParsersAction))
+            inner_helps = {a.dest: a.help for a in inner._choices_actions}
+            for short, parser in inner.choices.items():
+                lines += [f"### `racf {name} {short}`", "", inner_helps.get(short) or "", "", "```text",
+                          parser.format_help().rstrip(), "```", ""]
+    aliases = [f"`racf {flat}` = `racf {group} {short}`" for group, (_, commands) in GROUPS.items()
+               for short, flat in commands.items()]
+    lines += ["## Old names", "", "The commands had flat names before they were grouped; those names still work "
+              "(scripts run unchanged) and `racf bench` followed by the offline benchmark's flags is that benchmark: "
+              + "; ".join(aliases) + ".", ""]
     from racf.experiments.cli.mistakes import mistakes_markdown
 
     return "\n".join([*lines, mistakes_markdown(), ""])
@@ -55,10 +69,10 @@ def parts_markdown() -> str:
 
 def step_log_markdown() -> str:
     """The step log's columns from their one declaration, and the result row's fields."""
-    from dataclasses import fields
 
     from racf.experiments.episode.record import STEP_COLUMNS
-    from racf.experiments.episode.runner import TrialResult
+    from racf.experiments.episode.runner import IDENTITY
+    from racf.plugins import METRICS
 
     lines = ["# The step log and the result row", "",
              "Every episode logs one row per 50 Hz step with these columns "
@@ -67,8 +81,15 @@ def step_log_markdown() -> str:
              "map; *referee*: ground truth, never seen by the car.", "",
              "| column | unit | side | meaning |", "|---|---|---|---|"]
     lines += [f"| `{c.name}` | {c.unit or '-'} | {c.side} | {c.meaning} |" for c in STEP_COLUMNS]
-    lines += ["", "The result row (`TrialResult`, strict JSON: null for a missing number):", "",
-              ", ".join(f"`{f.name}`" for f in fields(TrialResult)), ""]
+    lines += ["", "## The result row", "",
+              "`TrialResult`, strict JSON (null for a missing number): which episode it is ("
+              + ", ".join(f"`{name}`" for name in IDENTITY) + "), then the fields of each metric the episode "
+              "scored (`racf.plugins.METRICS`; racf's own are listed here, a plug-in's follow them):", "",
+              "| field | unit | metric | summarised as | meaning |", "|---|---|---|---|---|"]
+    for name in sorted((n for n in METRICS if METRICS.plugin(n).builtin), key=lambda n: (METRICS[n].order, n)):
+        lines += [f"| `{f.name}` | {f.unit or '-'} | `{name}` | {f.summary or '-'} | {f.meaning} |"
+                  for f in METRICS[name].fields]
+    lines.append("")
     return "\n".join(lines)
 
 

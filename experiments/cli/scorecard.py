@@ -9,7 +9,7 @@ import time
 from pathlib import Path
 
 from racf.experiments.cli.common import (backend_flags, estimator_option_flag, estimator_options, fail, output_dir,
-                                         plugin_flag)
+                                         plain_values, plugin_flag)
 
 __all__ = ["register"]
 
@@ -28,6 +28,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     what.add_argument("--compare", nargs=2, metavar=("A", "B"),
                       help="two stored cards side by side (a defence's name in --out, or a card's JSON file)")
     sc.add_argument("--battery", default=None, help="the battery (default: the newest, racf-4)")
+    sc.add_argument("--target", default=None, metavar="SCENARIO",
+                    help="run the battery's stop-sign approaches in this scenario (racf list shows them; its cards "
+                         "are named BATTERY@SCENARIO)")
+    sc.add_argument("--scenario-param", action="append", default=[], metavar="KEY=VALUE",
+                    help="a parameter of --target's scenario (repeatable; values are TOML)")
     sc.add_argument("--quick", action="store_true",
                     help="every row at a small N, for development: marked as quick in every output")
     sc.add_argument("--out", type=output_dir, default=_DEFAULT_OUT, help=f"results folder (default {_DEFAULT_OUT}); "
@@ -86,6 +91,14 @@ def _scorecard(args: argparse.Namespace) -> int:
     from racf.plugins import ATTACKS, ESTIMATORS
 
     battery = _battery(args.battery)
+    if args.target is not None:
+        try:
+            battery = battery.in_scenario(args.target, plain_values("scorecard", "--scenario-param",
+                                                                     args.scenario_param))
+        except ValueError as err:
+            fail("scorecard", str(err))
+    elif args.scenario_param:
+        fail("scorecard", "--scenario-param sets a parameter of --target's scenario: give --target too")
     name = battery.name + ("-quick" if args.quick else "")
     if args.compare:
         print(compare_markdown(*(_load_card(args, ref, name) for ref in args.compare)))

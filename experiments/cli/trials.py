@@ -62,8 +62,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     st.add_argument("--json", action="store_true", help="print one JSON object instead of tables")
     st.set_defaults(handler=_attack_study)
 
-    ls = sub.add_parser("list", help="the registered attacks, estimators (defences), detectors and scenarios (with "
-                                     "their parameters), plug-ins included")
+    ls = sub.add_parser("list", help="the registered attacks, estimators (defences), detectors, scenarios (with "
+                                     "their parameters) and metrics (with their fields), plug-ins included")
     ls.add_argument("--markdown", action="store_true", help="print the README's Markdown tables")
     ls.add_argument("--json", action="store_true", help="print {kind: {name: {origin, description}}} as JSON")
     plugin_flag(ls)
@@ -213,7 +213,7 @@ def _attack_study(args: argparse.Namespace) -> int:
 
 
 def _list(args: argparse.Namespace) -> int:
-    from racf.plugins import ATTACKS, DETECTORS, ESTIMATORS, REGISTRIES, SCENARIOS
+    from racf.plugins import ATTACKS, DETECTORS, ESTIMATORS, METRICS, REGISTRIES, SCENARIOS
 
     if args.markdown:
         print(registry_markdown())
@@ -224,7 +224,11 @@ def _list(args: argparse.Namespace) -> int:
         for name, entry in listed["scenario"].items():
             entry["params"] = {p.name: {"default": p.default, "low": p.low, "high": p.high, "choices": p.choices,
                                         "unit": p.unit, "meaning": p.meaning} for p in SCENARIOS[name].params}
-        print(json.dumps(listed))
+        for name, entry in listed["metric"].items():
+            entry["always"] = METRICS[name].always
+            entry["fields"] = {f.name: {"unit": f.unit, "meaning": f.meaning, "summary": f.summary}
+                               for f in METRICS[name].fields}
+        print(json.dumps(listed, default=str))
         return 0
     for title, registry in (("attacks (--attack, joined by ',' or '+')", ATTACKS),
                             ("estimators (--estimator)", ESTIMATORS), ("detectors (--detector)", DETECTORS)):
@@ -238,4 +242,10 @@ def _list(args: argparse.Namespace) -> int:
         print(f"  {name:<24}{text}" + ("" if origin == "racf" else f"  [plug-in: {origin}]"))
         for param in SCENARIOS[name].params:
             print(f"    {param.describe()}")
+    print("metrics (every episode; --metric NAME for those marked 'asked')")
+    for name, text in registry_rows(METRICS):
+        origin = METRICS.plugin(name).origin
+        print(f"  {name:<24}{text}" + ("" if METRICS[name].always else "  [asked]")
+              + ("" if origin == "racf" else f"  [plug-in: {origin}]"))
+        print(f"    fields: {', '.join(f.name + (f' ({f.unit})' if f.unit else '') for f in METRICS[name].fields)}")
     return 0

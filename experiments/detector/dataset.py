@@ -1,6 +1,6 @@
 """The segmenter's dataset on disk: rendered views in shards, named by what made them.
 
-``racf detector-data`` renders ``n_train`` training views and ``n_heldout`` held-out views
+``racf detector data`` renders ``n_train`` training views and ``n_heldout`` held-out views
 (a different seed: no pose, lighting or distractor draw is shared) into
 ``data/detector/<split>/shard-NNN.npz``. A ``manifest.json`` records the settings and the
 code version of the simulator and of this package; a dataset whose manifest differs from
@@ -147,7 +147,7 @@ def load_split(root: Path, split: str) -> dict[str, np.ndarray]:
     d_true (N,), cam_pos (N, 3), cam_mat (N, 3, 3), sign_px (N, 4)."""
     files = sorted((Path(root) / split).glob("shard-*.npz"))
     if not files:
-        raise FileNotFoundError(f"no {split} shards under {root}; render them with `racf detector-data`")
+        raise FileNotFoundError(f"no {split} shards under {root}; render them with `racf detector data`")
     parts = [dict(np.load(f)) for f in files]
     out = {key: np.concatenate([p[key] for p in parts]) for key in parts[0]}
     width = out["rgb"].shape[2]

@@ -1,4 +1,4 @@
-"""``racf optimise-patch``: an adversarial sticker for the stop sign, against the learned segmenter.
+"""``racf detector optimise-patch``: an adversarial sticker for the stop sign, against the learned segmenter.
 
 Expectation over transformation (Athalye et al. 2018; Brown et al. 2017, "Adversarial
 Patch"; Eykholt et al. 2018, "Robust Physical-World Attacks"): MuJoCo's renderer is not

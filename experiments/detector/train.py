@@ -1,4 +1,4 @@
-"""``racf train-detector``: trains the stop-sign segmenter on rendered views, on the CPU.
+"""``racf detector train``: trains the stop-sign segmenter on rendered views, on the CPU.
 
 Per-pixel binary cross-entropy plus a soft Dice term, against the ground-truth face masks
 pooled to the network's half resolution (a pixel's target is the share of its 2x2 block on

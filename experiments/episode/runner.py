@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import math
 from collections import deque
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 from typing import Callable
 
 import gymnasium as gym
@@ -27,20 +27,18 @@ import numpy as np
 import pandas as pd
 
 from racf.controllers import DistanceEstimator, Phase
-from racf.experiments.episode.conflict import NEAR_MISS_S, score_conflict
+from racf.experiments.episode.conflict import NEAR_MISS_S
 from racf.experiments.episode.record import step_row
 from racf.experiments.episode.referee import Referee
-from racf.experiments.episode.scoring import largest_jump, score_log, stealth
-from racf.experiments.episode.robustness import robustness
 from racf.experiments.episode.spec import TrialSpec
 from racf.experiments.episode.plan import EpisodePlan, plan_episode
 from racf.experiments.episode.stack import build_car, default_env
-from racf.sim.attacks import PatchOcclusion
-from racf.sim.attacks.base import AttackWrapper
+from racf.plugins import METRICS
+from racf.sim.attacks.base import AttackWrapper, find_wrapper
 from racf.sim.sensors import STATE_FIELDS
 from racf.sim.world.traffic import CAR_FOOTPRINT_M
 
-__all__ = ["TrialResult", "StepHook", "run_trial", "scan_fov", "SCAN_FOV_HALF_BEAMS",
+__all__ = ["TrialResult", "IDENTITY", "Episode", "StepHook", "run_trial", "scan_fov", "SCAN_FOV_HALF_BEAMS",
            "RUN_THROUGH_M", "run_through_m"]
 
 #: An episode ends once the bumper is this far past the last target's line (without traffic).
@@ -58,61 +56,47 @@ def scan_fov(ranges: np.ndarray, half_beams: int = SCAN_FOV_HALF_BEAMS) -> np.nd
     return np.concatenate([ranges[-half_beams:], ranges[:half_beams + 1]])
 
 
-@dataclass(frozen=True, kw_only=True)
+@dataclass(frozen=True)
+class Episode:
+    """What a metric (``racf.experiments.metrics``) scores: the spec, the plan, the per-step log and
+    the env as it ran (its attack wrappers' schedules say when an attack acted)."""
+
+    spec: TrialSpec
+    plan: EpisodePlan
+    log: pd.DataFrame
+    env: gym.Env
+
+
+#: The result row's first columns: which episode it is (the metrics' fields follow).
+IDENTITY = ("trial_id", "setting", "estimator", "target", "sign", "speed", "seed")
+
+
 class TrialResult:
-    """The result row of one episode; the timing fields are the first target's (NaN: none).
+    """The result row of one episode: which episode it is (``IDENTITY``), then the fields of every
+    metric it scored (``racf.plugins.METRICS``, in their ``order``; ``racf list metrics`` says what
+    each field means). Fields read as attributes (``result.success``); :meth:`to_dict` is the row."""
 
-    ``trigger_delay_s`` = t(brake) - t*; ``dt_brake_s``: t* to braking within 0.60 m of
-    the line (the paper's latency); ``failure``: where a failed first target went wrong.
-    ``attack_start_s`` and ``t_atk_s`` are the first window of the attack that began first
-    (the patch on a tie; NaN: no attack began); ``rho`` is the patch's (NaN: no patch).
-    ``fused_jump_m``: the largest step change of the distance the car acted on beyond its own
-    motion (``scoring.largest_jump``). ``undetected_error_m``, ``detection_delay_s`` and
-    ``detected``: how far the attack pushed that distance before the defence flagged it, and
-    when it did (``scoring.stealth``). ``robustness_m``: the stop rule's signal-temporal-logic
-    robustness, the lowest over the targets (``robustness``; negative: the rule was broken).
-    ``conflict``, ``collision``, ``collision_with``, ``min_ttc_s``, ``pet_s``: what the episode came
-    to with cross-traffic (``conflict.score_conflict``; a contact with anything counts, traffic or
-    not); ``traffic_cars``: how many other cars drove.
-    """
+    def __init__(self, row: dict) -> None:
+        object.__setattr__(self, "_row", dict(row))
 
-    trial_id: str
-    setting: str
-    estimator: str
-    target: str
-    sign: int
-    speed: float
-    seed: int
-    rho: float
-    t_atk_s: float
-    attack_start_s: float
-    lost_frames: int
-    success: bool
-    stopped: bool
-    stop_distance_m: float
-    t_star_s: float
-    t_brake_s: float
-    trigger_delay_s: float
-    dt_brake_s: float
-    failure: str | None
-    duration_s: float
-    n_targets: int = 1
-    targets_served: int = 0
-    fused_jump_m: float = math.nan
-    undetected_error_m: float = math.nan
-    detection_delay_s: float = math.nan
-    detected: bool = False
-    robustness_m: float = math.nan
-    conflict: str | None = None
-    collision: bool = False
-    collision_with: str | None = None
-    min_ttc_s: float = math.nan
-    pet_s: float = math.nan
-    traffic_cars: int = 0
+    def __getattr__(self, name: str):
+        try:
+            return self._row[name]
+        except KeyError:
+            raise AttributeError(f"the result row has no field {name!r}; its fields: {list(self._row)}") from None
+
+    def __setattr__(self, name: str, value) -> None:
+        raise AttributeError("a result row is read-only")
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, TrialResult) and self.to_dict() == other.to_dict()
+
+    def __repr__(self) -> str:
+        return f"TrialResult({self._row!r})"
 
     def to_dict(self) -> dict:
         """Strict-JSON-ready: NaN becomes None."""
-        return {k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in asdict(self).items()}
+        return {k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in self._row.items()}
 
 
 def run_trial(spec: TrialSpec, estimator: DistanceEstimator | None = None, make_env: Callable[[TrialSpec], gym.Env] | None = None,
@@ -149,7 +133,7 @@ def _run(env: gym.Env, spec: TrialSpec, plan: EpisodePlan, estimator, on_step: S
     car = build_car(spec, plan, estimator)
     _grant_white_box(env, car.estimator)
     targets = car.mission.targets
-    referee = Referee(car.calibration, spec.braking, dt, _find_wrapper(env, AttackWrapper) is not None, clean_pass,
+    referee = Referee(car.calibration, spec.braking, dt, find_wrapper(env, AttackWrapper) is not None, clean_pass,
                       plan.conflict.xy if plan.conflict is not None else None)
     run_through = run_through_m(plan)
     linger = round(NEAR_MISS_S / dt) if plan.traffic else 0
@@ -214,36 +198,14 @@ def run_through_m(plan: EpisodePlan) -> float:
 
 
 def _result(spec: TrialSpec, plan: EpisodePlan, env: gym.Env, log: pd.DataFrame) -> TrialResult:
-    outcomes = score_log(log)
-    first = outcomes[0]
-    patch = _find_wrapper(env, PatchOcclusion)
-    windows = _first_attack_windows(env)
-    lost = int((log["attack_active"] & log["sign_in_view"] & ~log["detected"]).sum())
-    n_targets = len(plan.mission.targets)
-    served = sum(o.success for o in outcomes)
-    return TrialResult(
-        trial_id=spec.trial_id, setting=spec.setting, estimator=spec.estimator, target=spec.target, sign=spec.sign,
-        speed=spec.speed, seed=spec.seed, rho=patch.rho if patch is not None else math.nan,
-        t_atk_s=windows[0][1] - windows[0][0] if windows else math.nan,
-        attack_start_s=windows[0][0] if windows else math.nan, lost_frames=lost,
-        success=bool(served == n_targets), stopped=not math.isnan(first.rest_distance_m),
-        stop_distance_m=first.rest_distance_m, t_star_s=first.t_star_s, t_brake_s=first.t_brake_s,
-        trigger_delay_s=first.trigger_delay_s, dt_brake_s=first.dt_brake_s, failure=first.failure,
-        duration_s=float(log["t"].iloc[-1]), n_targets=n_targets, targets_served=served,
-        fused_jump_m=largest_jump(log), robustness_m=robustness(log), **asdict(stealth(log)),
-        **score_conflict(log).to_dict(), traffic_cars=len(plan.traffic))
-
-
-def _first_attack_windows(env: gym.Env) -> list[tuple[float, float]]:
-    """The attack windows (start, end s) of the attack that began first (the patch on a tie)."""
-    attacks = []
-    while isinstance(env, gym.Wrapper):
-        if isinstance(env, AttackWrapper) and env.schedule.windows:
-            attacks.append(env)
-        env = env.env
-    if not attacks:
-        return []
-    return min(attacks, key=lambda a: (a.schedule.windows[0][0], not isinstance(a, PatchOcclusion))).schedule.windows
+    """The row: the episode's identity, then each metric it scores (a field it leaves out takes its default)."""
+    episode = Episode(spec, plan, log, env)
+    row = {"trial_id": spec.trial_id, "setting": spec.setting, "estimator": spec.estimator, "target": spec.target,
+           "sign": spec.sign, "speed": spec.speed, "seed": spec.seed}
+    for name in spec.metric_names:
+        metric = METRICS[name]()
+        row |= metric.defaults() | metric.score(episode)
+    return TrialResult(row)
 
 
 def _grant_white_box(env: gym.Env, defence) -> None:
@@ -254,9 +216,3 @@ def _grant_white_box(env: gym.Env, defence) -> None:
         env = env.env
 
 
-def _find_wrapper(env: gym.Env, kind: type) -> gym.Env | None:
-    while isinstance(env, gym.Wrapper):
-        if isinstance(env, kind):
-            return env
-        env = env.env
-    return None

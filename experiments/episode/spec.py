@@ -31,7 +31,7 @@ from racf.sim.attacks.schedule import as_range
 from racf.sim.env.config import SENSOR_PROFILES
 from racf.sim.world.stop_signs import SIGN_GEOMETRIES
 from racf.sim.world.drives import DriveSpec, draw_drive
-from racf.plugins import SCENARIOS
+from racf.plugins import METRICS, SCENARIOS
 
 __all__ = ["TrialSpec", "parse_setting", "setting_name", "EPISODE_CODE", "TARGETS", "DRIVE_S", "STRONG_RHO",
            "STRONG_T_ATK_S", "extra_attacks", "TABLE_SETTINGS", "plugin_sources"]
@@ -130,6 +130,8 @@ class TrialSpec:
             or the longest the lane allows); not for a drive.
         scenario_params: the scenario's parameters (its ``params`` declare them); the spec holds
             every one, the defaults filled in.
+        metrics: metrics to score beyond those every episode has (``racf.plugins.METRICS``; a
+            scenario adds its own, ``Scenario.metrics``).
     """
 
     setting: str
@@ -151,6 +153,7 @@ class TrialSpec:
     estimator_options: dict = field(default_factory=dict)
     run_up_m: float | None = None
     scenario_params: dict = field(default_factory=dict)
+    metrics: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         attacks, estimator = parse_setting(self.setting)
@@ -197,6 +200,12 @@ class TrialSpec:
             raise ValueError(f"run_up_m must be None or a number of metres in [0.3, 10] for an approach (not a "
                              f"drive), got {self.run_up_m!r} with target {self.target!r}")
         scenario.check(self, self.scenario_params)
+        if isinstance(self.metrics, str) or not all(isinstance(m, str) for m in self.metrics):
+            raise ValueError(f"metrics must be a list of metric names, got {self.metrics!r}")
+        object.__setattr__(self, "metrics", tuple(self.metrics))
+        unknown = [m for m in (*self.metrics, *scenario.metrics) if m not in METRICS]
+        if unknown:
+            raise ValueError(f"unknown metric(s) {unknown}; choose from {tuple(METRICS)}")
         if self.control_hz is not None and not 1.0 <= self.control_hz <= 50.0:
             raise ValueError(f"control_hz must be in [1, 50] Hz (the env steps at 50 Hz) or None, "
                              f"got {self.control_hz!r}")
@@ -205,6 +214,14 @@ class TrialSpec:
     def scenario(self):
         """The scenario ``target`` names (a fresh object of its class)."""
         return SCENARIOS[self.target]()
+
+    @property
+    def metric_names(self) -> tuple[str, ...]:
+        """The metrics this episode scores, in the result row's order: every ``always`` one, the
+        spec's and its scenario's."""
+        asked = {*self.metrics, *self.scenario.metrics}
+        chosen = [name for name in METRICS if METRICS[name].always or name in asked]
+        return tuple(sorted(chosen, key=lambda name: (METRICS[name].order, name)))
 
     @property
     def attacks(self) -> tuple[str, ...]:
@@ -250,7 +267,8 @@ class TrialSpec:
 
 #: What "the code" of an episode is: the source that runs it and the assets (map, shipped
 #: checkpoints). Summaries, tables and the CLI are left out: changing them changes no episode.
-EPISODE_CODE = ("racf.sim", "racf.controllers", "racf.odca", "racf.experiments.episode", "racf.assets")
+EPISODE_CODE = ("racf.sim", "racf.controllers", "racf.odca", "racf.experiments.episode", "racf.experiments.scenarios",
+                "racf.experiments.metrics", "racf.assets")
 
 
 def plugin_sources(spec: TrialSpec) -> dict[str, str]:
@@ -260,7 +278,7 @@ def plugin_sources(spec: TrialSpec) -> dict[str, str]:
     from racf.provenance import source_version
 
     parts = [("estimator", ESTIMATORS, spec.estimator), ("detector", DETECTORS, spec.detector),
-             ("scenario", SCENARIOS, spec.target),
+             ("scenario", SCENARIOS, spec.target), *(("metric", METRICS, name) for name in spec.metric_names),
              *(("attack", ATTACKS, name) for name in spec.attacks)]
     out = {}
     for kind, registry, name in parts:

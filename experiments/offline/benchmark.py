@@ -1,4 +1,4 @@
-"""The offline repair benchmark: every method on both splits under every preset (``racf bench``).
+"""The offline repair benchmark: every method on both splits under every preset (``racf bench offline``).
 
 Per split (by series; leave one target out) the benchmark trains what needs training on
 that split's train series (ODCA's head and gate, the four neuralforecast models; cached by
@@ -63,7 +63,7 @@ ABLATION = _ablation_rows()
 
 @dataclass(frozen=True)
 class BenchConfig:
-    """What ``racf bench`` runs.
+    """What ``racf bench offline`` runs.
 
     Attributes:
         data: the dataset folder (``racf collect``).

@@ -207,7 +207,7 @@ def write_report(results: dict, out: Path) -> dict[str, Path]:
     paths.update(figures.write_all(clean, traces, out / "figures"))
     quick = " (--quick: not a result to quote)" if clean["dataset"]["quick"] else ""
     summary = ["# Offline repair benchmark", "",
-               f"`racf bench` on `{clean['dataset']['path']}`{quick}; "
+               f"`racf bench offline` on `{clean['dataset']['path']}`{quick}; "
                f"{clean['wall_s']:.0f} s. Scored per `docs/protocol.md`: causal methods, RMSE/MAE in metres, "
                "scores are means over the corruption draws, 95 % intervals resample test drives and draws "
                "together.", "",

@@ -1,4 +1,4 @@
-"""ODCA checkpoints from a collected dataset: ``racf train`` and ``racf pretrain-prior``."""
+"""ODCA checkpoints from a collected dataset: ``racf odca train`` and ``racf odca pretrain-prior``."""
 
 from __future__ import annotations
 

@@ -171,15 +171,15 @@ def _sweeps(d: _Data) -> str:
 
 def _offline(d: _Data) -> str:
     lines = [*_page_head("The offline repair benchmark"),
-             "`racf bench` scores every registered estimator step by step, beside the forecasting baselines "
+             "`racf bench offline` scores every registered estimator step by step, beside the forecasting baselines "
              "(Chronos-2 forecast-only, SOFTS, NHITS, DLinear, NLinear) and the aligned LiDAR, on the test drives "
              "of two splits under the weak, mid and strong corruption presets. Each preset is drawn several times; "
              "[the protocol](../protocol.md) fixes the presets and the scoring.", ""]
     lines += ["## The QCar 2's sensors (`qcar2`)", ""]
-    lines += _bench_table(d["offline-bench"]) if "offline-bench" in d else _missing("offline-bench", "racf bench --json")
+    lines += _bench_table(d["offline-bench"]) if "offline-bench" in d else _missing("offline-bench", "racf bench offline --json")
     lines += ["## Ideal sensors (`ideal`: a one-instant 360-beam LiDAR, a 50 Hz camera, the true pose)", ""]
     lines += _bench_table(d["offline-bench-ideal"]) if "offline-bench-ideal" in d else _missing(
-        "offline-bench-ideal", "racf collect --sensor-profile ideal --out data/ideal && racf bench --dataset data/ideal "
+        "offline-bench-ideal", "racf collect --sensor-profile ideal --out data/ideal && racf bench offline --dataset data/ideal "
                                "--no-ablation --json")
     return "\n".join(lines)
 
@@ -315,7 +315,7 @@ def _detector(d: _Data) -> str:
     if "bench-detector" in d:
         data = d["bench-detector"]
         lines += _meta(data["meta"]) + [
-            "Held-out views: rendered views with ground-truth masks (`racf detector-data`); drives: every frame of "
+            "Held-out views: rendered views with ground-truth masks (`racf detector data`); drives: every frame of "
             "the approach drives, recall over the frames with the sign 0.5-2.5 m away.", "",
             "| detector | held-out recall [CI] (N) | held-out false-positive frames [CI] (of N) | drive recall [CI] (N) | "
             "drive false-positive frames [CI] (of N) | ms per frame, one core |", "|---|---|---|---|---|---|"]
@@ -329,7 +329,7 @@ def _detector(d: _Data) -> str:
         lines.append("")
         lines += _default_verdict(data["detectors"]) + _heldout_breakdown(data["detectors"])
     else:
-        lines += _missing("bench-detector", "racf bench-detector --json")
+        lines += _missing("bench-detector", "racf bench detector --json")
     lines += ["## The sticker in the scene, per view", ""]
     if "bench-patch" in d:
         data = d["bench-patch"]
@@ -355,7 +355,7 @@ def _detector(d: _Data) -> str:
                 lines.append(f"| {name} | " + " | ".join(cells) + " |")
             lines.append("")
     else:
-        lines += _missing("bench-patch", "racf bench-patch -n 300 --json")
+        lines += _missing("bench-patch", "racf bench patch -n 300 --json")
     lines += ["## The sticker in the closed loop", ""]
     if "physical-patch" in d:
         data = d["physical-patch"]
@@ -365,7 +365,7 @@ def _detector(d: _Data) -> str:
     lines += ["## A sticker optimised over the loop", "",
               "Up on the sign from the start, 0.6 of the plate, no defence: the first sticker (optimised over any "
               "view) against the one optimised over the car's own approaches and weighted to the frames where "
-              "detection decides the stop (`racf optimise-patch --views approach`). With the sticker up from the "
+              "detection decides the stop (`racf detector optimise-patch --views approach`). With the sticker up from the "
               "start every attack begins before t*.", ""]
     for name, detector in (("sticker-loop", "the default (classical) detector"),
                            ("sticker-loop-learned", "the learned segmenter")):
@@ -388,7 +388,7 @@ def _placement(d: _Data) -> list[str]:
     """Where the sticker sits: recall on rendered approach views, then the chosen place in the loop."""
     lines = ["## Where the sticker sits", "",
              "The sticker `learned-approach` at two places, in rendered views on the car's approaches "
-             "(`racf bench-patch --views approach`). Which place works depends on the detector: the colour "
+             "(`racf bench patch --views approach`). Which place works depends on the detector: the colour "
              "detector tests the red octagon's outline, which a sticker at the plate's edge breaks and one in the "
              "middle leaves whole; the segmenter, against which the texture was optimised in the middle, sees "
              "the whole face and what the sticker leaves of it. Recall [95 % CI] over the views with the sign "
@@ -396,7 +396,7 @@ def _placement(d: _Data) -> list[str]:
     rows = []
     for name, words, flags in _PLACEMENTS:
         if name not in d:
-            lines += _missing(name, f"racf bench-patch -n 200 --views approach --texture learned-approach {flags} --json")
+            lines += _missing(name, f"racf bench patch -n 200 --views approach --texture learned-approach {flags} --json")
             continue
         data = d[name]
         bands = sorted({b for row in data["by_band"].values() for r in row.values() for b in r})
@@ -439,7 +439,7 @@ def _default_verdict(detectors: dict) -> list[str]:
 
 def _heldout_breakdown(detectors: dict) -> list[str]:
     """Held-out recall per kind of view and per distance band, and the red-square negatives (stored
-    by ``racf bench-detector`` since the size witness's issue; older results have neither)."""
+    by ``racf bench detector`` since the size witness's issue; older results have neither)."""
     first = next(iter(detectors.values()))
     if "by_kind" not in first["heldout"]:
         return []
@@ -483,18 +483,18 @@ def _speed(d: _Data) -> str:
              "The real-time factor is simulated seconds per wall-clock second at the 50 Hz control rate. This "
              "machine's speed drifts by 10-20 % from minute to minute: compare two versions in one run, in "
              "alternation, not across pages.", ""]
-    lines += ["## The simulator alone (`racf bench-sim`)", ""]
+    lines += ["## The simulator alone (`racf bench sim`)", ""]
     if "bench-sim" in d:
         data = d["bench-sim"]
         lines += _meta(data["meta"]) + ["| setting | steps/s | real-time factor |", "|---|---|---|"]
         lines += [f"| {k} | {v['steps_per_s']:.1f} | {v['real_time_factor']:.2f} |" for k, v in data["settings"].items()]
         lines.append("")
     else:
-        lines += _missing("bench-sim", "racf bench-sim --json")
-    lines += ["## Whole episodes, as a sweep runs them (`racf bench-loop`)", ""]
-    lines += _measures(d, "bench-loop", "loop", "racf bench-loop --json", digits=2)
-    lines += ["## ODCA's per-step cost (`racf odca-latency`)", ""]
-    lines += _measures(d, "odca-latency", "latency", "racf odca-latency --json", digits=3)
+        lines += _missing("bench-sim", "racf bench sim --json")
+    lines += ["## Whole episodes, as a sweep runs them (`racf bench loop`)", ""]
+    lines += _measures(d, "bench-loop", "loop", "racf bench loop --json", digits=2)
+    lines += ["## ODCA's per-step cost (`racf bench odca-latency`)", ""]
+    lines += _measures(d, "odca-latency", "latency", "racf bench odca-latency --json", digits=3)
     return "\n".join(lines)
 
 

@@ -14,8 +14,8 @@ __all__ = ["traffic_markdown", "TRAFFIC_RESULTS"]
 
 #: The stored results the page reads, and the command that makes each.
 TRAFFIC_RESULTS = {"cross-traffic": "racf sweep cross-traffic.toml",
-                   "bench-traffic": "racf bench-traffic --seeds 10 --json",
-                   "bench-sim-traffic": "racf bench-sim --traffic-cars 2 --steps 250 --repeats 5 --json"}
+                   "bench-traffic": "racf bench traffic --seeds 10 --json",
+                   "bench-sim-traffic": "racf bench sim --traffic-cars 2 --steps 250 --repeats 5 --json"}
 
 
 def _load(root: Path, name: str) -> dict | None:

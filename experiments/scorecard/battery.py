@@ -9,7 +9,7 @@ score with CARLA's vehicle-collision penalty (x 0.60) beside the stop-sign run's
 
 ``racf-3`` is ``racf-2`` and one row: a smaller sticker placed where it breaks the sign's outline
 (0.4 of the plate at its top edge, the place chosen on rendered approach views with
-``racf bench-patch --views approach``), against the default detector.
+``racf bench patch --views approach``), against the default detector.
 
 ``racf-2`` is ``racf-1`` and two rows for the size witness (issue 35): the frustum spoof that
 also scales the sign's image, and the printed sticker up from the start against the default
@@ -112,6 +112,27 @@ class Battery:
 
     def quick(self) -> "Battery":
         return replace(self, name=f"{self.name}-quick")
+
+    def in_scenario(self, scenario: str, params: dict | None = None) -> "Battery":
+        """The battery with every plain stop-sign approach of its closed-loop rows run in ``scenario``
+        instead (``racf.plugins.SCENARIOS``, a scenario whose target is a stop sign), named
+        ``NAME@SCENARIO``; cross-traffic rows and the drives stay as they are. ValueError names a
+        scenario that does not approach a stop sign, or a parameter it refuses."""
+        from racf.plugins import SCENARIOS
+
+        if scenario not in SCENARIOS or SCENARIOS[scenario].target != "sign":
+            raise ValueError(f"a battery runs in a scenario that approaches a stop sign; choose from "
+                             f"{[n for n in SCENARIOS if SCENARIOS[n].target == 'sign']}, got {scenario!r}")
+        values = SCENARIOS[scenario].values(params or {})
+
+        def situated(make: Callable[[str, int], list[TrialSpec]]) -> Callable[[str, int], list[TrialSpec]]:
+            def remade(defence: str, n: int) -> list[TrialSpec]:
+                return [replace(s, target=scenario, scenario_params=values) if s.target == "sign" else s
+                        for s in make(defence, n)]
+            return remade
+
+        loop = tuple(replace(row, make=situated(row.make)) for row in self.loop)
+        return replace(self, name=f"{self.name}@{scenario}", loop=loop)
 
 
 _RACF_1 = Battery(

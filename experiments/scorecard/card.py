@@ -24,7 +24,7 @@ from racf.experiments.scorecard.detection import detection_rows
 from racf.experiments.scorecard.drives import driving_rows
 from racf.provenance import atomic_write
 from racf.experiments.sweeps.store import ResultStore
-from racf.experiments.sweeps.summary import stealth_summary, summarize
+from racf.experiments.sweeps.summary import plugin_measures, stealth_summary, summarize
 
 __all__ = ["run_card", "card_version"]
 
@@ -46,7 +46,8 @@ def _loop_summary(rows: pd.DataFrame, attacked: bool) -> dict:
             "violation_share_ci", "n_traffic", "collision_rate", "collision_rate_ci", "conflicts",
             "n_traffic_attack_before_t_star", "collision_rate_attack_before_t_star",
             "collision_rate_attack_before_t_star_ci")
-    return {k: s.get(k) for k in keep if k in s}
+    return {k: s.get(k) for k in keep if k in s} | {"measures": plugin_measures(rows, attacked)}
+
 
 
 #: The offline reference every card's strong RMSE is divided by.

@@ -72,6 +72,8 @@ def card_rows(card: dict) -> list[tuple[str, str, str, float | None, list | None
         if r.get("driving_score") is not None:
             rows.append(("closed loop", r["title"], "driving score", r["driving_score"], r["driving_score_ci"], r["n"],
                          True))
+        for m in r.get("measures", []):  # the plug-in metrics' declared fields (card.plugin_measures)
+            rows.append(("closed loop", r["title"], m["measure"], m["value"], m["ci"], m["n"], m["higher_is_better"]))
     for key, r in card["drives"].items():
         rows.append(("drives", r["title"], "driving score", r["driving_score"], r["driving_score_ci"], r["n"], True))
         rows.append(("drives", r["title"], "route completion", r["route_completion"], None, r["n"], True))

@@ -9,7 +9,7 @@ thread, and Mesa's software rasteriser (llvmpipe) on the calling thread
 (``LP_NUM_THREADS=0``; with one rasteriser thread, handing it each frame made a frame about
 20 % slower). Left at their defaults, every worker would start as many threads as the
 machine has cores, and two workers on two cores ran slower together than one alone
-(``racf bench-loop`` measured 0.25 scaling efficiency). Ray workers get ``MUJOCO_GL`` and the
+(``racf bench loop`` measured 0.25 scaling efficiency). Ray workers get ``MUJOCO_GL`` and the
 same settings through their runtime env.
 """
 

@@ -17,7 +17,8 @@ from racf.experiments.sweeps.detection_bands import band_labels, recall_rows
 from racf.provenance import atomic_write
 from racf.experiments.sweeps.store import ResultStore
 from racf.stats import median_ci, wilson_interval
-from racf.experiments.sweeps.summary import stealth_summary, summarize_settings
+from racf.experiments.episode.spec import parse_setting
+from racf.experiments.sweeps.summary import plugin_measures, stealth_summary, summarize_settings
 
 __all__ = ["write_report", "report_from_store", "stealth_rows"]
 
@@ -220,6 +221,20 @@ def _traffic_lines(summary: dict) -> list[str]:
     return lines
 
 
+def _plugin_metric_lines(frame: pd.DataFrame) -> list[str]:
+    """A table of what the plug-in metrics the episodes scored say, per setting (as each declares it)."""
+    rows = []
+    if not frame.empty:
+        for setting, group in frame.groupby("setting", sort=True):
+            attacked = bool(parse_setting(str(setting))[0])
+            rows += [f"| {setting} | {m['measure']} | {_fmt(m['value'], 3)} {_ci(m['ci'])} | {m['n']} |"
+                     for m in plugin_measures(group, attacked)]
+    if not rows:
+        return []
+    return ["", "Plug-in metrics (each field as its metric declares it; 95 % intervals):", "",
+            "| setting | measure | value [95 % CI] | N |", "|---|---|---|---|", *rows]
+
+
 def write_report(frame: pd.DataFrame, out: Path, name: str = "sweep") -> dict[str, Path]:
     """Writes ``summary.md``, ``summary.json`` and the two plots under ``out``."""
     out = Path(out)
@@ -243,6 +258,7 @@ def write_report(frame: pd.DataFrame, out: Path, name: str = "sweep") -> dict[st
                      f"{_fmt(r['dt_brake_mean'], 3)} ({r['n_latency']}) | {_fmt(r['max_fused_jump_m'], 3)} | "
                      f"{_robustness_cells(r)} |")
     lines += _traffic_lines(summary)
+    lines += _plugin_metric_lines(frame)
     pairs = traffic_pairs(frame) if not frame.empty else {}
     if pairs:
         atomic_write(out / "traffic.json", json.dumps(pairs, indent=1, allow_nan=False))

@@ -1,6 +1,6 @@
 """Sweep specs: a grid or random draws over the attack and the defence, read from TOML.
 
-Example (``experiments/sweeps/specs/smoke.toml``)::
+Example (``experiments/sweeps/specs/smoke.toml``, with every optional field added)::
 
     name = "smoke"
     mode = "grid"            # every combination, `repeats` seeds each; or "random": `n` draws
@@ -9,6 +9,8 @@ Example (``experiments/sweeps/specs/smoke.toml``)::
     sensor_profile = "qcar2" # the car's sensors as delivered (default), or "ideal" (an ablation)
     sign_geometry = "plate"  # the LiDAR's scan plane meets the sign's plate (default), or "pole"
     detector = "classical"   # the car's stop-sign detector: "classical" (default) or "learned"
+    target = "parked_car"    # the scenario (racf.plugins.SCENARIOS; default "sign", the plain approach)
+    metrics = ["my_metric"]  # metrics to score beyond those every episode has (default none)
 
     [space]
     attack = ["patch_occlusion", "none"]       # "none", an attack, or attacks joined by "+"
@@ -29,9 +31,8 @@ Example (``experiments/sweeps/specs/smoke.toml``)::
     gap_s = 0.0                      # it passes the conflict point this long after the ego car would
     speed = 1.0                      # its speed, m/s
 
-    target = "parked_car"            # optional: the scenario (racf.plugins.SCENARIOS; default "sign")
-    [scenario.parked_car]            # its parameters (what the scenario declares), each a list of values
-    leave_s = [1.0, 3.0]             # grid: every combination; random: crossed with each draw
+    [scenario.parked_car]            # optional: the parameters `target`'s scenario declares, each a
+    ahead_m = [0.5, 1.5]             # list of values; grid: every combination; random: crossed with each draw
 
 Attacks: any in ``racf.sim.attacks.ATTACKS`` (``patch_occlusion``, ``lidar_spoof``, ...) and
 ``+``-combinations of them; estimators: any in ``racf.experiments.episode.estimators.ESTIMATORS``
@@ -57,7 +58,7 @@ from pathlib import Path
 import numpy as np
 
 from racf.controllers.detectors import DETECTORS
-from racf.plugins import SCENARIOS
+from racf.plugins import METRICS, SCENARIOS
 from racf.experiments.episode import TrialSpec
 from racf.experiments.episode.estimators import ESTIMATORS, check_options, make_estimator
 from racf.experiments.episode.spec import setting_name
@@ -74,7 +75,7 @@ SPACE_KEYS = {"attack": None, "estimator": None, "rho": (0.0, 1.0), "t_atk": (0.
 _DEFAULTS = {"attack": ["patch_occlusion"], "estimator": ["raw"], "rho": [0.95], "t_atk": [1.75], "speed": [1.5],
              "sign": [0, 1, 2, 3]}
 _TOP_KEYS = {"name", "mode", "repeats", "n", "seed", "space", "params", "estimators", "log_steps", "sensor_profile",
-             "sign_geometry", "detector", "traffic", "target", "scenario"}
+             "sign_geometry", "detector", "traffic", "target", "scenario", "metrics"}
 _TRAFFIC_KEYS = {"cars": [0], "gap_s": 0.0, "speed": 1.0}
 #: The example specs shipped with the project.
 SPECS_DIR = Path(__file__).resolve().parent / "specs"
@@ -99,6 +100,7 @@ class SweepSpec:
     traffic: dict = field(default_factory=dict)
     target: str = "sign"
     scenario: dict = field(default_factory=dict)
+    metrics: list = field(default_factory=list)
 
     def __post_init__(self) -> None:
         if self.detector not in DETECTORS:
@@ -144,6 +146,8 @@ class SweepSpec:
         object.__setattr__(self, "space", space)
         self._check_traffic()
         self._check_scenario()
+        if not isinstance(self.metrics, list) or any(m not in METRICS for m in self.metrics):
+            raise ValueError(f"metrics must be a list of metric names from {tuple(METRICS)}, got {self.metrics!r}")
         self._check_params()
         self._check_estimators()
 
@@ -239,7 +243,8 @@ class SweepSpec:
                          | ({"detector": self.detector} if self.detector != "classical" else {})
                          | ({"traffic": self.traffic} if self.traffic else {})
                          | ({"target": self.target} if self.target != "sign" else {})
-                         | ({"scenario": self.scenario} if self.scenario else {}), sort_keys=True)
+                         | ({"scenario": self.scenario} if self.scenario else {})
+                         | ({"metrics": self.metrics} if self.metrics else {}), sort_keys=True)
         return hashlib.sha256(raw.encode()).hexdigest()[:12]
 
     def episodes(self) -> list[TrialSpec]:
@@ -300,7 +305,7 @@ def _trial(cell: tuple, estimator: str, seed: int, sweep: SweepSpec, params: dic
                      rho=(float(rho), float(rho)), t_atk=(float(t_atk), float(t_atk)),
                      sensor_profile=sweep.sensor_profile, sign_geometry=sweep.sign_geometry,
                      attack_params=params or {}, detector=sweep.detector,
-                     estimator_options=sweep.estimators.get(estimator, {}), **traffic)
+                     estimator_options=sweep.estimators.get(estimator, {}), metrics=tuple(sweep.metrics), **traffic)
 
 
 def spec_path(path: str | Path) -> Path:
@@ -342,7 +347,7 @@ def parse_spec(text: str, source: str = "spec", default_name: str = "sweep") -> 
                          sign_geometry=raw.get("sign_geometry", "plate"),
                          detector=raw.get("detector", "classical"), estimators=raw.get("estimators", {}),
                          traffic=raw.get("traffic", {}), target=raw.get("target", "sign"),
-                         scenario=raw.get("scenario", {}))
+                         scenario=raw.get("scenario", {}), metrics=raw.get("metrics", []))
         episodes = spec.episodes()
     except ValueError as err:
         raise ValueError(f"{source}: {err}") from None

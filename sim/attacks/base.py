@@ -10,7 +10,7 @@ import numpy as np
 
 from racf.sim.attacks.schedule import SCHEDULE_PARAMS, AttackSchedule
 
-__all__ = ["AttackWrapper", "blank_env"]
+__all__ = ["AttackWrapper", "attack_wrappers", "blank_env", "find_wrapper"]
 
 
 class AttackWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
@@ -152,3 +152,22 @@ class _BlankEnv(gym.Env):
         "rgb": gym.spaces.Box(0, 255, (2, 2, 3), np.uint8), "depth": gym.spaces.Box(0.0, np.inf, (2, 2, 1), np.float32),
         "lidar": gym.spaces.Box(0.0, np.inf, (4,), np.float32)})
     action_space = gym.spaces.Box(-1.0, 1.0, (2,), np.float32)
+
+
+def find_wrapper(env: gym.Env, kind: type) -> gym.Env | None:
+    """The outermost wrapper of ``kind`` around an env (None: none)."""
+    while isinstance(env, gym.Wrapper):
+        if isinstance(env, kind):
+            return env
+        env = env.env
+    return None
+
+
+def attack_wrappers(env: gym.Env) -> list[AttackWrapper]:
+    """Every attack wrapper around an env, outermost first."""
+    found = []
+    while isinstance(env, gym.Wrapper):
+        if isinstance(env, AttackWrapper):
+            found.append(env)
+        env = env.env
+    return found

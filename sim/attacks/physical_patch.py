@@ -34,7 +34,7 @@ class PhysicalPatch(AttackWrapper):
     Args:
         env: the racf env (or a wrapper of it).
         texture: a shipped sticker (``learned``: optimised against the learned segmenter by
-            ``racf optimise-patch``; ``learned-approach``: the same over the car's approaches,
+            ``racf detector optimise-patch``; ``learned-approach``: the same over the car's approaches,
             ``--views approach``), ``natural`` (a naturalistic sticker drawn per episode), or a PNG path.
         size: the sticker's area over the plate's, in (0, 0.6].
         position: its centre (right, up) on the plate, across-flats units, or a name of

@@ -158,7 +158,7 @@ def load_patch_texture(texture: str, rng: np.random.Generator | None = None) -> 
     image = cv2.imread(str(path), cv2.IMREAD_COLOR) if path.is_file() else None
     if image is None:
         raise ValueError(f"no sticker texture {texture!r} (looked for {path}); shipped: {shipped_patches()}, "
-                         "'natural', or a PNG path (make one with `racf optimise-patch`)")
+                         "'natural', or a PNG path (make one with `racf detector optimise-patch`)")
     image = cv2.cvtColor(image, cv2.COLOR_BGR2RGB)
     if image.shape[:2] != (TEXTURE_PX, TEXTURE_PX):
         image = cv2.resize(image, (TEXTURE_PX, TEXTURE_PX), interpolation=cv2.INTER_AREA)

@@ -64,7 +64,7 @@ def test_a_checkpoint_round_trips_and_a_missing_one_says_how_to_make_one(tmp_pat
     back = load_segmenter(tmp_path / "ck")
     x = torch.rand(1, 3, 48, 64)
     assert torch.equal(net.eval()(x), back(x))
-    with pytest.raises(FileNotFoundError, match="racf train-detector"):
+    with pytest.raises(FileNotFoundError, match="racf detector train"):
         LearnedSignDetector(checkpoint=tmp_path / "none")
 
 
@@ -76,14 +76,14 @@ def test_a_checkpoint_of_another_architecture_says_to_retrain(tmp_path):
     old = json.loads(meta.read_text())
     old["architecture"]["decoder"] = 8  # the concatenating decoder's width, before the lateral sum
     meta.write_text(json.dumps(old))
-    with pytest.raises(ValueError, match="another segmenter architecture.*racf train-detector"):
+    with pytest.raises(ValueError, match="another segmenter architecture.*racf detector train"):
         load_segmenter(tmp_path / "old")
     state = SignSegmenterNet().state_dict()
     state["head.weight"] = state["head.weight"][:, :, :1, :1]  # the same widths, another layer
     torch.save(state, tmp_path / "ck2.pt")
     save_segmenter(SignSegmenterNet(), tmp_path / "other")
     (tmp_path / "ck2.pt").replace(tmp_path / "other" / "model.pt")
-    with pytest.raises(ValueError, match="do not fit this network's layers.*racf train-detector"):
+    with pytest.raises(ValueError, match="do not fit this network's layers.*racf detector train"):
         load_segmenter(tmp_path / "other")
 
 

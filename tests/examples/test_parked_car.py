@@ -71,3 +71,31 @@ def test_editing_the_scenario_renews_its_ids(parked_car_installed):
     source.write_text(source.read_text().replace("VAN_SIZE_M = (0.40, 0.22, 0.35)", "VAN_SIZE_M = (0.45, 0.22, 0.35)"))
     _forget_plugins()
     assert TrialSpec("clean", 0, 1.0, 0, target="parked_car").trial_id != before
+
+
+def test_a_sweep_runs_it(parked_car_installed, tmp_path):
+    from racf.experiments.sweeps.store import ResultStore
+
+    spec = tmp_path / "van.toml"
+    spec.write_text('name = "van"\ntarget = "parked_car"\n[space]\nattack = ["none"]\nspeed = [1.0]\nsign = [1]\n'
+                    '[scenario.parked_car]\nahead_m = [0.5]\n')
+    code, _ = _run(["sweep", str(spec), "--out", str(tmp_path / "out"), "--workers", "1", "--json"])
+    rows = ResultStore(tmp_path / "out").rows()
+    assert code == 0 and rows["target"].tolist() == ["parked_car"]
+
+
+def test_a_scorecard_runs_a_battery_in_it(parked_car_installed, tmp_path, monkeypatch, capsys):
+    from racf.experiments.scorecard import battery as battery_module
+    from racf.experiments.scorecard.battery import Battery, LoopRow, _paper
+    from tests.conftest import write_bench_dataset
+
+    tiny = Battery(name="tiny-van", loop=(LoopRow("paper_clean", "clean", 1, 1, _paper("clean"), attacked=False),),
+                   drives=(), offline_presets=("strong",), offline_draws=1, offline_draws_quick=1)
+    monkeypatch.setitem(battery_module.BATTERIES, "tiny-van", tiny)
+    data = write_bench_dataset(tmp_path / "data", n_series=10)
+    code = main(["scorecard", "--defence", "raw", "--battery", "tiny-van", "--target", "parked_car",
+                 "--scenario-param", "ahead_m=0.5", "--quick", "--workers", "1", "--out", str(tmp_path),
+                 "--dataset", str(data), "--json"])
+    card = json.loads(capsys.readouterr().out)["cards"][0]
+    assert code == 0 and card["battery"] == "tiny-van@parked_car-quick" and card["closed_loop"]["paper_clean"]["n"] == 1
+    assert (tmp_path / "cards" / "tiny-van@parked_car-quick" / "raw.json").exists()

@@ -249,7 +249,7 @@ def test_head_size_and_checkpoint_errors(tmp_path):
     old = json.loads((tmp_path / "ok" / "odca.json").read_text())
     old["gate"] = {"tau_low": 0.1, "tau_high": 0.4, "gamma": 1.0, "trust_confidence": 0.4}  # before the vote
     (tmp_path / "bad_cfg" / "odca.json").write_text(json.dumps(old))
-    with pytest.raises(CheckpointError, match="retrain it with `racf train`"):
+    with pytest.raises(CheckpointError, match="retrain it with `racf odca train`"):
         ODCA.load(tmp_path / "bad_cfg", prior=LastValuePrior())
     assert (SHIPPED_HEAD / "train_report.json").exists()
 

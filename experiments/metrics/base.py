@@ -1,0 +1,100 @@
+"""What a metric is: a measure of one episode, declared once and summarised over many.
+
+A metric declares its result fields (:class:`Field`: name, unit, meaning, the value where it
+does not apply, and how it is summarised over episodes), scores one episode from its per-step
+log and plan (:meth:`Metric.score`), and says what its summary over a setting's episodes is
+(:meth:`Metric.summarize`: by default, per field, a rate with its Wilson interval or a median
+with its bootstrap interval). The result row (``TrialResult``), the sweep summary and report,
+the scorecard's closed-loop rows and the step-log reference read these declarations.
+
+A metric registers under the entry-point group ``racf.metrics`` (or is loaded with
+``--plugin FILE.py``), racf's own the same way as a user's. Metrics with ``always = True`` score
+every episode; the others score the episodes whose spec (``TrialSpec.metrics``) or scenario
+(``Scenario.metrics``) asks for them.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+import pandas as pd
+
+from racf.experiments.episode.runner import Episode
+from racf.stats import median_ci, wilson_interval
+
+__all__ = ["Field", "Metric", "Episode", "SUMMARIES"]
+
+#: How a field is summarised over episodes: ``rate`` (a share of true values, Wilson interval),
+#: ``median`` (bootstrap interval), None (not summarised by default).
+SUMMARIES = ("rate", "median", None)
+
+
+@dataclass(frozen=True)
+class Field:
+    """One column of the result row.
+
+    Attributes:
+        name: the column.
+        default: its value where the metric does not apply (NaN, None, False, 0).
+        unit: what a number counts (``m``, ``s``, ``frames``); empty for flags and labels.
+        meaning: one line for the docs.
+        summary: how :meth:`Metric.summarize` summarises it by default (``SUMMARIES``).
+    """
+
+    name: str
+    default: Any = math.nan
+    unit: str = ""
+    meaning: str = ""
+    summary: str | None = None
+
+
+class Metric:
+    """A measure of one episode. Subclass it, declare ``name`` and ``fields``, write :meth:`score`.
+
+    Attributes:
+        name: its key (``racf list``, ``TrialSpec.metrics``, ``--metric``).
+        meaning: one line for ``racf list``.
+        fields: the result columns it fills.
+        always: scored on every episode (else only where a spec or its scenario asks).
+        order: where its columns stand in the result row (racf's own: 10-60; a plug-in: 100).
+        higher_is_better: per summarised field, which way is better (the scorecard's comparisons).
+    """
+
+    name: ClassVar[str] = "metric"
+    meaning: ClassVar[str] = ""
+    fields: ClassVar[tuple[Field, ...]] = ()
+    always: ClassVar[bool] = False
+    order: ClassVar[int] = 100
+    higher_is_better: ClassVar[dict[str, bool]] = {}
+
+    def score(self, episode: Episode) -> dict[str, Any]:
+        """The fields' values for one episode (a field left out takes its default)."""
+        raise NotImplementedError
+
+    def summarize(self, results: pd.DataFrame, attacked: bool) -> dict[str, Any]:
+        """The summary of a setting's result rows (``attacked``: the setting runs an attack).
+        By default each field with a ``summary``: ``rate``: ``{name}_rate``, ``{name}_rate_ci`` and
+        ``n_{name}``; ``median``: ``{name}_median``, ``{name}_ci`` and ``n_{name}``. Rows where the
+        field is missing (None, NaN) do not count."""
+        out: dict[str, Any] = {}
+        for field in self.fields:
+            if field.summary is None or field.name not in results:
+                continue
+            column = results[field.name]
+            if field.summary == "rate":
+                values = column.dropna().astype(bool)
+                k, n = int(values.sum()), int(len(values))
+                out |= {f"n_{field.name}": n, f"{field.name}_rate": k / n if n else None,
+                        f"{field.name}_rate_ci": list(wilson_interval(k, n))}
+            else:
+                values = pd.to_numeric(column, errors="coerce").dropna()
+                median, interval = median_ci(values)
+                out |= {f"n_{field.name}": int(len(values)), f"{field.name}_median": median,
+                        f"{field.name}_ci": interval}
+        return out
+
+    @classmethod
+    def defaults(cls) -> dict[str, Any]:
+        return {f.name: f.default for f in cls.fields}
