@@ -23,6 +23,14 @@ MISTAKES: list[tuple[str, str]] = [
     ("trial --detector yolo", "invalid choice"),
     ("trial --setting attack --target obstacle --sign 0", "cannot act on target 'obstacle'"),
     ("trials --sign 3", "unrecognized arguments: --sign 3"),
+    # scenarios and metrics
+    ("trial --target parking_lot", "invalid choice"),
+    ("trial --target cross_traffic --scenario-param cars=9", "parameter 'cars' must be an int in [1, 4]"),
+    ("trial --scenario-param cars=2", "scenario 'sign' has no parameter(s) ['cars']"),
+    ("trial --scenario-param cars", "--scenario-param takes KEY=VALUE"),
+    ("trial --metric comfort", "unknown metric(s) ['comfort']"),
+    ("scorecard --defence raw --target drive", "a battery runs in a scenario that approaches a stop sign"),
+    ("bench sim --traffic-cars 9", "--traffic-cars must be in 1..4"),
     ("trial --sped 1.0", "unrecognized arguments: --sped"),
     # estimator options
     ("trial --estimator odca --estimator-option flavour=1", "no option(s) ['flavour']"),
