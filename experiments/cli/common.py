@@ -254,11 +254,13 @@ def registry_rows(registry: dict) -> list[tuple[str, str]]:
 
 
 def registry_markdown() -> str:
-    """The README's tables of attacks, estimators and detectors, made from the registries."""
+    """The README's tables of attacks, estimators, detectors, scenarios and metrics, made from the registries."""
     from racf.controllers.detectors import DETECTORS
+    from racf.plugins import METRICS, SCENARIOS
 
     lines = []
-    for title, registry in (("attack", ATTACKS), ("estimator", ESTIMATORS), ("detector", DETECTORS)):
+    for title, registry in (("attack", ATTACKS), ("estimator", ESTIMATORS), ("detector", DETECTORS),
+                            ("scenario", SCENARIOS), ("metric", METRICS)):
         lines += [f"| {title} | what it does |", "|---|---|"]
         lines += [f"| `{name}` | {text} |" for name, text in registry_rows(registry)]
         lines.append("")

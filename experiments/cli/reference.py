@@ -58,11 +58,12 @@ def _cli_markdown(parser: argparse.ArgumentParser) -> str:
 
 
 def parts_markdown() -> str:
-    """The registered attacks, estimators and detectors with what each does."""
+    """The registered attacks, estimators, detectors, scenarios and metrics with what each does."""
     from racf.experiments.cli.common import registry_markdown
 
     return "\n".join(["# The registered parts", "",
-                      "racf's own attacks, estimators (defences) and detectors, read from the registries "
+                      "racf's own attacks, estimators (defences), detectors, scenarios and metrics, read from the "
+                      "registries "
                       "(`racf list --markdown` prints the same; a plug-in you install or load joins them).", "",
                       registry_markdown()])
 

@@ -176,7 +176,7 @@ def load_space(defence: str, attacks: tuple[str, ...], path: str | Path | None =
     if set(tables) - {target}:
         raise ValueError(f"[scenario.{sorted(set(tables) - {target})[0]}] of {path} names a scenario the search "
                          f"does not run (target = {target!r})")
-    for key, value in tables.get(target, {}).items():
+    for key in tables.get(target, {}):
         SCENARIOS[target].param(key)  # a parameter the scenario does not declare is an error now
     fixed = {**(fixed or {}), **({"target": target} if target != "sign" else {})}
     bad = sorted(set(scenario) - set(SCENARIO_FIELDS))
