@@ -28,6 +28,19 @@ ROOT = Path(__file__).resolve().parents[1]
 EXAMPLES = ROOT / "examples"
 
 
+def run_cli(argv: list[str]) -> tuple[int, str]:
+    """``racf ARGV`` in this process: its exit code and what it printed on stdout."""
+    import io
+    from contextlib import redirect_stdout
+
+    from racf.experiments.cli import main
+
+    out = io.StringIO()
+    with redirect_stdout(out):
+        code = main(argv)
+    return code, out.getvalue()
+
+
 def _forget_plugins() -> None:
     """The registries read the entry points afresh on next use."""
     for registry in REGISTRIES.values():
@@ -38,11 +51,7 @@ def _forget_plugins() -> None:
 def cusum_wheel_site(tmp_path_factory) -> Path:
     """The example defence installed once by pip from its own ``pyproject.toml`` (its entry point
     included) into a folder of its own: what ``pip install examples/racf-cusum`` puts in site-packages."""
-    site = tmp_path_factory.mktemp("cusum-site")
-    done = subprocess.run([sys.executable, "-m", "pip", "install", "--quiet", "--no-deps", "--no-build-isolation",
-                           "--target", str(site), str(EXAMPLES / "racf-cusum")], capture_output=True, text=True)
-    assert done.returncode == 0, done.stderr[-2000:]
-    return site
+    return _pip_install_example(tmp_path_factory, "racf-cusum")
 
 
 def install_cusum(site: Path, installed: Path) -> Path:
@@ -70,8 +79,11 @@ def _pip_install_example(tmp_path_factory, folder: str) -> Path:
     """An example package installed by pip from its own ``pyproject.toml`` (its entry points included)
     into a folder of its own: what ``pip install examples/FOLDER`` puts in site-packages."""
     site = tmp_path_factory.mktemp(folder)
+    # Built from a copy: test processes running side by side never share the build's scratch folders.
+    source = shutil.copytree(EXAMPLES / folder, tmp_path_factory.mktemp(f"{folder}-src") / folder,
+                             ignore=shutil.ignore_patterns("build", "*.egg-info", "__pycache__"))
     done = subprocess.run([sys.executable, "-m", "pip", "install", "--quiet", "--no-deps", "--no-build-isolation",
-                           "--target", str(site), str(EXAMPLES / folder)], capture_output=True, text=True)
+                           "--target", str(site), str(source)], capture_output=True, text=True)
     assert done.returncode == 0, done.stderr[-2000:]
     return site
 

@@ -30,4 +30,5 @@ def test_jedi_resolves_racf_and_a_plugins_imports_to_the_checkouts_files(tmp_pat
     found = {name: [os.path.realpath(p) for p in paths] for name, paths in json.loads(done.stdout).items()}
     assert found["racf.sim.env"] == [str(ROOT / "sim" / "env" / "__init__.py")]
     assert found["racf.odca.online"] == [str(ROOT / "odca" / "online.py")]
-    assert found["DistanceEstimator"] and all(p.startswith(str(ROOT / "controllers")) for p in found["DistanceEstimator"])
+    assert found["DistanceEstimator"]
+    assert all(p.startswith(str(ROOT / "controllers")) for p in found["DistanceEstimator"])

@@ -57,18 +57,20 @@ class Param:
 
     def check(self, value: Any, owner: str) -> Any:
         """The value as the parameter's type; ValueError names the scenario, the parameter and what is allowed."""
-        allowed = self.allowed()
         kind = self.type
-        ok = (isinstance(value, bool) if kind is bool else
-              isinstance(value, (int, float)) and not isinstance(value, bool) and (kind is float or float(value).is_integer())
-              if kind in (int, float) else isinstance(value, kind))
+        if kind is bool or kind not in (int, float):
+            ok = isinstance(value, kind)
+        else:  # a number: an int parameter takes only whole values
+            ok = (isinstance(value, (int, float)) and not isinstance(value, bool)
+                  and (kind is float or float(value).is_integer()))
         if ok and kind in (int, float):
             value = kind(value)
-            ok = math.isfinite(value) and (self.low is None or value >= self.low) and (self.high is None or value <= self.high)
+            ok = (math.isfinite(value) and (self.low is None or value >= self.low)
+                  and (self.high is None or value <= self.high))
         if ok and self.choices is not None:
             ok = value in self.choices
         if not ok:
-            raise ValueError(f"scenario {owner!r} parameter {self.name!r} must be {allowed}, got {value!r}")
+            raise ValueError(f"scenario {owner!r} parameter {self.name!r} must be {self.allowed()}, got {value!r}")
         return value
 
     def allowed(self) -> str:
@@ -76,7 +78,8 @@ class Param:
             return f"one of {list(self.choices)}"
         kind = self.type.__name__
         if self.low is not None or self.high is not None:
-            return f"{'an' if kind == 'int' else 'a'} {kind} in [{self.low}, {self.high}]{' ' + self.unit if self.unit else ''}"
+            unit = f" {self.unit}" if self.unit else ""
+            return f"{'an' if kind == 'int' else 'a'} {kind} in [{self.low}, {self.high}]{unit}"
         return f"a {kind}"
 
     def describe(self) -> str:

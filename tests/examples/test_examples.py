@@ -12,22 +12,14 @@ from contextlib import redirect_stdout
 import pandas as pd
 import pytest
 
-from tests.conftest import EXAMPLES
+from tests.conftest import EXAMPLES, run_cli
 from racf.controllers import PerceptionSample
-from racf.experiments.cli import main
 
 ATTACK = str(EXAMPLES / "depth_scale_attack.py")
 
 
-def _run(argv: list[str]) -> tuple[int, str]:
-    out = io.StringIO()
-    with redirect_stdout(out):
-        code = main(argv)
-    return code, out.getvalue()
-
-
 def test_both_plugins_show_up_in_racf_list(cusum_installed, plugin_env):
-    code, out = _run(["list", "--json", "--plugin", ATTACK])
+    code, out = run_cli(["list", "--json", "--plugin", ATTACK])
     listed = json.loads(out)
     assert code == 0
     assert listed["estimator"]["lidar_cusum"]["origin"] == "racf-cusum"
@@ -37,7 +29,7 @@ def test_both_plugins_show_up_in_racf_list(cusum_installed, plugin_env):
 
 @pytest.mark.slow  # two spawned workers start racf and torch: CI's slow stage runs it
 def test_the_defence_and_the_attack_run_in_trials_on_spawned_workers(cusum_installed, plugin_env, tmp_path):
-    code, out = _run(["trials", "--plugin", ATTACK, "--attack", "depth_scale", "--estimator", "lidar_cusum",
+    code, out = run_cli(["trials", "--plugin", ATTACK, "--attack", "depth_scale", "--estimator", "lidar_cusum",
                       "--estimator-option", "h_m=0.2", "--seed", "0", "-n", "2",
                       "--workers", "2", "--json", "--out", str(tmp_path / "ts")])
     summary = json.loads(out)
@@ -49,12 +41,12 @@ def test_the_defence_and_the_attack_run_in_trials_on_spawned_workers(cusum_insta
 def test_a_sweep_from_flags_runs_both_and_an_edited_plugin_reruns(cusum_installed, plugin_env, tmp_path):
     argv = ["sweep", "--plugin", ATTACK, "--attack", "depth_scale", "--estimator", "lidar_cusum", "--sign", "1",
             "--workers", "1", "--json", "--out", str(tmp_path / "sweep")]
-    first = json.loads(_run(argv)[1])
+    first = json.loads(run_cli(argv)[1])
     assert first["done"] == 1 and set(first["scr"]) == {"clean+depth_scale+lidar_cusum"}
-    assert json.loads(_run(argv)[1])["reused"] == 1
+    assert json.loads(run_cli(argv)[1])["reused"] == 1
     source = cusum_installed / "__init__.py"
     source.write_text(source.read_text() + "\n# edited\n")
-    assert json.loads(_run(argv)[1])["done"] == 1  # a new id: the old result is not reused
+    assert json.loads(run_cli(argv)[1])["done"] == 1  # a new id: the old result is not reused
 
 
 @pytest.mark.slow
@@ -120,7 +112,7 @@ def test_racf_bench_quick_scores_the_installed_defence(cusum_installed, tmp_path
     from tests.conftest import write_bench_dataset
 
     data = write_bench_dataset(tmp_path / "data")
-    code, out = _run(["bench", "--quick", "--dataset", str(data), "--out", str(tmp_path / "bench"), "--json"])
+    code, out = run_cli(["bench", "--quick", "--dataset", str(data), "--out", str(tmp_path / "bench"), "--json"])
     assert code == 0
     results = json.loads(out)
     assert results["by_series"]["strong"]["lidar_cusum"]["rmse"] is not None

@@ -4,24 +4,16 @@ take its parameters, and editing it renews its episodes' ids."""
 
 from __future__ import annotations
 
-import io
 import json
-from contextlib import redirect_stdout
 
 import pandas as pd
 
 from racf.experiments.cli import main
-
-
-def _run(argv: list[str]) -> tuple[int, str]:
-    out = io.StringIO()
-    with redirect_stdout(out):
-        code = main(argv)
-    return code, out.getvalue()
+from tests.conftest import run_cli
 
 
 def test_the_scenario_is_listed_with_its_parameters(parked_car_installed):
-    code, out = _run(["list", "--json"])
+    code, out = run_cli(["list", "--json"])
     entry = json.loads(out)["scenario"]["parked_car"]
     assert code == 0 and entry["origin"] == "racf-parked-car"
     assert entry["params"]["ahead_m"]["low"] == 0.2 and entry["params"]["ahead_m"]["unit"] == "m"
@@ -30,7 +22,8 @@ def test_the_scenario_is_listed_with_its_parameters(parked_car_installed):
 def test_a_trial_runs_it_and_the_van_hides_the_sign_for_the_far_part(parked_car_installed, tmp_path):
     first_seen = {}
     for target in ("sign", "parked_car"):
-        code, out = _run(["trial", "--target", target, "--sign", "1", "--speed", "1.0", "--out", str(tmp_path / target)])
+        code, out = run_cli(["trial", "--target", target, "--sign", "1", "--speed", "1.0",
+                             "--out", str(tmp_path / target)])
         assert code == 0
         row = json.loads(out)
         log = pd.read_parquet(row["log"])
@@ -79,7 +72,7 @@ def test_a_sweep_runs_it(parked_car_installed, tmp_path):
     spec = tmp_path / "van.toml"
     spec.write_text('name = "van"\ntarget = "parked_car"\n[space]\nattack = ["none"]\nspeed = [1.0]\nsign = [1]\n'
                     '[scenario.parked_car]\nahead_m = [0.5]\n')
-    code, _ = _run(["sweep", str(spec), "--out", str(tmp_path / "out"), "--workers", "1", "--json"])
+    code, _ = run_cli(["sweep", str(spec), "--out", str(tmp_path / "out"), "--workers", "1", "--json"])
     rows = ResultStore(tmp_path / "out").rows()
     assert code == 0 and rows["target"].tolist() == ["parked_car"]
 

@@ -4,26 +4,18 @@ scorecard row, and editing it renews the ids of the episodes it scores."""
 
 from __future__ import annotations
 
-import io
 import json
 import math
-from contextlib import redirect_stdout
 
 from racf.experiments.cli import main
+from tests.conftest import run_cli
 from racf.experiments.sweeps.store import ResultStore
 
 TINY = 'name = "ttl"\n[space]\nattack = ["patch_occlusion"]\nrho = [1.0]\nt_atk = [2.0]\nspeed = [1.5]\nsign = [1]\n'
 
 
-def _run(argv: list[str]) -> tuple[int, str]:
-    out = io.StringIO()
-    with redirect_stdout(out):
-        code = main(argv)
-    return code, out.getvalue()
-
-
 def test_the_metric_is_listed_with_its_field(time_to_line_installed):
-    code, out = _run(["list", "--json"])
+    code, out = run_cli(["list", "--json"])
     entry = json.loads(out)["metric"]["time_to_line"]
     assert code == 0 and entry["origin"] == "racf-time-to-line" and entry["always"]
     assert entry["fields"]["time_to_line_s"] == {"unit": "s", "summary": "median",
@@ -34,7 +26,7 @@ def test_the_metric_is_listed_with_its_field(time_to_line_installed):
 def test_a_sweep_scores_summarises_and_reports_it(time_to_line_installed, tmp_path):
     spec = tmp_path / "ttl.toml"
     spec.write_text(TINY)
-    code, _ = _run(["sweep", str(spec), "--out", str(tmp_path / "out"), "--workers", "1", "--json"])
+    code, _ = run_cli(["sweep", str(spec), "--out", str(tmp_path / "out"), "--workers", "1", "--json"])
     assert code == 0
     rows = ResultStore(tmp_path / "out").rows()
     value = float(rows["time_to_line_s"].iloc[0])
@@ -70,6 +62,7 @@ def test_editing_the_metric_renews_the_ids_it_scores(time_to_line_installed):
 
     before = TrialSpec("attack", 0, 1.0, 0).trial_id
     source = time_to_line_installed / "__init__.py"
-    source.write_text(source.read_text().replace("max(float(step[\"speed\"]), 0.05)", "max(float(step[\"speed\"]), 0.1)"))
+    text = source.read_text()
+    source.write_text(text.replace('max(float(step["speed"]), 0.05)', 'max(float(step["speed"]), 0.1)'))
     _forget_plugins()
     assert TrialSpec("attack", 0, 1.0, 0).trial_id != before

@@ -1,0 +1,34 @@
+"""Metrics, declared once: the result row is the episode's identity and then each metric's fields in
+their declared order, and a field's default summary follows its declared kind."""
+
+import math
+
+import pandas as pd
+import pytest
+
+from racf.experiments.episode.runner import IDENTITY
+from racf.experiments.metrics import Field, Metric
+from racf.plugins import METRICS
+from racf.stats import median_ci, wilson_interval
+
+
+class _Probe(Metric):
+    name = "probe"
+    fields = (Field("hit", False, "", "a flag", "rate"), Field("gap_m", math.nan, "m", "a gap", "median"),
+              Field("note", None, "", "not summarised"))
+
+
+def test_the_default_summary_follows_each_fields_kind():
+    rows = pd.DataFrame({"hit": [True, False, True, None], "gap_m": [0.1, 0.3, float("nan"), 0.2], "note": "x"})
+    s = _Probe().summarize(rows, attacked=False)
+    assert s["n_hit"] == 3 and s["hit_rate"] == pytest.approx(2 / 3) and s["hit_rate_ci"] == list(wilson_interval(2, 3))
+    assert s["n_gap_m"] == 3 and (s["gap_m_median"], s["gap_m_ci"]) == median_ci([0.1, 0.3, 0.2])
+    assert not [k for k in s if "note" in k]
+
+
+def test_racfs_own_metrics_declare_the_result_rows_columns_once():
+    names = sorted((n for n in METRICS if METRICS.plugin(n).builtin), key=lambda n: METRICS[n].order)
+    columns = [f.name for n in names for f in METRICS[n].fields]
+    assert len(columns) == len(set(columns)) and not set(columns) & set(IDENTITY)
+    assert columns[:4] == ["rho", "t_atk_s", "attack_start_s", "lost_frames"] and columns[-1] == "traffic_cars"
+    assert all(METRICS[n].always for n in names)
