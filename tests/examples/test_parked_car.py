@@ -7,6 +7,7 @@ from __future__ import annotations
 import json
 
 import pandas as pd
+import pytest
 
 from racf.experiments.cli import main
 from tests.conftest import run_cli
@@ -66,6 +67,7 @@ def test_editing_the_scenario_renews_its_ids(parked_car_installed):
     assert TrialSpec("clean", 0, 1.0, 0, target="parked_car").trial_id != before
 
 
+@pytest.mark.slow  # a sweep or a card end to end: CI's slow stage runs it
 def test_a_sweep_runs_it(parked_car_installed, tmp_path):
     from racf.experiments.sweeps.store import ResultStore
 
@@ -77,6 +79,7 @@ def test_a_sweep_runs_it(parked_car_installed, tmp_path):
     assert code == 0 and rows["target"].tolist() == ["parked_car"]
 
 
+@pytest.mark.slow  # a sweep or a card end to end: CI's slow stage runs it
 def test_a_scorecard_runs_a_battery_in_it(parked_car_installed, tmp_path, monkeypatch, capsys):
     from racf.experiments.scorecard import battery as battery_module
     from racf.experiments.scorecard.battery import Battery, LoopRow, _paper

@@ -7,6 +7,8 @@ from __future__ import annotations
 import json
 import math
 
+import pytest
+
 from racf.experiments.cli import main
 from tests.conftest import run_cli
 from racf.experiments.sweeps.store import ResultStore
@@ -38,6 +40,7 @@ def test_a_sweep_scores_summarises_and_reports_it(time_to_line_installed, tmp_pa
     assert "time_to_line_s s, median (time_to_line)" in report
 
 
+@pytest.mark.slow  # a sweep or a card end to end: CI's slow stage runs it
 def test_a_scorecard_row_shows_it(time_to_line_installed, tmp_path, monkeypatch, capsys):
     from racf.experiments.scorecard import battery as battery_module
     from racf.experiments.scorecard.battery import Battery, LoopRow, _paper
