@@ -27,12 +27,14 @@ class CameraModel:
         fx: horizontal focal length, pixels.
         cx: principal point column, pixels.
         fy: vertical focal length, pixels (None: square pixels, fx).
+        cy: principal point row, pixels (None: not known; what needs it says so).
     """
 
     width: int
     fx: float
     cx: float
     fy: float | None = None
+    cy: float | None = None
 
     def __post_init__(self) -> None:
         if not (self.width > 0 and self.fx > 0 and 0 <= self.cx <= self.width):

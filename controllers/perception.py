@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -40,6 +41,8 @@ class PerceptionSample:
             known size, m (NaN: no size stage, no detection, or a box too broken or cut to
             measure; :class:`~racf.controllers.size_distance.SizeDistance`).
         size_std: its std, m.
+        witnesses: the existence stage's witnesses (``racf.controllers.existence``), for a defence
+            that answers whether its target stands; None otherwise.
     """
 
     detection: Detection | None
@@ -50,6 +53,7 @@ class PerceptionSample:
     lidar_confirmed: bool = True
     d_size: float = math.nan
     size_std: float = math.nan
+    witnesses: Any = None
 
     @property
     def detected(self) -> bool:
@@ -142,6 +146,11 @@ class Perception:
                                   detection_height=held.height)
         return PerceptionSample(held.detection, held.d_meas, held.c_meas, lidar_m, held.bearing,
                                 self.lidar.depth_confirmed, held.d_size, held.size_std)
+
+    def detect(self, rgb: np.ndarray, map_bearing: float | None = None) -> Detection | None:
+        """The detector's pick of the target on one frame after the map check (see :meth:`process`),
+        without the depth and LiDAR stages: what a second detector beside the car's reports."""
+        return self._detect(np.asarray(rgb), map_bearing)
 
     def _detect(self, rgb: np.ndarray, map_bearing: float | None) -> Detection | None:
         """The frame's detection of the target. Without a map, the detector's own pick. With one, the

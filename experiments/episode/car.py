@@ -13,7 +13,7 @@ once before the episode (:mod:`racf.experiments.episode.plan`). Ground truth is 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -44,6 +44,7 @@ class CarCalibration:
         bumper_x_m: the front bumper's position ahead of the body origin, m.
         rear_axle_x_m: the rear axle's position on the body, m (negative: behind the origin).
         lidar_xy_m: the LiDAR's position on the body, m (the scan plane's origin).
+        camera_height_m: the camera's height above the floor, m.
     """
 
     camera: CameraModel
@@ -51,6 +52,7 @@ class CarCalibration:
     bumper_x_m: float
     rear_axle_x_m: float
     lidar_xy_m: tuple[float, float]
+    camera_height_m: float = 0.172
 
     @property
     def camera_lever_m(self) -> float:
@@ -86,10 +88,16 @@ class CarStep:
     frame_new: bool = True
 
 
+#: Where a sign the map does not list has its stop line: where the sign stands (the rule the map's
+#: own lines follow: each lies within 0.02 m of its sign's projection onto the lane), m past the line.
+UNMAPPED_SIGN_PAST_LINE_M = 0.0
+
+
 def sign_depth_at_line(calibration: CarCalibration, target: RouteTarget) -> float:
-    """The target's camera depth when the front bumper is on its stop line, m (from the map and the car's build)."""
+    """The target's camera depth when the front bumper is on its stop line, m (from the map and the
+    car's build; a target the map does not list: by the rule of the road, ``UNMAPPED_SIGN_PAST_LINE_M``)."""
     camera_to_bumper = float(calibration.bumper_x_m - calibration.camera_xy_m[0])
-    return camera_to_bumper + (target.target_s - target.stop_s)
+    return camera_to_bumper + (target.target_s - target.stop_s if target.mapped else UNMAPPED_SIGN_PAST_LINE_M)
 
 
 def route_follower(path: Path, cruise_mps: float, start_s: float = 0.0) -> RouteFollower:
@@ -99,21 +107,35 @@ def route_follower(path: Path, cruise_mps: float, start_s: float = 0.0) -> Route
     return follower
 
 
+def _from_camera(calibration: CarCalibration, target: RouteTarget, pose: np.ndarray) -> tuple[float, float, float]:
+    """The map's target from the camera: (dx, dy) in the map frame and the car's yaw."""
+    cx, cy = calibration.camera_xy_m
+    x, y, yaw = (float(v) for v in pose)
+    c, s = np.cos(yaw), np.sin(yaw)
+    tx, ty = target.target.centre[:2]
+    return tx - (x + c * cx - s * cy), ty - (y + s * cx + c * cy), yaw
+
+
+def camera_offset(calibration: CarCalibration, target: RouteTarget, pose: np.ndarray) -> tuple[float, float]:
+    """Where the map puts ``target`` from the camera, from the car's pose: (ahead along the optical
+    axis, left of it), m."""
+    dx, dy, yaw = _from_camera(calibration, target, pose)
+    c, s = np.cos(yaw), np.sin(yaw)
+    return float(c * dx + s * dy), float(-s * dx + c * dy)
+
+
 def map_bearing(calibration: CarCalibration, target: RouteTarget, pose: np.ndarray) -> float:
     """Bearing of ``target`` from the camera's optical axis (rad, left positive), from the map and the car's pose.
 
     NaN when the map says the camera cannot see the target's face (a stop sign showing
     the car its back): no detection is its then.
     """
-    cx, cy = calibration.camera_xy_m
-    x, y, yaw = (float(v) for v in pose)
-    c, s = np.cos(yaw), np.sin(yaw)
-    tx, ty = target.target.centre[:2]
-    dx, dy = tx - (x + c * cx - s * cy), ty - (y + s * cx + c * cy)
+    dx, dy, _ = _from_camera(calibration, target, pose)
     face = getattr(target.target, "face_yaw", None)
     if face is not None and -(dx * np.cos(face) + dy * np.sin(face)) < 0.0:
         return float("nan")
-    return float(np.arctan2(-s * dx + c * dy, c * dx + s * dy))
+    ahead, left = camera_offset(calibration, target, pose)
+    return float(np.arctan2(left, ahead))
 
 
 class Car:
@@ -131,11 +153,14 @@ class Car:
         localisation: the env's (``racf.sim.sensors.localiser.LOCALISATIONS``): ``qcar2``, the car runs its
             own filter on odometry, the gyro and the localiser's fixes; ``true``, the fix is the
             true pose at every step and the car takes it as it is (the ablation).
+        existence: the existence stage (``racf.experiments.episode.existence.ExistenceStage``) for a
+            defence that answers ``stands()``: its witnesses reach the defence with each sample, and
+            its verdict, not the detector's, drives the braker's track. None: the detector's.
     """
 
     def __init__(self, calibration: CarCalibration, mission: Mission, perceptions: dict[str, Perception],
                  estimator, braking: BrakingConfig, dt: float, control_every: int = 1,
-                 localisation: str = "qcar2") -> None:
+                 localisation: str = "qcar2", existence=None) -> None:
         if localisation not in LOCALISATIONS:
             raise ValueError(f"localisation must be one of {LOCALISATIONS}, got {localisation!r}")
         if not mission.targets:
@@ -147,6 +172,7 @@ class Car:
         self.braking = braking
         self.dt = float(dt)
         self.every = int(control_every)
+        self.existence = existence
         self.pose_filter = PoseFilter() if localisation == "qcar2" else None
         self._step = 0
         self._fix_time = -math.inf
@@ -176,6 +202,8 @@ class Car:
         self.estimator.reset()
         self.perception = self.perceptions[self.target.kind]
         self.perception.reset()
+        if self.existence is not None:
+            self.existence.reset()
         self.braker = StopSignBraker(self.braking, sign_depth_at_line(self.calibration, self.target))
         self._decision = None
 
@@ -203,6 +231,13 @@ class Car:
         self._pose = self.pose_filter.pose
         return yaw_rate - self.pose_filter.gyro_bias
 
+    def _stands(self) -> bool:
+        """Whether a target stands ahead this step: the defence's verdict when it gives one
+        (``stands()``, None: it defers), else the detector's."""
+        verdict = getattr(self.estimator, "stands", None)
+        said = verdict() if callable(verdict) else None
+        return self._sample.detected if said is None else bool(said)
+
     def step(self, obs: dict) -> CarStep:
         """One 50 Hz step of the car's software on one observation; returns its action and why."""
         first = self._step == 0
@@ -228,7 +263,8 @@ class Car:
             # The camera runs slower than the loop: its detector and depth stages run on new frames only.
             frame_time = float(obs["timestamps"][_FRAME_TIME])
             frame_new, self._frame_time = frame_time != self._frame_time, frame_time
-            bearing = map_bearing(self.calibration, self.target, self._pose)
+            # A target the map does not list has no bearing to check detections against.
+            bearing = map_bearing(self.calibration, self.target, self._pose) if self.target.mapped else None
             # No slip at the rear axle: the camera moves sideways at yaw rate x its lever arm.
             lateral = yaw_rate * (self.calibration.camera_xy_m[0] - self.calibration.rear_axle_x_m)
             # The scan's beams were taken over its revolution: the tracker moves each cluster on by its age.
@@ -236,9 +272,15 @@ class Car:
             self._sample = self.perception.process(obs["rgb"], obs["depth"][..., 0], obs["lidar"] if scan_new else None,
                                                    speed=speed, yaw_rate=yaw_rate, lateral_speed=lateral, dt=dt,
                                                    map_bearing=bearing, new_frame=frame_new, beam_age_s=ages)
+            if self.existence is not None and frame_new:
+                witnesses = self.existence.observe(obs["rgb"], obs["depth"][..., 0], obs["lidar"], self.target,
+                                                   self._pose, self.perception, self._sample)
+                self._sample = replace(self._sample, witnesses=witnesses)
+            elif self.existence is not None:
+                self._sample = replace(self._sample, witnesses=self.existence.witnesses)
             self._d_fused = float(self.estimator.estimate(self._sample, speed, dt, yaw_rate_radps=yaw_rate))
-            in_fov = math.isfinite(bearing) and abs(bearing) <= self.calibration.camera.half_hfov_rad
-            self._decision = self.braker.step(self._sample.detected, self._d_fused, speed, dt, expected_in_view=in_fov)
+            in_fov = bearing is None or (math.isfinite(bearing) and abs(bearing) <= self.calibration.camera.half_hfov_rad)
+            self._decision = self.braker.step(self._stands(), self._d_fused, speed, dt, expected_in_view=in_fov)
             self._action = np.array(self.follower.act(x, y, yaw, speed, dt, self._decision.speed_cap_mps), np.float32)
         self._step += 1
         track = self.perception.lidar.state.position  # camera-relative; + the camera's body position

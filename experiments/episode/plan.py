@@ -127,5 +127,5 @@ def car_calibration(width_px: int, height_px: int) -> CarCalibration:
     (``racf.sim.vehicle.calibration``: read from the model the simulator drives)."""
     build = car_build(width_px, height_px)
     k = build.intrinsics
-    return CarCalibration(CameraModel(width=k.width, fx=k.fx, cx=k.cx, fy=k.fy), build.camera_xy_m, build.bumper_x_m,
-                          build.rear_axle_x_m, build.lidar_xy_m)
+    return CarCalibration(CameraModel(width=k.width, fx=k.fx, cx=k.cx, fy=k.fy, cy=k.cy), build.camera_xy_m,
+                          build.bumper_x_m, build.rear_axle_x_m, build.lidar_xy_m, build.camera_height_m)

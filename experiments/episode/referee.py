@@ -66,11 +66,13 @@ class Referee:
             self._begin(target)
         if car.control and car.frame_new:  # d_clean is of the frame, like the car's d_meas
             self._d_clean = self._clean_distance(env, obs, car, perception)
-        in_view = bool(info["sign_in_view"])
+        # No sign stands where the map's was removed (a phantom may look like one): nothing to brake for.
+        stands = info.get("sign_removed", -1) != info["target_sign"] or info["target_kind"] != "stop_sign"
+        in_view = bool(info["sign_in_view"]) and stands
         ideal = self._ideal.step(in_view, float(info["d_true"]) if in_view else math.nan, float(info["speed"]), self.dt)
         x, y, yaw = (float(v) for v in info["pose"])
         return {
-            "d_true": info["d_true"], "d_clean": self._d_clean, "sign_in_view": in_view,
+            "d_true": info["d_true"], "d_clean": self._d_clean, "sign_in_view": in_view, "sign_stands": stands,
             "ideal_brake": ideal.brake, "x": x, "y": y, "yaw": yaw, "speed": info["speed"],
             "dist_to_stop_line": info["dist_to_stop_line"], "lateral_error": info["lateral_error"],
             "attack_active": bool(info.get("attack_active", False)), "attack": "+".join(info.get("attack", ())),

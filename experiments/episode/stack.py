@@ -11,12 +11,13 @@ from racf.controllers import LidarTargetConfig, LidarTargetTracker, ObstacleDete
 from racf.controllers.detectors import make_detector
 from racf.experiments.episode.car import Car, CarCalibration
 from racf.experiments.episode.estimators import make_estimator
+from racf.experiments.episode.existence import ExistenceStage
 from racf.experiments.episode.plan import DRIVE_MAX_EPISODE_S, EpisodePlan, env_settings
 from racf.experiments.episode.spec import TrialSpec
 from racf.sim.attacks import ATTACKS
 from racf.sim.world.stop_signs import SIGN_FACE_ACROSS_FLATS_M, SIGN_RED_FACE_ACROSS_FLATS_M
 
-__all__ = ["default_env", "wrap_attacks", "plain_env", "build_car", "tracker", "outlined_size_m", "OUTLINED_SIZE_M",
+__all__ = ["default_env", "wrap_attacks", "plain_env", "build_car", "existence_stage", "tracker", "outlined_size_m", "OUTLINED_SIZE_M",
            "DRIVE_MAX_EPISODE_S"]
 
 #: The map's size, across flats, of each part of the sign a detector may outline (``BlobDetector.outline``).
@@ -94,4 +95,17 @@ def build_car(spec: TrialSpec, plan: EpisodePlan, estimator=None) -> Car:
     configure = getattr(estimator, "use_calibration", None)
     if callable(configure):
         configure(calib)
-    return Car(calib, plan.mission, perceptions, estimator, spec.braking, plan.control_dt_s, every, plan.localisation)
+    return Car(calib, plan.mission, perceptions, estimator, spec.braking, plan.control_dt_s, every, plan.localisation,
+               existence_stage(estimator, calib, spec.detector))
+
+
+def existence_stage(estimator, calibration: CarCalibration, detector: str) -> ExistenceStage | None:
+    """The existence stage for a defence that answers ``stands()`` (``existence = True``), with its
+    ``second_detector`` beside the car's (the other of the two when it names the car's own); None
+    for any other defence."""
+    if not getattr(estimator, "existence", False):
+        return None
+    second = getattr(estimator, "second_detector", None)
+    if second == detector:
+        second = "classical" if detector != "classical" else "learned"
+    return ExistenceStage(calibration, make_detector(second) if second else None)

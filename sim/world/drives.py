@@ -40,11 +40,14 @@ class RouteTarget:
         target: the stop sign or crate.
         stop_s: arclength of its stop line along the drive's path, m.
         target_s: arclength where the path passes the target (sign pole / crate face), m.
+        mapped: whether the car's map lists it (False: a temporary sign, or a picture of one, the
+            car must find for itself; its position fields are then the referee's, never the car's).
     """
 
     target: StopSign | Obstacle
     stop_s: float
     target_s: float
+    mapped: bool = True
 
     @property
     def kind(self) -> str:

@@ -1,0 +1,105 @@
+"""The car's existence stage: the witnesses of whether its target stands ahead, each frame.
+
+It runs for a defence that answers ``stands()`` (``existence = True``), on the car's side: it
+reads the frame, the scan, the car's own pose and the map, never ``info``. It holds the second
+detector (the defence's ``second_detector``; None: only the car's), forms the hypothesis (the
+map's entry, else where a detector sees a sign) and reads the physical witnesses there
+(:mod:`racf.controllers.existence`).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from racf.controllers import DepthDistance, Perception, PerceptionSample
+from racf.controllers.existence import (NO_WITNESSES, ExistenceWitnesses, Hypothesis, depth_witness,
+                                        detection_hypothesis, lidar_witness)
+from racf.experiments.episode.car import CarCalibration, camera_offset, map_bearing
+from racf.sim.world.drives import RouteTarget
+
+__all__ = ["ExistenceStage", "MAP_TOLERANCE_M", "MAP_LATERAL_M"]
+
+#: How far from the map's depth the object may stand: the car's localisation error along the lane, m.
+MAP_TOLERANCE_M = 0.35
+#: How far either side of the map's place: the plate's half-width and the lateral localisation error, m.
+MAP_LATERAL_M = 0.15
+#: The band of the plate read by the depth witness, either side of its centre's height, m.
+_PLATE_BAND_M = 0.03
+
+
+class ExistenceStage:
+    """Per frame: the witnesses of the target's existence (:class:`ExistenceWitnesses`).
+
+    Args:
+        calibration: the car's build.
+        second: the second detector (None: none).
+    """
+
+    def __init__(self, calibration: CarCalibration, second=None) -> None:
+        self.calibration = calibration
+        self.second = Perception(calibration.camera, detector=second) if second is not None else None
+        self.depth = DepthDistance()
+        self.witnesses = NO_WITNESSES
+
+    def reset(self) -> None:
+        self.witnesses = NO_WITNESSES
+
+    def observe(self, rgb: np.ndarray, depth: np.ndarray, scan: np.ndarray, target: RouteTarget, pose: np.ndarray,
+                primary: Perception, sample: PerceptionSample) -> ExistenceWitnesses:
+        """The witnesses on a new frame (``sample``: the car's perception of it)."""
+        mapped = target.mapped
+        bearing = map_bearing(self.calibration, target, pose) if mapped else None
+        second = self.second.detect(rgb, bearing) if self.second is not None else None
+        seen = (sample.detection, second)
+        seen_depth = tuple(self.depth.estimate(depth, d)[0] for d in seen)
+        map_depth = self._map_depth(target, pose) if mapped else math.nan
+        found = None
+        if mapped and math.isfinite(bearing) and math.isfinite(map_depth):
+            found = self._at(self._map_hypothesis(target, bearing, map_depth), depth, scan, seen)
+        if found is None:  # nothing where the map says (or it says nothing): where a detector sees a sign
+            raw = (primary.last_raw_detection, self.second.last_raw_detection if self.second else None)
+            for detection in (d for d in raw if d is not None):
+                at = self.depth.estimate(depth, detection)[0]
+                if math.isfinite(at):
+                    found = self._at(detection_hypothesis(detection, at, self.calibration.camera), depth, scan,
+                                     raw, keep_empty=True)
+                    break
+        if found is None:
+            found = (tuple(d is not None for d in seen), False, False, math.nan, "map" if mapped else "")
+        detectors, by_depth, by_lidar, depth_m, source = found
+        self.witnesses = ExistenceWitnesses(tuple(d is not None for d in seen), seen_depth, detectors, by_depth,
+                                            by_lidar, source == "map", depth_m, map_depth, source)
+        return self.witnesses
+
+    def _at(self, hypothesis: Hypothesis, depth: np.ndarray, scan: np.ndarray, detections,
+            keep_empty: bool = False):
+        """The witnesses at ``hypothesis`` (None when no physical witness finds anything there and
+        ``keep_empty`` is False: the caller tries the next place)."""
+        calib = self.calibration
+        by_depth = depth_witness(depth, calib.camera, hypothesis)
+        by_lidar = lidar_witness(scan, hypothesis, calib.camera_xy_m, calib.lidar_xy_m)
+        if not (math.isfinite(by_depth) or math.isfinite(by_lidar) or keep_empty):
+            return None
+        at = [d is not None and self._holds(d, hypothesis) for d in detections]
+        depth_m = by_depth if math.isfinite(by_depth) else by_lidar
+        return tuple(at), math.isfinite(by_depth), math.isfinite(by_lidar), depth_m, hypothesis.source
+
+    def _holds(self, detection, hypothesis: Hypothesis) -> bool:
+        camera = self.calibration.camera
+        x0, _, x1, _ = detection.box
+        left, right = camera.bearing(x0 - 0.5), camera.bearing(x1 - 0.5)
+        return right - hypothesis.half_width_rad <= hypothesis.bearing_rad <= left + hypothesis.half_width_rad
+
+    def _map_depth(self, target: RouteTarget, pose: np.ndarray) -> float:
+        forward, _ = camera_offset(self.calibration, target, pose)
+        return forward if forward > 0 else math.nan
+
+    def _map_hypothesis(self, target: RouteTarget, bearing: float, depth_m: float) -> Hypothesis:
+        calib, camera = self.calibration, self.calibration.camera
+        fy = camera.fy if camera.fy is not None else camera.fx
+        cy = camera.cy if camera.cy is not None else 0.0
+        height = float(target.target.centre[2]) - calib.camera_height_m
+        rows = tuple(int(round(cy - fy * (height + dz) / depth_m)) for dz in (_PLATE_BAND_M, -_PLATE_BAND_M))
+        return Hypothesis(bearing, depth_m, MAP_TOLERANCE_M, math.atan2(MAP_LATERAL_M, depth_m), "map", rows)

@@ -1,0 +1,135 @@
+"""Defences that say whether a stop sign stands, not only how far it is.
+
+The contract (``racf.controllers.estimators.DistanceEstimator``) gains one optional answer: a
+defence with ``existence = True`` gets the existence stage's witnesses with each sample
+(``PerceptionSample.witnesses``) and answers ``stands()`` after each ``estimate``: True or
+False, or None to defer to the detector. The braker confirms its track on that verdict and
+brakes on the distance ``estimate`` returns. A user's defence takes part the same way.
+
+- ``vote``: RACF's existence vote (:func:`racf.controllers.existence.vote`) over the two detectors,
+  the depth and LiDAR witnesses and the map; its distance is an inner defence's (ODCA by
+  default) while the car's detector sees the sign, else the physical witnesses' depth;
+- ``detectors_or``: the two detectors OR-ed (a sign stands when either sees it); its distance
+  is the inner defence's, else the depth at the second detector's detection;
+- ``map_only``: stop at every line the map lists (a sign stands whenever the map lists one
+  ahead); its distance is where the map puts the sign from the car's own pose.
+
+Detector-only (what every defence did before) is any defence without ``existence``.
+"""
+
+from __future__ import annotations
+
+import math
+
+from racf.controllers import PerceptionSample
+from racf.controllers.existence import NO_WITNESSES, ExistenceWitnesses, vote
+
+__all__ = ["ExistenceVote", "DetectorsOr", "MapOnly"]
+
+
+class _Existence:
+    """What the three share: an inner defence for the distance, the witnesses, the verdict."""
+
+    name = "existence"
+    existence = True
+    second_detector: str | None = "learned"
+
+    def __init__(self, inner: str = "odca") -> None:
+        from racf.experiments.episode.estimators import make_estimator
+
+        self.inner_name = inner
+        self.inner = make_estimator(inner, {})
+        self._stands: bool | None = None
+        self._witnesses = NO_WITNESSES
+
+    @property
+    def n_parameters(self) -> int:
+        return int(getattr(self.inner, "n_parameters", 0))
+
+    @property
+    def n_frozen_parameters(self) -> int:
+        return int(getattr(self.inner, "n_frozen_parameters", 0))
+
+    def use_calibration(self, calibration) -> None:
+        configure = getattr(self.inner, "use_calibration", None)
+        if callable(configure):
+            configure(calibration)
+
+    def reset(self) -> None:
+        self.inner.reset()
+        self._stands = None
+        self._witnesses = NO_WITNESSES
+
+    def estimate(self, sample: PerceptionSample, speed_mps: float, dt: float, yaw_rate_radps: float = 0.0) -> float:
+        d = float(self.inner.estimate(sample, speed_mps, dt, yaw_rate_radps=yaw_rate_radps))
+        self._witnesses = sample.witnesses if sample.witnesses is not None else NO_WITNESSES
+        self._stands = self.verdict(self._witnesses)
+        return d if math.isfinite(d) else self.fallback_distance(self._witnesses)
+
+    def verdict(self, witnesses: ExistenceWitnesses) -> bool:
+        raise NotImplementedError
+
+    def fallback_distance(self, witnesses: ExistenceWitnesses) -> float:
+        """The distance when the inner defence has none (the car's detector does not see the sign)."""
+        return math.nan
+
+    def stands(self) -> bool | None:
+        return self._stands
+
+    def diagnostics(self) -> dict[str, float]:
+        out = dict(self.inner.diagnostics())
+        if self._stands is not None:
+            out |= self._witnesses.columns() | {"stands": float(self._stands)}
+        return out
+
+    def would_pass(self, **kwargs) -> bool:
+        return self.inner.would_pass(**kwargs)
+
+
+class ExistenceVote(_Existence):
+    """RACF's vote: a physical witness (depth, LiDAR) and a semantic one (either detector, the map)."""
+
+    name = "vote"
+
+    def __init__(self, inner: str = "odca", second_detector: str = "learned") -> None:
+        super().__init__(inner)
+        self.second_detector = second_detector
+
+    def verdict(self, witnesses: ExistenceWitnesses) -> bool:
+        return vote(witnesses)
+
+    def fallback_distance(self, witnesses: ExistenceWitnesses) -> float:
+        return witnesses.depth_m
+
+
+class DetectorsOr(_Existence):
+    """The two detectors OR-ed: a sign stands where either sees one (the map checks both)."""
+
+    name = "detectors_or"
+
+    def __init__(self, inner: str = "odca", second_detector: str = "learned") -> None:
+        super().__init__(inner)
+        self.second_detector = second_detector
+
+    def verdict(self, witnesses: ExistenceWitnesses) -> bool:
+        return any(witnesses.seen)
+
+    def fallback_distance(self, witnesses: ExistenceWitnesses) -> float:
+        return witnesses.seen_depth_m[-1]
+
+
+class MapOnly(_Existence):
+    """Stop at every line the map lists: a sign stands whenever the map lists one ahead."""
+
+    name = "map_only"
+    second_detector = None
+
+    def __init__(self, inner: str = "raw") -> None:
+        super().__init__(inner)
+
+    def estimate(self, sample: PerceptionSample, speed_mps: float, dt: float, yaw_rate_radps: float = 0.0) -> float:
+        super().estimate(sample, speed_mps, dt, yaw_rate_radps)
+        return self._witnesses.map_depth_m  # the map's place, never a sensor's
+
+    def verdict(self, witnesses: ExistenceWitnesses) -> bool:
+        return math.isfinite(witnesses.map_depth_m)
