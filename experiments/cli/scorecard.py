@@ -120,7 +120,7 @@ def _scorecard(args: argparse.Namespace) -> int:
     from racf.provenance import atomic_write
 
     t0 = time.perf_counter()
-    dataset = _dataset(args, args.quick)
+    dataset = _dataset(args, args.quick) if battery.offline_presets else None  # racf-5 has no offline rows
     cards = []
     with backend_session(args.backend, args.workers, args.address):
         for defence in args.defence:

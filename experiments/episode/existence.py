@@ -14,9 +14,9 @@ import math
 import numpy as np
 
 from racf.controllers import DepthDistance, Perception, PerceptionSample
-from racf.controllers.existence import (NO_WITNESSES, ExistenceWitnesses, Hypothesis, depth_witness,
-                                        detection_hypothesis, lidar_witness)
-from racf.experiments.episode.car import CarCalibration, camera_offset, map_bearing
+from racf.controllers.existence import (NO_WITNESSES, ExistenceWitnesses, Hypothesis, depth_hole, depth_witness,
+                                        detection_hypothesis, lidar_blind, lidar_witness)
+from racf.experiments.episode.car import CarCalibration, camera_offset, map_bearing, sign_depth_at_line
 from racf.sim.world.drives import RouteTarget
 
 __all__ = ["ExistenceStage", "MAP_TOLERANCE_M", "MAP_LATERAL_M"]
@@ -25,8 +25,8 @@ __all__ = ["ExistenceStage", "MAP_TOLERANCE_M", "MAP_LATERAL_M"]
 MAP_TOLERANCE_M = 0.35
 #: How far either side of the map's place: the plate's half-width and the lateral localisation error, m.
 MAP_LATERAL_M = 0.15
-#: The band of the plate read by the depth witness, either side of its centre's height, m.
-_PLATE_BAND_M = 0.03
+#: Half a plate's height, m (the map's signs: 0.10 m across flats).
+_PLATE_HALF_M = 0.05
 
 
 class ExistenceStage:
@@ -47,17 +47,23 @@ class ExistenceStage:
         self.witnesses = NO_WITNESSES
 
     def observe(self, rgb: np.ndarray, depth: np.ndarray, scan: np.ndarray, target: RouteTarget, pose: np.ndarray,
-                primary: Perception, sample: PerceptionSample) -> ExistenceWitnesses:
-        """The witnesses on a new frame (``sample``: the car's perception of it)."""
+                to_line_m: float, primary: Perception, sample: PerceptionSample) -> ExistenceWitnesses:
+        """The witnesses on a new frame (``sample``: the car's perception of it; ``to_line_m``: how far
+        the car's own localisation puts its bumper before the target's line along the route)."""
         mapped = target.mapped
         bearing = map_bearing(self.calibration, target, pose) if mapped else None
         second = self.second.detect(rgb, bearing) if self.second is not None else None
         seen = (sample.detection, second)
         seen_depth = tuple(self.depth.estimate(depth, d)[0] for d in seen)
-        map_depth = self._map_depth(target, pose) if mapped else math.nan
+        # The map's sign as the route brings it: its camera depth at the line, plus the route's distance to it.
+        map_depth = to_line_m + sign_depth_at_line(self.calibration, target) if mapped and to_line_m > -0.5 \
+            else math.nan
         found = None
-        if mapped and math.isfinite(bearing) and math.isfinite(map_depth):
-            found = self._at(self._map_hypothesis(target, bearing, map_depth), depth, scan, seen)
+        ahead, _ = camera_offset(self.calibration, target, pose)
+        half_fov = self.calibration.camera.half_hfov_rad
+        if mapped and math.isfinite(bearing) and abs(bearing) < half_fov and ahead > 0 and math.isfinite(map_depth):
+            # Where the camera could see the map's sign: are the plate and its witnesses there?
+            found = self._at(self._map_hypothesis(target, bearing, ahead), depth, scan, seen)
         if found is None:  # nothing where the map says (or it says nothing): where a detector sees a sign
             raw = (primary.last_raw_detection, self.second.last_raw_detection if self.second else None)
             for detection in (d for d in raw if d is not None):
@@ -67,10 +73,10 @@ class ExistenceStage:
                                      raw, keep_empty=True)
                     break
         if found is None:
-            found = (tuple(d is not None for d in seen), False, False, math.nan, "map" if mapped else "")
-        detectors, by_depth, by_lidar, depth_m, source = found
+            found = (tuple(d is not None for d in seen), False, False, False, False, math.nan, "map" if mapped else "")
+        detectors, by_depth, by_lidar, hole, blind, depth_m, source = found
         self.witnesses = ExistenceWitnesses(tuple(d is not None for d in seen), seen_depth, detectors, by_depth,
-                                            by_lidar, source == "map", depth_m, map_depth, source)
+                                            by_lidar, hole, blind, source == "map", depth_m, map_depth, source)
         return self.witnesses
 
     def _at(self, hypothesis: Hypothesis, depth: np.ndarray, scan: np.ndarray, detections,
@@ -80,11 +86,14 @@ class ExistenceStage:
         calib = self.calibration
         by_depth = depth_witness(depth, calib.camera, hypothesis)
         by_lidar = lidar_witness(scan, hypothesis, calib.camera_xy_m, calib.lidar_xy_m)
-        if not (math.isfinite(by_depth) or math.isfinite(by_lidar) or keep_empty):
+        hole = depth_hole(depth, calib.camera, hypothesis)
+        found = math.isfinite(by_depth) or (math.isfinite(by_lidar) and hole)
+        blind = not found and hole and lidar_blind(scan, hypothesis, calib.camera_xy_m, calib.lidar_xy_m)
+        if not (found or blind or keep_empty):
             return None
         at = [d is not None and self._holds(d, hypothesis) for d in detections]
         depth_m = by_depth if math.isfinite(by_depth) else by_lidar
-        return tuple(at), math.isfinite(by_depth), math.isfinite(by_lidar), depth_m, hypothesis.source
+        return tuple(at), math.isfinite(by_depth), math.isfinite(by_lidar), hole, blind, depth_m, hypothesis.source
 
     def _holds(self, detection, hypothesis: Hypothesis) -> bool:
         camera = self.calibration.camera
@@ -92,14 +101,10 @@ class ExistenceStage:
         left, right = camera.bearing(x0 - 0.5), camera.bearing(x1 - 0.5)
         return right - hypothesis.half_width_rad <= hypothesis.bearing_rad <= left + hypothesis.half_width_rad
 
-    def _map_depth(self, target: RouteTarget, pose: np.ndarray) -> float:
-        forward, _ = camera_offset(self.calibration, target, pose)
-        return forward if forward > 0 else math.nan
-
     def _map_hypothesis(self, target: RouteTarget, bearing: float, depth_m: float) -> Hypothesis:
         calib, camera = self.calibration, self.calibration.camera
         fy = camera.fy if camera.fy is not None else camera.fx
         cy = camera.cy if camera.cy is not None else 0.0
         height = float(target.target.centre[2]) - calib.camera_height_m
-        rows = tuple(int(round(cy - fy * (height + dz) / depth_m)) for dz in (_PLATE_BAND_M, -_PLATE_BAND_M))
+        rows = tuple(int(round(cy - fy * (height + dz) / depth_m)) for dz in (_PLATE_HALF_M, -_PLATE_HALF_M))
         return Hypothesis(bearing, depth_m, MAP_TOLERANCE_M, math.atan2(MAP_LATERAL_M, depth_m), "map", rows)

@@ -32,6 +32,7 @@ from dataclasses import dataclass, field, replace
 from typing import Callable
 
 from racf.experiments.episode import TrialSpec
+from racf.experiments.episode.spec import setting_name
 from racf.experiments.sweeps.batches import batch_specs
 from racf.experiments.sweeps.spec import SweepSpec
 
@@ -189,6 +190,77 @@ _RACF_4 = replace(_RACF_3, name="racf-4", loop=_RACF_3.loop + (
     LoopRow("traffic_strong", "random strong patch draws with cross-traffic timed to the conflict point", 60, 4,
             _sweep("strong", "patch_occlusion", traffic={"cars": [1], "gap_s": 0.0, "speed": 1.0}), driving=True),))
 
+_STICKER_06 = {"texture": "learned-approach", "size": 0.6, "from_start": True}
+_STICKER_04_TOP = {"texture": "learned-approach", "size": 0.4, "position": "top", "from_start": True}
+#: The strong patch from the second step the sign is in view (0.04 s), before any track is confirmed
+#: (three frames, 0.1 s), and on until the car has stopped or passed: the braking window opened wide.
+_EARLY_PATCH = {"patch_occlusion": {"window_s": 60.0}}
+
+
+def _stale(case: str, attack: str = "clean", params: dict | None = None, *, stable_steps: int | None = None,
+           t_atk: tuple[float, float] | None = None) -> Callable[[str, int], list[TrialSpec]]:
+    """Stale-map approaches (``racf.experiments.scenarios.stale_map``), paired over defences: episode
+    ``i`` approaches sign ``i % 4`` at a speed drawn in [1, 2] m/s (and, moved, a shift of 0.5-1.5 m
+    either way) from its index alone."""
+    import numpy as np
+
+    def make(defence: str, n: int) -> list[TrialSpec]:
+        specs = []
+        for i in range(n):
+            draw = np.random.default_rng([5, i])  # battery 5, episode i: the same draw for every defence
+            speed, shift = round(float(draw.uniform(1.0, 2.0)), 2), round(float(draw.uniform(0.5, 1.5)), 2)
+            values = {"case": case} | ({"shift_m": shift if i % 2 else -shift} if case == "moved" else {})
+            setting = setting_name(() if attack == "clean" else tuple(attack.split("+")), defence)
+            extra = {"t_atk": t_atk} if t_atk is not None else {}
+            specs.append(TrialSpec(setting, i % 4, speed, i, target="stale_map", scenario_params=values,
+                                   detector=_CAR, attack_params=params or {}, stable_steps=stable_steps, **extra))
+        return specs
+    return make
+
+
+#: ``racf-5``: whether the car stops where a sign stands, and only there (issue 48). Stop-sign
+#: approaches against a map that may be stale (``stale_map``): the stickers up from the start on
+#: mapped signs, the strong patch before the track is confirmed, removed signs and phantoms
+#: (needless stops), temporary signs the map does not list, clean and with the stickers, moved
+#: signs, and the white-box attack on the vote (the sticker with the depth and the LiDAR blinded
+#: at the sign). Closed-loop rows only: no drives, no offline rows (``racf-4`` rates the distance).
+_RACF_5 = Battery(
+    name="racf-5",
+    loop=(
+        LoopRow("mapped_clean", "mapped signs, clean", 60, 4, _stale("mapped"), attacked=False),
+        LoopRow("mapped_sticker", "mapped signs, the 0.6 sticker up from the start", 60, 4,
+                _stale("mapped", "physical_patch", {"physical_patch": _STICKER_06})),
+        LoopRow("mapped_sticker_top", "mapped signs, the 0.4 top-edge sticker up from the start", 60, 4,
+                _stale("mapped", "physical_patch", {"physical_patch": _STICKER_04_TOP})),
+        LoopRow("mapped_early_patch", "mapped signs, the strong patch from 0.04 s after first sight, before the "
+                                      "track is confirmed", 60, 4,
+                _stale("mapped", "patch_occlusion", _EARLY_PATCH, stable_steps=2, t_atk=(10.0, 10.0))),
+        LoopRow("removed", "a mapped sign that is gone (needless stops)", 60, 4, _stale("removed"), attacked=False),
+        LoopRow("phantom", "a stop-sign picture on a wall, no sign, none mapped (needless stops)", 60, 4,
+                _stale("phantom"), attacked=False),
+        LoopRow("temporary_clean", "a temporary sign the map does not list, clean", 60, 4, _stale("temporary"),
+                attacked=False),
+        LoopRow("temporary_sticker", "a temporary sign, the 0.6 sticker up from the start", 60, 4,
+                _stale("temporary", "physical_patch", {"physical_patch": _STICKER_06})),
+        LoopRow("temporary_sticker_top", "a temporary sign, the 0.4 top-edge sticker up from the start", 60, 4,
+                _stale("temporary", "physical_patch", {"physical_patch": _STICKER_04_TOP})),
+        LoopRow("moved", "a sign standing 0.5-1.5 m off its map entry along the lane, clean", 60, 4, _stale("moved"),
+                attacked=False),
+        LoopRow("mapped_sticker_blind", "mapped signs, the 0.6 sticker with the sign's depth and the LiDAR's sector "
+                                        "blinded from the start (white box on the vote)", 60, 4,
+                _stale("mapped", "physical_patch+depth_blackout+lidar_dropout",
+                       {"physical_patch": _STICKER_06, "depth_blackout": {"trigger": "always"},
+                        "lidar_dropout": {"trigger": "always"}}, t_atk=(60.0, 60.0))),
+        LoopRow("mapped_sticker_spoof", "mapped signs, the 0.6 sticker with the sign's depth and LiDAR returns moved "
+                                        "away at 3 m/s from the start (white box on the vote)", 60, 4,
+                _stale("mapped", "physical_patch+frustum_spoof",
+                       {"physical_patch": _STICKER_06, "frustum_spoof": {"trigger": "always", "rate_mps": 3.0}},
+                       t_atk=(60.0, 60.0))),
+    ),
+    drives=(),
+    offline_presets=(),
+)
+
 #: Every released battery, by name.
-BATTERIES = {"racf-1": _RACF_1, "racf-2": _RACF_2, "racf-3": _RACF_3, "racf-4": _RACF_4}
+BATTERIES = {"racf-1": _RACF_1, "racf-2": _RACF_2, "racf-3": _RACF_3, "racf-4": _RACF_4, "racf-5": _RACF_5}
 DEFAULT_BATTERY = "racf-4"

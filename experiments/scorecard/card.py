@@ -137,7 +137,7 @@ def run_card(defence: str, battery: Battery, out: Path, *, quick: bool = False, 
     card["detection"] = detection_rows(loop_logs)
     card["penalties"] = PENALTIES
     card["cost"] = {"parameters": trainable_parameters(defence, options)}
-    if dataset is not None:
+    if dataset is not None and battery.offline_presets:
         t_off = time.perf_counter()
         draws = battery.offline_draws_quick if quick else battery.offline_draws
         card["offline"] = _cached_offline(defence, options, dataset, battery, draws, out)
