@@ -32,6 +32,8 @@ __all__ = ["CarCalibration", "Mission", "CarStep", "Car", "sign_depth_at_line", 
 MAX_ACCEL_MPS2 = 0.75 * 9.81
 _FIX_TIME, _SCAN_TIME = TIMESTAMP_FIELDS.index("gps"), TIMESTAMP_FIELDS.index("lidar")
 _FRAME_TIME = TIMESTAMP_FIELDS.index("rgb")
+#: A detection box this close to the image's side touches it, pixels.
+_EDGE_PX = 2
 
 
 @dataclass(frozen=True)
@@ -204,6 +206,7 @@ class Car:
         self.perception.reset()
         if self.existence is not None:
             self.existence.reset()
+        self._left_at_edge = False
         self.braker = StopSignBraker(self.braking, sign_depth_at_line(self.calibration, self.target))
         self._decision = None
 
@@ -230,6 +233,16 @@ class Car:
                 self.pose_filter.correct(fix)
         self._pose = self.pose_filter.pose
         return yaw_rate - self.pose_filter.gyro_bias
+
+    def _unmapped_in_view(self) -> bool:
+        """Whether a target the map does not list should still be in view: its last detection's box
+        did not touch the image's sides (a sign that went out of the picture there left the view;
+        one that vanished inside it was hidden)."""
+        detection = self._sample.detection
+        if detection is not None:
+            x0, _, x1, _ = detection.box
+            self._left_at_edge = x0 <= _EDGE_PX or x1 >= self.calibration.camera.width - _EDGE_PX
+        return not self._left_at_edge
 
     def _stands(self) -> bool:
         """Whether a target stands ahead this step: the defence's verdict when it gives one
@@ -280,7 +293,8 @@ class Car:
             elif self.existence is not None:
                 self._sample = replace(self._sample, witnesses=self.existence.witnesses)
             self._d_fused = float(self.estimator.estimate(self._sample, speed, dt, yaw_rate_radps=yaw_rate))
-            in_fov = bearing is None or (math.isfinite(bearing) and abs(bearing) <= self.calibration.camera.half_hfov_rad)
+            in_fov = self._unmapped_in_view() if bearing is None else (
+                math.isfinite(bearing) and abs(bearing) <= self.calibration.camera.half_hfov_rad)
             self._decision = self.braker.step(self._stands(), self._d_fused, speed, dt, expected_in_view=in_fov)
             self._action = np.array(self.follower.act(x, y, yaw, speed, dt, self._decision.speed_cap_mps), np.float32)
         self._step += 1
