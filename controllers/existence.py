@@ -7,7 +7,7 @@ A sticker changes the plate's colour, not its shape. Beside the two detectors (w
   compact object standing free: no other return within ``CLEAR_RADIUS_M`` of it (a picture on
   a wall has the wall beside it);
 - **LiDAR**: a compact return with open space seen around it, where its plane meets the plate or
-  the pole (it stands in for the depth where the depth has no return);
+  the pole (it stands in for the depth where the depth is blind);
 - **the map**: it lists a sign here (a prior the physical witnesses can outvote).
 
 Each is read at one **hypothesis**, a place where a sign may stand: where the map puts its sign
@@ -31,7 +31,7 @@ import numpy as np
 from racf.controllers.detector import Detection
 from racf.controllers.distance import CameraModel
 
-__all__ = ["ExistenceWitnesses", "Hypothesis", "free_standing", "detection_hypothesis", "depth_witness", "depth_hole", "lidar_witness", "lidar_blind", "vote",
+__all__ = ["ExistenceWitnesses", "Hypothesis", "free_standing", "detection_hypothesis", "depth_witness", "depth_hole", "lidar_witness", "vote",
            "PLATE_HALF_WIDTH_M", "OPEN_GAP_M", "LIDAR_PLATE_RADIUS_M", "CLEAR_RADIUS_M", "NO_WITNESSES"]
 
 #: Half a plate's width, with the depth image's noise (millimetres), m.
@@ -82,9 +82,8 @@ class ExistenceWitnesses:
         detectors: per detector, whether it sees a stop sign at the hypothesis.
         depth: the depth witness found a compact, free-standing object there.
         lidar: the LiDAR witness did.
-        depth_hole: the depth image has no return in part of the place.
-        blind: neither found anything because neither could see: the depth image has no return in
-            part of the place and every beam towards it came back empty (a jammed or blinded place).
+        blind: the depth image has no return at all in part of the place (a real one has returns
+            from whatever stands there or behind it): the camera's depth is blinded there.
         mapped: the hypothesis is the map's entry (the map lists a sign there).
         depth_m: the object's camera depth, m (the depth witness's, else the LiDAR's; NaN: none).
         map_depth_m: the camera depth the map's sign will have at its line plus the route's distance to
@@ -97,7 +96,6 @@ class ExistenceWitnesses:
     detectors: tuple[bool, ...]
     depth: bool
     lidar: bool
-    depth_hole: bool
     blind: bool
     mapped: bool
     depth_m: float
@@ -108,23 +106,23 @@ class ExistenceWitnesses:
         """The witnesses as step-log columns (1.0 / 0.0)."""
         out = {f"wit_det{k}": float(v) for k, v in enumerate(self.detectors)}
         out |= {f"seen_det{k}": float(v) for k, v in enumerate(self.seen)}
-        return out | {"wit_depth": float(self.depth), "wit_lidar": float(self.lidar), "wit_depth_hole": float(self.depth_hole), "wit_blind": float(self.blind), "wit_map": float(self.mapped),
+        return out | {"wit_depth": float(self.depth), "wit_lidar": float(self.lidar), "wit_blind": float(self.blind), "wit_map": float(self.mapped),
                       "wit_depth_m": self.depth_m, "map_depth_m": self.map_depth_m}
 
 
 NO_WITNESSES = ExistenceWitnesses((False, False), (math.nan, math.nan), (False, False), False, False, False, False,
-                                  False, math.nan, math.nan, "")
+                                  math.nan, math.nan, "")
 
 
 def vote(witnesses: ExistenceWitnesses) -> bool:
     """RACF's existence vote: a physical witness and a semantic one agree that a sign stands.
 
-    The depth image is the physical witness; the LiDAR stands in for it only where the depth has
-    no return (the A2M12's sparse, often dropped beams make empty space out of a wall seen
-    obliquely: alone it would pass a poster). Where the map lists a sign and both are blind
-    there, the map is not outvoted: only sensors that see through the place can say that
+    The depth image is the physical witness. Where it is blind (no return at all where the plate
+    would show), the LiDAR stands in for it (alone, the A2M12's sparse, often dropped beams make
+    empty space out of a wall seen obliquely and would pass a poster), and where the map lists a
+    sign there, the map is not outvoted: only a sensor that sees through the place can say that
     nothing stands in it."""
-    physical = witnesses.depth or (witnesses.lidar and witnesses.depth_hole) or (witnesses.mapped and witnesses.blind)
+    physical = witnesses.depth or (witnesses.blind and (witnesses.lidar or witnesses.mapped))
     semantic = any(witnesses.detectors) or witnesses.mapped
     return bool(physical and semantic)
 
@@ -260,14 +258,6 @@ def lidar_witness(scan: np.ndarray, hypothesis: Hypothesis, camera_xy_m: tuple[f
     if not math.isfinite(found):
         return math.nan
     return found * math.cos(angle) + lidar_xy_m[0] - camera_xy_m[0]  # back to the camera's depth
-
-
-def lidar_blind(scan: np.ndarray, hypothesis: Hypothesis, camera_xy_m: tuple[float, float],
-                lidar_xy_m: tuple[float, float]) -> bool:
-    """Whether every beam towards the hypothesis came back empty."""
-    ranges, lateral, angle, half, _ = _scan_around(scan, hypothesis, camera_xy_m, lidar_xy_m)
-    window = ranges[np.abs(lateral - angle) <= half]
-    return bool(window.size and not np.any(np.isfinite(window) & (window > 0)))
 
 
 def _scan_around(scan: np.ndarray, hypothesis: Hypothesis, camera_xy_m: tuple[float, float],

@@ -15,7 +15,7 @@ import numpy as np
 
 from racf.controllers import DepthDistance, Perception, PerceptionSample
 from racf.controllers.existence import (NO_WITNESSES, ExistenceWitnesses, Hypothesis, depth_hole, depth_witness,
-                                        detection_hypothesis, lidar_blind, lidar_witness)
+                                        detection_hypothesis, lidar_witness)
 from racf.experiments.episode.car import CarCalibration, camera_offset, map_bearing, sign_depth_at_line
 from racf.sim.world.drives import RouteTarget
 
@@ -73,10 +73,10 @@ class ExistenceStage:
                                      raw, keep_empty=True)
                     break
         if found is None:
-            found = (tuple(d is not None for d in seen), False, False, False, False, math.nan, "map" if mapped else "")
-        detectors, by_depth, by_lidar, hole, blind, depth_m, source = found
+            found = (tuple(d is not None for d in seen), False, False, False, math.nan, "map" if mapped else "")
+        detectors, by_depth, by_lidar, blind, depth_m, source = found
         self.witnesses = ExistenceWitnesses(tuple(d is not None for d in seen), seen_depth, detectors, by_depth,
-                                            by_lidar, hole, blind, source == "map", depth_m, map_depth, source)
+                                            by_lidar, blind, source == "map", depth_m, map_depth, source)
         return self.witnesses
 
     def _at(self, hypothesis: Hypothesis, depth: np.ndarray, scan: np.ndarray, detections,
@@ -86,14 +86,12 @@ class ExistenceStage:
         calib = self.calibration
         by_depth = depth_witness(depth, calib.camera, hypothesis)
         by_lidar = lidar_witness(scan, hypothesis, calib.camera_xy_m, calib.lidar_xy_m)
-        hole = depth_hole(depth, calib.camera, hypothesis)
-        found = math.isfinite(by_depth) or (math.isfinite(by_lidar) and hole)
-        blind = not found and hole and lidar_blind(scan, hypothesis, calib.camera_xy_m, calib.lidar_xy_m)
-        if not (found or blind or keep_empty):
+        blind = not math.isfinite(by_depth) and depth_hole(depth, calib.camera, hypothesis)
+        if not (math.isfinite(by_depth) or blind or keep_empty):
             return None
         at = [d is not None and self._holds(d, hypothesis) for d in detections]
-        depth_m = by_depth if math.isfinite(by_depth) else by_lidar
-        return tuple(at), math.isfinite(by_depth), math.isfinite(by_lidar), hole, blind, depth_m, hypothesis.source
+        depth_m = by_depth if math.isfinite(by_depth) else by_lidar if blind else math.nan
+        return tuple(at), math.isfinite(by_depth), math.isfinite(by_lidar), blind, depth_m, hypothesis.source
 
     def _holds(self, detection, hypothesis: Hypothesis) -> bool:
         camera = self.calibration.camera

@@ -8,7 +8,8 @@ brakes on the distance ``estimate`` returns. A user's defence takes part the sam
 
 - ``vote``: RACF's existence vote (:func:`racf.controllers.existence.vote`) over the two detectors,
   the depth and LiDAR witnesses and the map; its distance is an inner defence's (ODCA by
-  default) while the car's detector sees the sign, else the physical witnesses' depth;
+  default) while the car's detector sees the sign, else the physical witnesses' depth (where
+  they are blind at the map's sign, the map's);
 - ``detectors_or``: the two detectors OR-ed (a sign stands when either sees it); its distance
   is the inner defence's, else the depth at the second detector's detection;
 - ``map_only``: stop at every line the map lists (a sign stands whenever the map lists one
@@ -99,7 +100,10 @@ class ExistenceVote(_Existence):
         return vote(witnesses)
 
     def fallback_distance(self, witnesses: ExistenceWitnesses) -> float:
-        return witnesses.depth_m
+        """The physical witnesses' depth; where they are blind at the map's sign, the map's."""
+        if math.isfinite(witnesses.depth_m) or not witnesses.mapped:
+            return witnesses.depth_m
+        return witnesses.map_depth_m
 
 
 class DetectorsOr(_Existence):

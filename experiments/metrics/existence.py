@@ -35,7 +35,7 @@ class Existence(Metric):
         Field("needless_stop", None, "", "no real sign stood and the car braked to rest (None where one stood)",
               summary="rate"),
         Field("driving_score", math.nan, "1", f"1.0, x {NEEDLESS_STOP_PENALTY} for a needless stop, x 0.80 for a "
-                                              "real sign not stopped at (CARLA's coefficients)", summary="median"),
+                                              "real sign not stopped at (CARLA's coefficients)"),
     )
 
     def score(self, episode: Episode) -> dict:

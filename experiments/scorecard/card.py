@@ -46,7 +46,11 @@ def _loop_summary(rows: pd.DataFrame, attacked: bool) -> dict:
             "violation_share_ci", "n_traffic", "collision_rate", "collision_rate_ci", "conflicts",
             "n_traffic_attack_before_t_star", "collision_rate_attack_before_t_star",
             "collision_rate_attack_before_t_star_ci")
-    return {k: s.get(k) for k in keep if k in s} | {"measures": plugin_measures(rows, attacked)}
+    summary = {k: s.get(k) for k in keep if k in s} | {"measures": plugin_measures(rows, attacked)}
+    if "sign_stands" in rows and not rows["sign_stands"].fillna(True).astype(bool).any():
+        # No sign stood (a removed sign, a phantom): stopping is the failure, measured as needless stops.
+        summary |= {"scr": None, "scr_ci": [None, None], "n_needless": int(len(rows))}
+    return summary
 
 
 

@@ -52,7 +52,8 @@ def card_rows(card: dict) -> list[tuple[str, str, str, float | None, list | None
     battery = BATTERIES.get(card["battery"].removesuffix("-quick"))
     order = [r.key for r in battery.rows()] if battery else []
     for key, r in sorted(card["closed_loop"].items(), key=lambda kv: order.index(kv[0]) if kv[0] in order else 99):
-        rows.append(("closed loop", r["title"], "SCR", r["scr"], r["scr_ci"], r["n"], True))
+        if r.get("scr") is not None or "n_needless" not in r:  # no SCR where no sign stands (needless stops)
+            rows.append(("closed loop", r["title"], "SCR", r["scr"], r["scr_ci"], r["n"], True))
         if r.get("n_attack_before_t_star"):
             rows.append(("closed loop", r["title"], "SCR, attack before t*", r["scr_attack_before_t_star"],
                          r["scr_attack_before_t_star_ci"], r["n_attack_before_t_star"], True))
@@ -171,7 +172,7 @@ def _plots(cards: list[dict]) -> list[str]:
     fig.tight_layout()
     images.append(_png(fig))
     plt.close(fig)
-    keys = list(cards[0]["closed_loop"])
+    keys = [k for k, r in cards[0]["closed_loop"].items() if r.get("scr") is not None]  # rows where a sign stands
     fig, ax = plt.subplots(figsize=(8.5, 4.2))
     width = 0.8 / len(cards)
     for i, card in enumerate(cards):

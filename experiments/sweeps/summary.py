@@ -54,16 +54,17 @@ def summarised_metrics(results: pd.DataFrame) -> list:
 
 
 def plugin_measures(rows: pd.DataFrame, attacked: bool) -> list[dict]:
-    """The card's rows for the plug-in metrics the episodes scored: each summarised field's value
+    """The card's rows for the plug-in metrics the episodes scored (and racf's own that a scenario
+    asks for, such as ``existence``): each summarised field's value
     with its interval and N, as the metric declares it (``Field.summary``, ``Metric.higher_is_better``)."""
     measures = []
     for metric in summarised_metrics(rows):
-        if METRICS.plugin(metric.name).builtin:
-            continue
+        if METRICS.plugin(metric.name).builtin and metric.always:
+            continue  # racf's own always-scored metrics have their own rows
         summary = metric.summarize(rows, attacked)
         for field in metric.fields:
-            if field.summary is None or f"n_{field.name}" not in summary:
-                continue
+            if field.summary is None or not summary.get(f"n_{field.name}"):
+                continue  # not summarised, or no episode it applies to
             key = f"{field.name}_rate" if field.summary == "rate" else f"{field.name}_median"
             what = "share" if field.summary == "rate" else "median"
             measures.append({"measure": f"{field.name}{' ' + field.unit if field.unit else ''}, {what} ({metric.name})",
