@@ -277,9 +277,10 @@ def _scan_around(scan: np.ndarray, hypothesis: Hypothesis, camera_xy_m: tuple[fl
     return ranges[index], lateral, angle, half, rng
 
 
-def detection_hypothesis(detection: Detection, depth_m: float, camera: CameraModel) -> Hypothesis:
-    """Where a detection puts a sign: at its box's bearing and its depth, over its box's rows."""
-    x0, y0, x1, y1 = detection.box
+def detection_hypothesis(detection: Detection, depth_m: float, camera: CameraModel, rows: tuple[int, int]) -> Hypothesis:
+    """Where a detection puts a sign: at its box's bearing and its depth, over ``rows`` (where a sign
+    of the map's build shows at that depth: a sticker may hide part of the plate from the detector)."""
+    x0, _, x1, _ = detection.box
     left, right = camera.bearing(x0 - 0.5), camera.bearing(x1 - 0.5)
     return Hypothesis(camera.bearing(detection.centroid[0]), depth_m, 0.25, abs(left - right) / 2 + math.radians(1),
-                      "detector", (int(y0), int(y1 - 1)))
+                      "detector", rows)

@@ -69,8 +69,8 @@ class ExistenceStage:
             for detection in (d for d in raw if d is not None):
                 at = self.depth.estimate(depth, detection)[0]
                 if math.isfinite(at):
-                    found = self._at(detection_hypothesis(detection, at, self.calibration.camera), depth, scan,
-                                     raw, keep_empty=True)
+                    hypothesis = detection_hypothesis(detection, at, self.calibration.camera, self._rows(target, at))
+                    found = self._at(hypothesis, depth, scan, raw, keep_empty=True)
                     break
         if found is None:
             found = (tuple(d is not None for d in seen), False, False, False, math.nan, "map" if mapped else "")
@@ -100,9 +100,15 @@ class ExistenceStage:
         return right - hypothesis.half_width_rad <= hypothesis.bearing_rad <= left + hypothesis.half_width_rad
 
     def _map_hypothesis(self, target: RouteTarget, bearing: float, depth_m: float) -> Hypothesis:
+        return Hypothesis(bearing, depth_m, MAP_TOLERANCE_M, math.atan2(MAP_LATERAL_M, depth_m), "map",
+                          self._rows(target, depth_m))
+
+    def _rows(self, target: RouteTarget, depth_m: float) -> tuple[int, int]:
+        """The image rows (top, bottom) a plate of the map's sign build spans at ``depth_m`` (every sign,
+        a temporary one too, is built to the map's standard: its centre height is the map's)."""
         calib, camera = self.calibration, self.calibration.camera
         fy = camera.fy if camera.fy is not None else camera.fx
         cy = camera.cy if camera.cy is not None else 0.0
-        height = float(target.target.centre[2]) - calib.camera_height_m
-        rows = tuple(int(round(cy - fy * (height + dz) / depth_m)) for dz in (_PLATE_HALF_M, -_PLATE_HALF_M))
-        return Hypothesis(bearing, depth_m, MAP_TOLERANCE_M, math.atan2(MAP_LATERAL_M, depth_m), "map", rows)
+        height = float(target.target.geometry.centre_height_m) - calib.camera_height_m
+        top, bottom = (int(round(cy - fy * (height + dz) / depth_m)) for dz in (_PLATE_HALF_M, -_PLATE_HALF_M))
+        return top, bottom
