@@ -99,7 +99,7 @@ def sign_depth_at_line(calibration: CarCalibration, target: RouteTarget) -> floa
     """The target's camera depth when the front bumper is on its stop line, m (from the map and the
     car's build; a target the map does not list: by the rule of the road, ``UNMAPPED_SIGN_PAST_LINE_M``)."""
     camera_to_bumper = float(calibration.bumper_x_m - calibration.camera_xy_m[0])
-    return camera_to_bumper + (target.target_s - target.stop_s if target.mapped else UNMAPPED_SIGN_PAST_LINE_M)
+    return camera_to_bumper + (target.target_s - target.stop_s if getattr(target, "mapped", True) else UNMAPPED_SIGN_PAST_LINE_M)
 
 
 def route_follower(path: Path, cruise_mps: float, start_s: float = 0.0) -> RouteFollower:
@@ -277,7 +277,7 @@ class Car:
             frame_time = float(obs["timestamps"][_FRAME_TIME])
             frame_new, self._frame_time = frame_time != self._frame_time, frame_time
             # A target the map does not list has no bearing to check detections against.
-            bearing = map_bearing(self.calibration, self.target, self._pose) if self.target.mapped else None
+            bearing = map_bearing(self.calibration, self.target, self._pose) if getattr(self.target, "mapped", True) else None
             # No slip at the rear axle: the camera moves sideways at yaw rate x its lever arm.
             lateral = yaw_rate * (self.calibration.camera_xy_m[0] - self.calibration.rear_axle_x_m)
             # The scan's beams were taken over its revolution: the tracker moves each cluster on by its age.

@@ -49,8 +49,10 @@ STEP_S = 0.02
 
 def offline_estimators() -> tuple[str, ...]:
     """The registered estimators the benchmark runs step by step: all but those a forecaster of
-    the same name scores (``chronos``)."""
-    return tuple(name for name in ESTIMATORS if name not in FORECASTERS)
+    the same name scores (``chronos``), and those that answer whether a sign stands
+    (``existence``: they read the live frame's witnesses, which a recorded series does not hold)."""
+    return tuple(name for name in ESTIMATORS
+                 if name not in FORECASTERS and not getattr(ESTIMATORS[name], "existence", False))
 
 
 def table_order(names) -> list[str]:
