@@ -15,7 +15,10 @@ then replays the log and those frames into a recording on the ``sim_time`` timel
 - ``series/*`` (d_true, d_clean, d_meas, lidar, d_fused, and ODCA's d_kin; NaN, where an
   estimator has no target, is a gap), ``control/*`` (gate w, the defence's flag, brake, attack
   active) and ``estimator/*`` (whatever else the estimator, a plug-in's too, reports in
-  ``diagnostics()``), every step, sent with ``send_columns``.
+  ``diagnostics()``), every step, sent with ``send_columns``; ``existence/*``: a defence that
+  answers whether a sign stands (``vote``, ``detectors_or``, ``map_only``) logs each witness
+  (``wit_det0``/``wit_det1`` the detectors at the hypothesis, ``wit_depth`` the plate in the depth
+  image, ``wit_lidar``, ``wit_blind``, ``wit_map``) and its verdict ``stands``.
 
 A default blueprint lays these out so the story reads at a glance.
 """
@@ -30,8 +33,10 @@ import pandas as pd
 
 from racf.sim.world.traffic import CAR_FOOTPRINT_M
 
-__all__ = ["FrameRecorder", "write_rrd", "SERIES", "CONTROL", "STYLE", "CAR_HALF_SIZE_M", "TRAFFIC_RGB"]
+__all__ = ["FrameRecorder", "write_rrd", "EXISTENCE_COLUMNS", "SERIES", "CONTROL", "STYLE", "CAR_HALF_SIZE_M", "TRAFFIC_RGB"]
 
+#: The step-log columns of an existence defence's witnesses (``ExistenceWitnesses.columns``, ``stands``).
+EXISTENCE_COLUMNS = ("wit_", "seen_det", "map_depth_m", "stands")
 #: Distance series (metres) and control series, as logged (entity name -> log column).
 SERIES = {"d_true": "d_true", "d_clean": "d_clean", "d_meas": "d_meas", "lidar": "lidar", "d_fused": "d_fused",
           "d_kin": "d_kin"}
@@ -125,6 +130,7 @@ def _blueprint():
             rrb.Vertical(
                 rrb.TimeSeriesView(origin="series", name="distances (m)"),
                 rrb.TimeSeriesView(origin="control", name="gate w, brake, attack"),
+                rrb.TimeSeriesView(origin="existence", name="existence witnesses (1: says a sign stands)"),
             ),
             rrb.Vertical(
                 rrb.Spatial2DView(origin="map", name="map (top view)"),
@@ -199,7 +205,8 @@ def write_rrd(path: str | Path, log: pd.DataFrame, recorder: FrameRecorder | Non
     # Every step: the signals, as columns.
     times = rr.TimeColumn("sim_time", duration=log["t"].to_numpy(float))
     shown = set(SERIES.values()) | set(CONTROL.values())
-    own = {f"estimator/{c}": c for c in log.columns  # the estimator's diagnostics beyond the declared log
+    own = {f"{'existence' if c.startswith(EXISTENCE_COLUMNS) else 'estimator'}/{c}": c for c in log.columns
+           # the estimator's diagnostics beyond the declared log; an existence defence's witnesses apart
            if c not in STEP_LOG and c not in shown and pd.api.types.is_numeric_dtype(log[c])}
     for name, column in {**{f"series/{k}": v for k, v in SERIES.items()},
                          **{f"control/{k}": v for k, v in CONTROL.items()}, **own}.items():
