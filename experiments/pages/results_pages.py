@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Callable
 
 from racf.experiments.pages.falsify_page import falsification_markdown
+from racf.experiments.pages.existence_page import existence_markdown
 from racf.experiments.pages.leaderboard_page import leaderboard_markdown
 from racf.experiments.pages.traffic_page import traffic_markdown
 from racf.experiments.pages.results_format import page_head as _page_head
@@ -520,6 +521,7 @@ def _index(d: _Data) -> str:
              "| [Detector and sticker](detector-and-sticker.md) | the learned segmenter and the printed sticker |",
              "| [Falsification](falsification.md) | searched worst cases per defence, and the regression suite |",
              "| [Cross-traffic](traffic.md) | the paper's settings with another car at the conflict point |",
+             "| [Existence](existence.md) | whether a sign stands: the vote against stickers, phantoms and stale maps |",
              "| [Speed](speed.md) | the simulator, whole episodes and ODCA's per-step cost |", "",
              "## Every stored result", "",
              "| result | command | commit | measured | machine |", "|---|---|---|---|---|"]
@@ -538,3 +540,4 @@ RESULT_PAGES: dict[str, Callable[[Path], str]] = {
                        ("detector-and-sticker", _detector), ("speed", _speed))}
 RESULT_PAGES["results/falsification.md"] = falsification_markdown
 RESULT_PAGES["results/traffic.md"] = traffic_markdown
+RESULT_PAGES["results/existence.md"] = existence_markdown

@@ -55,12 +55,19 @@ class ScrambledInfo(gym.Wrapper):
 
 @pytest.mark.parametrize("spec", [TrialSpec("attack+odca", 0, 1.5, 1),
                                   # Two other cars crossing: their states in info are scrambled too.
-                                  TrialSpec("attack+odca", 3, 1.5, 1, target="cross_traffic", scenario_params={"cars": 2})], ids=["empty", "traffic"])
+                                  TrialSpec("attack+odca", 3, 1.5, 1, target="cross_traffic", scenario_params={"cars": 2}),
+                                  # The existence vote's witnesses, a sticker up from the start on a mapped sign.
+                                  pytest.param(TrialSpec("clean+physical_patch+vote", 1, 1.5, 1, target="stale_map",
+                                                         attack_params={"physical_patch": {"from_start": True}}),
+                                               marks=pytest.mark.slow)],
+                         ids=["empty", "traffic", "existence"])
 def test_the_car_does_the_same_with_info_scrambled(spec):
     result, log = run_trial(spec, clean_pass=False)
     _, blind = run_trial(spec, make_env=lambda s: ScrambledInfo(default_env(s)), clean_pass=False)
     assert len(log) > 50 and log["attack_active"].any()
-    pd.testing.assert_frame_equal(blind[CAR_COLUMNS], log[CAR_COLUMNS])
+    witnesses = [c for c in log.columns if c.startswith("wit_") or c == "stands"]
+    assert bool(witnesses) == (spec.estimator == "vote")
+    pd.testing.assert_frame_equal(blind[CAR_COLUMNS + witnesses], log[CAR_COLUMNS + witnesses])
     # The scrambler did reach the runner: the referee's ground truth differs.
     assert not np.allclose(blind["d_true"].fillna(-1), log["d_true"].fillna(-1))
     assert not np.allclose(blind["x"], log["x"])

@@ -1,0 +1,72 @@
+"""Defences that answer whether a sign stands (racf.experiments.episode.existence_defences), and the car
+acting on that answer."""
+
+import math
+
+import pytest
+
+from racf.controllers import PerceptionSample
+from racf.controllers.existence import ExistenceWitnesses
+from racf.experiments.episode.existence_defences import DetectorsOr, ExistenceVote, MapOnly
+from racf.experiments.episode.plan import car_calibration
+from racf.experiments.episode.stack import existence_stage
+
+
+def _sample(witnesses, d_meas=math.nan, detected=False):
+    import numpy as np
+
+    from racf.controllers.detector import Detection
+
+    detection = Detection(np.zeros((4, 4), bool), (0, 0, 2, 2), 0.9, 4, (1.0, 1.0)) if detected else None
+    return PerceptionSample(detection, d_meas, 0.9 if detected else 0.0, math.nan, math.nan, witnesses=witnesses)
+
+
+def _w(seen=(False, False), detectors=(False, False), depth=False, blind=False, mapped=False, depth_m=math.nan,
+       map_depth_m=math.nan, seen_depth=(math.nan, math.nan)):
+    return ExistenceWitnesses(seen, seen_depth, detectors, depth, False, blind, mapped, depth_m, map_depth_m,
+                              "map" if mapped else "detector")
+
+
+def test_the_vote_stops_for_a_mapped_plate_no_detector_sees_at_the_plates_depth():
+    vote = ExistenceVote(inner="raw")
+    assert vote.stands() is None  # before any step it defers
+    d = vote.estimate(_sample(_w(depth=True, mapped=True, depth_m=1.2, map_depth_m=1.3)), 1.0, 0.02)
+    assert vote.stands() is True and d == 1.2
+    assert vote.diagnostics()["stands"] == 1.0 and vote.diagnostics()["wit_map"] == 1.0
+
+
+def test_the_vote_keeps_the_inner_defences_distance_while_the_detector_sees_the_sign():
+    vote = ExistenceVote(inner="raw")
+    assert vote.estimate(_sample(_w(detectors=(True, True), depth=True, depth_m=1.2), 1.25, True), 1.0, 0.02) == 1.25
+
+
+def test_a_blinded_mapped_place_brakes_at_the_maps_distance():
+    vote = ExistenceVote(inner="raw")
+    assert vote.estimate(_sample(_w(blind=True, mapped=True, map_depth_m=1.4)), 1.0, 0.02) == 1.4 and vote.stands()
+
+
+def test_the_baselines_answer_by_their_own_rule():
+    either = DetectorsOr(inner="raw")
+    assert either.estimate(_sample(_w(seen=(False, True), seen_depth=(math.nan, 0.9))), 1.0, 0.02) == 0.9
+    assert either.stands() is True
+    assert not (either.estimate(_sample(_w(depth=True, mapped=True)), 1.0, 0.02), either.stands())[1]
+    only_map = MapOnly()
+    assert only_map.estimate(_sample(_w(map_depth_m=2.0)), 1.0, 0.02) == 2.0 and only_map.stands()
+    assert math.isnan(only_map.estimate(_sample(_w(detectors=(True, True), depth=True)), 1.0, 0.02))
+    assert not only_map.stands()
+
+
+def test_the_car_builds_the_stage_only_for_a_defence_that_answers_and_with_the_other_detector():
+    calib = car_calibration(320, 240)
+    assert existence_stage(object(), calib, "classical") is None
+    assert existence_stage(MapOnly(), calib, "classical").second is None
+    stage = existence_stage(ExistenceVote(inner="raw", second_detector="classical"), calib, "classical")
+    assert type(stage.second.detector).__name__ == "LearnedSignDetector"
+
+
+@pytest.mark.parametrize("name", ["vote", "detectors_or", "map_only"])
+def test_each_is_registered_and_kept_out_of_the_offline_benchmark(name):
+    from racf.experiments.offline.methods import offline_estimators
+    from racf.plugins import ESTIMATORS
+
+    assert name in ESTIMATORS and name not in offline_estimators()

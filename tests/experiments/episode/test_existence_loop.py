@@ -1,0 +1,29 @@
+"""The existence vote in the closed loop, against what detector-only does (slow: a few episodes)."""
+
+import pytest
+
+from racf.experiments.episode import TrialSpec, run_trial
+
+pytestmark = pytest.mark.slow
+
+
+def _run(setting, case, sign=0, **kwargs):
+    result, _ = run_trial(TrialSpec(setting, sign, 1.5, 3, target="stale_map", scenario_params={"case": case},
+                                    **kwargs), clean_pass=False)
+    return result
+
+
+def test_a_phantom_stops_detector_only_and_not_the_vote():
+    assert _run("clean+odca", "phantom").needless_stop is True
+    assert _run("clean+vote", "phantom").needless_stop is False
+
+
+def test_a_sticker_from_the_start_on_a_mapped_sign_runs_detector_only_and_not_the_vote():
+    sticker = {"physical_patch": {"texture": "learned-approach", "size": 0.6, "from_start": True}}
+    assert not _run("clean+physical_patch+odca", "mapped", attack_params=sticker).success
+    assert _run("clean+physical_patch+vote", "mapped", attack_params=sticker).success
+
+
+def test_a_removed_sign_stops_map_only_and_not_the_vote():
+    assert _run("clean+map_only", "removed").needless_stop is True
+    assert _run("clean+vote", "removed").needless_stop is False

@@ -1,0 +1,39 @@
+"""The stale-map scenario's plans: what the car's map says against what stands (racf.experiments.scenarios.stale_map)."""
+
+import numpy as np
+import pytest
+
+from racf.experiments.episode import TrialSpec
+from racf.experiments.episode.plan import plan_episode
+from racf.experiments.scenarios.stale_map import CASES
+
+
+def _plan(case, sign=2, **params):
+    return plan_episode(TrialSpec("clean", sign, 1.0, 0, target="stale_map", scenario_params={"case": case, **params}))
+
+
+@pytest.mark.parametrize("case", CASES)
+def test_the_world_and_the_map_each_case_sets(case):
+    plan = _plan(case)
+    (target,) = plan.mission.targets
+    props = plan.reset_options["sign_props"]
+    assert props["remove"] == (2 if case in ("removed", "phantom") else None)
+    assert props["phantom"] == (2 if case == "phantom" else None)
+    assert target.mapped == (case not in ("temporary", "phantom"))
+    assert plan.env_kwargs["world"] and plan.start_s_m == _plan("mapped").start_s_m
+
+
+@pytest.mark.parametrize("shift", [-1.2, 0.7])
+def test_a_moved_sign_is_listed_shift_m_from_where_it_stands_along_the_lane(shift):
+    (real,) = _plan("mapped").mission.targets
+    (listed,) = _plan("moved", shift_m=shift).mission.targets
+    assert listed.stop_s == pytest.approx(real.stop_s - shift) and listed.target_s == pytest.approx(real.target_s - shift)
+    moved = np.hypot(*(np.subtract(listed.target.position, real.target.position)))
+    assert moved == pytest.approx(abs(shift), rel=0.05)  # along a straight lane, as far as it moved
+
+
+def test_a_move_too_small_to_matter_is_refused():
+    with pytest.raises(ValueError, match="shift_m"):
+        TrialSpec("clean", 0, 1.0, 0, target="stale_map", scenario_params={"case": "moved", "shift_m": 0.05})
+    with pytest.raises(ValueError, match="case"):
+        TrialSpec("clean", 0, 1.0, 0, target="stale_map", scenario_params={"case": "gone"})
