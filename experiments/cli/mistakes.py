@@ -27,6 +27,8 @@ MISTAKES: list[tuple[str, str]] = [
     ("trial --target parking_lot", "invalid choice"),
     ("trial --target cross_traffic --scenario-param cars=9", "parameter 'cars' must be an int in [1, 4]"),
     ("trial --scenario-param cars=2", "scenario 'sign' has no parameter(s) ['cars']"),
+    ("trial --target stale_map --scenario-param case=gone", "parameter 'case' must be one of ['mapped', 'moved'"),
+    ("trial --target stale_map --scenario-param case=moved --scenario-param shift_m=0.0", "needs |shift_m| >= 0.1 m"),
     ("trial --scenario-param cars", "--scenario-param takes KEY=VALUE"),
     ("trial --metric comfort", "unknown metric(s) ['comfort']"),
     ("scorecard --defence raw --target drive", "a battery runs in a scenario that approaches a stop sign"),
