@@ -32,8 +32,6 @@ __all__ = ["CarCalibration", "Mission", "CarStep", "Car", "sign_depth_at_line", 
 MAX_ACCEL_MPS2 = 0.75 * 9.81
 _FIX_TIME, _SCAN_TIME = TIMESTAMP_FIELDS.index("gps"), TIMESTAMP_FIELDS.index("lidar")
 _FRAME_TIME = TIMESTAMP_FIELDS.index("rgb")
-#: A detection box this close to the image's side touches it, pixels.
-_EDGE_PX = 2
 
 
 @dataclass(frozen=True)
@@ -236,12 +234,13 @@ class Car:
 
     def _unmapped_in_view(self) -> bool:
         """Whether a target the map does not list should still be in view: its last detection's box
-        did not touch the image's sides (a sign that went out of the picture there left the view;
-        one that vanished inside it was hidden)."""
-        detection = self._sample.detection
+        lay more than its own width from the image's sides (a sign that vanished there went out of
+        the picture, as a box moves by about its width a frame when it leaves; one that vanished
+        further in was hidden)."""
+        detection = self._sample.detection or self.perception.last_raw_detection
         if detection is not None:
             x0, _, x1, _ = detection.box
-            self._left_at_edge = x0 <= _EDGE_PX or x1 >= self.calibration.camera.width - _EDGE_PX
+            self._left_at_edge = x0 <= x1 - x0 or x1 >= self.calibration.camera.width - (x1 - x0)
         return not self._left_at_edge
 
     def _stands(self) -> bool:
@@ -295,6 +294,9 @@ class Car:
             self._d_fused = float(self.estimator.estimate(self._sample, speed, dt, yaw_rate_radps=yaw_rate))
             in_fov = self._unmapped_in_view() if bearing is None else (
                 math.isfinite(bearing) and abs(bearing) <= self.calibration.camera.half_hfov_rad)
+            if not in_fov and self._sample.witnesses is not None and self._sample.witnesses.source == "detector":
+                # The existence stage found the sign off its map entry (a moved sign): in view by where it was seen.
+                in_fov = self._unmapped_in_view()
             self._decision = self.braker.step(self._stands(), self._d_fused, speed, dt, expected_in_view=in_fov)
             self._action = np.array(self.follower.act(x, y, yaw, speed, dt, self._decision.speed_cap_mps), np.float32)
         self._step += 1

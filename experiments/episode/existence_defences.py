@@ -60,12 +60,19 @@ class _Existence:
         self.inner.reset()
         self._stands = None
         self._witnesses = NO_WITNESSES
+        self._carried = math.nan
 
     def estimate(self, sample: PerceptionSample, speed_mps: float, dt: float, yaw_rate_radps: float = 0.0) -> float:
         d = float(self.inner.estimate(sample, speed_mps, dt, yaw_rate_radps=yaw_rate_radps))
         self._witnesses = sample.witnesses if sample.witnesses is not None else NO_WITNESSES
         self._stands = self.verdict(self._witnesses)
-        return d if math.isfinite(d) else self.fallback_distance(self._witnesses)
+        if not math.isfinite(d):
+            d = self.fallback_distance(self._witnesses)
+        # With no witness left (the sign went out of the picture on a bend), the last distance is
+        # carried on by odometry, as ODCA's kinematic branch does: the braker decides whether the
+        # track still stands (the target expected in view, within its timeout).
+        self._carried = d if math.isfinite(d) else self._carried - max(0.0, speed_mps) * dt
+        return self._carried
 
     def verdict(self, witnesses: ExistenceWitnesses) -> bool:
         raise NotImplementedError
@@ -100,10 +107,10 @@ class ExistenceVote(_Existence):
         return vote(witnesses)
 
     def fallback_distance(self, witnesses: ExistenceWitnesses) -> float:
-        """The physical witnesses' depth; where they are blind at the map's sign, the map's."""
-        if math.isfinite(witnesses.depth_m) or not witnesses.mapped:
-            return witnesses.depth_m
-        return witnesses.map_depth_m
+        """The physical witnesses' depth; where the depth is blind at the map's sign, the map's."""
+        if witnesses.blind and witnesses.mapped and not math.isfinite(witnesses.depth_m):
+            return witnesses.map_depth_m
+        return witnesses.depth_m
 
 
 class DetectorsOr(_Existence):

@@ -253,6 +253,13 @@ def paper_rows(d: _Data, link: str = "") -> list[str]:
             lines.append(f"| a printed sticker (0.4 of the plate, at its top edge), no defence: SCR | "
                          f"{PAPER['attack_scr']:.2f} (the paper's patch) | {_rate(r['scr'], r['scr_ci'])} (N {r['n']}, every "
                          f"attack before t*) | [the sticker]({link}detector-and-sticker.md) |")
+    if "scorecard-racf-5" in d:
+        cards = {c["defence"]: c["closed_loop"] for c in d["scorecard-racf-5"]["cards"]}
+        vote, odca = cards.get("vote", {}).get("mapped_sticker"), cards.get("odca", {}).get("mapped_sticker")
+        if vote and odca:
+            lines.append(f"| the 0.6 sticker up from the start on mapped signs: SCR | - | existence vote "
+                         f"{_rate(vote['scr'], vote['scr_ci'])}, ODCA alone {_rate(odca['scr'], odca['scr_ci'])} "
+                         f"(N {vote['n']}) | [existence]({link}existence.md) |")
     if "cross-traffic" in d:
         s = d["cross-traffic"]["settings"]
         none, odca = s.get("attack@traffic1"), s.get("attack+odca@traffic1")
