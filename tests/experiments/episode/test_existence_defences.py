@@ -27,8 +27,13 @@ def _w(seen=(False, False), detectors=(False, False), depth=False, blind=False, 
                               "map" if mapped else "detector")
 
 
+def _ready(defence):
+    defence.reset()  # the car resets a defence before each target
+    return defence
+
+
 def test_the_vote_stops_for_a_mapped_plate_no_detector_sees_at_the_plates_depth():
-    vote = ExistenceVote(inner="raw")
+    vote = _ready(ExistenceVote(inner="raw"))
     assert vote.stands() is None  # before any step it defers
     d = vote.estimate(_sample(_w(depth=True, mapped=True, depth_m=1.2, map_depth_m=1.3)), 1.0, 0.02)
     assert vote.stands() is True and d == 1.2
@@ -36,21 +41,27 @@ def test_the_vote_stops_for_a_mapped_plate_no_detector_sees_at_the_plates_depth(
 
 
 def test_the_vote_keeps_the_inner_defences_distance_while_the_detector_sees_the_sign():
-    vote = ExistenceVote(inner="raw")
+    vote = _ready(ExistenceVote(inner="raw"))
     assert vote.estimate(_sample(_w(detectors=(True, True), depth=True, depth_m=1.2), 1.25, True), 1.0, 0.02) == 1.25
 
 
 def test_a_blinded_mapped_place_brakes_at_the_maps_distance():
-    vote = ExistenceVote(inner="raw")
+    vote = _ready(ExistenceVote(inner="raw"))
     assert vote.estimate(_sample(_w(blind=True, mapped=True, map_depth_m=1.4)), 1.0, 0.02) == 1.4 and vote.stands()
 
 
+def test_the_vote_carries_its_last_distance_on_by_odometry_once_no_witness_is_left():
+    vote = _ready(ExistenceVote(inner="raw"))
+    vote.estimate(_sample(_w(depth=True, mapped=True, depth_m=1.0)), 1.0, 0.02)
+    assert vote.estimate(_sample(_w()), 1.0, 0.1) == pytest.approx(0.9) and vote.stands() is False
+
+
 def test_the_baselines_answer_by_their_own_rule():
-    either = DetectorsOr(inner="raw")
+    either = _ready(DetectorsOr(inner="raw"))
     assert either.estimate(_sample(_w(seen=(False, True), seen_depth=(math.nan, 0.9))), 1.0, 0.02) == 0.9
     assert either.stands() is True
     assert not (either.estimate(_sample(_w(depth=True, mapped=True)), 1.0, 0.02), either.stands())[1]
-    only_map = MapOnly()
+    only_map = _ready(MapOnly())
     assert only_map.estimate(_sample(_w(map_depth_m=2.0)), 1.0, 0.02) == 2.0 and only_map.stands()
     assert math.isnan(only_map.estimate(_sample(_w(detectors=(True, True), depth=True)), 1.0, 0.02))
     assert not only_map.stands()
