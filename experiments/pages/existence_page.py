@@ -53,7 +53,11 @@ def existence_markdown(root: Path) -> str:
     cards = {c["defence"]: c for c in data["cards"]}
     names = [n for n in _ORDER if n in cards] + sorted(set(cards) - set(_ORDER))
     lines += meta_lines(data["meta"])
-    keys = list(cards[names[0]]["closed_loop"])
+    from racf.experiments.scorecard.battery import BATTERIES
+
+    stored = list(cards[names[0]]["closed_loop"])
+    order = [row.key for row in BATTERIES["racf-5"].loop]
+    keys = sorted(stored, key=lambda k: order.index(k) if k in order else len(order))  # the battery's order
     lines += ["| row | measure | " + " | ".join(f"`{n}`" for n in names) + " |", "|---|---|" + "---|" * len(names)]
     scores = ["| row | " + " | ".join(f"`{n}`" for n in names) + " |", "|---|" + "---|" * len(names)]
     for key in keys:
@@ -121,4 +125,14 @@ def _claims(cards: dict) -> list[str]:
         key, worst = min(white, key=lambda kv: kv[1][1])
         lines.append(f"| the strongest white-box attack on the vote | `{key}`: vote {rate(worst[1], worst[2])} "
                      f"(N {worst[3]}) | reported |")
-    return lines + [""]
+    return lines + ["", "## What would do better", "",
+                    "- **A sticker that blinds both detectors on a sign the map does not list** leaves no semantic "
+                    "witness at all: the vote, like every defence, needs something that says *stop sign*. A "
+                    "class-agnostic witness (a free-standing plate of a stop sign's size and height beside the lane) "
+                    "would stand in, at the price of stopping for any such plate.",
+                    "- **A spoof that moves the plate's depth and its LiDAR returns together** leaves a free plate at "
+                    "the map's bearing at the wrong range: the vote reads it as no sign there. Holding the map where "
+                    "a plate stands at its bearing but moves against the car's own odometry (ODCA's kinematic "
+                    "cross-check, applied to the map's range) is the next witness to add.",
+                    "- **A sticker optimised against both detectors at once** (the same EOT over the approach) is not "
+                    "measured yet: the classical detector has no gradient, so it needs a differentiable stand-in.", ""]
