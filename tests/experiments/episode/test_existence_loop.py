@@ -20,8 +20,9 @@ def test_a_phantom_stops_detector_only_and_not_the_vote():
 
 def test_a_sticker_from_the_start_on_a_mapped_sign_runs_detector_only_and_not_the_vote():
     sticker = {"physical_patch": {"texture": "learned-approach", "size": 0.6, "from_start": True}}
-    assert not _run("clean+physical_patch+odca", "mapped", attack_params=sticker).success
-    assert _run("clean+physical_patch+vote", "mapped", attack_params=sticker).success
+    # At sign 1 (racf-5: detector-only stops at none of its 15 sticker episodes, the vote at 14).
+    assert not _run("clean+physical_patch+odca", "mapped", sign=1, attack_params=sticker).success
+    assert _run("clean+physical_patch+vote", "mapped", sign=1, attack_params=sticker).success
 
 
 def test_a_removed_sign_stops_map_only_and_not_the_vote():
