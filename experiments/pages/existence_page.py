@@ -13,7 +13,7 @@ __all__ = ["existence_markdown", "EXISTENCE_RESULT", "EXISTENCE_COMMAND"]
 
 #: The stored result the page reads, and the command that makes it.
 EXISTENCE_RESULT = "scorecard-racf-5"
-EXISTENCE_COMMAND = "racf scorecard --defence vote odca detectors_or map_only --battery racf-5 --json"
+EXISTENCE_COMMAND = "racf scorecard --defence vote odca detectors_or map_only raw ekf --battery racf-5 --json"
 #: The defences in the order the page shows them (any other stored card follows).
 _ORDER = ("vote", "odca", "detectors_or", "map_only", "raw", "ekf")
 #: The driving score's factors (CARLA's coefficients; a needless stop: ``NEEDLESS_STOP_PENALTY``).
