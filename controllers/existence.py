@@ -3,9 +3,9 @@
 A sticker changes the plate's colour, not its shape. Beside the two detectors (what the sign
 *is*), the car holds two physical witnesses of *that* something stands there, and the map:
 
-- **depth**: in the depth image, at the rows where a plate at the sign's height shows, a
-  compact object standing free: no other return within ``CLEAR_RADIUS_M`` of it (a picture on
-  a wall has the wall beside it);
+- **depth**: in the depth image, at the rows where a plate at the sign's height shows, a run of
+  columns a plate's width at one range with open space over and under it but for its pole (a
+  picture on a wall has the wall over it and under it);
 - **LiDAR**: a compact return with open space seen around it, where its plane meets the plate or
   the pole (it stands in for the depth where the depth is blind);
 - **the map**: it lists a sign here (a prior the physical witnesses can outvote).
@@ -14,9 +14,9 @@ Each is read at one **hypothesis**, a place where a sign may stand: where the ma
 when it lists one and something stands there; otherwise where a detector sees a stop sign
 (a temporary sign, a sign moved off its map entry, a phantom).
 
-:func:`vote` is RACF's cross-check: a sign stands when a physical witness (depth or LiDAR)
-finds an object there *and* a semantic one (either detector, or the map) says it is a stop
-sign. No single witness decides: a sticker that blinds both detectors leaves the map and the
+:func:`vote` is RACF's cross-check: a sign stands when a physical witness (the depth; where
+the depth is blind, the LiDAR or the map) finds an object there *and* a semantic one (either
+detector, or the map) says it is a stop sign. No single witness decides: a sticker that blinds both detectors leaves the map and the
 plate; a removed sign leaves the map alone; a phantom leaves the detectors alone.
 """
 
@@ -31,8 +31,8 @@ import numpy as np
 from racf.controllers.detector import Detection
 from racf.controllers.distance import CameraModel
 
-__all__ = ["ExistenceWitnesses", "Hypothesis", "free_standing", "detection_hypothesis", "depth_witness", "depth_hole", "lidar_witness", "vote",
-           "PLATE_HALF_WIDTH_M", "OPEN_GAP_M", "LIDAR_PLATE_RADIUS_M", "CLEAR_RADIUS_M", "NO_WITNESSES"]
+__all__ = ["ExistenceWitnesses", "Hypothesis", "free_standing", "detection_hypothesis", "depth_witness", "depth_hole",
+           "lidar_witness", "vote", "PLATE_HALF_WIDTH_M", "OPEN_GAP_M", "LIDAR_PLATE_RADIUS_M", "CLEAR_RADIUS_M", "NO_WITNESSES"]
 
 #: Half a plate's width, with the depth image's noise (millimetres), m.
 PLATE_HALF_WIDTH_M = 0.06
