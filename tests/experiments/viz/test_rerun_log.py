@@ -85,7 +85,7 @@ def test_the_default_layout_shows_the_story():
     blueprint = _blueprint()
     names = [view.name for view in _views(blueprint.root_container)]
     assert names == ["camera (detection green, patch magenta)", "depth", "distances (m)", "gate w, brake, attack",
-                     "map (top view)", "car, camera and LiDAR"]
+                     "existence witnesses (1: says a sign stands)", "map (top view)", "car, camera and LiDAR"]
 
 
 def _views(container):
@@ -107,3 +107,11 @@ def test_other_cars_appear_in_the_world_and_on_the_map(tmp_path):
         assert rows[f"/map/traffic/{k}/car"] == len(recorder.frames)
         assert f"/map/traffic/{k}/path" in rows
     assert "/map/conflict" in rows and "/world/traffic/2" not in rows
+
+
+@pytest.mark.slow
+def test_an_existence_defences_witnesses_have_their_own_panel(tmp_path):
+    _, log = run_trial(TrialSpec("clean+vote", 2, 1.5, 0, target="stale_map"), clean_pass=False)
+    entities = {str(chunk.entity_path) for chunk in _chunks(write_rrd(tmp_path / "vote.rrd", log))}
+    assert {"/existence/wit_depth", "/existence/wit_map", "/existence/stands"} <= entities
+    assert not [e for e in entities if e.startswith("/estimator/wit_")]
