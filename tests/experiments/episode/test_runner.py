@@ -107,6 +107,7 @@ def test_clean_obstacle_trial_stops_before_the_crate():
         TrialSpec("clean", 3, 1.0, 0, target="obstacle")
 
 
+@pytest.mark.slow  # 5 s: the default suite keeps under two minutes
 def test_clean_drive_serves_every_target_in_turn():
     spec = TrialSpec("clean", 0, 1.5, 4, target="drive", drive_s=(10.0, 15.0))
     result, log = run_trial(spec)

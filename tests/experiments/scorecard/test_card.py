@@ -31,6 +31,7 @@ def _without_timing(card):
     return {k: v for k, v in card.items() if k != "timing"}
 
 
+@pytest.mark.slow  # 7 s: the default suite keeps under two minutes
 def test_a_card_fills_every_section_and_a_rerun_reuses_everything(tmp_path, dataset):
     card = run_card("ekf", TINY, tmp_path, quick=True, dataset=dataset, workers=1, progress=False)
     assert set(card["closed_loop"]) == {"paper_clean", "stealth_ramp"} and card["battery"] == "tiny-quick"
@@ -68,6 +69,7 @@ def test_bad_input_is_one_line_and_exit_2(tmp_path, capsys, argv, message):
     assert message in err and "\n" not in err
 
 
+@pytest.mark.slow  # 6 s: the default suite keeps under two minutes
 def test_the_example_plugin_defence_gets_a_card_with_no_edit_to_racf(cusum_installed, tmp_path, dataset,
                                                                        monkeypatch, capsys):
     monkeypatch.setitem(battery_module.BATTERIES, "tiny", TINY)
