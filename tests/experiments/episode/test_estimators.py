@@ -19,8 +19,8 @@ def _run(name, samples):
     return np.array([est.estimate(s, 1.0, 0.02) for s in samples])
 
 
-@pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.slow) if n == "chronos" else n  # chronos: 5 s
-                                  for n in ESTIMATORS])
+@pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.slow)  # 3-5 s each: the prior, or ODCA inside
+                                  if n in ("chronos", "vote", "detectors_or") else n for n in ESTIMATORS])
 def test_changing_the_future_does_not_change_the_past(name):
     rng = np.random.default_rng(0)
     depths = list(2.0 - 0.02 * np.arange(40) + rng.normal(0, 0.005, 40))
