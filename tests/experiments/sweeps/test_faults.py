@@ -144,8 +144,9 @@ def test_an_interrupt_in_process_reports_what_is_stored(tmp_path, monkeypatch):
 @pytest.mark.slow
 def test_sigint_stops_a_sweep_within_5_s_and_the_rerun_runs_exactly_the_missing_episodes(tmp_path):
     out = tmp_path / "sweep"
+    # 32 episodes: enough that the signal lands mid-sweep on a loaded machine (CI's slow stage runs in parallel).
     argv = [str(Path(sys.executable).parent / "racf"), "sweep", "--attack", "none", "--sign", "0", "1", "2", "3",
-            "--speed", "1.0", "1.5", "--repeats", "2", "--out", str(out), "--workers", "2"]  # 16 episodes
+            "--speed", "1.0", "1.5", "--repeats", "4", "--out", str(out), "--workers", "2"]
     env = {**os.environ, "MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl")}
     run = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
     deadline = time.monotonic() + 300
@@ -160,9 +161,9 @@ def test_sigint_stops_a_sweep_within_5_s_and_the_rerun_runs_exactly_the_missing_
     assert run.returncode == 130, err[-2000:]
     assert took < 5.0, took
     assert "Traceback" not in err
-    assert f"{stored} of 16 episodes stored; run the same command again to resume" in err.splitlines()[-1]
+    assert f"{stored} of 32 episodes stored; run the same command again to resume" in err.splitlines()[-1]
     time.sleep(3)  # the workers are gone: nothing more is written
     assert len(list((out / "parts").glob("*.parquet"))) == stored
     again = subprocess.run(argv, capture_output=True, text=True, env=env, timeout=900)
     assert again.returncode == 0, again.stderr[-2000:]
-    assert f"16 episodes ({16 - stored} run, {stored} reused)" in again.stdout
+    assert f"32 episodes ({32 - stored} run, {stored} reused)" in again.stdout
