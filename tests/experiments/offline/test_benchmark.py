@@ -32,6 +32,7 @@ def bench_runs(tmp_path_factory):
     return out, [_bench_json(data, out, "--no-ablation")], data  # the ablation's seven heads: in the slow test
 
 
+@pytest.mark.slow  # the quick benchmark (20 s): the default suite keeps under two minutes
 def test_json_has_every_split_preset_and_method(bench_runs):
     _, (results,), _ = bench_runs
     for split in ("by_series", "leave_target_out"):
@@ -54,6 +55,7 @@ def test_json_has_every_split_preset_and_method(bench_runs):
     assert results["complexity"]["odca"]["trainable"] == 917
 
 
+@pytest.mark.slow  # the quick benchmark (20 s): the default suite keeps under two minutes
 def test_odca_repairs_what_raw_depth_and_the_forecasters_do_not_and_passes_clean_input_through(bench_runs):
     """The benchmark's claims on this dataset (seeded, so the numbers are fixed): the corruption
     grows from the weak to the strong preset; under the mid and strong ones ODCA's error is below
@@ -69,6 +71,7 @@ def test_odca_repairs_what_raw_depth_and_the_forecasters_do_not_and_passes_clean
         assert results["clean"][split]["unchanged_share"] >= 0.8, results["clean"][split]
 
 
+@pytest.mark.slow  # the quick benchmark (20 s): the default suite keeps under two minutes
 def test_results_folder_holds_strict_json_tables_and_figures(bench_runs):
     out, (results,), _ = bench_runs
 
