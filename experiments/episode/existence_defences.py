@@ -42,6 +42,7 @@ class _Existence:
         self.inner = make_estimator(inner, {})
         self._stands: bool | None = None
         self._witnesses = NO_WITNESSES
+        self._carried = math.nan
 
     @property
     def n_parameters(self) -> int:
@@ -94,14 +95,18 @@ class _Existence:
         return self.inner.would_pass(**kwargs)
 
 
-class ExistenceVote(_Existence):
-    """RACF's vote: a physical witness (depth, LiDAR) and a semantic one (either detector, the map)."""
-
-    name = "vote"
+class _WithSecondDetector(_Existence):
+    """An existence defence that reads a second detector beside the car's (an option)."""
 
     def __init__(self, inner: str = "odca", second_detector: str = "learned") -> None:
         super().__init__(inner)
         self.second_detector = second_detector
+
+
+class ExistenceVote(_WithSecondDetector):
+    """RACF's vote: a physical witness (depth, LiDAR) and a semantic one (either detector, the map)."""
+
+    name = "vote"
 
     def verdict(self, witnesses: ExistenceWitnesses) -> bool:
         return vote(witnesses)
@@ -113,14 +118,10 @@ class ExistenceVote(_Existence):
         return witnesses.depth_m
 
 
-class DetectorsOr(_Existence):
+class DetectorsOr(_WithSecondDetector):
     """The two detectors OR-ed: a sign stands where either sees one (the map checks both)."""
 
     name = "detectors_or"
-
-    def __init__(self, inner: str = "odca", second_detector: str = "learned") -> None:
-        super().__init__(inner)
-        self.second_detector = second_detector
 
     def verdict(self, witnesses: ExistenceWitnesses) -> bool:
         return any(witnesses.seen)
