@@ -39,7 +39,7 @@ from racf.sim.sensors import STATE_FIELDS
 from racf.sim.world.traffic import CAR_FOOTPRINT_M
 
 __all__ = ["TrialResult", "IDENTITY", "Episode", "StepHook", "run_trial", "scan_fov", "SCAN_FOV_HALF_BEAMS",
-           "RUN_THROUGH_M", "run_through_m"]
+           "RUN_THROUGH_M", "run_through_m", "car_columns", "grant_white_box"]
 
 #: An episode ends once the bumper is this far past the last target's line (without traffic).
 RUN_THROUGH_M = 0.5
@@ -131,7 +131,7 @@ def _run(env: gym.Env, spec: TrialSpec, plan: EpisodePlan, estimator, on_step: S
     delay_steps = int(round(spec.delay_ms / 1000.0 / dt))
     # The car gets its build and its mission before it starts, then only observations.
     car = build_car(spec, plan, estimator)
-    _grant_white_box(env, car.estimator)
+    grant_white_box(env, car.estimator)
     targets = car.mission.targets
     referee = Referee(car.calibration, spec.braking, dt, find_wrapper(env, AttackWrapper) is not None, clean_pass,
                       plan.conflict.xy if plan.conflict is not None else None)
@@ -143,30 +143,10 @@ def _run(env: gym.Env, spec: TrialSpec, plan: EpisodePlan, estimator, on_step: S
         step = car.step(obs)
         pending.append(step.action)
         applied = pending.popleft() if len(pending) > delay_steps else pending[0]
-        sample, decision = step.sample, step.decision
+        decision = step.decision
         truth = referee.observe(env, obs, info, step, car.target, car.perception)
-        rows.append(step_row({
-            "t": info["time"], "slot": step.slot, "target": car.target.name, "control": step.control,
-            "d_meas": sample.d_meas, "c_meas": sample.c_meas, "lidar": sample.lidar_m, "d_fused": step.d_fused,
-            "d_size": sample.d_size, "size_std": sample.size_std,
-            "detected": sample.detected,
-            "det_confidence": sample.detection_confidence, "bearing": sample.bearing_rad,
-            **dict(zip(("det_x0", "det_y0", "det_x1", "det_y1"),
-                       sample.detection.box if sample.detection is not None else (-1, -1, -1, -1))),
-            "confirmed": decision.confirmed, "phase": decision.phase.value,
-            "brake": decision.brake, "speed_cap": decision.speed_cap_mps,
-            "speed_cmd": float(applied[0]), "steer_cmd": float(applied[1]),
-            # The car's own pose estimate beside the referee's truth (x, y, yaw).
-            "x_est": float(step.pose[0]), "y_est": float(step.pose[1]), "yaw_est": float(step.pose[2]),
-            # The localiser's fix as the car received it (held between fixes).
-            **{f"fix_{k}": float(v) for k, v in zip(("x", "y", "yaw"), obs["gps"])},
-            **truth,
-            # The vehicle state as the car measures it, and the LiDAR's forward sector (compact scan).
-            **{f"state_{name}": float(v) for name, v in zip(STATE_FIELDS, obs["state"])},
-            "frame_new": step.frame_new, "scan_new": step.scan_new, "scan_fov": scan_fov(obs["lidar"]),
-            # The LiDAR reference's tracked point in the body frame (NaN without a track), for viewers.
-            "track_x": step.tracked_xy[0], "track_y": step.tracked_xy[1],
-        }, car.estimator.diagnostics()))
+        rows.append(step_row({**car_columns(car, step, obs, info["time"], applied), **truth},
+                             car.estimator.diagnostics()))
         if on_step is not None:
             on_step(env, obs, info, rows[-1])
         last = step.slot == len(targets) - 1
@@ -185,6 +165,33 @@ def _run(env: gym.Env, spec: TrialSpec, plan: EpisodePlan, estimator, on_step: S
     log = pd.DataFrame(rows)
     log.insert(0, "trial_id", spec.trial_id)
     return log
+
+
+def car_columns(car, step, obs: dict, t: float, applied: np.ndarray) -> dict:
+    """The car's side of one step's row (``racf.experiments.episode.record``): what its software made
+    of the observation ``obs`` at time ``t`` (its ``step``) and the action that reached the wheels."""
+    sample, decision = step.sample, step.decision
+    return {
+        "t": t, "slot": step.slot, "target": car.target.name, "control": step.control,
+        "d_meas": sample.d_meas, "c_meas": sample.c_meas, "lidar": sample.lidar_m, "d_fused": step.d_fused,
+        "d_size": sample.d_size, "size_std": sample.size_std,
+        "detected": sample.detected,
+        "det_confidence": sample.detection_confidence, "bearing": sample.bearing_rad,
+        **dict(zip(("det_x0", "det_y0", "det_x1", "det_y1"),
+                   sample.detection.box if sample.detection is not None else (-1, -1, -1, -1))),
+        "confirmed": decision.confirmed, "phase": decision.phase.value,
+        "brake": decision.brake, "speed_cap": decision.speed_cap_mps,
+        "speed_cmd": float(applied[0]), "steer_cmd": float(applied[1]),
+        # The car's own pose estimate beside the referee's truth (x, y, yaw).
+        "x_est": float(step.pose[0]), "y_est": float(step.pose[1]), "yaw_est": float(step.pose[2]),
+        # The localiser's fix as the car received it (held between fixes).
+        **{f"fix_{k}": float(v) for k, v in zip(("x", "y", "yaw"), obs["gps"])},
+        # The vehicle state as the car measures it, and the LiDAR's forward sector (compact scan).
+        **{f"state_{name}": float(v) for name, v in zip(STATE_FIELDS, obs["state"])},
+        "frame_new": step.frame_new, "scan_new": step.scan_new, "scan_fov": scan_fov(obs["lidar"]),
+        # The LiDAR reference's tracked point in the body frame (NaN without a track), for viewers.
+        "track_x": step.tracked_xy[0], "track_y": step.tracked_xy[1],
+    }
 
 
 def run_through_m(plan: EpisodePlan) -> float:
@@ -208,7 +215,7 @@ def _result(spec: TrialSpec, plan: EpisodePlan, env: gym.Env, log: pd.DataFrame)
     return TrialResult(row)
 
 
-def _grant_white_box(env: gym.Env, defence) -> None:
+def grant_white_box(env: gym.Env, defence) -> None:
     """Hands the defence to every white-box attack in the env's wrappers (their threat model)."""
     while isinstance(env, gym.Wrapper):
         if isinstance(env, AttackWrapper) and env.threat_model == "white box":

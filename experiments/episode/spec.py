@@ -251,6 +251,22 @@ class TrialSpec:
     def to_dict(self) -> dict:
         return asdict(self)
 
+    @classmethod
+    def from_dict(cls, raw: dict) -> "TrialSpec":
+        """A spec from its :meth:`to_dict` form, read back from JSON (lists back to the tuples and
+        configs it holds). Specs written before scenarios were plug-ins held cross-traffic as three
+        fields of their own; they read as the ``cross_traffic`` scenario."""
+        raw = dict(raw)
+        raw["braking"] = BrakingConfig(**raw.get("braking", {}))
+        for key in ("rho", "t_atk", "drive_s", "metrics"):
+            if key in raw:
+                raw[key] = tuple(raw[key])
+        cars, gap_s, speed = (raw.pop(k, d) for k, d in (("traffic_cars", 0), ("traffic_gap_s", 0.0),
+                                                         ("traffic_speed", 1.0)))
+        if cars:
+            raw["target"], raw["scenario_params"] = "cross_traffic", {"cars": cars, "gap_s": gap_s, "speed": speed}
+        return cls(**raw)
+
     @property
     def trial_id(self) -> str:
         """Readable prefix + a hash of the spec, its configs, the code version and the source of

@@ -17,7 +17,6 @@ import math
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 
-from racf.controllers import BrakingConfig
 from racf.experiments.episode.spec import EPISODE_CODE, TrialSpec, setting_name
 from racf.provenance import atomic_write, code_version
 
@@ -27,21 +26,11 @@ __all__ = ["Case", "save_case", "load_case", "replay_case", "reseed_case", "Repl
 #: The shipped regression suite.
 SUITE = Path(__file__).with_name("cases")
 _VERSION = 1
-_RANGES = ("rho", "t_atk", "drive_s")
 
 
 def spec_from_json(raw: dict) -> TrialSpec:
-    """A ``TrialSpec`` from its ``asdict`` form (JSON lists back to the tuples and configs it holds)."""
-    raw = dict(raw)
-    raw["braking"] = BrakingConfig(**raw.get("braking", {}))
-    for key in _RANGES:
-        if key in raw:
-            raw[key] = tuple(raw[key])
-    # Specs written before scenarios were plug-ins held cross-traffic as three fields of their own.
-    cars, gap_s, speed = (raw.pop(k, d) for k, d in (("traffic_cars", 0), ("traffic_gap_s", 0.0), ("traffic_speed", 1.0)))
-    if cars:
-        raw["target"], raw["scenario_params"] = "cross_traffic", {"cars": cars, "gap_s": gap_s, "speed": speed}
-    return TrialSpec(**raw)
+    """A ``TrialSpec`` from its ``asdict`` form (:meth:`TrialSpec.from_dict`)."""
+    return TrialSpec.from_dict(raw)
 
 
 @dataclass(frozen=True)

@@ -32,6 +32,9 @@ class AttackWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
     #: The targets it can act on (``TrialSpec.target``): a stop sign approach, an obstacle crate's,
     #: a drive (which meets stop signs). An episode that asks for another is refused before it runs.
     targets: tuple[str, ...] = ("sign", "obstacle", "drive")
+    #: Why it cannot act on a recording (empty: it reads only the observation and ``info``): an
+    #: attack that places things in the scene or aims from the simulator's geometry says so here.
+    needs_simulator: str = ""
     defence: Any = None
 
     @classmethod

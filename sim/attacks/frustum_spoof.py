@@ -37,6 +37,7 @@ class FrustumSpoof(StealthRamp):
     """
 
     name = "frustum_spoof"
+    needs_simulator = "it moves the sign's returns in the scene (the simulator's geometry)"
     moves_lidar = True
 
     def __init__(self, env: gym.Env, rate_mps: float = 1.0, direction: int = 1, margin: float = 0.9,

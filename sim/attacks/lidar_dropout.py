@@ -29,6 +29,7 @@ class LidarDropout(AttackWrapper):
     """
 
     name = "lidar_dropout"
+    needs_simulator = "it aims at the sign's beams from the simulator's geometry"
 
     def __init__(self, env: gym.Env, share: float = 1.0, sector: str = "sign", margin_deg: float = 3.0,
                  **schedule: Any) -> None:

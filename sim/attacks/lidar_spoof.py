@@ -30,6 +30,7 @@ class LidarSpoof(AttackWrapper):
     """
 
     name = "lidar_spoof"
+    needs_simulator = "it aims at the sign's beams from the simulator's geometry"
 
     def __init__(self, env: gym.Env, range_m: Any = SPOOF_RANGE_M, **schedule: Any) -> None:
         gym.utils.RecordConstructorArgs.__init__(self, range_m=range_m, **schedule)

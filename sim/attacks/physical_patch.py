@@ -45,6 +45,7 @@ class PhysicalPatch(AttackWrapper):
     """
 
     name = "physical_patch"
+    needs_simulator = "it is a sticker on the sign in the scene, rendered by the simulator"
     #: It is drawn on a stop sign's face: a crate has none.
     targets = ("sign", "drive")
 

@@ -41,6 +41,7 @@ class TimedDropout(AttackWrapper):
     """
 
     name = "dropout_timed"
+    needs_simulator = "it aims at the sign's beams from the simulator's geometry"
 
     def __init__(self, env: gym.Env, scans: int = 3, effect: str = "blackout", bias_m: float = 0.8,
                  **schedule: Any) -> None:

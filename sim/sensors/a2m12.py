@@ -43,7 +43,7 @@ from racf.sim.sensors.lidar_driver import filter_rplidar_data, quanser_read
 ensure_gl_backend()
 import mujoco  # noqa: E402
 
-__all__ = ["A2M12Config", "A2M12Lidar", "MATERIALS", "material_of"]
+__all__ = ["A2M12Config", "A2M12Lidar", "MATERIALS", "material_of", "driver_scan"]
 
 #: Material classes of the map's geoms, in the order of :attr:`A2M12Config.dropouts`.
 MATERIALS = ("sign", "pole", "wall", "crate", "other")
@@ -62,6 +62,39 @@ def material_of(geom_name: str) -> str:
     if geom_name.startswith("obstacle_"):
         return "crate"
     return "other"
+
+
+def driver_scan(ranges: np.ndarray, times: np.ndarray, read_per_rev: int = 384, n_bins: int = 360,
+                max_gap_deg: float = 1.1, yaw_deg: float = 180.0) -> tuple[np.ndarray, np.ndarray]:
+    """One revolution's samples as the car's software gets them: Quanser's read of ``read_per_rev``
+    of them, ``filter_rplidar_data``'s bins, turned into the car's frame.
+
+    Args:
+        ranges: (n,) m in scan order, sample i at i * 360 / n deg clockwise from the LiDAR's
+            forward; 0 = no return (NaN too: a sample the read skips).
+        times: (n,) when each sample was taken, s.
+        read_per_rev, n_bins, max_gap_deg: the driver's settings (``A2M12Config``).
+        yaw_deg: the LiDAR's forward in the car's frame, deg counter-clockwise (the QCar 2 mounts
+            it yawed 180: forward is the car's rear); a multiple of the bin width.
+
+    Returns:
+        ``(scan, beam_times)``: (n_bins,) float32 m, bin j at j deg counter-clockwise from the car's
+        forward, ``inf`` = no return; (n_bins,) float64 s, when the rotor was at each bin.
+    """
+    ranges, times = np.asarray(ranges, float), np.asarray(times, float)
+    n = ranges.size
+    degrees = np.degrees(np.arange(n) * (2 * math.pi / n))
+    _, picks = quanser_read(degrees, np.arange(n, dtype=float), read_per_rev)
+    picked = picks.astype(np.int64)
+    bins = filter_rplidar_data(degrees[picked], ranges[picked], n_bins, max_gap_deg)
+    bin_times = np.interp(np.arange(n_bins) * (360.0 / n_bins), degrees[picked], times[picked])
+    # LiDAR bin j (j bins clockwise from its forward) is car bin (yaw - j) mod n_bins.
+    to_car = (int(round(yaw_deg * n_bins / 360.0)) - np.arange(n_bins)) % n_bins
+    scan = np.full(n_bins, np.inf, np.float32)
+    scan[to_car] = np.where(bins > 0, bins, np.inf)
+    beam_times = np.empty(n_bins)
+    beam_times[to_car] = bin_times
+    return scan, beam_times
 
 
 @dataclass(frozen=True)
@@ -174,9 +207,6 @@ class A2M12Lidar(Sensor):
         _, picks = quanser_read(np.degrees(self._theta), np.arange(n, dtype=float), config.read_per_rev)
         self._picks = picks.astype(np.int64)
         bins = config.n_bins
-        self._bin_deg = np.arange(bins) * (360.0 / bins)
-        # LiDAR bin j (j bins clockwise from the car's rear) is car bin (bins/2 - j) mod bins.
-        self._to_car = (bins // 2 - np.arange(bins)) % bins
         self._dist = np.full((n, k), -1.0)
         self._cos_inc = np.ones((n, k))
         self._geom = np.full((n, k), -1, np.int32)
@@ -189,6 +219,7 @@ class A2M12Lidar(Sensor):
         self._scan_time = 0.0
         self._scan = np.full(bins, np.inf, np.float32)
         self._beam_times = np.zeros(bins)
+        self._samples = (np.full(n, np.nan), np.zeros(n))
         self._pending = None
 
     # -- the env's calls ------------------------------------------------------------------
@@ -239,6 +270,14 @@ class A2M12Lidar(Sensor):
     def beam_times(self) -> np.ndarray:
         """(n_bins,) when the rotor pointed at each bin of the delivered scan, s."""
         return self._beam_times.copy()
+
+    @property
+    def samples(self) -> tuple[np.ndarray, np.ndarray]:
+        """The delivered revolution before the driver's filter, in scan order: ``(ranges, times)``,
+        each (samples_per_rev,) float64; sample i lies i * 360 / samples_per_rev deg clockwise from the
+        LiDAR's forward. ``ranges`` is m, 0 = no return, NaN = a sample Quanser's read skips (never
+        cast); ``times`` is when each was cast, s. What a recording of the raw scan holds."""
+        return self._samples[0].copy(), self._samples[1].copy()
 
     # -- internals ------------------------------------------------------------------------
     def _materials(self, model) -> None:
@@ -303,13 +342,8 @@ class A2M12Lidar(Sensor):
             r = np.round(r / c.quantum_m) * c.quantum_m
         valid = any_hit & (uniform < p_return) & (r >= c.range_min_m) & (r <= c.range_max_m)
         raw = np.where(valid, r, 0.0)
-        degrees = np.degrees(self._theta)
-        picked = self._picks
-        bins = filter_rplidar_data(degrees[picked], raw[picked], c.n_bins, c.max_gap_deg)
-        bin_times = np.interp(self._bin_deg, degrees[picked], times[picked])
-        scan = np.full(c.n_bins, np.inf, np.float32)
-        scan[self._to_car] = np.where(bins > 0, bins, np.inf)
-        self._scan = scan
-        self._beam_times = np.empty(c.n_bins)
-        self._beam_times[self._to_car] = bin_times
+        read = np.full(n, np.nan)
+        read[self._picks] = raw[self._picks]
+        self._samples = (read, times.copy())
+        self._scan, self._beam_times = driver_scan(read, times, c.read_per_rev, c.n_bins, c.max_gap_deg)
         self._scan_time = float(t_end)

@@ -26,6 +26,7 @@ class CarBuild:
     rear_axle_x_m: float
     lidar_xy_m: tuple[float, float]
     camera_height_m: float = 0.172
+    lidar_height_m: float = 0.0
 
 
 @lru_cache(maxsize=8)
@@ -41,4 +42,4 @@ def car_build(width_px: int, height_px: int) -> CarBuild:
     camera, lidar = model.camera("d435").pos, model.site("lidar").pos
     return CarBuild(CameraIntrinsics.d435_colour(width_px, height_px), (float(camera[0]), float(camera[1])),
                     float(model.site("front_bumper").pos[0]), float(model.body("wheel_rl").pos[0]),
-                    (float(lidar[0]), float(lidar[1])), float(camera[2]))
+                    (float(lidar[0]), float(lidar[1])), float(camera[2]), float(lidar[2]))
