@@ -17,7 +17,8 @@ A TOML file with up to four tables, every key optional::
     [lidar]
     yaw_deg = 180.0            # base_scan's forward in base_link (Quanser's car: 180; its virtual car: 0)
     driver = "quanser"         # "quanser": Quanser's read of 384 and its 1-degree filter; "none": the scan is the bins
-    quantum_m = 0.001          # snap ranges to the A2M12's 1 mm resolution (0: keep as stored)
+    quantum_m = 0.001          # snap ranges to the A2M12's 1 mm resolution (0: as stored; default: 1 mm
+                               # through Quanser's driver, as stored with driver = "none")
     read_per_rev = 384
 
     [mission]                  # for a bag racf did not write: the episode's spec fields (racf trials' names)
@@ -57,7 +58,7 @@ class Mapping:
     camera_size: tuple[int, int] | None = None
     lidar_yaw_deg: float = 180.0
     lidar_driver: str | None = None
-    lidar_quantum_m: float = 0.001
+    lidar_quantum_m: float | None = None
     read_per_rev: int = 384
     mission: dict = field(default_factory=dict)
     source: str = "(defaults)"
@@ -113,12 +114,13 @@ class Mapping:
         driver = lidar.get("driver")
         if driver is not None and driver not in LIDAR_DRIVERS:
             raise bad(f"[lidar] driver must be one of {', '.join(LIDAR_DRIVERS)}, got {driver!r}")
-        quantum = lidar.get("quantum_m", out.lidar_quantum_m)
-        if not (isinstance(quantum, (int, float)) and not isinstance(quantum, bool) and 0.0 <= quantum <= 0.1):
+        quantum = lidar.get("quantum_m")
+        if quantum is not None and not (isinstance(quantum, (int, float)) and not isinstance(quantum, bool)
+                                        and 0.0 <= quantum <= 0.1):
             raise bad(f"[lidar] quantum_m must be a number of metres in [0, 0.1], got {quantum!r}")
         read = lidar.get("read_per_rev", out.read_per_rev)
         if not (isinstance(read, int) and not isinstance(read, bool) and 1 <= read <= 100_000):
             raise bad(f"[lidar] read_per_rev must be a whole number in [1, 100000], got {read!r}")
         return replace(out, topics=topics, camera_crop=tuple(crop) if crop else None,
                        camera_size=tuple(size) if size else None, lidar_yaw_deg=float(yaw), lidar_driver=driver,
-                       lidar_quantum_m=float(quantum), read_per_rev=read, mission=dict(raw.get("mission", {})))
+                       lidar_quantum_m=None if quantum is None else float(quantum), read_per_rev=read, mission=dict(raw.get("mission", {})))

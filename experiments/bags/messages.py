@@ -182,10 +182,11 @@ def pose_msg(x: float, y: float, yaw: float, t_ns: int, frame: str = "map"):
 def pose_from(msg) -> np.ndarray:
     """(x, y, yaw) float32 from a ``PoseStamped`` (yaw from its quaternion)."""
     q = msg.pose.orientation
-    yaw = math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
-    if q.x == 0.0 and q.y == 0.0:  # a pure yaw: the form the round trip keeps to the bit
+    if q.x == 0.0 and q.y == 0.0:
+        # A pure yaw: 2 atan2(z, w) gives back any yaw in (-2 pi, 2 pi) as it was written, unwrapped.
         yaw = 2.0 * math.atan2(q.z, q.w)
-        yaw = yaw - 2 * math.pi if yaw > math.pi else yaw + 2 * math.pi if yaw < -math.pi else yaw
+    else:
+        yaw = math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
     return np.array([msg.pose.position.x, msg.pose.position.y, yaw], np.float32)
 
 

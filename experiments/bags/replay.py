@@ -138,6 +138,8 @@ class BagEnv(gym.Env):
         if topics["fix"] in last:
             self._obs["gps"] = m.pose_from(last[topics["fix"]])
             self._obs["timestamps"][_SLOT["gps"]] = m.seconds_of(m.stamp_of(last[topics["fix"]]))
+        # racf writes a referee value every step it has one: a step without it has none (NaN).
+        self._truth = {key: math.nan for key in self._truth}
         for topic, msg in last.items():
             if topic == SIGN_MASK:
                 self._mask = self._camera(m.mask_from(msg).astype(np.uint8), cv2.INTER_NEAREST).astype(bool)
@@ -163,7 +165,8 @@ class BagEnv(gym.Env):
             self._obs["lidar"] = m.bins_from(delivered)
             self._obs["lidar_beam_times"] = np.asarray(delivered_times.data, np.float64).copy()
             return
-        ranges = m.scan_from(scan, self.mapping.lidar_quantum_m)
+        quantum = self.mapping.lidar_quantum_m
+        ranges = m.scan_from(scan, (0.001 if self.driver == "quanser" else 0.0) if quantum is None else quantum)
         n = ranges.size
         if times_msg is not None and len(times_msg.data) == n:
             times = np.asarray(times_msg.data, np.float64)

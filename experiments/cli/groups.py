@@ -24,6 +24,9 @@ GROUPS: dict[str, tuple[str, dict[str, str]]] = {
              {"pretrain-prior": "pretrain-prior", "train": "train", "evaluate": "evaluate"}),
     "detector": ("the learned stop-sign detector: render its views, train it, optimise a sticker against it",
                  {"data": "detector-data", "train": "train-detector", "optimise-patch": "optimise-patch"}),
+    "bag": ("ROS 2 bags on Quanser's QCar 2 topics: export an episode, replay the car's software on a recording, "
+            "show what a bag holds",
+            {"export": "export-bag", "replay": "replay-bag", "info": "bag-info"}),
 }
 #: What ``racf bench FLAGS`` (no subcommand) was before the groups: the offline benchmark.
 _BARE = {"bench": "bench-offline"}

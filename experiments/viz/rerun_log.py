@@ -186,9 +186,11 @@ def write_rrd(path: str | Path, log: pd.DataFrame, recorder: FrameRecorder | Non
     signs = stop_signs()
     rec.log("map/stop_signs", rr.Points2D(_map_px([s.position for s in signs]), radii=4, colors=[200, 20, 20],
                                           labels=[f"stop {s.index}" for s in signs]), static=True)
-    xy = log[["x", "y"]].to_numpy(float)
-    rec.log("map/trajectory", rr.LineStrips2D([_map_px(xy)], colors=[30, 120, 230], radii=1.5,
-                                              labels=["true pose"]), static=True)
+    # A replayed recording has no ground truth: its pose is the car's own estimate.
+    pose = ("x", "y", "yaw") if "x" in log else ("x_est", "y_est", "yaw_est")
+    if "x" in log:
+        rec.log("map/trajectory", rr.LineStrips2D([_map_px(log[["x", "y"]].to_numpy(float))], colors=[30, 120, 230],
+                                                  radii=1.5, labels=["true pose"]), static=True)
     cars = _traffic_cars(log)
     for k in cars:
         rec.log(f"map/traffic/{k}/path", rr.LineStrips2D([_map_px(log[[f"traffic{k}_x", f"traffic{k}_y"]].to_numpy(float))],
@@ -244,7 +246,7 @@ def write_rrd(path: str | Path, log: pd.DataFrame, recorder: FrameRecorder | Non
                                                                colors=[230, 0, 230], labels=["patch"]))
             else:
                 rec.log("world/camera/image/patch", rr.Clear(recursive=False))
-            x, y, yaw = float(row["x"]), float(row["y"]), float(row["yaw"])
+            x, y, yaw = (float(row[c]) for c in pose)
             rec.log("world/car", rr.Transform3D(translation=[x, y, 0.0],
                                                 rotation=rr.RotationAxisAngle(axis=[0, 0, 1], radians=yaw)))
             rec.log("map/car", rr.Points2D(_map_px([x, y]), radii=5, colors=[255, 160, 0]))

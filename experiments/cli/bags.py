@@ -1,0 +1,175 @@
+"""``racf bag export|replay|info`` (flat: ``export-bag``, ``replay-bag``, ``bag-info``): episodes as
+ROS 2 bags on Quanser's topics, and the car's software on a recording."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from pathlib import Path
+
+from racf.experiments.cli.common import (episode_flags, episode_params, fail, keyed_values, output_dir, plugin_flag,
+                                         sign, speed)
+
+__all__ = ["register"]
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    e = sub.add_parser("export-bag", help="run an episode (racf trial's flags) and write it as a ROS 2 bag (MCAP) "
+                                          "on Quanser's QCar 2 topics, with racf's signals under /racf/",
+                       description="Runs the episode racf trial's flags describe (its id makes the run "
+                                   "reproducible) and writes what the car's software received, step by step, as a "
+                                   "rosbag2 folder in MCAP: Quanser's topics, names, types and conventions, with "
+                                   "the defence's distance, gate and flag and the ground truth under /racf/.")
+    e.add_argument("bag", type=Path, metavar="BAG", help="the bag folder to write (must not exist)")
+    episode_flags(e)
+    e.add_argument("--sign", type=sign, default=2, help="stop sign 0-3, or crate 0-1 with --target obstacle (default 2)")
+    e.add_argument("--target", default="sign", metavar="SCENARIO", help="the scenario (default sign; drive: --sign 0)")
+    e.add_argument("--speed", type=speed, default=1.0, help="cruise speed m/s, 0.1-3.0 (default 1.0)")
+    e.add_argument("--seed", type=int, default=0)
+    e.add_argument("--json", action="store_true", help="print one JSON object")
+    e.set_defaults(handler=_export)
+
+    r = sub.add_parser("replay-bag", help="run the car's software (perception, tracker, localisation, defence, "
+                                          "braker) on a recorded bag, with no simulator: the step log and a rerun "
+                                          "recording",
+                       description="Replays a rosbag2 (racf's, or your QCar 2's through --mapping) into the car's "
+                                   "software step by step at 50 Hz and writes the per-step log (Parquet), a JSON "
+                                   "summary and, with --rerun, a rerun recording. Ground truth is in the log only "
+                                   "where the bag carries it.")
+    r.add_argument("bag", type=Path, metavar="BAG", help="the bag folder (holding metadata.yaml)")
+    r.add_argument("--mapping", type=Path, default=None, metavar="TOML",
+                   help="how another recording's topics, camera and LiDAR meet the car (the tutorial's mapping file)")
+    r.add_argument("--defence", default=None, metavar="NAME",
+                   help="the defence (estimator) to run (default: the bag's own; raw for a bag racf did not write)")
+    r.add_argument("--attack", default=None, metavar="A[,B]",
+                   help="observation-space attacks to apply to the recording, comma-separated (those that need "
+                        "the simulator are refused)")
+    r.add_argument("--attack-param", action="append", default=[], metavar="ATTACK.KEY=VALUE",
+                   help="a setting of one of the attacks (repeatable; TOML values), e.g. "
+                        "depth_bias.trigger=at_time depth_bias.start_s=1.0")
+    r.add_argument("--out", type=output_dir, default=Path("outputs/replay"), help="output folder")
+    r.add_argument("--rerun", type=Path, default=None, metavar="PATH", help="also write a rerun recording (.rrd)")
+    r.add_argument("--json", action="store_true", help="print one JSON object")
+    plugin_flag(r)
+    r.set_defaults(handler=_replay)
+
+    i = sub.add_parser("bag-info", help="a bag's topics, types, counts, rates and duration")
+    i.add_argument("bag", type=Path, metavar="BAG", help="the bag folder (holding metadata.yaml)")
+    i.add_argument("--json", action="store_true", help="print one JSON object")
+    i.set_defaults(handler=_info)
+
+
+def _export(args: argparse.Namespace) -> int:
+    from racf.experiments.bags.export import export_episode
+    from racf.experiments.episode import TrialSpec, parse_setting
+    from racf.experiments.episode.preflight import check_specs
+
+    setting, params = episode_params(args, "export-bag")
+    params["estimator_options"] = params["estimator_options"].get(parse_setting(setting)[1], {})
+    params["target"] = args.target if params["target"] == "sign" else params["target"]
+    try:
+        spec = TrialSpec(setting, args.sign, args.speed, args.seed, **params)
+    except (ValueError, KeyError) as err:
+        fail("export-bag", str(err).strip("'\""))
+    if args.bag.exists():
+        fail("export-bag", f"{args.bag} exists; remove it or choose another path for the bag")
+    check_specs([spec])
+    start = time.perf_counter()
+    summary = export_episode(spec, args.bag)
+    wall = time.perf_counter() - start
+    size = sum(f.stat().st_size for f in args.bag.rglob("*") if f.is_file())
+    out = {"bag": str(summary.path), "trial_id": summary.trial_id, "steps": summary.steps,
+           "simulated_s": summary.duration_s, "wall_s": round(wall, 2),
+           "wall_per_simulated_s": round(wall / max(summary.duration_s, 1e-9), 3), "megabytes": round(size / 1e6, 1),
+           "messages": sum(summary.counts.values()), "topics": len(summary.counts), "result": summary.result}
+    if args.json:
+        print(json.dumps(out, indent=2, allow_nan=False))
+    else:
+        print(f"wrote {out['bag']}: {summary.steps} steps ({summary.duration_s:.2f} s simulated), "
+              f"{out['messages']} messages on {out['topics']} topics, {out['megabytes']} MB, in {wall:.1f} s "
+              f"({out['wall_per_simulated_s']:.2f} s per simulated s)")
+        print(f"episode {summary.trial_id}; see it with `racf bag-info {out['bag']}`, replay it with "
+              f"`racf replay-bag {out['bag']}`")
+    return 0
+
+
+def _replay(args: argparse.Namespace) -> int:
+    from racf.experiments.bags.mapping import Mapping
+    from racf.experiments.bags.replay import check_attacks, replay_bag
+    from racf.provenance import atomic_write
+
+    attacks = tuple(a.strip() for a in args.attack.split(",") if a.strip()) if args.attack else ()
+    params = keyed_values("replay-bag", "--attack-param", args.attack_param)
+    if params and not set(params) <= set(attacks):
+        fail("replay-bag", f"--attack-param names attack(s) {sorted(params)}; --attack gives {list(attacks) or 'none'}")
+    check_attacks(attacks)
+    mapping = Mapping.load(args.mapping)
+    recorder = None
+    if args.rerun is not None:
+        recorder = _frames_for(args.bag, mapping)
+    start = time.perf_counter()
+    replay = replay_bag(args.bag, mapping, args.defence, attacks, params, on_step=recorder)
+    wall = time.perf_counter() - start
+    args.out.mkdir(parents=True, exist_ok=True)
+    name = args.bag.name + ("+" + "+".join(attacks) if attacks else "") + (f"+{args.defence}" if args.defence else "")
+    log_path = atomic_write(args.out / f"{name}.parquet", replay.log)
+    simulated = float(replay.log["t"].iloc[-1] - replay.log["t"].iloc[0]) if len(replay.log) > 1 else 0.0
+    summary = {"bag": str(args.bag), "log": str(log_path), "setting": replay.spec.setting,
+               "mapping": mapping.source, "steps": len(replay.log), "recorded_s": round(simulated, 3),
+               "wall_s": round(wall, 2), "wall_per_recorded_s": round(wall / max(simulated, 1e-9), 3),
+               "ground_truth": not {"d_true", "x"} <= set(replay.absent),
+               "absent_columns": list(replay.absent), "offline": replay.scores,
+               "brake_steps": int(replay.log["brake"].sum()), "detected_steps": int(replay.log["detected"].sum())}
+    atomic_write(args.out / f"{name}.json", json.dumps(summary, indent=2, allow_nan=False))
+    if recorder is not None:
+        from racf.experiments.viz.rerun_log import write_rrd
+
+        write_rrd(args.rerun, replay.log, recorder, title=f"racf replay-bag {args.bag.name}")
+        summary["rerun"] = str(args.rerun)
+    if args.json:
+        print(json.dumps(summary, indent=2, allow_nan=False))
+        return 0
+    print(f"replayed {summary['steps']} steps ({summary['recorded_s']:.2f} s recorded) in {wall:.1f} s; "
+          f"setting {summary['setting']}; detections on {summary['detected_steps']} steps, "
+          f"brake on {summary['brake_steps']}")
+    if summary["ground_truth"]:
+        o = replay.scores
+        print("offline, against the bag's ground truth: " + ", ".join(
+            f"{k} {v:.3f}" for k, v in o.items() if isinstance(v, float)) + f" (N {o['steps']} steps)")
+    else:
+        print("the bag has no ground truth: the log leaves out the referee's columns and no offline score is given")
+    print(f"log {log_path}" + (f"; rerun {args.rerun} (open it with `racf view {args.rerun}`)" if args.rerun else ""))
+    return 0
+
+
+def _frames_for(bag: Path, mapping):
+    from racf.experiments.bags.frames import ReplayFrames
+    from racf.experiments.bags.recording import Recording
+    from racf.experiments.episode.plan import car_calibration, plan_episode
+    from racf.sim.sensors.camera import CameraIntrinsics
+
+    spec = Recording.open(bag, mapping).spec
+    plan = plan_episode(spec)
+    from racf.sim.env.config import EnvConfig
+
+    camera = EnvConfig.from_kwargs(**plan.env_kwargs).camera
+    width, height = mapping.camera_size or (camera.width, camera.height)
+    return ReplayFrames(car_calibration(width, height), CameraIntrinsics.d435_colour(width, height))
+
+
+def _info(args: argparse.Namespace) -> int:
+    from racf.experiments.bags.info import bag_info
+
+    info = bag_info(args.bag)
+    if args.json:
+        print(json.dumps(info, indent=2, allow_nan=False))
+        return 0
+    print(f"{info['path']}: {info['storage']}, {info['messages']} messages, {info['duration_s']:.2f} s"
+          + (f", episode {info['trial_id']}" if info.get("trial_id") else ""))
+    width = max(len(t["topic"]) for t in info["topics"]) if info["topics"] else 5
+    print(f"{'topic':<{width}}  {'type':<38} {'count':>6} {'rate Hz':>8}")
+    for t in info["topics"]:
+        rate = f"{t['rate_hz']:.1f}" if t["rate_hz"] is not None else "-"
+        print(f"{t['topic']:<{width}}  {t['type']:<38} {t['count']:>6} {rate:>8}")
+    return 0
