@@ -78,7 +78,8 @@ class BagWriter:
 
 @dataclass(frozen=True)
 class ExportSummary:
-    """What an export wrote: the bag, the episode's result row, its steps and each topic's count."""
+    """What an export wrote: the bag, the episode's result row, its steps and each topic's count, and
+    the episode's own step log (what a replay of the bag should give back)."""
 
     path: Path
     trial_id: str
@@ -86,6 +87,7 @@ class ExportSummary:
     duration_s: float
     counts: dict[str, int]
     result: dict
+    log: object = None
 
 
 def _numeric(value) -> bool:
@@ -213,4 +215,4 @@ def export_episode(spec: TrialSpec, path: Path) -> ExportSummary:
         raise
     out = writer.close()
     return ExportSummary(out, spec.trial_id, len(log), float(log["t"].iloc[-1]), dict(writer.counts),
-                         result.to_dict())
+                         result.to_dict(), log)

@@ -26,7 +26,7 @@ from racf.experiments.bags.recording import Recording
 from racf.experiments.bags.topics import SCAN_DELIVERED, SCAN_TIMES, SIGN_MASK, TRUTH_PREFIX
 from racf.experiments.episode.plan import car_calibration, plan_episode
 from racf.experiments.episode.record import REFEREE, columns_of, step_row
-from racf.experiments.episode.runner import car_columns, grant_white_box
+from racf.experiments.episode.runner import ActionLine, car_columns, grant_white_box
 from racf.experiments.episode.spec import TrialSpec, parse_setting, setting_name
 from racf.experiments.episode.stack import build_car, wrap_attacks
 from racf.sim.attacks import ATTACKS
@@ -252,14 +252,12 @@ def replay_bag(path: str | Path, mapping: Mapping | None = None, defence: str | 
     obs, info = env.reset(seed=spec.seed)
     car = build_car(spec, plan, None)
     grant_white_box(env, car.estimator)
-    delay_steps = int(round(spec.delay_ms / 1000.0 / plan.control_dt_s))
-    pending: list = []
+    actions = ActionLine(int(round(spec.delay_ms / 1000.0 / plan.control_dt_s)))
     rows: list[dict] = []
     referee = columns_of(REFEREE)
     while True:
         step = car.step(obs)
-        pending.append(step.action)
-        applied = pending.pop(0) if len(pending) > delay_steps else pending[0]
+        applied = actions.push(step.action)
         truth = {c: info.get(c, math.nan) for c in referee}
         truth["attack_active"] = bool(info.get("attack_active", False)) if attacks else \
             info.get("attack_active_recorded", math.nan)

@@ -298,6 +298,25 @@ def _detector_names() -> tuple[str, ...]:
     return tuple(DETECTORS)
 
 
+def service_flags(p: argparse.ArgumentParser) -> None:
+    """``--estimator-endpoint`` (run the defence in a ``racf serve`` process) and its timeout."""
+    p.add_argument("--estimator-endpoint", default=None, metavar="tcp://HOST:PORT",
+                   help="run the defence in the `racf serve` process listening there: its measured round trip "
+                        "delays the car, and a step it does not answer in time falls back to the car's own depth "
+                        "distance (logged); default: in the car's own process")
+    p.add_argument("--estimator-timeout-ms", type=float, default=50.0, metavar="MS",
+                   help="with --estimator-endpoint: how long the car waits for an answer, ms (default 50)")
+
+
+def service_params(args: argparse.Namespace, command: str) -> dict:
+    """The spec fields the service flags give (none without an endpoint)."""
+    if args.estimator_endpoint is None:
+        if args.estimator_timeout_ms != 50.0:
+            flag_error(command, "--estimator-timeout-ms applies with --estimator-endpoint")
+        return {}
+    return {"estimator_endpoint": args.estimator_endpoint, "estimator_timeout_ms": args.estimator_timeout_ms}
+
+
 def episode_flags(p: argparse.ArgumentParser) -> None:
     """The flags ``racf trial`` and ``racf trials`` share: what runs and how."""
     p.add_argument("--setting", default=None,
@@ -338,6 +357,7 @@ def episode_flags(p: argparse.ArgumentParser) -> None:
                         "depth_bias.bias_m=1.5, or its schedule: depth_bias.trigger=at_time depth_bias.start_s=2.0 "
                         "starts it 2 s into the episode (the attack page lists each attack's settings and ranges)")
     estimator_option_flag(p)
+    service_flags(p)
     plugin_flag(p)
     sensor_flags(p)
 
@@ -390,7 +410,8 @@ def episode_params(args: argparse.Namespace, command: str, table: bool = False) 
             situation = {"cars": args.traffic_cars, "gap_s": args.traffic_gap, "speed": args.traffic_speed} | situation
         elif args.traffic_gap != 0.0 or args.traffic_speed != 1.0:
             flag_error(command, "--traffic-gap and --traffic-speed need --traffic-cars N (N >= 1)")
-        params |= {"target": target, "scenario_params": situation, "metrics": tuple(args.metric)}
+        params |= {"target": target, "scenario_params": situation, "metrics": tuple(args.metric),
+                   **service_params(args, command)}
     except ValueError as err:
         flag_error(command, str(err))
     return setting, params

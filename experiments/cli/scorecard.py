@@ -9,6 +9,7 @@ import time
 from pathlib import Path
 
 from racf.experiments.cli.common import (backend_flags, estimator_option_flag, estimator_options, fail, output_dir,
+                                         service_flags, service_params,
                                          plain_values, plugin_flag)
 
 __all__ = ["register"]
@@ -43,6 +44,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     backend_flags(sc, workers_help="parallel episodes (local processes, or a local Ray's CPUs)")
     sc.add_argument("--json", action="store_true", help="print the cards as one JSON object")
     estimator_option_flag(sc)
+    service_flags(sc)
     plugin_flag(sc)
     sc.set_defaults(handler=_scorecard)
 
@@ -127,7 +129,7 @@ def _scorecard(args: argparse.Namespace) -> int:
             try:
                 card = run_card(defence, battery, args.out, quick=args.quick, dataset=dataset, backend=args.backend,
                                 workers=args.workers, address=args.address, progress=not args.json,
-                                options=options.get(defence))
+                                options=options.get(defence), service=service_params(args, "scorecard"))
             except ValueError as err:
                 fail("scorecard", str(err))
             path = _card_path(args.out, name, defence)

@@ -7,7 +7,8 @@ import json
 from pathlib import Path
 
 from racf.experiments.cli.common import (attack_help, backend_flags, count, estimator_help, estimator_option_flag,
-                                         estimator_options, fail, output_dir, plugin_flag, sensor_flags)
+                                         estimator_options, fail, output_dir, plugin_flag, sensor_flags,
+                                         service_flags, service_params)
 
 __all__ = ["register"]
 
@@ -46,6 +47,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                         help=f"{what}: values (grid) or LOW HIGH (random)")
     fl.add_argument("--sign", nargs="+", type=int, default=None, metavar="K", help="stop signs 0-3")
     estimator_option_flag(fl)
+    service_flags(fl)
     plugin_flag(sw)
     sw.set_defaults(handler=_sweep)
 
@@ -65,6 +67,7 @@ def _sweep(args: argparse.Namespace) -> int:
                                              ("log_steps", args.log_steps),
                                              ("sensor_profile", args.sensor_profile),
                                              ("sign_geometry", args.sign_geometry)) if value is not None}
+    fields |= service_params(args, "sweep")
     space = {key: value for key, value in (("attack", args.attack), ("estimator", args.estimator),
                                            ("rho", args.rho), ("t_atk", args.t_atk), ("speed", args.speed),
                                            ("sign", args.sign)) if value is not None}

@@ -39,7 +39,7 @@ from racf.sim.sensors import STATE_FIELDS
 from racf.sim.world.traffic import CAR_FOOTPRINT_M
 
 __all__ = ["TrialResult", "IDENTITY", "Episode", "StepHook", "run_trial", "scan_fov", "SCAN_FOV_HALF_BEAMS",
-           "RUN_THROUGH_M", "run_through_m", "car_columns", "grant_white_box"]
+           "RUN_THROUGH_M", "run_through_m", "car_columns", "grant_white_box", "ActionLine", "late_steps"]
 
 #: An episode ends once the bumper is this far past the last target's line (without traffic).
 RUN_THROUGH_M = 0.5
@@ -137,12 +137,11 @@ def _run(env: gym.Env, spec: TrialSpec, plan: EpisodePlan, estimator, on_step: S
                       plan.conflict.xy if plan.conflict is not None else None)
     run_through = run_through_m(plan)
     linger = round(NEAR_MISS_S / dt) if plan.traffic else 0
-    pending: deque = deque()
+    actions = ActionLine(delay_steps)
     rows: list[dict] = []
     for _ in range(plan.max_steps):
         step = car.step(obs)
-        pending.append(step.action)
-        applied = pending.popleft() if len(pending) > delay_steps else pending[0]
+        applied = actions.push(step.action, late_steps(car.estimator, dt) if step.control else 0)
         decision = step.decision
         truth = referee.observe(env, obs, info, step, car.target, car.perception)
         rows.append(step_row({**car_columns(car, step, obs, info["time"], applied), **truth},
@@ -165,6 +164,43 @@ def _run(env: gym.Env, spec: TrialSpec, plan: EpisodePlan, estimator, on_step: S
     log = pd.DataFrame(rows)
     log.insert(0, "trial_id", spec.trial_id)
     return log
+
+
+class ActionLine:
+    """The actions on their way to the wheels: each arrives ``delay_steps`` (the spec's fixed
+    delay) plus its own ``late`` steps after it was decided, and the wheels take the newest that has
+    arrived (an older one arriving after it is dropped). Before any has arrived they take the first
+    decided. With ``late`` always 0 this is the fixed FIFO delay.
+    """
+
+    def __init__(self, delay_steps: int) -> None:
+        self.delay = int(delay_steps)
+        self._pending: deque = deque()
+        self._k = 0
+        self._applied = None
+        self._applied_index = -1
+
+    def push(self, action: np.ndarray, late: int = 0) -> np.ndarray:
+        """This step's decided action; returns the one the wheels take this step."""
+        k = self._k
+        self._pending.append((k + self.delay + late, k, action))
+        arrived = [p for p in self._pending if p[0] <= k]
+        if arrived:
+            _, index, newest = max(arrived, key=lambda p: p[1])
+            if index > self._applied_index:
+                self._applied, self._applied_index = newest, index
+            self._pending = deque(p for p in self._pending if p[1] > index)
+        elif self._applied is None:
+            self._applied = self._pending[0][2]
+        self._k += 1
+        return self._applied
+
+
+def late_steps(estimator, dt: float) -> int:
+    """Whole control periods a defence's last answer overran (``latency_s``, measured by a remote
+    defence): an answer within the period is in time for the step's action. 0 for one in the car."""
+    latency = getattr(estimator, "latency_s", None)
+    return int(latency // dt) if latency else 0
 
 
 def car_columns(car, step, obs: dict, t: float, applied: np.ndarray) -> dict:

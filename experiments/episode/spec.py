@@ -132,6 +132,11 @@ class TrialSpec:
             every one, the defaults filled in.
         metrics: metrics to score beyond those every episode has (``racf.plugins.METRICS``; a
             scenario adds its own, ``Scenario.metrics``).
+        estimator_endpoint: run the estimator in a ``racf serve`` process at this address
+            (``tcp://HOST:PORT``) instead of in the car's (None: in the car's). The measured round
+            trip delays the car; the id records that a service ran it, not where it listened.
+        estimator_timeout_ms: with an endpoint, how long the car waits for an answer before it
+            falls back to its own depth distance for the step, ms.
     """
 
     setting: str
@@ -154,6 +159,8 @@ class TrialSpec:
     run_up_m: float | None = None
     scenario_params: dict = field(default_factory=dict)
     metrics: tuple[str, ...] = ()
+    estimator_endpoint: str | None = None
+    estimator_timeout_ms: float = 50.0
 
     def __post_init__(self) -> None:
         attacks, estimator = parse_setting(self.setting)
@@ -206,6 +213,11 @@ class TrialSpec:
         unknown = [m for m in (*self.metrics, *scenario.metrics) if m not in METRICS]
         if unknown:
             raise ValueError(f"unknown metric(s) {unknown}; choose from {tuple(METRICS)}")
+        if self.estimator_endpoint is not None and not (isinstance(self.estimator_endpoint, str)
+                                                        and self.estimator_endpoint.startswith(("tcp://", "ipc://"))):
+            raise ValueError(f"estimator_endpoint must be tcp://HOST:PORT or ipc://PATH, got {self.estimator_endpoint!r}")
+        if not (isinstance(self.estimator_timeout_ms, (int, float)) and 1.0 <= self.estimator_timeout_ms <= 10_000.0):
+            raise ValueError(f"estimator_timeout_ms must be in [1, 10000] ms, got {self.estimator_timeout_ms!r}")
         if self.control_hz is not None and not 1.0 <= self.control_hz <= 50.0:
             raise ValueError(f"control_hz must be in [1, 50] Hz (the env steps at 50 Hz) or None, "
                              f"got {self.control_hz!r}")
@@ -219,7 +231,7 @@ class TrialSpec:
     def metric_names(self) -> tuple[str, ...]:
         """The metrics this episode scores, in the result row's order: every ``always`` one, the
         spec's and its scenario's."""
-        asked = {*self.metrics, *self.scenario.metrics}
+        asked = {*self.metrics, *self.scenario.metrics, *(("service",) if self.estimator_endpoint else ())}
         chosen = [name for name in METRICS if METRICS[name].always or name in asked]
         return tuple(sorted(chosen, key=lambda name: (METRICS[name].order, name)))
 
@@ -249,7 +261,12 @@ class TrialSpec:
         return draw_drive(np.random.default_rng(self.seed), *self.drive_s, nominal_speed_mps=self.speed)
 
     def to_dict(self) -> dict:
-        return asdict(self)
+        """Every field; the service's two only when the estimator runs in one (so that the form, and the
+        id, of an in-process episode stay as they were)."""
+        out = asdict(self)
+        if self.estimator_endpoint is None:
+            del out["estimator_endpoint"], out["estimator_timeout_ms"]
+        return out
 
     @classmethod
     def from_dict(cls, raw: dict) -> "TrialSpec":
@@ -273,7 +290,10 @@ class TrialSpec:
         every plug-in it uses (read now: an edited plug-in makes new ids)."""
         from racf.sim.env.config import EnvConfig
 
-        payload = {"spec": self.to_dict(), "env": asdict(EnvConfig()), "code": code_version(*EPISODE_CODE)}
+        spec = self.to_dict()
+        if spec.pop("estimator_endpoint", None) is not None:  # which service ran it, not where it listened
+            spec["estimator_service"] = True
+        payload = {"spec": spec, "env": asdict(EnvConfig()), "code": code_version(*EPISODE_CODE)}
         extra = plugin_sources(self)
         if extra:  # racf's own parts add nothing: the ids of built-in episodes stay as they were
             payload["plugins"] = extra

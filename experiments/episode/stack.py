@@ -91,6 +91,11 @@ def build_car(spec: TrialSpec, plan: EpisodePlan, estimator=None) -> Car:
     perceptions = {"sign": Perception(calib.camera, detector=detector, lidar=tracker(calib), size=size),
                    "obstacle": Perception(calib.camera, detector=ObstacleDetector(), lidar=tracker(calib),
                                           target="obstacle")}
+    if estimator is None and spec.estimator_endpoint is not None:
+        from racf.experiments.episode.remote import RemoteEstimator
+
+        estimator = RemoteEstimator(spec.estimator_endpoint, spec.estimator, spec.estimator_options,
+                                    spec.estimator_timeout_ms)
     estimator = estimator if estimator is not None else make_estimator(spec.estimator, spec.estimator_options)
     configure = getattr(estimator, "use_calibration", None)
     if callable(configure):

@@ -96,8 +96,9 @@ def _logs(store: ResultStore, ids: list[str]) -> list[pd.DataFrame]:
 
 def run_card(defence: str, battery: Battery, out: Path, *, quick: bool = False, dataset=None,
              backend: str = "local", workers: int = 2, address: str | None = None, progress: bool = True,
-             options: dict | None = None) -> dict:
+             options: dict | None = None, service: dict | None = None) -> dict:
     """Runs (or resumes) ``battery`` for ``defence`` and returns its card (strict-JSON-ready).
+    ``service``: the spec fields that run the defence in a ``racf serve`` process (``estimator_endpoint``).
 
     ``dataset`` is the offline rows' ``QCarDataset`` (by-series split); None leaves them out.
     """
@@ -114,6 +115,8 @@ def run_card(defence: str, battery: Battery, out: Path, *, quick: bool = False, 
         specs = row.specs(defence, quick)
         if options:
             specs = [replace(s, estimator_options=options) for s in specs]
+        if service:
+            specs = [replace(s, **service) for s in specs]
         plan.append((row, specs))
     # One batch for the whole card: one pool of workers, each keeping its env and models from
     # episode to episode, and the long drives first so that no worker idles at the end.

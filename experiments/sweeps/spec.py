@@ -75,7 +75,8 @@ SPACE_KEYS = {"attack": None, "estimator": None, "rho": (0.0, 1.0), "t_atk": (0.
 _DEFAULTS = {"attack": ["patch_occlusion"], "estimator": ["raw"], "rho": [0.95], "t_atk": [1.75], "speed": [1.5],
              "sign": [0, 1, 2, 3]}
 _TOP_KEYS = {"name", "mode", "repeats", "n", "seed", "space", "params", "estimators", "log_steps", "sensor_profile",
-             "sign_geometry", "detector", "traffic", "target", "scenario", "metrics"}
+             "sign_geometry", "detector", "traffic", "target", "scenario", "metrics", "estimator_endpoint",
+             "estimator_timeout_ms"}
 _TRAFFIC_KEYS = {"cars": [0], "gap_s": 0.0, "speed": 1.0}
 #: The example specs shipped with the project.
 SPECS_DIR = Path(__file__).resolve().parent / "specs"
@@ -101,6 +102,8 @@ class SweepSpec:
     target: str = "sign"
     scenario: dict = field(default_factory=dict)
     metrics: list = field(default_factory=list)
+    estimator_endpoint: str | None = None
+    estimator_timeout_ms: float = 50.0
 
     def __post_init__(self) -> None:
         if self.detector not in DETECTORS:
@@ -305,7 +308,9 @@ def _trial(cell: tuple, estimator: str, seed: int, sweep: SweepSpec, params: dic
                      rho=(float(rho), float(rho)), t_atk=(float(t_atk), float(t_atk)),
                      sensor_profile=sweep.sensor_profile, sign_geometry=sweep.sign_geometry,
                      attack_params=params or {}, detector=sweep.detector,
-                     estimator_options=sweep.estimators.get(estimator, {}), metrics=tuple(sweep.metrics), **traffic)
+                     estimator_options=sweep.estimators.get(estimator, {}), metrics=tuple(sweep.metrics),
+                     estimator_endpoint=sweep.estimator_endpoint, estimator_timeout_ms=sweep.estimator_timeout_ms,
+                     **traffic)
 
 
 def spec_path(path: str | Path) -> Path:
@@ -347,7 +352,9 @@ def parse_spec(text: str, source: str = "spec", default_name: str = "sweep") -> 
                          sign_geometry=raw.get("sign_geometry", "plate"),
                          detector=raw.get("detector", "classical"), estimators=raw.get("estimators", {}),
                          traffic=raw.get("traffic", {}), target=raw.get("target", "sign"),
-                         scenario=raw.get("scenario", {}), metrics=raw.get("metrics", []))
+                         scenario=raw.get("scenario", {}), metrics=raw.get("metrics", []),
+                         estimator_endpoint=raw.get("estimator_endpoint"),
+                         estimator_timeout_ms=raw.get("estimator_timeout_ms", 50.0))
         episodes = spec.episodes()
     except ValueError as err:
         raise ValueError(f"{source}: {err}") from None

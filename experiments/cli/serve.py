@@ -1,0 +1,90 @@
+"""``racf serve``: a defence as its own process; ``racf bench service``: its round trip per step."""
+
+from __future__ import annotations
+
+import argparse
+import json
+
+from racf.experiments.cli.common import estimator_help, estimator_option_flag, estimator_options, fail, plugin_flag
+
+__all__ = ["register"]
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    s = sub.add_parser("serve", help="serve a defence (estimator) to cars over ZeroMQ: trials, sweeps and scorecards "
+                                     "reach it with --estimator-endpoint",
+                       description="Runs one defence in this process, one instance per connecting car, behind "
+                                   "a ZeroMQ socket (msgpack requests, numpy arrays as raw buffers). Episodes "
+                                   "reach it with --estimator-endpoint; Ctrl-C stops it.")
+    s.add_argument("--defence", required=True, metavar="NAME", help=f"the defence: {estimator_help()}")
+    s.add_argument("--bind", default="tcp://127.0.0.1:5555", metavar="tcp://HOST:PORT",
+                   help="where to listen (default tcp://127.0.0.1:5555; port 0: any free port, printed)")
+    estimator_option_flag(s)
+    plugin_flag(s)
+    s.set_defaults(handler=_serve)
+
+    b = sub.add_parser("bench-service", help="the defence service's round trip per step on real samples, "
+                                             "beside the in-process cost and the paper's 49 ms cycle")
+    b.add_argument("--defence", default="odca", metavar="NAME", help="the defence to serve (default odca)")
+    b.add_argument("-n", type=int, default=10_000, help="steps to time (default 10000)")
+    b.add_argument("--endpoint", default=None, metavar="tcp://HOST:PORT",
+                   help="a running `racf serve` (default: start one on a free loopback port)")
+    b.add_argument("--sign", type=int, default=1, help="the stop sign of the episode whose samples are sent (default 1)")
+    b.add_argument("--setting", default=None, help="that episode's setting (default attack+DEFENCE)")
+    b.add_argument("--json", action="store_true", help="print one JSON object")
+    estimator_option_flag(b)
+    b.set_defaults(handler=_bench)
+
+
+def _serve(args: argparse.Namespace) -> int:
+    from racf.experiments.service.server import serve
+
+    from racf.plugins import ESTIMATORS
+
+    if args.defence not in ESTIMATORS:
+        fail("serve", f"unknown defence {args.defence!r}; registered: {', '.join(ESTIMATORS)}")
+    options = estimator_options("serve", args.estimator_option, (args.defence,), args.defence).get(args.defence, {})
+
+    def ready(endpoint: str) -> None:
+        print(f"listening at {endpoint} (defence {args.defence}); Ctrl-C stops", flush=True)
+
+    served = serve(args.bind, args.defence, options, ready=ready)
+    print(f"answered {served} requests")
+    return 0
+
+
+def _bench(args: argparse.Namespace) -> int:
+    from racf.experiments.episode import TrialSpec
+    from racf.experiments.service.bench import measure, record_samples, service_process
+    from racf.plugins import ESTIMATORS
+
+    if args.defence not in ESTIMATORS:
+        fail("bench service", f"unknown defence {args.defence!r}; registered: {', '.join(ESTIMATORS)}")
+    if args.n < 1:
+        fail("bench service", "-n must be >= 1")
+    options = estimator_options("bench service", args.estimator_option, (args.defence,),
+                                args.defence).get(args.defence, {})
+    setting = args.setting or ("attack" if args.defence == "raw" else f"attack+{args.defence}")
+    try:
+        spec = TrialSpec(setting, args.sign, 1.0, 0, estimator_options=options)
+    except ValueError as err:
+        fail("bench service", str(err))
+    calls, calibration = record_samples(spec)
+    if args.endpoint is not None:
+        result = measure(args.endpoint, spec.estimator, calls, calibration, args.n, options)
+    else:
+        with service_process(spec.estimator, options) as (endpoint, _):
+            result = measure(endpoint, spec.estimator, calls, calibration, args.n, options)
+    result["episode"] = spec.trial_id
+    if args.json:
+        print(json.dumps(result, indent=2, allow_nan=False))
+        return 0
+    rt, local = result["round_trip"], result["in_process"]
+    print(f"racf serve ({result['defence']}) at {result['endpoint']}: {rt['n']} steps of episode {spec.trial_id}")
+    print(f"{'':<22}{'p50':>8}{'p90':>8}{'p99':>8}{'p99.9':>8}{'max':>8}   ms")
+    for name, row in (("round trip (service)", rt), ("in-process estimate", local)):
+        print(f"{name:<22}{row['p50_ms']:>8.3f}{row['p90_ms']:>8.3f}{row['p99_ms']:>8.3f}{row['p999_ms']:>8.3f}"
+              f"{row['max_ms']:>8.3f}")
+    print(f"the paper's offboard cycle (perception, transmission, ODCA, control): {result['paper_cycle_ms']:.0f} ms; "
+          f"distances differing from in-process: {result['distance_mismatches']}")
+    return 0

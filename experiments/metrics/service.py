@@ -1,0 +1,45 @@
+"""How the defence service answered an episode (the ``service`` metric, scored where the spec runs
+its estimator through ``racf serve``): the round trips the car measured, the steps they made it
+late, and the steps it fell back to its own depth distance."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from racf.experiments.metrics.base import Episode, Field, Metric
+
+__all__ = ["ServiceMeasures"]
+
+
+class ServiceMeasures(Metric):
+    """Round trips to the defence service, late steps and fallbacks."""
+
+    name = "service"
+    meaning = "the defence service's round trips, late actions and fallbacks (an estimator run by racf serve)"
+    order = 80
+    higher_is_better = {"service_fallback_steps": False, "service_rtt_p99_ms": False}
+    fields = (
+        Field("service_steps", 0, "steps", "steps whose estimate came from the service"),
+        Field("service_rtt_p50_ms", math.nan, "ms", "median round trip of a step's request", summary="median"),
+        Field("service_rtt_p99_ms", math.nan, "ms", "99th percentile of the round trips", summary="median"),
+        Field("service_late_steps", 0, "steps", "actions delayed a control period or more by a slow answer"),
+        Field("service_fallback_steps", 0, "steps", "steps with no answer in time: the car's own depth distance"),
+        Field("service_fallback", False, "", "the car fell back at least once", summary="rate"),
+    )
+
+    def score(self, episode: Episode) -> dict:
+        log = episode.log
+        if "service_rtt_ms" not in log:
+            return {}
+        control = log["control"].astype(bool)
+        rtt = log.loc[control, "service_rtt_ms"].to_numpy(float)
+        answered = rtt[np.isfinite(rtt)]
+        fallback = int((log.loc[control, "service_fallback"] == 1.0).sum())
+        dt = float(log["t"].diff().median()) if len(log) > 1 else 0.02
+        return {"service_steps": int(answered.size),
+                "service_rtt_p50_ms": float(np.percentile(answered, 50)) if answered.size else math.nan,
+                "service_rtt_p99_ms": float(np.percentile(answered, 99)) if answered.size else math.nan,
+                "service_late_steps": int((answered >= dt * 1000.0).sum()),
+                "service_fallback_steps": fallback, "service_fallback": fallback > 0}
