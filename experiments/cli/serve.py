@@ -11,12 +11,13 @@ __all__ = ["register"]
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    s = sub.add_parser("serve", help="serve a defence (estimator) to cars over ZeroMQ: trials, sweeps and scorecards "
-                                     "reach it with --estimator-endpoint",
-                       description="Runs one defence in this process, one instance per connecting car, behind "
+    s = sub.add_parser("serve", help="serve defences (estimators) to cars over ZeroMQ: trials, sweeps and scorecards "
+                                     "reach them with --estimator-endpoint",
+                       description="Runs the defences in this process, one instance per connecting car, behind "
                                    "a ZeroMQ socket (msgpack requests, numpy arrays as raw buffers). Episodes "
-                                   "reach it with --estimator-endpoint; Ctrl-C stops it.")
-    s.add_argument("--defence", required=True, metavar="NAME", help=f"the defence: {estimator_help()}")
+                                   "reach it with --estimator-endpoint and name their defence; Ctrl-C stops it.")
+    s.add_argument("--defence", action="append", default=None, metavar="NAME",
+                   help=f"serve only this defence (repeatable; default: every registered one): {estimator_help()}")
     s.add_argument("--bind", default="tcp://127.0.0.1:5555", metavar="tcp://HOST:PORT",
                    help="where to listen (default tcp://127.0.0.1:5555; port 0: any free port, printed)")
     estimator_option_flag(s)
@@ -41,14 +42,21 @@ def _serve(args: argparse.Namespace) -> int:
 
     from racf.plugins import ESTIMATORS
 
-    if args.defence not in ESTIMATORS:
-        fail("serve", f"unknown defence {args.defence!r}; registered: {', '.join(ESTIMATORS)}")
-    options = estimator_options("serve", args.estimator_option, (args.defence,), args.defence).get(args.defence, {})
+    names = tuple(args.defence) if args.defence else None
+    unknown = [d for d in names or () if d not in ESTIMATORS]
+    if unknown:
+        fail("serve", f"unknown defence {unknown[0]!r}; registered: {', '.join(ESTIMATORS)}")
+    options = None
+    if args.estimator_option:
+        if not names:
+            fail("serve", "--estimator-option sets the options of one defence: name it with --defence")
+        options = estimator_options("serve", args.estimator_option, names, names[0]).get(names[0], {})
 
     def ready(endpoint: str) -> None:
-        print(f"listening at {endpoint} (defence {args.defence}); Ctrl-C stops", flush=True)
+        print(f"listening at {endpoint} (defences: {', '.join(names) if names else 'every registered one'}); "
+              "Ctrl-C stops", flush=True)
 
-    served = serve(args.bind, args.defence, options, ready=ready)
+    served = serve(args.bind, names, options, ready=ready)
     print(f"answered {served} requests")
     return 0
 

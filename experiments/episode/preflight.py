@@ -18,10 +18,13 @@ __all__ = ["check_specs"]
 
 def check_specs(specs: list[TrialSpec]) -> None:
     """Builds each distinct estimator (with its options) and attack stack (with its parameters and
-    schedule) of ``specs``; UserError names the first that fails and why."""
-    estimators, attacks = {}, {}
+    schedule) of ``specs``, and opens a session with each defence service they name; UserError
+    names the first that fails and why."""
+    estimators, attacks, services = {}, {}, {}
     for spec in specs:
         estimators.setdefault(_key(spec.estimator, spec.estimator_options), spec)
+        if spec.estimator_endpoint is not None:
+            services.setdefault(_key(spec.estimator_endpoint, spec.estimator, spec.estimator_options), spec)
         if spec.attacks:
             attacks.setdefault(_key(spec.attacks, spec.attack_params, spec.t_atk, spec.rho,
                                     spec.attack_stable_steps), spec)
@@ -33,6 +36,11 @@ def check_specs(specs: list[TrialSpec]) -> None:
         except Exception as err:  # a plug-in's constructor may raise anything: name it, one line
             raise UserError(f"estimator {spec.estimator!r} with options {spec.estimator_options} cannot be built: "
                             f"{_words(err)}") from None
+    for spec in services.values():  # the service is there and serves the defence (it warms it now)
+        from racf.experiments.episode.remote import RemoteEstimator
+
+        RemoteEstimator(spec.estimator_endpoint, spec.estimator, spec.estimator_options,
+                        spec.estimator_timeout_ms).close()
     for spec in attacks.values():
         try:
             wrap_attacks(blank_env(), spec).close()

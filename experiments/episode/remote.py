@@ -39,6 +39,8 @@ __all__ = ["RemoteEstimator", "ServiceError", "encode_sample", "decode_sample", 
 PROTOCOL = 1
 DEFAULT_TIMEOUT_MS = 50.0
 DEFAULT_RETRY_S = 1.0
+#: How long a car waits for a service to answer at all before it says none is there.
+PING_TIMEOUT_S = 2.0
 
 
 class ServiceError(RuntimeError):
@@ -116,10 +118,12 @@ class RemoteEstimator:
         options: the defence's options, as the service must have been started with.
         timeout_ms: how long the car waits for an answer before it falls back.
         retry_s: after a failure, how much of the car's own time passes before it asks again.
+        connect_s: how long the car waits for the service to open its session (before it drives:
+            the service may build and warm the defence first).
     """
 
     def __init__(self, endpoint: str, name: str, options: dict | None = None, timeout_ms: float = DEFAULT_TIMEOUT_MS,
-                 retry_s: float = DEFAULT_RETRY_S) -> None:
+                 retry_s: float = DEFAULT_RETRY_S, connect_s: float = 60.0) -> None:
         from racf.errors import UserError
 
         self.endpoint, self.name, self.options = endpoint, name, dict(options or {})
@@ -133,20 +137,17 @@ class RemoteEstimator:
         self._stands: bool | None = None
         self.latency_s = 0.0
         self.restarts = 0
-        try:
-            hello = self._request({"op": "hello", "protocol": PROTOCOL})
+        self.connect_s = float(connect_s)
+        try:  # a live service answers a ping at once; the hello may wait while it builds the defence
+            self._request({"op": "ping"}, PING_TIMEOUT_S * 1000.0)
+            hello = self._hello()
         except TimeoutError:
             self._close()
-            raise UserError(f"no defence service answers at {endpoint} within {self.timeout_ms:.0f} ms; start one "
-                            f"with `racf serve --defence {name}`") from None
-        if hello.get("estimator") != name:
+            raise UserError(f"no defence service answers at {endpoint}; start one with `racf serve` (or `racf serve "
+                            f"--defence {name}`)") from None
+        if "refused" in hello:
             self._close()
-            raise UserError(f"the service at {endpoint} serves {hello.get('estimator')!r}; the episode asks for "
-                            f"{name!r} (start `racf serve --defence {name}`)")
-        if hello.get("options", {}) != _plain(self.options):
-            self._close()
-            raise UserError(f"the service at {endpoint} runs {name} with options {hello.get('options')}; the episode "
-                            f"asks for {_plain(self.options)}")
+            raise UserError(f"the service at {endpoint}: {hello['refused']}")
         self.service = hello
         self.existence = bool(hello.get("existence", False))
         self.second_detector = hello.get("second_detector")
@@ -196,7 +197,7 @@ class RemoteEstimator:
             return None
         try:
             if self._needs_reset:  # the service came back: its defence starts afresh
-                self._request({"op": "hello", "protocol": PROTOCOL})
+                self._hello(self.timeout_ms)
                 if getattr(self, "_calibration", None) is not None:
                     self._request({"op": "calibrate", "calibration": self._calibration})
                 self._request({"op": "reset"})
@@ -209,7 +210,11 @@ class RemoteEstimator:
             self.latency_s = self.timeout_ms / 1000.0
             return None
 
-    def _request(self, message: dict) -> dict:
+    def _hello(self, timeout_ms: float | None = None) -> dict:
+        return self._request({"op": "hello", "protocol": PROTOCOL, "estimator": self.name, "options": self.options},
+                             self.connect_s * 1000.0 if timeout_ms is None else timeout_ms)
+
+    def _request(self, message: dict, timeout_ms: float | None = None) -> dict:
         import zmq
 
         if self._socket is None:
@@ -219,7 +224,7 @@ class RemoteEstimator:
             self._socket.connect(self.endpoint)
         start = time.perf_counter()
         self._socket.send(pack(message))
-        if not self._socket.poll(self.timeout_ms, zmq.POLLIN):
+        if not self._socket.poll(self.timeout_ms if timeout_ms is None else timeout_ms, zmq.POLLIN):
             self._close()  # a REQ socket that got no answer cannot send again: open a new one next time
             raise TimeoutError
         reply = unpack(self._socket.recv())
@@ -239,7 +244,3 @@ class RemoteEstimator:
         except Exception:
             pass
 
-
-def _plain(options: dict) -> dict:
-    """Options as they come back through msgpack (tuples as lists)."""
-    return unpack(pack(options))

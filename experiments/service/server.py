@@ -1,9 +1,11 @@
-"""``racf serve``: a defence in its own process, one instance per car, behind ZeroMQ.
+"""``racf serve``: defences in their own process, one instance per car, behind ZeroMQ.
 
 A ROUTER socket takes each car's requests (``racf.experiments.episode.remote`` speaks the other
-end): ``hello`` opens the car's session (its own estimator, built as an episode builds it),
-``calibrate`` hands the estimator the car's build, ``reset`` / ``estimate`` / ``would_pass`` are
-the ``DistanceEstimator`` protocol. A session idle for ``idle_s`` is dropped.
+end): ``hello`` names the defence and its options and opens the car's session (its own
+estimator, built as an episode builds it; the first of a kind is warmed up first, so that
+what it loads on first use is loaded before the car's first timed request), ``calibrate`` hands
+the estimator the car's build, ``reset`` / ``estimate`` / ``would_pass`` are the
+``DistanceEstimator`` protocol. A session idle for ``idle_s`` is dropped.
 """
 
 from __future__ import annotations
@@ -27,24 +29,48 @@ class _Session:
 
 
 class DefenceService:
-    """Answers the protocol's requests for one defence (``name``, ``options``); one estimator per car."""
+    """Answers the protocol's requests; one estimator per car.
 
-    def __init__(self, name: str, options: dict | None = None, idle_s: float = 600.0) -> None:
-        self.name, self.options, self.idle_s = name, dict(options or {}), idle_s
-        warm_up(make_estimator(name, self.options))  # a bad name or option fails now, not on the first car
+    Args:
+        names: the defences it serves (None: every registered one). The first is built and warmed
+            now: a bad name fails before the service listens.
+        options: options of the first defence it serves, the only ones it accepts for it (None:
+            any the car asks for).
+    """
+
+    def __init__(self, names: tuple[str, ...] | None = None, options: dict | None = None, idle_s: float = 600.0) -> None:
+        self.names, self.options, self.idle_s = names, options, idle_s
+        self._warm: set[str] = set()
+        if names:
+            self._warm_up(names[0], options or {})
         self.sessions: dict[bytes, _Session] = {}
         self.requests = 0
+
+    def _warm_up(self, name: str, options: dict) -> None:
+        key = f"{name}:{sorted(options.items())}"
+        if key not in self._warm:
+            warm_up(make_estimator(name, options))
+            self._warm.add(key)
 
     def handle(self, client: bytes, message: dict) -> dict:
         self.requests += 1
         op = message.get("op")
+        if op == "ping":
+            return {"pong": True}
         if op == "hello":
             if message.get("protocol") != PROTOCOL:
                 return {"error": f"protocol {message.get('protocol')!r}; this service speaks {PROTOCOL}"}
-            estimator = make_estimator(self.name, self.options)
+            name, options = message.get("estimator"), dict(message.get("options") or {})
+            if self.names is not None and name not in self.names:
+                return {"refused": f"this service serves {', '.join(self.names)}, not {name!r} "
+                                   f"(start `racf serve --defence {name}`)"}
+            if self.names is not None and self.options is not None and name == self.names[0] and options != self.options:
+                return {"refused": f"this service runs {name} with options {self.options}, not {options}"}
+            self._warm_up(name, options)
+            estimator = make_estimator(name, options)
             self.sessions[client] = _Session(estimator)
             self._drop_idle()
-            return {"estimator": self.name, "options": self.options, "protocol": PROTOCOL,
+            return {"estimator": name, "options": options, "protocol": PROTOCOL,
                     "existence": bool(getattr(estimator, "existence", False)),
                     "second_detector": getattr(estimator, "second_detector", None),
                     "n_parameters": getattr(estimator, "n_parameters", 0),
@@ -113,12 +139,15 @@ def _floats(values: dict) -> dict:
     return out
 
 
-def serve(endpoint: str, name: str, options: dict | None = None, ready=None, max_requests: float = math.inf) -> int:
-    """Serves ``name`` at ``endpoint`` until interrupted (or ``max_requests`` answered); returns the
-    requests answered. ``ready(endpoint)`` is called once the socket is bound."""
+def serve(endpoint: str, names: tuple[str, ...] | None = None, options: dict | None = None, ready=None,
+          max_requests: float = math.inf, stop=None) -> int:
+    """Serves the defences ``names`` (None: every registered one) at ``endpoint`` until interrupted,
+    ``stop`` (a ``threading.Event``) is set or ``max_requests`` are answered (then it stops
+    answering, as a dead service would); returns the requests answered. ``ready(endpoint)`` is
+    called once the socket is bound."""
     import zmq
 
-    service = DefenceService(name, options)
+    service = DefenceService(names, options)
     ctx = zmq.Context.instance()
     sock = ctx.socket(zmq.ROUTER)
     sock.setsockopt(zmq.LINGER, 0)
@@ -133,7 +162,9 @@ def serve(endpoint: str, name: str, options: dict | None = None, ready=None, max
     if ready is not None:
         ready(bound)
     try:
-        while service.requests < max_requests:
+        while service.requests < max_requests and not (stop is not None and stop.is_set()):
+            if not sock.poll(100):
+                continue
             client, empty, raw = sock.recv_multipart()
             try:
                 reply = service.handle(client, unpack(raw))

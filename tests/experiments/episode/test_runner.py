@@ -160,3 +160,26 @@ def test_white_box_attacks_are_handed_the_cars_estimator_and_black_box_ones_are_
     assert ramp.defence is not None and ramp.defence.name == "odca"
     assert callable(ramp.defence.would_pass) and ramp.margin == pytest.approx(0.9)
     assert all(a.defence is None for a in attacks if a.threat_model == "black box")
+
+
+from hypothesis import given
+from hypothesis import strategies as st
+
+from racf.experiments.episode.runner import ActionLine
+
+
+@given(st.integers(0, 6), st.integers(1, 40))
+def test_the_action_line_without_late_answers_is_the_fixed_delay(delay, steps):
+    """Step k takes the action decided at k - delay (before that, the first): the FIFO it replaced."""
+    line = ActionLine(delay)
+    got = [int(line.push(np.array([k]))[0]) for k in range(steps)]
+    assert got == [max(0, k - delay) for k in range(steps)]
+
+
+@given(st.integers(0, 3), st.lists(st.integers(0, 4), min_size=1, max_size=40))
+def test_a_late_answer_arrives_late_and_never_undoes_a_newer_one(delay, lates):
+    line = ActionLine(delay)
+    got = [int(line.push(np.array([k]), late)[0]) for k, late in enumerate(lates)]
+    assert all(b >= a for a, b in zip(got, got[1:]))  # the wheels never go back to an older decision
+    for k, index in enumerate(got):
+        assert index == 0 or index + delay + lates[index] <= k  # nothing is taken before it arrived

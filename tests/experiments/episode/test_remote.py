@@ -1,0 +1,38 @@
+"""The wire form of a perception sample: what the car sends a defence service comes back whole."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from hypothesis import given
+from hypothesis import strategies as st
+
+from racf.controllers import PerceptionSample
+from racf.controllers.detector import Detection
+from racf.controllers.existence import NO_WITNESSES
+from racf.experiments.episode.remote import decode_sample, encode_sample, pack, unpack
+
+finite_or_nan = st.one_of(st.floats(-50, 50), st.just(math.nan))
+
+
+@given(st.booleans(), st.booleans(), finite_or_nan, st.floats(0, 1), finite_or_nan, finite_or_nan,
+       st.integers(1, 30), st.integers(1, 30), st.integers(0, 2**32 - 1))
+def test_a_sample_survives_the_wire(detected, witnessed, d, c, lidar, bearing, h, w, seed):
+    mask = np.random.default_rng(seed).random((h, w)) < 0.3
+    detection = Detection(mask, (0, 1, w, h), 0.8, int(mask.sum()), (w / 2, h / 2)) if detected else None
+    sample = PerceptionSample(detection, d, c, lidar, bearing, lidar_confirmed=False, d_size=d, size_std=0.1,
+                              witnesses=NO_WITNESSES if witnessed else None)
+    back = decode_sample(unpack(pack(encode_sample(sample))))
+    for name in ("d_meas", "c_meas", "lidar_m", "bearing_rad", "d_size", "size_std", "lidar_confirmed"):
+        a, b = getattr(sample, name), getattr(back, name)
+        assert a == b or (math.isnan(a) and math.isnan(b)), name
+    assert (back.detection is None) == (detection is None)
+    if detection is not None:
+        assert np.array_equal(back.detection.mask, mask) and back.detection.box == detection.box
+        assert back.detection.centroid == detection.centroid and back.detection.area_px == detection.area_px
+    if witnessed:
+        assert back.witnesses.source == NO_WITNESSES.source and back.witnesses.seen == NO_WITNESSES.seen
+        assert math.isnan(back.witnesses.depth_m)
+    else:
+        assert back.witnesses is None

@@ -1,0 +1,96 @@
+"""The defence as a service: the same answers as in the car's process, one defence per car, a car
+that survives a service dying mid-episode, and one line for a service that is not there."""
+
+from __future__ import annotations
+
+import threading
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from racf.errors import UserError
+from racf.experiments.episode import TrialSpec, run_trial
+from racf.experiments.episode.remote import RemoteEstimator
+from racf.experiments.service.server import serve
+from tests.conftest import run_cli
+
+
+@pytest.fixture
+def service():
+    """``serve(defence, max_requests=...)`` in a thread; yields a function that starts one and
+    returns its endpoint. Every one is stopped after the test."""
+    stops = []
+
+    def start(defence: str, max_requests: float = float("inf")) -> str:
+        bound, stop = [], threading.Event()
+        ready = threading.Event()
+        thread = threading.Thread(target=serve, args=("tcp://127.0.0.1:0", (defence,)),
+                                  kwargs={"ready": lambda e: (bound.append(e), ready.set()),
+                                          "max_requests": max_requests, "stop": stop}, daemon=True)
+        thread.start()
+        assert ready.wait(60)
+        stops.append((stop, thread))
+        return bound[0]
+
+    yield start
+    for stop, thread in stops:
+        stop.set()
+        thread.join(5)
+
+
+SPEC = TrialSpec("attack+odca", 1, 1.0, 3)
+
+
+def test_an_episode_through_the_service_is_the_episode_in_process(service):
+    """The same distances, gate and brake, step by step, until an answer is late (a loaded machine
+    can make one overrun the 20 ms period: the measured latency then delays the car, as it should)."""
+    endpoint = service("odca")
+    result, log = run_trial(replace(SPEC, estimator_endpoint=endpoint))
+    expected, reference = run_trial(SPEC)
+    late = np.flatnonzero(log["service_rtt_ms"].to_numpy() >= 20.0)
+    upto = int(late[0]) + 1 if late.size else max(len(log), len(reference))
+    for column in ("d_fused", "w", "flag", "brake", "speed_cmd"):
+        assert np.array_equal(log[column].to_numpy()[:upto], reference[column].to_numpy()[:upto], equal_nan=True), column
+    row = result.to_dict()
+    assert row["service_fallback_steps"] == 0 and row["service_steps"] == int(log["control"].sum())
+    assert row["service_late_steps"] == late.size and 0 < row["service_rtt_p50_ms"] < 20.0
+    if not late.size:
+        assert {k: v for k, v in row.items() if not k.startswith(("service", "trial_id"))} == \
+            {k: v for k, v in expected.to_dict().items() if k != "trial_id"}
+
+
+def test_a_service_that_dies_mid_episode_is_survived_and_logged(service):
+    endpoint = service("odca", max_requests=60)  # hello, calibrate, reset, then 57 answers
+    result, log = run_trial(replace(SPEC, estimator_endpoint=endpoint, estimator_timeout_ms=20.0))
+    fell_back = log["service_fallback"].to_numpy() == 1.0
+    first = int(np.argmax(fell_back))
+    assert fell_back.any() and fell_back[first:].all() and not fell_back[:first].any()
+    # Where it fell back the car drove on its own depth distance.
+    assert np.array_equal(log["d_fused"][fell_back].to_numpy(), log["d_meas"][fell_back].to_numpy(), equal_nan=True)
+    assert result.service_fallback and result.service_fallback_steps == int(fell_back.sum())
+
+
+def test_each_car_gets_its_own_defence(service):
+    from racf.controllers import PerceptionSample
+
+    endpoint = service("ekf")
+    a, b = RemoteEstimator(endpoint, "ekf"), RemoteEstimator(endpoint, "ekf")
+    for est in (a, b):
+        est.reset()
+    near = PerceptionSample(None, 1.0, 0.9, 1.0, 0.0)
+    far = PerceptionSample(None, 3.0, 0.9, 3.0, 0.0)
+    for _ in range(20):
+        da, db = a.estimate(near, 0.0, 0.02), b.estimate(far, 0.0, 0.02)
+    assert da < 1.5 < 2.5 < db
+    a.close(), b.close()
+
+
+def test_a_service_serving_another_defence_or_none_is_one_line(service, capsys):
+    endpoint = service("raw")
+    with pytest.raises(UserError, match="serves raw, not 'odca'"):
+        RemoteEstimator(endpoint, "odca")
+    code, _ = run_cli(["trial", "--setting", "attack+odca", "--estimator-endpoint", "tcp://127.0.0.1:9",
+                       "--estimator-timeout-ms", "200"])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and "\n" not in err and "racf serve" in err and "no defence service answers" in err
