@@ -42,10 +42,12 @@ def open_reader(path: str | Path):
         raise UserError(f"bag {path} does not exist")
     if path.is_file():
         raise UserError(f"{path} is a file; a rosbag2 is the folder holding metadata.yaml and the .mcap or .db3 file")
+    if not (path / "metadata.yaml").exists():
+        raise UserError(f"{path} is not a readable rosbag2: it holds no metadata.yaml (a bag folder does)")
     try:
         reader = Reader(path)
         reader.open()
-    except ReaderError as err:
+    except (ReaderError, OSError, ValueError) as err:
         raise UserError(f"{path} is not a readable rosbag2: {err}") from None
     return reader
 

@@ -79,8 +79,8 @@ RACF_TOPICS: dict[str, Topic] = {
                          "the colour camera's pinhole calibration (racf's model of the D435)"),
     "fix": Topic("/pose_estimate", "geometry_msgs/msg/PoseStamped", "map", "10 Hz (one per scan)",
                  "the localiser's fix (Quanser's LiDAR scan matching, qcar2LidarToGPS), map frame"),
-    "tf": Topic("/tf", "tf2_msgs/msg/TFMessage", "map", "50 Hz", "map -> base_link, the car's own pose estimate"),
-    "tf_static": Topic("/tf_static", "tf2_msgs/msg/TFMessage", "base_link", "once",
+    "tf": Topic("/tf", "tf2_msgs/msg/TFMessage", "", "50 Hz", "map -> base_link, the car's own pose estimate"),
+    "tf_static": Topic("/tf_static", "tf2_msgs/msg/TFMessage", "", "once",
                        "base_link -> base_scan (yaw 180 deg), color_image, depth_image: the mounts of racf's model"),
     "scan_times": Topic("/racf/scan/sample_times", "std_msgs/msg/Float64MultiArray", "", "with each scan",
                         "when each sample of /scan was taken, s (racf's A2M12 casts by physics step; a "

@@ -15,6 +15,7 @@ __all__ = ["register"]
 
 
 def register(sub: argparse._SubParsersAction) -> None:
+    register_bench(sub)
     e = sub.add_parser("export-bag", help="run an episode (racf trial's flags) and write it as a ROS 2 bag (MCAP) "
                                           "on Quanser's QCar 2 topics, with racf's signals under /racf/",
                        description="Runs the episode racf trial's flags describe (its id makes the run "
@@ -173,3 +174,61 @@ def _info(args: argparse.Namespace) -> int:
         rate = f"{t['rate_hz']:.1f}" if t["rate_hz"] is not None else "-"
         print(f"{t['topic']:<{width}}  {t['type']:<38} {t['count']:>6} {rate:>8}")
     return 0
+
+
+def register_bench(sub: argparse._SubParsersAction) -> None:
+    b = sub.add_parser("bench-bags", help="the cost of exporting a drive as a bag and replaying it, per simulated "
+                                          "second, on this process's core (the goal: each <= 2)")
+    b.add_argument("--drive-s", type=float, default=60.0, help="how long the drive lasts, s (default 60)")
+    b.add_argument("--setting", default="clean+odca", help="the drive's setting (default clean+odca)")
+    b.add_argument("--seed", type=int, default=0)
+    b.add_argument("--out", type=output_dir, default=Path("outputs/bench-bags"), help="where the bag is written")
+    b.add_argument("--json", action="store_true", help="print one JSON object")
+    b.set_defaults(handler=_bench_bags)
+
+
+def _bench_bags(args: argparse.Namespace) -> int:
+    import shutil
+
+    from racf.experiments.bags.export import export_episode
+    from racf.experiments.bags.replay import replay_bag
+    from racf.experiments.episode import TrialSpec, run_trial
+
+    try:
+        spec = TrialSpec(args.setting, 0, 1.0, args.seed, target="drive", drive_s=(args.drive_s, args.drive_s))
+    except ValueError as err:
+        fail("bench bags", str(err))
+    bag = args.out / "drive"
+    shutil.rmtree(bag, ignore_errors=True)
+    run_trial(replace_steps(spec))  # warm: the env, the detector and the defence's models are built once
+    timings = {}
+    start = time.perf_counter()
+    _, log = run_trial(spec)
+    timings["episode_s"] = time.perf_counter() - start
+    start = time.perf_counter()
+    summary = export_episode(spec, bag)
+    timings["export_s"] = time.perf_counter() - start
+    start = time.perf_counter()
+    replay = replay_bag(bag)
+    timings["replay_s"] = time.perf_counter() - start
+    simulated = float(log["t"].iloc[-1])
+    out = {"spec": spec.trial_id, "simulated_s": simulated, "steps": len(log), **{k: round(v, 2) for k, v in timings.items()},
+           **{k.replace("_s", "_per_simulated_s"): round(v / simulated, 3) for k, v in timings.items()},
+           "bag_megabytes": round(sum(f.stat().st_size for f in bag.rglob("*") if f.is_file()) / 1e6, 1),
+           "replay_equal": bool(all(replay.log[c].equals(summary.log[c]) for c in ("d_fused", "brake", "detected")))}
+    if args.json:
+        print(json.dumps(out, indent=2, allow_nan=False))
+        return 0
+    print(f"a {simulated:.1f} s drive ({out['steps']} steps, {spec.setting}), one process:")
+    for key in ("episode", "export", "replay"):
+        print(f"  {key:<8}{out[key + '_s']:>8.1f} s   {out[key + '_per_simulated_s']:.2f} s per simulated s")
+    print(f"bag {out['bag_megabytes']} MB; the replay gives back the episode's distances and brakes: "
+          f"{out['replay_equal']}")
+    return 0
+
+
+def replace_steps(spec):
+    """A short drive of the same setting (the warm-up)."""
+    from dataclasses import replace
+
+    return replace(spec, drive_s=(5.0, 5.0))

@@ -87,6 +87,18 @@ MISTAKES: list[tuple[str, str]] = [
     ("replay-case {tmp}", "no case files"),
     ("replay-case --defence tinfoil {bad.toml}", "unknown defence"),
     ("replay-case --suite --reseed -1", "--reseed must be in"),
+    # bags and the defence service
+    ("bag-info {tmp}/nowhere", "does not exist"),
+    ("replay-bag {bad.toml}", "is a file; a rosbag2 is the folder"),
+    ("replay-bag {tmp}", "is not a readable rosbag2"),
+    ("replay-bag {tmp} --mapping {bad.toml}", "not valid TOML"),
+    ("replay-bag {tmp} --attack lidar_spoof", "cannot act on a recording"),
+    ("replay-bag {tmp} --attack depth_bias --attack-param lidar_spoof.range_m=1", "--attack-param names attack(s)"),
+    ("export-bag {tmp}", "exists; remove it or choose another path"),
+    ("serve --defence tinfoil", "unknown defence 'tinfoil'"),
+    ("serve --estimator-option checkpoint=x", "name it with --defence"),
+    ("trial --estimator-endpoint localhost:5555", "estimator_endpoint must be tcp://HOST:PORT"),
+    ("trial --estimator-timeout-ms 20", "--estimator-timeout-ms applies with --estimator-endpoint"),
     # searches
     ("falsify --defence tinfoil", "unknown defence 'tinfoil'"),
     ("falsify --defence odca --attack laser", "unknown attack"),

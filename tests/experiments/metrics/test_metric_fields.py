@@ -32,6 +32,7 @@ def test_racfs_own_metrics_declare_the_result_rows_columns_once():
     assert len(columns) == len(set(columns)) and not set(columns) & set(IDENTITY)
     always = [f.name for n in names if METRICS[n].always for f in METRICS[n].fields]
     assert always[:4] == ["rho", "t_atk_s", "attack_start_s", "lost_frames"] and always[-1] == "traffic_cars"
-    # The one a scenario asks for (stale_map: existence) comes after every episode's columns.
-    assert [n for n in names if not METRICS[n].always] == ["existence"]
-    assert columns[len(always):] == ["sign_stands", "needless_stop", "driving_score"]
+    # Those asked for (stale_map: existence; an estimator run by racf serve: service) come after
+    # every episode's columns.
+    assert [n for n in names if not METRICS[n].always] == ["existence", "service"]
+    assert columns[len(always):len(always) + 3] == ["sign_stands", "needless_stop", "driving_score"]

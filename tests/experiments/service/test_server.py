@@ -42,6 +42,7 @@ def service():
 SPEC = TrialSpec("attack+odca", 1, 1.0, 3)
 
 
+@pytest.mark.slow
 def test_an_episode_through_the_service_is_the_episode_in_process(service):
     """The same distances, gate and brake, step by step, until an answer is late (a loaded machine
     can make one overrun the 20 ms period: the measured latency then delays the car, as it should)."""
