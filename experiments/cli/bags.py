@@ -8,6 +8,7 @@ import json
 import time
 from pathlib import Path
 
+from racf.plugins import SCENARIOS
 from racf.experiments.cli.common import (episode_flags, episode_params, fail, keyed_values, output_dir, plugin_flag,
                                          sign, speed)
 
@@ -25,7 +26,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     e.add_argument("bag", type=Path, metavar="BAG", help="the bag folder to write (must not exist)")
     episode_flags(e)
     e.add_argument("--sign", type=sign, default=2, help="stop sign 0-3, or crate 0-1 with --target obstacle (default 2)")
-    e.add_argument("--target", default="sign", metavar="SCENARIO", help="the scenario (default sign; drive: --sign 0)")
+    e.add_argument("--target", choices=tuple(SCENARIOS), default="sign", metavar="SCENARIO",
+                   help=f"the scenario: {', '.join(SCENARIOS)} (default sign; drive: --sign 0)")
     e.add_argument("--speed", type=speed, default=1.0, help="cruise speed m/s, 0.1-3.0 (default 1.0)")
     e.add_argument("--seed", type=int, default=0)
     e.add_argument("--json", action="store_true", help="print one JSON object")
@@ -68,7 +70,6 @@ def _export(args: argparse.Namespace) -> int:
 
     setting, params = episode_params(args, "export-bag")
     params["estimator_options"] = params["estimator_options"].get(parse_setting(setting)[1], {})
-    params["target"] = args.target if params["target"] == "sign" else params["target"]
     try:
         spec = TrialSpec(setting, args.sign, args.speed, args.seed, **params)
     except (ValueError, KeyError) as err:

@@ -19,6 +19,7 @@ from typing import Callable
 from racf.experiments.pages.falsify_page import falsification_markdown
 from racf.experiments.pages.existence_page import existence_markdown
 from racf.experiments.pages.leaderboard_page import leaderboard_markdown
+from racf.experiments.pages.service_page import bags_and_service_markdown
 from racf.experiments.pages.traffic_page import traffic_markdown
 from racf.experiments.pages.results_format import page_head as _page_head
 from racf.experiments.pages.results_format import ci as _ci
@@ -503,6 +504,7 @@ def _speed(d: _Data) -> str:
     lines += _measures(d, "bench-loop", "loop", "racf bench loop --json", digits=2)
     lines += ["## ODCA's per-step cost (`racf bench odca-latency`)", ""]
     lines += _measures(d, "odca-latency", "latency", "racf bench odca-latency --json", digits=3)
+    lines += bags_and_service_markdown(d)
     return "\n".join(lines)
 
 
@@ -529,7 +531,8 @@ def _index(d: _Data) -> str:
              "| [Falsification](falsification.md) | searched worst cases per defence, and the regression suite |",
              "| [Cross-traffic](traffic.md) | the paper's settings with another car at the conflict point |",
              "| [Existence](existence.md) | whether a sign stands: the vote against stickers, phantoms and stale maps |",
-             "| [Speed](speed.md) | the simulator, whole episodes and ODCA's per-step cost |", "",
+             "| [Speed](speed.md) | the simulator, whole episodes, ODCA's per-step cost, ROS 2 bags and the defence "
+             "service |", "",
              "## Every stored result", "",
              "| result | command | commit | measured | machine |", "|---|---|---|---|---|"]
     for path in sorted(d.root.glob("*.json")):

@@ -1,0 +1,83 @@
+"""The speed page's section on ROS 2 bags and the defence service: the cost of exporting and
+replaying a drive, the service's round trip per step, and the paper's table through the service
+beside the in-process one."""
+
+from __future__ import annotations
+
+import math
+
+from racf.experiments.pages.results_format import meta_lines, missing
+
+__all__ = ["bags_and_service_markdown", "table_differences"]
+
+
+def _flat(value, prefix: str = "") -> dict:
+    """Nested numbers as {dotted key: value}."""
+    if isinstance(value, dict):
+        out = {}
+        for k, v in value.items():
+            out |= _flat(v, f"{prefix}{k}.")
+        return out
+    if isinstance(value, list):
+        out = {}
+        for i, v in enumerate(value):
+            out |= _flat(v, f"{prefix}{i}.")
+        return out
+    return {prefix[:-1]: value}
+
+
+def table_differences(in_process: dict, served: dict) -> tuple[int, list[str]]:
+    """How many values the two tables' settings hold (the service's own fields left out), and the
+    keys whose values differ."""
+    a = _flat(in_process["settings"])
+    b = {k: v for k, v in _flat(served["settings"]).items() if ".service" not in k}
+    keys = sorted(set(a) | set(b))
+    differ = [k for k in keys if not (a.get(k) == b.get(k) or (isinstance(a.get(k), float) and isinstance(b.get(k), float)
+                                                                and math.isnan(a[k]) and math.isnan(b[k])))]
+    return len(keys), differ
+
+
+def bags_and_service_markdown(d) -> list[str]:
+    lines = ["## ROS 2 bags and the defence service", ""]
+    if "bench-bags" in d:
+        b = d["bench-bags"]
+        lines += ["Exporting a drive as a bag (the episode run again, every reading written) and replaying the car's "
+                  "software on it, on one core (`taskset -c 0`), against the episode alone:", ""]
+        lines += meta_lines(b["meta"]) + ["| step | wall s | s per simulated s |", "|---|---|---|"]
+        for key in ("episode", "export", "replay"):
+            lines.append(f"| {key} | {b[key + '_s']:.1f} | {b[key + '_per_simulated_s']:.2f} |")
+        lines += ["", f"A {b['simulated_s']:.1f} s drive ({b['steps']} steps, `{b['spec']}`), a {b['bag_megabytes']} MB "
+                  f"bag; the replay gives back the episode's distances, brakes and detections: {b['replay_equal']}.", ""]
+    else:
+        lines += missing("bench-bags", "taskset -c 0 racf bench bags --json")
+    if "bench-service" in d:
+        s = d["bench-service"]
+        rt, local = s["round_trip"], s["in_process"]
+        lines += [f"The defence service's round trip per step (`racf serve` on loopback, {s['defence']}, the samples "
+                  "of one attacked approach sent over and over), against the same estimate in the car's process:", ""]
+        lines += meta_lines(s["meta"]) + ["| | N | p50 ms | p90 ms | p99 ms | p99.9 ms | max ms |",
+                                          "|---|---|---|---|---|---|---|"]
+        for name, row in (("round trip through the service", rt), ("the estimate in the car's process", local)):
+            lines.append(f"| {name} | {row['n']} | {row['p50_ms']:.3f} | {row['p90_ms']:.3f} | {row['p99_ms']:.3f} | "
+                         f"{row['p999_ms']:.3f} | {row['max_ms']:.3f} |")
+        lines += ["", f"The paper's offboard cycle (perception, transmission, ODCA inference and control): about "
+                  f"{s['paper_cycle_ms']:.0f} ms. Distances that differed from the car's own: {s['distance_mismatches']}.", ""]
+    else:
+        lines += missing("bench-service", "racf bench service -n 10000 --json")
+    if "closed-loop-table-service" in d and "closed-loop-table" in d:
+        served, local = d["closed-loop-table-service"], d["closed-loop-table"]
+        n, differ = table_differences(local, served)
+        lines += ["The paper's table through the service (`racf serve` and one worker on 2 cores) against the stored "
+                  "in-process table:", ""]
+        lines += meta_lines(served["meta"])
+        lines += ["| setting | N | SCR in process | SCR through the service | late steps | fallback steps |",
+                  "|---|---|---|---|---|---|"]
+        for name, row in served["settings"].items():
+            mine = local["settings"].get(name, {})
+            lines.append(f"| {name} | {row['n']} | {mine.get('scr', float('nan')):.2f} | {row['scr']:.2f} | "
+                         f"{row.get('service_late_steps_total', '-')} | {row.get('service_fallback_steps_total', '-')} |")
+        lines += ["", f"Of the {n} values of the two tables (every setting's rates, intervals, latencies and robustness), "
+                  + (f"all {n} are equal." if not differ else f"{len(differ)} differ: " + ", ".join(differ[:12]) + "."), ""]
+    else:
+        lines += missing("closed-loop-table-service", "racf trials --table -n 30 --json --estimator-endpoint ...")
+    return lines
