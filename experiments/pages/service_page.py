@@ -85,8 +85,9 @@ def bags_and_service_markdown(d) -> list[str]:
                   + (f"all {n} are equal." if not differ else
                      f"{n - len(differ)} are equal and {len(differ)} differ: " + ", ".join(f"`{k}`" for k in differ[:12])
                      + f". {late} of the {steps} answers came later than the 20 ms control period (the defence's own "
-                       "compute: ODCA refreshing its Chronos-2 prior, Chronos forecasting), and the measured latency "
-                       "delayed those actions by a step: the differences are theirs, in the settings that had them."),
+                       "compute: its slowest estimates take as long in the car's process, as the table above shows), "
+                       "and the measured latency delayed those actions by a step: the differences are theirs, in the "
+                       "settings that had them; no SCR moved."),
                   ""]
     else:
         lines += missing("closed-loop-table-service", "racf trials --table -n 30 --json --estimator-endpoint ...")
