@@ -87,7 +87,8 @@ def bags_and_service_markdown(d) -> list[str]:
                      + f". {late} of the {steps} answers came later than the 20 ms control period (the defence's own "
                        "compute: its slowest estimates take as long in the car's process, as the table above shows), "
                        "and the measured latency delayed those actions by a step: the differences are theirs, in the "
-                       "settings that had them; no SCR moved."),
+                       "settings that had them" + ("; no SCR moved." if not [k for k in differ if k.endswith(".scr")]
+                                                   else ".")),
                   ""]
     else:
         lines += missing("closed-loop-table-service", "racf trials --table -n 30 --json --estimator-endpoint ...")
