@@ -231,7 +231,7 @@ def replay_bag(path: str | Path, mapping: Mapping | None = None, defence: str | 
     check_attacks(attacks)
     recording = Recording.open(path, mapping)
     spec = recording.spec
-    bag_attacks, bag_estimator = parse_setting(spec.setting)
+    bag_estimator = parse_setting(spec.setting)[1]
     estimator = defence or bag_estimator
     # The recording already holds the attacks it was made under; the replay adds only those asked for.
     setting = setting_name(tuple(attacks), estimator) if attacks or defence else spec.setting

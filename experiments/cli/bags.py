@@ -8,9 +8,7 @@ import json
 import time
 from pathlib import Path
 
-from racf.plugins import SCENARIOS
-from racf.experiments.cli.common import (episode_flags, episode_params, fail, keyed_values, output_dir, plugin_flag,
-                                         sign, speed)
+from racf.experiments.cli.common import fail, keyed_values, output_dir, plugin_flag, trial_flags, trial_spec
 
 __all__ = ["register"]
 
@@ -24,12 +22,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                                    "rosbag2 folder in MCAP: Quanser's topics, names, types and conventions, with "
                                    "the defence's distance, gate and flag and the ground truth under /racf/.")
     e.add_argument("bag", type=Path, metavar="BAG", help="the bag folder to write (must not exist)")
-    episode_flags(e)
-    e.add_argument("--sign", type=sign, default=2, help="stop sign 0-3, or crate 0-1 with --target obstacle (default 2)")
-    e.add_argument("--target", choices=tuple(SCENARIOS), default="sign", metavar="SCENARIO",
-                   help=f"the scenario: {', '.join(SCENARIOS)} (default sign; drive: --sign 0)")
-    e.add_argument("--speed", type=speed, default=1.0, help="cruise speed m/s, 0.1-3.0 (default 1.0)")
-    e.add_argument("--seed", type=int, default=0)
+    trial_flags(e)
     e.add_argument("--json", action="store_true", help="print one JSON object")
     e.set_defaults(handler=_export)
 
@@ -65,15 +58,9 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def _export(args: argparse.Namespace) -> int:
     from racf.experiments.bags.export import export_episode
-    from racf.experiments.episode import TrialSpec, parse_setting
     from racf.experiments.episode.preflight import check_specs
 
-    setting, params = episode_params(args, "export-bag")
-    params["estimator_options"] = params["estimator_options"].get(parse_setting(setting)[1], {})
-    try:
-        spec = TrialSpec(setting, args.sign, args.speed, args.seed, **params)
-    except (ValueError, KeyError) as err:
-        fail("export-bag", str(err).strip("'\""))
+    spec = trial_spec(args, "export-bag")
     if args.bag.exists():
         fail("export-bag", f"{args.bag} exists; remove it or choose another path for the bag")
     check_specs([spec])

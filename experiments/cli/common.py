@@ -362,6 +362,33 @@ def episode_flags(p: argparse.ArgumentParser) -> None:
     sensor_flags(p)
 
 
+def trial_flags(p: argparse.ArgumentParser) -> None:
+    """The flags that name one episode (``racf trial``, ``racf bag export``): the episode flags and
+    its target, speed and seed."""
+    from racf.plugins import SCENARIOS
+
+    episode_flags(p)
+    p.add_argument("--sign", type=sign, default=2,
+                   help="stop sign 0-3, or crate 0-1 with --target obstacle (default 2)")
+    p.add_argument("--target", choices=tuple(SCENARIOS), default="sign", metavar="SCENARIO",
+                   help=f"the scenario: {', '.join(SCENARIOS)} (default sign: approach a stop sign; obstacle: a "
+                        "crate; drive: a random 20-60 s drive, --sign 0; `racf list scenarios` says what each is)")
+    p.add_argument("--speed", type=speed, default=1.0, help="cruise speed m/s, 0.1-3.0 (default 1.0)")
+    p.add_argument("--seed", type=int, default=0)
+
+
+def trial_spec(args: argparse.Namespace, command: str):
+    """The one episode :func:`trial_flags` name, as a ``TrialSpec``; exits 2 naming what is wrong."""
+    from racf.experiments.episode import TrialSpec, parse_setting
+
+    setting, params = episode_params(args, command)
+    params["estimator_options"] = params["estimator_options"].get(parse_setting(setting)[1], {})
+    try:
+        return TrialSpec(setting, args.sign, args.speed, args.seed, **params)
+    except ValueError as err:
+        fail(command, str(err))
+
+
 def episode_params(args: argparse.Namespace, command: str, table: bool = False) -> tuple[str | None, dict]:
     """The setting and the spec fields the episode flags give; UsageError naming what is wrong.
     With ``table`` the settings are the table's own: none may be given, and the setting is None.

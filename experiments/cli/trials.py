@@ -6,24 +6,16 @@ import argparse
 import json
 from pathlib import Path
 
-from racf.plugins import SCENARIOS
 from racf.experiments.cli.common import (backend_flags, count, episode_flags, episode_params, fail, fmt_ci,
                                          output_dir, plugin_flag, registry_markdown, registry_rows, sensor_flags,
-                                         sign, speed)
+                                         trial_flags, trial_spec)
 
 __all__ = ["register"]
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     t = sub.add_parser("trial", help="one closed-loop stop-sign trial: per-step log (Parquet) and result row")
-    episode_flags(t)
-    t.add_argument("--sign", type=sign, default=2,
-                   help="stop sign 0-3, or crate 0-1 with --target obstacle (default 2)")
-    t.add_argument("--target", choices=tuple(SCENARIOS), default="sign", metavar="SCENARIO",
-                   help=f"the scenario: {', '.join(SCENARIOS)} (default sign: approach a stop sign; obstacle: a "
-                        "crate; drive: a random 20-60 s drive, --sign 0; `racf list scenarios` says what each is)")
-    t.add_argument("--speed", type=speed, default=1.0, help="cruise speed m/s, 0.1-3.0 (default 1.0)")
-    t.add_argument("--seed", type=int, default=0)
+    trial_flags(t)
     t.add_argument("--out", type=output_dir, default=Path("outputs/trial"), help="output folder")
     t.add_argument("--rerun", type=Path, default=None, metavar="PATH",
                    help="also record the episode to a rerun file (.rrd; open it with `racf view PATH`)")
@@ -71,15 +63,9 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _trial(args: argparse.Namespace) -> int:
-    from racf.experiments.episode import TrialSpec, parse_setting
     from racf.provenance import atomic_write
 
-    setting, params = episode_params(args, "trial")
-    params["estimator_options"] = params["estimator_options"].get(parse_setting(setting)[1], {})
-    try:
-        spec = TrialSpec(setting, args.sign, args.speed, args.seed, **params)
-    except ValueError as err:
-        fail("trial", str(err))
+    spec = trial_spec(args, "trial")
     from racf.errors import EpisodeFailed
     from racf.experiments.episode.preflight import check_specs
     from racf.experiments.sweeps.failures import LOG_NAME, append_log, describe
