@@ -12,7 +12,7 @@ export MUJOCO_GL ?= egl
 # every test process, spawned worker and `racf` subprocess compile racf and the tests again.
 unexport PYTHONDONTWRITEBYTECODE
 
-.PHONY: demo test test-all check-slow docs bench bench-sim snapshot trials bench-detector clean
+.PHONY: demo test test-all check-slow check-speed docs bench bench-sim snapshot trials bench-detector clean
 
 $(PY):
 	$(PYTHON) -m venv $(VENV)
@@ -43,6 +43,13 @@ test-all: $(STAMP)
 # The slow checks, spread test by test over the cores (a page's slow blocks are one test each).
 check-slow: $(STAMP)
 	$(SINGLE_THREAD) $(PY) -m pytest -q -m slow -n auto --dist load --durations=15
+
+# The speed guard: the closed loop's step cost over bare physics, on one core, against the ratio
+# stored for the newest commit (docs/results/data/speed-guard.json); fails 15 % above it. Run it
+# alone on the machine before a change to the loop lands (`racf bench guard --store` after it
+# lands); not in CI, whose machines are shared and noisy.
+check-speed: $(STAMP)
+	$(SINGLE_THREAD) $(if $(shell command -v taskset),taskset -c 0) $(VENV)/bin/racf bench guard --check
 
 # The documentation site into site/ (the reference pages are written from the code first).
 # Serve it with: .venv/bin/mkdocs serve (http://127.0.0.1:8000), or open site/index.html.

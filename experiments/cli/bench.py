@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import statistics
 from pathlib import Path
 
 from racf.controllers.detectors import DETECTORS
@@ -58,6 +59,22 @@ def register(sub: argparse._SubParsersAction) -> None:
     bl.add_argument("--json", action="store_true", help="print one JSON object")
     sensor_flags(bl, geometry_default=None)
     bl.set_defaults(handler=_bench_loop)
+
+    g = sub.add_parser("bench-guard", help="the speed guard: the closed loop's step cost over bare physics, in "
+                                           "one run; --check fails when it is more than 15 %% above the stored one",
+                       description="Times one attack + ODCA episode and the same number of bare physics steps, "
+                                   "in alternation, and prints their ratio (the median over rounds). --store "
+                                   "keeps it for this commit in docs/results/data/speed-guard.json; --check "
+                                   "compares it with the newest stored one (make check-speed). Run it alone on "
+                                   "the machine, before a change to the loop lands; not in CI.")
+    g.add_argument("--rounds", type=count, default=5, help="alternating rounds (default 5)")
+    g.add_argument("--check", action="store_true", help="exit 1 when the ratio is worse than stored by > 15 %%")
+    g.add_argument("--store", action="store_true", help="store the ratio for this commit")
+    g.add_argument("--slowdown", type=float, default=1.0, metavar="X",
+                   help="make the loop X times slower on purpose (busy work after each step): shows that --check "
+                        "catches a regression (default 1: none)")
+    g.add_argument("--json", action="store_true", help="print one JSON object")
+    g.set_defaults(handler=_bench_guard)
 
     bd = sub.add_parser("bench-detector", help="stop-sign detectors side by side: recall and false-positive frames "
                                                "on held-out views and approach drives, time per frame on one core")
@@ -165,6 +182,40 @@ def _bench_loop(args: argparse.Namespace) -> int:
     print(f"against the goals: rtf_attack_odca / 5 = {r['rtf_attack_odca'] / 5:.2f}, "
           f"scaling_efficiency / 0.9 = {r['scaling_efficiency'] / 0.9:.2f} (>= 1 meets each)")
     return 0
+
+
+def _bench_guard(args: argparse.Namespace) -> int:
+    from racf.experiments.bench.guard import TOLERANCE, measure_guard
+    from racf.experiments.bench.guard_store import GUARD_FILE, load_guard, store_guard
+
+    if not 1.0 <= args.slowdown <= 5.0:
+        fail("bench-guard", f"--slowdown must be in [1, 5], got {args.slowdown}")
+    if args.store and args.slowdown != 1.0:
+        fail("bench-guard", "--store keeps a real measurement: drop --slowdown")
+    stored = load_guard() if args.check else None
+    if args.check and stored is None:
+        fail("bench-guard", f"no stored ratio in {GUARD_FILE}: run `racf bench guard --store` on a commit first")
+    result = measure_guard(rounds=args.rounds, slowdown=args.slowdown)
+    out = result.to_dict()
+    if stored is not None:
+        out["stored"] = {"commit": stored["commit"], "ratio": stored["ratio"]}
+        out["change"] = result.ratio / stored["ratio"] - 1.0
+        out["passed"] = out["change"] <= TOLERANCE
+    if args.store:
+        out["stored_as"] = store_guard(result)
+    if args.json:
+        print(json.dumps(out, allow_nan=False))
+    else:
+        print(f"loop step {statistics.median(result.loop_step_ms):.2f} ms, bare physics step "
+              f"{statistics.median(result.physics_step_ms):.3f} ms: ratio {result.ratio:.2f} "
+              f"(rounds {', '.join(f'{r:.2f}' for r in result.ratios)}; {result.steps} steps a round"
+              + (f", slowed x{args.slowdown:g} on purpose" if args.slowdown != 1.0 else "") + ")")
+        if stored is not None:
+            print(f"stored at {stored['commit']}: {stored['ratio']:.2f}; change {out['change']:+.1%} "
+                  f"(allowed: +{TOLERANCE:.0%}): {'passed' if out['passed'] else 'FAILED'}")
+        if args.store:
+            print(f"stored in {out['stored_as']}")
+    return 0 if stored is None or out["passed"] else 1
 
 
 def _bench_traffic_views(args: argparse.Namespace) -> int:
