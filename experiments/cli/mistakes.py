@@ -99,6 +99,8 @@ MISTAKES: list[tuple[str, str]] = [
     ("serve --estimator-option checkpoint=x", "name it with --defence"),
     ("trial --estimator-endpoint localhost:5555", "estimator_endpoint must be tcp://HOST:PORT"),
     ("trial --estimator-timeout-ms 20", "--estimator-timeout-ms applies with --estimator-endpoint"),
+    ("bench guard --slowdown 9", "--slowdown must be in [1, 5]"),
+    ("bench guard --store --slowdown 1.2", "--store keeps a real measurement"),
     # searches
     ("falsify --defence tinfoil", "unknown defence 'tinfoil'"),
     ("falsify --defence odca --attack laser", "unknown attack"),

@@ -504,8 +504,26 @@ def _speed(d: _Data) -> str:
     lines += _measures(d, "bench-loop", "loop", "racf bench loop --json", digits=2)
     lines += ["## ODCA's per-step cost (`racf bench odca-latency`)", ""]
     lines += _measures(d, "odca-latency", "latency", "racf bench odca-latency --json", digits=3)
+    lines += _guard(d)
     lines += bags_and_service_markdown(d)
     return "\n".join(lines)
+
+
+def _guard(d: _Data) -> list[str]:
+    """The speed guard's ratio per commit (``racf bench guard --store``; ``make check-speed``)."""
+    lines = ["## The speed guard (`make check-speed`)", "",
+             "The closed loop's step (attack + ODCA, one core) over MuJoCo's bare physics step, timed in "
+             "alternating rounds in one run, so that the machine's drift moves both. `make check-speed` fails "
+             "when a change makes it more than 15 % worse than the newest commit's.", ""]
+    if "speed-guard" not in d:
+        return lines + _missing("speed-guard", "racf bench guard --store")
+    lines += ["| commit | measured | machine | ratio (median of rounds) | rounds | loop step ms | physics step ms | "
+              "loop real-time factor |", "|---|---|---|---|---|---|---|---|"]
+    for e in d["speed-guard"]["history"]:
+        lines.append(f"| `{e['commit']}` | {e['measured']} | {e['machine']} | {e['ratio']:.2f} | "
+                     f"{', '.join(f'{r:.2f}' for r in e['ratios'])} | {sorted(e['loop_step_ms'])[len(e['loop_step_ms']) // 2]:.2f} | "
+                     f"{sorted(e['physics_step_ms'])[len(e['physics_step_ms']) // 2]:.3f} | {e['rtf_loop']:.2f} |")
+    return lines + [""]
 
 
 def _measures(d: _Data, name: str, key: str, command: str, digits: int) -> list[str]:
