@@ -207,9 +207,13 @@ class A2M12Lidar(Sensor):
         _, picks = quanser_read(np.degrees(self._theta), np.arange(n, dtype=float), config.read_per_rev)
         self._picks = picks.astype(np.int64)
         bins = config.n_bins
-        self._dist = np.full((n, k), -1.0)
-        self._cos_inc = np.ones((n, k))
-        self._geom = np.full((n, k), -1, np.int32)
+        # What the picked samples returned, in pick order (filled by slices as the rotor turns; laid
+        # out over the whole revolution, unread samples as never hit, once a revolution completes).
+        self._pick_dirs = self._dirs.reshape(n, k, 3)[self._picks]
+        self._dist = np.full((self._picks.size, k), -1.0)
+        self._cos_inc = np.ones((self._picks.size, k))
+        self._geom = np.full((self._picks.size, k), -1, np.int32)
+        self._site_id: tuple | None = None
         self._time = np.zeros(n)
         self._material: np.ndarray | None = None  # geom id -> MATERIALS index
         self._model_id = None
@@ -295,25 +299,29 @@ class A2M12Lidar(Sensor):
         self._materials(model)
         self._time[start:end] = t
         a, b = np.searchsorted(self._picks, (start, end))
-        rows = self._picks[a:b]
-        if rows.size == 0:
+        if b == a:
             return
         k = self.config.sub_rays
-        m = rows.size * k
-        site = data.site(self.site)
-        vec = self._dirs.reshape(-1, k, 3)[rows].reshape(-1, 3) @ site.xmat.reshape(3, 3).T
+        m = (b - a) * k
+        if self._site_id is None or self._site_id[0] != id(model):
+            self._site_id = (id(model), model.site(self.site).id)
+        sid = self._site_id[1]
+        vec = self._pick_dirs[a:b].reshape(-1, 3) @ data.site_xmat[sid].reshape(3, 3).T
         dist = np.empty(m)
         geom = np.empty(m, np.int32)
         normal = np.empty(3 * m)
-        mujoco.mj_multiRay(model, data, site.xpos.astype(np.float64), vec.ravel(), _VISIBLE_GROUPS, 1, -1,
+        mujoco.mj_multiRay(model, data, data.site_xpos[sid].astype(np.float64), vec.ravel(), _VISIBLE_GROUPS, 1, -1,
                            geom, dist, normal, m, self.config.range_max_m * 2)
-        self._dist[rows] = dist.reshape(-1, k)
-        self._geom[rows] = geom.reshape(-1, k)
-        self._cos_inc[rows] = np.abs(np.einsum("ij,ij->i", vec, normal.reshape(-1, 3))).reshape(-1, k)
+        self._dist[a:b] = dist.reshape(-1, k)
+        self._geom[a:b] = geom.reshape(-1, k)
+        self._cos_inc[a:b] = np.abs(np.einsum("ij,ij->i", vec, normal.reshape(-1, 3))).reshape(-1, k)
 
     def _finish(self, revolution: int, t: float) -> None:
-        # Keep what was cast; the next revolution overwrites the buffers.
-        self._pending = (self._dist.copy(), self._geom.copy(), self._cos_inc.copy(), self._time.copy(), t)
+        # Keep what was cast, laid out over the revolution; the next revolution overwrites the buffers.
+        n, k = self.config.samples_per_rev, self.config.sub_rays
+        dist, geom, cos_inc = np.full((n, k), -1.0), np.full((n, k), -1, np.int32), np.ones((n, k))
+        dist[self._picks], geom[self._picks], cos_inc[self._picks] = self._dist, self._geom, self._cos_inc
+        self._pending = (dist, geom, cos_inc, self._time.copy(), t)
         self._complete = revolution
 
     def _deliver(self, rng: np.random.Generator) -> None:
