@@ -2,7 +2,9 @@
 
 Prints control steps per second and the real-time factor (simulated seconds per wall
 second) for physics only, physics + LiDAR, and the full sensor set (RGB-D camera, LiDAR,
-state, ground truth) at three camera resolutions. The car drives a stop-sign approach at
+state, ground truth) at three camera resolutions, and the floor at 320 x 240: MuJoCo's bare
+physics, one render and readback a frame and the A2M12's rays, each timed alone (what the env
+cannot go below without changing what it computes); the CLI prints the full set's ratio to it. The car drives a stop-sign approach at
 1 m/s with Stanley lane following, so the camera sees a changing scene.
 
 ``bench_traffic`` (``racf bench sim --traffic-cars N``) times the full sensor set at the
@@ -21,7 +23,7 @@ import numpy as np
 from racf import sim
 from racf.controllers import StanleyController
 
-__all__ = ["BenchRow", "bench_sim", "bench_traffic", "TrafficBench"]
+__all__ = ["BenchRow", "bench_sim", "bench_traffic", "TrafficBench", "floor_step_s", "FLOOR_ROW"]
 
 RESOLUTIONS = ((160, 120), (320, 240), (640, 480))
 
@@ -87,7 +89,52 @@ def bench_sim(steps: int = 250, sign: int = 3, sensor_profile: str = "qcar2") ->
         wall = _drive(env, steps, env.step)
         rows.append(BenchRow(f"full sensors {width}x{height}", steps / wall, steps / wall / control_hz))
         env.close()
+    floor = floor_step_s(steps, sign, sensor_profile)
+    rows.append(BenchRow(FLOOR_ROW, 1.0 / floor, 1.0 / floor / control_hz))
     return rows
+
+
+#: The floor's row: what a control step at 320 x 240 cannot cost less than with MuJoCo's own calls.
+FLOOR_ROW = "floor 320x240"
+
+
+def floor_step_s(steps: int, sign: int = 3, sensor_profile: str = "qcar2") -> float:
+    """Seconds a control step cannot go below at 320 x 240: MuJoCo's bare physics steps, one render and
+    one readback (RGB and depth) a camera frame, and the A2M12's rays for the samples a step casts,
+    each timed alone on the same scene; the frame's share is the camera's rate over the control rate."""
+    import mujoco
+
+    env = gym.make(sim.ENV_ID, camera_width=320, camera_height=240, sensor_profile=sensor_profile)
+    env.reset(seed=0, options={"sign": sign, "cruise_speed": 1.0})
+    base = env.unwrapped
+    model, data, cfg = base.model, base.data, base.config
+    start = time.perf_counter()
+    for _ in range(steps):
+        mujoco.mj_step(model, data, nstep=cfg.substeps)
+    physics = (time.perf_counter() - start) / steps
+    base.rig.render(model, data)  # the GL context is made once, not per frame
+    start = time.perf_counter()
+    for _ in range(steps):
+        base.rig.invalidate()
+        base.rig.render(model, data)
+    frame = (time.perf_counter() - start) / steps
+    rays = 0.0
+    lidar = base.lidar
+    if hasattr(lidar, "_pick_dirs"):  # the A2M12: the picked samples' rays, a step's share of a revolution
+        per_step = max(1, int(round(lidar._pick_dirs.shape[0] * lidar.rev_hz / cfg.control_hz)))
+        vec = lidar._pick_dirs[:per_step].reshape(-1, 3).copy()
+        m = vec.shape[0]
+        site = data.site(lidar.site)
+        dist, geom, normal = np.empty(m), np.empty(m, np.int32), np.empty(3 * m)
+        groups = np.array([1, 1, 1, 0, 0, 0], np.uint8)
+        start = time.perf_counter()
+        for _ in range(steps):
+            mujoco.mj_multiRay(model, data, site.xpos.astype(np.float64), vec.ravel(), groups, 1, -1, geom, dist,
+                               normal, m, 24.0)
+        rays = (time.perf_counter() - start) / steps
+    env.close()
+    camera_hz = cfg.camera_hz if cfg.camera_hz else cfg.control_hz
+    return physics + frame * camera_hz / cfg.control_hz + rays
 
 
 @dataclass(frozen=True)
