@@ -23,7 +23,8 @@ import numpy as np
 from racf import sim
 from racf.controllers import StanleyController
 
-__all__ = ["BenchRow", "bench_sim", "bench_traffic", "TrafficBench", "floor_step_s", "FLOOR_ROW"]
+__all__ = ["BenchRow", "bench_sim", "bench_traffic", "TrafficBench", "floor_step_s", "full_over_floor", "FLOOR_ROW",
+           "RATIO_ROW"]
 
 RESOLUTIONS = ((160, 120), (320, 240), (640, 480))
 
@@ -89,9 +90,31 @@ def bench_sim(steps: int = 250, sign: int = 3, sensor_profile: str = "qcar2") ->
         wall = _drive(env, steps, env.step)
         rows.append(BenchRow(f"full sensors {width}x{height}", steps / wall, steps / wall / control_hz))
         env.close()
-    floor = floor_step_s(steps, sign, sensor_profile)
+    floor, ratio = full_over_floor(steps, sign, sensor_profile)
     rows.append(BenchRow(FLOOR_ROW, 1.0 / floor, 1.0 / floor / control_hz))
+    rows.append(BenchRow(RATIO_ROW, ratio, ratio))
     return rows
+
+
+#: The row holding the full set's time a step over the floor's (median of alternating rounds).
+RATIO_ROW = "full 320x240 / floor"
+
+
+def full_over_floor(steps: int, sign: int = 3, sensor_profile: str = "qcar2", rounds: int = 3) -> tuple[float, float]:
+    """The floor's seconds a step and the full sensor set's time over it at 320 x 240, each the median
+    of ``rounds`` in which the two are timed one after the other (the machine's drift hits both)."""
+    import statistics
+
+    env = gym.make(sim.ENV_ID, camera_width=320, camera_height=240, sensor_profile=sensor_profile)
+    env.reset(seed=0, options={"sign": sign, "cruise_speed": 1.0})
+    env.step(np.zeros(2, np.float32))
+    floors, ratios = [], []
+    for _ in range(rounds):
+        full = _drive(env, steps, env.step) / steps
+        floors.append(floor_step_s(steps, sign, sensor_profile))
+        ratios.append(full / floors[-1])
+    env.close()
+    return statistics.median(floors), statistics.median(ratios)
 
 
 #: The floor's row: what a control step at 320 x 240 cannot cost less than with MuJoCo's own calls.
