@@ -24,6 +24,10 @@ from racf.experiments.bags.topics import (CAR_PREFIX, QUANSER_TOPICS, RACF_TOPIC
 from racf.experiments.episode.plan import plan_episode
 from racf.experiments.episode.record import CAR, REFEREE, STEP_LOG
 from racf.experiments.episode.spec import TrialSpec
+from racf.sim.sensors import TIMESTAMP_FIELDS
+from racf.sim.sensors.a2m12 import A2M12Lidar, driver_scan
+from racf.sim.sensors.state import OdometryConfig
+from racf.sim.vehicle.calibration import car_build
 
 __all__ = ["BagWriter", "ExportSummary", "export_episode", "DELIVERED_TIMES"]
 
@@ -98,15 +102,13 @@ class _Recorder:
     """The episode's step hook: writes what arrived at each step."""
 
     def __init__(self, writer: BagWriter, spec: TrialSpec) -> None:
-        from racf.sim.sensors.state import OdometryConfig
-
         self.w = writer
         self.plan = plan_episode(spec)
         self.step_ns = int(round(self.plan.control_dt_s * 1e9))
         self.m_per_count = OdometryConfig().m_per_count
         self.k = 0
         self.last: dict[str, float] = {}
-        self.counts = 0.0
+        self.encoder_counts = 0.0
 
     def _new(self, key: str, stamp: float) -> bool:
         if self.last.get(key) == stamp:
@@ -115,8 +117,6 @@ class _Recorder:
         return True
 
     def __call__(self, env, obs: dict, info: dict, row: dict) -> None:
-        from racf.sim.sensors import TIMESTAMP_FIELDS
-
         t = self.k * self.step_ns
         u = env.unwrapped
         stamps = dict(zip(TIMESTAMP_FIELDS, (float(s) for s in obs["timestamps"])))
@@ -140,8 +140,9 @@ class _Recorder:
             speed, _, yaw_rate, accel = (float(v) for v in obs["state"])
             self.w.write(_Q["imu"].name, _Q["imu"].msgtype, t, m.imu_msg(yaw_rate, accel, ts))
             per_s = speed / self.m_per_count
-            self.counts += per_s * self.plan.control_dt_s
-            self.w.write(_Q["joint"].name, _Q["joint"].msgtype, t, m.joint_msg(float(round(self.counts)), per_s, ts))
+            self.encoder_counts += per_s * self.plan.control_dt_s
+            self.w.write(_Q["joint"].name, _Q["joint"].msgtype, t,
+                         m.joint_msg(float(round(self.encoder_counts)), per_s, ts))
         if self._new("gps", stamps["gps"]):
             self.w.write(_R["fix"].name, _R["fix"].msgtype, t, m.pose_msg(*obs["gps"], m.ns_of(stamps["gps"])))
         self.w.write(_Q["command"].name, _Q["command"].msgtype, t,
@@ -153,8 +154,6 @@ class _Recorder:
 
     def _static(self, u, t: int) -> None:
         calib = self.plan.calibration
-        from racf.sim.vehicle.calibration import car_build
-
         build = car_build(u.rig.intrinsics.width, u.rig.intrinsics.height)
         lx, ly = calib.lidar_xy_m
         cx, cy = calib.camera_xy_m
@@ -164,8 +163,6 @@ class _Recorder:
         self.w.write(_R["tf_static"].name, _R["tf_static"].msgtype, t, m.tf_msg(transforms, t))
 
     def _scan(self, u, obs: dict, ts: int, t: int) -> None:
-        from racf.sim.sensors.a2m12 import A2M12Lidar, driver_scan
-
         lidar = u.lidar
         if isinstance(lidar, A2M12Lidar):
             ranges, times = lidar.samples

@@ -60,6 +60,7 @@ class Recording:
     mapping: Mapping
     spec: TrialSpec
     written_by_racf: bool
+    topics: frozenset[str] = frozenset()
 
     @classmethod
     def open(cls, path: str | Path, mapping: Mapping | None = None) -> "Recording":
@@ -79,14 +80,7 @@ class Recording:
         finally:
             reader.close()
         spec = _spec(raw, mapping, path)
-        return cls(Path(path), mapping, spec, raw is not None)
-
-    def has(self, topic: str) -> bool:
-        reader = open_reader(self.path)
-        try:
-            return topic in reader.topics
-        finally:
-            reader.close()
+        return cls(Path(path), mapping, spec, raw is not None, frozenset(topics))
 
     def steps(self, step_ns: int) -> Iterator[tuple[int, dict[str, list]]]:
         """(step, {topic: [decoded messages]}) for every ``step_ns`` from the bag's first message to

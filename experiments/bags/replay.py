@@ -21,6 +21,7 @@ import pandas as pd
 
 from racf.errors import UserError
 from racf.experiments.bags import messages as m
+from racf.experiments.bags.frames import ReplayFrames
 from racf.experiments.bags.mapping import Mapping
 from racf.experiments.bags.recording import Recording
 from racf.experiments.bags.topics import SCAN_DELIVERED, SCAN_TIMES, SIGN_MASK, TRUTH_PREFIX
@@ -30,8 +31,10 @@ from racf.experiments.episode.runner import ActionLine, car_columns, grant_white
 from racf.experiments.episode.spec import TrialSpec, parse_setting, setting_name
 from racf.experiments.episode.stack import build_car, wrap_attacks
 from racf.sim.attacks import ATTACKS
+from racf.sim.sensors.camera import CameraIntrinsics
 from racf.sim.sensors import TIMESTAMP_FIELDS
 from racf.sim.sensors.a2m12 import driver_scan
+from racf.sim.sensors.state import OdometryConfig
 
 __all__ = ["BagEnv", "Replay", "replay_bag", "check_attacks", "offline_scores"]
 
@@ -64,6 +67,7 @@ class BagEnv(gym.Env):
         self.hz = round(1.0 / step_s)
         self.width, self.height = camera_size
         self.driver = self.mapping.lidar_driver or ("none" if recording.spec.sensor_profile == "ideal" else "quanser")
+        self.m_per_count = OdometryConfig().m_per_count  # the encoder's calibration, counts/s -> m/s
         h, w = self.height, self.width
         self.observation_space = gym.spaces.Dict({
             "rgb": gym.spaces.Box(0, 255, (h, w, 3), np.uint8),
@@ -79,45 +83,32 @@ class BagEnv(gym.Env):
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         super().reset(seed=seed)
         self._steps = self.recording.steps(self.step_ns)
+        self._next = next(self._steps, None)  # the recording's next step, not yet played
         self._obs: dict = {"timestamps": np.zeros(len(TIMESTAMP_FIELDS))}
         self._truth: dict = {}
         self._mask = np.zeros((self.height, self.width), bool)
         self._k = -1
-        self._next = None
         # The car starts once every required stream has spoken (a bag racf wrote: at its first step).
-        while True:
-            step = self._advance()
-            if step is None:
+        while not {"rgb", "depth", "lidar", "gps", "state"} <= set(self._obs):
+            if self.exhausted:
                 raise UserError(f"bag {self.recording.path} never has all of the car's streams at once "
                                 f"({', '.join(sorted(self.mapping.topics))})")
-            if {"rgb", "depth", "lidar", "gps", "state"} <= set(self._obs):
-                break
-        self._lookahead()
+            self._play()
         return self._observation(), self._info()
 
     def step(self, action):
-        self._advance_from_lookahead()
-        obs, info = self._observation(), self._info()
-        self._lookahead()
-        return obs, 0.0, False, self._next is None, info
+        if self.exhausted:
+            raise RuntimeError("the recording has ended")
+        self._play()
+        return self._observation(), 0.0, False, self.exhausted, self._info()
 
     @property
     def exhausted(self) -> bool:
         return self._next is None
 
-    def _lookahead(self) -> None:
-        self._next = next(self._steps, None)
-
-    def _advance_from_lookahead(self) -> None:
-        if self._next is None:
-            raise RuntimeError("the recording has ended")
+    def _play(self) -> None:
         self._apply(*self._next)
-
-    def _advance(self):
-        step = next(self._steps, None)
-        if step is not None:
-            self._apply(*step)
-        return step
+        self._next = next(self._steps, None)
 
     def _apply(self, k: int, msgs: dict[str, list]) -> None:
         self._k = k
@@ -184,11 +175,9 @@ class BagEnv(gym.Env):
             self._obs["lidar"], self._obs["lidar_beam_times"] = lidar, beam_times
 
     def _state(self, imu, joint) -> None:
-        from racf.sim.sensors.state import OdometryConfig
-
         state = self._obs.get("state", np.full(4, np.nan, np.float32)).copy()
         if joint is not None:
-            state[0] = np.float32(float(joint.velocity[0]) * OdometryConfig().m_per_count)
+            state[0] = np.float32(float(joint.velocity[0]) * self.m_per_count)
             self._obs["timestamps"][_SLOT["state"]] = m.seconds_of(m.stamp_of(joint))
         if imu is not None:
             state[2] = np.float32(imu.angular_velocity.z)
@@ -215,10 +204,12 @@ class Replay:
     absent: tuple[str, ...]
     attacks: tuple[str, ...] = ()
     scores: dict = field(default_factory=dict)
+    frames: object = None
 
 
 def replay_bag(path: str | Path, mapping: Mapping | None = None, defence: str | None = None,
-               attacks: tuple[str, ...] = (), attack_params: dict | None = None, on_step=None) -> Replay:
+               attacks: tuple[str, ...] = (), attack_params: dict | None = None, on_step=None,
+               record: bool = False) -> Replay:
     """Runs the car's software on the bag at ``path``.
 
     Args:
@@ -226,7 +217,8 @@ def replay_bag(path: str | Path, mapping: Mapping | None = None, defence: str | 
         defence: the estimator (None: the bag's own, or ``raw`` for a bag racf did not write).
         attacks: observation-space attacks to apply to the recording (refused: those needing the simulator).
         attack_params: per attack, its settings (``TrialSpec.attack_params``).
-        on_step: ``on_step(env, obs, info, row)`` after each step (the rerun recorder).
+        on_step: ``on_step(env, obs, info, row)`` after each step.
+        record: keep frames for a rerun recording (``Replay.frames``, for ``write_rrd``).
     """
     check_attacks(attacks)
     recording = Recording.open(path, mapping)
@@ -252,6 +244,7 @@ def replay_bag(path: str | Path, mapping: Mapping | None = None, defence: str | 
     obs, info = env.reset(seed=spec.seed)
     car = build_car(spec, plan, None)
     grant_white_box(env, car.estimator)
+    frames = ReplayFrames(plan.calibration, CameraIntrinsics.d435_colour(*size)) if record else None
     actions = ActionLine(int(round(spec.delay_ms / 1000.0 / plan.control_dt_s)))
     rows: list[dict] = []
     referee = columns_of(REFEREE)
@@ -265,29 +258,20 @@ def replay_bag(path: str | Path, mapping: Mapping | None = None, defence: str | 
         truth["collision_with"] = ""
         rows.append(step_row({**car_columns(car, step, obs, info["time"], applied), **truth},
                              car.estimator.diagnostics()))
-        if on_step is not None:
-            on_step(env, obs, info, rows[-1])
+        for hook in (frames, on_step):
+            if hook is not None:
+                hook(env, obs, info, rows[-1])
         if bag.exhausted:
             break
         obs, _, _, _, info = env.step(applied)
     log = pd.DataFrame(rows)
     log.insert(0, "trial_id", f"replay:{Path(path).name}")
     present = bag.truth_columns | ({"attack_active", "attack"} if attacks else set()) | (
-        {"attack_active"} if "/racf/attack_active" in _topics(recording) else set())
+        {"attack_active"} if "/racf/attack_active" in recording.topics else set())
     absent = tuple(c for c in referee if c not in present)
     log = log.drop(columns=list(absent))
     log.attrs["absent_ground_truth"] = list(absent)
-    return Replay(log, spec, absent, tuple(attacks), offline_scores(log))
-
-
-def _topics(recording: Recording) -> set[str]:
-    from racf.experiments.bags.recording import open_reader
-
-    reader = open_reader(recording.path)
-    try:
-        return set(reader.topics)
-    finally:
-        reader.close()
+    return Replay(log, spec, absent, tuple(attacks), offline_scores(log), frames)
 
 
 def _height(plan) -> int:

@@ -22,6 +22,7 @@ import numpy as np
 
 from racf import sim
 from racf.controllers import StanleyController
+from racf.sim.sensors.a2m12 import VISIBLE_GROUPS, A2M12Lidar
 
 __all__ = ["BenchRow", "bench_sim", "bench_traffic", "TrafficBench", "floor_step_s", "full_over_floor", "FLOOR_ROW",
            "RATIO_ROW"]
@@ -143,17 +144,17 @@ def floor_step_s(steps: int, sign: int = 3, sensor_profile: str = "qcar2") -> fl
     frame = (time.perf_counter() - start) / steps
     rays = 0.0
     lidar = base.lidar
-    if hasattr(lidar, "_pick_dirs"):  # the A2M12: the picked samples' rays, a step's share of a revolution
-        per_step = max(1, int(round(lidar._pick_dirs.shape[0] * lidar.rev_hz / cfg.control_hz)))
-        vec = lidar._pick_dirs[:per_step].reshape(-1, 3).copy()
+    if isinstance(lidar, A2M12Lidar):  # the picked samples' rays, a step's share of a revolution
+        picked = lidar.picked_directions
+        per_step = max(1, int(round(picked.shape[0] * lidar.rev_hz / cfg.control_hz)))
+        vec = picked[:per_step].reshape(-1, 3).copy()
         m = vec.shape[0]
         site = data.site(lidar.site)
         dist, geom, normal = np.empty(m), np.empty(m, np.int32), np.empty(3 * m)
-        groups = np.array([1, 1, 1, 0, 0, 0], np.uint8)
         start = time.perf_counter()
         for _ in range(steps):
-            mujoco.mj_multiRay(model, data, site.xpos.astype(np.float64), vec.ravel(), groups, 1, -1, geom, dist,
-                               normal, m, 24.0)
+            mujoco.mj_multiRay(model, data, site.xpos.astype(np.float64), vec.ravel(), VISIBLE_GROUPS, 1, -1, geom,
+                               dist, normal, m, lidar.config.range_max_m * 2)
         rays = (time.perf_counter() - start) / steps
     env.close()
     camera_hz = cfg.camera_hz if cfg.camera_hz else cfg.control_hz

@@ -85,20 +85,16 @@ def _export(args: argparse.Namespace) -> int:
 
 def _replay(args: argparse.Namespace) -> int:
     from racf.experiments.bags.mapping import Mapping
-    from racf.experiments.bags.replay import check_attacks, replay_bag
+    from racf.experiments.bags.replay import replay_bag
     from racf.provenance import atomic_write
 
     attacks = tuple(a.strip() for a in args.attack.split(",") if a.strip()) if args.attack else ()
     params = keyed_values("replay-bag", "--attack-param", args.attack_param)
     if params and not set(params) <= set(attacks):
         fail("replay-bag", f"--attack-param names attack(s) {sorted(params)}; --attack gives {list(attacks) or 'none'}")
-    check_attacks(attacks)
     mapping = Mapping.load(args.mapping)
-    recorder = None
-    if args.rerun is not None:
-        recorder = _frames_for(args.bag, mapping)
     start = time.perf_counter()
-    replay = replay_bag(args.bag, mapping, args.defence, attacks, params, on_step=recorder)
+    replay = replay_bag(args.bag, mapping, args.defence, attacks, params, record=args.rerun is not None)
     wall = time.perf_counter() - start
     args.out.mkdir(parents=True, exist_ok=True)
     name = args.bag.name + ("+" + "+".join(attacks) if attacks else "") + (f"+{args.defence}" if args.defence else "")
@@ -111,10 +107,10 @@ def _replay(args: argparse.Namespace) -> int:
                "absent_columns": list(replay.absent), "offline": replay.scores,
                "brake_steps": int(replay.log["brake"].sum()), "detected_steps": int(replay.log["detected"].sum())}
     atomic_write(args.out / f"{name}.json", json.dumps(summary, indent=2, allow_nan=False))
-    if recorder is not None:
+    if replay.frames is not None:
         from racf.experiments.viz.rerun_log import write_rrd
 
-        write_rrd(args.rerun, replay.log, recorder, title=f"racf replay-bag {args.bag.name}")
+        write_rrd(args.rerun, replay.log, replay.frames, title=f"racf replay-bag {args.bag.name}")
         summary["rerun"] = str(args.rerun)
     if args.json:
         print(json.dumps(summary, indent=2, allow_nan=False))
@@ -130,21 +126,6 @@ def _replay(args: argparse.Namespace) -> int:
         print("the bag has no ground truth: the log leaves out the referee's columns and no offline score is given")
     print(f"log {log_path}" + (f"; rerun {args.rerun} (open it with `racf view {args.rerun}`)" if args.rerun else ""))
     return 0
-
-
-def _frames_for(bag: Path, mapping):
-    from racf.experiments.bags.frames import ReplayFrames
-    from racf.experiments.bags.recording import Recording
-    from racf.experiments.episode.plan import car_calibration, plan_episode
-    from racf.sim.sensors.camera import CameraIntrinsics
-
-    spec = Recording.open(bag, mapping).spec
-    plan = plan_episode(spec)
-    from racf.sim.env.config import EnvConfig
-
-    camera = EnvConfig.from_kwargs(**plan.env_kwargs).camera
-    width, height = mapping.camera_size or (camera.width, camera.height)
-    return ReplayFrames(car_calibration(width, height), CameraIntrinsics.d435_colour(width, height))
 
 
 def _info(args: argparse.Namespace) -> int:

@@ -29,6 +29,7 @@ from typing import Any
 import numpy as np
 
 from racf.controllers import PerceptionSample
+from racf.errors import UserError
 from racf.controllers.detector import Detection
 from racf.controllers.existence import ExistenceWitnesses
 
@@ -124,8 +125,6 @@ class RemoteEstimator:
 
     def __init__(self, endpoint: str, name: str, options: dict | None = None, timeout_ms: float = DEFAULT_TIMEOUT_MS,
                  retry_s: float = DEFAULT_RETRY_S, connect_s: float = 60.0) -> None:
-        from racf.errors import UserError
-
         self.endpoint, self.name, self.options = endpoint, name, dict(options or {})
         self.timeout_ms, self.retry_s = float(timeout_ms), float(retry_s)
         self._socket = None
@@ -169,11 +168,12 @@ class RemoteEstimator:
         reply = self._call({"op": "estimate", "sample": encode_sample(sample), "speed": float(speed_mps), "dt": float(dt),
                             "yaw_rate": float(yaw_rate_radps)})
         if reply is None:  # no answer: the car's own depth distance, unrepaired
-            self._last = {"service_fallback": 1.0, "service_rtt_ms": math.nan}
+            self._last = {"service_fallback": 1.0, "service_rtt_ms": math.nan,
+                          "service_restarts": float(self.restarts)}
             self._stands = None
             return float(sample.d_meas)
         self._last = {**reply.get("diagnostics", {}), "service_fallback": 0.0,
-                      "service_rtt_ms": self.latency_s * 1000.0}
+                      "service_rtt_ms": self.latency_s * 1000.0, "service_restarts": float(self.restarts)}
         self._stands = reply.get("stands")
         return float(reply["distance"])
 

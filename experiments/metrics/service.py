@@ -27,6 +27,7 @@ class ServiceMeasures(Metric):
         Field("service_late_steps", 0, "steps", "actions delayed a control period or more by a slow answer"),
         Field("service_fallback_steps", 0, "steps", "steps with no answer in time: the car's own depth distance"),
         Field("service_fallback", False, "", "the car fell back at least once", summary="rate"),
+        Field("service_restarts", 0, "", "times the service answered again after a failure (its defence restarted)"),
     )
 
     def score(self, episode: Episode) -> dict:
@@ -42,4 +43,5 @@ class ServiceMeasures(Metric):
                 "service_rtt_p50_ms": float(np.percentile(answered, 50)) if answered.size else math.nan,
                 "service_rtt_p99_ms": float(np.percentile(answered, 99)) if answered.size else math.nan,
                 "service_late_steps": int((answered >= dt * 1000.0).sum()),
-                "service_fallback_steps": fallback, "service_fallback": fallback > 0}
+                "service_fallback_steps": fallback, "service_fallback": fallback > 0,
+                "service_restarts": int(log["service_restarts"].max()) if "service_restarts" in log else 0}

@@ -56,9 +56,6 @@ class _Recorder:
 
     def __init__(self, inner) -> None:
         self.inner, self.calls = inner, []
-        for attr in ("name", "existence", "second_detector"):
-            if hasattr(inner, attr):
-                setattr(self, attr, getattr(inner, attr))
 
     def __getattr__(self, name):
         return getattr(self.inner, name)

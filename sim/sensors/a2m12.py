@@ -43,12 +43,13 @@ from racf.sim.sensors.lidar_driver import filter_rplidar_data, quanser_read
 ensure_gl_backend()
 import mujoco  # noqa: E402
 
-__all__ = ["A2M12Config", "A2M12Lidar", "MATERIALS", "material_of", "driver_scan"]
+__all__ = ["A2M12Config", "A2M12Lidar", "MATERIALS", "material_of", "driver_scan", "VISIBLE_GROUPS"]
 
 #: Material classes of the map's geoms, in the order of :attr:`A2M12Config.dropouts`.
 MATERIALS = ("sign", "pole", "wall", "crate", "other")
-#: Geom groups the beams can hit (the map and its props); the car is group 3.
-_VISIBLE_GROUPS = np.array([1, 1, 1, 0, 0, 0], dtype=np.uint8)
+#: Geom groups the beams can hit (the map and its props); the car is group 3. Public: a benchmark
+#: casting the same rays alone (``racf bench sim``'s floor) uses it.
+VISIBLE_GROUPS = np.array([1, 1, 1, 0, 0, 0], dtype=np.uint8)
 
 
 def material_of(geom_name: str) -> str:
@@ -276,6 +277,11 @@ class A2M12Lidar(Sensor):
         return self._beam_times.copy()
 
     @property
+    def picked_directions(self) -> np.ndarray:
+        """(picks, sub_rays, 3) the rays of the samples Quanser's read keeps, in the LiDAR's frame, in scan order."""
+        return self._pick_dirs
+
+    @property
     def samples(self) -> tuple[np.ndarray, np.ndarray]:
         """The delivered revolution before the driver's filter, in scan order: ``(ranges, times)``,
         each (samples_per_rev,) float64; sample i lies i * 360 / samples_per_rev deg clockwise from the
@@ -310,7 +316,7 @@ class A2M12Lidar(Sensor):
         dist = np.empty(m)
         geom = np.empty(m, np.int32)
         normal = np.empty(3 * m)
-        mujoco.mj_multiRay(model, data, data.site_xpos[sid].astype(np.float64), vec.ravel(), _VISIBLE_GROUPS, 1, -1,
+        mujoco.mj_multiRay(model, data, data.site_xpos[sid].astype(np.float64), vec.ravel(), VISIBLE_GROUPS, 1, -1,
                            geom, dist, normal, m, self.config.range_max_m * 2)
         self._dist[a:b] = dist.reshape(-1, k)
         self._geom[a:b] = geom.reshape(-1, k)
