@@ -137,8 +137,9 @@ class Workers:
 
     A local worker that dies mid-episode (SIGKILL, out of memory) breaks the pool: a new pool
     starts and the episodes it was running run again (those that had stored their part are
-    read back, not run). An episode that was running when workers died twice is reported as a
-    failure. Ray retries a task whose worker died once (``max_retries=1``) on another worker.
+    read back, not run). Which of them killed its worker cannot be told, so when several were
+    running each runs again alone: a bystander is not blamed for another's death. An episode that
+    was running when workers died twice is reported as a failure. Ray retries a task whose worker died once (``max_retries=1``) on another worker.
 
     Leaving the block on an exception (Ctrl-C included) kills the workers at once: nothing
     pending starts, and a killed episode stores nothing (parts are written atomically).
@@ -195,10 +196,14 @@ class Workers:
         # At most `workers` episodes are handed out at a time, so those in flight when a worker
         # dies are known, and an interrupt has nothing queued in the pool to drain.
         queue, running, deaths = deque(specs), {}, Counter()
+        suspects: set[str] = set()  # in flight together when a worker died: each runs again alone
         while queue or running:
             if self._pool is None:
                 self._pool = spawn_pool(self.workers)
             while queue and len(running) < self.workers:
+                alone = queue[0].trial_id in suspects or any(s.trial_id in suspects for s in running.values())
+                if alone and running:
+                    break
                 spec = queue.popleft()
                 running[self._pool.submit(episode_task, spec, out, expected_id=spec.trial_id, **episode)] = spec
             done, _ = wait(running, return_when=FIRST_COMPLETED)
@@ -214,6 +219,8 @@ class Workers:
                 running.clear()
                 self._pool.shutdown(wait=False, cancel_futures=True)
                 self._pool = None
+                if len(lost) > 1:
+                    suspects.update(s.trial_id for s in lost)
                 yield from self._after_death(lost, queue, deaths, out, episode.get("logs_dir", "logs"))
 
     @staticmethod
