@@ -25,12 +25,19 @@ def sanitize(depth, confidence, lidar, speed, yaw_rate=0.0, bearing=np.nan):
     l = np.asarray(lidar, float)
     d = np.where(np.isfinite(d) & (d > 0) & (d <= MAX_RANGE_M), d, np.nan)
     l = np.where(np.isfinite(l) & (l > 0) & (l <= MAX_RANGE_M), l, np.nan)
-    c = np.clip(np.nan_to_num(np.asarray(confidence, float), nan=0.0, posinf=1.0, neginf=0.0), 0.0, 1.0)
-    v = np.clip(np.nan_to_num(np.asarray(speed, float), nan=0.0, posinf=10.0, neginf=-10.0), -10.0, 10.0)
-    w = np.clip(np.nan_to_num(np.asarray(yaw_rate, float), nan=0.0, posinf=10.0, neginf=-10.0), -10.0, 10.0)
+    c = _clip_nan_zero(confidence, 0.0, 1.0)
+    v = _clip_nan_zero(speed, -10.0, 10.0)
+    w = _clip_nan_zero(yaw_rate, -10.0, 10.0)
     b = np.asarray(bearing, float)
     b = np.where(np.isfinite(b), b, np.nan)
     return d, c, l, v, w, b
+
+
+def _clip_nan_zero(x, low: float, high: float) -> np.ndarray:
+    """``x`` as floats clipped to [low, high], NaN -> 0 (an infinity clips to its bound): what
+    ``nan_to_num`` then ``clip`` gives, at a fraction of its cost on one step's scalars."""
+    x = np.asarray(x, float)
+    return np.clip(np.where(x == x, x, 0.0), low, high)
 
 
 def sanitize_size(size, size_std):

@@ -361,7 +361,7 @@ class ODCA:
         cols = self._finish(*(np.array([x], float) for x in (d, c, l_al, v, mu, sigma, *verdict)),
                             prev=self._prev)
         self._prev = float(cols[0][0])
-        self._context = np.roll(self._context, -1)
+        self._context[:-1] = self._context[1:]  # slide the window in place (np.roll allocates twice)
         self._context[-1] = d
         self._t += 1
         return FusedSample(*(float(col[0]) for col in cols))

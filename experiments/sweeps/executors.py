@@ -42,9 +42,11 @@ SINGLE_THREAD_ENV = {"OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "LP_NUM_THR
 def single_thread() -> None:
     """Pins this process's numeric and rendering libraries to one thread (call before rendering)."""
     os.environ.update(SINGLE_THREAD_ENV)
+    import cv2
     import torch
 
     torch.set_num_threads(1)
+    cv2.setNumThreads(1)  # OpenCV's own pool otherwise starts a thread per core (same detections: tested)
 
 
 def spawn_pool(workers: int) -> ProcessPoolExecutor:

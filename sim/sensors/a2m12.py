@@ -214,6 +214,12 @@ class A2M12Lidar(Sensor):
         self._dist = np.full((self._picks.size, k), -1.0)
         self._cos_inc = np.ones((self._picks.size, k))
         self._geom = np.full((self._picks.size, k), -1, np.int32)
+        # Per-cast scratch, sized for the largest cast (a whole revolution), and where each sample
+        # index falls among the picks: a cast is a few dozen rays, so its Python costs as much as they.
+        self._pick_at = np.searchsorted(self._picks, np.arange(n + 1)).tolist()
+        self._vec = np.empty((self._picks.size * k, 3))
+        self._normal = np.empty(self._picks.size * k * 3)
+        self._cos = np.empty(self._picks.size * k)
         self._site_id: tuple | None = None
         self._time = np.zeros(n)
         self._material: np.ndarray | None = None  # geom id -> MATERIALS index
@@ -304,7 +310,7 @@ class A2M12Lidar(Sensor):
         """
         self._materials(model)
         self._time[start:end] = t
-        a, b = np.searchsorted(self._picks, (start, end))
+        a, b = self._pick_at[start], self._pick_at[end]
         if b == a:
             return
         k = self.config.sub_rays
@@ -312,15 +318,14 @@ class A2M12Lidar(Sensor):
         if self._site_id is None or self._site_id[0] != id(model):
             self._site_id = (id(model), model.site(self.site).id)
         sid = self._site_id[1]
-        vec = self._pick_dirs[a:b].reshape(-1, 3) @ data.site_xmat[sid].reshape(3, 3).T
-        dist = np.empty(m)
-        geom = np.empty(m, np.int32)
-        normal = np.empty(3 * m)
-        mujoco.mj_multiRay(model, data, data.site_xpos[sid].astype(np.float64), vec.ravel(), VISIBLE_GROUPS, 1, -1,
-                           geom, dist, normal, m, self.config.range_max_m * 2)
-        self._dist[a:b] = dist.reshape(-1, k)
-        self._geom[a:b] = geom.reshape(-1, k)
-        self._cos_inc[a:b] = np.abs(np.einsum("ij,ij->i", vec, normal.reshape(-1, 3))).reshape(-1, k)
+        # The results land in the revolution's buffers directly (contiguous row slices).
+        vec = np.matmul(self._pick_dirs[a:b].reshape(-1, 3), data.site_xmat[sid].reshape(3, 3).T, out=self._vec[:m])
+        normal = self._normal[:3 * m]
+        mujoco.mj_multiRay(model, data, data.site_xpos[sid], vec.reshape(-1), VISIBLE_GROUPS, 1, -1,
+                           self._geom[a:b].reshape(-1), self._dist[a:b].reshape(-1), normal, m,
+                           self.config.range_max_m * 2)
+        cos = np.einsum("ij,ij->i", vec, normal.reshape(-1, 3), out=self._cos[:m])
+        np.abs(cos, out=self._cos_inc[a:b].reshape(-1))
 
     def _finish(self, revolution: int, t: float) -> None:
         # Keep what was cast, laid out over the revolution; the next revolution overwrites the buffers.
