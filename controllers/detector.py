@@ -24,6 +24,8 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from racf.controllers.components import sparse_components
+
 __all__ = ["DetectorConfig", "Detection", "BlobDetector", "StopSignDetector", "check_rgb"]
 
 
@@ -159,7 +161,7 @@ class StopSignDetector(BlobDetector):
         red = cv2.bitwise_or(
             cv2.inRange(hsv, (0, c.red_min_saturation, c.red_min_value), (c.red_hue_max, 255, 255)),
             cv2.inRange(hsv, (180 - c.red_hue_max, c.red_min_saturation, c.red_min_value), (255, 255, 255)))
-        n, labels, stats, centroids = cv2.connectedComponentsWithStats(red, connectivity=8)
+        n, labels, stats, centroids = sparse_components(red)
         out = []
         for i in range(1, n):
             x, y, w, hgt, area = (int(q) for q in stats[i])

@@ -21,6 +21,7 @@ import cv2
 import numpy as np
 import torch
 
+from racf.controllers.components import sparse_components
 from racf.controllers.detector import BlobDetector, Detection, check_rgb
 from racf.controllers.segmenter_net import SegmenterConfig, SignSegmenterNet
 from racf.assets import asset_path
@@ -126,7 +127,7 @@ class LearnedSignDetector(BlobDetector):
         """Every component of above-threshold pixels at least ``min_area_px`` large."""
         logits = self.scores(rgb)
         mask = (logits > self._logit_threshold).astype(np.uint8)
-        n, labels, stats, centroids = cv2.connectedComponentsWithStats(mask, connectivity=8)
+        n, labels, stats, centroids = sparse_components(mask)
         out = []
         for i in range(1, n):
             x, y, w, h, area = (int(q) for q in stats[i])

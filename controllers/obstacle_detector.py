@@ -12,6 +12,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from racf.controllers.components import sparse_components
 from racf.controllers.detector import BlobDetector, Detection, check_rgb
 
 __all__ = ["ObstacleDetectorConfig", "ObstacleDetector"]
@@ -59,7 +60,7 @@ class ObstacleDetector(BlobDetector):
         hsv = cv2.cvtColor(rgb, cv2.COLOR_RGB2HSV)
         blue = ((hsv[..., 0] >= c.hue_range[0]) & (hsv[..., 0] <= c.hue_range[1])
                 & (hsv[..., 1] >= c.min_saturation) & (hsv[..., 2] >= c.min_value))
-        n, labels, stats, centroids = cv2.connectedComponentsWithStats(blue.view(np.uint8), connectivity=8)
+        n, labels, stats, centroids = sparse_components(blue.view(np.uint8))
         out = []
         for i in range(1, n):
             x, y, w, h, area = (int(q) for q in stats[i])

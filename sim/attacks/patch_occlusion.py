@@ -45,8 +45,8 @@ def paste_occluder(rgb: np.ndarray, region: np.ndarray, rho: float, texture: np.
     if not covered.any():
         return rgb
     # Stretch the texture over the sign's box so it moves and scales with the sign.
-    rows, cols = np.nonzero(region)
-    y0, y1, x0, x1 = rows.min(), rows.max() + 1, cols.min(), cols.max() + 1
+    rows, cols = np.flatnonzero(region.any(axis=1)), np.flatnonzero(region.any(axis=0))
+    y0, y1, x0, x1 = rows[0], rows[-1] + 1, cols[0], cols[-1] + 1
     tex = cv2.resize(texture, (int(x1 - x0), int(y1 - y0)), interpolation=cv2.INTER_LINEAR)
     out = rgb.copy()
     box = covered[y0:y1, x0:x1]
