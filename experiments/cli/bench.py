@@ -76,6 +76,19 @@ def register(sub: argparse._SubParsersAction) -> None:
     g.add_argument("--json", action="store_true", help="print one JSON object")
     g.set_defaults(handler=_bench_guard)
 
+    bp = sub.add_parser("bench-paired", help="this checkout's closed loop against another checkout's, timed in "
+                                             "alternation on one core: ms a step of each and their ratio",
+                        description="Runs the same episodes in a warm worker of each checkout, pinned to one core, "
+                                    "old and new in turn, and prints each round's ms a control step and the median "
+                                    "ratio new / old (below 1: this checkout is faster). Make the baseline with "
+                                    "`git worktree add /tmp/old <rev>`. Run it alone on the machine.")
+    bp.add_argument("--baseline", required=True, metavar="DIR", help="a checkout of the code to compare against")
+    bp.add_argument("--rounds", type=count, default=6, help="alternating rounds (default 6)")
+    bp.add_argument("--episodes", type=count, default=6, help="episodes a round in each checkout (default 6)")
+    bp.add_argument("--setting", default="attack+odca", help="the episodes' setting (default attack+odca)")
+    bp.add_argument("--json", action="store_true", help="print one JSON object")
+    bp.set_defaults(handler=_bench_paired)
+
     bd = sub.add_parser("bench-detector", help="stop-sign detectors side by side: recall and false-positive frames "
                                                "on held-out views and approach drives, time per frame on one core")
     bd.add_argument("--detector", choices=("both", *DETECTORS), default="both",
@@ -224,6 +237,32 @@ def _bench_guard(args: argparse.Namespace) -> int:
         if args.store:
             print(f"stored in {out['stored_as']}")
     return 0 if stored is None or out["passed"] else 1
+
+
+def _bench_paired(args: argparse.Namespace) -> int:
+    from racf.experiments.bench.paired import bench_paired, checkout_root
+    from racf.experiments.episode.spec import TrialSpec
+
+    baseline = checkout_root(args.baseline)
+    try:
+        TrialSpec(args.setting, 0, 1.5, 0)
+    except ValueError as err:
+        fail("bench-paired", f"--setting: {err}")
+
+    def show(r: int, old: float, new: float) -> None:
+        if not args.json:
+            print(f"round {r + 1}/{args.rounds}: old {old:.3f} ms, new {new:.3f} ms a step: new / old {new / old:.3f}",
+                  flush=True)
+
+    result = bench_paired(baseline, args.rounds, args.setting, args.episodes, on_round=show)
+    out = result.to_dict()
+    if args.json:
+        print(json.dumps(out, allow_nan=False))
+    else:
+        print(f"{args.setting}, {args.episodes} episodes a round, {args.rounds} rounds: new / old {result.ratio:.3f} "
+              f"(median; rounds {min(result.ratios):.3f}-{max(result.ratios):.3f}); real-time factor "
+              f"{out['old_rtf']:.2f} -> {out['new_rtf']:.2f}")
+    return 0
 
 
 def _bench_traffic_views(args: argparse.Namespace) -> int:

@@ -511,6 +511,7 @@ def _speed(d: _Data) -> str:
     lines += ["## ODCA's per-step cost (`racf bench odca-latency`)", ""]
     lines += _measures(d, "odca-latency", "latency", "racf bench odca-latency --json", digits=3)
     lines += _guard(d)
+    lines += _paired(d)
     lines += bags_and_service_markdown(d)
     return "\n".join(lines)
 
@@ -530,6 +531,23 @@ def _guard(d: _Data) -> list[str]:
                      f"{', '.join(f'{r:.2f}' for r in e['ratios'])} | {sorted(e['loop_step_ms'])[len(e['loop_step_ms']) // 2]:.2f} | "
                      f"{sorted(e['physics_step_ms'])[len(e['physics_step_ms']) // 2]:.3f} | {e['rtf_loop']:.2f} |")
     return lines + [""]
+
+
+def _paired(d: _Data) -> list[str]:
+    """The last speed change, old and new timed in alternation (``racf bench paired``)."""
+    lines = ["## Old against new, in alternation (`racf bench paired`)", "",
+             "The same episodes in a warm worker of each checkout, both on one core, old and new in turn; each "
+             "round's ratio is new / old (below 1: faster).", ""]
+    if "speed-paired" not in d:
+        return lines + _missing("speed-paired", "racf bench paired --baseline DIR --json")
+    data = d["speed-paired"]
+    r = data["paired"]
+    lines += _meta(data["meta"]) + ["| round | old ms a step | new ms a step | new / old |", "|---|---|---|---|"]
+    lines += [f"| {i + 1} | {o:.3f} | {n:.3f} | {n / o:.3f} |" for i, (o, n) in enumerate(zip(r["old_ms"], r["new_ms"]))]
+    lines += ["", f"{r['setting']}, {r['episodes']} episodes a round in each: new / old {r['ratio']:.3f} (median of "
+              f"{len(r['ratios'])} rounds, {min(r['ratios']):.3f}-{max(r['ratios']):.3f}); real-time factor "
+              f"{r['old_rtf']:.2f} -> {r['new_rtf']:.2f}.", ""]
+    return lines
 
 
 def _measures(d: _Data, name: str, key: str, command: str, digits: int) -> list[str]:
