@@ -139,9 +139,12 @@ class Chronos2Prior:
         ctx = _check_context(context)[:, -self.context_length:].astype(np.float32)
         patch = int(self.pipeline.model_output_patch_size)
         n_patches = -(-horizon // patch)
-        out_q = np.empty((ctx.shape[0], len(self.quantiles), n_patches * patch), np.float32)
+        out_q = np.full((ctx.shape[0], len(self.quantiles), n_patches * patch), np.nan, np.float32)
+        seen = np.isfinite(ctx).any(axis=1)
         with torch.no_grad():
             for start in range(0, ctx.shape[0], self.batch_size):
+                if not seen[start:start + self.batch_size].any():
+                    continue  # nothing to forecast from: the answer is NaN (below) without the model
                 chunk = ctx[start:start + self.batch_size]
                 # NaN marks missing values: the model masks them itself (zeros plus a mask leak through).
                 padded = np.zeros((self.batch_size, ctx.shape[1]), np.float32)
@@ -151,8 +154,7 @@ class Chronos2Prior:
         q = out_q[..., :horizon].astype(float)
         mean = q[:, self._mid]
         std = np.maximum((q[:, self._hi] - q[:, self._lo]) / (2 * _Z90), 0.0)
-        empty = ~np.isfinite(ctx).any(axis=1)
-        mean[empty], std[empty] = np.nan, np.nan
+        mean[~seen], std[~seen] = np.nan, np.nan
         return mean, std
 
 

@@ -40,6 +40,13 @@ def test_a_window_gets_the_same_numbers_alone_or_in_a_batch(prior):
     assert np.array_equal(alone, together)
 
 
+def test_a_window_with_nothing_in_it_is_nan_without_running_the_model(prior, monkeypatch):
+    # Before the first sight a window is all NaN: its answer is NaN, and the model is not asked.
+    monkeypatch.setattr(prior, "_forward", lambda *a: pytest.fail("the model ran on an empty window"))
+    mean, std = prior.forecast(np.full((1, 64), np.nan), 16)
+    assert np.isnan(mean).all() and np.isnan(std).all()
+
+
 def test_beats_the_last_value_forecast_on_held_out_synthetic_series(prior):
     scores = score_prior(prior, synthetic_series(150, seed=12345))
     assert scores["n_windows"] > 500
