@@ -544,7 +544,8 @@ def _paired(d: _Data) -> list[str]:
     r = data["paired"]
     lines += _meta(data["meta"]) + ["| round | old ms a step | new ms a step | new / old |", "|---|---|---|---|"]
     lines += [f"| {i + 1} | {o:.3f} | {n:.3f} | {n / o:.3f} |" for i, (o, n) in enumerate(zip(r["old_ms"], r["new_ms"]))]
-    lines += ["", f"{r['setting']}, {r['episodes']} episodes a round in each: new / old {r['ratio']:.3f} (median of "
+    against = f" against `{data['meta']['baseline']}`" if "baseline" in data["meta"] else ""
+    lines += ["", f"{r['setting']}, {r['episodes']} episodes a round in each{against}: new / old {r['ratio']:.3f} (median of "
               f"{len(r['ratios'])} rounds, {min(r['ratios']):.3f}-{max(r['ratios']):.3f}); real-time factor "
               f"{r['old_rtf']:.2f} -> {r['new_rtf']:.2f}.", ""]
     return lines

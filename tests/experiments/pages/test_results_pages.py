@@ -52,6 +52,17 @@ def test_the_offline_page_shows_the_clean_pass_through_of_each_split(data_dir):
     page = RESULT_PAGES["results/offline-benchmark.md"](data_dir)
     assert "by series 99.88 % of 2,794 steps; leave target out 100.00 % of 7,201 steps" in page
 
+def test_a_stored_pairing_reaches_the_speed_page_with_its_baseline(data_dir):
+    from racf.experiments.bench.paired import PairedResult
+
+    paired = PairedResult("attack+odca", 6, old_ms=(6.0, 5.0, 7.0), new_ms=(5.0, 4.5, 6.3)).to_dict()
+    results_store.store_result("speed-paired", {"paired": paired}, command="racf bench paired --json",
+                               data_dir=data_dir, baseline="dc58729")
+    page = RESULT_PAGES["results/speed.md"](data_dir)
+    assert "against `dc58729`: new / old 0.900 (median of 3 rounds, 0.833-0.900)" in page
+    assert "| 1 | 6.000 | 5.000 | 0.833 |" in page
+
+
 def test_every_page_renders_from_an_empty_folder(tmp_path):
     for name, make in RESULT_PAGES.items():
         assert make(tmp_path).startswith("# "), name
