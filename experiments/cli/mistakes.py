@@ -101,6 +101,8 @@ MISTAKES: list[tuple[str, str]] = [
     ("trial --estimator-timeout-ms 20", "--estimator-timeout-ms applies with --estimator-endpoint"),
     ("bench guard --slowdown 9", "--slowdown must be in [1, 5]"),
     ("bench guard --store --slowdown 1.2", "--store keeps a real measurement"),
+    ("bench paired --baseline {tmp}", "--baseline must be a racf checkout"),
+    ("bench paired --baseline . --setting warp", "--setting: a setting starts with"),
     # searches
     ("falsify --defence tinfoil", "unknown defence 'tinfoil'"),
     ("falsify --defence odca --attack laser", "unknown attack"),

@@ -38,6 +38,7 @@ def test_snapshot_writes_the_four_pictures(tmp_path):
     assert all(p.stat().st_size > 5000 for p in tmp_path.glob("*.png"))
 
 
+@pytest.mark.slow  # nine seconds of three episodes; CI's slow stage runs it
 def test_demo_tells_the_story_and_writes_three_recordings(tmp_path, capsys):
     assert main(["demo", "--out", str(tmp_path)]) == 0
     out = capsys.readouterr().out
