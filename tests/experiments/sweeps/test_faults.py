@@ -167,3 +167,30 @@ def test_sigint_stops_a_sweep_within_5_s_and_the_rerun_runs_exactly_the_missing_
     again = subprocess.run(argv, capture_output=True, text=True, env=env, timeout=900)
     assert again.returncode == 0, again.stderr[-2000:]
     assert f"32 episodes ({32 - stored} run, {stored} reused)" in again.stdout
+
+
+class _SwallowingPool:
+    """Yields made-up outcomes; after the first, a Ctrl-C lands where Python drops it (as in an
+    object's finaliser) and is lost as an exception."""
+
+    def __init__(self) -> None:
+        self.yielded = 0
+
+    def run(self, specs, out, **episode):
+        for spec in specs:
+            self.yielded += 1
+            yield {"row": {"trial_id": spec.trial_id}}
+            try:
+                signal.getsignal(signal.SIGINT)(signal.SIGINT, None)
+            except KeyboardInterrupt:
+                pass  # what the interpreter does to one raised inside __del__
+
+
+def test_a_ctrl_c_the_interpreter_drops_still_stops_the_batch_at_the_next_episode(tmp_path):
+    specs = [TrialSpec("clean", sign, 1.0, 7) for sign in range(4)]
+    pool = _SwallowingPool()
+    before = signal.getsignal(signal.SIGINT)
+    with pytest.raises(Interrupted):
+        run_episodes(specs, ResultStore(tmp_path), pool=pool, progress=False)
+    assert pool.yielded == 2  # the episode in flight when it landed is taken, then the batch stops
+    assert signal.getsignal(signal.SIGINT) is before  # the handler is the caller's again
