@@ -148,7 +148,11 @@ def test_sigint_stops_a_sweep_within_5_s_and_the_rerun_runs_exactly_the_missing_
     argv = [str(Path(sys.executable).parent / "racf"), "sweep", "--attack", "none", "--sign", "0", "1", "2", "3",
             "--speed", "1.0", "1.5", "--repeats", "4", "--out", str(out), "--workers", "2"]
     env = {**os.environ, "MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl")}
-    run = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+    # Started as a terminal starts it (SIGINT at its default), whatever earlier tests left in this
+    # test process: twice a check-slow run saw the sweep ignore the signal and finish, as a process
+    # started with SIGINT ignored does (the disposition is inherited; what set it was not found).
+    run = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
+                           preexec_fn=_as_a_terminal_starts_it)
     deadline = time.monotonic() + 300
     while not (out / "parts").exists() or len(list((out / "parts").glob("*.parquet"))) < 2:
         assert run.poll() is None and time.monotonic() < deadline, run.communicate()
@@ -167,6 +171,11 @@ def test_sigint_stops_a_sweep_within_5_s_and_the_rerun_runs_exactly_the_missing_
     again = subprocess.run(argv, capture_output=True, text=True, env=env, timeout=900)
     assert again.returncode == 0, again.stderr[-2000:]
     assert f"32 episodes ({32 - stored} run, {stored} reused)" in again.stdout
+
+
+def _as_a_terminal_starts_it() -> None:
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, [signal.SIGINT])
 
 
 class _SwallowingPool:
