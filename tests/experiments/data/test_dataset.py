@@ -23,6 +23,7 @@ def small(tmp_path_factory):
     return out
 
 
+@pytest.mark.slow  # the small dataset takes 15 s to collect; CI's slow stage runs it
 def test_counts_columns_units_and_files(small):
     ds = load_dataset(small)
     df = ds.frame
@@ -47,12 +48,14 @@ def test_counts_columns_units_and_files(small):
     assert {"by_series", "leave_target_out"} <= set(split)
 
 
+@pytest.mark.slow  # the small dataset takes 15 s to collect; CI's slow stage runs it
 def test_start_poses_differ_between_series(small):
     starts = load_dataset(small).frame.groupby("series_id")[["x", "y", "yaw"]].first().to_numpy()
     gaps = np.abs(starts[:, None] - starts[None])
     assert (gaps.max(axis=2) + np.eye(len(starts)) > 0.01).all()
 
 
+@pytest.mark.slow  # the small dataset takes 15 s to collect; CI's slow stage runs it
 def test_d_clean_and_the_lidar_reference_track_d_true(small):
     df = load_dataset(small).frame
     both = df[df["detected"] & df["sign_in_view"]]
@@ -85,6 +88,7 @@ def test_leave_target_out_puts_every_series_meeting_the_target_in_test():
         make_target_split(frame, "sign9", seed=0)
 
 
+@pytest.mark.slow  # the small dataset takes 15 s to collect; CI's slow stage runs it
 def test_loader_gives_both_splits_and_labelled_corruption(small):
     ds = load_dataset(small)
     assert ds.scheme == "by_series" and set(ds.clean("train")["series_id"]) == set(ds.split["train"])
@@ -111,6 +115,7 @@ def test_loader_gives_both_splits_and_labelled_corruption(small):
         load_dataset(small, split="random")
 
 
+@pytest.mark.slow  # the small dataset takes 15 s to collect; CI's slow stage runs it
 def test_same_seed_same_bytes_and_resume_redoes_nothing(tmp_path, small, monkeypatch):
     import racf.experiments.sweeps.executors as executors_module
 
@@ -137,6 +142,7 @@ def test_specs_cycle_speeds_and_differ_by_seed():
         collection_specs(drives=0)
 
 
+@pytest.mark.slow  # the small dataset takes 15 s to collect; CI's slow stage runs it
 def test_cli_summary_json_and_missing_dataset_error(small, capsys, tmp_path, monkeypatch):
     import racf.experiments.data.dataset as dataset_module
 
