@@ -4,12 +4,10 @@ attack study and dataset collection all run through :func:`run_episodes`."""
 
 from __future__ import annotations
 
-import signal
 import sys
 import time
-from contextlib import contextmanager, nullcontext
+from contextlib import nullcontext
 from pathlib import Path
-from typing import Callable, Iterator
 
 import pandas as pd
 
@@ -61,8 +59,7 @@ def run_episodes(specs: list[TrialSpec], store: ResultStore, backend: str = "loc
                smoothing=0.1)
     failures: list[Failure] = []
     try:
-        with _stop_requests() as stop_requested, \
-                (nullcontext(pool) if pool is not None else Workers(backend, workers, address)) as running:
+        with nullcontext(pool) if pool is not None else Workers(backend, workers, address) as running:
             if todo:
                 for outcome in running.run(todo, str(store.out), log_steps=log_steps,
                                            logs_dir=str(store.logs.relative_to(store.out)),
@@ -72,8 +69,6 @@ def run_episodes(specs: list[TrialSpec], store: ResultStore, backend: str = "loc
                         failures.append(outcome["failure"])
                         bar.set_postfix(failed=len(failures))
                     bar.update()
-                    if stop_requested():  # an interrupt the interpreter dropped (see _stop_requests)
-                        raise KeyboardInterrupt
     except KeyboardInterrupt:
         bar.close()
         raise Interrupted(len(set(ids) & store.done_ids()), len(ids)) from None
@@ -81,35 +76,6 @@ def run_episodes(specs: list[TrialSpec], store: ResultStore, backend: str = "loc
     if failures:
         raise EpisodeFailed(failures, len(set(ids) & store.done_ids()), len(ids), store.out / LOG_NAME)
     return store.rows(ids), len(todo)
-
-
-@contextmanager
-def _stop_requests() -> Iterator[Callable[[], bool]]:
-    """Ctrl-C or SIGTERM while a batch runs: raised at once as KeyboardInterrupt, and remembered.
-
-    Python drops a KeyboardInterrupt that lands while an object's finaliser runs (it prints
-    "Exception ignored" and goes on); a batch that frees many objects a second could then run to
-    its end. The remembered request stops it after the next episode instead. A signal the process
-    was started ignoring stays ignored; off the main thread nothing is installed.
-    """
-    requested: list[int] = []
-
-    def handler(signum, frame):
-        requested.append(signum)
-        raise KeyboardInterrupt
-
-    old = {}
-    try:
-        for sig in (signal.SIGINT, signal.SIGTERM):
-            if signal.getsignal(sig) is not signal.SIG_IGN:
-                old[sig] = signal.signal(sig, handler)
-    except ValueError:  # not the main thread (a test's runner, a notebook's worker)
-        pass
-    try:
-        yield lambda: bool(requested)
-    finally:
-        for sig, previous in old.items():
-            signal.signal(sig, previous)
 
 
 def run_sweep(spec: SweepSpec, spec_text: str, out: str | Path, backend: str = "local", workers: int = 2,

@@ -177,29 +177,3 @@ def _as_a_terminal_starts_it() -> None:
     signal.signal(signal.SIGINT, signal.SIG_DFL)
     signal.pthread_sigmask(signal.SIG_UNBLOCK, [signal.SIGINT])
 
-
-class _SwallowingPool:
-    """Yields made-up outcomes; after the first, a Ctrl-C lands where Python drops it (as in an
-    object's finaliser) and is lost as an exception."""
-
-    def __init__(self) -> None:
-        self.yielded = 0
-
-    def run(self, specs, out, **episode):
-        for spec in specs:
-            self.yielded += 1
-            yield {"row": {"trial_id": spec.trial_id}}
-            try:
-                signal.getsignal(signal.SIGINT)(signal.SIGINT, None)
-            except KeyboardInterrupt:
-                pass  # what the interpreter does to one raised inside __del__
-
-
-def test_a_ctrl_c_the_interpreter_drops_still_stops_the_batch_at_the_next_episode(tmp_path):
-    specs = [TrialSpec("clean", sign, 1.0, 7) for sign in range(4)]
-    pool = _SwallowingPool()
-    before = signal.getsignal(signal.SIGINT)
-    with pytest.raises(Interrupted):
-        run_episodes(specs, ResultStore(tmp_path), pool=pool, progress=False)
-    assert pool.yielded == 2  # the episode in flight when it landed is taken, then the batch stops
-    assert signal.getsignal(signal.SIGINT) is before  # the handler is the caller's again
