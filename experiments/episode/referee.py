@@ -66,8 +66,9 @@ class Referee:
             self._begin(target)
         if car.control and car.frame_new:  # d_clean is of the frame, like the car's d_meas
             self._d_clean = self._clean_distance(env, obs, car, perception)
-        # No sign stands where the map's was removed (a phantom may look like one): nothing to brake for.
-        stands = info.get("sign_removed", -1) != info["target_sign"] or info["target_kind"] != "stop_sign"
+        # Where no target stands in the world (the map's sign was removed; a phantom may look like one),
+        # there is nothing to brake for.
+        stands = bool(info["target_stands"])
         in_view = bool(info["sign_in_view"]) and stands
         ideal = self._ideal.step(in_view, float(info["d_true"]) if in_view else math.nan, float(info["speed"]), self.dt)
         x, y, yaw = (float(v) for v in info["pose"])

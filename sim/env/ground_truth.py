@@ -3,6 +3,12 @@
 The sign's pixel mask comes from projecting the octagon through the camera's intrinsics
 and keeping the pixels where the noise-free rendered depth agrees with the sign's plane,
 so parts hidden behind other objects are excluded. No extra render pass is needed.
+
+The truth follows the world, not the map: a world manager may move, turn or lean a target's
+body, and the env hands the body's displacement from its map pose (:class:`Motion`, read from
+MuJoCo's body poses after every manager acted) to the views here. The map's record gives the
+target's shape in the body; the motion puts it where the body stands now. A body at its map
+pose has no motion (None), and its truth is the record's to the bit.
 """
 
 from __future__ import annotations
@@ -16,7 +22,8 @@ import numpy as np
 from racf.sim.sensors.camera import CameraIntrinsics
 from racf.sim.world.stop_signs import SIGN_FACE_ACROSS_FLATS_M, StopSign
 
-__all__ = ["SignView", "sign_view", "face_area_px", "obstacle_view", "with_centre_from"]
+__all__ = ["SignView", "Motion", "sign_view", "face_area_px", "obstacle_view", "with_centre_from",
+           "target_centre"]
 
 #: Converts MuJoCo's camera frame (x right, y up, looking along -z) to the optical frame.
 _MJ_TO_OPTICAL = np.diag([1.0, -1.0, -1.0])
@@ -45,6 +52,54 @@ class SignView:
     in_view: bool
 
 
+@dataclass(frozen=True)
+class Motion:
+    """A body's rigid displacement from its map pose: a point ``p`` of the map's record of the body
+    stands at ``rotation @ (p - origin) + position`` in the world now.
+
+    Attributes:
+        rotation: (3, 3) the body's rotation now times its map rotation's transpose.
+        origin: (3,) the body's origin where the map puts it.
+        position: (3,) the body's origin now.
+    """
+
+    rotation: np.ndarray
+    origin: np.ndarray
+    position: np.ndarray
+
+    @classmethod
+    def between(cls, home_pos: np.ndarray, home_mat: np.ndarray, pos: np.ndarray, mat: np.ndarray) -> "Motion | None":
+        """The motion from a body's map pose (``home_*``) to its pose now (positions (3,), rotations
+        as MuJoCo's row-major ``xmat`` (9,) or (3, 3)); None when the body has not moved (exactly)."""
+        home_mat, mat = np.asarray(home_mat, np.float64).reshape(3, 3), np.asarray(mat, np.float64).reshape(3, 3)
+        if np.array_equal(home_pos, pos) and np.array_equal(home_mat, mat):
+            return None
+        return cls(mat @ home_mat.T, np.array(home_pos, np.float64), np.array(pos, np.float64))
+
+    def points(self, points: np.ndarray) -> np.ndarray:
+        """Points ((3,) or (N, 3)) of the map's record where they stand now."""
+        return (np.asarray(points, np.float64) - self.origin) @ self.rotation.T + self.position
+
+    def vector(self, vector: np.ndarray) -> np.ndarray:
+        """A direction of the map's record (a face's normal) as it points now."""
+        return self.rotation @ np.asarray(vector, np.float64)
+
+
+def _moved(motion: Motion | None, points: np.ndarray) -> np.ndarray:
+    return points if motion is None else motion.points(points)
+
+
+def target_centre(target, motion: Motion | None = None) -> np.ndarray:
+    """(3,) where a target's centre (a sign's octagon, a crate's near face) stands: its record's
+    ``centre`` moved by ``motion``."""
+    return _moved(motion, target.centre)
+
+
+def _face_normal(sign: StopSign, motion: Motion | None) -> np.ndarray:
+    normal = np.array([math.cos(sign.face_yaw), math.sin(sign.face_yaw), 0.0])
+    return normal if motion is None else motion.vector(normal)
+
+
 def _octagon_world(sign: StopSign) -> np.ndarray:
     r = SIGN_FACE_ACROSS_FLATS_M / (2 * math.cos(math.pi / 8))
     a = math.pi / 8 + np.arange(8) * math.pi / 4
@@ -55,21 +110,24 @@ def _octagon_world(sign: StopSign) -> np.ndarray:
 
 
 def sign_view(sign: StopSign, cam_pos: np.ndarray, cam_mat: np.ndarray,
-              intrinsics: CameraIntrinsics, clean_depth: np.ndarray) -> SignView:
+              intrinsics: CameraIntrinsics, clean_depth: np.ndarray, motion: Motion | None = None) -> SignView:
     """Ground truth of ``sign`` from a camera pose.
 
     Args:
-        sign: the stop sign.
+        sign: the stop sign (the map's record: its shape in its body).
         cam_pos: (3,) camera position in the map frame.
         cam_mat: (3, 3) camera-to-world rotation (MuJoCo's ``cam_xmat``).
         intrinsics: the camera's pinhole intrinsics.
         clean_depth: (H, W) noise-free z-depth of the same frame, metres.
+        motion: how the sign's body stands off its map pose in the world (None: where the map says).
     """
-    world_to_opt, centre, corners, mask, behind = _project(sign.centre, _octagon_world(sign), cam_pos, cam_mat,
-                                                           intrinsics)
+    centre_world = target_centre(sign, motion)
+    normal_world = _face_normal(sign, motion)
+    world_to_opt, centre, corners, mask, behind = _project(centre_world, _moved(motion, _octagon_world(sign)),
+                                                           cam_pos, cam_mat, intrinsics)
     if behind is not None:
         return behind
-    facing = float(np.dot(cam_pos - sign.centre, [math.cos(sign.face_yaw), math.sin(sign.face_yaw), 0.0])) > 0
+    facing = float(np.dot(cam_pos - centre_world, normal_world)) > 0
     if facing and (corners[:, 2] > 0.05).all():
         uv = intrinsics.project(corners)
         _fill(mask, uv)
@@ -80,7 +138,7 @@ def sign_view(sign: StopSign, cam_pos: np.ndarray, cam_mat: np.ndarray,
         if len(rows):
             rows, cols = rows + v0, cols + u0
             # Depth of the sign's plane at each masked pixel: intersect the pixel's ray with it.
-            normal_opt = world_to_opt @ np.array([math.cos(sign.face_yaw), math.sin(sign.face_yaw), 0.0])
+            normal_opt = world_to_opt @ normal_world
             rays = np.column_stack([(cols - intrinsics.cx) / intrinsics.fx,
                                     (rows - intrinsics.cy) / intrinsics.fy, np.ones(len(rows))])
             plane_z = float(normal_opt @ centre) / (rays @ normal_opt)
@@ -103,14 +161,15 @@ def face_area_px(sign: StopSign, cam_pos: np.ndarray, cam_mat: np.ndarray, intri
 
 
 def obstacle_view(obstacle, cam_pos: np.ndarray, cam_mat: np.ndarray,
-                  intrinsics: CameraIntrinsics, clean_depth: np.ndarray) -> SignView:
+                  intrinsics: CameraIntrinsics, clean_depth: np.ndarray, motion: Motion | None = None) -> SignView:
     """Ground truth of an obstacle crate, in the same form as a sign's.
 
     ``d_true`` is the depth of the centre of the crate's near face; the mask is the crate's
     projected outline where the rendered depth lies within the crate's depth span (so
-    parts hidden behind something nearer are excluded).
+    parts hidden behind something nearer are excluded). ``motion``: as :func:`sign_view`'s.
     """
-    _, centre, corners, mask, behind = _project(obstacle.centre, obstacle.corners(), cam_pos, cam_mat, intrinsics)
+    _, centre, corners, mask, behind = _project(_moved(motion, obstacle.centre), _moved(motion, obstacle.corners()),
+                                                cam_pos, cam_mat, intrinsics)
     if behind is not None:
         return behind
     if (corners[:, 2] > 0.05).all():

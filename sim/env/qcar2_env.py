@@ -30,7 +30,7 @@ from gymnasium import spaces
 from racf.sim._gl import ensure_gl_backend, gl_context_class
 from racf.sim.env.config import RESET_OPTIONS, EnvConfig
 from racf.sim.env.world import TrafficManager, WorldManager
-from racf.sim.env.ground_truth import SignView, obstacle_view, sign_view, with_centre_from
+from racf.sim.env.ground_truth import Motion, SignView, obstacle_view, sign_view, target_centre, with_centre_from
 from racf.sim.sensors import (TIMESTAMP_FIELDS, DepthCamera, Lidar2D, LocalisationFix, RGBCamera, RGBDCameraRig, Sensor,
                          VehicleStateSensor)
 from racf.sim.sensors.a2m12 import A2M12Lidar
@@ -38,7 +38,8 @@ from racf.sim.vehicle import QCar2
 from racf.sim.world.drives import RouteTarget
 from racf.sim.world.route_plan import current_slot, plan_route
 from racf.sim.world.road_graph import Path
-from racf.sim.world.scene import HIDDEN_GEOM_GROUP, PROP_GEOM_GROUP, load_model, patch_geom, patch_texture
+from racf.sim.world.scene import (HIDDEN_GEOM_GROUP, PROP_GEOM_GROUP, load_model, obstacle_body, patch_geom,
+                                  patch_texture, sign_body)
 from racf.sim.world.sign_patch import PatchPlacement
 from racf.sim.world.obstacles import Obstacle, obstacles
 from racf.sim.world.stop_signs import StopSign, stop_signs
@@ -169,8 +170,16 @@ class QCar2Env(gym.Env):
         self._collision_with: str | None = None
         self._moving: tuple[WorldManager, ...] = ()
         # Crates stand on the map only in their own episodes (as a test operator would place one).
-        self._crates = [(self.model.body(f"obstacle_{o.index}").id, self.model.body(f"obstacle_{o.index}").pos.copy())
+        self._crates = [(self.model.body(obstacle_body(o.index)).id, self.model.body(obstacle_body(o.index)).pos.copy())
                         for o in obstacles()]
+        # Each target's body and its map pose (the MJCF's): the truth follows a body a manager moved.
+        self._bodies = {**{("stop_sign", s.index): self.model.body(sign_body(s.index)).id
+                           for s in stop_signs(self.config.sign)},
+                        **{("obstacle", o.index): body for o, (body, _) in zip(obstacles(), self._crates)}}
+        home = mujoco.MjData(self.model)
+        mujoco.mj_kinematics(self.model, home)
+        self._home = {key: (home.xpos[body].copy(), home.xmat[body].copy()) for key, body in self._bodies.items()}
+        self._frame_xpos, self._frame_xmat = home.xpos.copy(), home.xmat.copy()
         first = stop_signs(self.config.sign)[0]
         self._path: Path = first.path
         self._targets: tuple[RouteTarget, ...] = (RouteTarget(first, first.stop_s, first.stop_s),)
@@ -370,6 +379,7 @@ class QCar2Env(gym.Env):
         self._frame_depth[:] = self.rig.render(self.model, self.data)[1]
         pos, mat = self.car.camera_pose(self.model, self.data)
         self._frame_cam = (np.array(pos, dtype=np.float64), np.array(mat, dtype=np.float64).reshape(3, 3))
+        self._frame_xpos[:], self._frame_xmat[:] = self.data.xpos, self.data.xmat  # where the frame saw the bodies
         self._frames = self._frames_due(self._substep)
 
     def _read_sensors(self, force: bool) -> None:
@@ -404,18 +414,21 @@ class QCar2Env(gym.Env):
         if self._step == 0:
             self._update_route_progress()
         state = self.car.state(self.data)
-        # The target's mask as the held frame shows it (computed once per frame and target) ...
+        # The target's mask as the held frame shows it, where the frame saw its body (once per frame and target) ...
         if self._view is None or self._view[0] != (self._frames, self._slot):
             view_of = obstacle_view if isinstance(self._sign, Obstacle) else sign_view
+            motion = self._motion(self._sign, self._frame_xpos, self._frame_xmat)
             self._view = ((self._frames, self._slot),
-                          view_of(self._sign, *self._frame_cam, self.rig.intrinsics, self._frame_depth))
-        # ... and its depth and bearing from where the camera is now.
+                          view_of(self._sign, *self._frame_cam, self.rig.intrinsics, self._frame_depth, motion))
+        # ... and its depth and bearing from where the camera and the body are now.
         cam_pos, cam_mat = self.car.camera_pose(self.model, self.data)
-        view = with_centre_from(self._view[1], self._sign.centre, np.asarray(cam_pos, np.float64),
+        centre = target_centre(self._sign, self._motion(self._sign, self.data.xpos, self.data.xmat))
+        view = with_centre_from(self._view[1], centre, np.asarray(cam_pos, np.float64),
                                 np.asarray(cam_mat, np.float64).reshape(3, 3))
         return {
             "target_kind": "obstacle" if isinstance(self._sign, Obstacle) else "stop_sign",
             "target_sign": self._sign.index,
+            "target_stands": bool(centre[2] > 0.0),  # a body taken off the floor (parked below it) stands nowhere
             "target_slot": self._slot,
             "lidar_time": float(self._stamps[_STAMP_SLOT["lidar"]]),
             "cruise_speed": self._cruise_speed,
@@ -463,8 +476,15 @@ class QCar2Env(gym.Env):
         For evaluation, like ``info``: the masks belong to the frame the observation's ``rgb``
         shows, which is older than the step when the camera runs slower than the loop.
         """
-        return [sign_view(s, *self._frame_cam, self.rig.intrinsics, self._frame_depth).mask
+        return [sign_view(s, *self._frame_cam, self.rig.intrinsics, self._frame_depth,
+                          self._motion(s, self._frame_xpos, self._frame_xmat)).mask
                 for s in stop_signs(self.config.sign)]
+
+    def _motion(self, target: StopSign | Obstacle, xpos: np.ndarray, xmat: np.ndarray) -> Motion | None:
+        """How ``target``'s body stands off its map pose in body poses ``xpos``/``xmat`` (None: at it)."""
+        key = ("obstacle" if isinstance(target, Obstacle) else "stop_sign", target.index)
+        body = self._bodies[key]
+        return Motion.between(*self._home[key], xpos[body], xmat[body])
 
     def sensor_observation(self) -> dict[str, np.ndarray]:
         """The current sensor readings as the env returned them, before any wrapper changed them.

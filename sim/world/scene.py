@@ -87,7 +87,7 @@ def _stop_sign_xml(index: int, x: float, y: float, yaw: float, geometry: SignGeo
     # The pole stands just behind the plate and reaches up to the plate's centre.
     z, r = geometry.centre_height_m, geometry.pole_radius_m
     return f"""
-    <body name="stop_sign_{index}" pos="{x} {y} 0" euler="0 0 {math.degrees(yaw):.4f}">
+    <body name="{sign_body(index)}" pos="{x} {y} 0" euler="0 0 {math.degrees(yaw):.4f}">
       <geom name="stop_sign_{index}_pole" type="cylinder" pos="{-_SIGN_THICKNESS_M - r} 0 {z / 2}"
             size="{r} {z / 2}" rgba="0.55 0.55 0.58 1"/>
       <geom name="stop_sign_{index}_border" type="mesh" mesh="stop_octagon_border" pos="0 0 {z}" rgba="0.97 0.97 0.97 1"/>
@@ -97,6 +97,17 @@ def _stop_sign_xml(index: int, x: float, y: float, yaw: float, geometry: SignGeo
             size="{_PATCH_HALF_THICKNESS_M} 0.02 0.02" material="stop_sign_{index}_patch" contype="0" conaffinity="0"
             group="{HIDDEN_GEOM_GROUP}"/>
     </body>"""
+
+
+def sign_body(index: int) -> str:
+    """Name of stop sign ``index``'s body (its frame: x along the face's normal, z up, origin at the
+    pole's foot on the floor; the plate's centre at z = the geometry's ``centre_height_m``)."""
+    return f"stop_sign_{index}"
+
+
+def obstacle_body(index: int) -> str:
+    """Name of crate ``index``'s body."""
+    return f"obstacle_{index}"
 
 
 def patch_geom(index: int) -> str:
@@ -164,7 +175,7 @@ def _room_xml(cx: float, cy: float) -> str:
 def _obstacle_xml(index: int, x: float, y: float, yaw: float) -> str:
     lx, ly, h = OBSTACLE_SIZE_M
     return f"""
-    <body name="obstacle_{index}" pos="{x} {y} 0" euler="0 0 {math.degrees(yaw)}">
+    <body name="{obstacle_body(index)}" pos="{x} {y} 0" euler="0 0 {math.degrees(yaw)}">
       <geom name="obstacle_{index}" type="box" pos="0 0 {h / 2}" size="{lx / 2} {ly / 2} {h / 2}" rgba="0.16 0.33 0.78 1"/>
     </body>"""
 
