@@ -180,11 +180,12 @@ def bench_traffic(cars: int = 2, steps: int = 250, repeats: int = 3, sign: int =
     """The full sensor set (320 x 240) on an approach to ``sign``, without and with ``cars`` other
     cars crossing at its conflict point, timed in alternation ``repeats`` times."""
     from racf.sim.world.traffic import cross_traffic
+    from racf.sim.world.traffic_manager import TrafficManager
 
     traffic = [c.to_options() for c in cross_traffic(sign, 1.5, cars=cars)]
     envs = {}
     for n in (0, cars):
-        env = gym.make(sim.ENV_ID, sensor_profile=sensor_profile, traffic_cars=n)
+        env = gym.make(sim.ENV_ID, sensor_profile=sensor_profile, world=(TrafficManager(n),) if n else ())
         options = {"sign": sign, "cruise_speed": 1.0, **({"traffic": traffic} if n else {})}
         env.reset(seed=0, options=options)
         env.step(np.zeros(2, np.float32))  # GL context creation is not part of the rate

@@ -26,11 +26,12 @@ import pandas as pd
 
 from racf.experiments.episode import TrialSpec, run_trial
 from racf.experiments.episode.plan import plan_episode
-from racf.experiments.scenarios.builtin import arrival_s
+from racf.experiments.scenarios.cross_traffic import arrival_s
 from racf.experiments.episode.stack import default_env
 from racf.stats import wilson_interval
 from racf.sim.world.road_graph import qcar2_road_graph
 from racf.sim.world.traffic import TrafficCar
+from racf.sim.world.traffic_manager import TrafficManager
 
 __all__ = ["CASES", "TrafficCase", "measure_case", "OFF_M"]
 
@@ -135,7 +136,7 @@ def measure_case(case: TrafficCase, seeds: int = 10, estimator: str = "raw") -> 
         spec = TrialSpec(setting, case.sign, 1.0, seed, run_up_m=2.0)
         car = _other_car(case, spec)
         for name, make in (("empty", None),
-                           ("traffic", lambda s: _WithCar(default_env(s, traffic_cars=1), car))):
+                           ("traffic", lambda s: _WithCar(default_env(s, world=(TrafficManager(1),)), car))):
             result, log = run_trial(spec, make_env=make, clean_pass=False)
             runs[name][0].append(result)
             runs[name][1].append(log)

@@ -339,13 +339,7 @@ def episode_flags(p: argparse.ArgumentParser) -> None:
     p.add_argument("--stable-steps", type=int, default=None,
                    help="steps the sign must be visible before an attack may start (default: the braking "
                         "controller's confirm_frames + 3 = 6)")
-    p.add_argument("--traffic-cars", type=int, default=0, metavar="N",
-                   help="other cars crossing at the stop sign's conflict point, 0-4 (default 0: an empty map)")
-    p.add_argument("--traffic-gap", type=float, default=0.0, metavar="S",
-                   help="with --traffic-cars: the first passes the conflict point this long after the ego car "
-                        "would have, had it not stopped, s in [-5, 5] (default 0)")
-    p.add_argument("--traffic-speed", type=float, default=1.0, metavar="V",
-                   help="with --traffic-cars: their speed, m/s in [0.1, 3] (default 1.0)")
+    scenario_alias_flags(p)
     p.add_argument("--scenario-param", action="append", default=[], metavar="KEY=VALUE",
                    help="a parameter of the scenario (--target; `racf list scenarios` lists each one's, with "
                         "ranges); repeatable, values are TOML, e.g. leave_s=2.5")
@@ -360,6 +354,41 @@ def episode_flags(p: argparse.ArgumentParser) -> None:
     service_flags(p)
     plugin_flag(p)
     sensor_flags(p)
+
+
+def scenario_alias_flags(p: argparse.ArgumentParser) -> None:
+    """A flag for every scenario parameter an older name stands for (``Scenario.aliases``):
+    ``--traffic-cars N`` is ``--target cross_traffic --scenario-param cars=N``."""
+    from racf.plugins import SCENARIOS
+
+    for name in SCENARIOS:
+        scenario = SCENARIOS[name]
+        for alias, param_name in scenario.aliases.items():
+            param = scenario.param(param_name)
+            p.add_argument(f"--{alias.replace('_', '-')}", dest=alias, type=param.type, default=None,
+                           metavar=param.unit.upper() or "VALUE",
+                           help=f"scenario {name}'s {param_name}: {param.meaning} ({param.allowed()}); sets --target "
+                                f"{name}")
+
+
+def aliased_scenario(args: argparse.Namespace, command: str, target: str, situation: dict) -> tuple[str, dict]:
+    """The scenario and its parameters once the alias flags (:func:`scenario_alias_flags`) are read:
+    any of a scenario's alias flags runs that scenario (a sign approach's variant: ``--target sign``
+    or the scenario itself), with the flags' values under ``--scenario-param``'s."""
+    from racf.plugins import SCENARIOS
+
+    for name in SCENARIOS:
+        scenario = SCENARIOS[name]
+        given = {param: getattr(args, alias) for alias, param in scenario.aliases.items()
+                 if getattr(args, alias, None) is not None}
+        if not given:
+            continue
+        flags = ", ".join(f"--{a.replace('_', '-')}" for a, param in scenario.aliases.items() if param in given)
+        if target not in (name, scenario.target):
+            flag_error(command, f"{flags} set scenario {name!r} (a {scenario.target} approach); --target {target} "
+                                "cannot take it")
+        target, situation = name, given | situation
+    return target, situation
 
 
 def trial_flags(p: argparse.ArgumentParser) -> None:
@@ -430,13 +459,7 @@ def episode_params(args: argparse.Namespace, command: str, table: bool = False) 
                   "detector": args.detector or "classical", "estimator_options": options}
         target = getattr(args, "target", "sign")
         situation = plain_values(command, "--scenario-param", args.scenario_param)
-        if args.traffic_cars:  # the cross-traffic scenario's parameters, by their own flags
-            if target != "sign":
-                flag_error(command, f"--traffic-cars crosses at a stop sign; --target {target} cannot take it")
-            target = "cross_traffic"
-            situation = {"cars": args.traffic_cars, "gap_s": args.traffic_gap, "speed": args.traffic_speed} | situation
-        elif args.traffic_gap != 0.0 or args.traffic_speed != 1.0:
-            flag_error(command, "--traffic-gap and --traffic-speed need --traffic-cars N (N >= 1)")
+        target, situation = aliased_scenario(args, command, target, situation)
         params |= {"target": target, "scenario_params": situation, "metrics": tuple(args.metric),
                    **service_params(args, command)}
     except ValueError as err:

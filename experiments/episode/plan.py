@@ -8,7 +8,7 @@ nothing is read back out of the env: the runner hands the mission and the calibr
 car and the referee.
 
 A scenario (``racf.experiments.scenarios``) adds to the route's plan: env settings, world managers the
-env runs, reset options, other actors.
+env runs, reset options, and what else it planned for its own criteria, metrics and end (``extras``).
 
 Example:
     >>> from racf.experiments.episode import TrialSpec
@@ -20,7 +20,7 @@ Example:
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import lru_cache
 
 import numpy as np
@@ -32,7 +32,6 @@ from racf.sim.env.config import EnvConfig
 from racf.sim.vehicle.calibration import car_build
 from racf.sim.world.route_plan import longest_run_up_m, plan_route
 from racf.sim.world.stop_signs import SIGN_GEOMETRIES
-from racf.sim.world.traffic import ConflictPoint, TrafficCar
 
 __all__ = ["EpisodePlan", "plan_episode", "reset_options", "env_settings", "car_calibration",
            "longest_run_up", "DRIVE_MAX_EPISODE_S"]
@@ -53,9 +52,9 @@ class EpisodePlan:
         control_dt_s: the car's loop period, s (the env's step).
         localisation: how the car localises (``qcar2``: its own filter; ``true``: the ablation).
         max_steps: the episode's step limit.
-        traffic: the other cars (empty: none), as the env's reset options hold them.
-        conflict: where they meet the ego car's path (None without traffic).
         start_s_m: where the ego car starts along the mission's path, m.
+        extras: what the scenario planned beyond the route, by its own names, for its own metrics,
+            criteria and end (cross-traffic: its cars and their conflict point); the engine reads none.
     """
 
     env_kwargs: dict
@@ -65,9 +64,8 @@ class EpisodePlan:
     control_dt_s: float
     localisation: str
     max_steps: int
-    traffic: tuple[TrafficCar, ...] = ()
-    conflict: ConflictPoint | None = None
     start_s_m: float = 0.0
+    extras: dict = field(default_factory=dict)
 
 
 def env_settings(spec: TrialSpec) -> dict:

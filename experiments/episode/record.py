@@ -6,6 +6,8 @@ the map: perception, estimator, braker, steering, its pose estimate) beside the 
 through :func:`step_row`, which refuses a row that leaves out a declared column or adds an
 undeclared one, so this table, the log, the scorer and the dataset cannot drift apart.
 
+A scenario's world managers add the ground-truth columns they declare
+(``WorldManager.columns()``: :func:`world_columns`), on the referee's side, after racf's own.
 An estimator adds its own columns through ``diagnostics()`` (ODCA: ``w``, ``flag``,
 ``odca_source``, ``d_kin``; a plug-in: whatever it reports). ``w``, ``flag`` and ``score`` are declared
 (NaN when the estimator has none), the others ride along on the car's side.
@@ -21,9 +23,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from racf.sim.sensors.state import STATE_FIELDS
-from racf.sim.world.traffic import MAX_TRAFFIC_CARS
 
-__all__ = ["Column", "STEP_COLUMNS", "STEP_LOG", "CAR", "REFEREE", "step_row", "columns_of"]
+__all__ = ["Column", "STEP_COLUMNS", "STEP_LOG", "CAR", "REFEREE", "step_row", "columns_of", "world_columns"]
 
 CAR, REFEREE, EPISODE = "car", "referee", "episode"
 #: The unit of each field of the state sensor (a new field must be given one here).
@@ -111,15 +112,8 @@ STEP_COLUMNS: tuple[Column, ...] = (
     _c(REFEREE, "lateral_error", "m", "ground truth: distance from the lane's centre line"),
     _c(REFEREE, "attack_active", "bool", "some attack acted on this step's observation"),
     _c(REFEREE, "attack", "", "the attacks active this step, '+'-joined"),
-    _c(REFEREE, "collision_with", "", "ground truth: what the car touched (traffic0.. another car, else the "
-                                      "geom's name; '' nothing)"),
-    _c(REFEREE, "conflict_x", "m", "the conflict point where cross-traffic meets the route, map frame (NaN: no "
-                                   "traffic)"),
-    _c(REFEREE, "conflict_y", "m", "the conflict point, map frame (NaN: no traffic)"),
-    *(_c(REFEREE, f"traffic{k}_{field}", unit, f"ground truth: other car {k}'s {meaning} (NaN: no such car)")
-      for k in range(MAX_TRAFFIC_CARS)
-      for field, unit, meaning in (("x", "m", "position, map frame"), ("y", "m", "position, map frame"),
-                                   ("yaw", "rad", "heading, map frame"), ("speed", "m/s", "speed"))),
+    _c(REFEREE, "collision_with", "", "ground truth: what the car touched (a world manager's name for its body, "
+                                      "else the geom's name; '' nothing)"),
 )
 #: The columns by name.
 STEP_LOG: dict[str, Column] = {c.name: c for c in STEP_COLUMNS}
@@ -134,22 +128,41 @@ def columns_of(side: str) -> tuple[str, ...]:
     return tuple(c.name for c in STEP_COLUMNS if c.side == side)
 
 
-def step_row(values: dict, diagnostics: dict) -> dict:
-    """One step's row, in the declared order, then the estimator's own diagnostics.
+def world_columns(managers) -> tuple[Column, ...]:
+    """The ground-truth columns a world's managers declare (``WorldManager.columns()``), as step log
+    columns on the referee's side. ValueError names one that racf's own columns already hold."""
+    out = []
+    for manager in managers:
+        for column in manager.columns():
+            if column.name in STEP_LOG:
+                raise ValueError(f"world manager {manager.name!r} declares the column {column.name!r}, which racf's "
+                                 "step log already holds; give it another name")
+            out.append(Column(column.name, column.unit, column.meaning, REFEREE))
+    return tuple(out)
+
+
+def step_row(values: dict, diagnostics: dict, world: tuple[Column, ...] = ()) -> dict:
+    """One step's row, in the declared order (racf's columns, then the ``world`` managers' columns),
+    then the estimator's own diagnostics.
 
     ``values`` holds every declared column but ``trial_id`` (added per log) and ``w``/``flag``/``score``
     (from ``diagnostics`` when the estimator reports them, else NaN). ValueError names a
-    column left out or not declared: a new column is declared here first.
+    column left out or not declared: a new column is declared here first (a world manager's, by
+    its ``columns()``).
     """
+    declared = _DECLARED | {c.name for c in world} if world else _DECLARED
     given = set(values) | _FROM_DIAGNOSTICS
-    if given != _DECLARED:
-        raise ValueError(f"step row: missing {sorted(_DECLARED - given)}, undeclared {sorted(given - _DECLARED)}; "
-                         "declare a new column in racf.experiments.episode.record.STEP_COLUMNS")
+    if given != declared:
+        raise ValueError(f"step row: missing {sorted(declared - given)}, undeclared {sorted(given - declared)}; "
+                         "declare a new column in racf.experiments.episode.record.STEP_COLUMNS (racf's) or in its "
+                         "world manager's columns()")
     row = {name: values[name] if name in values else diagnostics.get(name, float("nan"))
            for name in STEP_LOG if name != "trial_id"}
+    for column in world:
+        row[column.name] = values[column.name]
     for name, value in diagnostics.items():
         if name not in _FROM_DIAGNOSTICS:
-            if name in STEP_LOG:
+            if name in row:
                 raise ValueError(f"an estimator's diagnostics may not overwrite the declared column {name!r}")
             row[name] = value
     return row

@@ -7,7 +7,8 @@ feeds nothing back. Per step it runs:
 - the ``d_clean`` pass: the protocol's pseudo ground truth, the car's detector and depth
   pipeline on the env's own readings before any attack;
 - the ground-truth log columns (pose, speed, distance to the line, d_true, visibility, what
-  the car touched, the other cars' states and the conflict point they cross).
+  the car touched), then every column the world's managers declare, copied from ``info`` by name
+  (the referee knows none of them).
 """
 
 from __future__ import annotations
@@ -20,7 +21,6 @@ import numpy as np
 from racf.controllers import BrakingConfig, Perception, StopSignBraker
 from racf.experiments.episode.car import CarCalibration, CarStep, sign_depth_at_line
 from racf.sim.world.drives import RouteTarget
-from racf.sim.world.traffic import MAX_TRAFFIC_CARS
 
 __all__ = ["Referee"]
 
@@ -35,12 +35,12 @@ class Referee:
         attacked: whether an attack wrapper sits between the env and the car.
         clean_pass: under attack, run the ``d_clean`` pass (a diagnostic: without it the
             log's ``d_clean`` is NaN under attack and nothing else changes).
-        conflict_xy: where cross-traffic meets the route (None: no traffic).
+        world_columns: the columns the world's managers declare (``record.world_columns``), logged from ``info``.
     """
 
     def __init__(self, calibration: CarCalibration, braking: BrakingConfig, dt: float, attacked: bool,
-                 clean_pass: bool = True, conflict_xy: tuple[float, float] | None = None) -> None:
-        self.conflict_xy = conflict_xy if conflict_xy is not None else (math.nan, math.nan)
+                 clean_pass: bool = True, world_columns: tuple[str, ...] = ()) -> None:
+        self.world_columns = world_columns
         self.calibration = calibration
         self.braking = braking
         self.dt = dt
@@ -78,7 +78,7 @@ class Referee:
             "dist_to_stop_line": info["dist_to_stop_line"], "lateral_error": info["lateral_error"],
             "attack_active": bool(info.get("attack_active", False)), "attack": "+".join(info.get("attack", ())),
             "collision_with": info.get("collision_with") or "",
-            "conflict_x": self.conflict_xy[0], "conflict_y": self.conflict_xy[1], **_traffic_columns(info),
+            **{name: info[name] for name in self.world_columns},
         }
 
     def _clean_distance(self, env: gym.Env, obs: dict, car: CarStep, perception: Perception) -> float:
@@ -90,13 +90,3 @@ class Referee:
         unchanged = np.array_equal(clean["rgb"], obs["rgb"])
         detection = perception.last_raw_detection if unchanged else perception.detector.detect(clean["rgb"])
         return perception.depth.estimate(clean["depth"][..., 0], detection)[0]
-
-
-def _traffic_columns(info: dict) -> dict:
-    """The other cars' states as log columns, NaN for the slots no car fills."""
-    states = np.asarray(info.get("traffic", np.empty((0, 4))), np.float64).reshape(-1, 4)
-    out = {}
-    for k in range(MAX_TRAFFIC_CARS):
-        values = states[k] if k < len(states) else (math.nan,) * 4
-        out.update({f"traffic{k}_{field}": float(v) for field, v in zip(("x", "y", "yaw", "speed"), values)})
-    return out

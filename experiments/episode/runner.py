@@ -17,6 +17,7 @@ Both are off by default. The reference controller runs every step without delay.
 
 from __future__ import annotations
 
+import logging
 import math
 from collections import deque
 from dataclasses import dataclass
@@ -27,8 +28,7 @@ import numpy as np
 import pandas as pd
 
 from racf.controllers import DistanceEstimator, Phase
-from racf.experiments.episode.conflict import NEAR_MISS_S
-from racf.experiments.episode.record import step_row
+from racf.experiments.episode.record import step_row, world_columns
 from racf.experiments.episode.referee import Referee
 from racf.experiments.episode.spec import TrialSpec
 from racf.experiments.episode.plan import EpisodePlan, plan_episode
@@ -36,17 +36,15 @@ from racf.experiments.episode.stack import build_car, default_env
 from racf.plugins import METRICS
 from racf.sim.attacks.base import AttackWrapper, find_wrapper
 from racf.sim.sensors import STATE_FIELDS
-from racf.sim.world.traffic import CAR_FOOTPRINT_M
 
 __all__ = ["TrialResult", "IDENTITY", "Episode", "StepHook", "run_trial", "scan_fov", "SCAN_FOV_HALF_BEAMS",
-           "RUN_THROUGH_M", "run_through_m", "car_columns", "grant_white_box", "ActionLine", "late_steps"]
+           "car_columns", "grant_white_box", "ActionLine", "late_steps"]
 
-#: An episode ends once the bumper is this far past the last target's line (without traffic).
-RUN_THROUGH_M = 0.5
 #: Half-width of the LiDAR sector kept in the logs, in beams of the 360-beam scan (1 deg each).
 SCAN_FOV_HALF_BEAMS = 40
 
 StepHook = Callable[[gym.Env, dict, dict, dict], None]
+_log = logging.getLogger(__name__)
 
 
 def scan_fov(ranges: np.ndarray, half_beams: int = SCAN_FOV_HALF_BEAMS) -> np.ndarray:
@@ -133,10 +131,12 @@ def _run(env: gym.Env, spec: TrialSpec, plan: EpisodePlan, estimator, on_step: S
     car = build_car(spec, plan, estimator)
     grant_white_box(env, car.estimator)
     targets = car.mission.targets
+    scenario = spec.scenario
+    # The world's own ground truth: every column the env's world managers declare, logged by name.
+    truth_columns = world_columns(env.unwrapped.world)
     referee = Referee(car.calibration, spec.braking, dt, find_wrapper(env, AttackWrapper) is not None, clean_pass,
-                      plan.conflict.xy if plan.conflict is not None else None)
-    run_through = run_through_m(plan)
-    linger = round(NEAR_MISS_S / dt) if plan.traffic else 0
+                      tuple(c.name for c in truth_columns))
+    ending = tuple(c() for c in scenario.criteria if c.terminates)
     actions = ActionLine(delay_steps)
     rows: list[dict] = []
     for _ in range(plan.max_steps):
@@ -145,17 +145,13 @@ def _run(env: gym.Env, spec: TrialSpec, plan: EpisodePlan, estimator, on_step: S
         decision = step.decision
         truth = referee.observe(env, obs, info, step, car.target, car.perception)
         rows.append(step_row({**car_columns(car, step, obs, info["time"], applied), **truth},
-                             car.estimator.diagnostics()))
+                             car.estimator.diagnostics(), truth_columns))
         if on_step is not None:
             on_step(env, obs, info, rows[-1])
-        last = step.slot == len(targets) - 1
-        if last and decision.phase is Phase.DONE:
+        if step.slot == len(targets) - 1 and decision.phase is Phase.DONE:
+            break  # the car is done with its last target
+        if scenario.over(plan, rows) or any(c.fails_at(rows[-1]) for c in ending):
             break
-        if last and info["dist_to_stop_line"] < -run_through:
-            # Past the line (and the conflict point): with traffic, watch on for the post-encroachment time.
-            if linger <= 0:
-                break
-            linger -= 1
         obs, _, terminated, truncated, info = env.step(applied)
         if terminated or truncated:
             if info.get("collision_with"):  # the contact that ended it belongs to the last row's step
@@ -230,25 +226,33 @@ def car_columns(car, step, obs: dict, t: float, applied: np.ndarray) -> dict:
     }
 
 
-def run_through_m(plan: EpisodePlan) -> float:
-    """How far past the last line the bumper runs before the episode ends, m: ``RUN_THROUGH_M``,
-    or with cross-traffic far enough for the whole car to clear the conflict point (a missed stop
-    there is scored by what it meets, not by the line)."""
-    if plan.conflict is None:
-        return RUN_THROUGH_M
-    past_line = plan.conflict.ego_s - plan.mission.targets[-1].stop_s
-    return max(RUN_THROUGH_M, past_line + CAR_FOOTPRINT_M[0] + 0.1)
-
-
 def _result(spec: TrialSpec, plan: EpisodePlan, env: gym.Env, log: pd.DataFrame) -> TrialResult:
-    """The row: the episode's identity, then each metric it scores (a field it leaves out takes its default)."""
+    """The row: the episode's identity and its scenario's parameters (``scenario_<name>``), then each
+    metric it scores (a field it leaves out takes its default). A metric that raises costs its own
+    fields (their defaults, logged in one line naming it), never the episode."""
     episode = Episode(spec, plan, log, env)
     row = {"trial_id": spec.trial_id, "setting": spec.setting, "estimator": spec.estimator, "target": spec.target,
-           "sign": spec.sign, "speed": spec.speed, "seed": spec.seed}
+           "sign": spec.sign, "speed": spec.speed, "seed": spec.seed, **scenario_columns(spec.scenario_params)}
     for name in spec.metric_names:
         metric = METRICS[name]()
-        row |= metric.defaults() | metric.score(episode)
+        row |= metric.defaults() | scored(metric, episode)
     return TrialResult(row)
+
+
+def scenario_columns(values: dict) -> dict:
+    """A scenario's parameter values as result columns: ``scenario_<name>`` each."""
+    return {f"scenario_{name}": value for name, value in values.items()}
+
+
+def scored(metric, episode: Episode) -> dict:
+    """One metric's fields on one episode; a metric that raises gives none (the row keeps its defaults)
+    and the fault is logged in one line naming the metric and the episode."""
+    try:
+        return metric.score(episode)
+    except Exception as err:  # a plug-in's fault is its own: the episode's other fields stand
+        _log.warning("metric %r raised %s: %s; its fields are null for episode %s", metric.name, type(err).__name__,
+                     err, episode.spec.trial_id)
+        return {}
 
 
 def grant_white_box(env: gym.Env, defence) -> None:

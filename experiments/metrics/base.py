@@ -15,39 +15,15 @@ every episode; the others score the episodes whose spec (``TrialSpec.metrics``) 
 
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import pandas as pd
 
+from racf.experiments.episode.fields import SUMMARIES, Field
 from racf.experiments.episode.runner import Episode
 from racf.stats import median_ci, wilson_interval
 
 __all__ = ["Field", "Metric", "Episode", "SUMMARIES"]
-
-#: How a field is summarised over episodes: ``rate`` (a share of true values, Wilson interval),
-#: ``median`` (bootstrap interval), None (not summarised by default).
-SUMMARIES = ("rate", "median", None)
-
-
-@dataclass(frozen=True)
-class Field:
-    """One column of the result row.
-
-    Attributes:
-        name: the column.
-        default: its value where the metric does not apply (NaN, None, False, 0).
-        unit: what a number counts (``m``, ``s``, ``frames``); empty for flags and labels.
-        meaning: one line for the docs.
-        summary: how :meth:`Metric.summarize` summarises it by default (``SUMMARIES``).
-    """
-
-    name: str
-    default: Any = math.nan
-    unit: str = ""
-    meaning: str = ""
-    summary: str | None = None
 
 
 class Metric:

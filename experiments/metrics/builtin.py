@@ -1,9 +1,12 @@
 """racf's own metrics, registered the way a user's are (``racf.metrics`` entry points): what the
 attack did, the stop's outcome and timing, the acted-on distance's largest jump, the stealth
-measures, the stop rule's STL robustness, and what an episode came to with other cars.
+measures, the stop rule's STL robustness and whether the car touched anything. A scenario's own
+metrics live with it (cross-traffic's ``conflict``: ``racf.experiments.scenarios.cross_traffic``).
 
 Each wraps a pure scorer of the per-step log (``racf.experiments.episode.scoring``,
-``.robustness``, ``.conflict``), so a stored log can be rescored without running anything.
+``.robustness``), so a stored log can be rescored without running anything. Where the stop rule
+does not apply (no target stands: ``racf.experiments.episode.criteria``), the outcome and the
+robustness say nothing (None, NaN) instead of a broken rule.
 """
 
 from __future__ import annotations
@@ -14,16 +17,16 @@ from dataclasses import asdict
 import numpy as np
 import pandas as pd
 
-from racf.experiments.episode.conflict import CONFLICT_OUTCOMES, score_conflict
+from racf.experiments.episode.criteria import StopRule, standing_outcomes
 from racf.experiments.episode.robustness import robustness
-from racf.experiments.episode.scoring import FAILURES, largest_jump, score_log, stealth
+from racf.experiments.episode.scoring import FAILURES, largest_jump, stealth
 from racf.experiments.metrics.base import Episode, Field, Metric
 from racf.sim.attacks import PatchOcclusion
 from racf.sim.attacks.base import attack_wrappers, find_wrapper
 from racf.stats import median_ci, wilson_interval
 
-__all__ = ["AttackMeasures", "Outcome", "Jump", "StealthMeasures", "Robustness", "Conflict",
-           "stealth_summary", "robustness_summary", "conflict_summary"]
+__all__ = ["AttackMeasures", "Outcome", "Jump", "StealthMeasures", "Robustness", "Collision",
+           "stealth_summary", "robustness_summary", "attack_before_t_star"]
 
 _NAN = math.nan
 
@@ -55,7 +58,7 @@ class AttackMeasures(Metric):
         if not attacked:
             return {}
         n = len(results)
-        early = _attack_before_t_star(results)
+        early = attack_before_t_star(results)
         k_early = int(early["success"].astype(bool).sum()) if len(early) else 0
         return {"n_attack_before_t_star": int(len(early)),
                 "scr_attack_before_t_star": k_early / len(early) if len(early) else None,
@@ -72,7 +75,8 @@ class Outcome(Metric):
     always, order = True, 20
     higher_is_better = {"success": True}
     fields = (
-        Field("success", False, "", "every target served: at rest 0-0.60 m before its line", "rate"),
+        Field("success", None, "", "every target that stands served: at rest 0-0.60 m before its line (None: no "
+                                   "target stands, the stop rule does not apply)", "rate"),
         Field("stopped", False, "", "the car came to rest for the first target"),
         Field("stop_distance_m", _NAN, "m", "front bumper to the first target's line at rest"),
         Field("t_star_s", _NAN, "s", "t*: when the reference controller first brakes"),
@@ -86,21 +90,26 @@ class Outcome(Metric):
     )
 
     def score(self, episode: Episode) -> dict:
-        outcomes = score_log(episode.log)
-        first, n_targets = outcomes[0], len(episode.plan.mission.targets)
+        n_targets, duration = len(episode.plan.mission.targets), float(episode.log["t"].iloc[-1])
+        if not StopRule().applies(episode):  # no target stands: nothing to stop for, no SCR
+            return {"success": None, "duration_s": duration, "n_targets": n_targets}
+        outcomes = standing_outcomes(episode.log)
+        first = outcomes[0]
         served = sum(o.success for o in outcomes)
-        return {"success": bool(served == n_targets), "stopped": not math.isnan(first.rest_distance_m),
+        return {"success": bool(served == len(outcomes)), "stopped": not math.isnan(first.rest_distance_m),
                 "stop_distance_m": first.rest_distance_m, "t_star_s": first.t_star_s, "t_brake_s": first.t_brake_s,
                 "trigger_delay_s": first.trigger_delay_s, "dt_brake_s": first.dt_brake_s, "failure": first.failure,
-                "duration_s": float(episode.log["t"].iloc[-1]), "n_targets": n_targets, "targets_served": served}
+                "duration_s": duration, "n_targets": n_targets, "targets_served": served}
 
     def summarize(self, results: pd.DataFrame, attacked: bool) -> dict:
+        results = results[results["success"].notna()] if len(results) else results  # where the stop rule applies
         n = int(len(results))
         success = results["success"].astype(bool) if n else pd.Series(dtype=bool)
         k = int(success.sum())
         scr = k / n if n else None
         ok = results[success] if n else results
-        summary = {"scr": scr, "scr_ci": list(wilson_interval(k, n)), "asr": (1.0 - scr) if attacked and n else None}
+        summary = {"n_scr": n, "scr": scr, "scr_ci": list(wilson_interval(k, n)),
+                   "asr": (1.0 - scr) if attacked and n else None}
         summary["trigger_delay_mean"], summary["trigger_delay_std"] = _mean_std(ok["trigger_delay_s"]) if n else (
             None, None)
         summary["dt_brake_mean"], summary["dt_brake_std"] = _mean_std(ok["dt_brake_s"]) if n else (None, None)
@@ -157,41 +166,30 @@ class Robustness(Metric):
     fields = (Field("robustness_m", _NAN, "m", "the stop rule's STL robustness, lowest over the targets"),)
 
     def score(self, episode: Episode) -> dict:
+        if not StopRule().applies(episode):  # no stop rule where no target stands
+            return {}
         return {"robustness_m": robustness(episode.log)}
 
     def summarize(self, results: pd.DataFrame, attacked: bool) -> dict:
         return robustness_summary(results)
 
 
-class Conflict(Metric):
-    """What the episode came to with other cars (a contact with anything counts, traffic or not)."""
+class Collision(Metric):
+    """Whether the car touched anything, and what (the env's contact report, which ends the episode)."""
 
-    name = "conflict"
-    meaning = "collisions, conflicts and time-to-collision with other cars"
+    name = "collision"
+    meaning = "whether the car touched anything, and what it touched first"
     always, order = True, 60
     higher_is_better = {"collision": False}
     fields = (
-        Field("conflict", None, "", f"with other cars, one of {', '.join(CONFLICT_OUTCOMES)}"),
         Field("collision", False, "", "the car touched anything"),
-        Field("collision_with", None, "", "what it touched first (traffic0.. or a geom's name)"),
-        Field("min_ttc_s", _NAN, "s", "the smallest time-to-collision with another car"),
-        Field("pet_s", _NAN, "s", "the post-encroachment time at the conflict point"),
-        Field("traffic_cars", 0, "cars", "how many other cars drove"),
+        Field("collision_with", None, "", "what it touched first (a world manager's name for its body, or a geom's)"),
     )
 
     def score(self, episode: Episode) -> dict:
-        return {**score_conflict(episode.log).to_dict(), "traffic_cars": len(episode.plan.traffic)}
-
-    def summarize(self, results: pd.DataFrame, attacked: bool) -> dict:
-        summary = conflict_summary(results)
-        if attacked and summary.get("n_traffic"):
-            early = _attack_before_t_star(results)
-            early = early[pd.to_numeric(early["traffic_cars"], errors="coerce").fillna(0) > 0]
-            k_hit = int(early["collision"].fillna(False).astype(bool).sum())
-            summary["n_traffic_attack_before_t_star"] = int(len(early))
-            summary["collision_rate_attack_before_t_star"] = k_hit / len(early) if len(early) else None
-            summary["collision_rate_attack_before_t_star_ci"] = list(wilson_interval(k_hit, len(early)))
-        return summary
+        touched = episode.log["collision_with"].astype(str) if "collision_with" in episode.log else ()
+        hits = [name for name in touched if name]
+        return {"collision": bool(hits), "collision_with": hits[0] if hits else None}
 
 
 def robustness_summary(results: pd.DataFrame) -> dict:
@@ -223,22 +221,7 @@ def stealth_summary(results: pd.DataFrame) -> dict:
             "detection_delay_median": float(delays.median()) if len(delays) else None}
 
 
-def conflict_summary(results: pd.DataFrame) -> dict:
-    """Collisions and conflicts over the episodes that drove with other cars (none without)."""
-    if "traffic_cars" not in results or not len(results):
-        return {}
-    with_traffic = results[pd.to_numeric(results["traffic_cars"], errors="coerce").fillna(0) > 0]
-    if not len(with_traffic):
-        return {}
-    n = int(len(with_traffic))
-    hit = int(with_traffic["collision"].fillna(False).astype(bool).sum())
-    ttc = pd.to_numeric(with_traffic["min_ttc_s"], errors="coerce").dropna()
-    return {"n_traffic": n, "collision_rate": hit / n, "collision_rate_ci": list(wilson_interval(hit, n)),
-            "conflicts": {c: int((with_traffic["conflict"] == c).sum()) for c in CONFLICT_OUTCOMES},
-            "min_ttc_median_s": float(ttc.median()) if len(ttc) else None}
-
-
-def _attack_before_t_star(results: pd.DataFrame) -> pd.DataFrame:
+def attack_before_t_star(results: pd.DataFrame) -> pd.DataFrame:
     """The episodes whose attack began before t* (only those can test a defence)."""
     if not len(results):
         return results

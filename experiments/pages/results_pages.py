@@ -20,7 +20,7 @@ from racf.experiments.pages.falsify_page import falsification_markdown
 from racf.experiments.pages.existence_page import existence_markdown
 from racf.experiments.pages.leaderboard_page import leaderboard_markdown
 from racf.experiments.pages.service_page import bags_and_service_markdown
-from racf.experiments.pages.traffic_page import traffic_markdown
+from racf.experiments.pages.traffic_page import crossed_key, traffic_markdown
 from racf.experiments.pages.results_format import page_head as _page_head
 from racf.experiments.pages.results_format import ci as _ci
 from racf.experiments.pages.results_format import meta_lines as _meta
@@ -263,7 +263,7 @@ def paper_rows(d: _Data, link: str = "") -> list[str]:
                          f"(N {vote['n']}) | [existence]({link}existence.md) |")
     if "cross-traffic" in d:
         s = d["cross-traffic"]["settings"]
-        none, odca = s.get("attack@traffic1"), s.get("attack+odca@traffic1")
+        none, odca = s.get(crossed_key("attack")), s.get(crossed_key("attack+odca"))
         if none and odca and none.get("n_traffic_attack_before_t_star"):
             lines.append(
                 f"| with cross-traffic at the conflict point, patch attack: collision rate | - (the paper's scenario; "

@@ -7,15 +7,23 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from racf.experiments.episode.conflict import CONFLICT_OUTCOMES
+from racf.experiments.scenarios.cross_traffic.conflict import CONFLICT_OUTCOMES
 from racf.experiments.pages.results_format import meta_lines, missing, page_head, rate
+from racf.experiments.sweeps.summary import setting_key
 
-__all__ = ["traffic_markdown", "TRAFFIC_RESULTS"]
+__all__ = ["traffic_markdown", "TRAFFIC_RESULTS", "crossed_key"]
 
 #: The stored results the page reads, and the command that makes each.
 TRAFFIC_RESULTS = {"cross-traffic": "racf sweep cross-traffic.toml",
                    "bench-traffic": "racf bench traffic --seeds 10 --json",
                    "bench-sim-traffic": "racf bench sim --traffic-cars 2 --steps 250 --repeats 5 --json"}
+
+
+def crossed_key(setting: str, cars: int = 1, gap_s: float = 0.0, speed: float = 1.0) -> str:
+    """The summary key of ``setting`` with ``cars`` other cars crossing (the cross-traffic scenario's
+    parameters, as ``sweeps.summary.setting_key`` names them)."""
+    return setting_key({"setting": setting, "target": "cross_traffic", "scenario_cars": cars,
+                        "scenario_gap_s": gap_s, "scenario_speed": speed})
 
 
 def _load(root: Path, name: str) -> dict | None:
@@ -30,9 +38,9 @@ def _sweep(data: dict) -> list[str]:
         "before t* (N) | " + " / ".join(c.replace("_", " ") for c in CONFLICT_OUTCOMES) + " |",
         "|---|---|---|---|---|---|---|"]
     for key, r in settings.items():
-        if "@traffic" in key:
+        if "@" in key:
             continue
-        t = settings.get(f"{key}@traffic1")
+        t = settings.get(crossed_key(key))
         if t is None:
             continue
         early = "-" if t.get("n_traffic_attack_before_t_star") is None else (

@@ -6,6 +6,6 @@ holds them by name.
 """
 
 from racf.experiments.scenarios.base import TARGET_KINDS, Param, Scenario
-from racf.sim.env.world import WorldManager
+from racf.sim.world.manager import WorldManager
 
 __all__ = ["Param", "Scenario", "TARGET_KINDS", "WorldManager"]

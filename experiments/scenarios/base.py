@@ -4,8 +4,10 @@ A scenario declares its parameters (:class:`Param`: type, range, default, unit a
 ``TrialSpec.scenario_params``, the CLI's ``--scenario-param``, a sweep spec's
 ``[scenario.<name>]`` table, a falsification space and ``racf list`` all read that one
 declaration. It plans the episode: pure, from the spec and the map to the env's settings, its
-world (managers the env runs without knowing them: ``racf.sim.env.world``), its reset options
-and the car's mission. The referee scores what it asks for (:attr:`Scenario.metrics`).
+world (managers the env runs without knowing them, each logging its own ground-truth columns:
+``racf.sim.world.manager``), its reset options and the car's mission. It owns how the episode is
+judged: its criteria (:attr:`Scenario.criteria`, ``racf.experiments.episode.criteria``), the
+metrics it asks for (:attr:`Scenario.metrics`) and when its episode is over (:meth:`Scenario.over`).
 
 A scenario registers under the entry-point group ``racf.scenarios`` (or is loaded with
 ``--plugin FILE.py``), racf's own the same way as a user's; ``TrialSpec.target`` names it.
@@ -18,16 +20,19 @@ import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, ClassVar
 
+from racf.experiments.episode.criteria import TARGET_CRITERIA, Criterion
 from racf.experiments.episode.spec import TARGETS
-from racf.sim.env.world import WorldManager
+from racf.sim.world.manager import WorldManager
 
 if TYPE_CHECKING:  # the plan is made by racf.experiments.episode, which reads scenarios
     from racf.experiments.episode.plan import EpisodePlan
 
-__all__ = ["Param", "Scenario", "TARGET_KINDS"]
+__all__ = ["Param", "Scenario", "TARGET_KINDS", "RUN_THROUGH_M"]
 
 #: What a route is built around, and how many of each the map holds (``TrialSpec.sign`` indexes them).
 TARGET_KINDS = TARGETS
+#: By default an episode ends once the bumper is this far past the last target's line, m.
+RUN_THROUGH_M = 0.5
 
 
 @dataclass(frozen=True)
@@ -97,6 +102,15 @@ class Scenario:
             the attacks that can act on it are those whose ``targets`` list it.
         params: the scenario's parameters.
         metrics: what the referee scores beyond the metrics every episode has (``racf.metrics``).
+        criteria: the rules its episodes are judged by (``Criterion`` classes; by default the stop
+            rule where a target stands and no needless stop where none does); the ``criteria``
+            metric writes each verdict and the driving score.
+        aliases: older names of its parameters on the command line, mapped to theirs
+            (``{"traffic_cars": "cars"}`` makes ``--traffic-cars N`` run it with ``cars = N``).
+        table: a top-level table of a sweep spec that lists its parameters (cross-traffic's
+            ``[traffic]``), beside ``[scenario.<name>]``; None: none.
+        control: parameter values in that table that stand for the plain approach of its
+            ``target`` kind (cross-traffic's ``{"cars": 0}``): the paired control episode.
     """
 
     name: ClassVar[str] = "scenario"
@@ -104,6 +118,10 @@ class Scenario:
     target: ClassVar[str] = "sign"
     params: ClassVar[tuple[Param, ...]] = ()
     metrics: ClassVar[tuple[str, ...]] = ()
+    criteria: ClassVar[tuple[type[Criterion], ...]] = TARGET_CRITERIA
+    aliases: ClassVar[dict[str, str]] = {}
+    table: ClassVar[str | None] = None
+    control: ClassVar[dict[str, Any]] = {}
 
     @classmethod
     def values(cls, given: dict[str, Any]) -> dict[str, Any]:
@@ -142,6 +160,14 @@ class Scenario:
         """The episode's plan from the route's (``draft``): add reset options, other actors, or
         change the car's mission. Pure: the same spec gives the same plan."""
         return draft
+
+    def over(self, plan: "EpisodePlan", rows: list[dict]) -> bool:
+        """Whether the episode is over after the step whose row is ``rows[-1]`` (``rows``: the step log
+        so far, the world managers' columns included). By default once the car's bumper is
+        ``RUN_THROUGH_M`` past the last target's line; a scenario may run on (until a crossing car
+        has passed) or stop sooner. The car's own end (it stopped for good) ends the episode anyway."""
+        row = rows[-1]
+        return row["slot"] == len(plan.mission.targets) - 1 and row["dist_to_stop_line"] < -RUN_THROUGH_M
 
     @staticmethod
     def replace(plan: "EpisodePlan", **changes: Any) -> "EpisodePlan":

@@ -70,20 +70,21 @@ def _paper(setting: str) -> Callable[[str, int], list[TrialSpec]]:
 
 
 def _sweep(name: str, attack: str, *, mode: str = "random", detector: str = _CAR, params: dict | None = None,
-           t_atk: list | None = None, rho: list | None = None, speed: list | None = None, traffic: dict | None = None
+           t_atk: list | None = None, rho: list | None = None, speed: list | None = None, tables: dict | None = None
            ) -> Callable[[str, int], list[TrialSpec]]:
     """Episodes of a sweep over the four signs, the same seeds for every defence (paired): ``n``
-    random draws, or (grid) ``n // 4`` repeats at each sign and each of the attack's settings."""
+    random draws, or (grid) ``n // 4`` repeats at each sign and each of the attack's settings (``tables``:
+    a scenario's own sweep tables, ``SweepSpec.tables``)."""
     def make(defence: str, n: int) -> list[TrialSpec]:
         space = {"attack": [attack], "estimator": [defence], "sign": [0, 1, 2, 3]}
         if mode == "random":
             space |= {"rho": rho or [0.9, 1.0], "t_atk": t_atk or [0.5, 3.0], "speed": speed or [1.0, 2.0]}
             spec = SweepSpec(name, mode="random", n=n, seed=0, space=space, params=params or {}, log_steps=True,
-                             detector=detector, traffic=traffic or {})
+                             detector=detector, tables=tables or {})
         else:
             space |= {"rho": rho or [1.0], "t_atk": t_atk or [3.0], "speed": speed or [1.5]}
             spec = SweepSpec(name, mode="grid", repeats=max(1, n // 4), seed=0, space=space, params=params or {},
-                             log_steps=True, detector=detector, traffic=traffic or {})
+                             log_steps=True, detector=detector, tables=tables or {})
         return spec.episodes()
     return make
 
@@ -188,7 +189,7 @@ _RACF_3 = replace(_RACF_2, name="racf-3", loop=_RACF_2.loop + (
 
 _RACF_4 = replace(_RACF_3, name="racf-4", loop=_RACF_3.loop + (
     LoopRow("traffic_strong", "random strong patch draws with cross-traffic timed to the conflict point", 60, 4,
-            _sweep("strong", "patch_occlusion", traffic={"cars": [1], "gap_s": 0.0, "speed": 1.0}), driving=True),))
+            _sweep("strong", "patch_occlusion", tables={"traffic": {"cars": [1], "gap_s": 0.0, "speed": 1.0}}), driving=True),))
 
 _STICKER_06 = {"texture": "learned-approach", "size": 0.6, "from_start": True}
 _STICKER_04_TOP = {"texture": "learned-approach", "size": 0.4, "position": "top", "from_start": True}

@@ -11,20 +11,28 @@ from pathlib import Path
 from racf.errors import Failure
 from racf.experiments.episode import TrialSpec
 
-__all__ = ["describe", "worker_died", "plugin_fault", "episode_words", "append_log", "LOG_NAME"]
+__all__ = ["describe", "worker_died", "plugin_fault", "episode_words", "params_words", "append_log", "LOG_NAME"]
 
 #: The file under a batch's results folder that holds its failures' tracebacks.
 LOG_NAME = "failures.log"
 
 
 def episode_words(spec: TrialSpec) -> str:
-    """``attack+odca sign1 v1.50 seed 3 (id ...)``: enough to find and rerun the episode."""
-    return f"{spec.setting} {spec.target}{spec.sign} v{spec.speed:.2f} seed {spec.seed} (id {spec.trial_id})"
+    """``attack+odca sign1 v1.50 seed 3 (id ...)``: enough to find and rerun the episode (a scenario's
+    parameters follow its name: ``stale_map[case=removed, shift_m=1.0]1``)."""
+    return (f"{spec.setting} {spec.target}{params_words(spec.scenario_params)}{spec.sign} v{spec.speed:.2f} "
+            f"seed {spec.seed} (id {spec.trial_id})")
+
+
+def params_words(values: dict) -> str:
+    """``[case=removed, shift_m=1.0]``: a scenario's parameter values ('' for a scenario without any)."""
+    return f"[{', '.join(f'{k}={v}' for k, v in values.items())}]" if values else ""
 
 
 def describe(spec: TrialSpec, err: BaseException) -> Failure:
     """The failure of ``spec``'s episode that ``err`` ended: the part named is the innermost frame
-    of the traceback that lies in one of the episode's parts (its estimator, attacks, detector)."""
+    of the traceback that lies in one of the episode's parts (its estimator, attacks, detector,
+    scenario with its world managers and criteria, metrics)."""
     where = _innermost(err, _parts(spec)) or "racf"
     return Failure(spec.trial_id, where, f"{type(err).__name__}: {err}", "".join(traceback.format_exception(err)),
                    episode_words(spec))
@@ -59,7 +67,8 @@ def _parts(spec: TrialSpec) -> list[tuple[str, Path]]:
     """(label, the file or package folder of its code) of each registered part the episode runs."""
     from racf.plugins import REGISTRIES
 
-    named = [("estimator", spec.estimator), *[("attack", a) for a in spec.attacks], ("detector", spec.detector)]
+    named = [("estimator", spec.estimator), *[("attack", a) for a in spec.attacks], ("detector", spec.detector),
+             ("scenario", spec.target), *[("metric", m) for m in spec.metric_names]]
     out = []
     for kind, name in named:
         plugin = REGISTRIES[kind].plugin(name)

@@ -26,19 +26,24 @@ Example (``experiments/sweeps/specs/smoke.toml``, with every optional field adde
     [estimators.odca]                # optional: an estimator's options (one value each)
     checkpoint = "outputs/odca-head" # a trained head instead of the shipped one
 
-    [traffic]                        # optional: cross-traffic at the stop sign (racf.sim.world.traffic)
-    cars = [0, 1]                    # each episode without and with one other car: the same seed
-    gap_s = 0.0                      # it passes the conflict point this long after the ego car would
-    speed = 1.0                      # its speed, m/s
-
     [scenario.parked_car]            # optional: the parameters `target`'s scenario declares, each a
     ahead_m = [0.5, 1.5]             # list of values; grid: every combination; random: crossed with each draw
+
+A scenario may also take a table of its own name at the top (``Scenario.table``): cross-traffic's
+``[traffic]`` lists its parameters (a value or a list each), and its ``control`` values (``cars =
+0``) stand for the plain approach, so ``cars = [0, 1]`` runs each episode without and with one other
+car, on the same seed::
+
+    [traffic]
+    cars = [0, 1]
+    gap_s = 0.0
+    speed = 1.0
 
 Attacks: any in ``racf.sim.attacks.ATTACKS`` (``patch_occlusion``, ``lidar_spoof``, ...) and
 ``+``-combinations of them; estimators: any in ``racf.experiments.episode.estimators.ESTIMATORS``
 (``raw``, ``odca``, ``ekf``, ``chronos``), plug-ins included. An episode's seed depends on its cell and repeat but not on the
 estimator or the attack's ``[params]``, so estimators (and the settings of an attack) meet
-identical episodes (paired comparisons); so do the ``[traffic]`` table's car counts. Everything is
+identical episodes (paired comparisons); so do the values of a scenario's own table. Everything is
 checked, with an error naming the field and what is allowed, before any episode runs.
 
 The same fields come as command-line flags (``racf sweep --mode random --n 50 --attack patch_occlusion
@@ -65,7 +70,6 @@ from racf.experiments.episode.spec import setting_name
 from racf.sim.attacks import ATTACKS
 from racf.sim.env.config import SENSOR_PROFILES
 from racf.sim.world.stop_signs import SIGN_GEOMETRIES
-from racf.sim.world.traffic import MAX_TRAFFIC_CARS
 
 __all__ = ["SweepSpec", "load_spec", "parse_spec", "spec_text", "spec_path", "SPACE_KEYS", "SPECS_DIR"]
 
@@ -75,9 +79,13 @@ SPACE_KEYS = {"attack": None, "estimator": None, "rho": (0.0, 1.0), "t_atk": (0.
 _DEFAULTS = {"attack": ["patch_occlusion"], "estimator": ["raw"], "rho": [0.95], "t_atk": [1.75], "speed": [1.5],
              "sign": [0, 1, 2, 3]}
 _TOP_KEYS = {"name", "mode", "repeats", "n", "seed", "space", "params", "estimators", "log_steps", "sensor_profile",
-             "sign_geometry", "detector", "traffic", "target", "scenario", "metrics", "estimator_endpoint",
+             "sign_geometry", "detector", "target", "scenario", "metrics", "estimator_endpoint",
              "estimator_timeout_ms"}
-_TRAFFIC_KEYS = {"cars": [0], "gap_s": 0.0, "speed": 1.0}
+
+
+def _scenario_tables() -> dict[str, str]:
+    """The top-level tables scenarios take in a spec (``Scenario.table``), table -> scenario."""
+    return {SCENARIOS[name].table: name for name in SCENARIOS if SCENARIOS[name].table}
 #: The example specs shipped with the project.
 SPECS_DIR = Path(__file__).resolve().parent / "specs"
 
@@ -98,7 +106,7 @@ class SweepSpec:
     sign_geometry: str = "plate"
     detector: str = "classical"
     estimators: dict = field(default_factory=dict)
-    traffic: dict = field(default_factory=dict)
+    tables: dict = field(default_factory=dict)
     target: str = "sign"
     scenario: dict = field(default_factory=dict)
     metrics: list = field(default_factory=list)
@@ -147,30 +155,58 @@ class SweepSpec:
             if self.mode == "random" and key in ("rho", "t_atk", "speed") and len(vals) != 2:
                 raise ValueError(f"space.{key} must be [low, high] in random mode, got {vals!r}")
         object.__setattr__(self, "space", space)
-        self._check_traffic()
+        self._check_tables()
         self._check_scenario()
         if not isinstance(self.metrics, list) or any(m not in METRICS for m in self.metrics):
             raise ValueError(f"metrics must be a list of metric names from {tuple(METRICS)}, got {self.metrics!r}")
         self._check_params()
         self._check_estimators()
 
-    def _check_traffic(self) -> None:
-        if not isinstance(self.traffic, dict):
-            raise ValueError("traffic must be a table ([traffic] with cars, gap_s, speed)")
-        unknown = sorted(set(self.traffic) - set(_TRAFFIC_KEYS))
-        if unknown:
-            raise ValueError(f"unknown field(s) {unknown} in [traffic]; allowed: {sorted(_TRAFFIC_KEYS)}")
-        cars = self.traffic.get("cars", [0])
-        if not isinstance(cars, list) or not cars or not all(
-                isinstance(c, int) and not isinstance(c, bool) and 0 <= c <= MAX_TRAFFIC_CARS for c in cars):
-            raise ValueError(f"traffic.cars must be a non-empty list of car counts in 0..{MAX_TRAFFIC_CARS}, got {cars!r}")
-        for key, low, high in (("gap_s", -5.0, 5.0), ("speed", 0.1, 3.0)):
-            value = self.traffic.get(key, _TRAFFIC_KEYS[key])
-            if isinstance(value, bool) or not isinstance(value, (int, float)) or not low <= value <= high:
-                raise ValueError(f"traffic.{key} must be a number in [{low}, {high}], got {value!r}")
+    def _check_tables(self) -> None:
+        """A scenario's own tables (``Scenario.table``): its parameters, a value or a list of values
+        each; a ``control`` value (the plain approach) is allowed beside the parameter's range."""
+        if not isinstance(self.tables, dict):
+            raise ValueError("tables must map a scenario's table name to its table")
+        known = _scenario_tables()
+        for table, content in self.tables.items():
+            if table not in known:
+                raise ValueError(f"unknown table [{table}]; scenarios' tables: {sorted(known)}")
+            scenario = SCENARIOS[known[table]]
+            if not isinstance(content, dict):
+                raise ValueError(f"{table} must be a table ([{table}] with {[p.name for p in scenario.params]})")
+            unknown = sorted(set(content) - {p.name for p in scenario.params})
+            if unknown:
+                raise ValueError(f"unknown field(s) {unknown} in [{table}]; allowed: "
+                                 f"{sorted(p.name for p in scenario.params)}")
+            for name, values in content.items():
+                listed = values if isinstance(values, list) else [values]
+                if not listed:
+                    raise ValueError(f"{table}.{name} must be a value or a non-empty list of values, got {values!r}")
+                for value in listed:
+                    if scenario.control.get(name, object()) != value:
+                        scenario.param(name).check(value, scenario.name)
+            if self.target not in (scenario.name, scenario.target) and any(
+                    combo for combo in self._table_combos(table)):
+                raise ValueError(f"[{table}] lists the parameters of scenario {scenario.name!r} (a {scenario.target} approach); target "
+                                 f"{self.target!r} cannot take it")
 
-    def _traffic_counts(self) -> list[int]:
-        return list(self.traffic.get("cars", [0]))
+    def _table_combos(self, table: str) -> list[dict]:
+        """Every combination of a scenario's table's values; {} for the control (the plain approach)."""
+        scenario = SCENARIOS[_scenario_tables()[table]]
+        content = {k: v if isinstance(v, list) else [v] for k, v in self.tables[table].items()}
+        combos = [dict(zip(content, combo)) for combo in itertools.product(*content.values())]
+        return [{} if any(scenario.control.get(k, object()) == v for k, v in combo.items()) else combo
+                for combo in combos]
+
+    def _situations(self) -> list[tuple[str, dict]]:
+        """(scenario, its parameters) of every episode of a cell: the scenario tables' combinations
+        (their control runs ``target``), each crossed with ``[scenario.<target>]``'s."""
+        out: list[tuple[str, dict]] = [(self.target, situation) for situation in self._scenario_combos()]
+        for table in self.tables:
+            name = _scenario_tables()[table]
+            out = [(name, combo | situation) if combo else (target, situation)
+                   for combo in self._table_combos(table) for target, situation in out]
+        return out
 
     def _check_scenario(self) -> None:
         """``target`` names a scenario; ``[scenario.<target>]`` gives lists of its parameters' values."""
@@ -188,9 +224,6 @@ class SweepSpec:
                 raise ValueError(f"scenario.{self.target}.{name} must be a non-empty list of values, got {values!r}")
             for value in values:
                 param.check(value, self.target)
-        if self.target != "sign" and self.traffic and max(self._traffic_counts()) > 0:
-            raise ValueError(f"[traffic] crosses at a stop sign (scenario 'cross_traffic'); target {self.target!r} "
-                             "cannot take it")
 
     def _scenario_combos(self) -> list[dict]:
         table = self.scenario.get(self.target, {})
@@ -244,7 +277,7 @@ class SweepSpec:
                          | ({"params": self.params} if self.params else {})
                          | ({"estimators": self.estimators} if self.estimators else {})
                          | ({"detector": self.detector} if self.detector != "classical" else {})
-                         | ({"traffic": self.traffic} if self.traffic else {})
+                         | self.tables
                          | ({"target": self.target} if self.target != "sign" else {})
                          | ({"scenario": self.scenario} if self.scenario else {})
                          | ({"metrics": self.metrics} if self.metrics else {}), sort_keys=True)
@@ -260,10 +293,9 @@ class SweepSpec:
                 for repeat in range(self.repeats):
                     seed = self._episode_seed(cell, repeat)
                     for params in self._param_combos(cell[0]):
-                        for cars in self._traffic_counts():
-                            for situation in self._scenario_combos():
-                                for estimator in s["estimator"]:
-                                    out.append(_trial(cell, estimator, seed, self, params, cars, situation))
+                        for target, situation in self._situations():
+                            for estimator in s["estimator"]:
+                                out.append(_trial(cell, estimator, seed, self, params, target, situation))
         else:
             rng = np.random.default_rng(self.seed)
             for i in range(self.n):
@@ -273,10 +305,9 @@ class SweepSpec:
                 seed = self._episode_seed(cell, i)
                 combos = self._param_combos(cell[0])
                 params = combos[rng.integers(len(combos))] if len(combos) > 1 else combos[0]
-                for cars in self._traffic_counts():
-                    for situation in self._scenario_combos():
-                        for estimator in s["estimator"]:
-                            out.append(_trial(cell, estimator, seed, self, params, cars, situation))
+                for target, situation in self._situations():
+                    for estimator in s["estimator"]:
+                        out.append(_trial(cell, estimator, seed, self, params, target, situation))
         return out
 
     def _episode_seed(self, cell: tuple, repeat: int) -> int:
@@ -297,20 +328,15 @@ def _attacks(value) -> tuple[str, ...]:
 
 
 def _trial(cell: tuple, estimator: str, seed: int, sweep: SweepSpec, params: dict | None = None,
-           traffic_cars: int = 0, situation: dict | None = None) -> TrialSpec:
+           target: str | None = None, situation: dict | None = None) -> TrialSpec:
     attack, rho, t_atk, speed, sign = cell
-    # [traffic] is the cross-traffic scenario's table by another name (cars = 0: the plain approach).
-    traffic = {"target": "cross_traffic", "scenario_params": {
-        "cars": traffic_cars, "gap_s": float(sweep.traffic.get("gap_s", 0.0)),
-        "speed": float(sweep.traffic.get("speed", 1.0))}} if traffic_cars else {
-        "target": sweep.target, "scenario_params": situation or {}}
     return TrialSpec(setting_name(_attacks(attack), estimator), int(sign), float(speed), seed,
                      rho=(float(rho), float(rho)), t_atk=(float(t_atk), float(t_atk)),
                      sensor_profile=sweep.sensor_profile, sign_geometry=sweep.sign_geometry,
                      attack_params=params or {}, detector=sweep.detector,
                      estimator_options=sweep.estimators.get(estimator, {}), metrics=tuple(sweep.metrics),
                      estimator_endpoint=sweep.estimator_endpoint, estimator_timeout_ms=sweep.estimator_timeout_ms,
-                     **traffic)
+                     target=target or sweep.target, scenario_params=situation or {})
 
 
 def spec_path(path: str | Path) -> Path:
@@ -335,9 +361,10 @@ def parse_spec(text: str, source: str = "spec", default_name: str = "sweep") -> 
         raw = tomllib.loads(text)
     except tomllib.TOMLDecodeError as err:
         raise ValueError(f"{source}: not valid TOML: {err}") from None
-    unknown = sorted(set(raw) - _TOP_KEYS)
+    tables = _scenario_tables()
+    unknown = sorted(set(raw) - _TOP_KEYS - set(tables))
     if unknown:
-        raise ValueError(f"{source}: unknown field(s) {unknown}; allowed: {sorted(_TOP_KEYS)}")
+        raise ValueError(f"{source}: unknown field(s) {unknown}; allowed: {sorted(_TOP_KEYS | set(tables))}")
     if "space" in raw and not isinstance(raw["space"], dict):
         raise ValueError(f"{source}: space must be a table ([space])")
     if not raw.get("space"):
@@ -351,7 +378,7 @@ def parse_spec(text: str, source: str = "spec", default_name: str = "sweep") -> 
                          sensor_profile=raw.get("sensor_profile", "qcar2"),
                          sign_geometry=raw.get("sign_geometry", "plate"),
                          detector=raw.get("detector", "classical"), estimators=raw.get("estimators", {}),
-                         traffic=raw.get("traffic", {}), target=raw.get("target", "sign"),
+                         tables={t: raw[t] for t in tables if t in raw}, target=raw.get("target", "sign"),
                          scenario=raw.get("scenario", {}), metrics=raw.get("metrics", []),
                          estimator_endpoint=raw.get("estimator_endpoint"),
                          estimator_timeout_ms=raw.get("estimator_timeout_ms", 50.0))

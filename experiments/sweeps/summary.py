@@ -10,11 +10,14 @@ the undetected error's median with a 95 % bootstrap interval (seeded: the same r
 same interval) and its largest value, the share of episodes whose attack the defence flagged
 (Wilson interval) and the median detection delay; the stop rule's STL robustness
 (``episode.robustness``): its median with a bootstrap interval, 5th percentile and lowest value,
-and the share of episodes that broke the rule (robustness < 0, Wilson interval); with
-cross-traffic (``episode.conflict``), the collision rate (Wilson interval; under an attack also
-over the episodes whose attack began before t*), the conflict outcomes and the smallest
-time-to-collision. A plug-in metric's fields are summarised by their declared kind (a rate with its
-Wilson interval, a median with its bootstrap interval). Strict JSON: None, never NaN.
+and the share of episodes that broke the rule (robustness < 0, Wilson interval); each criterion of
+the rows' scenarios, a pass rate with its Wilson interval where its rule applies; a scenario's own
+metrics (cross-traffic's collision rate, conflict outcomes and smallest time-to-collision). A
+plug-in metric's fields are summarised by their declared kind (a rate with its Wilson interval, a
+median with its bootstrap interval). Strict JSON: None, never NaN.
+
+Rows are grouped by setting and by the scenario's parameters (:func:`setting_key`): a sweep over a
+scenario's parameters gives one summary per combination.
 """
 
 from __future__ import annotations
@@ -22,11 +25,14 @@ from __future__ import annotations
 import pandas as pd
 
 from racf.experiments.episode.spec import parse_setting
-from racf.experiments.metrics.builtin import conflict_summary, robustness_summary, stealth_summary
-from racf.plugins import METRICS
+from racf.experiments.metrics.builtin import robustness_summary, stealth_summary
+from racf.plugins import METRICS, SCENARIOS
 
 __all__ = ["summarize", "summarize_settings", "summarised_metrics", "plugin_measures", "stealth_summary", "robustness_summary",
-           "conflict_summary", "setting_key"]
+           "setting_key", "scenario_label", "SCENARIO_PREFIX"]
+
+#: A result row's scenario parameter ``name`` is its column ``scenario_<name>``.
+SCENARIO_PREFIX = "scenario_"
 
 
 def summarize(results: pd.DataFrame, attack: bool | None = None) -> dict:
@@ -75,16 +81,35 @@ def plugin_measures(rows: pd.DataFrame, attacked: bool) -> list[dict]:
     return measures
 
 
-def setting_key(setting: str, traffic_cars: int = 0) -> str:
-    """How summaries name a setting: with other cars, ``SETTING@trafficN``."""
-    return f"{setting}@traffic{int(traffic_cars)}" if traffic_cars else str(setting)
+def scenario_label(row) -> str:
+    """``stale_map[case=removed, shift_m=1.0]``: a row's scenario with its parameter values ('' for a
+    scenario without parameters). ``row``: a result row (a dict or a pandas row)."""
+    target = row.get("target")
+    names = [p.name for p in SCENARIOS[target].params] if target in SCENARIOS else \
+        [k[len(SCENARIO_PREFIX):] for k in row.keys() if str(k).startswith(SCENARIO_PREFIX)]
+    values = [(name, row.get(SCENARIO_PREFIX + name)) for name in names]
+    values = [(name, value) for name, value in values if value is not None and not (isinstance(value, float)
+                                                                                    and pd.isna(value))]
+    return f"{target}[{', '.join(f'{k}={_plain(v)}' for k, v in values)}]" if values else ""
+
+
+def _plain(value):
+    """A number as a table shows it: 1.0 not numpy.float64(1.0), 1 not 1.0 for a whole count."""
+    if hasattr(value, "item"):
+        value = value.item()
+    return value
+
+
+def setting_key(row) -> str:
+    """How summaries name a row's group: its setting, then ``@`` and its scenario with its parameters
+    when the scenario has any (``attack@cross_traffic[cars=1, gap_s=0.0, speed=1.0]``)."""
+    label = scenario_label(row)
+    return f"{row['setting']}@{label}" if label else str(row["setting"])
 
 
 def summarize_settings(frame: pd.DataFrame) -> dict[str, dict]:
-    """:func:`summarize` per setting (and per traffic, ``setting_key``), in sorted order."""
+    """:func:`summarize` per setting and scenario parameters (``setting_key``), in sorted order."""
     if frame.empty:
         return {}
-    cars = pd.to_numeric(frame["traffic_cars"], errors="coerce").fillna(0).astype(int) if "traffic_cars" in frame \
-        else pd.Series(0, index=frame.index)
-    keys = [setting_key(s, c) for s, c in zip(frame["setting"], cars)]
+    keys = [setting_key(row) for row in frame.to_dict("records")]
     return {key: summarize(rows) for key, rows in frame.groupby(pd.Series(keys, index=frame.index), sort=True)}

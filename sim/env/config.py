@@ -13,7 +13,6 @@ from racf.sim.sensors.localiser import LOCALISATIONS, LocaliserConfig
 from racf.sim.sensors.state import OdometryConfig
 from racf.sim.vehicle.qcar2 import VehicleConfig
 from racf.sim.world.stop_signs import SignGeometry
-from racf.sim.world.traffic import MAX_TRAFFIC_CARS
 
 __all__ = ["EnvConfig", "RESET_OPTIONS", "LOCALISATIONS", "SENSOR_PROFILES"]
 
@@ -29,7 +28,7 @@ SENSOR_PROFILES: dict[str, dict[str, Any]] = {
 
 #: Keys ``reset(options=...)`` accepts.
 RESET_OPTIONS = ("sign", "obstacle", "cruise_speed", "run_up_m", "route", "start_s_m", "lateral_offset_m",
-                 "heading_error_rad", "crate", "traffic")
+                 "heading_error_rad", "crate")
 
 
 @dataclass(frozen=True)
@@ -59,10 +58,9 @@ class EnvConfig:
         max_episode_s: episode time limit (truncation).
         off_road_m: lateral distance from the route's lane centre that ends the episode.
         render_width, render_height: size of ``render()`` frames.
-        traffic_cars: how many other cars the model holds (0..``MAX_TRAFFIC_CARS``); an episode
-            drives as many as its ``options["traffic"]`` lists and parks the rest out of sight.
-        world: a scenario's world managers (``racf.sim.env.world.WorldManager``): bodies added to the
-            map and driven at each reset and physics step; each may read one more reset option.
+        world: a scenario's world managers (``racf.sim.world.manager.WorldManager``): bodies added to
+            the map and driven at each reset and physics step; each may read one more reset option
+            and log its own ground-truth columns.
     """
 
     sensor_profile: str = "qcar2"
@@ -84,7 +82,6 @@ class EnvConfig:
     off_road_m: float = 0.30
     render_width: int = 640
     render_height: int = 480
-    traffic_cars: int = 0
     world: tuple = ()
 
     def __post_init__(self) -> None:
@@ -114,9 +111,6 @@ class EnvConfig:
             raise ValueError(f"max_episode_s must be in [0.1, 3600] s, got {self.max_episode_s}")
         if not 0.05 <= self.off_road_m <= 2.0:
             raise ValueError(f"off_road_m must be in [0.05, 2] m, got {self.off_road_m}")
-        if not (isinstance(self.traffic_cars, int) and not isinstance(self.traffic_cars, bool)
-                and 0 <= self.traffic_cars <= MAX_TRAFFIC_CARS):
-            raise ValueError(f"traffic_cars must be an int in 0..{MAX_TRAFFIC_CARS}, got {self.traffic_cars!r}")
         _check_world(self.world)
         if not (16 <= self.render_width <= 1280 and 12 <= self.render_height <= 960):
             raise ValueError(f"render size must be within 1280x960 px, got {self.render_width}x{self.render_height}")
@@ -172,11 +166,15 @@ class EnvConfig:
 
 
 def _check_world(world: Any) -> None:
-    from racf.sim.env.world import WorldManager
+    from racf.sim.world.manager import WorldManager
 
     if not isinstance(world, tuple) or not all(isinstance(m, WorldManager) for m in world):
-        raise ValueError(f"world must be a tuple of racf.sim.env.world.WorldManager, got {world!r}")
+        raise ValueError(f"world must be a tuple of racf.sim.world.manager.WorldManager, got {world!r}")
     options = [m.option for m in world if m.option]
     taken = sorted({o for o in options if options.count(o) > 1 or o in RESET_OPTIONS})
     if taken:
         raise ValueError(f"world managers read reset option(s) {taken} that another part reads; give each its own")
+    columns = [c.name for m in world for c in m.columns()]
+    twice = sorted({c for c in columns if columns.count(c) > 1})
+    if twice:
+        raise ValueError(f"world managers log column(s) {twice} that another manager logs; give each its own")

@@ -29,7 +29,7 @@ from gymnasium import spaces
 
 from racf.sim._gl import ensure_gl_backend, gl_context_class
 from racf.sim.env.config import RESET_OPTIONS, EnvConfig
-from racf.sim.env.world import TrafficManager, WorldManager
+from racf.sim.world.manager import WorldManager
 from racf.sim.env.ground_truth import Motion, SignView, obstacle_view, sign_view, target_centre, with_centre_from
 from racf.sim.sensors import (TIMESTAMP_FIELDS, DepthCamera, Lidar2D, LocalisationFix, RGBCamera, RGBDCameraRig, Sensor,
                          VehicleStateSensor)
@@ -87,16 +87,18 @@ class QCar2Env(gym.Env):
       ``route_plan.PASS_LINE_M`` past the current one's stop line (``info["target_slot"]``).
 
     Ground truth is in ``info`` (the ``sign_*`` keys describe the current target, sign or
-    crate; ``target_kind`` says which): ``d_true`` (target depth along the camera axis, m),
-    ``d_true_euclid``, ``sign_bearing``, ``sign_mask``, ``sign_in_view``, ``pose``,
-    ``speed``, ``route_s``, ``lateral_error``, ``dist_to_stop_line`` (front bumper to the
-    stop line along the route, m; negative once past it), ``collision``, ``collision_with``
-    (what the car first touched: ``traffic0``.. or a geom's name; None), ``traffic`` ((n, 4) x,
-    y, yaw, speed of each other car), ``off_road``.
+    crate; ``target_kind`` says which), read from the world after every manager acted (the
+    target's body pose, not the map's record: ``racf.sim.env.ground_truth``): ``d_true``
+    (target depth along the camera axis, m), ``d_true_euclid``, ``sign_bearing``,
+    ``sign_mask``, ``sign_in_view``, ``target_stands`` (its body stands on the floor: False for a
+    sign taken away), ``pose``, ``speed``, ``route_s``, ``lateral_error``,
+    ``dist_to_stop_line`` (front bumper to the stop line along the route, m; negative once past
+    it), ``collision``, ``collision_with`` (what the car first touched: a world manager's name for
+    its body, else a geom's name; None), ``off_road``, and what each world manager reports.
 
-    Other cars (``racf.sim.world.traffic``): the model holds ``traffic_cars`` of them, and the
-    reset option ``traffic`` (a list of ``TrafficCar.to_options()`` dicts) drives as many; the
-    rest wait out of every sensor's sight.
+    World managers (the setting ``world``: ``racf.sim.world.manager``) add bodies, read a reset
+    option each and log their own ground truth; the env knows none of them (other cars are one:
+    ``racf.sim.world.traffic_manager``).
     ``info["lidar_time"]`` repeats the LiDAR's timestamp (the LiDAR scans at ``lidar_hz``,
     10 Hz by default, like the A2M12). ``sign_mask`` and ``sign_in_view`` describe the
     held camera frame, ``d_true`` and ``sign_bearing`` the car's pose now. The car's side
@@ -124,14 +126,13 @@ class QCar2Env(gym.Env):
         self.render_mode = render_mode
         self.metadata = {**self.metadata, "render_fps": self.config.control_hz}
 
-        # The world's managers: other cars, then what the env's ``world`` setting brings (a scenario's).
-        self.traffic = TrafficManager(self.config.traffic_cars)
-        self.world: tuple[WorldManager, ...] = (self.traffic, *self.config.world)
+        # The world's managers: what the env's ``world`` setting brings (a scenario's); the env knows none.
+        self.world: tuple[WorldManager, ...] = tuple(self.config.world)
         self.model = load_model(sign_geometry=self.config.sign,
                                 world_xml="".join(manager.scene_xml() for manager in self.world))
         for manager in self.world:
             manager.bind(self.model)
-        self._reset_options = (*RESET_OPTIONS, *(m.option for m in self.config.world if m.option))
+        self._reset_options = (*RESET_OPTIONS, *(m.option for m in self.world if m.option))
         self.model.opt.timestep = self.config.physics_dt_s
         self.data = mujoco.MjData(self.model)
         self.car = QCar2(self.model, self.config.vehicle)
@@ -331,7 +332,8 @@ class QCar2Env(gym.Env):
         return False
 
     def _name_of(self, geom: int) -> str:
-        """What a geom belongs to: ``traffic0``.. for an other car, else the geom's (or its body's) name."""
+        """What a geom belongs to: what a world manager calls its body (``WorldManager.owner_of``), else
+        the geom's (or its body's) name."""
         body = int(self.model.geom_bodyid[geom])
         root = int(self.model.body_rootid[body])
         for manager in self.world:
@@ -339,10 +341,6 @@ class QCar2Env(gym.Env):
             if owner is not None:
                 return owner
         return self.model.geom(geom).name or self.model.body(body).name or f"geom{geom}"
-
-    def traffic_states(self) -> np.ndarray:
-        """(n, 4) x, y, yaw, speed of each driven other car now (ground truth, like ``info``)."""
-        return self.traffic.states(self._substep)
 
     # -- internals ------------------------------------------------------------------------
     def _rng_of(self, sensor: Sensor) -> np.random.Generator:
@@ -359,7 +357,7 @@ class QCar2Env(gym.Env):
         while self._substep < end:
             # Step to the next physics step where a sensor acts (every one while the LiDAR sweeps).
             nxt = self._substep + 1
-            if not self._sweeping and not self._moving:  # a moving world (other cars) acts every physics step
+            if not self._sweeping and not self._moving:  # a moving world acts every physics step
                 while nxt < end and (not frames or self._frames_due(nxt) == self._frames):
                     nxt += 1
             for manager in self._moving:
@@ -444,10 +442,9 @@ class QCar2Env(gym.Env):
             "dist_to_stop_line": self._targets[self._slot].stop_s - (self._route_s + self._bumper_ahead_m),
             "collision": collision,
             "collision_with": self._collision_with,
-            "traffic": self.traffic_states(),
             "off_road": off_road,
             "time": self._step / self.config.control_hz,
-            **{key: value for manager in self.config.world for key, value in manager.info(self._substep).items()},
+            **{key: value for manager in self.world for key, value in manager.info(self._substep).items()},
         }
 
     # Route and sign, for controllers and experiments that plan on the road graph.

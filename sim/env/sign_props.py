@@ -1,6 +1,6 @@
 """The stop signs as a stale map meets them: a mapped sign taken away, and a phantom put up.
 
-:class:`SignPropsManager` is a world manager (:mod:`racf.sim.env.world`). At each reset it reads
+:class:`SignPropsManager` is a world manager (:mod:`racf.sim.world.manager`). At each reset it reads
 the option ``sign_props`` (``{"remove": i, "phantom": j}``, either None) and
 
 - takes stop sign ``i`` off the map's floor (its body goes under the floor, out of every
@@ -22,7 +22,7 @@ from typing import Any
 import mujoco
 import numpy as np
 
-from racf.sim.env.world import WorldManager
+from racf.sim.world.manager import WorldManager
 
 __all__ = ["SignPropsManager", "PHANTOM_PANEL_M", "PHANTOM_BODY"]
 

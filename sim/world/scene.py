@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import math
 import os
-import xml.etree.ElementTree as ET
 from functools import lru_cache
 from pathlib import Path
 
@@ -35,8 +34,7 @@ from racf.sim.world.stop_signs import (  # noqa: E402
 )
 
 __all__ = ["ASSETS_DIR", "build_scene_xml", "load_model", "PROP_GEOM_GROUP", "CAR_GEOM_GROUP", "HIDDEN_GEOM_GROUP",
-           "patch_geom", "patch_texture", "TRAFFIC_GEOM_GROUP", "traffic_body", "traffic_paint_geoms",
-           "traffic_xml", "PARKED_Z_M"]
+           "patch_geom", "patch_texture", "sign_body", "obstacle_body", "car_xml"]
 
 ASSETS_DIR = Path(os.environ["RACF_ASSETS"]) if "RACF_ASSETS" in os.environ else asset_path("qcar2_map")
 #: Geom groups: 0 map and props (seen by camera and LiDAR), 3 the car (skipped by the LiDAR).
@@ -53,15 +51,6 @@ _PATCH_HALF_THICKNESS_M = 0.0001
 HIDDEN_GEOM_GROUP = 5
 #: The yield signs' pole (their build is not a scenario parameter).
 _POLE_RADIUS_M = 0.004
-#: Geom group of the other cars: seen by the camera and the LiDARs (groups 0-2), unlike the ego car's.
-TRAFFIC_GEOM_GROUP = 2
-#: Where an other car the episode does not use waits: below the floor, out of every sensor's sight.
-PARKED_Z_M = -5.0
-#: The other cars' geoms that carry their colour.
-_PAINTED = ("shell", "chassis")
-#: Elements of the car's body that an other car leaves out: it is kinematic (a mocap body) and
-#: carries no sensors.
-_NOT_IN_TRAFFIC = {"freejoint", "joint", "inertial", "camera", "site"}
 
 
 def _octagon_mesh(name: str, across_flats: float, thickness: float) -> str:
@@ -180,49 +169,10 @@ def _obstacle_xml(index: int, x: float, y: float, yaw: float) -> str:
     </body>"""
 
 
-def traffic_body(index: int) -> str:
-    """Name of other car ``index``'s (mocap) body."""
-    return f"traffic_{index}"
-
-
-def traffic_paint_geoms(index: int) -> tuple[str, ...]:
-    """Names of other car ``index``'s geoms that carry its colour."""
-    return tuple(f"traffic_{index}_{name}" for name in _PAINTED)
-
-
-def traffic_xml(index: int, car_xml: bytes) -> str:
-    """Other car ``index``: the QCar 2's own bodies and geoms (from its MJCF), welded to one mocap
-    body, renamed, in a group every sensor sees, colliding with the ego car's chassis only."""
-    root = ET.fromstring(car_xml)
-    body = next(b for b in root.iter("body") if b.get("name") == "qcar")
-    body = ET.fromstring(ET.tostring(body))  # a copy to edit
-
-    def strip(element: ET.Element) -> None:
-        for child in list(element):
-            if child.tag in _NOT_IN_TRAFFIC:
-                element.remove(child)
-            else:
-                strip(child)
-        if element.get("name"):
-            element.set("name", f"traffic_{index}_{element.get('name')}")
-        if element.tag == "geom":
-            # Contact bits: type 4 (no other car, wheel or floor has it in its affinity), affinity 2
-            # (the ego chassis's type): a crash with the ego car registers, nothing else costs a contact.
-            element.set("group", str(TRAFFIC_GEOM_GROUP))
-            if element.get("class") != "qcar_visual":
-                element.set("contype", "4")
-                element.set("conaffinity", "2")
-    strip(body)
-    body.set("name", traffic_body(index))
-    body.set("mocap", "true")
-    body.set("pos", f"0 0 {PARKED_Z_M}")
-    return "\n    " + ET.tostring(body, encoding="unicode")
-
-
 def build_scene_xml(sign_geometry: SignGeometry = PLATE_IN_SCAN, world_xml: str = "") -> str:
     """The full MJCF text of the map with the car (the car's file is an include), the stop
     signs built to ``sign_geometry``, and the bodies the env's world managers add
-    (``world_xml``: ``racf.sim.env.world``; other cars, a scenario's props)."""
+    (``world_xml``: ``racf.sim.world.manager``; a scenario's props and actors)."""
     x0, x1, y0, y1 = map_facts.WALL_BOUNDS_M
     cx, cy, sx, sy = (x0 + x1) / 2, (y0 + y1) / 2, (x1 - x0) / 2, (y1 - y0) / 2
     props = "".join(_stop_sign_xml(s.index, *s.position, s.face_yaw, s.geometry) for s in stop_signs(sign_geometry))
@@ -273,16 +223,16 @@ def _compiled_xml_and_assets(sign_geometry: SignGeometry, world_xml: str) -> tup
     return build_scene_xml(sign_geometry, world_xml), (("qcar2.xml", car), ("mat.png", mat_png_bytes()))
 
 
-def load_model(sign_geometry: SignGeometry = PLATE_IN_SCAN, traffic_cars: int = 0, world_xml: str = "") -> mujoco.MjModel:
+def car_xml() -> bytes:
+    """The QCar 2's MJCF (a scenario that adds other cars copies their bodies from it)."""
+    return (ASSETS_DIR / "qcar2.xml").read_bytes()
+
+
+def load_model(sign_geometry: SignGeometry = PLATE_IN_SCAN, world_xml: str = "") -> mujoco.MjModel:
     """Compiles a fresh ``MjModel`` of the map with the car (each caller gets its own copy),
-    the stop signs built to ``sign_geometry``, ``traffic_cars`` other cars and the bodies of
-    ``world_xml`` (the MJCF text is cached per geometry and world)."""
+    the stop signs built to ``sign_geometry`` and the bodies of ``world_xml`` (the world
+    managers'; the MJCF text is cached per geometry and world)."""
     if not isinstance(sign_geometry, SignGeometry):
         raise TypeError(f"sign_geometry must be a SignGeometry, got {type(sign_geometry).__name__}")
-    if not isinstance(traffic_cars, int) or isinstance(traffic_cars, bool) or traffic_cars < 0:
-        raise ValueError(f"traffic_cars must be an int >= 0, got {traffic_cars!r}")
-    if traffic_cars:
-        car_xml = (ASSETS_DIR / "qcar2.xml").read_bytes()
-        world_xml = "".join(traffic_xml(k, car_xml) for k in range(traffic_cars)) + world_xml
     xml, assets = _compiled_xml_and_assets(sign_geometry, world_xml)
     return mujoco.MjModel.from_xml_string(xml, assets=dict(assets))

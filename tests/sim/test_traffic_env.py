@@ -1,4 +1,5 @@
-"""Other cars in the env: every sensor sees them, a touch is a collision, and they are parked when unused."""
+"""Other cars in the env (cross-traffic's world manager): every sensor sees them, a touch is a collision,
+they are parked when unused, and they log their own ground truth."""
 
 import gymnasium as gym
 import numpy as np
@@ -7,11 +8,12 @@ import pytest
 from racf import sim
 from racf.sim.world.scene import load_model
 from racf.sim.world.traffic import TrafficCar
+from racf.sim.world.traffic_manager import TrafficManager
 
 
 @pytest.fixture(scope="module")
 def env():
-    e = gym.make(sim.ENV_ID, traffic_cars=2, camera_width=320, camera_height=240)
+    e = gym.make(sim.ENV_ID, world=(TrafficManager(2),), camera_width=320, camera_height=240)
     yield e
     e.close()
 
@@ -26,7 +28,7 @@ def _parked_ahead(s_m: float = 1.56) -> dict:
 
 
 def test_the_model_holds_the_other_cars_as_copies_of_the_qcar(env):
-    model = load_model(traffic_cars=2)
+    model = load_model(world_xml=TrafficManager(2).scene_xml())
     assert model.nmocap == 2
     ego = {model.geom(i).name for i in range(model.ngeom) if model.geom_bodyid[i] and
            model.body(model.body_rootid[model.geom_bodyid[i]]).name == "qcar"}
@@ -88,12 +90,14 @@ def test_bad_traffic_options_name_the_problem(env):
         env.reset(options={"sign": 2, "traffic": [_parked_ahead()] * 3})
     with pytest.raises(ValueError, match="list of other cars"):
         env.reset(options={"sign": 2, "traffic": {"route": [4, 14]}})
-    with pytest.raises(ValueError, match="traffic_cars"):
-        gym.make(sim.ENV_ID, traffic_cars=9)
+    with pytest.raises(ValueError, match=r"cars must be an int in 0\.\.4"):
+        TrafficManager(9)
+    with pytest.raises(ValueError, match="conflict_xy"):
+        env.reset(options={"sign": 2, "traffic": {"cars": [], "conflict_xy": 3.0}})
 
 
 def test_the_ideal_lidar_sees_another_car_too():
-    env = gym.make(sim.ENV_ID, traffic_cars=1, sensor_profile="ideal", camera_width=160, camera_height=120)
+    env = gym.make(sim.ENV_ID, world=(TrafficManager(1),), sensor_profile="ideal", camera_width=160, camera_height=120)
     try:
         obs0, _ = env.reset(seed=0, options={**SIGN1, "cruise_speed": 0.0})
         obs1, info = env.reset(seed=0, options={**SIGN1, "cruise_speed": 0.0, "traffic": [_parked_ahead()]})
@@ -104,3 +108,13 @@ def test_the_ideal_lidar_sees_another_car_too():
     front = lambda scan: np.concatenate([scan[-3:], scan[:4]])  # noqa: E731
     assert np.nanmin(front(obs1["lidar"])) == pytest.approx(ahead - 0.038, abs=0.04)
     assert np.nanmin(front(obs0["lidar"])) > ahead + 0.5
+
+
+def test_the_cars_and_the_conflict_point_are_declared_columns_of_the_managers_info(env):
+    _, info = env.reset(seed=0, options={**SIGN1, "cruise_speed": 0.0,
+                                         "traffic": {"cars": [_parked_ahead()], "conflict_xy": [1.0, 2.0]}})
+    manager = env.unwrapped.world[0]
+    names = [c.name for c in manager.columns()]
+    assert set(names) <= set(info) and len(names) == len(set(names)) == 2 + 4 * 4
+    assert (info["conflict_x"], info["conflict_y"]) == (1.0, 2.0)
+    assert info["traffic0_x"] == pytest.approx(info["traffic"][0][0]) and np.isnan(info["traffic1_x"])

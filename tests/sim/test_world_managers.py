@@ -8,7 +8,8 @@ import pytest
 
 import racf.sim as sim
 from racf.sim.env.config import EnvConfig
-from racf.sim.env.world import TrafficManager, WorldManager
+from racf.sim.env.world import TruthColumn, WorldManager
+from racf.sim.world.traffic_manager import TrafficManager
 
 
 class _Marker(WorldManager):
@@ -47,7 +48,7 @@ def test_the_env_places_a_managers_body_and_reports_it_in_info_only():
     try:
         obs, info = env.reset(seed=0, options={"sign": 2, "cruise_speed": 1.0, "marker": (1.0, 2.0)})
         base = env.unwrapped
-        assert np.allclose(base.data.mocap_pos[base.world[1]._mocap][:2], (1.0, 2.0))
+        assert np.allclose(base.data.mocap_pos[base.world[0]._mocap][:2], (1.0, 2.0))
         assert info["marker_placed"] and "marker_placed" not in obs
         with pytest.raises(ValueError, match="unknown reset option"):
             gym.make(sim.ENV_ID, camera_width=160, camera_height=120).reset(options={"marker": (0, 0)})
@@ -59,4 +60,19 @@ def test_two_parts_may_not_read_the_same_reset_option():
     with pytest.raises(ValueError, match=r"reset option\(s\) \['marker'\]"):
         EnvConfig(world=(_Marker(0.1), _Marker(0.2)))
     with pytest.raises(ValueError, match=r"reset option\(s\) \['traffic'\]"):
-        EnvConfig(world=(TrafficManager(1),))
+        EnvConfig(world=(TrafficManager(1), TrafficManager(2)))
+
+
+def test_two_managers_may_not_log_the_same_column():
+    class _Twin(_Marker):
+        option = "twin"
+
+        def columns(self):
+            return (TruthColumn("marker_placed", "bool", "placed"),)
+
+    class _Placed(_Marker):
+        def columns(self):
+            return (TruthColumn("marker_placed", "bool", "placed"),)
+
+    with pytest.raises(ValueError, match=r"log column\(s\) \['marker_placed'\]"):
+        EnvConfig(world=(_Placed(), _Twin()))

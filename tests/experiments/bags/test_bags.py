@@ -44,7 +44,8 @@ def test_a_replay_gives_back_the_episode_to_the_bit(exported):
     assert_same(exported.log, replay.log)
     # The bag carries ground truth: the referee's columns come back too, and the offline scores use them.
     assert np.array_equal(exported.log["d_true"].to_numpy(), replay.log["d_true"].to_numpy(), equal_nan=True)
-    assert replay.scores["rmse_m"] is not None and "traffic0_x" in replay.absent
+    assert replay.scores["rmse_m"] is not None and "d_true" not in replay.absent
+    assert set(replay.absent).isdisjoint(replay.log.columns)
 
 
 def test_the_bag_opens_with_rosbags_and_with_mcap_at_the_sensors_rates(exported):

@@ -5,6 +5,7 @@ import pytest
 from racf.experiments.bench.traffic_views import CASES, _other_car, measure_case
 from racf.experiments.cli import main
 from racf.experiments.episode import TrialSpec, run_trial
+from racf.sim.world.traffic_manager import TrafficManager
 
 
 def test_the_between_car_hides_part_of_the_sign_when_it_says():
@@ -23,7 +24,7 @@ def test_the_between_car_hides_part_of_the_sign_when_it_says():
     from racf.experiments.episode.stack import default_env
 
     run_trial(spec, on_step=keep("empty"), clean_pass=False)
-    run_trial(spec, make_env=lambda s: _WithCar(default_env(s, traffic_cars=1), car), on_step=keep("traffic"),
+    run_trial(spec, make_env=lambda s: _WithCar(default_env(s, world=(TrafficManager(1),)), car), on_step=keep("traffic"),
               clean_pass=False)
     # The sign's visible face (ground truth) shrinks: the other car stands in the line of sight.
     assert masks["traffic"] < 0.7 * masks["empty"]

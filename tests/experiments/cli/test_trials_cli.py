@@ -41,5 +41,9 @@ def test_cli_trial_with_traffic_reports_the_conflict(tmp_path, capsys):
     out = json.loads(capsys.readouterr().out)
     assert out["traffic_cars"] == 1 and out["conflict"] == "yielded" and out["collision"] is False
     assert pd.read_parquet(out["log"])["traffic0_x"].notna().all()
-    assert main(["trial", "--traffic-gap", "1.0"]) == 2
-    assert "need --traffic-cars" in capsys.readouterr().err
+    # The flags are cross-traffic's parameters by older names: a sign approach's only, in its ranges.
+    assert out["target"] == "cross_traffic" and out["scenario_cars"] == 1
+    assert main(["trial", "--traffic-gap", "1.0", "--target", "obstacle"]) == 2
+    assert "--traffic-gap set scenario 'cross_traffic' (a sign approach); --target obstacle" in capsys.readouterr().err
+    assert main(["trial", "--traffic-cars", "9"]) == 2
+    assert "parameter 'cars' must be an int in [1, 4]" in capsys.readouterr().err

@@ -2,7 +2,7 @@
 
 import pandas as pd
 
-from racf.experiments.metrics.existence import NEEDLESS_STOP_PENALTY, Existence
+from racf.experiments.metrics.existence import Existence
 
 
 class _Episode:
@@ -19,15 +19,15 @@ def _log(stands: bool, stops: bool) -> pd.DataFrame:
                          "dist_to_stop_line": dist, "ideal_brake": brake, "confirmed": brake})
 
 
-def test_a_stop_where_no_sign_stands_is_needless_and_costs_the_driving_score():
+def test_a_stop_where_no_sign_stands_is_needless():
     scored = Existence().score(_Episode(_log(stands=False, stops=True)))
-    assert scored == {"sign_stands": False, "needless_stop": True, "driving_score": NEEDLESS_STOP_PENALTY}
+    assert scored == {"sign_stands": False, "needless_stop": True}
     assert Existence().score(_Episode(_log(stands=False, stops=False)))["needless_stop"] is False
 
 
 def test_where_a_sign_stands_there_is_no_needless_stop_to_score():
     scored = Existence().score(_Episode(_log(stands=True, stops=False)))
-    assert scored["sign_stands"] is True and "needless_stop" not in scored and scored["driving_score"] == 0.80
+    assert scored == {"sign_stands": True}
 
 
 def test_the_rate_counts_only_episodes_without_a_sign():

@@ -31,8 +31,8 @@ def test_racfs_own_metrics_declare_the_result_rows_columns_once():
     columns = [f.name for n in names for f in METRICS[n].fields]
     assert len(columns) == len(set(columns)) and not set(columns) & set(IDENTITY)
     always = [f.name for n in names if METRICS[n].always for f in METRICS[n].fields]
-    assert always[:4] == ["rho", "t_atk_s", "attack_start_s", "lost_frames"] and always[-1] == "traffic_cars"
-    # Those asked for (stale_map: existence; an estimator run by racf serve: service) come after
-    # every episode's columns.
-    assert [n for n in names if not METRICS[n].always] == ["existence", "service"]
-    assert columns[len(always):len(always) + 3] == ["sign_stands", "needless_stop", "driving_score"]
+    assert always[:4] == ["rho", "t_atk_s", "attack_start_s", "lost_frames"] and always[-1] == "driving_score"
+    # Those asked for (cross_traffic: conflict; stale_map: existence; an estimator run by racf serve:
+    # service) stand in the order their metrics declare; none names a field twice.
+    assert [n for n in names if not METRICS[n].always] == ["conflict", "existence", "service"]
+    assert ["sign_stands", "needless_stop"] == [f.name for f in METRICS["existence"].fields]

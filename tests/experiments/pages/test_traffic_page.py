@@ -2,7 +2,7 @@
 
 import json
 
-from racf.experiments.pages.traffic_page import TRAFFIC_RESULTS, traffic_markdown
+from racf.experiments.pages.traffic_page import TRAFFIC_RESULTS, crossed_key, traffic_markdown
 
 META = {"commit": "abc", "racf": "0.1.0", "measured": "2026-11-26", "machine": "2 CPU cores, no GPU",
         "command": "racf sweep cross-traffic.toml", "sensor_profile": "qcar2"}
@@ -26,7 +26,7 @@ def test_without_stored_results_the_page_names_each_command(tmp_path):
 
 
 def test_the_sweep_table_pairs_each_setting_with_its_traffic_twin(tmp_path):
-    data = {"meta": META, "settings": {"attack": _summary(8, 0.5), "attack@traffic1": _summary(8, 0.5, 3)},
+    data = {"meta": META, "settings": {"attack": _summary(8, 0.5), crossed_key("attack"): _summary(8, 0.5, 3)},
             "traffic": {"attack": {"n_pairs": 8, "n_outcome_changed": 1, "stop_distance_change_max_m": 0.01,
                                    "changed": [{"seed": 7, "sign": 1, "speed": 1.5, "empty": "success",
                                                 "traffic": "braked_late", "conflict": "near_miss",

@@ -33,7 +33,7 @@ def test_summary_has_the_protocol_keys_and_wilson_interval():
                          "lost_frames": [0] * 9 + [30], "attack_start_s": [math.nan] * 8 + [2.0, 1.2],
                          "t_star_s": [1.5] * 10})
     s = summarize(rows, attack=True)
-    assert set(s) == {"n", "scr", "scr_ci", "asr", "asr_ci", "trigger_delay_mean", "trigger_delay_std",
+    assert set(s) == {"n", "n_scr", "scr", "scr_ci", "asr", "asr_ci", "trigger_delay_mean", "trigger_delay_std",
                       "dt_brake_mean", "dt_brake_std", "n_latency", "failures", "lost_frames_mean", "attacked_share",
                       "n_attack_before_t_star", "scr_attack_before_t_star", "scr_attack_before_t_star_ci",
                       "max_fused_jump_m"}
@@ -68,20 +68,25 @@ def test_a_sweeps_report_gives_the_scr_of_episodes_attacked_before_t_star(tmp_pa
     assert "0.50 [" in (tmp_path / "summary.md").read_text()
 
 
-def test_with_traffic_the_summary_gives_the_collision_rate_and_keys_settings_apart():
+def test_a_scenarios_parameters_key_its_summaries_apart():
+    """Rows of one setting under a scenario's parameters group apart (cross-traffic's collision rate
+    with one car, none without), and the rows say which parameters made them."""
     from racf.experiments.sweeps.summary import summarize_settings
 
     base = {"setting": "attack", "trigger_delay_s": math.nan, "dt_brake_s": math.nan, "lost_frames": 0,
             "t_star_s": 1.5}
-    traffic = pd.DataFrame([{**base, "success": ok, "failure": None if ok else "confirmed_lost",
+    traffic = pd.DataFrame([{**base, "target": "cross_traffic", "scenario_cars": 1, "scenario_gap_s": 0.0,
+                             "scenario_speed": 1.0, "success": ok, "failure": None if ok else "confirmed_lost",
                              "attack_start_s": start, "traffic_cars": 1, "collision": hit,
                              "conflict": "collision" if hit else "yielded", "min_ttc_s": 0.0 if hit else 1.2}
                             for ok, start, hit in [(True, 1.0, False), (False, 1.0, True), (False, 2.0, True),
                                                    (True, 2.0, False)]])
-    empty = traffic.assign(traffic_cars=0, collision=False, conflict=None, min_ttc_s=math.nan)
+    empty = traffic.assign(target="sign", scenario_cars=None, scenario_gap_s=None, scenario_speed=None, collision=False)
+    empty = empty.drop(columns=["traffic_cars", "conflict", "min_ttc_s"])
     out = summarize_settings(pd.concat([traffic, empty], ignore_index=True))
-    assert set(out) == {"attack", "attack@traffic1"}
-    s = out["attack@traffic1"]
+    crossed = "attack@cross_traffic[cars=1, gap_s=0.0, speed=1.0]"
+    assert set(out) == {"attack", crossed}
+    s = out[crossed]
     assert s["n_traffic"] == 4 and s["collision_rate"] == 0.5
     assert s["collision_rate_ci"] == pytest.approx(list(wilson_interval(2, 4)))
     assert s["conflicts"]["collision"] == 2 and s["conflicts"]["yielded"] == 2
@@ -89,3 +94,7 @@ def test_with_traffic_the_summary_gives_the_collision_rate_and_keys_settings_apa
     assert s["n_traffic_attack_before_t_star"] == 2 and s["collision_rate_attack_before_t_star"] == 0.5
     assert "n_traffic" not in out["attack"]
     json.dumps(out, allow_nan=False)
+    stale = pd.DataFrame([{**base, "target": "stale_map", "scenario_case": case, "scenario_shift_m": 1.0,
+                           "success": None, "attack_start_s": math.nan} for case in ("removed", "phantom")])
+    keys = set(summarize_settings(stale))
+    assert keys == {"attack@stale_map[case=removed, shift_m=1.0]", "attack@stale_map[case=phantom, shift_m=1.0]"}

@@ -117,9 +117,11 @@ def test_report_redraws_from_the_store_without_running(uninterrupted, capsys, tm
     ("budget = 3\n" + TINY, "unknown field"),
     ('sensor_profile = "real"\n' + TINY, r"sensor_profile must be one of \('qcar2', 'ideal'\)"),
     ('sign_geometry = "post"\n' + TINY, r"sign_geometry must be one of \('plate', 'pole'\)"),
-    (TINY + "\n[traffic]\ncars = [0, 9]\n", r"traffic.cars must be a non-empty list of car counts in 0..4"),
+    (TINY + "\n[traffic]\ncars = [0, 9]\n", r"scenario 'cross_traffic' parameter 'cars' must be an int in \[1, 4\] cars, got 9"),
     (TINY + "\n[traffic]\nlanes = 2\n", r"unknown field\(s\) \['lanes'\] in \[traffic\]"),
-    (TINY + "\n[traffic]\ncars = [1]\ngap_s = 9\n", r"traffic.gap_s must be a number in \[-5.0, 5.0\]"),
+    (TINY + "\n[traffic]\ncars = [1]\ngap_s = 9\n", r"parameter 'gap_s' must be a float in \[-5.0, 5.0\]"),
+    (TINY + "\n[lanes]\ncars = [1]\n", r"unknown field\(s\) \['lanes'\]; allowed: .*'traffic'"),
+    ("target = \"obstacle\"\n" + TINY + "\n[traffic]\ncars = [1]\n", r"\[traffic\] lists the parameters of scenario 'cross_traffic' \(a sign approach\); target 'obstacle' cannot"),
 ])
 def test_bad_specs_are_refused_before_any_work(tmp_path, capsys, text, message):
     path = _spec_file(tmp_path, text, "bad.toml")

@@ -6,7 +6,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from racf.experiments.episode.conflict import NEAR_MISS_S, score_conflict
+from racf.experiments.scenarios.cross_traffic.conflict import NEAR_MISS_S, score_conflict
 from racf.sim.world.traffic import MAX_TRAFFIC_CARS
 
 DT = 0.02

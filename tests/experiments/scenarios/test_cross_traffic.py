@@ -1,11 +1,15 @@
-"""Episodes with cross-traffic: a stop yields, a missed stop is a crash, and the same seed gives the same log."""
+"""Episodes with cross-traffic: a stop yields, a missed stop is a crash, the same seed gives the same log,
+and the scenario, not the engine, says when its episode is over."""
 
 import pandas as pd
 import pytest
 
 from racf.experiments.episode import TrialSpec, run_trial
 from racf.experiments.episode.plan import plan_episode
-from racf.experiments.episode.runner import RUN_THROUGH_M, run_through_m
+from racf.experiments.scenarios import Scenario
+from racf.experiments.scenarios.base import RUN_THROUGH_M
+from racf.experiments.scenarios.cross_traffic import CrossTraffic, run_through_m
+from racf.experiments.scenarios.cross_traffic.conflict import NEAR_MISS_S
 
 
 @pytest.fixture(scope="module")
@@ -40,10 +44,17 @@ def test_the_same_seed_gives_the_same_log_with_traffic(missed):
 def test_with_traffic_the_episode_runs_on_past_the_conflict_point():
     plain, crossed = plan_episode(TrialSpec("clean", 1, 1.5, 0)), plan_episode(TrialSpec("clean", 1, 1.5, 0,
                                                                                           target="cross_traffic", scenario_params={"cars": 1}))
-    assert run_through_m(plain) == RUN_THROUGH_M
-    assert run_through_m(crossed) > crossed.conflict.ego_s - crossed.mission.targets[0].stop_s
+    run_through = run_through_m(crossed)
+    assert run_through > crossed.extras["conflict"].ego_s - crossed.mission.targets[0].stop_s > RUN_THROUGH_M
     # The car's mission is the same: it is told nothing of the other cars.
     assert crossed.mission == plain.mission and "traffic" in crossed.reset_options
+    # A plain approach ends just past the line; cross-traffic runs on past the conflict point, then
+    # watches NEAR_MISS_S more for the post-encroachment time.
+    past_line = [{"slot": 0, "dist_to_stop_line": -RUN_THROUGH_M - 0.01}]
+    assert Scenario().over(plain, past_line) and not CrossTraffic().over(crossed, past_line)
+    linger = round(NEAR_MISS_S / crossed.control_dt_s)
+    past_point = [{"slot": 0, "dist_to_stop_line": -run_through - 0.01}] * (linger + 1)
+    assert not CrossTraffic().over(crossed, past_point[:-1]) and CrossTraffic().over(crossed, past_point)
 
 
 def test_traffic_needs_a_stop_sign_approach():

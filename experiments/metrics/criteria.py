@@ -1,0 +1,87 @@
+"""The scenario's criteria, judged on every episode (the ``criteria`` metric).
+
+Each criterion of the episode's scenario (``Scenario.criteria``; ``racf.experiments.episode.criteria``)
+gives its verdict column (True passed, False failed, None where the rule does not apply) and its
+own fields; ``driving_score`` is the product of the failed criteria's penalties (1.0 where none
+failed). Over many episodes each verdict is a pass rate with its Wilson interval over the
+episodes where its rule applies, and each of its fields is summarised as it declares.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+
+import pandas as pd
+
+from racf.experiments.episode.criteria import Criterion
+from racf.experiments.metrics.base import Episode, Field, Metric
+from racf.plugins import SCENARIOS
+from racf.stats import wilson_interval
+
+__all__ = ["Criteria", "criteria_of_rows"]
+
+_log = logging.getLogger(__name__)
+
+
+class Criteria(Metric):
+    """Every criterion of the episode's scenario: its verdict, its measures and the driving score."""
+
+    name = "criteria"
+    meaning = "the scenario's criteria (pass, fail or not applicable, each with its measures) and the driving score"
+    always, order = True, 65
+    higher_is_better = {"driving_score": True}
+    fields = (Field("driving_score", math.nan, "1", "the product of the failed criteria's penalties (CARLA's "
+                                                    "infraction coefficients; 1.0: none failed)"),)
+
+    def score(self, episode: Episode) -> dict:
+        row: dict = {}
+        score = 1.0
+        for criterion in (cls() for cls in episode.spec.scenario.criteria):
+            row |= judged(criterion, episode, episode.spec.target)
+            if row[criterion.name] is False and not criterion.optional:
+                score *= criterion.penalty
+        return row | {"driving_score": score}
+
+    def summarize(self, results: pd.DataFrame, attacked: bool) -> dict:
+        out: dict = {}
+        for criterion in criteria_of_rows(results):
+            if criterion.name not in results:
+                continue
+            verdicts = results[criterion.name].dropna().astype(bool)
+            k, n = int(verdicts.sum()), int(len(verdicts))
+            out |= {f"n_{criterion.name}": n, f"{criterion.name}_rate": k / n if n else None,
+                    f"{criterion.name}_rate_ci": list(wilson_interval(k, n))}
+            out |= _FieldSummary(criterion.fields).summarize(results, attacked)
+        return out
+
+
+def judged(criterion: Criterion, episode: Episode, owner: str) -> dict:
+    """One criterion's verdict and measures on one episode. A criterion that raises costs its own
+    columns (its defaults: None and NaN), logged in one line naming it, never the episode."""
+    try:
+        if not criterion.applies(episode):
+            return criterion.defaults()
+        return criterion.defaults() | criterion.measures(episode) | {criterion.name: bool(criterion.passed(episode))}
+    except Exception as err:  # a plug-in's fault is its own: the episode's other fields stand
+        _log.warning("criterion %r of scenario %r raised %s: %s; its fields are null for episode %s", criterion.name,
+                     owner, type(err).__name__, err, episode.spec.trial_id)
+        return criterion.defaults()
+
+
+def criteria_of_rows(results: pd.DataFrame) -> list[Criterion]:
+    """The criteria of the scenarios the rows ran (each once, in the scenarios' order)."""
+    seen: dict[str, Criterion] = {}
+    targets = results["target"].dropna().unique() if "target" in results else ()
+    for target in targets:
+        if target in SCENARIOS:
+            for cls in SCENARIOS[target].criteria:
+                seen.setdefault(cls.name, cls())
+    return list(seen.values())
+
+
+class _FieldSummary(Metric):
+    """A criterion's fields summarised the way a metric's are (``Metric.summarize``)."""
+
+    def __init__(self, fields: tuple[Field, ...]) -> None:
+        self.fields = fields
