@@ -47,7 +47,7 @@ from racf.errors import UserError
 from racf.provenance import source_version
 
 __all__ = ["Plugin", "PluginError", "Registry", "ESTIMATORS", "ATTACKS", "DETECTORS", "SCENARIOS", "METRICS", "REGISTRIES",
-           "load_plugin_file", "plugin_files", "PLUGIN_ENV"]
+           "load_plugin_file", "plugin_files", "PLUGIN_ENV", "PART_KIND"]
 
 #: The environment variable that lists the plug-in files this process and its workers load.
 PLUGIN_ENV = "RACF_PLUGINS"
@@ -238,19 +238,24 @@ def _is_estimator(obj: Any) -> bool:
         callable(getattr(obj, m, None)) for m in _ESTIMATOR_METHODS)
 
 
-def _subclass_of(module: str, base_name: str) -> Callable[[Any], bool]:
-    """Whether an object is a proper subclass of ``module.base_name``, read from the modules already
-    imported: the floor never imports the packages above it, and a class cannot derive from a base
-    whose module was never imported."""
+#: The class attribute a part's base class sets to the kind it is the base of (``AttackWrapper``:
+#: ``attack``, ``Scenario``: ``scenario``, ``Metric``: ``metric``). The floor reads it from the class:
+#: it never names, or imports, the packages above it.
+PART_KIND = "racf_part"
+
+
+def _subclass_of(kind: str) -> Callable[[Any], bool]:
+    """Whether an object is a proper subclass of the base class that declares itself the base of
+    ``kind`` (``racf_part = kind`` in its own body)."""
     def accepts(obj: Any) -> bool:
-        base = getattr(sys.modules.get(module), base_name, None)
-        return base is not None and inspect.isclass(obj) and issubclass(obj, base) and obj is not base
+        return inspect.isclass(obj) and any(
+            base is not obj and vars(base).get(PART_KIND) == kind for base in obj.__mro__[1:])
     return accepts
 
 
-_is_attack = _subclass_of("racf.sim.attacks.base", "AttackWrapper")
-_is_scenario = _subclass_of("racf.experiments.scenarios.base", "Scenario")
-_is_metric = _subclass_of("racf.experiments.metrics.base", "Metric")
+_is_attack = _subclass_of("attack")
+_is_scenario = _subclass_of("scenario")
+_is_metric = _subclass_of("metric")
 
 
 def _is_detector(obj: Any) -> bool:

@@ -39,6 +39,8 @@ class Metric:
     """
 
     name: ClassVar[str] = "metric"
+    #: Marks the base of racf's metrics for the registries (``racf.plugins.PART_KIND``).
+    racf_part: ClassVar[str] = "metric"
     meaning: ClassVar[str] = ""
     fields: ClassVar[tuple[Field, ...]] = ()
     always: ClassVar[bool] = False

@@ -114,6 +114,8 @@ class Scenario:
     """
 
     name: ClassVar[str] = "scenario"
+    #: Marks the base of racf's scenarios for the registries (``racf.plugins.PART_KIND``).
+    racf_part: ClassVar[str] = "scenario"
     meaning: ClassVar[str] = ""
     target: ClassVar[str] = "sign"
     params: ClassVar[tuple[Param, ...]] = ()

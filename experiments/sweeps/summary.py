@@ -22,6 +22,8 @@ scenario's parameters gives one summary per combination.
 
 from __future__ import annotations
 
+import math
+
 import pandas as pd
 
 from racf.experiments.episode.spec import parse_setting
@@ -83,21 +85,21 @@ def plugin_measures(rows: pd.DataFrame, attacked: bool) -> list[dict]:
 
 def scenario_label(row) -> str:
     """``stale_map[case=removed, shift_m=1.0]``: a row's scenario with its parameter values ('' for a
-    scenario without parameters). ``row``: a result row (a dict or a pandas row)."""
+    scenario without parameters). ``row``: a result row (a dict or a pandas row). A value reads as its
+    parameter declares it (a count stays 1 in a column that NaN made float)."""
     target = row.get("target")
-    names = [p.name for p in SCENARIOS[target].params] if target in SCENARIOS else \
-        [k[len(SCENARIO_PREFIX):] for k in row.keys() if str(k).startswith(SCENARIO_PREFIX)]
-    values = [(name, row.get(SCENARIO_PREFIX + name)) for name in names]
-    values = [(name, value) for name, value in values if value is not None and not (isinstance(value, float)
-                                                                                    and pd.isna(value))]
-    return f"{target}[{', '.join(f'{k}={_plain(v)}' for k, v in values)}]" if values else ""
-
-
-def _plain(value):
-    """A number as a table shows it: 1.0 not numpy.float64(1.0), 1 not 1.0 for a whole count."""
-    if hasattr(value, "item"):
-        value = value.item()
-    return value
+    params = {p.name: p for p in SCENARIOS[target].params} if target in SCENARIOS else \
+        {str(k)[len(SCENARIO_PREFIX):]: None for k in row.keys() if str(k).startswith(SCENARIO_PREFIX)}
+    values = []
+    for name, param in params.items():
+        value = row.get(SCENARIO_PREFIX + name)
+        if value is None or (isinstance(value, float) and math.isnan(value)):
+            continue
+        value = value.item() if hasattr(value, "item") else value
+        if param is not None and param.type in (int, float) and not isinstance(value, bool):
+            value = param.type(value)
+        values.append(f"{name}={value}")
+    return f"{target}[{', '.join(values)}]" if values else ""
 
 
 def setting_key(row) -> str:

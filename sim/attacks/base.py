@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import inspect
-from typing import Any
+from typing import Any, ClassVar
 
 import gymnasium as gym
 import numpy as np
@@ -23,6 +23,8 @@ class AttackWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
     """
 
     name = "attack"
+    #: Marks the base of racf's attacks for the registries (``racf.plugins.PART_KIND``).
+    racf_part: ClassVar[str] = "attack"
     #: Constructor arguments an experiment sets per episode (e.g. the patch's ``rho``); the
     #: others keep their defaults.
     episode_params: tuple[str, ...] = ()
