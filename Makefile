@@ -5,7 +5,11 @@
 PYTHON ?= python3
 VENV := .venv
 PY := $(VENV)/bin/python
-STAMP := $(VENV)/.racf-installed
+# The development install is a tree of links to racf's files (setuptools' editable_mode=strict: a
+# plain path that editors and type checkers follow, and nothing importable but racf). A file added
+# or removed needs a new tree: the stamp is named after the packages' file list.
+LAYOUT := $(shell find core sim odca controllers experiments assets -name __pycache__ -prune -o -type f -print 2>/dev/null | sort | cksum | cut -d' ' -f1)
+STAMP := $(VENV)/.racf-installed-$(LAYOUT)
 TORCH := torch==2.13.0
 export MUJOCO_GL ?= egl
 # Python caches compiled modules: a machine that turns that off (PYTHONDONTWRITEBYTECODE) makes
@@ -18,11 +22,12 @@ $(PY):
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install -qq --upgrade pip
 
-# -qq: errors only. Setuptools warns on every editable install that a folder named like the
-# package (racf/, which is that package's own source) may shadow it; nothing there to act on.
+# -qq: errors only.
 $(STAMP): pyproject.toml | $(PY)
 	$(PY) -m pip install -qq $(TORCH)
-	$(PY) -m pip install -qq -e ".[test]"
+	rm -rf build/__editable__.racf-*
+	$(PY) -m pip install -qq -e ".[test]" --config-settings editable_mode=strict
+	rm -f $(VENV)/.racf-installed*
 	touch $(STAMP)
 
 # The story at one stop sign: clean, patch attack, attack + ODCA (table, three .rrd, one PNG).

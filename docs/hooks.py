@@ -1,8 +1,8 @@
 """mkdocs hooks: the reference pages are written from the code before every build (at config time).
 
-The API reference reads the package as it installs: mkdocstrings reads ``racf/`` statically, and
-``racf/``'s links (``racf/sim -> ../sim``, ...) are the one folder mapping the wheel and the
-editable install use too (mkdocs.yml points the handler at the repository's root)."""
+The API reference reads the package as it installs: mkdocstrings finds ``racf`` on the path, where
+the development install's tree of links (pyproject's package-dir: ``racf`` = ``core/``,
+``racf.sim`` = ``sim/``, ...) puts it."""
 
 from __future__ import annotations
 

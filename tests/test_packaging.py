@@ -1,8 +1,11 @@
-"""racf installs as one namespace that carries its assets: the package list names every package
-folder, nothing imports the old top-level names, and (slow) a wheel works in a fresh venv."""
+"""racf installs as one namespace that carries its assets: setuptools' package-dir maps the design
+card's folders (no committed links), the package list names every package folder, nothing imports
+the old top-level names, the development install exposes racf alone, and (slow) a wheel works in a
+fresh venv."""
 
 from __future__ import annotations
 
+import json
 import os
 import re
 import subprocess
@@ -17,18 +20,14 @@ from racf.assets import asset_path
 
 ROOT = Path(__file__).resolve().parents[1]
 PYPROJECT = tomllib.loads((ROOT / "pyproject.toml").read_text())
-TOPS = {"racf": "racf", "racf.assets": "assets", "racf.sim": "sim", "racf.odca": "odca",
+TOPS = {"racf": "core", "racf.assets": "assets", "racf.sim": "sim", "racf.odca": "odca",
         "racf.controllers": "controllers", "racf.experiments": "experiments"}
 
 
 def test_every_package_folder_installs_under_racf_and_nothing_else():
     setuptools = PYPROJECT["tool"]["setuptools"]
-    assert setuptools["package-dir"] == {"": "."}
-    # The one folder mapping: racf/NAME links to the design card's top-level folder.
-    for name, folder in TOPS.items():
-        if name != "racf":
-            link = ROOT / "racf" / name.split(".")[1]
-            assert link.is_symlink() and link.resolve() == (ROOT / folder).resolve()
+    # The one folder mapping: setuptools' package-dir, each package to its design card folder.
+    assert setuptools["package-dir"] == TOPS
     found = {"racf", "racf.assets"}
     for name, folder in TOPS.items():
         if name in ("racf", "racf.assets"):
@@ -42,9 +41,26 @@ def test_every_package_folder_installs_under_racf_and_nothing_else():
     assert all(p == "racf" or p.startswith("racf.") for p in setuptools["packages"])
 
 
+def test_the_checkout_commits_no_links():
+    """A link is a 6-byte text file in a Windows checkout: the mapping lives in pyproject.toml instead."""
+    listed = subprocess.run(["git", "ls-files", "-s"], cwd=ROOT, capture_output=True, text=True, check=True).stdout
+    assert [line.split("\t")[1] for line in listed.splitlines() if line.startswith("120000")] == []
+
+
+def test_the_development_install_exposes_racf_alone(tmp_path):
+    """From outside the checkout, the design card's folders are no top-level packages; racf maps them."""
+    ask = ("import importlib.util, json; print(json.dumps({n: importlib.util.find_spec(n) is not None for n in "
+           "('sim', 'odca', 'controllers', 'experiments', 'core', 'racf.sim', 'racf.odca.online', 'racf.plugins')}))")
+    done = subprocess.run([sys.executable, "-c", ask], cwd=tmp_path, capture_output=True, text=True, check=True,
+                          env={**os.environ, "PYTHONPATH": ""})
+    found = json.loads(done.stdout)
+    assert found == {"sim": False, "odca": False, "controllers": False, "experiments": False, "core": False,
+                     "racf.sim": True, "racf.odca.online": True, "racf.plugins": True}
+
+
 def test_no_module_imports_the_old_top_level_names():
-    old = re.compile(r"^\s*(from|import) (sim|odca|controllers|experiments)\b", re.M)
-    offenders = [str(path.relative_to(ROOT)) for folder in ("sim", "odca", "controllers", "experiments", "racf",
+    old = re.compile(r"^\s*(from|import) (sim|odca|controllers|experiments|core)\b", re.M)
+    offenders = [str(path.relative_to(ROOT)) for folder in ("sim", "odca", "controllers", "experiments", "core",
                                                             "tests", "examples")
                  for path in (ROOT / folder).rglob("*.py") if old.search(path.read_text())]
     assert offenders == []

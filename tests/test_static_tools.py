@@ -1,6 +1,6 @@
 """Editors and type checkers resolve ``racf.*`` to the files in the checkout: the editable install
-is a plain ``.pth`` path (racf/'s links map the design card's folders), not an import hook that
-static analysis cannot run. jedi (Pylance and pyright follow the same path entries) is asked from
+is a plain ``.pth`` path to a tree of links that setuptools builds from pyproject's package-dir
+(``editable_mode=strict``), not an import hook that static analysis cannot run. jedi (Pylance and pyright follow the same path entries) is asked from
 a fresh interpreter outside the repository, as an editor would ask."""
 
 import json

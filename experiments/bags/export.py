@@ -27,7 +27,7 @@ from racf.experiments.episode.spec import TrialSpec
 from racf.sim.sensors import TIMESTAMP_FIELDS
 from racf.sim.sensors.a2m12 import A2M12Lidar, driver_scan
 from racf.sim.sensors.state import OdometryConfig
-from racf.sim.vehicle.calibration import car_build
+from racf.sim.sensors.calibration import car_build
 
 __all__ = ["BagWriter", "ExportSummary", "export_episode", "DELIVERED_TIMES"]
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from racf.experiments.viz.rerun_log import Frame
+from racf.experiments.episode.rerun_log import Frame
 
 __all__ = ["ReplayFrames"]
 

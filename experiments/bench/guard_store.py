@@ -26,7 +26,7 @@ def load_guard(path: Path = GUARD_FILE) -> dict | None:
 def store_guard(result, path: Path = GUARD_FILE) -> str:
     """Appends this commit's ratio (a commit measured again replaces its entry); refuses a tree
     whose tracked code differs from its commit (no commit would reproduce it)."""
-    from racf.experiments.pages.results_store import commit, machine
+    from racf.provenance import commit, machine
     from racf import __version__
 
     made_by = commit()

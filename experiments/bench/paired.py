@@ -69,19 +69,41 @@ class PairedResult:
                 "old_rtf": 20.0 / statistics.median(self.old_ms), "new_rtf": 20.0 / statistics.median(self.new_ms)}
 
 
+#: The packages a checkout maps under ``racf`` (pyproject's package-dir), and their folders.
+_MAPPED = ("sim", "odca", "controllers", "experiments", "assets")
+
+
 def checkout_root(path: str | Path) -> Path:
-    """The folder that holds a checkout's ``racf`` package; UserError if ``path`` is not one."""
+    """The folder of a racf checkout: one with ``core/__init__.py`` (racf's floor, the folders beside it
+    mapped under ``racf``) or, before that layout, ``racf/__init__.py`` with links; UserError if
+    ``path`` is neither."""
     root = Path(path).expanduser().resolve()
-    if not (root / "racf" / "__init__.py").is_file():
-        raise UserError(f"--baseline must be a racf checkout (a folder with racf/__init__.py, e.g. from `git worktree "
+    if not ((root / "core" / "__init__.py").is_file() or (root / "racf" / "__init__.py").is_file()):
+        raise UserError(f"--baseline must be a racf checkout (a folder with core/__init__.py, e.g. from `git worktree "
                         f"add /tmp/old HEAD~1`), got {path}")
     return root
+
+
+def importable(root: Path, workdir: str) -> Path:
+    """A folder that, put on ``PYTHONPATH``, imports ``racf`` from the checkout at ``root``: the checkout
+    itself in the old layout, else a folder under ``workdir`` whose ``racf/`` links to the checkout's
+    files as its package-dir maps them (what its development install builds)."""
+    if (root / "racf" / "__init__.py").is_file():
+        return root
+    home = Path(tempfile.mkdtemp(dir=workdir, prefix="checkout-"))
+    package = home / "racf"
+    package.mkdir()
+    for item in (root / "core").iterdir():
+        (package / item.name).symlink_to(item)
+    for name in _MAPPED:
+        (package / name).symlink_to(root / name, target_is_directory=True)
+    return home
 
 
 def _start(root: Path, cpu: int, setting: str, episodes: int, workdir: str, errors) -> subprocess.Popen:
     from racf.experiments.sweeps.executors import SINGLE_THREAD_ENV
 
-    env = {**os.environ, **SINGLE_THREAD_ENV, "PYTHONPATH": str(root)}
+    env = {**os.environ, **SINGLE_THREAD_ENV, "PYTHONPATH": str(importable(root, workdir))}
     proc = subprocess.Popen([sys.executable, "-c", _WORKER, str(cpu), setting, str(episodes)], cwd=workdir, env=env,
                             stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=errors, text=True)
     if proc.stdout.readline().strip() != "ready":

@@ -66,7 +66,7 @@ def occluded(rgb: np.ndarray, target: np.ndarray, share: float, rng: np.random.G
     """``rgb`` with the occluder (a naturalistic texture) pasted over a ``share`` of the sign's
     pixels (the top rows), as ``patch_occlusion`` does."""
     from racf.sim.attacks.patch_occlusion import paste_occluder
-    from racf.sim.attacks.texture import natural_texture
+    from racf.sim.world.patch_texture import natural_texture
 
     return paste_occluder(rgb, target, share, natural_texture(rng))
 

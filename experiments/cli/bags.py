@@ -108,7 +108,7 @@ def _replay(args: argparse.Namespace) -> int:
                "brake_steps": int(replay.log["brake"].sum()), "detected_steps": int(replay.log["detected"].sum())}
     atomic_write(args.out / f"{name}.json", json.dumps(summary, indent=2, allow_nan=False))
     if replay.frames is not None:
-        from racf.experiments.viz.rerun_log import write_rrd
+        from racf.experiments.episode.rerun_log import write_rrd
 
         write_rrd(args.rerun, replay.log, replay.frames, title=f"racf replay-bag {args.bag.name}")
         summary["rerun"] = str(args.rerun)

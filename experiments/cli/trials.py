@@ -69,7 +69,7 @@ def _trial(args: argparse.Namespace) -> int:
     from racf.errors import EpisodeFailed
     from racf.experiments.episode.preflight import check_specs
     from racf.experiments.sweeps.failures import LOG_NAME, append_log, describe
-    from racf.experiments.viz.rerun_log import recorded_trial
+    from racf.experiments.episode.rerun_log import recorded_trial
 
     check_specs([spec])
     try:

@@ -13,23 +13,18 @@ from dataclasses import asdict, dataclass
 import cv2
 import numpy as np
 
+from racf.experiments.sweeps.detection_bands import DISTANCE_BANDS_M, band_label
 from racf.stats import wilson_interval
 
 __all__ = ["DetectionCounts", "SplitCounts", "evaluate_split", "resolvable", "score_frame", "MIN_SHARE",
            "DISTANCE_BANDS_M", "VIEW_BANDS_M", "VIEW_KINDS", "band_label"]
 
 MIN_GT_PX, MIN_GT_SPAN_PX = 12, 3
-#: The distance bands recall is reported in (the sign's true depth, m): per view and in the loop.
-DISTANCE_BANDS_M = ((0.3, 1.0), (1.0, 2.0), (2.0, 4.0))
 #: What a rendered view is, as a split's ``kind`` column numbers it (``racf.experiments.detector.views``).
 VIEW_KINDS = ("sign", "approach", "map")
 #: The bands of a rendered split's recall: the loop's, and the far views' (first sight).
 VIEW_BANDS_M = (*DISTANCE_BANDS_M, (4.0, 6.0))
 
-
-def band_label(lo: float, hi: float) -> str:
-    """A band's name in tables and JSON, e.g. ``0.3-1 m``."""
-    return f"{lo:g}-{hi:g} m"
 _GROW = np.ones((5, 5), np.uint8)
 
 

@@ -29,7 +29,7 @@ from racf.controllers import CameraModel
 from racf.experiments.episode.car import CarCalibration, Mission
 from racf.experiments.episode.spec import TrialSpec
 from racf.sim.env.config import EnvConfig
-from racf.sim.vehicle.calibration import car_build
+from racf.sim.sensors.calibration import car_build
 from racf.sim.world.route_plan import longest_run_up_m, plan_route
 from racf.sim.world.stop_signs import SIGN_GEOMETRIES
 
@@ -122,7 +122,7 @@ def longest_run_up(target: str, index: int, sign_geometry: str = "plate") -> flo
 def car_calibration(width_px: int, height_px: int) -> CarCalibration:
     """The car's build as its software is configured with it: the camera's intrinsics at this
     resolution and the mounts of the camera, the LiDAR, the front bumper and the rear axle
-    (``racf.sim.vehicle.calibration``: read from the model the simulator drives)."""
+    (``racf.sim.sensors.calibration``: read from the model the simulator drives)."""
     build = car_build(width_px, height_px)
     k = build.intrinsics
     return CarCalibration(CameraModel(width=k.width, fx=k.fx, cx=k.cx, fy=k.fy, cy=k.cy), build.camera_xy_m,

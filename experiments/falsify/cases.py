@@ -108,7 +108,7 @@ def replay_case(case: Case, defence: str | None = None, rerun: str | Path | None
     """Runs ``case`` again (against ``defence`` instead of its own, if given); with ``rerun``,
     records it to that ``.rrd`` file."""
     from racf.experiments.sweeps.executors import single_thread
-    from racf.experiments.viz.rerun_log import recorded_trial
+    from racf.experiments.episode.rerun_log import recorded_trial
 
     single_thread()  # as the search's workers ran it: the same arithmetic, to the bit
     spec = _against(case.spec, defence)

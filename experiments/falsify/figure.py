@@ -22,7 +22,6 @@ def worst_case_figure(spec: TrialSpec, path: str | Path, title: str = "") -> Pat
 
     from racf.experiments.episode import run_trial
     from racf.experiments.sweeps.executors import single_thread
-    from racf.experiments.viz.figures import save_figure
 
     single_thread()
     frames: dict[str, np.ndarray] = {}
@@ -59,4 +58,9 @@ def worst_case_figure(spec: TrialSpec, path: str | Path, title: str = "") -> Pat
     trace.set_title(f"robustness {result.robustness_m:+.3f} m, {result.failure or 'stopped'}", fontsize=9)
     if title:
         fig.suptitle(title, fontsize=10)
-    return save_figure(fig, path, dpi=110)
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path

@@ -181,7 +181,7 @@ def diagnostics_frame(results: dict) -> pd.DataFrame:
 
 def write_report(results: dict, out: Path) -> dict[str, Path]:
     """Writes everything under ``out``; returns the paths by name."""
-    from racf.experiments.viz import offline as figures
+    from racf.experiments.offline import figures
 
     out = Path(out)
     (out / "tables").mkdir(parents=True, exist_ok=True)

@@ -14,43 +14,16 @@ from __future__ import annotations
 import argparse
 import datetime as dt
 import json
-import os
-import subprocess
 import sys
 from pathlib import Path
 
 from racf import __version__
-from racf.provenance import atomic_write
+from racf.provenance import atomic_write, commit, machine
 
 __all__ = ["DATA_DIR", "machine", "commit", "load_source", "store_result", "main"]
 
 #: Where the results pages read their data (the repository's docs, not an installed copy).
 DATA_DIR = Path("docs/results/data")
-
-
-def machine() -> str:
-    """The machine in words: its CPU cores, and its GPU if torch sees one."""
-    try:
-        import torch
-
-        gpu = torch.cuda.get_device_name(0) if torch.cuda.is_available() else None
-    except ImportError:  # torch is a dependency, but the store must not need it
-        gpu = None
-    return f"{os.cpu_count()} CPU cores, " + (gpu or "no GPU")
-
-
-def commit(root: Path = Path(".")) -> str:
-    """The checkout's short commit, with ``+changes`` when tracked code differs from it."""
-    def git(*args: str) -> str:
-        return subprocess.run(["git", "-C", str(root), *args], capture_output=True, text=True, check=True).stdout
-
-    try:
-        head = git("rev-parse", "--short", "HEAD").strip()
-        dirty = git("status", "--porcelain", "--untracked-files=no", "--", "sim", "odca", "controllers",
-                    "experiments", "assets", "racf").strip()
-    except (OSError, subprocess.CalledProcessError):
-        return "unknown (not a git checkout)"
-    return head + ("+changes" if dirty else "")
 
 
 def load_source(path: Path) -> dict:

@@ -12,11 +12,19 @@ from pathlib import Path
 
 import pandas as pd
 
-from racf.experiments.detector.evaluate import DISTANCE_BANDS_M as BANDS_M
-from racf.experiments.detector.evaluate import band_label
 from racf.stats import wilson_interval
 
-__all__ = ["BANDS_M", "recall_rows", "band_labels"]
+__all__ = ["BANDS_M", "DISTANCE_BANDS_M", "recall_rows", "band_labels", "band_label"]
+
+#: The distance bands recall is reported in (the sign's true depth, m): in the loop here, per
+#: rendered view in the detector's study (``racf.experiments.detector.evaluate``).
+DISTANCE_BANDS_M = ((0.3, 1.0), (1.0, 2.0), (2.0, 4.0))
+BANDS_M = DISTANCE_BANDS_M
+
+
+def band_label(lo: float, hi: float) -> str:
+    """A band's name in tables and JSON, e.g. ``0.3-1 m``."""
+    return f"{lo:g}-{hi:g} m"
 _COLUMNS = ["frame_new", "control", "sign_in_view", "d_true", "detected", "attack_active"]
 
 

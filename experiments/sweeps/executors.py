@@ -75,7 +75,7 @@ def run_episode(spec: TrialSpec, out: str, log_steps: bool = False, logs_dir: st
             (:class:`CodeChangedError`).
     """
     from racf.experiments.sweeps.store import ResultStore
-    from racf.experiments.viz.rerun_log import recorded_trial
+    from racf.experiments.episode.rerun_log import recorded_trial
 
     if expected_id is not None and spec.trial_id != expected_id:
         raise CodeChangedError(f"racf's code or a plug-in changed on disk while the batch ran (episode "

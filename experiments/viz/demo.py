@@ -33,7 +33,7 @@ def run_demo(out_dir: Path, sign: int = 1, speed: float = 1.5, seed: int = 0,
     from tqdm import tqdm
 
     from racf.experiments.episode import TrialSpec
-    from racf.experiments.viz.rerun_log import recorded_trial
+    from racf.experiments.episode.rerun_log import recorded_trial
 
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)

@@ -17,7 +17,7 @@ import numpy as np
 
 from racf.sim.attacks.base import AttackWrapper
 from racf.sim.attacks.schedule import AttackSchedule, as_range
-from racf.sim.attacks.texture import natural_texture
+from racf.sim.world.patch_texture import natural_texture
 
 __all__ = ["PatchOcclusion", "patch_rows", "paste_occluder"]
 

@@ -27,7 +27,6 @@ physics_dt_s, max_episode_s)`` ego car is placed (``value``: the reset option ``
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import Any
 

@@ -151,7 +151,7 @@ def load_patch_texture(texture: str, rng: np.random.Generator | None = None) -> 
         raise ValueError(f"texture must be a shipped name {shipped_patches()}, 'natural' or a PNG path, "
                          f"got {texture!r}")
     if texture == "natural":
-        from racf.sim.attacks.texture import natural_texture
+        from racf.sim.world.patch_texture import natural_texture
 
         return natural_texture(rng if rng is not None else np.random.default_rng(0), TEXTURE_PX)
     path = PATCHES_DIR / f"{texture}.png" if "/" not in texture and not texture.endswith(".png") else Path(texture)

@@ -1,5 +1,5 @@
 """Provenance: what made a result (the code version, a file's or plug-in's source hash) and
-writes that leave a whole file or none.
+writes that leave a whole file or none; the commit and the machine a stored measurement names.
 
 The floor of racf: it imports nothing of racf's, so every package (``sim``, ``experiments``,
 ``racf.plugins``) can stand on it. Results are identified by what produced them: a trial id
@@ -12,11 +12,12 @@ from __future__ import annotations
 import hashlib
 import importlib.util
 import os
+import subprocess
 from functools import lru_cache
 from pathlib import Path
 from typing import Any, Callable
 
-__all__ = ["atomic_write", "code_version", "source_version"]
+__all__ = ["atomic_write", "code_version", "source_version", "commit", "machine"]
 
 _CODE_SUFFIXES = (".py", ".xml", ".json", ".npz", ".safetensors", ".png", ".bin", ".pt", ".toml")
 
@@ -70,6 +71,31 @@ def _locate(root: str) -> Path:
     if spec.origin is None or not Path(spec.origin).exists():
         raise ValueError(f"code_version: module {root!r} has no source file")
     return Path(spec.origin).resolve()
+
+
+def machine() -> str:
+    """The machine in words: its CPU cores, and its GPU if torch sees one."""
+    try:
+        import torch
+
+        gpu = torch.cuda.get_device_name(0) if torch.cuda.is_available() else None
+    except ImportError:  # torch is a dependency, but the store must not need it
+        gpu = None
+    return f"{os.cpu_count()} CPU cores, " + (gpu or "no GPU")
+
+
+def commit(root: Path = Path(".")) -> str:
+    """The checkout's short commit, with ``+changes`` when tracked code differs from it."""
+    def git(*args: str) -> str:
+        return subprocess.run(["git", "-C", str(root), *args], capture_output=True, text=True, check=True).stdout
+
+    try:
+        head = git("rev-parse", "--short", "HEAD").strip()
+        dirty = git("status", "--porcelain", "--untracked-files=no", "--", "sim", "odca", "controllers",
+                    "experiments", "assets", "core").strip()
+    except (OSError, subprocess.CalledProcessError):
+        return "unknown (not a git checkout)"
+    return head + ("+changes" if dirty else "")
 
 
 def atomic_write(path: str | Path, data: str | bytes | Any | Callable[[Path], None]) -> Path:

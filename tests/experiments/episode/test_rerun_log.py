@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from racf.experiments.episode import TrialSpec, run_trial
-from racf.experiments.viz.rerun_log import CONTROL, SERIES, STYLE, FrameRecorder, _blueprint, _shown, write_rrd
+from racf.experiments.episode.rerun_log import CONTROL, SERIES, STYLE, FrameRecorder, _blueprint, _shown, write_rrd
 
 
 @pytest.fixture(scope="module")
