@@ -6,15 +6,8 @@ termination hooks. The world, the car and the sensors are built by their own mod
 Step order: validate action -> write controls -> ``substeps`` physics steps, after each of
 which the swept LiDAR casts the samples whose time has come and the camera takes a frame
 if one falls due -> read the other sensors that are due (each holds its last reading and
-its timestamp between readings) -> ground truth -> reward and flags.
-
-v3 (from v2): sensor profiles (``qcar2``, the default: the A2M12 swept over its revolution
-and delivered through Quanser's driver, the camera at 30 Hz; ``ideal``: v2's sensors and
-the true pose); the observation gains ``lidar_beam_times``.
-
-v2 (from v1): the observation gains ``gps`` (the localiser's fix) and ``timestamps``;
-``state`` is what the encoder and the IMU measure (quantised, noisy, biased) and loses the
-lateral speed, which no sensor on the car measures.
+its timestamp between readings) -> ground truth -> reward and flags. What each version of the
+env changed: ``docs/concepts/environment.md``.
 """
 
 from __future__ import annotations
@@ -22,15 +15,17 @@ from __future__ import annotations
 import math
 from typing import Any
 
-import cv2
 import gymnasium as gym
 import numpy as np
-from gymnasium import spaces
 
-from racf.sim._gl import ensure_gl_backend, gl_context_class
+from racf.sim._gl import ensure_gl_backend
 from racf.sim.env.config import RESET_OPTIONS, EnvConfig
 from racf.sim.world.manager import WorldManager
-from racf.sim.env.ground_truth import Motion, SignView, obstacle_view, sign_view, target_centre, with_centre_from
+from racf.sim.env.chase_view import ChaseView
+from racf.sim.env.contacts import Contacts
+from racf.sim.env.spaces import env_spaces
+from racf.sim.env.stickers import Stickers
+from racf.sim.env.truth import WorldTruth
 from racf.sim.sensors import (TIMESTAMP_FIELDS, DepthCamera, Lidar2D, LocalisationFix, RGBCamera, RGBDCameraRig, Sensor,
                          VehicleStateSensor)
 from racf.sim.sensors.a2m12 import A2M12Lidar
@@ -38,8 +33,7 @@ from racf.sim.vehicle import QCar2
 from racf.sim.world.drives import RouteTarget
 from racf.sim.world.route_plan import current_slot, plan_route
 from racf.sim.world.road_graph import Path
-from racf.sim.world.scene import (HIDDEN_GEOM_GROUP, PROP_GEOM_GROUP, load_model, obstacle_body, patch_geom,
-                                  patch_texture, sign_body)
+from racf.sim.world.scene import load_model, obstacle_body
 from racf.sim.world.sign_patch import PatchPlacement
 from racf.sim.world.obstacles import Obstacle, obstacles
 from racf.sim.world.stop_signs import StopSign, stop_signs
@@ -54,7 +48,6 @@ __all__ = ["QCar2Env", "TIMESTAMP_FIELDS"]
 _NAV_SENSORS = ("gps", "state")
 #: Each sensor's entry in the ``timestamps`` observation.
 _STAMP_SLOT = {name: i for i, name in enumerate(TIMESTAMP_FIELDS)}
-
 
 
 class QCar2Env(gym.Env):
@@ -97,22 +90,14 @@ class QCar2Env(gym.Env):
     its body, else a geom's name; None), ``off_road``, and what each world manager reports.
 
     World managers (the setting ``world``: ``racf.sim.world.manager``) add bodies, read a reset
-    option each and log their own ground truth; the env knows none of them (other cars are one:
-    ``racf.sim.world.traffic_manager``).
-    ``info["lidar_time"]`` repeats the LiDAR's timestamp (the LiDAR scans at ``lidar_hz``,
+    option each and log their own ground truth; the env knows none of them. ``info["lidar_time"]`` repeats the LiDAR's timestamp (the LiDAR scans at ``lidar_hz``,
     10 Hz by default, like the A2M12). ``sign_mask`` and ``sign_in_view`` describe the
     held camera frame, ``d_true`` and ``sign_bearing`` the car's pose now. The car's side
     reads the observation only.
 
     Reward per step: metres of route progress, minus 0.1 x lateral error (m), minus 10
     on leaving the road or colliding (both end the episode).
-
-    Example:
-        >>> import gymnasium as gym, sim
-        >>> env = gym.make("RACF/QCar2-v3", camera_width=160, camera_height=120)
-        >>> obs, info = env.reset(seed=0, options={"sign": 2, "cruise_speed": 1.0})
-        >>> obs["rgb"].shape, obs["lidar"].shape, obs["gps"].shape
-        ((120, 160, 3), (360,), (3,))
+    Examples: ``docs/concepts/environment.md``.
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 50}
@@ -153,50 +138,25 @@ class QCar2Env(gym.Env):
         self._decimation = {"lidar": lidar_every,
                             "gps": 1 if true_pose else lidar_every,  # a fix per matched scan
                             "state": self.config.decimation(self.config.state_hz)}
-        self.observation_space = spaces.Dict({
-            **{s.name: spaces.Box(low=s.low, high=s.high, shape=s.shape, dtype=s.dtype) for s in self.sensors},
-            "lidar_beam_times": spaces.Box(low=0.0, high=np.inf, shape=self.lidar.shape, dtype=np.float64),
-            "timestamps": spaces.Box(low=0.0, high=np.inf, shape=(len(TIMESTAMP_FIELDS),), dtype=np.float64)})
-        v = self.config.vehicle
-        self.action_space = spaces.Box(low=np.array([-v.max_reverse_mps, -v.max_steer_rad], np.float32),
-                                       high=np.array([v.max_speed_mps, v.max_steer_rad], np.float32),
-                                       dtype=np.float32)
-        self._chassis_geom = self.model.geom("chassis").id
-        self._wheel_geoms = {self.model.geom(w).id for w in ("wheel_fl", "wheel_fr", "wheel_rl", "wheel_rr")}
-        self._floor_geoms = {self.model.geom("mat").id, self.model.geom("lab_floor").id}
-        n_signs = len(stop_signs(self.config.sign))
-        self._patch_geoms = [self.model.geom(patch_geom(i)).id for i in range(n_signs)]
-        self._patch_textures = [self.model.texture(patch_texture(i)).id for i in range(n_signs)]
-        self._viewer = None
-        self._collision_with: str | None = None
-        self._moving: tuple[WorldManager, ...] = ()
+        self.observation_space, self.action_space = env_spaces(self.sensors, self.lidar.shape, self.config.vehicle)
+        self.contacts = Contacts(self.model, self.world)
+        self.stickers = Stickers(self.model, len(stop_signs(self.config.sign)))
+        self._viewer, self._collision_with, self._moving = None, None, ()
         # Crates stand on the map only in their own episodes (as a test operator would place one).
         self._crates = [(self.model.body(obstacle_body(o.index)).id, self.model.body(obstacle_body(o.index)).pos.copy())
                         for o in obstacles()]
-        # Each target's body and its map pose (the MJCF's): the truth follows a body a manager moved.
-        self._bodies = {**{("stop_sign", s.index): self.model.body(sign_body(s.index)).id
-                           for s in stop_signs(self.config.sign)},
-                        **{("obstacle", o.index): body for o, (body, _) in zip(obstacles(), self._crates)}}
-        home = mujoco.MjData(self.model)
-        mujoco.mj_kinematics(self.model, home)
-        self._home = {key: (home.xpos[body].copy(), home.xmat[body].copy()) for key, body in self._bodies.items()}
-        self._frame_xpos, self._frame_xmat = home.xpos.copy(), home.xmat.copy()
+        # The truth follows a target's body wherever a manager moved it (``racf.sim.env.truth``).
+        self.truth = WorldTruth(self.model, self.config.sign, self.rig.intrinsics)
         first = stop_signs(self.config.sign)[0]
         self._path: Path = first.path
         self._targets: tuple[RouteTarget, ...] = (RouteTarget(first, first.stop_s, first.stop_s),)
         self._slot = 0
-        self._stamps = np.zeros(len(TIMESTAMP_FIELDS))
-        self._beam_times = np.zeros(self.lidar.shape)
+        self._stamps, self._beam_times = np.zeros(len(TIMESTAMP_FIELDS)), np.zeros(self.lidar.shape)
         self._obs: dict[str, np.ndarray] = {}
-        self._step = 0
-        self._substep = 0  # physics steps since the reset
-        self._frames = 0  # camera frames taken since the reset
-        self._frame_depth = np.zeros((self.config.camera.height, self.config.camera.width), np.float32)
-        self._frame_cam = (np.zeros(3), np.eye(3))
-        self._view: tuple[tuple[int, int], SignView] | None = None
+        # Physics steps and camera frames since the reset; the noise generators (drawn at each reset).
+        self._step = self._substep = self._frames = 0
         self._route_s = 0.0
-        self._sensor_rng = np.random.default_rng()
-        self._nav_rng = np.random.default_rng()
+        self._sensor_rng, self._nav_rng = np.random.default_rng(), np.random.default_rng()
 
     # -- gymnasium API --------------------------------------------------------------------
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
@@ -232,7 +192,7 @@ class QCar2Env(gym.Env):
         mujoco.mj_forward(self.model, self.data)
         self._step = self._substep = self._frames = 0
         self._obs = {}
-        self._view = None
+        self.truth.forget_view()
         for sensor in self.sensors:
             sensor.reset(self._rng_of(sensor))
         self._read_sensors(force=True)
@@ -263,24 +223,7 @@ class QCar2Env(gym.Env):
         """Prints a sticker on stop sign ``sign_index``: ``texture`` ((H, W, 3) uint8, row 0 its top
         edge as seen from in front; resized to the scene's texture) where ``placement`` says. The
         camera and the LiDAR see it from the next reading on."""
-        if sign_index not in range(len(self._patch_geoms)):
-            raise ValueError(f"sign_index must be 0..{len(self._patch_geoms) - 1}, got {sign_index!r}")
-        if not isinstance(placement, PatchPlacement):
-            raise TypeError(f"placement must be a PatchPlacement, got {type(placement).__name__}")
-        texture = np.asarray(texture)
-        if texture.ndim != 3 or texture.shape[2] != 3 or texture.dtype != np.uint8:
-            raise ValueError(f"texture must be an (H, W, 3) uint8 image, got shape {texture.shape} dtype {texture.dtype}")
-        geom, tex = self._patch_geoms[sign_index], self._patch_textures[sign_index]
-        size = (int(self.model.tex_width[tex]), int(self.model.tex_height[tex]))
-        if texture.shape[:2] != size[::-1]:
-            texture = cv2.resize(texture, size, interpolation=cv2.INTER_AREA)
-        adr, n = int(self.model.tex_adr[tex]), int(self.model.tex_nchannel[tex])
-        self.model.tex_data[adr:adr + texture.size // 3 * n] = texture.reshape(-1) if n == 3 else \
-            np.concatenate([texture, np.full(texture.shape[:2] + (1,), 255, np.uint8)], 2).reshape(-1)
-        corners = placement.corners_local(self.config.sign)
-        self.model.geom_pos[geom] = [corners[0, 0] - self.model.geom_size[geom][0], *corners[:, 1:].mean(axis=0)]
-        self.model.geom_size[geom][1:] = placement.side_m / 2
-        self.model.geom_group[geom] = PROP_GEOM_GROUP
+        tex = self.stickers.show(self.model, self.config.sign, sign_index, texture, placement)
         mujoco.mj_kinematics(self.model, self.data)
         self.rig.upload_texture(self.model, tex)
         if self._viewer is not None:
@@ -292,20 +235,19 @@ class QCar2Env(gym.Env):
         if self._step != 0:
             raise RuntimeError("retake_reset_frame is for the reset's frame; later frames come with time")
         self._take_frame(0.0)
-        self._view = None
+        self.truth.forget_view()
         return self._observation(), self._info(collision=False, off_road=False)
 
     def hide_sign_patches(self) -> None:
         """Takes every sticker off (back to the group no sensor sees)."""
-        for geom in self._patch_geoms:
-            self.model.geom_group[geom] = HIDDEN_GEOM_GROUP
+        self.stickers.hide(self.model)
         self.rig.invalidate()
 
     def render(self):
         if self.render_mode != "rgb_array":
             return None
         if self._viewer is None:
-            self._viewer = _ChaseView(self.model, self.config.render_width, self.config.render_height)
+            self._viewer = ChaseView(self.model, self.config.render_width, self.config.render_height)
         return self._viewer.render(self.data)
 
     def close(self) -> None:
@@ -320,27 +262,12 @@ class QCar2Env(gym.Env):
         return float(progress_m - 0.1 * abs(self._lateral) - 10.0 * (collision or off_road))
 
     def _collided(self) -> bool:
-        """A contact of the chassis with anything, or of a wheel with anything but the floor; the
-        first such contact's other party is kept for ``info["collision_with"]``."""
-        for i in range(self.data.ncon):
-            g1, g2 = int(self.data.contact.geom1[i]), int(self.data.contact.geom2[i])
-            other = g2 if g1 == self._chassis_geom or g1 in self._wheel_geoms else g1
-            if self._chassis_geom in (g1, g2) or (
-                    (g1 in self._wheel_geoms or g2 in self._wheel_geoms) and other not in self._floor_geoms):
-                self._collision_with = self._collision_with or self._name_of(other)
-                return True
-        return False
-
-    def _name_of(self, geom: int) -> str:
-        """What a geom belongs to: what a world manager calls its body (``WorldManager.owner_of``), else
-        the geom's (or its body's) name."""
-        body = int(self.model.geom_bodyid[geom])
-        root = int(self.model.body_rootid[body])
-        for manager in self.world:
-            owner = manager.owner_of(root)
-            if owner is not None:
-                return owner
-        return self.model.geom(geom).name or self.model.body(body).name or f"geom{geom}"
+        """Whether the car touches anything (``racf.sim.env.contacts``); the first thing it touched is
+        kept for ``info["collision_with"]``."""
+        hit = self.contacts.touching(self.data)
+        if hit is not None:
+            self._collision_with = self._collision_with or hit
+        return hit is not None
 
     # -- internals ------------------------------------------------------------------------
     def _rng_of(self, sensor: Sensor) -> np.random.Generator:
@@ -374,10 +301,9 @@ class QCar2Env(gym.Env):
             self._obs[sensor.name] = sensor.read(self.model, self.data, self._sensor_rng)
             self._stamps[_STAMP_SLOT[sensor.name]] = now
         # The ground truth of the frame (its mask) needs the frame's clean depth and camera pose.
-        self._frame_depth[:] = self.rig.render(self.model, self.data)[1]
+        depth = self.rig.render(self.model, self.data)[1]
         pos, mat = self.car.camera_pose(self.model, self.data)
-        self._frame_cam = (np.array(pos, dtype=np.float64), np.array(mat, dtype=np.float64).reshape(3, 3))
-        self._frame_xpos[:], self._frame_xmat[:] = self.data.xpos, self.data.xmat  # where the frame saw the bodies
+        self.truth.hold_frame(self.data, depth, pos, mat)
         self._frames = self._frames_due(self._substep)
 
     def _read_sensors(self, force: bool) -> None:
@@ -412,17 +338,8 @@ class QCar2Env(gym.Env):
         if self._step == 0:
             self._update_route_progress()
         state = self.car.state(self.data)
-        # The target's mask as the held frame shows it, where the frame saw its body (once per frame and target) ...
-        if self._view is None or self._view[0] != (self._frames, self._slot):
-            view_of = obstacle_view if isinstance(self._sign, Obstacle) else sign_view
-            motion = self._motion(self._sign, self._frame_xpos, self._frame_xmat)
-            self._view = ((self._frames, self._slot),
-                          view_of(self._sign, *self._frame_cam, self.rig.intrinsics, self._frame_depth, motion))
-        # ... and its depth and bearing from where the camera and the body are now.
         cam_pos, cam_mat = self.car.camera_pose(self.model, self.data)
-        centre = target_centre(self._sign, self._motion(self._sign, self.data.xpos, self.data.xmat))
-        view = with_centre_from(self._view[1], centre, np.asarray(cam_pos, np.float64),
-                                np.asarray(cam_mat, np.float64).reshape(3, 3))
+        view, centre = self.truth.view(self._sign, (self._frames, self._slot), self.data, cam_pos, cam_mat)
         return {
             "target_kind": "obstacle" if isinstance(self._sign, Obstacle) else "stop_sign",
             "target_sign": self._sign.index,
@@ -473,15 +390,7 @@ class QCar2Env(gym.Env):
         For evaluation, like ``info``: the masks belong to the frame the observation's ``rgb``
         shows, which is older than the step when the camera runs slower than the loop.
         """
-        return [sign_view(s, *self._frame_cam, self.rig.intrinsics, self._frame_depth,
-                          self._motion(s, self._frame_xpos, self._frame_xmat)).mask
-                for s in stop_signs(self.config.sign)]
-
-    def _motion(self, target: StopSign | Obstacle, xpos: np.ndarray, xmat: np.ndarray) -> Motion | None:
-        """How ``target``'s body stands off its map pose in body poses ``xpos``/``xmat`` (None: at it)."""
-        key = ("obstacle" if isinstance(target, Obstacle) else "stop_sign", target.index)
-        body = self._bodies[key]
-        return Motion.between(*self._home[key], xpos[body], xmat[body])
+        return self.truth.sign_masks(stop_signs(self.config.sign))
 
     def sensor_observation(self) -> dict[str, np.ndarray]:
         """The current sensor readings as the env returned them, before any wrapper changed them.
@@ -489,37 +398,3 @@ class QCar2Env(gym.Env):
         For evaluation (e.g. the protocol's d_clean under an attack), like ``info``.
         """
         return self._observation()
-
-
-
-class _ChaseView:
-    """Offscreen third-person view behind the car (for ``render()``)."""
-
-    def __init__(self, model: mujoco.MjModel, width: int, height: int) -> None:
-        self._gl = gl_context_class()(width, height)
-        self._gl.make_current()
-        self._con = mujoco.MjrContext(model, mujoco.mjtFontScale.mjFONTSCALE_100.value)
-        mujoco.mjr_setBuffer(mujoco.mjtFramebuffer.mjFB_OFFSCREEN.value, self._con)
-        self._scene = mujoco.MjvScene(model, maxgeom=2000)
-        self._cam = mujoco.MjvCamera()
-        self._cam.type = mujoco.mjtCamera.mjCAMERA_FIXED
-        self._cam.fixedcamid = model.camera("chase").id
-        self._opt = mujoco.MjvOption()
-        self._model = model
-        self._rect = mujoco.MjrRect(0, 0, width, height)
-        self._rgb = np.empty((height, width, 3), np.uint8)
-
-    def upload_texture(self, texture_id: int) -> None:
-        self._gl.make_current()
-        mujoco.mjr_uploadTexture(self._model, self._con, texture_id)
-
-    def render(self, data: mujoco.MjData) -> np.ndarray:
-        self._gl.make_current()
-        mujoco.mjv_updateScene(self._model, data, self._opt, None, self._cam, mujoco.mjtCatBit.mjCAT_ALL.value, self._scene)
-        mujoco.mjr_render(self._rect, self._scene, self._con)
-        mujoco.mjr_readPixels(self._rgb, None, self._rect, self._con)
-        return self._rgb[::-1].copy()
-
-    def close(self) -> None:
-        self._con.free()
-        self._gl.free()

@@ -10,11 +10,11 @@ from racf.sim.attacks import ATTACKS, PhysicalPatch
 
 def _run(env, steps=30):
     obs, info = env.reset(seed=1, options={"sign": 2, "cruise_speed": 1.0})
-    shown = [env.unwrapped.model.geom_group[env.unwrapped._patch_geoms[2]] == 0]
+    shown = [env.unwrapped.model.geom_group[env.unwrapped.stickers.geoms[2]] == 0]
     marks = [info["attack_active"]]
     for _ in range(steps):
         obs, _, term, trunc, info = env.step(np.array([0.5, 0.0], np.float32))
-        shown.append(env.unwrapped.model.geom_group[env.unwrapped._patch_geoms[2]] == 0)
+        shown.append(env.unwrapped.model.geom_group[env.unwrapped.stickers.geoms[2]] == 0)
         marks.append(info["attack_active"])
         if term or trunc:
             break

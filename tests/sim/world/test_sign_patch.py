@@ -70,7 +70,7 @@ def test_the_sticker_renders_upright_and_unmirrored_where_its_corners_project(en
         pixel = obs["rgb"][probe[1], probe[0]].astype(int)
         assert np.argmax(pixel) == np.argmax(colour) or (max(colour) == 0 and pixel.max() < 60), (colour, pixel)
     env.reset(seed=0, options={"sign": 2, "cruise_speed": 0.0, "run_up_m": 0.5})  # the reset takes it off
-    assert (u.model.geom_group[u._patch_geoms] == 5).all()
+    assert (u.model.geom_group[u.stickers.geoms] == 5).all()
 
 
 def test_the_lidar_sees_the_plate_with_the_sticker_as_without(env):
