@@ -48,10 +48,12 @@ import pandas as pd
 
 from racf.odca.align import Alignment, fit_alignment
 from racf.odca.features import MAX_RANGE_M, features, sanitize, sanitize_size, usable_forecast
-from racf.odca.gate import BASELINE, DEPTH, DEPTH_UNCONFIRMED, KIN, LIDAR, LIDAR_KIN, SIZE, SOURCES, GateConfig, vote
+from racf.odca.gate import DEPTH, SOURCES, GateConfig, vote
 from racf.odca.head import HeadWeights
-from racf.odca.kinematics import KinematicBranch, KinematicsConfig
+from racf.odca.kinematics import KinematicsConfig
 from racf.odca.prior import SHIPPED_PRIOR, Chronos2Prior, CheckpointError, TemporalPrior
+from racf.odca.series import _optional, _pick, corrected, segments
+from racf.odca.witnesses import Witnesses, bounded
 from racf.assets import asset_path
 
 __all__ = ["ODCA", "ODCAConfig", "FusedSample", "SHIPPED_HEAD", "SOURCES"]
@@ -152,103 +154,6 @@ class FusedSample:
 _COLUMNS = tuple(f.name for f in fields(FusedSample))
 
 
-class _Witnesses:
-    """The sequential part of a step: kinematic branch, vote and anchoring (no head: it does
-    not feed back, so a series' verdicts are known before the head runs)."""
-
-    def __init__(self, config: ODCAConfig) -> None:
-        self.config = config
-        self.branch = KinematicBranch(config.kinematics)
-        self.last_size = math.nan
-        self.last_depth, self.held_s, self.held_m = math.nan, 0.0, 0.0
-
-    def reset(self) -> None:
-        self.branch.reset()
-        self.last_size = math.nan
-        self.last_depth, self.held_s, self.held_m = math.nan, 0.0, 0.0
-
-    def depth_age(self, d: float, motion: float, dt: float) -> float:
-        """The distance driven since this depth's frame, m: perception holds a camera frame's
-        depth over the loop's faster steps, so a depth equal to the last step's is that frame's,
-        as long as it has been held for less than one frame period (longer: not a frame's hold)."""
-        self.held_s, self.held_m = self._held_after(d, motion, dt)
-        self.last_depth = d
-        return self._age(self.held_s, self.held_m)
-
-    def peek_depth_age(self, d: float, motion: float, dt: float) -> float:
-        """:meth:`depth_age` for a step that may not happen: changes nothing."""
-        return self._age(*self._held_after(d, motion, dt))
-
-    def _held_after(self, d: float, motion: float, dt: float) -> tuple[float, float]:
-        """(seconds, metres) the depth will have been held after a step with depth ``d``."""
-        if d == d and d == self.last_depth:
-            return self.held_s + dt, self.held_m + abs(motion)
-        return 0.0, 0.0
-
-    def _age(self, held_s: float, held_m: float) -> float:
-        return held_m if held_s < self.config.kinematics.camera_frame_s else 0.0
-
-    def lidar_unconfirmed(self, l: float, lidar_confirmed: bool, branch: KinematicBranch) -> bool:
-        """Whether the LiDAR side of the vote is one witness: a track no depth confirmed, or a
-        branch anchored on such a track alone."""
-        return (self.config.kinematics.enabled and branch.alive and branch.lidar_only) or (
-            l == l and not lidar_confirmed)
-
-    def step(self, d, c, l, v, yaw_rate, bearing, mu, dt, lidar_confirmed=True, size=math.nan, size_std=math.nan):
-        """Returns (source, base, lidar_trusted, d_kin, kin_std, motion) for one sanitised step.
-        ``lidar_confirmed``: whether a depth ever agreed with the LiDAR's track (perception's word).
-        ``size``, ``size_std``: the size witness and its std (NaN: none)."""
-        cfg = self.config
-        branch = self.branch
-        on = cfg.kinematics.enabled
-        motion = branch.predict(v, yaw_rate, dt) if on else math.nan
-        if not motion == motion:
-            motion = -v * dt  # no branch: a straight approach's change
-        k, k_std = branch.distance, branch.std
-        lidar_only = on and branch.alive and branch.lidar_only
-        size_tol = cfg.gate.size_tolerance(size_std)
-        source, base, lidar_trusted = vote(d, c, l, k, branch.tolerance(cfg.gate.tau_m) if k == k else math.nan, mu,
-                                           cfg.gate, cfg.kinematics.witness,
-                                           lidar_unconfirmed=self.lidar_unconfirmed(l, lidar_confirmed, branch),
-                                           size=size, size_tol=size_tol, k_echoes_depth=on and branch.depth_only)
-        new_size = size == size and size != self.last_size  # perception holds a frame's box between frames
-        self.last_size = size
-        age_m = self.depth_age(d, motion, dt)
-        if on and source in (DEPTH, LIDAR, LIDAR_KIN) and branch.drifted(base, cfg.gate.tau_m,
-                                                                           age_m if source == DEPTH else 0.0):
-            source, base, lidar_trusted = BASELINE, branch.baseline, False
-        elif on and source == DEPTH and (lidar_trusted or lidar_only or branch.size_only or not branch.alive):
-            by_size = size == size and abs(d - size) <= size_tol
-            branch.anchor(d, bearing, confirmed=lidar_trusted, depth_only=not (lidar_trusted or by_size))
-        elif on and source in (LIDAR, LIDAR_KIN):
-            branch.anchor(l, bearing, confirmed=source == LIDAR_KIN and lidar_confirmed, lidar_only=not lidar_confirmed)
-        elif on and source == SIZE:
-            # The size alone anchors the branch at first sight (a blackout the LiDAR cannot confirm against).
-            branch.anchor(size, bearing, confirmed=False, std=size_std, size_only=True)
-        elif on and source == KIN and branch.size_only and new_size and abs(size - k) <= size_tol:
-            branch.fuse(size, size_std)
-        return source, base, lidar_trusted, k, k_std, motion
-
-
-def _bounded(values: np.ndarray, motion: np.ndarray, bound: float, prev: float, first: np.ndarray | None = None,
-             free: np.ndarray | None = None) -> np.ndarray:
-    """Each value kept within ``bound`` of (the previous output + the car's motion); a NaN
-    (no target) or a segment's ``first`` step starts afresh. ``free`` steps (a depth the gate
-    passed) are kept as they are and the bound restarts from them: Proposition 1 holds for the
-    output, not only for the vote (bounding them changed clean depth just after a repair)."""
-    out = values.copy()
-    for t in range(len(out)):
-        if first is not None and first[t]:
-            prev = math.nan
-        x = out[t]
-        if x == x and prev == prev and not (free is not None and free[t]):
-            centre = prev + motion[t]
-            x = min(max(x, centre - bound), centre + bound)
-            out[t] = min(max(x, 0.0), MAX_RANGE_M)
-        prev = out[t]
-    return out
-
-
 class ODCA:
     """The Object Distance Correction Algorithm.
 
@@ -311,7 +216,7 @@ class ODCA:
         self._t = 0
         self._mean = np.full(self.config.horizon, np.nan)
         self._std = np.full(self.config.horizon, np.nan)
-        self._witnesses = _Witnesses(self.config)
+        self._witnesses = Witnesses(self.config)
         self._prev = math.nan
         self._last_lidar = math.nan
         self._last_size = (math.nan, math.nan)
@@ -345,7 +250,7 @@ class ODCA:
         if not (math.isfinite(dt) and dt > 0):
             raise ValueError(f"dt must be a positive finite number of seconds, got {dt}")
         if self._witnesses.config is not self.config:  # the config was replaced (calibration)
-            self._witnesses = _Witnesses(self.config)
+            self._witnesses = Witnesses(self.config)
         k = self._t % self.config.refresh_steps
         if k == 0:
             mean, std = usable_forecast(*self.prior.forecast(self._context[None], self.config.horizon))
@@ -440,7 +345,7 @@ class ODCA:
     def verdicts(self, d, c, l_al, v, w, b, mu, size=None, size_std=None):
         """The gate's verdicts over one segment (sanitised arrays), from a fresh kinematic branch:
         (source, base, lidar_trusted, d_kin, kin_std, motion)."""
-        witnesses = _Witnesses(self.config)
+        witnesses = Witnesses(self.config)
         n = len(d)
         nan = np.full(n, np.nan)
         s, s_std = sanitize_size(nan if size is None else size, nan if size_std is None else size_std)
@@ -470,44 +375,8 @@ class ODCA:
         delta = np.where(corrected(source), delta, 0.0)
         d_rep = np.clip(base + delta, 0.0, MAX_RANGE_M)  # NaN stays NaN: no target
         d_fused = np.where(passed, d, d_rep)
-        d_fused = _bounded(d_fused, motion, self.config.step_bound_m, prev, first, free=passed)
+        d_fused = bounded(d_fused, motion, self.config.step_bound_m, prev, first, free=passed)
         n = len(d_fused)
         return (d_fused, (~passed).astype(float), d_rep, np.abs(d - l_al), np.abs(delta),
                 np.abs(d_fused - l_al), np.broadcast_to(mu, n), np.broadcast_to(sigma, n), k, k_std,
                 np.asarray(source, float))
-
-
-def corrected(source: np.ndarray) -> np.ndarray:
-    """The steps the head corrects: repairs that rest on a witness. A depth that passed is output
-    as it is (Proposition 1), and so is an unconfirmed one: with no witness to measure it
-    against, a correction would be a guess (on clean first sights it only moved the depth)."""
-    source = np.asarray(source)
-    return (source != DEPTH) & (source != DEPTH_UNCONFIRMED)
-
-
-def segments(df: pd.DataFrame) -> list[np.ndarray]:
-    """Row positions of each run ODCA makes afresh: a series, cut where ``slot`` changes."""
-    n = len(df)
-    if n == 0:
-        return []
-    new = np.zeros(n, bool)
-    new[0] = True
-    for name in ("series_id", "slot"):
-        if name in df:
-            values = df[name].to_numpy()
-            new[1:] |= values[1:] != values[:-1]
-    starts = np.flatnonzero(new)
-    return [np.arange(a, b) for a, b in zip(starts, np.r_[starts[1:], n])]
-
-
-def _pick(df: pd.DataFrame, name: str, alt: str | None) -> np.ndarray:
-    if name in df:
-        return df[name].to_numpy(float)
-    if alt is not None and alt in df:
-        return df[alt].to_numpy(float)
-    raise ValueError(f"run(df) needs a {name!r} column" + (f" (or {alt!r})" if alt else "") +
-                     f"; got columns {list(df.columns)}")
-
-
-def _optional(df: pd.DataFrame, name: str, default: float) -> np.ndarray:
-    return df[name].to_numpy(float) if name in df else np.full(len(df), default)

@@ -28,7 +28,8 @@ from racf.odca.features import sanitize, sanitize_size
 from racf.odca.gate import GateConfig
 from racf.odca.head import HeadWeights, head_parameters, make_head
 from racf.odca.losses import LossWeights, odca_losses
-from racf.odca.online import ODCA, ODCAConfig, corrected, segments
+from racf.odca.online import ODCA, ODCAConfig
+from racf.odca.series import corrected, segments
 
 __all__ = ["prepare", "prepare_split", "prepare_clean", "clean_series", "revote", "initial_model", "fit", "train_head",
            "calibrate_gate", "unchanged_share", "score", "pass_through", "evaluate", "train_odca"]

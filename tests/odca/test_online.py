@@ -387,7 +387,7 @@ def test_a_depth_held_from_the_last_frame_is_as_old_as_its_frame_and_no_older():
     """The camera runs at 30 Hz, the loop at 50 Hz: a depth equal to the last step's is that
     frame's, and the drift check gives it the distance driven since. A depth frozen for longer
     than a frame period is not a held frame (a freeze attack gets nothing)."""
-    from racf.odca.online import _Witnesses
+    from racf.odca.witnesses import Witnesses as _Witnesses
 
     w = _Witnesses(_stub().config)
     assert w.depth_age(1.50, -0.04, 0.02) == 0.0  # a fresh frame
