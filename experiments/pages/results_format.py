@@ -1,11 +1,14 @@
 """How the results pages write a number: intervals, rates, the provenance line of a stored
-result, and what a page says where a result is not stored yet."""
+result, what a page says where a result is not stored yet, and the stored results of a folder."""
 
 from __future__ import annotations
 
+import json
+from pathlib import Path
+
 from racf.stats import ci, num, rate
 
-__all__ = ["NOTE", "page_head", "ci", "num", "rate", "meta_lines", "missing"]
+__all__ = ["NOTE", "page_head", "ci", "num", "rate", "meta_lines", "missing", "StoredResults"]
 
 NOTE = ("Written by `racf.experiments.pages.results_pages` from the stored results in `docs/results/data/`: every "
         "number is what the command beside it printed, on the code, machine and sensors named. Intervals are "
@@ -32,3 +35,16 @@ def meta_lines(meta: dict) -> list[str]:
 
 def missing(name: str, command: str) -> list[str]:
     return [f"Not stored yet (`{name}`): run `{command}` and store it with `results_store`.", ""]
+
+
+class StoredResults:
+    """The stored results of one folder, loaded on demand."""
+
+    def __init__(self, root: Path):
+        self.root = Path(root)
+
+    def __contains__(self, name: str) -> bool:
+        return (self.root / f"{name}.json").exists()
+
+    def __getitem__(self, name: str) -> dict:
+        return json.loads((self.root / f"{name}.json").read_text())

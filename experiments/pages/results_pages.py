@@ -19,8 +19,13 @@ from typing import Callable
 from racf.experiments.pages.falsify_page import falsification_markdown
 from racf.experiments.pages.existence_page import existence_markdown
 from racf.experiments.pages.leaderboard_page import leaderboard_markdown
-from racf.experiments.pages.service_page import bags_and_service_markdown
 from racf.experiments.pages.traffic_page import crossed_key, traffic_markdown
+from racf.experiments.pages.detector_page import detector_markdown
+from racf.experiments.pages.speed_page import speed_markdown
+from racf.experiments.pages.results_format import StoredResults as _Data
+from racf.experiments.pages.results_tables import by_estimator_table as _by_estimator_table
+from racf.experiments.pages.results_tables import split_estimator as _split_estimator
+from racf.experiments.pages.results_tables import settings_table as _settings_table
 from racf.experiments.pages.results_format import page_head as _page_head
 from racf.experiments.pages.results_format import ci as _ci
 from racf.experiments.pages.results_format import meta_lines as _meta
@@ -31,7 +36,6 @@ from racf.experiments.pages.results_format import rate as _rate
 __all__ = ["RESULT_PAGES", "PAPER", "paper_rows", "readme_table"]
 
 _METHODS = ("raw", "lidar", "ekf", "chi2", "cusum", "chronos", "softs", "nhits", "dlinear", "nlinear", "odca")
-_ESTIMATORS = ("raw", "ekf", "chronos", "odca")
 
 #: The paper's numbers (racf-paper.tex: the real-car table, Table "attack persistence" and
 #: Table "recovery", strong preset), quoted beside racf's measurements.
@@ -39,58 +43,7 @@ PAPER = {"clean_scr": 1.00, "clean_dt_brake": 0.1647, "attack_scr": 0.17, "odca_
          "persistence_asr": {"0.5": 0.50, "1.0": 0.90, "3.0": 1.00}, "strong_rmse_odca": 0.323,
          "strong_rmse_chronos": 0.503, "strong_rmse_lidar": 0.600, "head_parameters": 921}
 
-class _Data:
-    """The stored results of one folder, loaded on demand."""
-
-    def __init__(self, root: Path):
-        self.root = Path(root)
-
-    def __contains__(self, name: str) -> bool:
-        return (self.root / f"{name}.json").exists()
-
-    def __getitem__(self, name: str) -> dict:
-        return json.loads((self.root / f"{name}.json").read_text())
-
-
 # --- tables ----------------------------------------------------------------------------------------------------
-
-def _settings_table(data: dict) -> list[str]:
-    lines = _meta(data["meta"]) + [
-        "| setting | N | SCR [95% CI] | ASR [95% CI] | dt_brake s, mean +- std (n) | SCR, attack before t* (n) |",
-        "|---|---|---|---|---|---|"]
-    for name, r in data["settings"].items():
-        early = ("-" if r.get("scr_attack_before_t_star") is None else
-                 f"{_rate(r['scr_attack_before_t_star'], r['scr_attack_before_t_star_ci'])} "
-                 f"({r['n_attack_before_t_star']})")
-        lines.append(f"| {name} | {r['n']} | {_rate(r['scr'], r['scr_ci'])} | {_rate(r.get('asr'), r.get('asr_ci'))} "
-                     f"| {_num(r['dt_brake_mean'])} +- {_num(r['dt_brake_std'])} ({r['n_latency']}) | {early} |")
-    return lines + [""]
-
-
-def _split_estimator(setting: str) -> tuple[str, str]:
-    """``"clean+stealth_ramp+odca"`` -> ("stealth_ramp", "odca"); no estimator is raw depth."""
-    parts = setting.split("+")
-    estimator = parts.pop() if parts[-1] in _ESTIMATORS else "raw"
-    attack = "+".join(p for p in parts if p != "clean") or "patch_occlusion"
-    if parts[0] == "attack":
-        attack = "+".join(["patch_occlusion", *parts[1:]])
-    return attack, estimator
-
-
-def _by_estimator_table(data: dict) -> list[str]:
-    """SCR per attack (rows) and estimator (columns)."""
-    cells: dict[str, dict[str, dict]] = {}
-    for setting, r in data["settings"].items():
-        attack, estimator = _split_estimator(setting)
-        cells.setdefault(attack, {})[estimator] = r
-    estimators = [e for e in _ESTIMATORS if any(e in row for row in cells.values())]
-    lines = ["| attack | " + " | ".join(estimators) + " |", "|---|" + "---|" * len(estimators)]
-    for attack, row in cells.items():
-        lines.append(f"| `{attack}` | " + " | ".join(
-            f"{_rate(row[e]['scr'], row[e]['scr_ci'])} (N {row[e]['n']})" if e in row else "-" for e in estimators)
-            + " |")
-    return lines + [""]
-
 
 def _stealth_table(rows: list[dict]) -> list[str]:
     lines = ["| attack | settings | estimator | N | SCR [95% CI] | undetected error m, median [CI] | max | "
@@ -313,254 +266,6 @@ def readme_table(root: Path) -> str:
     return "\n".join(paper_rows(_Data(root), link="docs/results/"))
 
 
-def _detector(d: _Data) -> str:
-    lines = [*_page_head("The learned detector and the printed sticker"),
-             "The paper detects the sign with YOLOv8-seg and attacks it with a physical patch. racf has a classical "
-             "colour-and-shape detector (the default) and a small learned segmenter trained on the simulator's "
-             "frames; the sticker is optimised against the segmenter and printed on the sign in the scene "
-             "([the tutorial](../tutorials/detector.md)).", "",
-             "![Near views, clean and with the sticker printed on the sign](../detector/patched_sign.png)", ""]
-    lines += ["## The detectors, on held-out views and approach drives", ""]
-    if "bench-detector" in d:
-        data = d["bench-detector"]
-        lines += _meta(data["meta"]) + [
-            "Held-out views: rendered views with ground-truth masks (`racf detector data`); drives: every frame of "
-            "the approach drives, recall over the frames with the sign 0.5-2.5 m away.", "",
-            "| detector | held-out recall [CI] (N) | held-out false-positive frames [CI] (of N) | drive recall [CI] (N) | "
-            "drive false-positive frames [CI] (of N) | ms per frame, one core |", "|---|---|---|---|---|---|"]
-        for name, r in data["detectors"].items():
-            h = r["heldout"]
-            lines.append(f"| {name} | {_rate(h['recall'], h['recall_ci'], 3)} ({h['n_positive']}) | "
-                         f"{_rate(h['fp_rate'], h['fp_rate_ci'], 4)} ({h['n_frames']}) | "
-                         f"{_rate(r['recall'], r['recall_ci'], 3)} ({r['n_positive']}) | "
-                         f"{_rate(r['fp_rate'], r['fp_rate_ci'], 4)} ({r['n_frames']}) | "
-                         f"{_num(r['ms_per_frame_one_core'], 2)} |")
-        lines.append("")
-        lines += _default_verdict(data["detectors"]) + _heldout_breakdown(data["detectors"])
-    else:
-        lines += _missing("bench-detector", "racf bench detector --json")
-    lines += ["## The sticker in the scene, per view", ""]
-    if "bench-patch" in d:
-        data = d["bench-patch"]
-        lines += _meta(data["meta"]) + [
-            f"The sticker ({data['texture']}, {data['size']:g} of the plate) in rendered views of a stop sign; recall "
-            "over the views with the sign resolvable, the same views clean, with the sticker, and with an occluder "
-            "of the same area.", "",
-            "| detector | recall, clean [CI] | recall, sticker [CI] | recall, occluder [CI] | N |",
-            "|---|---|---|---|---|"]
-        for name, row in data["counts"].items():
-            clean, sticker, occluder = (row.get(k, {}) for k in ("clean", "physical_patch", "patch_occlusion"))
-            lines.append(f"| {name} | {_rate(clean.get('recall'), clean.get('recall_ci'), 3)} | "
-                         f"{_rate(sticker.get('recall'), sticker.get('recall_ci'), 3)} | "
-                         f"{_rate(occluder.get('recall'), occluder.get('recall_ci'), 3)} | {clean.get('n_positive', '-')} |")
-        lines.append("")
-        bands = sorted({b for row in data["by_band"].values() for r in row.values() for b in r})
-        if bands:
-            lines += ["By distance (recall, clean -> sticker):", "", "| detector | " + " | ".join(bands) + " |",
-                      "|---|" + "---|" * len(bands)]
-            for name, row in data["by_band"].items():
-                cells = [f"{_num(row['clean'][b]['recall'], 2)} -> {_num(row['physical_patch'][b]['recall'], 2)} "
-                         f"(N {row['clean'][b]['n_positive']})" for b in bands]
-                lines.append(f"| {name} | " + " | ".join(cells) + " |")
-            lines.append("")
-    else:
-        lines += _missing("bench-patch", "racf bench patch -n 300 --json")
-    lines += ["## The sticker in the closed loop", ""]
-    if "physical-patch" in d:
-        data = d["physical-patch"]
-        lines += _settings_table(data) + ["SCR by estimator:", ""] + _by_estimator_table(data)
-    else:
-        lines += _missing("physical-patch", "racf sweep physical-patch.toml")
-    lines += ["## A sticker optimised over the loop", "",
-              "Up on the sign from the start, 0.6 of the plate, no defence: the first sticker (optimised over any "
-              "view) against the one optimised over the car's own approaches and weighted to the frames where "
-              "detection decides the stop (`racf detector optimise-patch --views approach`). With the sticker up from the "
-              "start every attack begins before t*.", ""]
-    for name, detector in (("sticker-loop", "the default (classical) detector"),
-                           ("sticker-loop-learned", "the learned segmenter")):
-        lines += [f"### Against {detector}", ""]
-        if name not in d:
-            lines += _missing(name, f"racf sweep {name}.toml")
-            continue
-        data = d[name]
-        lines += _meta(data["meta"]) + _sticker_rows(data)
-    lines += _placement(d)
-    return "\n".join(lines)
-
-
-#: The placement study's stored results: (name, the sticker in words, its bench-patch flags).
-_PLACEMENTS = (("sticker-place-centre", "0.6 of the plate, in the middle", "--size 0.6 --position centre"),
-               ("sticker-place-top", "0.4 of the plate, at its top edge", "--size 0.4 --position top"))
-
-
-def _placement(d: _Data) -> list[str]:
-    """Where the sticker sits: recall on rendered approach views, then the chosen place in the loop."""
-    lines = ["## Where the sticker sits", "",
-             "The sticker `learned-approach` at two places, in rendered views on the car's approaches "
-             "(`racf bench patch --views approach`). Which place works depends on the detector: the colour "
-             "detector tests the red octagon's outline, which a sticker at the plate's edge breaks and one in the "
-             "middle leaves whole; the segmenter, against which the texture was optimised in the middle, sees "
-             "the whole face and what the sticker leaves of it. Recall [95 % CI] over the views with the sign "
-             "resolvable, by its distance:", ""]
-    rows = []
-    for name, words, flags in _PLACEMENTS:
-        if name not in d:
-            lines += _missing(name, f"racf bench patch -n 200 --views approach --texture learned-approach {flags} --json")
-            continue
-        data = d[name]
-        bands = sorted({b for row in data["by_band"].values() for r in row.values() for b in r})
-        for det, row in data["counts"].items():
-            cells = [f"{_num(data['by_band'][det]['physical_patch'][b]['recall'], 2)} "
-                     f"(N {data['by_band'][det]['physical_patch'][b]['n_positive']})" for b in bands]
-            rows.append(f"| {words} | {det} | {_rate(row['clean']['recall'], row['clean']['recall_ci'])} | "
-                        f"{_rate(row['physical_patch']['recall'], row['physical_patch']['recall_ci'])} | "
-                        + " | ".join(cells) + " |")
-    if rows:
-        lines += _meta(d[_PLACEMENTS[-1][0]]["meta"]) + [
-            "| sticker | detector | recall, clean | recall, sticker | " + " | ".join(f"sticker, {b}" for b in bands)
-            + " |", "|---|---|---|---|" + "---|" * len(bands), *rows, ""]
-    lines += ["### The placed sticker in the loop, against the default detector", "",
-              "Chosen on the views above, then measured on fresh episodes: up on the sign from the start, no "
-              "defence, random draws of the sign and the speed. Every attack begins before t*.", ""]
-    if "sticker-placed" not in d:
-        return lines + _missing("sticker-placed", "racf sweep sticker-placed.toml")
-    return lines + _meta(d["sticker-placed"]["meta"]) + _sticker_rows(d["sticker-placed"])
-
-
-def _default_verdict(detectors: dict) -> list[str]:
-    """Whether the learned segmenter earns the default: it must beat the classical detector on recall
-    and on false-positive frames, on the held-out views and on the approach drives."""
-    if not {"classical", "learned"} <= set(detectors):
-        return []
-    c, l = detectors["classical"], detectors["learned"]
-    checks = {"held-out recall": (l["heldout"]["recall"], c["heldout"]["recall"], True),
-              "held-out false-positive frames": (l["heldout"]["fp_rate"], c["heldout"]["fp_rate"], False),
-              "drive recall": (l["recall"], c["recall"], True),
-              "drive false-positive frames": (l["fp_rate"], c["fp_rate"], False)}
-    lost = [name for name, (learned, classical, higher) in checks.items()
-            if (learned <= classical if higher else learned >= classical)]
-    if not lost:
-        return ["The learned segmenter beats the classical detector on all four counts.", ""]
-    return ["The learned segmenter becomes the default detector only when it beats the classical one on recall "
-            "and on false-positive frames, on the held-out views and on the drives. Here it does not on: "
-            + ", ".join(lost) + "; the classical detector stays the default.", ""]
-
-
-def _heldout_breakdown(detectors: dict) -> list[str]:
-    """Held-out recall per kind of view and per distance band, and the red-square negatives (stored
-    by ``racf bench detector`` since the size witness's issue; older results have neither)."""
-    first = next(iter(detectors.values()))
-    if "by_kind" not in first["heldout"]:
-        return []
-    columns = [*first["heldout"]["by_kind"], *first["heldout"]["by_band"]]
-    lines = ["Held-out recall by kind of view (`sign`: anywhere around a sign, 0.3-6 m; `approach`: on the "
-             "car's lane towards it) and by the sign's distance, [95 % CI] (N):", "",
-             "| detector | " + " | ".join(columns) + " |", "|---|" + "---|" * len(columns)]
-    for name, r in detectors.items():
-        cells = {**r["heldout"]["by_kind"], **r["heldout"]["by_band"]}
-        lines.append(f"| {name} | " + " | ".join(
-            f"{_rate(cells[c]['recall'], cells[c]['recall_ci'], 3)} ({cells[c]['n_positive']})"
-            if cells[c]["recall"] is not None else "-" for c in columns) + " |")
-    lines += ["", "False-positive frames with plain red squares (14-48 px) pasted into held-out views with no stop "
-              "sign: red alone is not a stop sign.", "", "| detector | false-positive frames [95 % CI] (of N) |",
-              "|---|---|"]
-    for name, r in detectors.items():
-        q = r["red_squares"]
-        lines.append(f"| {name} | {_rate(q['fp_rate'], q['fp_rate_ci'], 4)} ({q['n_frames']}) |")
-    return lines + [""]
-
-
-def _sticker_rows(data: dict) -> list[str]:
-    """Per sticker: SCR and the detector's recall by the sign's distance (a sweep's stealth and recall rows)."""
-    recall = {r["params"]: r["bands"] for r in data.get("recall", [])}
-    bands = list(next(iter(recall.values()))) if recall else []
-    lines = ["| sticker | N | SCR [95 % CI] | " + " | ".join(f"recall {b} [CI] (frames)" for b in bands) + " |",
-             "|---|---|---|" + "---|" * len(bands)]
-    for row in data.get("stealth", []):
-        sticker = dict(p.split("=", 1) for p in row["params"].split() if p.startswith("physical_patch."))
-        texture = f"`{sticker.get('physical_patch.texture', row['params'])}`"
-        if "physical_patch.size" in sticker or "physical_patch.position" in sticker:
-            texture += f", {sticker.get('physical_patch.size', '')} at {sticker.get('physical_patch.position', 'centre')}"
-        cells = [f"{_rate(c['recall'], c['recall_ci'])} ({c['n']})" if c["n"] else "-"
-                 for c in (recall.get(row["params"], {}).get(b, {"n": 0}) for b in bands)]
-        lines.append(f"| {texture} | {row['n']} | {_rate(row['scr'], row['scr_ci'])} | " + " | ".join(cells) + " |")
-    return lines + [""]
-
-
-def _speed(d: _Data) -> str:
-    lines = [*_page_head("Speed"),
-             "The real-time factor is simulated seconds per wall-clock second at the 50 Hz control rate. This "
-             "machine's speed drifts by 10-20 % from minute to minute: compare two versions in one run, in "
-             "alternation, not across pages.", ""]
-    lines += ["## The simulator alone (`racf bench sim`)", ""]
-    if "bench-sim" in d:
-        data = d["bench-sim"]
-        lines += _meta(data["meta"]) + ["| setting | steps/s | real-time factor |", "|---|---|---|"]
-        lines += [f"| {k} | {v['steps_per_s']:.1f} | {v['real_time_factor']:.2f} |" for k, v in data["settings"].items()
-                  if isinstance(v, dict)]
-        over = data["settings"].get("full_over_floor_320x240")
-        if over is not None:
-            lines += ["", f"The floor is MuJoCo's bare physics, one render and readback a camera frame and the A2M12's "
-                      f"rays, each timed alone: what a step at 320 x 240 cannot cost less than without changing what it "
-                      f"computes. The full sensor set takes {over:.2f} x the floor's time a step."]
-        lines.append("")
-    else:
-        lines += _missing("bench-sim", "racf bench sim --json")
-    lines += ["## Whole episodes, as a sweep runs them (`racf bench loop`)", ""]
-    lines += _measures(d, "bench-loop", "loop", "racf bench loop --json", digits=2)
-    lines += ["## ODCA's per-step cost (`racf bench odca-latency`)", ""]
-    lines += _measures(d, "odca-latency", "latency", "racf bench odca-latency --json", digits=3)
-    lines += _guard(d)
-    lines += _paired(d)
-    lines += bags_and_service_markdown(d)
-    return "\n".join(lines)
-
-
-def _guard(d: _Data) -> list[str]:
-    """The speed guard's ratio per commit (``racf bench guard --store``; ``make check-speed``)."""
-    lines = ["## The speed guard (`make check-speed`)", "",
-             "The closed loop's step (attack + ODCA, one core) over MuJoCo's bare physics step, timed in "
-             "alternating rounds in one run, so that the machine's drift moves both. `make check-speed` fails "
-             "when a change makes it more than 15 % worse than the newest commit's.", ""]
-    if "speed-guard" not in d:
-        return lines + _missing("speed-guard", "racf bench guard --store")
-    lines += ["| commit | measured | machine | ratio (median of rounds) | rounds | loop step ms | physics step ms | "
-              "loop real-time factor |", "|---|---|---|---|---|---|---|---|"]
-    for e in d["speed-guard"]["history"]:
-        lines.append(f"| `{e['commit']}` | {e['measured']} | {e['machine']} | {e['ratio']:.2f} | "
-                     f"{', '.join(f'{r:.2f}' for r in e['ratios'])} | {sorted(e['loop_step_ms'])[len(e['loop_step_ms']) // 2]:.2f} | "
-                     f"{sorted(e['physics_step_ms'])[len(e['physics_step_ms']) // 2]:.3f} | {e['rtf_loop']:.2f} |")
-    return lines + [""]
-
-
-def _paired(d: _Data) -> list[str]:
-    """The last speed change, old and new timed in alternation (``racf bench paired``)."""
-    lines = ["## Old against new, in alternation (`racf bench paired`)", "",
-             "The same episodes in a warm worker of each checkout, both on one core, old and new in turn; each "
-             "round's ratio is new / old (below 1: faster).", ""]
-    if "speed-paired" not in d:
-        return lines + _missing("speed-paired", "racf bench paired --baseline DIR --json")
-    data = d["speed-paired"]
-    r = data["paired"]
-    lines += _meta(data["meta"]) + ["| round | old ms a step | new ms a step | new / old |", "|---|---|---|---|"]
-    lines += [f"| {i + 1} | {o:.3f} | {n:.3f} | {n / o:.3f} |" for i, (o, n) in enumerate(zip(r["old_ms"], r["new_ms"]))]
-    against = f" against `{data['meta']['baseline']}`" if "baseline" in data["meta"] else ""
-    lines += ["", f"{r['setting']}, {r['episodes']} episodes a round in each{against}: new / old {r['ratio']:.3f} (median of "
-              f"{len(r['ratios'])} rounds, {min(r['ratios']):.3f}-{max(r['ratios']):.3f}); real-time factor "
-              f"{r['old_rtf']:.2f} -> {r['new_rtf']:.2f}.", ""]
-    return lines
-
-
-def _measures(d: _Data, name: str, key: str, command: str, digits: int) -> list[str]:
-    """A stored result's flat ``{measure: value}`` (under ``key``) as a two-column table."""
-    if name not in d:
-        return _missing(name, command)
-    data = d[name]
-    return _meta(data["meta"]) + ["| measure | value |", "|---|---|"] + [
-        f"| {k.replace('_', ' ')} | {_num(v, digits) if isinstance(v, float) else v} |"
-        for k, v in data[key].items()] + [""]
-
-
 def _index(d: _Data) -> str:
     lines = [*_page_head("Results"),
              "| page | what |", "|---|---|",
@@ -590,7 +295,7 @@ RESULT_PAGES: dict[str, Callable[[Path], str]] = {
     f"results/{name}.md": (lambda make: lambda root: make(_Data(root)))(make)
     for name, make in (("index", _index), ("leaderboard", leaderboard_markdown), ("paper", _paper), ("closed-loop", _closed_loop), ("sweeps", _sweeps),
                        ("offline-benchmark", _offline), ("adaptive-attacks", _adaptive),
-                       ("detector-and-sticker", _detector), ("speed", _speed))}
+                       ("detector-and-sticker", detector_markdown), ("speed", speed_markdown))}
 RESULT_PAGES["results/falsification.md"] = falsification_markdown
 RESULT_PAGES["results/traffic.md"] = traffic_markdown
 RESULT_PAGES["results/existence.md"] = existence_markdown
