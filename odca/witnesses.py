@@ -5,16 +5,11 @@ a series' verdicts are known before the head runs; the online and the batched pa
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
-
 import numpy as np
 
 from racf.odca.features import MAX_RANGE_M
 from racf.odca.gate import BASELINE, DEPTH, KIN, LIDAR, LIDAR_KIN, SIZE, vote
 from racf.odca.kinematics import KinematicBranch
-
-if TYPE_CHECKING:  # the config is the online module's; it builds the witnesses
-    from racf.odca.online import ODCAConfig
 
 __all__ = ["Witnesses", "bounded"]
 
@@ -23,7 +18,8 @@ class Witnesses:
     """The sequential part of a step: kinematic branch, vote and anchoring (no head: it does
     not feed back, so a series' verdicts are known before the head runs)."""
 
-    def __init__(self, config: "ODCAConfig") -> None:
+    def __init__(self, config) -> None:
+        """``config``: the online module's ``ODCAConfig`` (its kinematics and gate settings)."""
         self.config = config
         self.branch = KinematicBranch(config.kinematics)
         self.last_size = math.nan

@@ -8,7 +8,8 @@ import json
 import time
 from pathlib import Path
 
-from racf.experiments.cli.common import fail, keyed_values, output_dir, plugin_flag, trial_flags, trial_spec
+from racf.experiments.cli.common import fail, keyed_values, output_dir, plugin_flag
+from racf.experiments.cli.episode_flags import trial_flags, trial_spec
 
 __all__ = ["register"]
 

@@ -6,9 +6,9 @@ import argparse
 import json
 from pathlib import Path
 
-from racf.experiments.cli.common import (backend_flags, count, episode_flags, episode_params, fail, fmt_ci,
-                                         output_dir, plugin_flag, registry_markdown, registry_rows, sensor_flags,
-                                         trial_flags, trial_spec)
+from racf.experiments.cli.common import (backend_flags, count, fail, fmt_ci, output_dir, plugin_flag, registry_markdown,
+                                         registry_rows, sensor_flags)
+from racf.experiments.cli.episode_flags import episode_flags, episode_params, trial_flags, trial_spec
 
 __all__ = ["register"]
 

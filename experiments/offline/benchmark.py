@@ -21,9 +21,10 @@ import numpy as np
 import pandas as pd
 
 from racf.experiments.data.dataset import SPLITS, QCarDataset, load_dataset
+from racf.experiments.offline.ablation import ABLATION, run_ablation
 from racf.experiments.offline.forecasters import NF_MODELS, ChronosForecaster, NFSettings, train_nf, training_frame
 from racf.experiments.offline.methods import (FORECASTERS, estimator_estimate, forecast_at, lidar_estimate,
-                                              offline_estimators, split_arrays, table_order, with_fallback)
+                                              offline_estimators, split_arrays, table_order)
 from racf.experiments.offline.metrics import bounded_degradation, resilience_gain
 from racf.provenance import code_version
 from racf.experiments.offline.scoring import (bootstrap_rmse_draws, diagnostic_scores, error_sources, horizon_scores,
@@ -34,31 +35,6 @@ __all__ = ["BenchConfig", "ABLATION", "load_splits", "run_benchmark", "PRESETS",
 PRESETS = ("weak", "mid", "strong")
 #: The source a benchmark result depends on: the methods (ODCA, the EKF), the corruption and the scoring.
 BENCH_CODE = ("racf.odca", "racf.controllers", "racf.experiments.data", "racf.experiments.offline")
-
-
-def _ablation_rows() -> dict[str, dict]:
-    from racf.odca.losses import LossWeights
-
-    full = LossWeights()
-    off = {"minimal_change": 0.0, "consistency": 0.0, "kinematics": 0.0}
-    weights = {
-        "L_ID": asdict(replace(full, **off)),
-        "L_ID + L_Delta0": asdict(replace(full, consistency=0.0, kinematics=0.0)),
-        "L_ID + L_Delta0 + L_cons": asdict(replace(full, kinematics=0.0)),
-        "L_ID + L_Delta0 + L_kin": asdict(replace(full, consistency=0.0)),
-        "full": asdict(full),
-    }
-    rows = {name: {"loss_weights": w, "kinematics": {}} for name, w in weights.items()}
-    # The parts of the gate: the kinematic witness out of the vote (the paper's two-witness
-    # gate, kinematics only bases repairs), and no kinematic branch at all.
-    rows["full, two-witness gate"] = {"loss_weights": asdict(full), "kinematics": {"witness": False}}
-    rows["full, no kinematics"] = {"loss_weights": asdict(full), "kinematics": {"enabled": False}}
-    return rows
-
-
-#: The ablation rows under the strong preset: name -> the head's loss weights and the kinematic
-#: branch's settings (``KinematicsConfig`` fields changed from the default).
-ABLATION = _ablation_rows()
 
 
 @dataclass(frozen=True)
@@ -363,7 +339,9 @@ def run_benchmark(cfg: BenchConfig, progress: bool = True, datasets: dict[str, Q
         if split == cfg.splits[0]:
             complexity = _complexity(odca_report, forecasters, chronos.n_parameters)
             if cfg.ablation and "strong" in cfg.presets:
-                ablation = _run_ablation(ds, prior, cfg, per_preset["strong"]["odca"], odca_report, stage, bar)
+                ablation = run_ablation(ds, cfg.draws, per_preset["strong"]["odca"], odca_report, stage, bar,
+                                        lambda weights, kinematics: _trained_odca(ds, prior, cfg, weights, "ablation",
+                                                                                  kinematics))
     bar.close()
     first = cfg.splits[0]
     results["clean"]["odca_rmse_vs_input"] = results["clean"][first]["rmse_vs_input"]
@@ -379,34 +357,6 @@ def run_benchmark(cfg: BenchConfig, progress: bool = True, datasets: dict[str, Q
     results["wall_s"] = time.perf_counter() - t0
     results["_traces"] = traces  # for the figures; not written to results.json
     return results
-
-
-def _run_ablation(ds, prior, cfg: BenchConfig, full_scores: dict, full_report: dict, stage, bar) -> list[dict]:
-    """Each row retrains the head (and recalibrates the gate); scored on the strong preset's test
-    series over every draw (the mean, as the main table)."""
-    frames = [ds.corrupted("strong", "test", draw) for draw in range(cfg.draws)]
-    rows = []
-    for objective, spec in ABLATION.items():
-        if objective == "full":
-            scores, report = full_scores, full_report
-        else:
-            stage(f"ablation: {objective}")
-            model, report = _trained_odca(ds, prior, cfg, spec["loss_weights"], "ablation", spec["kinematics"])
-            per_draw = []
-            for frame in frames:
-                a = split_arrays(frame, model.config.alignment)
-                est = with_fallback(model.run(frame)["d_fused"].to_numpy(), a)
-                per_draw.append({**recovery_scores(est, a), **diagnostic_scores(est, a)})
-            scores = mean_over_draws(per_draw)
-            bar.update()
-        rows.append({"objective": objective, "loss_weights": spec["loss_weights"], "kinematics": spec["kinematics"],
-                     "rmse": scores["rmse"], "mae": scores["mae"], "auroc_chg": scores["auroc_chg"],
-                     "auprc_chg": scores["auprc_chg"], "n": scores["n"], "n_draws": cfg.draws, "gate": report["gate"]})
-    base, full = rows[0]["rmse"], next(r["rmse"] for r in rows if r["objective"] == "full")
-    for r in rows:
-        r["delta_rmse"] = None if r is rows[0] else r["rmse"] - base
-        r["delta_vs_full"] = r["rmse"] - full
-    return rows
 
 
 def _derived(per_preset: dict) -> dict:

@@ -67,6 +67,7 @@ from racf.plugins import METRICS, SCENARIOS
 from racf.experiments.episode import TrialSpec
 from racf.experiments.episode.estimators import ESTIMATORS, check_options, make_estimator
 from racf.experiments.episode.spec import setting_name
+from racf.experiments.sweeps.scenario_tables import check_tables, scenario_tables, situations
 from racf.sim.attacks import ATTACKS
 from racf.sim.env.config import SENSOR_PROFILES
 from racf.sim.world.stop_signs import SIGN_GEOMETRIES
@@ -83,9 +84,6 @@ _TOP_KEYS = {"name", "mode", "repeats", "n", "seed", "space", "params", "estimat
              "estimator_timeout_ms"}
 
 
-def _scenario_tables() -> dict[str, str]:
-    """The top-level tables scenarios take in a spec (``Scenario.table``), table -> scenario."""
-    return {SCENARIOS[name].table: name for name in SCENARIOS if SCENARIOS[name].table}
 #: The example specs shipped with the project.
 SPECS_DIR = Path(__file__).resolve().parent / "specs"
 
@@ -163,50 +161,11 @@ class SweepSpec:
         self._check_estimators()
 
     def _check_tables(self) -> None:
-        """A scenario's own tables (``Scenario.table``): its parameters, a value or a list of values
-        each; a ``control`` value (the plain approach) is allowed beside the parameter's range."""
-        if not isinstance(self.tables, dict):
-            raise ValueError("tables must map a scenario's table name to its table")
-        known = _scenario_tables()
-        for table, content in self.tables.items():
-            if table not in known:
-                raise ValueError(f"unknown table [{table}]; scenarios' tables: {sorted(known)}")
-            scenario = SCENARIOS[known[table]]
-            if not isinstance(content, dict):
-                raise ValueError(f"{table} must be a table ([{table}] with {[p.name for p in scenario.params]})")
-            unknown = sorted(set(content) - {p.name for p in scenario.params})
-            if unknown:
-                raise ValueError(f"unknown field(s) {unknown} in [{table}]; allowed: "
-                                 f"{sorted(p.name for p in scenario.params)}")
-            for name, values in content.items():
-                listed = values if isinstance(values, list) else [values]
-                if not listed:
-                    raise ValueError(f"{table}.{name} must be a value or a non-empty list of values, got {values!r}")
-                for value in listed:
-                    if scenario.control.get(name, object()) != value:
-                        scenario.param(name).check(value, scenario.name)
-            if self.target not in (scenario.name, scenario.target) and any(
-                    combo for combo in self._table_combos(table)):
-                raise ValueError(f"[{table}] lists the parameters of scenario {scenario.name!r} (a {scenario.target} approach); target "
-                                 f"{self.target!r} cannot take it")
-
-    def _table_combos(self, table: str) -> list[dict]:
-        """Every combination of a scenario's table's values; {} for the control (the plain approach)."""
-        scenario = SCENARIOS[_scenario_tables()[table]]
-        content = {k: v if isinstance(v, list) else [v] for k, v in self.tables[table].items()}
-        combos = [dict(zip(content, combo)) for combo in itertools.product(*content.values())]
-        return [{} if any(scenario.control.get(k, object()) == v for k, v in combo.items()) else combo
-                for combo in combos]
+        check_tables(self.tables, self.target)
 
     def _situations(self) -> list[tuple[str, dict]]:
-        """(scenario, its parameters) of every episode of a cell: the scenario tables' combinations
-        (their control runs ``target``), each crossed with ``[scenario.<target>]``'s."""
-        out: list[tuple[str, dict]] = [(self.target, situation) for situation in self._scenario_combos()]
-        for table in self.tables:
-            name = _scenario_tables()[table]
-            out = [(name, combo | situation) if combo else (target, situation)
-                   for combo in self._table_combos(table) for target, situation in out]
-        return out
+        """(scenario, its parameters) of every episode of a cell (``scenario_tables.situations``)."""
+        return situations(self.target, self._scenario_combos(), self.tables)
 
     def _check_scenario(self) -> None:
         """``target`` names a scenario; ``[scenario.<target>]`` gives lists of its parameters' values."""
@@ -361,7 +320,7 @@ def parse_spec(text: str, source: str = "spec", default_name: str = "sweep") -> 
         raw = tomllib.loads(text)
     except tomllib.TOMLDecodeError as err:
         raise ValueError(f"{source}: not valid TOML: {err}") from None
-    tables = _scenario_tables()
+    tables = scenario_tables()
     unknown = sorted(set(raw) - _TOP_KEYS - set(tables))
     if unknown:
         raise ValueError(f"{source}: unknown field(s) {unknown}; allowed: {sorted(_TOP_KEYS | set(tables))}")
