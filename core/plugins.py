@@ -96,13 +96,20 @@ class Registry(Mapping[str, Any]):
     def __init__(self, group: str, kind: str, accepts: Callable[[Any], bool]) -> None:
         self.group, self.kind, self.accepts = group, kind, accepts
         self._plugins: dict[str, Plugin] | None = None
+        self._broken: dict[str, str] = {}
 
     # --- the mapping -------------------------------------------------------------------------
     def __getitem__(self, name: str) -> Any:
-        return self._all()[name].obj
+        plugins = self._all()
+        if name in self._broken:
+            raise PluginError(self._broken[name])
+        return plugins[name].obj
 
     def __iter__(self) -> Iterator[str]:
         return iter(self._all())
+
+    def __contains__(self, name: object) -> bool:
+        return name in self._all()
 
     def __len__(self) -> int:
         return len(self._all())
@@ -111,9 +118,18 @@ class Registry(Mapping[str, Any]):
         return f"Registry({self.group!r}: {list(self)})"
 
     # --- lookups -----------------------------------------------------------------------------
+    @property
+    def broken(self) -> dict[str, str]:
+        """The installed parts that failed to load, by name, with what is wrong: left out of the
+        registry (a command that needs one says so; the others run), listed by ``racf list``."""
+        self._all()
+        return dict(self._broken)
+
     def plugin(self, name: str) -> Plugin:
-        """The part called ``name``; PluginError names the choices."""
+        """The part called ``name``; PluginError names the choices, or what is wrong with a broken one."""
         plugins = self._all()
+        if name in self._broken:
+            raise PluginError(self._broken[name])
         if name not in plugins:
             raise PluginError(f"unknown {self.kind} {name!r}; choose from {tuple(plugins)} "
                               f"(a plug-in registers under the entry-point group {self.group!r}, "
@@ -160,12 +176,17 @@ class Registry(Mapping[str, Any]):
     def _all(self) -> dict[str, Plugin]:
         if self._plugins is None:
             found: dict[str, Plugin] = {}
+            broken: dict[str, str] = {}
             # racf's own first, then the others; each by name: the same on every machine (and
             # the order attacks take in a setting's name).
             for ep in sorted(entry_points(group=self.group), key=lambda ep: (not _is_own(ep), ep.name)):
-                if ep.name not in found:  # a distribution seen twice on the path: the first wins, as for imports
-                    found[ep.name] = self._load(ep)
-            self._plugins = found
+                if ep.name not in found and ep.name not in broken:  # seen twice on the path: the first wins
+                    try:
+                        found[ep.name] = self._load(ep)
+                    except PluginError as err:  # one broken install must not stop what does not need it
+                        broken[ep.name] = str(err)
+                        _report_once(str(err))
+            self._plugins, self._broken = found, broken
             try:
                 for path in plugin_files():
                     load_plugin_file(path)
@@ -188,6 +209,20 @@ class Registry(Mapping[str, Any]):
         if not self.accepts(obj):
             raise PluginError(f"{where} is not {_an(self.kind)}: {_SHAPES[self.kind]}")
         return Plugin(ep.name, obj, dist, None if dist == _OWN else ep.module.split(".")[0])
+
+
+def _report_once(message: str) -> None:
+    """Says on stderr, once for a process and the workers it starts, that an installed part is left out."""
+    said = os.environ.get(_REPORTED_ENV, "")
+    key = hashlib.sha256(message.encode()).hexdigest()[:12]
+    if key in said.split(","):
+        return
+    os.environ[_REPORTED_ENV] = ",".join(filter(None, [said, key]))
+    print(f"racf: warning: {message}; it is left out (`racf list` shows it)", file=sys.stderr)
+
+
+#: The broken installed parts this process (or the one that started it) has reported already.
+_REPORTED_ENV = "RACF_REPORTED_BROKEN"
 
 
 def _an(kind: str) -> str:

@@ -79,14 +79,30 @@ def test_a_bad_plugin_file_is_named(plugin_env, tmp_path, text, message):
         load_plugin_file(path)
 
 
-def test_a_broken_entry_point_is_named_not_skipped(plugin_env, tmp_path, monkeypatch):
+def test_a_broken_entry_point_is_named_once_and_stops_only_what_needs_it(plugin_env, tmp_path, monkeypatch, capsys):
+    """An installed plug-in whose class is gone: reported once on stderr, left out of the registry
+    (racf's own parts and every command that does not name it work), named where it is asked for,
+    and listed as broken by ``racf list``."""
+    from racf.experiments.cli import main
+
     info = tmp_path / "broken-0.1.dist-info"
     info.mkdir()
     (info / "METADATA").write_text("Metadata-Version: 2.1\nName: broken\nVersion: 0.1\n")
     (info / "entry_points.txt").write_text("[racf.estimators]\nbroken = no_such_module:Defence\n")
     monkeypatch.syspath_prepend(str(tmp_path))
+    monkeypatch.delenv("RACF_REPORTED_BROKEN", raising=False)
+    assert "odca" in ESTIMATORS and "broken" not in ESTIMATORS and "broken" not in list(ESTIMATORS)
+    said = capsys.readouterr().err
+    assert said.count("failed to load") == 1 and "'broken' (no_such_module:Defence, from broken)" in said
     with pytest.raises(PluginError, match="'broken' .*from broken.* failed to load: ModuleNotFoundError"):
-        list(ESTIMATORS)
+        ESTIMATORS["broken"]
+    with pytest.raises(ValueError, match="failed to load"):
+        TrialSpec("clean+broken", 0, 1.0, 0)
+    assert "broken" in ESTIMATORS.broken
+    assert main(["list"]) == 0
+    listed = capsys.readouterr()
+    assert "broken plug-ins" in listed.out and "no_such_module:Defence" in listed.out
+    assert listed.err.count("failed to load") == 0  # reported once for the process
 
 
 def test_an_installed_plugin_is_found_and_versioned_by_its_package(cusum_installed):

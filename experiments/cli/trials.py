@@ -56,6 +56,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 
     ls = sub.add_parser("list", help="the registered attacks, estimators (defences), detectors, scenarios (with "
                                      "their parameters) and metrics (with their fields), plug-ins included")
+    ls.add_argument("kind", nargs="?", choices=LIST_KINDS, metavar="KIND",
+                    help=f"list only one kind: {', '.join(LIST_KINDS)} (default: all)")
     ls.add_argument("--markdown", action="store_true", help="print the README's Markdown tables")
     ls.add_argument("--json", action="store_true", help="print {kind: {name: {origin, description}}} as JSON")
     plugin_flag(ls)
@@ -198,6 +200,10 @@ def _attack_study(args: argparse.Namespace) -> int:
     return 0
 
 
+#: What ``racf list KIND`` lists.
+LIST_KINDS = ("attacks", "estimators", "detectors", "scenarios", "metrics")
+
+
 def _list(args: argparse.Namespace) -> int:
     from racf.plugins import ATTACKS, DETECTORS, ESTIMATORS, METRICS, REGISTRIES, SCENARIOS
 
@@ -210,28 +216,44 @@ def _list(args: argparse.Namespace) -> int:
         for name, entry in listed["scenario"].items():
             entry["params"] = {p.name: {"default": p.default, "low": p.low, "high": p.high, "choices": p.choices,
                                         "unit": p.unit, "meaning": p.meaning} for p in SCENARIOS[name].params}
+            entry["criteria"] = {c.name: {"checks": c.checks, "penalty": c.penalty, "terminates": c.terminates}
+                                 for c in SCENARIOS[name].criteria}
         for name, entry in listed["metric"].items():
             entry["always"] = METRICS[name].always
             entry["fields"] = {f.name: {"unit": f.unit, "meaning": f.meaning, "summary": f.summary}
                                for f in METRICS[name].fields}
+        listed["broken"] = {kind: dict(registry.broken) for kind, registry in REGISTRIES.items() if registry.broken}
         print(json.dumps(listed, default=str))
         return 0
-    for title, registry in (("attacks (--attack, joined by ',' or '+')", ATTACKS),
-                            ("estimators (--estimator)", ESTIMATORS), ("detectors (--detector)", DETECTORS)):
-        print(title)
-        for name, text in registry_rows(registry):
-            origin = registry.plugin(name).origin
+    shown = {args.kind} if args.kind else set(LIST_KINDS)
+    for kind, title, registry in (("attacks", "attacks (--attack, joined by ',' or '+')", ATTACKS),
+                                  ("estimators", "estimators (--estimator)", ESTIMATORS),
+                                  ("detectors", "detectors (--detector)", DETECTORS)):
+        if kind in shown:
+            print(title)
+            for name, text in registry_rows(registry):
+                origin = registry.plugin(name).origin
+                print(f"  {name:<24}{text}" + ("" if origin == "racf" else f"  [plug-in: {origin}]"))
+    if "scenarios" in shown:
+        print("scenarios (--target; parameters: --scenario-param KEY=VALUE)")
+        for name, text in registry_rows(SCENARIOS):
+            origin = SCENARIOS.plugin(name).origin
             print(f"  {name:<24}{text}" + ("" if origin == "racf" else f"  [plug-in: {origin}]"))
-    print("scenarios (--target; parameters: --scenario-param KEY=VALUE)")
-    for name, text in registry_rows(SCENARIOS):
-        origin = SCENARIOS.plugin(name).origin
-        print(f"  {name:<24}{text}" + ("" if origin == "racf" else f"  [plug-in: {origin}]"))
-        for param in SCENARIOS[name].params:
-            print(f"    {param.describe()}")
-    print("metrics (every episode; --metric NAME for those marked 'asked')")
-    for name, text in registry_rows(METRICS):
-        origin = METRICS.plugin(name).origin
-        print(f"  {name:<24}{text}" + ("" if METRICS[name].always else "  [asked]")
-              + ("" if origin == "racf" else f"  [plug-in: {origin}]"))
-        print(f"    fields: {', '.join(f.name + (f' ({f.unit})' if f.unit else '') for f in METRICS[name].fields)}")
+            for param in SCENARIOS[name].params:
+                print(f"    {param.describe()}")
+            for criterion in SCENARIOS[name].criteria:
+                print(f"    criterion {criterion.name}: {criterion.checks} (fails: x {criterion.penalty}"
+                      f"{', ends the episode' if criterion.terminates else ''})")
+    if "metrics" in shown:
+        print("metrics (every episode; --metric NAME for those marked 'asked')")
+        for name, text in registry_rows(METRICS):
+            origin = METRICS.plugin(name).origin
+            print(f"  {name:<24}{text}" + ("" if METRICS[name].always else "  [asked]")
+                  + ("" if origin == "racf" else f"  [plug-in: {origin}]"))
+            print(f"    fields: {', '.join(f.name + (f' ({f.unit})' if f.unit else '') for f in METRICS[name].fields)}")
+    broken = [(kind, name, why) for kind, registry in REGISTRIES.items() for name, why in registry.broken.items()]
+    if broken:
+        print("broken plug-ins (installed, failed to load: left out)")
+        for kind, name, why in broken:
+            print(f"  {kind} {name}: {why}")
     return 0

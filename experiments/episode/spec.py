@@ -73,6 +73,10 @@ def parse_setting(setting: str) -> tuple[tuple[str, ...], str]:
         estimator = rest.pop()
     extra = extra_attacks()
     unknown = [r for r in rest if r not in extra]
+    for part in unknown:  # an installed part that failed to load: say why, not "unknown"
+        for registry in (ESTIMATORS, ATTACKS):
+            if part in registry.broken:
+                registry.plugin(part)
     if unknown:
         raise ValueError(f"unknown part(s) {unknown} of setting {setting!r}: after 'clean'/'attack' come extra "
                          f"attacks {extra}, then an estimator {tuple(ESTIMATORS)}")
