@@ -9,8 +9,8 @@ import argparse
 import os
 from pathlib import Path
 
-__all__ = ["cli_markdown", "parts_markdown", "step_log_markdown", "PAGES", "write_pages", "readme_with_table",
-           "write_readme"]
+__all__ = ["cli_markdown", "parts_markdown", "step_log_markdown", "map_markdown", "PAGES", "write_pages",
+           "readme_with_table", "write_readme"]
 
 
 def cli_markdown() -> str:
@@ -114,9 +114,41 @@ def battery_markdown() -> str:
     return "\n".join(lines)
 
 
+def map_markdown() -> str:
+    """The map's bodies as the model holds them: name, pose, geoms, and each kind's frame."""
+    import math
+
+    import numpy as np
+
+    from racf.sim.world.scene import load_model
+    from racf.sim.world.stop_signs import PLATE_IN_SCAN
+
+    model = load_model()
+    lines = ["# The map's bodies", "",
+             "Read from the model the env builds (`racf.sim.world.scene.load_model()`, default sign geometry). A "
+             "world manager moves, turns or hides these bodies by name (`model.body(NAME)`; the names come from "
+             "`racf.sim.world.scene.sign_body(i)` and `obstacle_body(i)`), and the referee's truth follows them "
+             "(`racf.sim.env.truth`). Map frame: x east, y north, z up, metres; yaw counter-clockwise from +x.", "",
+             "Frames: a stop sign's body stands at the foot of its pole, its x axis the plate's face normal (the "
+             "direction the face looks), z up; the plate's centre is at (0, 0, "
+             f"{PLATE_IN_SCAN.centre_height_m:g}) m in it with the default geometry, the pole just behind it "
+             "(negative x). A crate's body is its centre on the floor, x along the lane. The car's body "
+             "(`qcar`) has x forward, y left; its camera is `d435`, its LiDAR the site `lidar`.", "",
+             "| body | x m | y m | yaw deg | geoms |", "|---|---|---|---|---|"]
+    for body in range(1, model.nbody):
+        if model.body_parentid[body] != 0:
+            continue
+        w, _, _, z = model.body_quat[body]
+        yaw = math.degrees(2 * math.atan2(z, w))
+        x, y, _ = np.round(model.body_pos[body], 3)
+        lines.append(f"| `{model.body(body).name}` | {x:g} | {y:g} | {yaw:.1f} | {int(model.body_geomnum[body])} |")
+    return "\n".join([*lines, ""])
+
+
 #: The generated pages, relative to ``docs/``.
 PAGES = {"reference/cli.md": cli_markdown, "reference/parts.md": parts_markdown,
-         "reference/step-log.md": step_log_markdown, "reference/battery.md": battery_markdown}
+         "reference/step-log.md": step_log_markdown, "reference/battery.md": battery_markdown,
+         "reference/map.md": map_markdown}
 
 
 #: The docs folder of the checkout (the results data lives there, not in the package).
