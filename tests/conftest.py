@@ -112,6 +112,18 @@ def parked_car_installed(tmp_path, monkeypatch, parked_car_site):
 
 
 @pytest.fixture(scope="session")
+def pedestrian_site(tmp_path_factory) -> Path:
+    return _pip_install_example(tmp_path_factory, "racf-pedestrian")
+
+
+@pytest.fixture
+def pedestrian_installed(tmp_path, monkeypatch, pedestrian_site):
+    """The example pedestrian scenario installed for one test (and the worker processes it spawns)."""
+    yield _use_example(tmp_path / "pedestrian-site", pedestrian_site, "racf_pedestrian", monkeypatch)
+    _forget_plugins()
+
+
+@pytest.fixture(scope="session")
 def time_to_line_site(tmp_path_factory) -> Path:
     return _pip_install_example(tmp_path_factory, "racf-time-to-line")
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import re
 import sys
 import time
 from pathlib import Path
@@ -31,7 +32,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     sc.add_argument("--battery", default=None, help="the battery (default: the newest, racf-4)")
     sc.add_argument("--target", default=None, metavar="SCENARIO",
                     help="run the battery's stop-sign approaches in this scenario (racf list shows them; its cards "
-                         "are named BATTERY@SCENARIO)")
+                         "are named BATTERY@SCENARIO[PARAMETERS])")
     sc.add_argument("--scenario-param", action="append", default=[], metavar="KEY=VALUE",
                     help="a parameter of --target's scenario (repeatable; values are TOML)")
     sc.add_argument("--quick", action="store_true",
@@ -75,7 +76,10 @@ def _dataset(args: argparse.Namespace, quick: bool):
 
 
 def _card_path(out: Path, battery: str, defence: str) -> Path:
-    return out / "cards" / battery / f"{defence}.json"
+    """Where a card is stored: under its battery's name (a scenario's parameters included), made safe
+    for a file name (``racf-4@stale_map[case=removed, shift_m=1.0]`` -> ``racf-4@stale_map_case=removed_shift_m=1.0``)."""
+    folder = re.sub(r"[^\w.@=+-]+", "_", battery).strip("_")
+    return out / "cards" / folder / f"{defence}.json"
 
 
 def _load_card(args: argparse.Namespace, ref: str, battery: str) -> dict:

@@ -27,7 +27,7 @@ import gymnasium as gym
 import numpy as np
 import pandas as pd
 
-from racf.controllers import DistanceEstimator, Phase
+from racf.controllers import DistanceEstimator
 from racf.experiments.episode.record import step_row, world_columns
 from racf.experiments.episode.referee import Referee
 from racf.experiments.episode.spec import TrialSpec
@@ -130,7 +130,6 @@ def _run(env: gym.Env, spec: TrialSpec, plan: EpisodePlan, estimator, on_step: S
     # The car gets its build and its mission before it starts, then only observations.
     car = build_car(spec, plan, estimator)
     grant_white_box(env, car.estimator)
-    targets = car.mission.targets
     scenario = spec.scenario
     # The world's own ground truth: every column the env's world managers declare, logged by name.
     truth_columns = world_columns(env.unwrapped.world)
@@ -142,14 +141,11 @@ def _run(env: gym.Env, spec: TrialSpec, plan: EpisodePlan, estimator, on_step: S
     for _ in range(plan.max_steps):
         step = car.step(obs)
         applied = actions.push(step.action, late_steps(car.estimator, dt) if step.control else 0)
-        decision = step.decision
         truth = referee.observe(env, obs, info, step, car.target, car.perception)
         rows.append(step_row({**car_columns(car, step, obs, info["time"], applied), **truth},
                              car.estimator.diagnostics(), truth_columns))
         if on_step is not None:
             on_step(env, obs, info, rows[-1])
-        if step.slot == len(targets) - 1 and decision.phase is Phase.DONE:
-            break  # the car is done with its last target
         if scenario.over(plan, rows) or any(c.fails_at(rows[-1]) for c in ending):
             break
         obs, _, terminated, truncated, info = env.step(applied)

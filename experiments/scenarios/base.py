@@ -20,6 +20,7 @@ import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, ClassVar
 
+from racf.controllers import Phase
 from racf.experiments.episode.criteria import TARGET_CRITERIA, Criterion
 from racf.experiments.episode.spec import TARGETS
 from racf.sim.world.manager import WorldManager
@@ -165,11 +166,14 @@ class Scenario:
 
     def over(self, plan: "EpisodePlan", rows: list[dict]) -> bool:
         """Whether the episode is over after the step whose row is ``rows[-1]`` (``rows``: the step log
-        so far, the world managers' columns included). By default once the car's bumper is
-        ``RUN_THROUGH_M`` past the last target's line; a scenario may run on (until a crossing car
-        has passed) or stop sooner. The car's own end (it stopped for good) ends the episode anyway."""
+        so far, the world managers' columns included). By default once the car is done with its last
+        target: it stopped there for good (its braker's phase ``done``), or its bumper is
+        ``RUN_THROUGH_M`` past the line. A scenario may run on (until a crossing car or a person has
+        passed) or stop sooner; the episode's time limit and a criterion that ``terminates`` end it
+        anyway."""
         row = rows[-1]
-        return row["slot"] == len(plan.mission.targets) - 1 and row["dist_to_stop_line"] < -RUN_THROUGH_M
+        return row["slot"] == len(plan.mission.targets) - 1 and (
+            row["phase"] == Phase.DONE.value or row["dist_to_stop_line"] < -RUN_THROUGH_M)
 
     @staticmethod
     def replace(plan: "EpisodePlan", **changes: Any) -> "EpisodePlan":

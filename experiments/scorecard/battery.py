@@ -118,7 +118,8 @@ class Battery:
     def in_scenario(self, scenario: str, params: dict | None = None) -> "Battery":
         """The battery with every plain stop-sign approach of its closed-loop rows run in ``scenario``
         instead (``racf.plugins.SCENARIOS``, a scenario whose target is a stop sign), named
-        ``NAME@SCENARIO``; cross-traffic rows and the drives stay as they are. ValueError names a
+        ``NAME@SCENARIO[param=value, ...]`` (so that cards of one scenario with other parameters never
+        share a name or a file); cross-traffic rows and the drives stay as they are. ValueError names a
         scenario that does not approach a stop sign, or a parameter it refuses."""
         from racf.plugins import SCENARIOS
 
@@ -134,7 +135,8 @@ class Battery:
             return remade
 
         loop = tuple(replace(row, make=situated(row.make)) for row in self.loop)
-        return replace(self, name=f"{self.name}@{scenario}", loop=loop)
+        label = ", ".join(f"{k}={v}" for k, v in values.items())
+        return replace(self, name=f"{self.name}@{scenario}" + (f"[{label}]" if label else ""), loop=loop)
 
 
 _RACF_1 = Battery(

@@ -93,5 +93,7 @@ def test_a_scorecard_runs_a_battery_in_it(parked_car_installed, tmp_path, monkey
                  "--scenario-param", "ahead_m=0.5", "--quick", "--workers", "1", "--out", str(tmp_path),
                  "--dataset", str(data), "--json"])
     card = json.loads(capsys.readouterr().out)["cards"][0]
-    assert code == 0 and card["battery"] == "tiny-van@parked_car-quick" and card["closed_loop"]["paper_clean"]["n"] == 1
-    assert (tmp_path / "cards" / "tiny-van@parked_car-quick" / "raw.json").exists()
+    name = "tiny-van@parked_car[ahead_m=0.5, kerb_gap_m=0.16]-quick"
+    assert code == 0 and card["battery"] == name and card["closed_loop"]["paper_clean"]["n"] == 1
+    # The parameters are in the card's name and its file: another ahead_m never overwrites it.
+    assert (tmp_path / "cards" / "tiny-van@parked_car_ahead_m=0.5_kerb_gap_m=0.16_-quick" / "raw.json").exists()

@@ -16,6 +16,7 @@ from typing import Any
 
 import numpy as np
 
+from racf.controllers import Phase
 from racf.experiments.episode.car import route_follower
 from racf.experiments.episode.criteria import TARGET_CRITERIA, Criterion
 from racf.experiments.scenarios.base import RUN_THROUGH_M, Param, Scenario
@@ -72,12 +73,14 @@ class CrossTraffic(Scenario):
         return self.replace(draft, reset_options=options, extras={**draft.extras, "cars": cars, "conflict": conflict})
 
     def over(self, plan, rows: list[dict]) -> bool:
-        """Over once the whole car has cleared the conflict point (a missed stop there is scored by
-        what it meets, not by the line) and the post-encroachment time has been watched for
-        (``NEAR_MISS_S`` more)."""
+        """Over once the car stopped for good at its last target, or the whole car has cleared the
+        conflict point (a missed stop there is scored by what it meets, not by the line) and the
+        post-encroachment time has been watched for (``NEAR_MISS_S`` more)."""
         run_through = run_through_m(plan)
         linger = round(NEAR_MISS_S / plan.control_dt_s)
         last = len(plan.mission.targets) - 1
+        if rows[-1]["slot"] == last and rows[-1]["phase"] == Phase.DONE.value:
+            return True
         past = 0
         for row in reversed(rows[-(linger + 1):]):
             if row["slot"] != last or row["dist_to_stop_line"] >= -run_through:
