@@ -18,7 +18,8 @@ from racf.provenance import atomic_write
 from racf.experiments.sweeps.store import ResultStore
 from racf.stats import median_ci, wilson_interval
 from racf.experiments.episode.spec import parse_setting
-from racf.experiments.sweeps.summary import plugin_measures, stealth_summary, summarize_settings
+from racf.experiments.metrics.criteria import criteria_of_rows
+from racf.experiments.sweeps.summary import plugin_measures, setting_key, stealth_summary, summarize_settings
 
 __all__ = ["write_report", "report_from_store", "stealth_rows"]
 
@@ -222,17 +223,38 @@ def _traffic_lines(summary: dict) -> list[str]:
 
 
 def _plugin_metric_lines(frame: pd.DataFrame) -> list[str]:
-    """A table of what the plug-in metrics the episodes scored say, per setting (as each declares it)."""
+    """A table of what the plug-in metrics the episodes scored say, per setting and scenario parameters
+    (as each declares it)."""
     rows = []
     if not frame.empty:
-        for setting, group in frame.groupby("setting", sort=True):
-            attacked = bool(parse_setting(str(setting))[0])
-            rows += [f"| {setting} | {m['measure']} | {_fmt(m['value'], 3)} {_ci(m['ci'])} | {m['n']} |"
+        keys = pd.Series([setting_key(row) for row in frame.to_dict("records")], index=frame.index)
+        for key, group in frame.groupby(keys, sort=True):
+            attacked = bool(parse_setting(str(group["setting"].iloc[0]))[0])
+            rows += [f"| {key} | {m['measure']} | {_fmt(m['value'], 3)} {_ci(m['ci'])} | {m['n']} |"
                      for m in plugin_measures(group, attacked)]
     if not rows:
         return []
     return ["", "Plug-in metrics (each field as its metric declares it; 95 % intervals):", "",
             "| setting | measure | value [95 % CI] | N |", "|---|---|---|---|", *rows]
+
+
+def _criteria_lines(frame: pd.DataFrame, summary: dict) -> list[str]:
+    """Each criterion of the rows' scenarios: its pass rate where its rule applies, per setting and
+    scenario parameters (the stop rule where a sign stands, no needless stop where none does, ...)."""
+    criteria = criteria_of_rows(frame) if not frame.empty else []
+    rows = [f"| {key} | {c.name} | {_fmt(r[f'{c.name}_rate'])} {_ci(r[f'{c.name}_rate_ci'])} | {r[f'n_{c.name}']} |"
+            for key, r in summary.items() for c in criteria if r.get(f"n_{c.name}")]
+    if not rows:
+        return []
+    return ["", "Criteria (the scenarios' rules, each where it applies: passed share [95 % Wilson CI], N):", "",
+            "| setting | criterion | passed [95 % CI] | N |", "|---|---|---|---|", *rows]
+
+
+def _scr_cells(r: dict) -> str:
+    """A summary's SCR cell: its rate and interval, or why it has none (no sign stood)."""
+    if r.get("n_scr") == 0:
+        return "— (no sign stands)"
+    return f"{_fmt(r['scr'])} {_ci(r['scr_ci'])}"
 
 
 def write_report(frame: pd.DataFrame, out: Path, name: str = "sweep") -> dict[str, Path]:
@@ -254,10 +276,11 @@ def write_report(frame: pd.DataFrame, out: Path, name: str = "sweep") -> dict[st
         early = "—" if r.get("n_attack_before_t_star") is None else (
             f"{_fmt(r['scr_attack_before_t_star'])} {_ci(r['scr_attack_before_t_star_ci'])} "
             f"({r['n_attack_before_t_star']})")
-        lines.append(f"| {setting} | {r['n']} | {_fmt(r['scr'])} {_ci(r['scr_ci'])} | {_fmt(r['asr'])} | {early} | "
+        lines.append(f"| {setting} | {r['n']} | {_scr_cells(r)} | {_fmt(r['asr'])} | {early} | "
                      f"{_fmt(r['dt_brake_mean'], 3)} ({r['n_latency']}) | {_fmt(r['max_fused_jump_m'], 3)} | "
                      f"{_robustness_cells(r)} |")
     lines += _traffic_lines(summary)
+    lines += _criteria_lines(frame, summary)
     lines += _plugin_metric_lines(frame)
     pairs = traffic_pairs(frame) if not frame.empty else {}
     if pairs:
@@ -274,7 +297,7 @@ def write_report(frame: pd.DataFrame, out: Path, name: str = "sweep") -> dict[st
         for attack, rows in frame.groupby("attack", sort=True):
             cells = []
             for e in estimators:
-                g = rows[rows["estimator"] == e]
+                g = rows[(rows["estimator"] == e) & rows["success"].notna()]  # where a sign stood
                 r = _rate(g["success"].astype(bool)) if len(g) else None
                 cells.append(f"{_fmt(r['scr'])} (N {r['n']})" if r else "—")
             lines.append(f"| {attack} | " + " | ".join(cells) + " |")

@@ -98,3 +98,21 @@ def test_a_scenarios_parameters_key_its_summaries_apart():
                            "success": None, "attack_start_s": math.nan} for case in ("removed", "phantom")])
     keys = set(summarize_settings(stale))
     assert keys == {"attack@stale_map[case=removed, shift_m=1.0]", "attack@stale_map[case=phantom, shift_m=1.0]"}
+
+
+def test_the_report_gives_no_scr_where_no_sign_stands_and_each_criterion_where_it_applies(tmp_path):
+    from racf.experiments.sweeps.report import write_report
+
+    base = {"setting": "clean+vote", "attack": "none", "estimator": "vote", "target": "stale_map",
+            "scenario_shift_m": 1.0, "trigger_delay_s": math.nan, "dt_brake_s": math.nan, "lost_frames": 0,
+            "attack_start_s": math.nan, "t_star_s": math.nan, "failure": None, "rho_set": 0.95, "t_atk_set": 1.75}
+    rows = pd.DataFrame([{**base, "scenario_case": "removed", "success": None, "stop_rule": None,
+                          "no_needless_stop": False, "needless_stop": True},
+                         {**base, "scenario_case": "mapped", "success": True, "stop_rule": True,
+                          "no_needless_stop": None, "needless_stop": None}])
+    write_report(rows, tmp_path, "t")
+    text = (tmp_path / "summary.md").read_text()
+    assert "| clean+vote@stale_map[case=removed, shift_m=1.0] | 1 | — (no sign stands) |" in text
+    assert "| clean+vote@stale_map[case=removed, shift_m=1.0] | no_needless_stop | 0.00 [" in text
+    assert "| clean+vote@stale_map[case=mapped, shift_m=1.0] | stop_rule | 1.00 [" in text
+    assert "needless_stop, share (existence) | 1.000" in text and "| none | 1.00 (N 1) |" in text
