@@ -50,10 +50,10 @@ def test_with_traffic_the_episode_runs_on_past_the_conflict_point():
     assert crossed.mission == plain.mission and "traffic" in crossed.reset_options
     # A plain approach ends just past the line; cross-traffic runs on past the conflict point, then
     # watches NEAR_MISS_S more for the post-encroachment time.
-    past_line = [{"slot": 0, "dist_to_stop_line": -RUN_THROUGH_M - 0.01}]
+    past_line = [{"slot": 0, "phase": "braking", "dist_to_stop_line": -RUN_THROUGH_M - 0.01}]
     assert Scenario().over(plain, past_line) and not CrossTraffic().over(crossed, past_line)
     linger = round(NEAR_MISS_S / crossed.control_dt_s)
-    past_point = [{"slot": 0, "dist_to_stop_line": -run_through - 0.01}] * (linger + 1)
+    past_point = [{"slot": 0, "phase": "braking", "dist_to_stop_line": -run_through - 0.01}] * (linger + 1)
     assert not CrossTraffic().over(crossed, past_point[:-1]) and CrossTraffic().over(crossed, past_point)
 
 
@@ -62,3 +62,10 @@ def test_traffic_needs_a_stop_sign_approach():
         TrialSpec("clean", 0, 1.5, 0, target="obstacle", scenario_params={"cars": 1})
     with pytest.raises(ValueError, match="parameter .gap_s. must be a float in \\[-5.0, 5.0\\]"):
         TrialSpec("clean", 0, 1.5, 0, target="cross_traffic", scenario_params={"cars": 1, "gap_s": 9.0})
+
+
+def test_a_car_done_with_its_last_target_ends_any_episode_by_default():
+    crossed = plan_episode(TrialSpec("clean", 1, 1.5, 0, target="cross_traffic", scenario_params={"cars": 1}))
+    done = [{"slot": 0, "phase": "done", "dist_to_stop_line": 0.3}]
+    assert Scenario().over(crossed, done) and CrossTraffic().over(crossed, done)
+    assert not Scenario().over(crossed, [{**done[0], "phase": "stopped"}])

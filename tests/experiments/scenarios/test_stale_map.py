@@ -37,3 +37,23 @@ def test_a_move_too_small_to_matter_is_refused():
         TrialSpec("clean", 0, 1.0, 0, target="stale_map", scenario_params={"case": "moved", "shift_m": 0.05})
     with pytest.raises(ValueError, match="case"):
         TrialSpec("clean", 0, 1.0, 0, target="stale_map", scenario_params={"case": "gone"})
+
+
+def test_a_move_beyond_its_range_is_refused_naming_it():
+    with pytest.raises(ValueError, match=r"parameter 'shift_m' must be a float in \[-1.5, 1.5\] m, got 2.0"):
+        TrialSpec("clean", 0, 1.0, 0, target="stale_map", scenario_params={"case": "moved", "shift_m": 2.0})
+
+
+@pytest.mark.parametrize("case", ["removed", "phantom"])
+def test_where_no_sign_stands_there_is_no_scr_and_no_broken_stop_rule_but_needless_stops(case):
+    """The referee's world has no sign (its body is under the floor): the stop rule does not apply, the
+    needless-stop rule does, and the driving score is that rule's."""
+    from racf.experiments.episode import run_trial
+
+    result, log = run_trial(TrialSpec("clean+vote", 2, 1.0, 0, target="stale_map", scenario_params={"case": case}),
+                            clean_pass=False)
+    row = result.to_dict()
+    assert not log["sign_stands"].any() and not log["sign_in_view"].any()
+    assert row["success"] is None and row["failure"] is None and row["robustness_m"] is None
+    assert row["stop_rule"] is None and row["no_needless_stop"] is (not row["needless_stop"])
+    assert row["driving_score"] == (0.7 if row["needless_stop"] else 1.0)

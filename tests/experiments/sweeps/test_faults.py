@@ -177,3 +177,45 @@ def _as_a_terminal_starts_it() -> None:
     signal.signal(signal.SIGINT, signal.SIG_DFL)
     signal.pthread_sigmask(signal.SIG_UNBLOCK, [signal.SIGINT])
 
+
+
+SCENARIOS_FILE = '''
+from racf.experiments.scenarios import Param, Scenario, WorldManager
+
+
+class Jammed(WorldManager):
+    name = option = "jammed"
+
+    def reset(self, model, data, value, physics_dt_s, max_episode_s):
+        raise KeyError("lane")
+
+
+class BadPlan(Scenario):
+    name = "bad_plan"
+    params = (Param("lanes", 2, 1, 3),)
+
+    def plan(self, spec, values, draft):
+        return {}["nothing"]
+
+
+class BadWorld(Scenario):
+    name = "bad_world"
+
+    def world(self, spec, values):
+        return (Jammed(),)
+'''
+
+
+@pytest.mark.parametrize("target, error", [("bad_plan", "KeyError: 'nothing'"), ("bad_world", "KeyError: 'lane'")])
+def test_a_scenario_plugins_fault_in_its_plan_or_its_world_names_the_plugin(tmp_path, plugin_env, target, error):
+    path = tmp_path / "scenarios.py"
+    path.write_text(SCENARIOS_FILE)
+    load_plugin_file(path)
+    store = ResultStore(tmp_path / "out")
+    with pytest.raises(EpisodeFailed) as caught:
+        run_episodes([TrialSpec("clean", 2, 1.0, 0, target=target)], store, workers=1, progress=False)
+    line = str(caught.value)
+    assert f"scenario plug-in '{target}' ({path})" in line and error in line, line
+    assert "racf raised" not in line
+    if target == "bad_plan":  # the failure line names the scenario's parameters too
+        assert "bad_plan[lanes=2]" in line
