@@ -207,7 +207,7 @@ def _traffic_lines(summary: dict) -> list[str]:
     rows = {k: r for k, r in summary.items() if r.get("n_traffic")}
     if not rows:
         return []
-    lines = ["", "With cross-traffic (`episode.conflict`): collision rate [95 % Wilson CI] over all episodes and "
+    lines = ["", "With cross-traffic (`scenarios.cross_traffic`): collision rate [95 % Wilson CI] over all episodes and "
              "over those whose attack began before t*; the conflict outcomes; the median smallest "
              "time-to-collision.", "",
              "| setting | N | collision rate | collision rate, attack before t* (N) | collision / crash / near miss / "

@@ -34,3 +34,18 @@ def test_each_battery_is_the_one_before_and_its_new_rows():
     traffic = next(r for r in four.loop if r.key == "traffic_strong")
     assert traffic.driving and all(s.scenario_params.get("cars") == 1 for s in traffic.specs("odca"))
     assert DEFAULT_BATTERY == "racf-4"
+
+
+def test_a_battery_in_a_scenario_is_named_with_its_parameters_and_stored_apart():
+    """Two cards of one scenario with other parameters never share a name or a file."""
+    from pathlib import Path
+
+    from racf.experiments.cli.scorecard import _card_path
+    from racf.experiments.scorecard.battery import BATTERIES
+
+    removed = BATTERIES["racf-4"].in_scenario("stale_map", {"case": "removed"})
+    phantom = BATTERIES["racf-4"].in_scenario("stale_map", {"case": "phantom"})
+    assert removed.name == "racf-4@stale_map[case=removed, shift_m=1.0]"
+    paths = {_card_path(Path("out"), b.name, "raw") for b in (removed, phantom)}
+    assert len(paths) == 2 and Path("out/cards/racf-4@stale_map_case=removed_shift_m=1.0/raw.json") in paths
+    assert BATTERIES["racf-4"].in_scenario("sign").name == "racf-4@sign"
