@@ -64,7 +64,7 @@ class _Boom(Metric):
     fields = (Field("boom_value", math.nan, "", "never filled"),)
 
     def score(self, episode):
-        raise ZeroDivisionError("a plug-in's bug")
+        raise LookupError("a plug-in's bug")
 
 
 def test_a_metric_that_raises_costs_its_own_fields_not_the_episode(caplog):
@@ -79,4 +79,32 @@ def test_a_metric_that_raises_costs_its_own_fields_not_the_episode(caplog):
         METRICS._all().pop("boom")
     row = result.to_dict()
     assert row["boom_value"] is None and row["success"] is True and row["driving_score"] == 1.0
-    assert "metric 'boom' raised ZeroDivisionError: a plug-in's bug" in caplog.text
+    assert "metric 'boom' raised LookupError: a plug-in's bug" in caplog.text
+
+
+class _OneSecond(Criterion):
+    name, checks, terminates = "under_a_second", "the episode lasts under a second", True
+
+    def passed(self, episode):
+        return float(episode.log["t"].iloc[-1]) < 1.0
+
+    def fails_at(self, row):
+        return row["t"] >= 1.0
+
+
+def test_a_criterion_that_terminates_ends_the_episode_at_the_step_that_breaks_it():
+    from racf.experiments.episode import TrialSpec, run_trial
+    from racf.experiments.scenarios import Scenario
+    from racf.plugins import SCENARIOS
+
+    class Hurried(Scenario):
+        name = "hurried_test"
+        criteria = (*Scenario.criteria, _OneSecond)
+
+    SCENARIOS.register(Hurried)
+    try:
+        result, log = run_trial(TrialSpec("clean", 2, 1.0, 0, target="hurried_test"), clean_pass=False)
+    finally:
+        SCENARIOS._all().pop("hurried_test")
+    assert log["t"].iloc[-1] == pytest.approx(1.0) and result.under_a_second is False
+    assert result.driving_score == pytest.approx(0.8 * 1.0)  # the stop rule broken too; its own penalty 1.0

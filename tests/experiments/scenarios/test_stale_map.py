@@ -45,13 +45,14 @@ def test_a_move_beyond_its_range_is_refused_naming_it():
 
 
 @pytest.mark.parametrize("case", ["removed", "phantom"])
-def test_where_no_sign_stands_there_is_no_scr_and_no_broken_stop_rule_but_needless_stops(case):
+def test_where_no_sign_stands_there_is_no_scr_and_no_broken_stop_rule_but_needless_stops(case, caplog):
     """The referee's world has no sign (its body is under the floor): the stop rule does not apply, the
     needless-stop rule does, and the driving score is that rule's."""
     from racf.experiments.episode import run_trial
 
     result, log = run_trial(TrialSpec("clean+vote", 2, 1.0, 0, target="stale_map", scenario_params={"case": case}),
                             clean_pass=False)
+    assert "raised" not in caplog.text  # every metric knew the rule does not apply; none fell over
     row = result.to_dict()
     assert not log["sign_stands"].any() and not log["sign_in_view"].any()
     assert row["success"] is None and row["failure"] is None and row["robustness_m"] is None

@@ -81,7 +81,9 @@ def test_a_scenarios_parameters_key_its_summaries_apart():
                              "conflict": "collision" if hit else "yielded", "min_ttc_s": 0.0 if hit else 1.2}
                             for ok, start, hit in [(True, 1.0, False), (False, 1.0, True), (False, 2.0, True),
                                                    (True, 2.0, False)]])
-    empty = traffic.assign(target="sign", scenario_cars=None, scenario_gap_s=None, scenario_speed=None, collision=False)
+    # A plain row has no such parameters: NaN, which makes the column float, as a stored frame holds it.
+    empty = traffic.assign(target="sign", scenario_cars=math.nan, scenario_gap_s=math.nan, scenario_speed=math.nan,
+                           collision=False)
     empty = empty.drop(columns=["traffic_cars", "conflict", "min_ttc_s"])
     out = summarize_settings(pd.concat([traffic, empty], ignore_index=True))
     crossed = "attack@cross_traffic[cars=1, gap_s=0.0, speed=1.0]"
