@@ -9,9 +9,11 @@ then replays the log and those frames into a recording on the ``sim_time`` timel
   and, while active, the patch) and ``depth`` (``DepthImage``);
 - ``world/car/lidar``: the LiDAR returns in the car's frame, the tracked reference's
   cluster in red, and ``world/car/lidar/track`` the tracked point;
-- ``map``: a top view of the mat with the car's trajectory and its current position, and with
-  cross-traffic the other cars' paths, their current positions and the conflict point;
-- ``world/traffic/k``: each other car's body (ground truth from the referee's columns);
+- ``map``: a top view of the mat with the car's trajectory and its current position, and the
+  world's other actors (``map/actors/NAME``): the paths and current positions of those that move
+  (other cars, a person) and the places of those that stay put (a conflict point);
+- ``world/actors/NAME``: each moving actor's body, a car's box where it has a heading (ground truth:
+  the ``NAME_x``/``NAME_y``/``NAME_yaw`` columns a world manager logs);
 - ``series/*`` (d_true, d_clean, d_meas, lidar, d_fused, and ODCA's d_kin; NaN, where an
   estimator has no target, is a gap), ``control/*`` (gate w, the defence's flag, brake, attack
   active) and ``estimator/*`` (whatever else the estimator, a plug-in's too, reports in
@@ -25,15 +27,17 @@ A default blueprint lays these out so the story reads at a glance.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
-from racf.sim.world.traffic import CAR_FOOTPRINT_M
+from racf.experiments.episode.record import STEP_LOG
 
-__all__ = ["FrameRecorder", "write_rrd", "EXISTENCE_COLUMNS", "SERIES", "CONTROL", "STYLE", "CAR_HALF_SIZE_M", "TRAFFIC_RGB"]
+__all__ = ["FrameRecorder", "write_rrd", "EXISTENCE_COLUMNS", "SERIES", "CONTROL", "STYLE", "CAR_HALF_SIZE_M",
+           "ACTOR_RGB", "actors"]
 
 #: The step-log columns of an existence defence's witnesses (``ExistenceWitnesses.columns``, ``stands``).
 EXISTENCE_COLUMNS = ("wit_", "seen_det", "map_depth_m", "stands")
@@ -54,10 +58,11 @@ STYLE: dict[str, tuple[tuple[int, int, int], str]] = {
     "brake": ((140, 86, 75), "brake"),
     "attack_active": ((188, 189, 34), "attack active"),
 }
-#: The car's body (QCar 2: its footprint, 0.20 m tall), centred over the axles' midpoint, m.
-CAR_HALF_SIZE_M = (CAR_FOOTPRINT_M[0] / 2, CAR_FOOTPRINT_M[1] / 2, 0.10)
-#: The other cars' colours on the map and in 3D, in the order of ``sim.world.traffic.TRAFFIC_COLOURS``.
-TRAFFIC_RGB = ((200, 20, 20), (25, 65, 190), (230, 190, 25), (235, 235, 235))
+#: A car's body (a QCar 2: its footprint, 0.425 x 0.192 m, 0.20 m tall), centred over the axles' midpoint, m.
+CAR_HALF_SIZE_M = (0.2125, 0.096, 0.10)
+#: The world's other actors' colours on the map and in 3D, in the order of their names (the first four
+#: are the other cars' paint: red, blue, yellow, white).
+ACTOR_RGB = ((200, 20, 20), (25, 65, 190), (230, 190, 25), (235, 235, 235), (240, 130, 20), (120, 60, 160))
 _CAR_CENTRE_Z_M = 0.10
 
 
@@ -191,14 +196,15 @@ def write_rrd(path: str | Path, log: pd.DataFrame, recorder: FrameRecorder | Non
     if "x" in log:
         rec.log("map/trajectory", rr.LineStrips2D([_map_px(log[["x", "y"]].to_numpy(float))], colors=[30, 120, 230],
                                                   radii=1.5, labels=["true pose"]), static=True)
-    cars = _traffic_cars(log)
-    for k in cars:
-        rec.log(f"map/traffic/{k}/path", rr.LineStrips2D([_map_px(log[[f"traffic{k}_x", f"traffic{k}_y"]].to_numpy(float))],
-                                                         colors=[TRAFFIC_RGB[k % len(TRAFFIC_RGB)]], radii=1.0,
-                                                         labels=[f"traffic{k}"]), static=True)
-    if cars and np.isfinite(log["conflict_x"].iloc[0]):
-        rec.log("map/conflict", rr.Points2D(_map_px([log["conflict_x"].iloc[0], log["conflict_y"].iloc[0]]), radii=6,
-                                            colors=[255, 200, 0], labels=["conflict point"]), static=True)
+    moving, still = actors(log)
+    for k, name in enumerate(moving):
+        rec.log(f"map/actors/{name}/path", rr.LineStrips2D([_map_px(log[[f"{name}_x", f"{name}_y"]].to_numpy(float))],
+                                                           colors=[ACTOR_RGB[k % len(ACTOR_RGB)]], radii=1.0,
+                                                           labels=[name]), static=True)
+    for name in still:
+        place = log[[f"{name}_x", f"{name}_y"]].dropna().iloc[0].to_numpy(float)
+        rec.log(f"map/actors/{name}", rr.Points2D(_map_px(place), radii=6, colors=[255, 200, 0], labels=[name]),
+                static=True)
     if {"x_est", "y_est"} <= set(log.columns):  # the car's own pose estimate, beside the truth
         est = log[["x_est", "y_est"]].to_numpy(float)
         rec.log("map/trajectory_estimate", rr.LineStrips2D([_map_px(est)], colors=[240, 120, 20], radii=1.0,
@@ -250,32 +256,50 @@ def write_rrd(path: str | Path, log: pd.DataFrame, recorder: FrameRecorder | Non
             rec.log("world/car", rr.Transform3D(translation=[x, y, 0.0],
                                                 rotation=rr.RotationAxisAngle(axis=[0, 0, 1], radians=yaw)))
             rec.log("map/car", rr.Points2D(_map_px([x, y]), radii=5, colors=[255, 160, 0]))
-            _log_traffic(rec, row, cars)
+            _log_actors(rec, row, moving)
             _log_lidar(rec, frame.lidar, row, lidar_cfg)
     rec.flush()
     rec.disconnect()
     return path
 
 
-def _traffic_cars(log: pd.DataFrame) -> list[int]:
-    """The other cars an episode drove (their columns hold states)."""
-    from racf.sim.world.traffic import MAX_TRAFFIC_CARS
+def actors(log: pd.DataFrame) -> tuple[list[str], list[str]]:
+    """The world's other actors the log places: every ``NAME_x``/``NAME_y`` pair of columns that racf's own
+    step log does not declare (a world manager's: other cars, a person, a conflict point) and that holds a
+    position. Those that move (drawn at every frame) and those that stay put (drawn once), by name."""
+    moving, still = [], []
+    for column in log.columns:
+        name = str(column)[:-2]
+        if not str(column).endswith("_x") or column in STEP_LOG or f"{name}_y" not in log or f"{name}_y" in STEP_LOG:
+            continue
+        xy = log[[column, f"{name}_y"]].to_numpy(float)
+        xy = xy[np.isfinite(xy).all(axis=1)]
+        if len(xy):
+            (moving if (xy != xy[0]).any() else still).append(name)
+    return sorted(moving), sorted(still)
 
-    return [k for k in range(MAX_TRAFFIC_CARS)
-            if f"traffic{k}_x" in log and np.isfinite(log[f"traffic{k}_x"].to_numpy(float)).any()]
 
-
-def _log_traffic(rec, row, cars: list[int]) -> None:
-    """Each other car's body in the world and its place on the map, at this step."""
+def _log_actors(rec, row, moving: list[str]) -> None:
+    """Each moving actor in the world and on the map at this step: a car's box where it has a heading
+    (``NAME_yaw``), else a post of a person's height."""
     import rerun as rr
 
-    for k in cars:
-        x, y, yaw = (float(row[f"traffic{k}_{f}"]) for f in ("x", "y", "yaw"))
-        colour = TRAFFIC_RGB[k % len(TRAFFIC_RGB)]
-        rec.log(f"world/traffic/{k}", rr.Boxes3D(half_sizes=[CAR_HALF_SIZE_M], centers=[[x, y, _CAR_CENTRE_Z_M]],
-                                                 rotation_axis_angles=[rr.RotationAxisAngle(axis=[0, 0, 1], radians=yaw)],
-                                                 colors=[colour], labels=[f"traffic{k}"]))
-        rec.log(f"map/traffic/{k}/car", rr.Points2D(_map_px([x, y]), radii=5, colors=[colour]))
+    for k, name in enumerate(moving):
+        x, y = float(row[f"{name}_x"]), float(row[f"{name}_y"])
+        colour = ACTOR_RGB[k % len(ACTOR_RGB)]
+        if not (math.isfinite(x) and math.isfinite(y)):
+            rec.log(f"world/actors/{name}", rr.Clear(recursive=False))
+            continue
+        yaw = row.get(f"{name}_yaw")
+        if yaw is not None and math.isfinite(float(yaw)):
+            rec.log(f"world/actors/{name}", rr.Boxes3D(half_sizes=[CAR_HALF_SIZE_M], centers=[[x, y, _CAR_CENTRE_Z_M]],
+                                                       rotation_axis_angles=[rr.RotationAxisAngle(axis=[0, 0, 1],
+                                                                                                  radians=float(yaw))],
+                                                       colors=[colour], labels=[name]))
+        else:
+            rec.log(f"world/actors/{name}", rr.Boxes3D(half_sizes=[[0.02, 0.02, 0.09]], centers=[[x, y, 0.09]],
+                                                       colors=[colour], labels=[name]))
+        rec.log(f"map/actors/{name}/now", rr.Points2D(_map_px([x, y]), radii=5, colors=[colour]))
 
 
 def _log_lidar(rec, ranges: np.ndarray, row, cfg) -> None:

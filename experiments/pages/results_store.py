@@ -1,11 +1,12 @@
 """Stores a measurement for the results pages: what a command printed (``--json``) or wrote (a
-sweep's ``summary.json``, ``stealth.json``, ``recall.json`` and ``traffic.json``), under ``docs/results/data/NAME.json`` with what
-produced it: the command, the commit, racf's version, the date and the machine.
+sweep's ``summary.json`` and the report's other JSON files), under ``docs/results/data/NAME.json``
+with what produced it: the command, the commit, racf's version, the date and the machine.
 
     python -m racf.experiments.pages.results_store NAME SOURCE [SOURCE ...] --command "racf ..."
 
-A SOURCE is a JSON file, or a sweep's folder (its ``summary.json`` becomes ``settings`` and its
-``stealth.json``, ``recall.json`` and ``traffic.json``, if any, ``stealth``, ``recall`` and ``traffic``). Several sources are merged key by key, in order. The
+A SOURCE is a JSON file, or a sweep's folder (its ``summary.json`` becomes ``settings``, and every
+other ``NAME.json`` the report wrote but ``sweep.json``, such as ``stealth.json``, ``recall.json`` or
+a scenario's own, becomes ``NAME``). Several sources are merged key by key, in order. The
 pages are then rewritten by ``make docs`` (``racf.experiments.pages.results_pages``).
 """
 
@@ -33,9 +34,9 @@ def load_source(path: Path) -> dict:
         if not summary.exists():
             raise ValueError(f"{path} is a folder without summary.json; give a sweep's folder or a JSON file")
         data = {"settings": json.loads(summary.read_text())}
-        for part in ("stealth", "recall", "traffic"):
-            if (path / f"{part}.json").exists():
-                data[part] = json.loads((path / f"{part}.json").read_text())
+        for part in sorted(path.glob("*.json")):  # the report's other files (stealth, recall, a scenario's own)
+            if part.stem not in ("summary", "sweep"):
+                data[part.stem] = json.loads(part.read_text())
         return data
     try:
         data = json.loads(path.read_text())

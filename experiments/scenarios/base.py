@@ -175,6 +175,12 @@ class Scenario:
         return row["slot"] == len(plan.mission.targets) - 1 and (
             row["phase"] == Phase.DONE.value or row["dist_to_stop_line"] < -RUN_THROUGH_M)
 
+    def report(self, frame: Any, summary: dict) -> tuple[list[str], dict[str, Any]]:
+        """What this scenario adds to a sweep's report, given the sweep's result rows (``frame``, every
+        scenario's) and its summaries: Markdown lines after racf's tables, and JSON files by name for the
+        results folder (cross-traffic: its collision table and its paired episodes). By default nothing."""
+        return [], {}
+
     @staticmethod
     def replace(plan: "EpisodePlan", **changes: Any) -> "EpisodePlan":
         return dataclasses.replace(plan, **changes)

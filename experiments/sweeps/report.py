@@ -19,6 +19,7 @@ from racf.experiments.sweeps.store import ResultStore
 from racf.stats import median_ci, wilson_interval
 from racf.experiments.episode.spec import parse_setting
 from racf.experiments.metrics.criteria import criteria_of_rows
+from racf.plugins import SCENARIOS
 from racf.experiments.sweeps.summary import plugin_measures, setting_key, stealth_summary, summarize_settings
 
 __all__ = ["write_report", "report_from_store", "stealth_rows"]
@@ -178,50 +179,6 @@ def _robustness_cells(r: dict) -> str:
             f"{_fmt(r['violation_share'])} {_ci(r['violation_share_ci'])}")
 
 
-def traffic_pairs(frame: pd.DataFrame) -> dict:
-    """Per setting, the episodes run on both maps (same seed and cell), and how their outcomes differ:
-    ``traffic.json``, the evidence for explaining every difference between the two."""
-    if "traffic_cars" not in frame or not (frame["traffic_cars"].fillna(0) > 0).any():
-        return {}
-    keys = ["setting", "seed", "sign", "speed"]
-    empty = frame[frame["traffic_cars"].fillna(0) == 0].set_index(keys)
-    crossed = frame[frame["traffic_cars"].fillna(0) > 0].set_index(keys)
-    both = empty.join(crossed, how="inner", lsuffix="_empty", rsuffix="_traffic")
-    out = {}
-    for setting, rows in both.groupby(level="setting", sort=True):
-        changed = rows[(rows["success_empty"] != rows["success_traffic"])
-                       | (rows["failure_empty"].fillna("") != rows["failure_traffic"].fillna(""))]
-        out[str(setting)] = {
-            "n_pairs": int(len(rows)), "n_outcome_changed": int(len(changed)),
-            "changed": [{"seed": int(i[1]), "sign": int(i[2]), "speed": float(i[3]),
-                         "empty": r["failure_empty"] or "success", "traffic": r["failure_traffic"] or "success",
-                         "conflict": r["conflict_traffic"], "collision_with": r["collision_with_traffic"]}
-                        for i, r in changed.iterrows()],
-            "stop_distance_change_max_m": float((rows["stop_distance_m_traffic"] - rows["stop_distance_m_empty"])
-                                                .abs().max()) if rows["stop_distance_m_traffic"].notna().any() else None}
-    return out
-
-
-def _traffic_lines(summary: dict) -> list[str]:
-    """The cross-traffic table: collision rate, conflict outcomes, smallest TTC (only with traffic)."""
-    rows = {k: r for k, r in summary.items() if r.get("n_traffic")}
-    if not rows:
-        return []
-    lines = ["", "With cross-traffic (`scenarios.cross_traffic`): collision rate [95 % Wilson CI] over all episodes and "
-             "over those whose attack began before t*; the conflict outcomes; the median smallest "
-             "time-to-collision.", "",
-             "| setting | N | collision rate | collision rate, attack before t* (N) | collision / crash / near miss / "
-             "passed / yielded | min TTC s, median |", "|---|---|---|---|---|---|"]
-    for key, r in rows.items():
-        early = "—" if r.get("n_traffic_attack_before_t_star") is None else (
-            f"{_fmt(r['collision_rate_attack_before_t_star'])} {_ci(r['collision_rate_attack_before_t_star_ci'])} "
-            f"({r['n_traffic_attack_before_t_star']})")
-        outcomes = " / ".join(str(v) for v in r["conflicts"].values())
-        lines.append(f"| {key} | {r['n_traffic']} | {_fmt(r['collision_rate'])} {_ci(r['collision_rate_ci'])} | "
-                     f"{early} | {outcomes} | {_fmt(r['min_ttc_median_s'])} |")
-    return lines
-
-
 def _plugin_metric_lines(frame: pd.DataFrame) -> list[str]:
     """A table of what the plug-in metrics the episodes scored say, per setting and scenario parameters
     (as each declares it)."""
@@ -257,6 +214,12 @@ def _scr_cells(r: dict) -> str:
     return f"{_fmt(r['scr'])} {_ci(r['scr_ci'])}"
 
 
+def _scenarios_of(frame: pd.DataFrame) -> list:
+    """The scenarios the rows ran (each once, by name), as the registry holds them."""
+    targets = sorted(frame["target"].dropna().unique()) if "target" in frame else []
+    return [SCENARIOS[t]() for t in targets if t in SCENARIOS]
+
+
 def write_report(frame: pd.DataFrame, out: Path, name: str = "sweep") -> dict[str, Path]:
     """Writes ``summary.md``, ``summary.json`` and the two plots under ``out``."""
     out = Path(out)
@@ -279,16 +242,13 @@ def write_report(frame: pd.DataFrame, out: Path, name: str = "sweep") -> dict[st
         lines.append(f"| {setting} | {r['n']} | {_scr_cells(r)} | {_fmt(r['asr'])} | {early} | "
                      f"{_fmt(r['dt_brake_mean'], 3)} ({r['n_latency']}) | {_fmt(r['max_fused_jump_m'], 3)} | "
                      f"{_robustness_cells(r)} |")
-    lines += _traffic_lines(summary)
     lines += _criteria_lines(frame, summary)
     lines += _plugin_metric_lines(frame)
-    pairs = traffic_pairs(frame) if not frame.empty else {}
-    if pairs:
-        atomic_write(out / "traffic.json", json.dumps(pairs, indent=1, allow_nan=False))
-        lines += ["", "The same episodes on both maps (`traffic.json` lists each whose outcome changed):", "",
-                  "| setting | pairs | outcome changed | largest change of the stop distance m |", "|---|---|---|---|"]
-        lines += [f"| {k} | {p['n_pairs']} | {p['n_outcome_changed']} | {_fmt(p['stop_distance_change_max_m'], 3)} |"
-                  for k, p in pairs.items()]
+    for scenario in _scenarios_of(frame):  # what each scenario the rows ran adds (its own tables and files)
+        more, files = scenario.report(frame, summary)
+        lines += more
+        for file, data in files.items():
+            atomic_write(out / file, json.dumps(data, indent=1, allow_nan=False))
     if not frame.empty:
         frame = frame.assign(estimator=frame["estimator"].astype(str))
         lines += ["", "By attack and estimator (columns):", ""]

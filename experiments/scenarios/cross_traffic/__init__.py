@@ -72,6 +72,11 @@ class CrossTraffic(Scenario):
         options = {**draft.reset_options, "traffic": traffic_option(cars, conflict.xy)}
         return self.replace(draft, reset_options=options, extras={**draft.extras, "cars": cars, "conflict": conflict})
 
+    def report(self, frame, summary: dict) -> tuple[list[str], dict]:
+        from racf.experiments.scenarios.cross_traffic.report import report
+
+        return report(frame, summary)
+
     def over(self, plan, rows: list[dict]) -> bool:
         """Over once the car stopped for good at its last target, or the whole car has cleared the
         conflict point (a missed stop there is scored by what it meets, not by the line) and the

@@ -102,11 +102,12 @@ def test_other_cars_appear_in_the_world_and_on_the_map(tmp_path):
     rows: dict[str, int] = {}
     for chunk in _chunks(write_rrd(tmp_path / "traffic.rrd", log, recorder)):
         rows[str(chunk.entity_path)] = rows.get(str(chunk.entity_path), 0) + chunk.num_rows
+    # The cars and the conflict point are the world manager's columns: drawn as actors, named as logged.
     for k in (0, 1):
-        assert rows[f"/world/traffic/{k}"] == len(recorder.frames)
-        assert rows[f"/map/traffic/{k}/car"] == len(recorder.frames)
-        assert f"/map/traffic/{k}/path" in rows
-    assert "/map/conflict" in rows and "/world/traffic/2" not in rows
+        assert rows[f"/world/actors/traffic{k}"] == len(recorder.frames)
+        assert rows[f"/map/actors/traffic{k}/now"] == len(recorder.frames)
+        assert f"/map/actors/traffic{k}/path" in rows
+    assert "/map/actors/conflict" in rows and "/world/actors/traffic2" not in rows
 
 
 @pytest.mark.slow
