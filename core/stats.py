@@ -9,11 +9,13 @@ interval on any machine.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pandas as pd
 from scipy.stats import binomtest
 
-__all__ = ["wilson_interval", "median_ci", "ci", "num", "rate"]
+__all__ = ["wilson_interval", "median_ci", "ci", "num", "rate", "cell", "cell_ci"]
 
 
 def wilson_interval(successes: int, n: int, confidence: float = 0.95) -> tuple[float, float]:
@@ -50,3 +52,13 @@ def num(value, digits: int = 3) -> str:
 def rate(value, pair, digits: int = 2) -> str:
     """A value with its interval (``-`` where there is none)."""
     return "-" if value is None else f"{value:.{digits}f} {ci(pair, digits)}".strip()
+
+
+def cell(value, digits: int = 2) -> str:
+    """A number in a sweep's table: ``—`` where it is missing (None or NaN)."""
+    return "—" if value is None or (isinstance(value, float) and math.isnan(value)) else f"{value:.{digits}f}"
+
+
+def cell_ci(pair) -> str:
+    """An interval in a sweep's table: ``[lo, hi]``, ``—`` for a missing end."""
+    return f"[{cell(pair[0])}, {cell(pair[1])}]"

@@ -32,7 +32,7 @@ from racf.experiments.episode.scoring import AT_REST_MPS, TargetOutcome, score_l
 if TYPE_CHECKING:  # the runner makes episodes and runs the criteria
     from racf.experiments.episode.runner import Episode
 
-__all__ = ["Criterion", "StopRule", "NoNeedlessStop", "TARGET_CRITERIA", "standing_outcomes", "NEEDLESS_STOP_PENALTY",
+__all__ = ["Criterion", "StopRule", "NoNeedlessStop", "NoContact", "TARGET_CRITERIA", "standing_outcomes", "NEEDLESS_STOP_PENALTY",
            "STOP_RULE_PENALTY"]
 
 #: CARLA's leaderboard: running a stop sign.
@@ -129,6 +129,24 @@ class NoNeedlessStop(Criterion):
         log = episode.log
         at_rest = (log["speed"].abs() < AT_REST_MPS) & log["brake"].astype(bool) & (log["t"] > 0)
         return not bool(at_rest.any())
+
+
+class NoContact(Criterion):
+    """Touch none of a kind of thing (CARLA's ``CollisionTest``): fails at the first step the car touches
+    one (the log's ``collision_with``, named as a world manager names its body), and ends the episode
+    there. A subclass says what it guards (:meth:`guards`), its name, what it checks and its penalty."""
+
+    terminates = True
+
+    def guards(self, touched: str) -> bool:
+        """Whether touching ``touched`` (a name from ``collision_with``) breaks this rule."""
+        raise NotImplementedError
+
+    def passed(self, episode: "Episode") -> bool:
+        return not any(self.guards(str(who)) for who in episode.log["collision_with"] if who)
+
+    def fails_at(self, row: dict) -> bool:
+        return bool(row["collision_with"]) and self.guards(str(row["collision_with"]))
 
 
 #: The criteria of racf's target approaches (``Scenario.criteria``'s default).

@@ -38,8 +38,10 @@ from racf.sim.attacks.base import AttackWrapper, find_wrapper
 from racf.sim.sensors import STATE_FIELDS
 
 __all__ = ["TrialResult", "IDENTITY", "Episode", "StepHook", "run_trial", "scan_fov", "SCAN_FOV_HALF_BEAMS",
-           "car_columns", "grant_white_box", "ActionLine", "late_steps"]
+           "car_columns", "grant_white_box", "ActionLine", "late_steps", "SCENARIO_PREFIX", "scenario_columns"]
 
+#: A result row's scenario parameter ``name`` is its column ``scenario_<name>``.
+SCENARIO_PREFIX = "scenario_"
 #: Half-width of the LiDAR sector kept in the logs, in beams of the 360-beam scan (1 deg each).
 SCAN_FOV_HALF_BEAMS = 40
 
@@ -237,7 +239,7 @@ def _result(spec: TrialSpec, plan: EpisodePlan, env: gym.Env, log: pd.DataFrame)
 
 def scenario_columns(values: dict) -> dict:
     """A scenario's parameter values as result columns: ``scenario_<name>`` each."""
-    return {f"scenario_{name}": value for name, value in values.items()}
+    return {f"{SCENARIO_PREFIX}{name}": value for name, value in values.items()}
 
 
 def scored(metric, episode: Episode) -> dict:

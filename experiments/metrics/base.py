@@ -23,7 +23,7 @@ from racf.experiments.episode.fields import SUMMARIES, Field
 from racf.experiments.episode.runner import Episode
 from racf.stats import median_ci, wilson_interval
 
-__all__ = ["Field", "Metric", "Episode", "SUMMARIES"]
+__all__ = ["Field", "Metric", "Episode", "SUMMARIES", "summarize_fields"]
 
 
 class Metric:
@@ -56,23 +56,30 @@ class Metric:
         By default each field with a ``summary``: ``rate``: ``{name}_rate``, ``{name}_rate_ci`` and
         ``n_{name}``; ``median``: ``{name}_median``, ``{name}_ci`` and ``n_{name}``. Rows where the
         field is missing (None, NaN) do not count."""
-        out: dict[str, Any] = {}
-        for field in self.fields:
-            if field.summary is None or field.name not in results:
-                continue
-            column = results[field.name]
-            if field.summary == "rate":
-                values = column.dropna().astype(bool)
-                k, n = int(values.sum()), int(len(values))
-                out |= {f"n_{field.name}": n, f"{field.name}_rate": k / n if n else None,
-                        f"{field.name}_rate_ci": list(wilson_interval(k, n))}
-            else:
-                values = pd.to_numeric(column, errors="coerce").dropna()
-                median, interval = median_ci(values)
-                out |= {f"n_{field.name}": int(len(values)), f"{field.name}_median": median,
-                        f"{field.name}_ci": interval}
-        return out
+        return summarize_fields(self.fields, results)
 
     @classmethod
     def defaults(cls) -> dict[str, Any]:
         return {f.name: f.default for f in cls.fields}
+
+
+def summarize_fields(fields, results: pd.DataFrame) -> dict[str, Any]:
+    """Each field with a ``summary`` over the rows that hold it: ``rate``: ``{name}_rate``,
+    ``{name}_rate_ci`` (Wilson) and ``n_{name}``; ``median``: ``{name}_median``, ``{name}_ci``
+    (bootstrap) and ``n_{name}``. Rows where the field is missing (None, NaN) do not count."""
+    out: dict[str, Any] = {}
+    for field in fields:
+        if field.summary is None or field.name not in results:
+            continue
+        column = results[field.name]
+        if field.summary == "rate":
+            values = column.dropna().astype(bool)
+            k, n = int(values.sum()), int(len(values))
+            out |= {f"n_{field.name}": n, f"{field.name}_rate": k / n if n else None,
+                    f"{field.name}_rate_ci": list(wilson_interval(k, n))}
+        else:
+            values = pd.to_numeric(column, errors="coerce").dropna()
+            median, interval = median_ci(values)
+            out |= {f"n_{field.name}": int(len(values)), f"{field.name}_median": median,
+                    f"{field.name}_ci": interval}
+    return out

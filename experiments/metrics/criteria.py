@@ -15,11 +15,10 @@ import math
 import pandas as pd
 
 from racf.experiments.episode.criteria import Criterion
-from racf.experiments.metrics.base import Episode, Field, Metric
+from racf.experiments.metrics.base import Episode, Field, Metric, summarize_fields
 from racf.plugins import SCENARIOS
-from racf.stats import wilson_interval
 
-__all__ = ["Criteria", "criteria_of_rows"]
+__all__ = ["Criteria", "criteria_of_rows", "scenarios_of"]
 
 _log = logging.getLogger(__name__)
 
@@ -44,16 +43,11 @@ class Criteria(Metric):
         return row | {"driving_score": score}
 
     def summarize(self, results: pd.DataFrame, attacked: bool) -> dict:
-        out: dict = {}
-        for criterion in criteria_of_rows(results):
-            if criterion.name not in results:
-                continue
-            verdicts = results[criterion.name].dropna().astype(bool)
-            k, n = int(verdicts.sum()), int(len(verdicts))
-            out |= {f"n_{criterion.name}": n, f"{criterion.name}_rate": k / n if n else None,
-                    f"{criterion.name}_rate_ci": list(wilson_interval(k, n))}
-            out |= _FieldSummary(criterion.fields).summarize(results, attacked)
-        return out
+        """Each criterion's verdict as a rate (the share passed, over the rows where its rule applies),
+        and its fields as each declares them."""
+        fields = [f for c in criteria_of_rows(results)
+                  for f in (Field(c.name, None, "", c.checks, "rate"), *c.fields)]
+        return summarize_fields(fields, results)
 
 
 def judged(criterion: Criterion, episode: Episode, owner: str) -> dict:
@@ -69,19 +63,16 @@ def judged(criterion: Criterion, episode: Episode, owner: str) -> dict:
         return criterion.defaults()
 
 
+def scenarios_of(results: pd.DataFrame) -> list:
+    """The scenarios the rows ran (each once, by name), as the registry holds them."""
+    targets = sorted(results["target"].dropna().unique()) if "target" in results else []
+    return [SCENARIOS[t] for t in targets if t in SCENARIOS]
+
+
 def criteria_of_rows(results: pd.DataFrame) -> list[Criterion]:
-    """The criteria of the scenarios the rows ran (each once, in the scenarios' order)."""
+    """The criteria of the scenarios the rows ran (each once)."""
     seen: dict[str, Criterion] = {}
-    targets = results["target"].dropna().unique() if "target" in results else ()
-    for target in targets:
-        if target in SCENARIOS:
-            for cls in SCENARIOS[target].criteria:
-                seen.setdefault(cls.name, cls())
+    for scenario in scenarios_of(results):
+        for cls in scenario.criteria:
+            seen.setdefault(cls.name, cls())
     return list(seen.values())
-
-
-class _FieldSummary(Metric):
-    """A criterion's fields summarised the way a metric's are (``Metric.summarize``)."""
-
-    def __init__(self, fields: tuple[Field, ...]) -> None:
-        self.fields = fields

@@ -28,12 +28,18 @@ from racf.sim.world.manager import WorldManager
 if TYPE_CHECKING:  # the plan is made by racf.experiments.episode, which reads scenarios
     from racf.experiments.episode.plan import EpisodePlan
 
-__all__ = ["Param", "Scenario", "TARGET_KINDS", "RUN_THROUGH_M"]
+__all__ = ["Param", "Scenario", "TARGET_KINDS", "RUN_THROUGH_M", "params_label"]
 
 #: What a route is built around, and how many of each the map holds (``TrialSpec.sign`` indexes them).
 TARGET_KINDS = TARGETS
 #: By default an episode ends once the bumper is this far past the last target's line, m.
 RUN_THROUGH_M = 0.5
+
+
+def params_label(values: dict[str, Any]) -> str:
+    """``case=removed, shift_m=1.0``: a scenario's parameter values as results, failure lines and card
+    names write them ('' for none)."""
+    return ", ".join(f"{name}={value}" for name, value in values.items())
 
 
 @dataclass(frozen=True)

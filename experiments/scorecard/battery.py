@@ -121,6 +121,7 @@ class Battery:
         ``NAME@SCENARIO[param=value, ...]`` (so that cards of one scenario with other parameters never
         share a name or a file); cross-traffic rows and the drives stay as they are. ValueError names a
         scenario that does not approach a stop sign, or a parameter it refuses."""
+        from racf.experiments.scenarios.base import params_label
         from racf.plugins import SCENARIOS
 
         if scenario not in SCENARIOS or SCENARIOS[scenario].target != "sign":
@@ -135,7 +136,7 @@ class Battery:
             return remade
 
         loop = tuple(replace(row, make=situated(row.make)) for row in self.loop)
-        label = ", ".join(f"{k}={v}" for k, v in values.items())
+        label = params_label(values)
         return replace(self, name=f"{self.name}@{scenario}" + (f"[{label}]" if label else ""), loop=loop)
 
 

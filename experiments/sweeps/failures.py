@@ -10,6 +10,7 @@ from pathlib import Path
 
 from racf.errors import Failure
 from racf.experiments.episode import TrialSpec
+from racf.experiments.scenarios.base import params_label
 
 __all__ = ["describe", "worker_died", "plugin_fault", "episode_words", "params_words", "append_log", "LOG_NAME"]
 
@@ -26,7 +27,7 @@ def episode_words(spec: TrialSpec) -> str:
 
 def params_words(values: dict) -> str:
     """``[case=removed, shift_m=1.0]``: a scenario's parameter values ('' for a scenario without any)."""
-    return f"[{', '.join(f'{k}={v}' for k, v in values.items())}]" if values else ""
+    return f"[{params_label(values)}]" if values else ""
 
 
 def describe(spec: TrialSpec, err: BaseException) -> Failure:

@@ -7,7 +7,6 @@ Wilson bands.
 from __future__ import annotations
 
 import json
-import math
 from pathlib import Path
 
 import numpy as np
@@ -18,8 +17,9 @@ from racf.provenance import atomic_write
 from racf.experiments.sweeps.store import ResultStore
 from racf.stats import median_ci, wilson_interval
 from racf.experiments.episode.spec import parse_setting
-from racf.experiments.metrics.criteria import criteria_of_rows
-from racf.plugins import SCENARIOS
+from racf.experiments.metrics.criteria import criteria_of_rows, scenarios_of
+from racf.stats import cell as _fmt
+from racf.stats import cell_ci as _ci
 from racf.experiments.sweeps.summary import plugin_measures, setting_key, stealth_summary, summarize_settings
 
 __all__ = ["write_report", "report_from_store", "stealth_rows"]
@@ -163,14 +163,6 @@ def _ci3(ci) -> str:
     return "[—, —]" if not ci or ci[0] is None else f"[{_fmt(ci[0], 3)}, {_fmt(ci[1], 3)}]"
 
 
-def _fmt(x, digits: int = 2) -> str:
-    return "—" if x is None or (isinstance(x, float) and math.isnan(x)) else f"{x:.{digits}f}"
-
-
-def _ci(ci: list[float]) -> str:
-    return f"[{_fmt(ci[0])}, {_fmt(ci[1])}]"
-
-
 def _robustness_cells(r: dict) -> str:
     """The stop rule's robustness cells of a setting's summary ('—' for rows stored before it was logged)."""
     if r.get("robustness_median_m") is None:
@@ -214,12 +206,6 @@ def _scr_cells(r: dict) -> str:
     return f"{_fmt(r['scr'])} {_ci(r['scr_ci'])}"
 
 
-def _scenarios_of(frame: pd.DataFrame) -> list:
-    """The scenarios the rows ran (each once, by name), as the registry holds them."""
-    targets = sorted(frame["target"].dropna().unique()) if "target" in frame else []
-    return [SCENARIOS[t]() for t in targets if t in SCENARIOS]
-
-
 def write_report(frame: pd.DataFrame, out: Path, name: str = "sweep") -> dict[str, Path]:
     """Writes ``summary.md``, ``summary.json`` and the two plots under ``out``."""
     out = Path(out)
@@ -244,8 +230,8 @@ def write_report(frame: pd.DataFrame, out: Path, name: str = "sweep") -> dict[st
                      f"{_robustness_cells(r)} |")
     lines += _criteria_lines(frame, summary)
     lines += _plugin_metric_lines(frame)
-    for scenario in _scenarios_of(frame):  # what each scenario the rows ran adds (its own tables and files)
-        more, files = scenario.report(frame, summary)
+    for scenario in scenarios_of(frame):  # what each scenario the rows ran adds (its own tables and files)
+        more, files = scenario().report(frame, summary)
         lines += more
         for file, data in files.items():
             atomic_write(out / file, json.dumps(data, indent=1, allow_nan=False))

@@ -27,14 +27,15 @@ import math
 import pandas as pd
 
 from racf.experiments.episode.spec import parse_setting
+from racf.experiments.episode.runner import SCENARIO_PREFIX
 from racf.experiments.metrics.builtin import robustness_summary, stealth_summary
+from racf.experiments.scenarios.base import params_label
 from racf.plugins import METRICS, SCENARIOS
 
 __all__ = ["summarize", "summarize_settings", "summarised_metrics", "plugin_measures", "stealth_summary", "robustness_summary",
            "setting_key", "scenario_label", "SCENARIO_PREFIX"]
 
-#: A result row's scenario parameter ``name`` is its column ``scenario_<name>``.
-SCENARIO_PREFIX = "scenario_"
+
 
 
 def summarize(results: pd.DataFrame, attack: bool | None = None) -> dict:
@@ -90,7 +91,7 @@ def scenario_label(row) -> str:
     target = row.get("target")
     params = {p.name: p for p in SCENARIOS[target].params} if target in SCENARIOS else \
         {str(k)[len(SCENARIO_PREFIX):]: None for k in row.keys() if str(k).startswith(SCENARIO_PREFIX)}
-    values = []
+    values = {}
     for name, param in params.items():
         value = row.get(SCENARIO_PREFIX + name)
         if value is None or (isinstance(value, float) and math.isnan(value)):
@@ -98,8 +99,8 @@ def scenario_label(row) -> str:
         value = value.item() if hasattr(value, "item") else value
         if param is not None and param.type in (int, float) and not isinstance(value, bool):
             value = param.type(value)
-        values.append(f"{name}={value}")
-    return f"{target}[{', '.join(values)}]" if values else ""
+        values[name] = value
+    return f"{target}[{params_label(values)}]" if values else ""
 
 
 def setting_key(row) -> str:

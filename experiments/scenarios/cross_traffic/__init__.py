@@ -18,7 +18,7 @@ import numpy as np
 
 from racf.controllers import Phase
 from racf.experiments.episode.car import route_follower
-from racf.experiments.episode.criteria import TARGET_CRITERIA, Criterion
+from racf.experiments.episode.criteria import TARGET_CRITERIA, NoContact
 from racf.experiments.scenarios.base import RUN_THROUGH_M, Param, Scenario
 from racf.experiments.scenarios.cross_traffic.conflict import NEAR_MISS_S
 from racf.sim.world.traffic import CAR_FOOTPRINT_M, MAX_TRAFFIC_CARS, conflict_of, cross_traffic
@@ -27,19 +27,15 @@ from racf.sim.world.traffic_manager import TrafficManager, traffic_option
 __all__ = ["CrossTraffic", "NoVehicleCollision", "arrival_s", "run_through_m"]
 
 
-class NoVehicleCollision(Criterion):
+class NoVehicleCollision(NoContact):
     """Touch no other car (CARLA's ``CollisionTest`` against vehicles: x 0.60, and the route ends)."""
 
     name = "no_vehicle_collision"
     checks = "the car touched no other car"
     penalty = 0.60
-    terminates = True
 
-    def passed(self, episode) -> bool:
-        return not any(self.fails_at({"collision_with": who}) for who in episode.log["collision_with"])
-
-    def fails_at(self, row: dict) -> bool:
-        return str(row["collision_with"]).startswith("traffic")
+    def guards(self, touched: str) -> bool:
+        return touched.startswith("traffic")  # the manager's names for its cars: traffic0, traffic1, ...
 
 
 class CrossTraffic(Scenario):

@@ -4,19 +4,12 @@ maps (the paired control with ``cars = 0`` and the same seed) whose outcome chan
 
 from __future__ import annotations
 
-import math
-
 import pandas as pd
 
+from racf.stats import cell as _fmt
+from racf.stats import cell_ci as _ci
+
 __all__ = ["traffic_pairs", "traffic_lines", "report"]
-
-
-def _fmt(x, digits: int = 2) -> str:
-    return "—" if x is None or (isinstance(x, float) and math.isnan(x)) else f"{x:.{digits}f}"
-
-
-def _ci(ci: list[float]) -> str:
-    return f"[{_fmt(ci[0])}, {_fmt(ci[1])}]"
 
 
 def traffic_pairs(frame: pd.DataFrame) -> dict:

@@ -21,7 +21,7 @@ import math
 
 import numpy as np
 
-from racf.experiments.episode.criteria import Criterion
+from racf.experiments.episode.criteria import Criterion, NoContact
 from racf.experiments.metrics import Field
 from racf.experiments.scenarios import Param, Scenario
 from racf.experiments.scenarios.cross_traffic import arrival_s
@@ -38,6 +38,12 @@ _HIT_M = 0.096 + RADIUS_M
 #: A time-to-collision under this is a near miss, s.
 TTC_LIMIT_S = 1.0
 _NAN = math.nan
+#: The walker's ground-truth columns (name, unit, meaning), in the order of ``Walker._state``.
+_COLUMNS = (("pedestrian_x", "m", "ground truth: the person's position, map frame (NaN: none)"),
+            ("pedestrian_y", "m", "ground truth: the person's position, map frame (NaN: none)"),
+            ("pedestrian_vx", "m/s", "ground truth: the person's velocity, map frame"),
+            ("pedestrian_vy", "m/s", "ground truth: the person's velocity, map frame"),
+            ("pedestrian_crossed", "bool", "ground truth: the person has reached the far side"))
 
 
 class Walker(WorldManager):
@@ -85,40 +91,32 @@ class Walker(WorldManager):
         data.mocap_pos[self._mocap] = (x, y, 0.0) if x == x else (0.0, 0.0, -5.0)
 
     def columns(self) -> tuple[TruthColumn, ...]:
-        return (TruthColumn("pedestrian_x", "m", "ground truth: the person's position, map frame (NaN: none)"),
-                TruthColumn("pedestrian_y", "m", "ground truth: the person's position, map frame (NaN: none)"),
-                TruthColumn("pedestrian_vx", "m/s", "ground truth: the person's velocity, map frame"),
-                TruthColumn("pedestrian_vy", "m/s", "ground truth: the person's velocity, map frame"),
-                TruthColumn("pedestrian_crossed", "bool", "ground truth: the person has reached the far side"))
+        return tuple(TruthColumn(*c) for c in _COLUMNS)
 
     def info(self, substep: int) -> dict:
-        names = [c.name for c in self.columns()]
-        return dict(zip(names, self._state(substep * self._dt)))
+        return dict(zip((c[0] for c in _COLUMNS), self._state(substep * self._dt)))
 
     def owner_of(self, root_body: int) -> str | None:
         return "pedestrian" if root_body == self._body else None
 
 
-def _crossed_at_all(log) -> bool:
+def _person_in(log) -> bool:
+    """Whether a person walked in this episode (their columns hold a position)."""
     return "pedestrian_x" in log and bool(np.isfinite(log["pedestrian_x"].to_numpy(float)).any())
 
 
-class NoPedestrianCollision(Criterion):
+class NoPedestrianCollision(NoContact):
     """Touch no person (CARLA's ``CollisionTest`` against pedestrians: x 0.50, and the route ends)."""
 
     name = "no_pedestrian_collision"
     checks = "the car touched no person"
     penalty = 0.50
-    terminates = True
 
     def applies(self, episode) -> bool:
-        return _crossed_at_all(episode.log)
+        return _person_in(episode.log)
 
-    def passed(self, episode) -> bool:
-        return not any(self.fails_at({"collision_with": who}) for who in episode.log["collision_with"])
-
-    def fails_at(self, row: dict) -> bool:
-        return row["collision_with"] == "pedestrian"
+    def guards(self, touched: str) -> bool:
+        return touched == "pedestrian"
 
 
 def min_time_to_collision(log, bumper_x_m: float) -> float:
@@ -152,7 +150,7 @@ class PedestrianTimeToCollision(Criterion):
                                                        "on a collision course)", "median"),)
 
     def applies(self, episode) -> bool:
-        return _crossed_at_all(episode.log)
+        return _person_in(episode.log)
 
     def measures(self, episode) -> dict:
         return {"pedestrian_min_ttc_s": min_time_to_collision(episode.log, episode.plan.calibration.bumper_x_m)}
