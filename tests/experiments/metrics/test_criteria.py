@@ -108,3 +108,19 @@ def test_a_criterion_that_terminates_ends_the_episode_at_the_step_that_breaks_it
         SCENARIOS._all().pop("hurried_test")
     assert log["t"].iloc[-1] == pytest.approx(1.0) and result.under_a_second is False
     assert result.driving_score == pytest.approx(0.8 * 1.0)  # the stop rule broken too; its own penalty 1.0
+
+
+def test_a_contact_rule_fails_at_the_step_the_car_touches_what_it_guards():
+    from racf.experiments.episode.criteria import NoContact
+
+    class NoPosts(NoContact):
+        name, checks = "no_posts", "the car touched no post"
+
+        def guards(self, touched):
+            return touched.startswith("post")
+
+    rule = NoPosts()
+    assert rule.terminates
+    assert [rule.fails_at({"collision_with": w}) for w in ("", "post3", "wall")] == [False, True, False]
+    log = pd.DataFrame({"collision_with": ["", "", "wall"]})
+    assert rule.passed(SimpleNamespace(log=log)) and not rule.passed(SimpleNamespace(log=log.assign(collision_with="post1")))
