@@ -10,6 +10,7 @@ from typing import NoReturn
 
 from racf.errors import UserError
 from racf.experiments.episode.estimators import ESTIMATORS
+from racf.experiments.episode.wire import DEFAULT_TIMEOUT_MS
 from racf.sim.attacks import ATTACKS
 
 __all__ = ["UsageError", "Parser", "output_dir", "unwritable", "sign", "positive", "speed", "share",
@@ -303,14 +304,22 @@ def service_flags(p: argparse.ArgumentParser) -> None:
                    help="run the defence in the `racf serve` process listening there: its measured round trip "
                         "delays the car, and a step it does not answer in time falls back to the car's own depth "
                         "distance (logged); default: in the car's own process")
-    p.add_argument("--estimator-timeout-ms", type=float, default=50.0, metavar="MS",
-                   help="with --estimator-endpoint: how long the car waits for an answer, ms (default 50)")
+    p.add_argument("--estimator-timeout-ms", type=float, default=None, metavar="MS",
+                   help=f"with --estimator-endpoint: how long the car waits for an answer, ms (default "
+                        f"{DEFAULT_TIMEOUT_MS:g})")
+    p.add_argument("--service-keys", default=None, metavar="DIR",
+                   help="with --estimator-endpoint: the key folder of `racf serve keys DIR`; the car pins the "
+                        "service's key and shows its own (CurveZMQ); default: a plain link")
 
 
 def service_params(args: argparse.Namespace, command: str) -> dict:
     """The spec fields the service flags give (none without an endpoint)."""
     if args.estimator_endpoint is None:
-        if args.estimator_timeout_ms != 50.0:
-            flag_error(command, "--estimator-timeout-ms applies with --estimator-endpoint")
+        for flag, value in (("--estimator-timeout-ms", args.estimator_timeout_ms), ("--service-keys", args.service_keys)):
+            if value is not None:
+                flag_error(command, f"{flag} applies with --estimator-endpoint")
         return {}
-    return {"estimator_endpoint": args.estimator_endpoint, "estimator_timeout_ms": args.estimator_timeout_ms}
+    out = {"estimator_endpoint": args.estimator_endpoint, "estimator_keys": args.service_keys}
+    if args.estimator_timeout_ms is not None:
+        out["estimator_timeout_ms"] = args.estimator_timeout_ms
+    return out

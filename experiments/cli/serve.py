@@ -12,17 +12,40 @@ __all__ = ["register"]
 
 def register(sub: argparse._SubParsersAction) -> None:
     s = sub.add_parser("serve", help="serve defences (estimators) to cars over ZeroMQ: trials, sweeps and scorecards "
-                                     "reach them with --estimator-endpoint",
+                                     "reach them with --estimator-endpoint; `racf serve keys DIR` makes CurveZMQ keys",
                        description="Runs the defences in this process, one instance per connecting car, behind "
                                    "a ZeroMQ socket (msgpack requests, numpy arrays as raw buffers). Episodes "
-                                   "reach it with --estimator-endpoint and name their defence; Ctrl-C stops it.")
+                                   "reach it with --estimator-endpoint and name their defence; Ctrl-C stops it. "
+                                   "With --keys the link is CurveZMQ: the cars pin this service's key and only "
+                                   "the admitted cars are answered (required beyond loopback).")
     s.add_argument("--defence", action="append", default=None, metavar="NAME",
                    help=f"serve only this defence (repeatable; default: every registered one): {estimator_help()}")
     s.add_argument("--bind", default="tcp://127.0.0.1:5555", metavar="tcp://HOST:PORT",
                    help="where to listen (default tcp://127.0.0.1:5555; port 0: any free port, printed)")
+    s.add_argument("--keys", default=None, metavar="DIR",
+                   help="serve over CurveZMQ with the keys of `racf serve keys DIR`: its key pair, and the cars "
+                        "admitted in DIR/admitted (required when --bind is not loopback)")
+    s.add_argument("--insecure", action="store_true",
+                   help="serve a non-loopback address without keys: anyone on the network may ask, and anyone "
+                        "between may answer")
+    s.add_argument("--idle-s", type=float, default=600.0, metavar="S",
+                   help="drop a car's session unused this long (default 600)")
+    s.add_argument("--sessions-per-client", type=int, default=16, metavar="N",
+                   help="at most N sessions per car key or address; the oldest gives way (default 16)")
+    s.add_argument("--max-sessions", type=int, default=1024, metavar="N",
+                   help="at most N sessions in all; a hello beyond is refused (default 1024)")
     estimator_option_flag(s)
     plugin_flag(s)
     s.set_defaults(handler=_serve)
+    inner = s.add_subparsers(dest="serve_command", required=False, metavar="[keys]")
+    k = inner.add_parser("keys", help="make the service's and the cars' CurveZMQ key pairs",
+                         description="Writes DIR/server.key (every car pins it), DIR/server.key_secret (the "
+                                     "service's), DIR/cars/NAME.key_secret (each car's) and DIR/admitted/NAME.key "
+                                     "(the cars the service admits). Nothing is overwritten.")
+    k.add_argument("dir", metavar="DIR", help="the key folder to write")
+    k.add_argument("--car", action="append", default=None, metavar="NAME",
+                   help="a car to make a pair for (repeatable; default: one car named 'car')")
+    k.set_defaults(handler=_keys)
 
     b = sub.add_parser("bench-service", help="the defence service's round trip per step on real samples, "
                                              "beside the in-process cost and the paper's 49 ms cycle")
@@ -38,8 +61,11 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _serve(args: argparse.Namespace) -> int:
-    from racf.experiments.service.server import serve
+    import logging
 
+    from racf.experiments.episode.curve import ServerKeys, is_loopback
+    from racf.experiments.service.server import serve
+    from racf.experiments.service.sessions import Sessions
     from racf.plugins import ESTIMATORS
 
     names = tuple(args.defence) if args.defence else None
@@ -51,13 +77,38 @@ def _serve(args: argparse.Namespace) -> int:
         if not names:
             fail("serve", "--estimator-option sets the options of one defence: name it with --defence")
         options = estimator_options("serve", args.estimator_option, names, names[0]).get(names[0], {})
+    if args.keys is None and not is_loopback(args.bind) and not args.insecure:
+        fail("serve", f"{args.bind} is reachable from other machines: serve it with --keys DIR (make them with "
+                      f"`racf serve keys DIR`), or say --insecure")
+    for flag, value, lo in (("--idle-s", args.idle_s, 1.0), ("--sessions-per-client", args.sessions_per_client, 1),
+                            ("--max-sessions", args.max_sessions, 1)):
+        if value < lo:
+            fail("serve", f"{flag} must be >= {lo}, got {value}")
+    keys = ServerKeys.load(args.keys) if args.keys is not None else None
+    logging.basicConfig(level=logging.INFO, format="%(asctime)s %(name)s: %(message)s", datefmt="%H:%M:%S")
 
     def ready(endpoint: str) -> None:
-        print(f"listening at {endpoint} (defences: {', '.join(names) if names else 'every registered one'}); "
+        link = f"CurveZMQ, cars admitted from {keys.admitted}" if keys else "plain link, no authentication"
+        print(f"listening at {endpoint} (defences: {', '.join(names) if names else 'every registered one'}; {link}); "
               "Ctrl-C stops", flush=True)
 
-    served = serve(args.bind, names, options, ready=ready)
+    sessions = Sessions(args.idle_s, args.sessions_per_client, args.max_sessions)
+    served = serve(args.bind, names, options, ready=ready, keys=keys, sessions=sessions)
     print(f"answered {served} requests")
+    return 0
+
+
+def _keys(args: argparse.Namespace) -> int:
+    from racf.experiments.episode.curve import DEFAULT_CAR, make_keys
+
+    cars = tuple(args.car or (DEFAULT_CAR,))
+    bad = [c for c in cars if not c.replace("-", "").replace("_", "").isalnum()]
+    if bad:
+        fail("serve keys", f"car name {bad[0]!r}: letters, digits, - and _ only")
+    for path in make_keys(args.dir, cars):
+        print(path)
+    print(f"serve with `racf serve --keys {args.dir}`; give each car `--service-keys {args.dir}` (it reads "
+          f"cars/NAME.key_secret and server.key)")
     return 0
 
 

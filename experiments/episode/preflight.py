@@ -9,7 +9,7 @@ import json
 from racf.errors import UserError
 from racf.experiments.episode.estimators import make_estimator
 from racf.experiments.episode.spec import TrialSpec
-from racf.experiments.episode.stack import wrap_attacks
+from racf.experiments.episode.stack import car_keys, wrap_attacks
 from racf.plugins import PluginError
 from racf.sim.attacks.base import blank_env
 
@@ -40,7 +40,7 @@ def check_specs(specs: list[TrialSpec]) -> None:
         from racf.experiments.episode.remote import RemoteEstimator
 
         RemoteEstimator(spec.estimator_endpoint, spec.estimator, spec.estimator_options,
-                        spec.estimator_timeout_ms).close()
+                        spec.estimator_timeout_ms, keys=car_keys(spec)).close()
     for spec in attacks.values():
         try:
             wrap_attacks(blank_env(), spec).close()

@@ -22,92 +22,30 @@ step and the service's defence (one instance per car) answers. What the car must
 from __future__ import annotations
 
 import dataclasses
+import logging
 import math
 import time
-from typing import Any
 
 import numpy as np
 
 from racf.controllers import PerceptionSample
 from racf.errors import UserError
-from racf.controllers.detector import Detection
-from racf.controllers.existence import ExistenceWitnesses
+from racf.experiments.episode.curve import CarKeys, handshake_failure
+from racf.experiments.episode.wire import (DEFAULT_RETRY_S, DEFAULT_TIMEOUT_MS, MAX_MESSAGE_BYTES, PROTOCOL, WireError,
+                                           decode_sample, encode_sample, pack, unpack)
 
 __all__ = ["RemoteEstimator", "ServiceError", "encode_sample", "decode_sample", "pack", "unpack", "PROTOCOL",
            "DEFAULT_TIMEOUT_MS", "DEFAULT_RETRY_S"]
 
-#: The wire protocol's version: a server answers a hello from another version with an error.
-PROTOCOL = 1
-DEFAULT_TIMEOUT_MS = 50.0
-DEFAULT_RETRY_S = 1.0
+LOG = logging.getLogger("racf.link")
 #: How long a car waits for a service to answer at all before it says none is there.
 PING_TIMEOUT_S = 2.0
+#: How long closing a session waits for the service to take the car's goodbye.
+BYE_TIMEOUT_MS = 200.0
 
 
 class ServiceError(RuntimeError):
     """The service refused a request (its message says why)."""
-
-
-def _array(a: np.ndarray) -> dict:
-    a = np.ascontiguousarray(a)
-    return {"__nd__": True, "dtype": a.dtype.str, "shape": list(a.shape), "data": a.tobytes()}
-
-
-def _default(obj: Any):
-    if isinstance(obj, np.ndarray):
-        return _array(obj)
-    if isinstance(obj, (np.floating, np.integer, np.bool_)):
-        return obj.item()
-    if isinstance(obj, tuple):
-        return list(obj)
-    raise TypeError(f"cannot send {type(obj).__name__} to the service")
-
-
-def _hook(obj: dict):
-    if obj.get("__nd__"):
-        return np.frombuffer(obj["data"], dtype=np.dtype(obj["dtype"])).reshape(obj["shape"]).copy()
-    return obj
-
-
-def pack(message: dict) -> bytes:
-    import msgpack
-
-    return msgpack.packb(message, default=_default, use_bin_type=True)
-
-
-def unpack(raw: bytes) -> dict:
-    import msgpack
-
-    return msgpack.unpackb(raw, object_hook=_hook, raw=False, strict_map_key=False)
-
-
-def encode_sample(sample: PerceptionSample) -> dict:
-    """A sample as plain values and raw buffers (the detection's mask bit-packed)."""
-    det = sample.detection
-    out = {f.name: getattr(sample, f.name) for f in dataclasses.fields(sample) if f.name not in ("detection", "witnesses")}
-    if det is not None:
-        out["detection"] = {"mask": np.packbits(np.asarray(det.mask, bool)), "shape": list(det.mask.shape),
-                            "box": list(det.box), "confidence": det.confidence, "area_px": det.area_px,
-                            "centroid": list(det.centroid)}
-    if sample.witnesses is not None:
-        out["witnesses"] = dataclasses.asdict(sample.witnesses)
-    return out
-
-
-def decode_sample(raw: dict) -> PerceptionSample:
-    raw = dict(raw)
-    det = raw.pop("detection", None)
-    wit = raw.pop("witnesses", None)
-    detection = None
-    if det is not None:
-        h, w = det["shape"]
-        mask = np.unpackbits(det["mask"], count=h * w).reshape(h, w).astype(bool)
-        detection = Detection(mask, tuple(int(v) for v in det["box"]), float(det["confidence"]), int(det["area_px"]),
-                              tuple(float(v) for v in det["centroid"]))
-    witnesses = None
-    if wit is not None:
-        witnesses = ExistenceWitnesses(**{k: tuple(v) if isinstance(v, list) else v for k, v in wit.items()})
-    return PerceptionSample(detection=detection, witnesses=witnesses, **raw)
 
 
 class RemoteEstimator:
@@ -121,29 +59,39 @@ class RemoteEstimator:
         retry_s: after a failure, how much of the car's own time passes before it asks again.
         connect_s: how long the car waits for the service to open its session (before it drives:
             the service may build and warm the defence first).
+        keys: the car's CURVE keys and the service key it pins (``racf.experiments.episode.curve``);
+            None: a plain link.
     """
 
     def __init__(self, endpoint: str, name: str, options: dict | None = None, timeout_ms: float = DEFAULT_TIMEOUT_MS,
-                 retry_s: float = DEFAULT_RETRY_S, connect_s: float = 60.0) -> None:
+                 retry_s: float = DEFAULT_RETRY_S, connect_s: float = 60.0, keys: CarKeys | None = None) -> None:
         self.endpoint, self.name, self.options = endpoint, name, dict(options or {})
-        self.timeout_ms, self.retry_s = float(timeout_ms), float(retry_s)
-        self._socket = None
-        self._ctx = None
+        self.timeout_ms, self.retry_s, self.keys = float(timeout_ms), float(retry_s), keys
+        self._socket = self._monitor = self._ctx = None
         self._clock = 0.0
         self._down_until = -math.inf
         self._needs_reset = False
         self._last: dict = {}
         self._stands: bool | None = None
+        self._calibration = None
+        self._rtts: list[float] = []
         self.latency_s = 0.0
         self.restarts = 0
+        self.refusals = 0  # answers lost to a failed handshake (a peer that is not the pinned service)
         self.connect_s = float(connect_s)
         try:  # a live service answers a ping at once; the hello may wait while it builds the defence
             self._request({"op": "ping"}, PING_TIMEOUT_S * 1000.0)
             hello = self._hello()
-        except TimeoutError:
+        except TimeoutError as err:
             self._close()
-            raise UserError(f"no defence service answers at {endpoint}; start one with `racf serve` (or `racf serve "
-                            f"--defence {name}`)") from None
+            why = (f"{err}; give the car the key folder the service was started with (--service-keys DIR, "
+                   f"made by `racf serve keys DIR`)" if str(err) else
+                   f"no defence service answers at {endpoint}; start one with `racf serve` (or "
+                   f"`racf serve --defence {name}`)")
+            raise UserError(why) from None
+        except (ServiceError, WireError) as err:
+            self._close()
+            raise UserError(f"the service at {endpoint}: {err}") from None
         if "refused" in hello:
             self._close()
             raise UserError(f"the service at {endpoint}: {hello['refused']}")
@@ -167,15 +115,19 @@ class RemoteEstimator:
         self._clock += dt
         reply = self._call({"op": "estimate", "sample": encode_sample(sample), "speed": float(speed_mps), "dt": float(dt),
                             "yaw_rate": float(yaw_rate_radps)})
-        if reply is None:  # no answer: the car's own depth distance, unrepaired
-            self._last = {"service_fallback": 1.0, "service_rtt_ms": math.nan,
-                          "service_restarts": float(self.restarts)}
+        status = {"service_restarts": float(self.restarts), "service_refusals": float(self.refusals)}
+        distance = None if reply is None else reply.get("distance")
+        if not isinstance(distance, (int, float)) or isinstance(distance, bool):  # no answer, or not a distance
+            self._last = {"service_fallback": 1.0, "service_rtt_ms": math.nan, **status}
             self._stands = None
-            return float(sample.d_meas)
-        self._last = {**reply.get("diagnostics", {}), "service_fallback": 0.0,
-                      "service_rtt_ms": self.latency_s * 1000.0, "service_restarts": float(self.restarts)}
-        self._stands = reply.get("stands")
-        return float(reply["distance"])
+            return float(sample.d_meas)  # the car's own depth distance, unrepaired
+        self._rtts.append(self.latency_s * 1000.0)
+        diagnostics = reply.get("diagnostics")
+        self._last = {**(diagnostics if isinstance(diagnostics, dict) else {}), "service_fallback": 0.0,
+                      "service_rtt_ms": self.latency_s * 1000.0, **status}
+        stands = reply.get("stands")
+        self._stands = stands if isinstance(stands, bool) else None
+        return float(distance)
 
     def diagnostics(self) -> dict[str, float]:
         return dict(self._last)
@@ -185,48 +137,89 @@ class RemoteEstimator:
 
     def would_pass(self, **kwargs) -> bool:
         reply = self._call({"op": "would_pass", "kwargs": kwargs})
-        return True if reply is None else bool(reply["answer"])
+        return True if reply is None else bool(reply.get("answer", True))
 
     def close(self) -> None:
+        """Ends the session: the service logs it with the round trips the car measured."""
+        if self._socket is not None and not self._needs_reset:
+            rtt = np.asarray(self._rtts, float)
+            summary = {"steps": int(rtt.size), **({"rtt_p50_ms": float(np.percentile(rtt, 50)),
+                                                   "rtt_p99_ms": float(np.percentile(rtt, 99))} if rtt.size else {})}
+            try:
+                self._request({"op": "bye", **summary}, BYE_TIMEOUT_MS)
+            except (TimeoutError, ServiceError, WireError):
+                pass  # a goodbye is a courtesy: the service expires an idle session anyway
         self._close()
 
     # -- the transport ------------------------------------------------------------------
     def _call(self, message: dict) -> dict | None:
-        """One request; None when the service is down (no answer in time, or waiting to retry)."""
+        """One request; None when the service gave no usable answer (none in time, a malformed one,
+        a defence it had to restart) or the car is waiting to retry."""
         if self._clock < self._down_until:
             return None
         try:
             if self._needs_reset:  # the service came back: its defence starts afresh
-                self._hello(self.timeout_ms)
-                if getattr(self, "_calibration", None) is not None:
-                    self._request({"op": "calibrate", "calibration": self._calibration})
-                self._request({"op": "reset"})
-                self._needs_reset = False
-                self.restarts += 1
-            return self._request(message)
-        except TimeoutError:
+                self._reopen()
+            reply = self._request(message)
+        except ServiceError as err:
+            if "no session" not in str(err):
+                raise
+            self._reopen()  # a service restarted between two requests: a new session, then the request
+            reply = self._request(message)
+        except (TimeoutError, WireError) as err:
             self._down_until = self._clock + self.retry_s
             self._needs_reset = True
             self.latency_s = self.timeout_ms / 1000.0
+            if isinstance(err, TimeoutError) and str(err):  # a failed handshake, not a silence
+                self.refusals += 1
+                if self.refusals == 1:
+                    LOG.warning("the link to %s: %s; the car falls back to its own depth distance", self.endpoint, err)
             return None
+        if "restarted" in reply:  # the defence raised and was rebuilt: this step has no answer
+            self.restarts += 1
+            return None
+        return reply
+
+    def _reopen(self) -> None:
+        self._hello(self.timeout_ms)
+        if self._calibration is not None:
+            self._request({"op": "calibrate", "calibration": self._calibration})
+        self._request({"op": "reset"})
+        self._needs_reset = False
+        self.restarts += 1
 
     def _hello(self, timeout_ms: float | None = None) -> dict:
         return self._request({"op": "hello", "protocol": PROTOCOL, "estimator": self.name, "options": self.options},
                              self.connect_s * 1000.0 if timeout_ms is None else timeout_ms)
 
+    def _open(self):
+        import zmq
+
+        self._ctx = self._ctx or zmq.Context.instance()
+        sock = self._ctx.socket(zmq.REQ)
+        sock.setsockopt(zmq.LINGER, 0)
+        sock.setsockopt(zmq.MAXMSGSIZE, MAX_MESSAGE_BYTES)
+        if self.keys is not None:
+            self.keys.apply(sock)
+        self._monitor = sock.get_monitor_socket(zmq.EVENT_HANDSHAKE_FAILED_AUTH | zmq.EVENT_HANDSHAKE_FAILED_NO_DETAIL
+                                                | zmq.EVENT_HANDSHAKE_FAILED_PROTOCOL | zmq.EVENT_HANDSHAKE_SUCCEEDED)
+        sock.connect(self.endpoint)
+        return sock
+
     def _request(self, message: dict, timeout_ms: float | None = None) -> dict:
+        """The service's answer to ``message``. TimeoutError when none came in time (its message
+        says why where the handshake failed), ServiceError for an error answer, WireError for one
+        that is not a message."""
         import zmq
 
         if self._socket is None:
-            self._ctx = self._ctx or zmq.Context.instance()
-            self._socket = self._ctx.socket(zmq.REQ)
-            self._socket.setsockopt(zmq.LINGER, 0)
-            self._socket.connect(self.endpoint)
+            self._socket = self._open()
         start = time.perf_counter()
         self._socket.send(pack(message))
         if not self._socket.poll(self.timeout_ms if timeout_ms is None else timeout_ms, zmq.POLLIN):
+            failure = handshake_failure(self._monitor)
             self._close()  # a REQ socket that got no answer cannot send again: open a new one next time
-            raise TimeoutError
+            raise TimeoutError(f"the service at {self.endpoint} cannot be authenticated: {failure}" if failure else "")
         reply = unpack(self._socket.recv())
         self.latency_s = time.perf_counter() - start
         if "error" in reply:
@@ -235,12 +228,13 @@ class RemoteEstimator:
 
     def _close(self) -> None:
         if self._socket is not None:
+            self._socket.disable_monitor()
+            self._monitor.close(0)
             self._socket.close(0)
-            self._socket = None
+            self._socket = self._monitor = None
 
     def __del__(self) -> None:
         try:
             self._close()
         except Exception:
             pass
-

@@ -130,7 +130,7 @@ def _run(env: gym.Env, spec: TrialSpec, plan: EpisodePlan, estimator, on_step: S
     dt = plan.control_dt_s
     delay_steps = int(round(spec.delay_ms / 1000.0 / dt))
     # The car gets its build and its mission before it starts, then only observations.
-    car = build_car(spec, plan, estimator)
+    car = build_car(spec, plan, estimator, env)
     grant_white_box(env, car.estimator)
     scenario = spec.scenario
     # The world's own ground truth: every column the env's world managers declare, logged by name.

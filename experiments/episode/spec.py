@@ -25,6 +25,7 @@ import numpy as np
 from racf.controllers import BrakingConfig
 from racf.controllers.detectors import DETECTORS
 from racf.experiments.episode.estimators import ESTIMATORS, check_options
+from racf.experiments.episode.wire import DEFAULT_TIMEOUT_MS
 from racf.provenance import code_version
 from racf.sim.attacks import ATTACKS
 from racf.sim.attacks.schedule import as_range
@@ -141,6 +142,9 @@ class TrialSpec:
             trip delays the car; the id records that a service ran it, not where it listened.
         estimator_timeout_ms: with an endpoint, how long the car waits for an answer before it
             falls back to its own depth distance for the step, ms.
+        estimator_keys: with an endpoint, the key folder of ``racf serve keys`` whose car pair and
+            service key make the link CurveZMQ (None: a plain link). The id records that the link was
+            authenticated, not where the keys lie.
     """
 
     setting: str
@@ -164,7 +168,8 @@ class TrialSpec:
     scenario_params: dict = field(default_factory=dict)
     metrics: tuple[str, ...] = ()
     estimator_endpoint: str | None = None
-    estimator_timeout_ms: float = 50.0
+    estimator_timeout_ms: float = DEFAULT_TIMEOUT_MS
+    estimator_keys: str | None = None
 
     def __post_init__(self) -> None:
         attacks, estimator = parse_setting(self.setting)
@@ -220,6 +225,14 @@ class TrialSpec:
         if self.estimator_endpoint is not None and not (isinstance(self.estimator_endpoint, str)
                                                         and self.estimator_endpoint.startswith(("tcp://", "ipc://"))):
             raise ValueError(f"estimator_endpoint must be tcp://HOST:PORT or ipc://PATH, got {self.estimator_endpoint!r}")
+        on_link = [name for name in attacks if getattr(ATTACKS[name], "on_link", False)]
+        if on_link and not (isinstance(self.estimator_endpoint, str) and self.estimator_endpoint.startswith("tcp://")):
+            raise ValueError(f"{on_link[0]} attacks the link to a defence service: the episode needs an "
+                             f"estimator_endpoint tcp://HOST:PORT (--estimator-endpoint), got {self.estimator_endpoint!r}")
+        if self.estimator_keys is not None and (self.estimator_endpoint is None
+                                                or not isinstance(self.estimator_keys, str)):
+            raise ValueError(f"estimator_keys is a key folder for the link to an estimator_endpoint, got "
+                             f"{self.estimator_keys!r} with endpoint {self.estimator_endpoint!r}")
         if not (isinstance(self.estimator_timeout_ms, (int, float)) and 1.0 <= self.estimator_timeout_ms <= 10_000.0):
             raise ValueError(f"estimator_timeout_ms must be in [1, 10000] ms, got {self.estimator_timeout_ms!r}")
         if self.control_hz is not None and not 1.0 <= self.control_hz <= 50.0:
@@ -270,6 +283,8 @@ class TrialSpec:
         out = asdict(self)
         if self.estimator_endpoint is None:
             del out["estimator_endpoint"], out["estimator_timeout_ms"]
+        if self.estimator_keys is None:
+            del out["estimator_keys"]
         return out
 
     @classmethod
@@ -297,6 +312,8 @@ class TrialSpec:
         spec = self.to_dict()
         if spec.pop("estimator_endpoint", None) is not None:  # which service ran it, not where it listened
             spec["estimator_service"] = True
+        if spec.pop("estimator_keys", None) is not None:  # an authenticated link, whoever holds the keys
+            spec["estimator_curve"] = True
         payload = {"spec": spec, "env": asdict(EnvConfig()), "code": code_version(*EPISODE_CODE)}
         extra = plugin_sources(self)
         if extra:  # racf's own parts add nothing: the ids of built-in episodes stay as they were

@@ -17,7 +17,7 @@ from racf.experiments.episode.spec import TrialSpec
 from racf.sim.attacks import ATTACKS
 from racf.sim.world.stop_signs import SIGN_FACE_ACROSS_FLATS_M, SIGN_RED_FACE_ACROSS_FLATS_M
 
-__all__ = ["default_env", "wrap_attacks", "plain_env", "build_car", "existence_stage", "tracker", "outlined_size_m", "OUTLINED_SIZE_M",
+__all__ = ["default_env", "wrap_attacks", "plain_env", "build_car", "car_keys", "link_endpoint", "existence_stage", "tracker", "outlined_size_m", "OUTLINED_SIZE_M",
            "DRIVE_MAX_EPISODE_S"]
 
 #: The map's size, across flats, of each part of the sign a detector may outline (``BlobDetector.outline``).
@@ -79,10 +79,11 @@ def tracker(calibration: CarCalibration) -> LidarTargetTracker:
                                                 camera_position_m=calibration.camera_xy_m))
 
 
-def build_car(spec: TrialSpec, plan: EpisodePlan, estimator=None) -> Car:
+def build_car(spec: TrialSpec, plan: EpisodePlan, estimator=None, env: gym.Env | None = None) -> Car:
     """The car's software for one episode of ``spec``: its build and mission from ``plan``, its
     loop at the env's rate, the controller at ``spec.control_hz``. The calibration configures
-    every part that needs the car's geometry (the trackers, an estimator that asks for it)."""
+    every part that needs the car's geometry (the trackers, an estimator that asks for it). A
+    served defence is reached through the link attacks among ``env``'s wrappers, if any."""
     calib = plan.calibration
     every = max(1, int(round(1.0 / plan.control_dt_s / spec.control_hz))) if spec.control_hz else 1
     detector = make_detector(spec.detector)
@@ -94,14 +95,36 @@ def build_car(spec: TrialSpec, plan: EpisodePlan, estimator=None) -> Car:
     if estimator is None and spec.estimator_endpoint is not None:
         from racf.experiments.episode.remote import RemoteEstimator
 
-        estimator = RemoteEstimator(spec.estimator_endpoint, spec.estimator, spec.estimator_options,
-                                    spec.estimator_timeout_ms)
+        estimator = RemoteEstimator(link_endpoint(env, spec), spec.estimator, spec.estimator_options,
+                                    spec.estimator_timeout_ms, keys=car_keys(spec))
     estimator = estimator if estimator is not None else make_estimator(spec.estimator, spec.estimator_options)
     configure = getattr(estimator, "use_calibration", None)
     if callable(configure):
         configure(calib)
     return Car(calib, plan.mission, perceptions, estimator, spec.braking, plan.control_dt_s, every, plan.localisation,
                existence_stage(estimator, calib, spec.detector))
+
+
+def car_keys(spec: TrialSpec):
+    """The car's CURVE keys for its link to the service (None: a plain link)."""
+    from racf.experiments.episode.curve import CarKeys
+
+    return None if spec.estimator_keys is None else CarKeys.load(spec.estimator_keys)
+
+
+def link_endpoint(env: gym.Env | None, spec: TrialSpec) -> str:
+    """Where the car reaches its served defence: the service itself, or, under link attacks, a man in
+    the middle (:class:`~racf.experiments.episode.link_relay.LinkRelay`) closed with the env."""
+    from racf.sim.attacks.link import link_attacks
+
+    attacks = link_attacks(env) if env is not None else []
+    if not attacks:
+        return spec.estimator_endpoint
+    from racf.experiments.episode.link_relay import LinkRelay
+
+    relay = LinkRelay(spec.estimator_endpoint, attacks)
+    attacks[0].bind_link(relay)
+    return relay.endpoint
 
 
 def existence_stage(estimator, calibration: CarCalibration, detector: str) -> ExistenceStage | None:

@@ -65,6 +65,7 @@ import numpy as np
 from racf.controllers.detectors import DETECTORS
 from racf.plugins import METRICS, SCENARIOS
 from racf.experiments.episode import TrialSpec
+from racf.experiments.episode.wire import DEFAULT_TIMEOUT_MS
 from racf.experiments.episode.estimators import ESTIMATORS, check_options, make_estimator
 from racf.experiments.episode.spec import setting_name
 from racf.experiments.sweeps.scenario_tables import check_tables, scenario_tables, situations
@@ -81,7 +82,7 @@ _DEFAULTS = {"attack": ["patch_occlusion"], "estimator": ["raw"], "rho": [0.95],
              "sign": [0, 1, 2, 3]}
 _TOP_KEYS = {"name", "mode", "repeats", "n", "seed", "space", "params", "estimators", "log_steps", "sensor_profile",
              "sign_geometry", "detector", "target", "scenario", "metrics", "estimator_endpoint",
-             "estimator_timeout_ms"}
+             "estimator_timeout_ms", "estimator_keys"}
 
 
 #: The example specs shipped with the project.
@@ -109,7 +110,8 @@ class SweepSpec:
     scenario: dict = field(default_factory=dict)
     metrics: list = field(default_factory=list)
     estimator_endpoint: str | None = None
-    estimator_timeout_ms: float = 50.0
+    estimator_timeout_ms: float = DEFAULT_TIMEOUT_MS
+    estimator_keys: str | None = None
 
     def __post_init__(self) -> None:
         if self.detector not in DETECTORS:
@@ -295,6 +297,7 @@ def _trial(cell: tuple, estimator: str, seed: int, sweep: SweepSpec, params: dic
                      attack_params=params or {}, detector=sweep.detector,
                      estimator_options=sweep.estimators.get(estimator, {}), metrics=tuple(sweep.metrics),
                      estimator_endpoint=sweep.estimator_endpoint, estimator_timeout_ms=sweep.estimator_timeout_ms,
+                     estimator_keys=sweep.estimator_keys,
                      target=target or sweep.target, scenario_params=situation or {})
 
 
@@ -340,7 +343,8 @@ def parse_spec(text: str, source: str = "spec", default_name: str = "sweep") -> 
                          tables={t: raw[t] for t in tables if t in raw}, target=raw.get("target", "sign"),
                          scenario=raw.get("scenario", {}), metrics=raw.get("metrics", []),
                          estimator_endpoint=raw.get("estimator_endpoint"),
-                         estimator_timeout_ms=raw.get("estimator_timeout_ms", 50.0))
+                         estimator_timeout_ms=raw.get("estimator_timeout_ms", DEFAULT_TIMEOUT_MS),
+                         estimator_keys=raw.get("estimator_keys"))
         episodes = spec.episodes()
     except ValueError as err:
         raise ValueError(f"{source}: {err}") from None

@@ -8,6 +8,8 @@
 - :class:`TimedDropout` (``dropout_timed``): a depth attack on while the LiDAR has nothing on the sign.
 - :class:`StealthRamp` (``stealth_ramp``, white box): a depth bias ramp kept under the defence's tolerance.
 - :class:`FrustumSpoof` (``frustum_spoof``, white box): the same ramp on depth and LiDAR together.
+- :class:`LinkDelay`, :class:`LinkDrop`, :class:`LinkSpoof` (``link_*``): a man in the middle of the
+  link to a defence service (``racf serve``): answers late, lost or replaced.
 Each marks ``info["attack"]`` (active attacks) and ``info["attack_active"]``.
 
 ``ATTACKS`` finds them by name (each wrapper's ``name``). It is :data:`racf.plugins.ATTACKS`,
@@ -23,6 +25,7 @@ from racf.sim.attacks.depth_blackout import DepthBlackout
 from racf.sim.attacks.frustum_spoof import FrustumSpoof
 from racf.sim.attacks.lidar_dropout import LidarDropout
 from racf.sim.attacks.lidar_spoof import LidarSpoof
+from racf.sim.attacks.link import LinkDelay, LinkDrop, LinkSpoof
 from racf.sim.attacks.patch_occlusion import PatchOcclusion, paste_occluder, patch_rows
 from racf.sim.attacks.physical_patch import PhysicalPatch
 from racf.sim.attacks.schedule import AttackSchedule
@@ -33,5 +36,5 @@ from racf.sim.attacks.timed_dropout import TimedDropout
 from racf.plugins import ATTACKS  # noqa: E402  (every attack wrapper by name, plug-ins included)
 
 __all__ = ["ATTACKS", "AttackSchedule", "AttackWrapper", "ConfidenceDegradation", "DepthBias", "DepthBlackout",
-           "FrustumSpoof", "LidarDropout", "LidarSpoof", "PatchOcclusion", "PhysicalPatch", "StaleData", "StealthRamp", "TimedDropout",
+           "FrustumSpoof", "LidarDropout", "LidarSpoof", "LinkDelay", "LinkDrop", "LinkSpoof", "PatchOcclusion", "PhysicalPatch", "StaleData", "StealthRamp", "TimedDropout",
            "paste_occluder", "patch_rows"]

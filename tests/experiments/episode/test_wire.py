@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 from racf.controllers import PerceptionSample
 from racf.controllers.detector import Detection
 from racf.controllers.existence import NO_WITNESSES
-from racf.experiments.episode.remote import decode_sample, encode_sample, pack, unpack
+from racf.experiments.episode.wire import decode_sample, encode_sample, pack, unpack
 
 finite_or_nan = st.one_of(st.floats(-50, 50), st.just(math.nan))
 

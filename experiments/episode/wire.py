@@ -1,0 +1,145 @@
+"""What crosses the link between a car and ``racf serve``: msgpack maps, numpy arrays as raw
+buffers, read as untrusted input on both ends.
+
+Every limit is stated once here: a message's size (also ZeroMQ's ``MAXMSGSIZE`` on both
+sockets, so a larger one is cut off before it is read), msgpack's container and buffer
+limits, the dtypes an array may have and the shape its bytes must fill. Anything else raises
+:class:`WireError` with what was wrong, which the server answers as an error and the car counts
+as a step without an answer: one path for every malformed message.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import Any
+
+import numpy as np
+
+from racf.controllers import PerceptionSample
+from racf.controllers.detector import Detection
+from racf.controllers.existence import ExistenceWitnesses
+
+__all__ = ["WireError", "MAX_MESSAGE_BYTES", "DEFAULT_TIMEOUT_MS", "DEFAULT_RETRY_S", "pack", "unpack", "encode_sample", "decode_sample", "PROTOCOL"]
+
+#: The wire protocol's version: a server answers a hello from another version with an error.
+PROTOCOL = 1
+#: How long a car waits for an answer before it falls back, and how much of its own time then
+#: passes before it asks again (``racf bench service`` measures the round trip they are set from).
+DEFAULT_TIMEOUT_MS = 50.0
+DEFAULT_RETRY_S = 1.0
+#: The largest message either end reads. A step's sample is about 10 kB (a 320x240 mask,
+#: bit-packed); a calibration less: 1 MiB leaves room for larger cameras and nothing more.
+MAX_MESSAGE_BYTES = 1 << 20
+#: msgpack's limits for untrusted input: no container or string needs more.
+_LIMITS = {"max_str_len": 4096, "max_bin_len": MAX_MESSAGE_BYTES, "max_array_len": 4096, "max_map_len": 256,
+           "max_ext_len": 0}
+#: The arrays a message may carry (no objects, no void, nothing that executes on reading).
+_DTYPES = frozenset(np.dtype(t).str for t in ("u1", "i4", "i8", "f4", "f8", "?"))
+
+
+class WireError(ValueError):
+    """A message that is not what the protocol allows (says what is wrong)."""
+
+
+def _array(a: np.ndarray) -> dict:
+    a = np.ascontiguousarray(a)
+    return {"__nd__": True, "dtype": a.dtype.str, "shape": list(a.shape), "data": a.tobytes()}
+
+
+def _default(obj: Any):
+    if isinstance(obj, np.ndarray):
+        return _array(obj)
+    if isinstance(obj, (np.floating, np.integer, np.bool_)):
+        return obj.item()
+    if isinstance(obj, tuple):
+        return list(obj)
+    raise TypeError(f"cannot send {type(obj).__name__} to the service")
+
+
+def _hook(obj: dict):
+    if not obj.get("__nd__"):
+        return obj
+    dtype, shape, data = obj.get("dtype"), obj.get("shape"), obj.get("data")
+    if dtype not in _DTYPES:
+        raise WireError(f"array dtype {dtype!r} is not allowed; allowed: {', '.join(sorted(_DTYPES))}")
+    if not (isinstance(shape, list) and len(shape) <= 4 and all(isinstance(n, int) and 0 <= n for n in shape)):
+        raise WireError(f"array shape {shape!r} is not a list of at most 4 sizes")
+    if not isinstance(data, bytes) or len(data) != math.prod(shape) * np.dtype(dtype).itemsize:
+        raise WireError(f"array of shape {shape} and dtype {dtype} does not match its {len(data or b'')} bytes")
+    return np.frombuffer(data, dtype=np.dtype(dtype)).reshape(shape).copy()
+
+
+def pack(message: dict) -> bytes:
+    import msgpack
+
+    return msgpack.packb(message, default=_default, use_bin_type=True)
+
+
+def unpack(raw: bytes) -> dict:
+    """One message: a map. Raises WireError for anything else (too large, not msgpack, over a limit,
+    trailing bytes, a bad array)."""
+    import msgpack
+
+    if not isinstance(raw, (bytes, bytearray, memoryview)):
+        raise WireError(f"a message is bytes, got {type(raw).__name__}")
+    if len(raw) > MAX_MESSAGE_BYTES:
+        raise WireError(f"message of {len(raw)} bytes; at most {MAX_MESSAGE_BYTES}")
+    try:
+        message = msgpack.unpackb(raw, object_hook=_hook, raw=False, strict_map_key=False, **_LIMITS)
+    except WireError:
+        raise
+    except Exception as err:  # msgpack raises many kinds (ExtraData, FormatError, ValueError, ...): one answer
+        raise WireError(f"not a msgpack message ({type(err).__name__}: {str(err)[:80]})") from None
+    if not isinstance(message, dict):
+        raise WireError(f"a message is a map, got {type(message).__name__}")
+    return message
+
+
+def encode_sample(sample: PerceptionSample) -> dict:
+    """A sample as plain values and raw buffers (the detection's mask bit-packed)."""
+    det = sample.detection
+    out = {f.name: getattr(sample, f.name) for f in dataclasses.fields(sample) if f.name not in ("detection", "witnesses")}
+    if det is not None:
+        out["detection"] = {"mask": np.packbits(np.asarray(det.mask, bool)), "shape": list(det.mask.shape),
+                            "box": list(det.box), "confidence": det.confidence, "area_px": det.area_px,
+                            "centroid": list(det.centroid)}
+    if sample.witnesses is not None:
+        out["witnesses"] = dataclasses.asdict(sample.witnesses)
+    return out
+
+
+def decode_sample(raw: Any) -> PerceptionSample:
+    """The sample ``encode_sample`` made; WireError for one that is not (missing or extra fields,
+    wrong kinds, a mask whose bytes do not fill its shape)."""
+    if not isinstance(raw, dict):
+        raise WireError(f"a sample is a map, got {type(raw).__name__}")
+    raw = dict(raw)
+    det, wit = raw.pop("detection", None), raw.pop("witnesses", None)
+    try:
+        detection = None if det is None else _detection(det)
+        witnesses = None
+        if wit is not None:
+            witnesses = ExistenceWitnesses(**{k: tuple(v) if isinstance(v, list) else v for k, v in wit.items()})
+        sample = PerceptionSample(detection=detection, witnesses=witnesses, **raw)
+    except WireError:
+        raise
+    except Exception as err:  # a field missing, one too many, a value of the wrong kind
+        raise WireError(f"not a sample ({type(err).__name__}: {str(err)[:120]})") from None
+    for f in dataclasses.fields(sample):
+        value = getattr(sample, f.name)
+        if f.name not in ("detection", "witnesses") and not isinstance(value, (int, float, bool, type(None))):
+            raise WireError(f"sample field {f.name} must be a number, got {type(value).__name__}")
+    return sample
+
+
+def _detection(det: dict) -> Detection:
+    h, w = (int(n) for n in det["shape"])
+    if not (0 < h <= 4096 and 0 < w <= 4096):
+        raise WireError(f"mask shape {det['shape']} outside 1..4096 a side")
+    packed = det["mask"]
+    if not isinstance(packed, np.ndarray) or packed.dtype != np.uint8 or packed.size != -(-h * w // 8):
+        raise WireError(f"the mask's bits do not fill its shape {h}x{w}")
+    mask = np.unpackbits(packed, count=h * w).reshape(h, w).astype(bool)
+    return Detection(mask, tuple(int(v) for v in det["box"]), float(det["confidence"]), int(det["area_px"]),
+                     tuple(float(v) for v in det["centroid"]))

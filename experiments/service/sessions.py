@@ -1,0 +1,100 @@
+"""The service's sessions: one defence per car, bounded per client and in all, idle ones expired,
+each logged in one line when it ends."""
+
+from __future__ import annotations
+
+import logging
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+__all__ = ["Session", "Sessions", "LOG"]
+
+LOG = logging.getLogger("racf.serve")
+
+
+@dataclass
+class Session:
+    """A car's defence and what the service saw of it.
+
+    Attributes:
+        client: who opened it: the car's CURVE key, else its network address.
+        name, options: the defence and its options (to rebuild it after it raises).
+        calibration: the car's build as the car sent it (raw), for a rebuilt defence.
+    """
+
+    estimator: object
+    client: str
+    name: str
+    options: dict
+    calibration: dict | None = None
+    steps: int = 0
+    restarts: int = 0
+    service_ms: list = field(default_factory=list)
+    opened: float = field(default_factory=time.monotonic)
+    seen: float = field(default_factory=time.monotonic)
+
+    def line(self, why: str, car: dict | None = None) -> str:
+        """The session in one line: defence, steps, the service's own time, the car's round trips."""
+        ms = np.asarray(self.service_ms, float)
+        own = f"service {np.percentile(ms, 50):.2f}/{np.percentile(ms, 99):.2f} ms p50/p99" if ms.size else "no estimates"
+        car = car or {}
+        rtt = (f", round trip {car['rtt_p50_ms']:.2f}/{car['rtt_p99_ms']:.2f} ms p50/p99 (car)"
+               if isinstance(car.get("rtt_p50_ms"), float) and isinstance(car.get("rtt_p99_ms"), float) else "")
+        return (f"session of {self.client} ended ({why}): {self.name}, {self.steps} steps, {own}{rtt}, "
+                f"{self.restarts} defence restarts, {time.monotonic() - self.opened:.0f} s")
+
+
+class Sessions:
+    """The open sessions by the socket identity of the car that opened each.
+
+    Args:
+        idle_s: a session unused this long is dropped.
+        per_client: at most this many sessions per client (a car reconnecting opens a new one: the
+            oldest of that client is dropped to make room).
+        total: at most this many in all; a hello beyond is refused.
+    """
+
+    def __init__(self, idle_s: float = 600.0, per_client: int = 16, total: int = 1024) -> None:
+        self.idle_s, self.per_client, self.total = idle_s, per_client, total
+        self._open: dict[bytes, Session] = {}
+        self._swept = time.monotonic()
+
+    def __len__(self) -> int:
+        return len(self._open)
+
+    def get(self, identity: bytes) -> Session | None:
+        session = self._open.get(identity)
+        if session is not None:
+            session.seen = time.monotonic()
+        return session
+
+    def open(self, identity: bytes, session: Session) -> str | None:
+        """Adds ``session``; returns why it cannot be (None: opened)."""
+        self.close(identity, "the car said hello again")
+        mine = sorted((s.opened, i) for i, s in self._open.items() if s.client == session.client)
+        for _, old in mine[:max(0, len(mine) - self.per_client + 1)]:
+            self.close(old, f"more than {self.per_client} sessions from one client")
+        if len(self._open) >= self.total:
+            return f"this service holds its most sessions ({self.total}); try again later"
+        self._open[identity] = session
+        return None
+
+    def close(self, identity: bytes, why: str, car: dict | None = None) -> None:
+        session = self._open.pop(identity, None)
+        if session is not None:
+            LOG.info(session.line(why, car))
+
+    def expire(self, every_s: float = 1.0) -> None:
+        """Drops the sessions idle for ``idle_s`` (looked at once per ``every_s``)."""
+        now = time.monotonic()
+        if now - self._swept < every_s:
+            return
+        self._swept = now
+        for identity in [i for i, s in self._open.items() if now - s.seen > self.idle_s]:
+            self.close(identity, f"idle {self.idle_s:.0f} s")
+
+    def close_all(self, why: str) -> None:
+        for identity in list(self._open):
+            self.close(identity, why)
