@@ -20,7 +20,7 @@ GROUPS: dict[str, tuple[str, dict[str, str]]] = {
     "bench": ("benchmarks: the offline repair benchmark and the speed and detector tests",
               {"offline": "bench-offline", "sim": "bench-sim", "loop": "bench-loop", "detector": "bench-detector",
                "traffic": "bench-traffic", "patch": "bench-patch", "odca-latency": "odca-latency",
-               "service": "bench-service", "bags": "bench-bags", "guard": "bench-guard",
+               "service": "bench-service", "service-stress": "bench-service-stress", "bags": "bench-bags", "guard": "bench-guard",
                "paired": "bench-paired"}),
     "odca": ("ODCA: pretrain its Chronos-2 prior, train its head, evaluate a checkpoint",
              {"pretrain-prior": "pretrain-prior", "train": "train", "evaluate": "evaluate"}),

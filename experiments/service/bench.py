@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import subprocess
 import sys
+import tempfile
 import time
 from contextlib import contextmanager
 from typing import Iterator
@@ -35,12 +36,16 @@ def service_process(defence: str, options: dict | None = None, bind: str = "tcp:
     cmd = [sys.executable, "-m", "racf.experiments.cli", "serve", "--defence", defence, "--bind", bind]
     for key, value in (options or {}).items():
         cmd += ["--estimator-option", f"{key}={json.dumps(value)}"]
-    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    # Its log goes to a file: a pipe nobody reads would fill and stop the service mid-run.
+    log = tempfile.TemporaryFile("w+")
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=log, text=True)
     try:
         line = proc.stdout.readline()
         if not line.startswith("listening at "):
             proc.kill()
-            raise RuntimeError(f"racf serve did not start: {line.strip()} {proc.stderr.read().strip()}")
+            proc.wait()
+            log.seek(0)
+            raise RuntimeError(f"racf serve did not start: {line.strip()} {log.read().strip()[-2000:]}")
         yield line.split("listening at ", 1)[1].split()[0], proc
     finally:
         if proc.poll() is None:
@@ -49,6 +54,7 @@ def service_process(defence: str, options: dict | None = None, bind: str = "tcp:
                 proc.wait(timeout=10)
             except subprocess.TimeoutExpired:
                 proc.kill()
+        log.close()
 
 
 class _Recorder:

@@ -19,7 +19,7 @@ from racf.controllers import CameraModel
 from racf.experiments.episode.car import CarCalibration
 from racf.experiments.episode.estimators import make_estimator
 from racf.experiments.episode.wire import PROTOCOL, WireError, decode_sample
-from racf.experiments.service.sessions import LOG, Session, Sessions
+from racf.experiments.service.sessions import LOG, Session, Sessions, warn
 
 __all__ = ["DefenceService", "BadRequest", "warm_up"]
 
@@ -81,7 +81,7 @@ class DefenceService:
             call = _DEFENCE_OPS[op](session, message)  # the request read: a BadRequest here is the car's
             return self._defend(session, op, call)
         except (BadRequest, WireError) as err:
-            LOG.warning("bad %s request from %s: %s", op if isinstance(op, str) else "?", client, err)
+            warn("request", "bad %s request from %s: %s", op if isinstance(op, str) else "?", client, err)
             return {"error": f"bad request: {err}"}
 
     def _hello(self, identity: bytes, client: str, message: dict) -> dict:

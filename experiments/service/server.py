@@ -17,7 +17,7 @@ from racf.errors import UserError
 from racf.experiments.episode.curve import ServerKeys
 from racf.experiments.episode.wire import MAX_MESSAGE_BYTES, WireError, pack, unpack
 from racf.experiments.service.handler import DefenceService, warm_up
-from racf.experiments.service.sessions import LOG, Sessions
+from racf.experiments.service.sessions import LOG, Sessions, warn
 
 __all__ = ["DefenceService", "serve", "warm_up"]
 
@@ -73,13 +73,13 @@ def _answer(sock, service: DefenceService) -> None:
     elif len(body) == 1:
         envelope, payload = [], body[0].bytes  # a DEALER's, without the delimiter: answered alike
     else:
-        LOG.warning("dropped a frame set from %s: %d frames after the identity; a request is [b'', message]",
-                    client, len(body))
+        warn("frames", "dropped a frame set from %s: %d frames after the identity; a request is [b'', message]",
+             client, len(body))
         return
     try:
         message = unpack(payload)
     except WireError as err:
-        LOG.warning("bad message from %s: %s", client, err)
+        warn("message", "bad message from %s: %s", client, err)
         reply = {"error": f"bad message: {err}"}
     else:
         try:

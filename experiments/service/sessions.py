@@ -9,9 +9,25 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["Session", "Sessions", "LOG"]
+__all__ = ["Session", "Sessions", "LOG", "warn"]
 
 LOG = logging.getLogger("racf.serve")
+#: A flood of bad requests must not become a flood of log lines: one line per kind per second,
+#: with the count of those it stood for.
+_WARN_EVERY_S = 1.0
+_warned: dict[str, list] = {}
+
+
+def warn(kind: str, message: str, *args) -> None:
+    """Logs a warning of ``kind`` at most once per second, saying how many like it it stands for."""
+    now = time.monotonic()
+    last = _warned.setdefault(kind, [-float("inf"), 0])
+    if now - last[0] < _WARN_EVERY_S:
+        last[1] += 1
+        return
+    more = f" (and {last[1]} more like it since the last line)" if last[1] else ""
+    _warned[kind] = [now, 0]
+    LOG.warning(message + more, *args)
 
 
 @dataclass
