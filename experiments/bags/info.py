@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from racf.experiments.bags.recording import custom_data, open_reader
+from racf.experiments.bags.recording import custom_data, messages, open_reader
 
 __all__ = ["bag_info"]
 
@@ -16,7 +16,7 @@ def bag_info(path: str | Path) -> dict:
     try:
         first: dict[str, int] = {}
         last: dict[str, int] = {}
-        for conn, t_ns, _ in reader.messages():
+        for conn, t_ns, _ in messages(reader, path):
             first.setdefault(conn.topic, t_ns)
             last[conn.topic] = t_ns
         topics = []

@@ -35,7 +35,6 @@ def open_reader(path: str | Path):
     """rosbags' reader on a bag folder (or a lone ``.mcap``/``.db3`` file's folder); UserError if
     it is not a bag."""
     from rosbags.rosbag2 import Reader
-    from rosbags.rosbag2.errors import ReaderError
 
     path = Path(path)
     if not path.exists():
@@ -47,9 +46,34 @@ def open_reader(path: str | Path):
     try:
         reader = Reader(path)
         reader.open()
-    except (ReaderError, OSError, ValueError) as err:
-        raise UserError(f"{path} is not a readable rosbag2: {err}") from None
+    except Exception as err:  # rosbags, its storage plug-ins and their decompressors raise many kinds
+        raise UserError(f"{path} is not a readable rosbag2 ({_words(err)}); {_ADVICE}") from None
     return reader
+
+
+#: What to do about a bag that cannot be read.
+_ADVICE = ("the recording is truncated or corrupt: copy it again from where it was recorded, or re-record it "
+           "(`racf bag export` writes one from an episode)")
+
+
+def _words(err: Exception) -> str:
+    return f"{type(err).__name__}: {err}" if str(err) else type(err).__name__
+
+
+def messages(reader, path: str | Path, **kwargs) -> Iterator[tuple]:
+    """``reader.messages(**kwargs)``, with whatever a damaged file raises midway (a bad chunk, a
+    failed decompression, a cut-off record) as one UserError naming the bag and where it broke."""
+    count = 0
+    stream = reader.messages(**kwargs)
+    while True:
+        try:
+            item = next(stream)
+        except StopIteration:
+            return
+        except Exception as err:  # the storage's own errors are of many kinds: one line, whatever broke
+            raise UserError(f"bag {path} breaks after {count} readable messages ({_words(err)}); {_ADVICE}") from None
+        count += 1
+        yield item
 
 
 @dataclass
@@ -93,7 +117,7 @@ class Recording:
             conns = [c for c in reader.connections if c.topic in wanted or c.topic.startswith(TRUTH_PREFIX)]
             t0 = reader.start_time
             k, pending = 0, {}
-            for conn, t_ns, raw in reader.messages(connections=conns):
+            for conn, t_ns, raw in messages(reader, self.path, connections=conns):
                 while t_ns > t0 + k * step_ns:
                     yield k, pending
                     k, pending = k + 1, {}

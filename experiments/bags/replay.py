@@ -144,6 +144,10 @@ class BagEnv(gym.Env):
         crop = self.mapping.camera_crop
         if crop is not None:
             x0, y0, x1, y1 = crop
+            h, w = image.shape[:2]
+            if x1 > w or y1 > h:  # numpy would cut the crop short without a word
+                raise UserError(f"mapping {self.mapping.source}: [camera] crop {list(crop)} reaches beyond the "
+                                f"recording's {w}x{h} frames; it must keep x1 <= {w} and y1 <= {h}")
             image = image[y0:y1, x0:x1]
         if image.shape[:2] != (self.height, self.width):
             image = cv2.resize(image, (self.width, self.height), interpolation=interpolation)

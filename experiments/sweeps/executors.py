@@ -101,12 +101,16 @@ def params_label(params: dict) -> str:
 def episode_task(spec: TrialSpec, out: str, **episode) -> dict:
     """:func:`run_episode` as a worker runs it: ``{"row": row}``, or ``{"failure": Failure}`` when
     the episode's code raised (a user's plug-in, or a bug of racf's). A failure is returned, not
-    raised, so that one episode's fault never aborts the batch. :class:`CodeChangedError` is
-    raised: the batch must stop."""
+    raised, so that one episode's fault never aborts the batch. A :class:`~racf.errors.UserError`
+    is ``{"stop": message}``: what it names (a defence service that no longer answers, keys it
+    refuses) fails every episode alike, so the batch stops. :class:`CodeChangedError` is raised:
+    the batch must stop."""
     try:
         return {"row": run_episode(spec, out, **episode)}
     except CodeChangedError:
         raise
+    except UserError as err:  # not this episode's fault but the batch's (a service gone, keys refused): stop
+        return {"stop": str(err)}
     except Exception as err:  # the fault of the code an episode runs, reported by episode, never a traceback
         from racf.experiments.sweeps.failures import describe
 

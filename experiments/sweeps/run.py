@@ -64,6 +64,8 @@ def run_episodes(specs: list[TrialSpec], store: ResultStore, backend: str = "loc
                 for outcome in running.run(todo, str(store.out), log_steps=log_steps,
                                            logs_dir=str(store.logs.relative_to(store.out)),
                                            rerun=rerun):
+                    if "stop" in outcome:  # leaving the block kills the workers; what is stored stays
+                        raise _Stopped(outcome["stop"])
                     if "failure" in outcome:
                         append_log(store.out, outcome["failure"], first=not failures)
                         failures.append(outcome["failure"])
@@ -72,10 +74,19 @@ def run_episodes(specs: list[TrialSpec], store: ResultStore, backend: str = "loc
     except KeyboardInterrupt:
         bar.close()
         raise Interrupted(len(set(ids) & store.done_ids()), len(ids)) from None
+    except _Stopped as stop:
+        bar.close()
+        raise UserError(f"{stop}. The batch stopped with {len(set(ids) & store.done_ids())} of {len(ids)} episodes "
+                        f"stored in {store.out}; put that right and run the same command again: it resumes "
+                        f"without redoing them") from None
     bar.close()
     if failures:
         raise EpisodeFailed(failures, len(set(ids) & store.done_ids()), len(ids), store.out / LOG_NAME)
     return store.rows(ids), len(todo)
+
+
+class _Stopped(Exception):
+    """An episode met what stops every episode of the batch alike (its message says what)."""
 
 
 def run_sweep(spec: SweepSpec, spec_text: str, out: str | Path, backend: str = "local", workers: int = 2,

@@ -3,7 +3,6 @@ that survives a service dying mid-episode, and one line for a service that is no
 
 from __future__ import annotations
 
-import threading
 from dataclasses import replace
 
 import numpy as np
@@ -12,31 +11,7 @@ import pytest
 from racf.errors import UserError
 from racf.experiments.episode import TrialSpec, run_trial
 from racf.experiments.episode.remote import RemoteEstimator
-from racf.experiments.service.server import serve
 from tests.conftest import run_cli
-
-
-@pytest.fixture
-def service():
-    """``serve(defence, max_requests=...)`` in a thread; yields a function that starts one and
-    returns its endpoint. Every one is stopped after the test."""
-    stops = []
-
-    def start(defence: str, max_requests: float = float("inf")) -> str:
-        bound, stop = [], threading.Event()
-        ready = threading.Event()
-        thread = threading.Thread(target=serve, args=("tcp://127.0.0.1:0", (defence,)),
-                                  kwargs={"ready": lambda e: (bound.append(e), ready.set()),
-                                          "max_requests": max_requests, "stop": stop}, daemon=True)
-        thread.start()
-        assert ready.wait(60)
-        stops.append((stop, thread))
-        return bound[0]
-
-    yield start
-    for stop, thread in stops:
-        stop.set()
-        thread.join(5)
 
 
 SPEC = TrialSpec("attack+odca", 1, 1.0, 3)
