@@ -4,7 +4,7 @@ and ``racf serve`` that reads ZeroMQ's framing (ZMTP 3) in the service's answers
 The car connects to the relay, the relay to the service; what the car sends passes untouched.
 The service's bytes are cut into ZMTP frames after the 64-byte greeting. A message on a plain
 link is its frames up to one without the MORE flag; on a CurveZMQ link every frame is an
-encrypted ``MESSAGE`` command whose flags sit inside the box, so the relay counts frames as the
+encrypted ``MESSAGE`` command (libzmq sends it as a data frame) whose flags sit inside the box, so the relay counts frames as the
 attacker would: racf's answers are two (the REQ envelope's empty delimiter, then the map).
 While an attack's schedule has it on, each answer gets its verdict (held, lost, or its last frame
 replaced); handshake commands always pass. A lost answer on a plain link or an encrypted one
@@ -42,18 +42,18 @@ class ZmtpFrames:
 
     def __init__(self) -> None:
         self._buf = bytearray()
-        self._greeted = False
+        self._greeting_left = _GREETING
 
     def feed(self, data: bytes) -> list[tuple[bytes, int, bytes]]:
-        """The pieces ``data`` completes: (raw bytes, flags, body); the greeting has flags -1."""
-        self._buf += data
+        """The pieces ``data`` completes: (raw bytes, flags, body). The greeting's bytes pass as they
+        come, with flags -1 (ZMTP sends it in stages and waits on the other end's)."""
         out = []
-        if not self._greeted:
-            if len(self._buf) < _GREETING:
-                return out
-            out.append((bytes(self._buf[:_GREETING]), -1, b""))
-            del self._buf[:_GREETING]
-            self._greeted = True
+        if self._greeting_left:
+            head, data = data[:self._greeting_left], data[self._greeting_left:]
+            self._greeting_left -= len(head)
+            if head:
+                out.append((bytes(head), -1, b""))
+        self._buf += data
         while len(self._buf) >= 2:
             flags = self._buf[0]
             head = 9 if flags & _LONG else 2
@@ -67,8 +67,6 @@ class ZmtpFrames:
         return out
 
 
-def _is_curve_message(flags: int, body: bytes) -> bool:
-    return bool(flags & _COMMAND) and body[:8] == b"\x07MESSAGE"
 
 
 class _Pair:
@@ -78,6 +76,7 @@ class _Pair:
         self.car, self.service = car, service
         self.frames = ZmtpFrames()
         self.message: list[tuple[bytes, int, bytes]] = []  # the answer being gathered
+        self.curve = False  # the service answered a CurveZMQ handshake (WELCOME): its frames are boxes
         self.curve_frames = 0
         self.out: deque = deque()  # (release time, bytes) towards the car, in order
         self.last_release = 0.0
@@ -158,11 +157,12 @@ class LinkRelay:
 
     def _answer_piece(self, pair: _Pair, raw: bytes, flags: int, body: bytes) -> None:
         """Gathers an answer's frames; a handshake's pieces pass at once."""
-        if flags < 0 or (flags & _COMMAND and not _is_curve_message(flags, body)):
+        if flags < 0 or flags & _COMMAND:
+            pair.curve |= body.startswith(b"\x07WELCOME")
             self._queue(pair, raw, 0.0)
             return
         pair.message.append((raw, flags, body))
-        if _is_curve_message(flags, body):
+        if pair.curve:  # libzmq frames each box as a data frame holding a MESSAGE command
             pair.curve_frames += 1
             complete, encrypted = pair.curve_frames % _ANSWER_FRAMES == 0, True
         else:

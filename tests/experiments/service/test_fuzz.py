@@ -14,7 +14,7 @@ from hypothesis import strategies as st
 
 from racf.experiments.episode.wire import MAX_MESSAGE_BYTES, PROTOCOL, pack, unpack
 from racf.experiments.service.stress import fuzz, ping
-from tests.experiments.service.conftest import start_service
+from tests.conftest import start_service
 
 
 @pytest.fixture(scope="module")
