@@ -99,6 +99,17 @@ MISTAKES: list[tuple[str, str]] = [
     ("serve --estimator-option checkpoint=x", "name it with --defence"),
     ("trial --estimator-endpoint localhost:5555", "estimator_endpoint must be tcp://HOST:PORT"),
     ("trial --estimator-timeout-ms 20", "--estimator-timeout-ms applies with --estimator-endpoint"),
+    ("trial --service-keys {keys}", "--service-keys applies with --estimator-endpoint"),
+    ("trial --estimator-endpoint tcp://127.0.0.1:9 --service-keys {tmp}/nowhere", "make a key folder with"),
+    ("trial --setting clean+link_drop", "link_drop attacks the link to a defence service"),
+    ("trial --setting clean+link_delay --estimator-endpoint tcp://127.0.0.1:9 --attack-param link_delay.delay_ms=-5",
+     "delay_ms must be a number in [0.0, 5000.0]"),
+    ("serve --bind tcp://0.0.0.0:5555", "is reachable from other machines: serve it with --keys DIR"),
+    ("serve --keys {tmp}/nowhere", "make a key folder with `racf serve keys"),
+    ("serve keys {keys}", "keys are never overwritten"),
+    ("serve --idle-s 0", "--idle-s must be >= 1.0"),
+    ("bag-info {corrupt_bag}", "the recording is truncated or corrupt: copy it again"),
+    ("replay-bag {corrupt_bag}", "the recording is truncated or corrupt: copy it again"),
     ("bench guard --slowdown 9", "--slowdown must be in [1, 5]"),
     ("bench guard --store --slowdown 1.2", "--store keeps a real measurement"),
     ("bench paired --baseline {tmp}", "--baseline must be a racf checkout"),
@@ -175,7 +186,35 @@ def make_files(root: Path) -> dict[str, str]:
              "defences.py": _DEFENCES, "incomplete.py": _INCOMPLETE}
     for name, text in texts.items():
         (root / name).write_text(text)
-    return {name: str(root / name) for name in ["data_corrupt", "ckpt", *texts]}
+    from racf.experiments.episode.curve import make_keys
+
+    make_keys(root / "keys")
+    (root / "corrupt_bag").mkdir()
+    (root / "corrupt_bag" / "metadata.yaml").write_text(_BAG_METADATA)
+    (root / "corrupt_bag" / "corrupt_bag.mcap").write_bytes(bytes(range(256)) * 16)  # no MCAP magic
+    return {name: str(root / name) for name in ["data_corrupt", "ckpt", "keys", "corrupt_bag", *texts]}
+
+
+#: A rosbag2's metadata naming one MCAP file (the corpus writes that file as bytes that are no MCAP).
+_BAG_METADATA = """rosbag2_bagfile_information:
+  version: 9
+  storage_identifier: mcap
+  duration: {nanoseconds: 1000000000}
+  starting_time: {nanoseconds_since_epoch: 0}
+  message_count: 1
+  topics_with_message_count:
+  - message_count: 1
+    topic_metadata: {name: /scan, offered_qos_profiles: [], serialization_format: cdr,
+                     type: sensor_msgs/msg/LaserScan, type_description_hash: ''}
+  compression_format: ''
+  compression_mode: ''
+  relative_file_paths: [corrupt_bag.mcap]
+  files:
+  - {path: corrupt_bag.mcap, starting_time: {nanoseconds_since_epoch: 0}, duration: {nanoseconds: 1000000000},
+     message_count: 1}
+  custom_data: {}
+  ros_distro: rosbags
+"""
 
 
 def mistakes_markdown() -> str:

@@ -87,8 +87,10 @@ def test_bag_info_counts_topics_and_rates(exported):
     assert rates["/camera/color_image"] == pytest.approx(30, rel=0.05) and rates["/scan"] == pytest.approx(10, rel=0.05)
 
 
-def _rewrite(src: Path, dst: Path, rename: dict[str, str], width: int, height: int, drop: str | None = None) -> None:
-    """``src`` as another recording would have it: topics renamed, the images resized, no racf metadata."""
+def _rewrite(src: Path, dst: Path, rename: dict[str, str], width: int, height: int, drop: str | None = None,
+             pad: int = 0) -> None:
+    """``src`` as another recording would have it: topics renamed, the images resized (then framed by
+    ``pad`` pixels of another colour on every side), no racf metadata."""
     from rosbags.rosbag2 import Reader, StoragePlugin, Writer
 
     from racf.experiments.bags import messages as m
@@ -100,12 +102,13 @@ def _rewrite(src: Path, dst: Path, rename: dict[str, str], width: int, height: i
             if conn.topic == drop or conn.topic.startswith("/racf/"):
                 continue
             msg = store.deserialize_cdr(raw, conn.msgtype)
+            framed = {"constant_values": 200} if pad else {}
             if conn.topic == "/camera/color_image":
-                msg = m.image_msg(cv2.resize(m.rgb_from(msg), (width, height), interpolation=cv2.INTER_NEAREST),
-                                  m.stamp_of(msg))
+                image = cv2.resize(m.rgb_from(msg), (width, height), interpolation=cv2.INTER_NEAREST)
+                msg = m.image_msg(np.pad(image, ((pad, pad), (pad, pad), (0, 0)), **framed), m.stamp_of(msg))
             elif conn.topic == "/camera/depth_image":
-                msg = m.depth_msg(cv2.resize(m.depth_from(msg), (width, height), interpolation=cv2.INTER_NEAREST),
-                                  m.stamp_of(msg))
+                image = cv2.resize(m.depth_from(msg), (width, height), interpolation=cv2.INTER_NEAREST)
+                msg = m.depth_msg(np.pad(image, pad, constant_values=7.0), m.stamp_of(msg))
             topic = rename.get(conn.topic, conn.topic)
             if topic not in conns:
                 conns[topic] = writer.add_connection(topic, conn.msgtype, typestore=store)
@@ -130,6 +133,38 @@ def test_another_recording_replays_through_a_mapping_file(exported, tmp_path):
     assert_same(exported.log, replay.log)
     assert {"d_true", "x", "sign_in_view"} <= set(replay.absent) and "d_true" not in replay.log
     assert replay.scores["rmse_m"] is None  # no reference: no offline error
+
+
+def test_a_padded_foreign_frame_is_cropped_back_to_the_episode(exported, tmp_path):
+    """The foreign camera's frame holds a 16-pixel border the car must not see: ``crop`` keeps the
+    1280 x 720 inside, and what the car gets is the episode's (a crop ignored would see the border)."""
+    foreign = tmp_path / "padded"
+    _rewrite(exported.path, foreign, RENAMED, 1280, 720, pad=16)
+    mapping = tmp_path / "mapping.toml"
+    mapping.write_text('[topics]\nrgb = "/qcar2/rgbd/color"\ndepth = "/qcar2/rgbd/depth"\nscan = "/qcar2/lidar"\n'
+                       'imu = "/qcar2/imu"\njoint = "/qcar2/joint"\nfix = "/qcar2/pose"\n\n'
+                       '[camera]\ncrop = [16, 16, 1296, 736]\nsize = [320, 240]\n\n'
+                       '[mission]\nsetting = "clean"\nsign = 1\nspeed = 1.0\n')
+    assert_same(exported.log, replay_bag(foreign, Mapping.load(mapping)).log)
+    mapping.write_text(mapping.read_text().replace("[16, 16, 1296, 736]", "[16, 16, 1400, 736]"))
+    with pytest.raises(UserError, match=r"crop \[16, 16, 1400, 736\] reaches beyond the recording's 1312x752 frames"):
+        replay_bag(foreign, Mapping.load(mapping))
+
+
+@pytest.mark.parametrize("damage", ["random bytes", "cut in half"])
+def test_a_damaged_bag_is_one_line_with_what_to_do(exported, tmp_path, capsys, damage):
+    import shutil
+
+    bag = tmp_path / "damaged"
+    shutil.copytree(exported.path, bag)
+    data = next(bag.glob("*.mcap"))
+    size = data.stat().st_size
+    data.write_bytes(np.random.default_rng(0).bytes(size) if damage == "random bytes"
+                     else data.read_bytes()[:size // 2])
+    for argv in (["bag-info", str(bag)], ["replay-bag", str(bag), "--out", str(tmp_path / "o")]):
+        code, _ = run_cli(argv)
+        err = capsys.readouterr().err.strip()
+        assert code == 2 and "\n" not in err and "truncated or corrupt" in err and "copy it again" in err, err
 
 
 def test_a_missing_topic_fails_in_one_line_before_any_work(exported, tmp_path, capsys):

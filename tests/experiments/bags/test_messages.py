@@ -77,3 +77,20 @@ def test_a_scan_seen_from_the_virtual_cars_frame_gives_the_same_bins():
     virtual = driver_scan(np.roll(ranges, n // 2), np.roll(times, n // 2), yaw_deg=0.0)
     assert np.allclose(physical[0], virtual[0], rtol=0, atol=1e-6)
     assert np.allclose(physical[1], virtual[1], rtol=0, atol=1e-9)
+
+
+def test_the_bytes_are_laid_out_as_quanser_and_ros_lay_them():
+    """What a second reader of the bag sees, byte by byte: the reversal Quanser's driver writes (a
+    return at sample i sits at ranges[N-1-i]) and depth as little-endian millimetres (1.234 m is 1234)."""
+    ranges = np.zeros(16)
+    ranges[3] = 1.5
+    msg = m.scan_msg(ranges, 0, 10.0, 12.0)
+    assert msg.ranges[16 - 1 - 3] == np.float32(1.5) and np.count_nonzero(msg.ranges) == 1
+    assert m.scan_from(msg)[3] == 1.5
+    depth = np.zeros((2, 3))
+    depth[1, 2] = 1.234
+    img = m.depth_msg(depth, 0)
+    assert img.encoding == "mono16" and not img.is_bigendian and img.step == 6
+    raw = np.asarray(img.data, np.uint8)
+    assert int(raw[1 * 6 + 2 * 2]) | int(raw[1 * 6 + 2 * 2 + 1]) << 8 == 1234
+    assert m.depth_from(img)[1, 2] == np.float32(1234) * np.float32(1.0 / 1000.0)

@@ -183,3 +183,14 @@ def test_a_late_answer_arrives_late_and_never_undoes_a_newer_one(delay, lates):
     assert all(b >= a for a, b in zip(got, got[1:]))  # the wheels never go back to an older decision
     for k, index in enumerate(got):
         assert index == 0 or index + delay + lates[index] <= k  # nothing is taken before it arrived
+
+
+@given(st.integers(0, 3), st.lists(st.integers(0, 4), min_size=1, max_size=40))
+def test_the_wheels_take_the_newest_action_that_has_arrived(delay, lates):
+    """Against a reference: at step k the wheels hold the newest decision that has arrived by k
+    (decided at j, arrived at j + delay + late_j), the first decided before any has."""
+    line = ActionLine(delay)
+    got = [int(line.push(np.array([k]), late)[0]) for k, late in enumerate(lates)]
+    for k in range(len(lates)):
+        arrived = [j for j in range(k + 1) if j + delay + lates[j] <= k]
+        assert got[k] == (max(arrived) if arrived else 0), (k, got)

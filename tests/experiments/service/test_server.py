@@ -70,3 +70,98 @@ def test_a_service_serving_another_defence_or_none_is_one_line(service, capsys):
                        "--estimator-timeout-ms", "200"])
     err = capsys.readouterr().err.strip()
     assert code == 2 and "\n" not in err and "racf serve" in err and "no defence service answers" in err
+
+
+BRITTLE = '''
+from racf.controllers.estimators import RawDepthEstimator
+
+
+class Brittle(RawDepthEstimator):
+    name = "brittle"
+
+    def __init__(self):
+        super().__init__()
+        self.calls = 0
+
+    def estimate(self, sample, speed_mps, dt, yaw_rate_radps=0.0):
+        self.calls += 1
+        if self.calls == 5:
+            raise RuntimeError("lost its footing")
+        return super().estimate(sample, speed_mps, dt, yaw_rate_radps)
+'''
+
+
+def test_a_defence_that_raises_is_restarted_for_that_car_alone(service, tmp_path, plugin_env, caplog):
+    from racf.controllers import PerceptionSample
+    from racf.plugins import load_plugin_file
+
+    path = tmp_path / "brittle.py"
+    path.write_text(BRITTLE)
+    load_plugin_file(path)
+    endpoint = service(None)
+    car, other = RemoteEstimator(endpoint, "brittle"), RemoteEstimator(endpoint, "raw")
+    car.reset(), other.reset()
+    sample = PerceptionSample(None, 1.5, 0.9, 1.4, 0.0)
+    with caplog.at_level("WARNING", logger="racf.serve"):
+        answers = [car.estimate(sample, 0.5, 0.02) for _ in range(8)]
+        assert all(other.estimate(sample, 0.5, 0.02) == 1.5 for _ in range(8))
+    assert car.diagnostics()["service_restarts"] == 1.0 and car.restarts == 1
+    assert answers == [1.5] * 8  # the 5th is the car's own depth: the same number, from the fallback
+    assert "brittle raised in the session" in caplog.text and "lost its footing" in caplog.text
+    car.close(), other.close()
+
+
+def test_a_defence_the_service_lacks_is_refused_in_one_line_with_what_to_do(service):
+    endpoint = service(None)
+    with pytest.raises(UserError) as err:
+        RemoteEstimator(endpoint, "tinfoil")
+    words = str(err.value)
+    assert "has no defence 'tinfoil'" in words and "racf serve --plugin" in words and "\n" not in words
+
+
+def _free_port() -> int:
+    import socket
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def test_a_service_killed_and_restarted_mid_episode_gets_a_new_session(service):
+    """The first service stops answering after 60 requests; a new one listens on its port at once.
+    The car falls back (each fallback step waits no longer than its timeout), asks again after
+    retry_s of its own time, opens a new session and is answered to the end."""
+    import threading
+    import time
+
+    endpoint = f"tcp://127.0.0.1:{_free_port()}"
+    stops: list = []
+    from tests.conftest import start_service
+
+    start_service("odca", stops, max_requests=60, endpoint=endpoint)
+    first_stop, first = stops[0]
+    threading.Thread(target=lambda: (first.join(), start_service("odca", stops, endpoint=endpoint)),
+                     daemon=True).start()
+    walls, last = [], [time.perf_counter()]
+
+    def clock(env, obs, info, row):
+        now = time.perf_counter()
+        walls.append(now - last[0])
+        last[0] = now
+
+    timeout_ms = 20.0
+    try:
+        result, log = run_trial(replace(SPEC, estimator_endpoint=endpoint, estimator_timeout_ms=timeout_ms),
+                                on_step=clock)
+    finally:
+        for stop, thread in stops:
+            stop.set()
+            thread.join(5)
+    fell_back = log["service_fallback"].to_numpy() == 1.0
+    first_down = int(np.argmax(fell_back))
+    back = first_down + int(np.argmax(~fell_back[first_down:]))
+    assert fell_back.any() and back > first_down and not fell_back[back:].any()
+    assert log["service_restarts"].to_numpy()[back] == 1.0 and result.service_restarts == 1
+    # A fallback step costs at most the timeout on top of the step's own work (margin 0.25 s).
+    step_cost = float(np.median(walls))
+    assert max(np.asarray(walls)[fell_back]) <= step_cost + timeout_ms / 1000.0 + 0.25
