@@ -51,14 +51,33 @@ from racf.odca.features import MAX_RANGE_M, features, sanitize, sanitize_size, u
 from racf.odca.gate import DEPTH, SOURCES, GateConfig, vote
 from racf.odca.head import HeadWeights
 from racf.odca.kinematics import KinematicsConfig
-from racf.odca.prior import SHIPPED_PRIOR, Chronos2Prior, CheckpointError, TemporalPrior
+from racf.odca.prior import CheckpointError, TemporalPrior, checkpoint_prior
 from racf.odca.series import _optional, _pick, corrected, segments
 from racf.odca.witnesses import Witnesses, bounded
 from racf.assets import asset_path
 
-__all__ = ["ODCA", "ODCAConfig", "FusedSample", "SHIPPED_HEAD", "SOURCES"]
+__all__ = ["ODCA", "ODCAConfig", "FusedSample", "SHIPPED_HEAD", "SOURCES", "RUNTIMES", "read_checkpoint"]
 
 SHIPPED_HEAD = asset_path("checkpoints", "odca-head")
+#: Where the prior and the head run: PyTorch (and numpy) in the car's process, or onnxruntime on
+#: the exported files (``racf odca export``).
+RUNTIMES = ("torch", "onnx")
+
+
+def read_checkpoint(folder: Path) -> tuple["ODCAConfig", dict]:
+    """The config and the head's arrays of an ODCA folder; CheckpointError names what is wrong."""
+    cfg_file, weights_file = folder / "odca.json", folder / "head.npz"
+    if not cfg_file.exists() or not weights_file.exists():
+        raise CheckpointError(f"no ODCA checkpoint at {folder} (need odca.json and head.npz; `racf odca train` makes one)")
+    try:
+        config = ODCAConfig.from_json(json.loads(cfg_file.read_text()))
+        with np.load(weights_file) as z:
+            arrays = {k: z[k] for k in z.files}
+        HeadWeights(arrays)  # the shapes checked
+    except (ValueError, TypeError, KeyError, OSError, json.JSONDecodeError) as err:
+        raise CheckpointError(f"the ODCA checkpoint at {folder} is corrupt or from an older racf "
+                              f"({type(err).__name__}: {err}); retrain it with `racf odca train`") from None
+    return config, arrays
 
 
 @dataclass(frozen=True)
@@ -173,28 +192,22 @@ class ODCA:
 
     # -- loading and saving ----------------------------------------------------------------
     @classmethod
-    def load(cls, path: str | Path | None = None, prior: TemporalPrior | None = None) -> "ODCA":
-        """Loads ``racf.odca.json`` + ``head.npz`` from ``path`` (default: the shipped ones) and the prior."""
+    def load(cls, path: str | Path | None = None, prior: TemporalPrior | None = None, runtime: str = "torch") -> "ODCA":
+        """Loads ``racf.odca.json`` + ``head.npz`` from ``path`` (default: the shipped ones) and the prior.
+        ``runtime="onnx"``: the folder ``racf odca export`` wrote (default: the shipped export), its
+        prior and head run by onnxruntime (:mod:`racf.odca.onnx_runtime`)."""
+        if runtime not in RUNTIMES:
+            raise ValueError(f"runtime must be one of {RUNTIMES}, got {runtime!r}")
+        if runtime == "onnx":
+            from racf.odca.onnx_runtime import SHIPPED_ONNX, OnnxHead, OnnxPrior, read_export
+
+            folder = Path(path) if path is not None else SHIPPED_ONNX
+            manifest = read_export(folder)
+            config, arrays = read_checkpoint(folder)
+            return cls(config, OnnxHead(folder, arrays, manifest), prior or OnnxPrior(folder, manifest))
         folder = Path(path) if path is not None else SHIPPED_HEAD
-        cfg_file, weights_file = folder / "odca.json", folder / "head.npz"
-        if not cfg_file.exists() or not weights_file.exists():
-            raise CheckpointError(f"no ODCA checkpoint at {folder} (need odca.json and head.npz; `racf odca train` makes one)")
-        try:
-            config = ODCAConfig.from_json(json.loads(cfg_file.read_text()))
-            with np.load(weights_file) as z:
-                head = HeadWeights({k: z[k] for k in z.files})
-        except (ValueError, TypeError, KeyError, OSError, json.JSONDecodeError) as err:
-            raise CheckpointError(f"the ODCA checkpoint at {folder} is corrupt or from an older racf "
-                                  f"({type(err).__name__}: {err}); retrain it with `racf odca train`") from None
-        if prior is None:
-            if config.prior == "shipped":
-                prior = Chronos2Prior(SHIPPED_PRIOR)
-            else:
-                prior_path = Path(config.prior)
-                if not prior_path.is_absolute() and (folder / prior_path).exists():
-                    prior_path = folder / prior_path
-                prior = Chronos2Prior(prior_path if prior_path.exists() else config.prior)
-        return cls(config, head, prior)
+        config, arrays = read_checkpoint(folder)
+        return cls(config, HeadWeights(arrays), prior or checkpoint_prior(config.prior, folder))
 
     def save(self, path: str | Path) -> None:
         folder = Path(path)

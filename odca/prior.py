@@ -24,7 +24,7 @@ from typing import Iterator, Protocol, runtime_checkable
 import numpy as np
 from racf.assets import asset_path
 
-__all__ = ["TemporalPrior", "LastValuePrior", "Chronos2Prior", "CheckpointError", "SHIPPED_PRIOR"]
+__all__ = ["TemporalPrior", "LastValuePrior", "Chronos2Prior", "CheckpointError", "SHIPPED_PRIOR", "checkpoint_prior"]
 
 #: The project's own small Chronos-2-architecture checkpoint (see its MODEL_CARD.md).
 SHIPPED_PRIOR = asset_path("checkpoints", "chronos2-racf-tiny")
@@ -156,6 +156,17 @@ class Chronos2Prior:
         std = np.maximum((q[:, self._hi] - q[:, self._lo]) / (2 * _Z90), 0.0)
         mean[~seen], std[~seen] = np.nan, np.nan
         return mean, std
+
+
+def checkpoint_prior(name: str, folder: Path) -> Chronos2Prior:
+    """The prior an ODCA checkpoint in ``folder`` names: ``"shipped"``, a path (absolute or relative
+    to the folder) or a hub id."""
+    if name == "shipped":
+        return Chronos2Prior(SHIPPED_PRIOR)
+    path = Path(name)
+    if not path.is_absolute() and (folder / path).exists():
+        path = folder / path
+    return Chronos2Prior(path if path.exists() else name)
 
 
 @contextmanager

@@ -19,11 +19,11 @@ __all__ = ["GROUPS", "add_groups", "canonical_argv"]
 GROUPS: dict[str, tuple[str, dict[str, str]]] = {
     "bench": ("benchmarks: the offline repair benchmark and the speed and detector tests",
               {"offline": "bench-offline", "sim": "bench-sim", "loop": "bench-loop", "detector": "bench-detector",
-               "traffic": "bench-traffic", "patch": "bench-patch", "odca-latency": "odca-latency",
+               "traffic": "bench-traffic", "patch": "bench-patch", "odca-latency": "odca-latency", "odca-onboard": "bench-odca-onboard",
                "service": "bench-service", "service-stress": "bench-service-stress", "bags": "bench-bags", "guard": "bench-guard",
                "paired": "bench-paired"}),
-    "odca": ("ODCA: pretrain its Chronos-2 prior, train its head, evaluate a checkpoint",
-             {"pretrain-prior": "pretrain-prior", "train": "train", "evaluate": "evaluate"}),
+    "odca": ("ODCA: pretrain its Chronos-2 prior, train its head, evaluate a checkpoint, export it for the car",
+             {"pretrain-prior": "pretrain-prior", "train": "train", "evaluate": "evaluate", "export": "export-odca"}),
     "detector": ("the learned stop-sign detector: render its views, train it, optimise a sticker against it",
                  {"data": "detector-data", "train": "train-detector", "optimise-patch": "optimise-patch"}),
     "bag": ("ROS 2 bags on Quanser's QCar 2 topics: export an episode, replay the car's software on a recording, "

@@ -77,7 +77,8 @@ def _stress(args: argparse.Namespace) -> int:
         c = out["cars"]
         drift = 100.0 * (c["server_mb_end"] / c["server_mb_start"] - 1.0)
         print(f"cars: {c['cars']} at {c['hz']:g} Hz for {c['seconds']:g} s: {c['steps']} requests, {c['lost']} lost "
-              f"(timeout {timeout_ms:g} ms); round trip p50 {c['rtt_p50_ms']:.2f} ms, p99 {c['rtt_p99_ms']:.2f} ms; "
+              f"(timeout {timeout_ms:g} ms); round trip p50 {c['rtt_p50_ms']:.2f} ms, p99 {c['rtt_p99_ms']:.2f} ms, "
+              f"p99.9 {c['rtt_p999_ms']:.2f} ms, max {c['rtt_max_ms']:.2f} ms; "
               f"server memory {c['server_mb_start']:.1f} -> {c['server_mb_end']:.1f} MB ({drift:+.1f} %)")
     print(f"alive at the end: {out['alive']}")
     return 0 if out["alive"] else 1

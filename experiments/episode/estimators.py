@@ -40,10 +40,10 @@ __all__ = ["ESTIMATORS", "make_estimator", "estimator_options", "check_options",
 
 
 @lru_cache(maxsize=None)
-def _odca(checkpoint: str | None):
+def _odca(checkpoint: str | None, runtime: str = "torch"):
     from racf.odca import ODCA
 
-    return ODCA.load(checkpoint)
+    return ODCA.load(checkpoint, runtime=runtime)
 
 
 class ODCAEstimator:
@@ -52,12 +52,21 @@ class ODCAEstimator:
 
     ``last`` holds the step's full output; ``diagnostics()`` logs the gate's verdict, its
     source and the kinematic branch.
+
+    Args:
+        checkpoint: the ODCA folder (None: the shipped one; with ``runtime="onnx"``, the shipped export).
+        runtime: ``"torch"`` (the prior in PyTorch, the head in numpy) or ``"onnx"`` (both from the
+            files of ``racf odca export``, run by onnxruntime on one thread: ODCA as the car runs it).
     """
 
     name = "odca"
 
-    def __init__(self, checkpoint: str | None = None) -> None:
-        self.model = _odca(checkpoint)
+    def __init__(self, checkpoint: str | None = None, runtime: str = "torch") -> None:
+        from racf.odca.online import RUNTIMES
+
+        if runtime not in RUNTIMES:
+            raise ValueError(f"runtime must be one of {RUNTIMES}, got {runtime!r}")
+        self.model = _odca(checkpoint, runtime)
         self.last = None
         self._had_depth = False
         self._size = (math.nan, math.nan)
@@ -214,7 +223,9 @@ class ChronosEstimator:
 
 def _prior_parameters(prior) -> int:
     model = getattr(prior, "model", None)
-    return int(sum(p.numel() for p in model.parameters())) if model is not None else 0
+    if model is None:  # an exported prior counts its own (racf.odca.onnx_runtime)
+        return int(getattr(prior, "n_parameters", 0))
+    return int(sum(p.numel() for p in model.parameters()))
 
 
 def make_estimator(name: str, options: dict[str, Any] | None = None) -> DistanceEstimator:

@@ -205,4 +205,6 @@ def cars(endpoint: str, defence: str, calls: list, calibration, k: int, hz: floa
             "lost": sum(r["lost"] for r in results),
             "rtt_p50_ms": float(np.percentile(rtt, 50)) if rtt.size else None,
             "rtt_p99_ms": float(np.percentile(rtt, 99)) if rtt.size else None,
+            "rtt_p999_ms": float(np.percentile(rtt, 99.9)) if rtt.size else None,
+            "rtt_max_ms": float(rtt.max()) if rtt.size else None,
             "server_mb_start": start_mb, "server_mb_end": end_mb}
