@@ -31,10 +31,10 @@ from typing import Iterator
 import numpy as np
 
 from racf.errors import UserError
+from racf.odca.onnx_runtime import EXPORT_FILE, HEAD_FILE, PRIOR_FILE
 
-__all__ = ["export_onnx", "EXPORT_FILE", "PRIOR_FILE", "HEAD_FILE"]
+__all__ = ["export_onnx", "OPSET"]
 
-EXPORT_FILE, PRIOR_FILE, HEAD_FILE = "export.json", "prior.onnx", "head.onnx"
 OPSET = 18
 
 

@@ -10,10 +10,12 @@ from pathlib import Path
 import numpy as np
 
 from racf.odca.head import HeadWeights
-from racf.odca.onnx_export import EXPORT_FILE, HEAD_FILE, PRIOR_FILE
 from racf.odca.prior import CheckpointError, _check_context
 
-__all__ = ["OnnxPrior", "OnnxHead", "read_export", "SHIPPED_ONNX"]
+__all__ = ["OnnxPrior", "OnnxHead", "read_export", "SHIPPED_ONNX", "EXPORT_FILE", "PRIOR_FILE", "HEAD_FILE"]
+
+#: The files of an export (``racf odca export``, :mod:`racf.odca.onnx_export`).
+EXPORT_FILE, PRIOR_FILE, HEAD_FILE = "export.json", "prior.onnx", "head.onnx"
 
 _Z90 = 1.2815515655446004
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 from pathlib import Path
 
 from racf.experiments.cli.common import (backend_flags, count, fail, fmt_ci, output_dir, plugin_flag, registry_markdown,
@@ -84,6 +85,11 @@ def _trial(args: argparse.Namespace) -> int:
     log_path = atomic_write(args.out / f"{spec.trial_id}.parquet", log)
     atomic_write(args.out / f"{spec.trial_id}.json", json.dumps(result.to_dict(), indent=2, allow_nan=False))
     print(json.dumps({**result.to_dict(), "log": str(log_path)}, indent=2, allow_nan=False))
+    row = result.to_dict()
+    if row.get("service_fallback"):  # said where it is read, not only in a field
+        print(f"racf trial: the defence service gave no answer in time on {row['service_fallback_steps']} of "
+              f"{row['service_fallback_steps'] + row['service_steps']} steps; the car drove on its own depth "
+              f"distance there ({row['service_restarts']} new sessions)", file=sys.stderr)
     return 0
 
 
@@ -134,6 +140,10 @@ def _trials(args: argparse.Namespace) -> int:
         failures = ", ".join(f"{k} {v}" for k, v in group["failure"].dropna().value_counts().items()) or "-"
         print(f"{sign_:>4} {speed_:>6.1f} {len(group):>3} {group['success'].mean():>5.2f} {lat_text:>26}  {failures}")
     print(table_text({setting: summary}))
+    if "service_fallback" in results and results["service_fallback"].astype(bool).any():
+        fell = results[results["service_fallback"].astype(bool)]
+        print(f"the defence service gave no answer in time in {len(fell)} of {len(results)} episodes "
+              f"({int(fell['service_fallback_steps'].sum())} steps): the car drove on its own depth there")
     print(f"results: {out / 'results.parquet'}; per-step logs: {out / 'trials'}")
     return 0
 

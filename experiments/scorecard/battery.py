@@ -2,6 +2,9 @@
 defence is rated on. A battery never changes once released: a change is a new name
 (``racf-2``), so two cards of one battery always rate the same thing.
 
+``racf-link`` rates a defence served offboard, as the paper ran it, with its link attacked: delayed,
+lost, spoofed, on a plain and on a CurveZMQ link (issue 58).
+
 ``racf-4`` is ``racf-3`` and one row with cross-traffic (issue 37): random strong patch draws
 over the four signs, each with another car timed to reach the sign's conflict point when the
 ego car would (``racf.sim.world.traffic``). The row reports its collision rate, and a driving
@@ -36,7 +39,7 @@ from racf.experiments.episode.spec import setting_name
 from racf.experiments.sweeps.batches import batch_specs
 from racf.experiments.sweeps.spec import SweepSpec
 
-__all__ = ["LoopRow", "Battery", "BATTERIES", "DEFAULT_BATTERY", "PENALTIES"]
+__all__ = ["LoopRow", "Battery", "BATTERIES", "DEFAULT_BATTERY", "PENALTIES", "OFFBOARD", "PAPER_LOOP_HZ"]
 
 #: The driving score's penalties (CARLA's leaderboard coefficients): one factor per infraction.
 PENALTIES = {"ran_stop_sign": 0.80, "hit_static_object": 0.65, "hit_vehicle": 0.60}
@@ -53,6 +56,9 @@ class LoopRow:
     make: Callable[[str, int], list[TrialSpec]] = field(compare=False, repr=False)
     attacked: bool = True
     driving: bool = False  # also a driving score (route completion x penalties), as the drives rows have
+    #: The link its defence is served over (``"plain"`` or ``"curve"``): the card starts that
+    #: ``racf serve`` itself (``racf.experiments.scorecard.link``); None: as the command says.
+    link: str | None = None
 
     def specs(self, defence: str, quick: bool = False) -> list[TrialSpec]:
         return self.make(defence, self.n_quick if quick else self.n)
@@ -265,6 +271,44 @@ _RACF_5 = Battery(
     offline_presets=(),
 )
 
+#: The paper's offboard loop: the control step at 20 Hz, the defence in a ``racf serve`` process
+#: ("approximately 49 ms per frame (~20 Hz)"); the endpoint the card fills in for each row's link.
+PAPER_LOOP_HZ = 20.0
+OFFBOARD = "tcp://127.0.0.1:0"
+_LINK_DELAY = {"link_delay": {"delay_ms": 60.0, "jitter_ms": 20.0}}
+_LINK_SPOOF = {"link_spoof": {"distance_m": 5.0}}
+
+
+def _offboard(setting: str, params: dict | None = None) -> Callable[[str, int], list[TrialSpec]]:
+    def make(defence: str, n: int) -> list[TrialSpec]:
+        return batch_specs(setting + ("" if defence == "raw" else f"+{defence}"), n, detector=_CAR,
+                           control_hz=PAPER_LOOP_HZ, estimator_endpoint=OFFBOARD, attack_params=params or {})
+    return make
+
+
+#: ``racf-link``: the defence where the paper ran it, offboard, and its link attacked (issue 58).
+#: The paper's loop clean and under the strong patch, then the patch with the link's answers
+#: delayed (60 +- 20 ms, past the 50 ms period), lost, or spoofed (the sign 5 m away) on a plain
+#: link, and spoofed on a CurveZMQ link. Each attack on the link keeps the protocol's window.
+_RACF_LINK = Battery(
+    name="racf-link",
+    loop=(
+        LoopRow("offboard_clean", "the paper's offboard loop (20 Hz, served), clean", 30, 4, _offboard("clean"),
+                attacked=False, link="plain"),
+        LoopRow("offboard_patch", "offboard, the strong patch", 30, 4, _offboard("attack"), link="plain"),
+        LoopRow("link_delay", "offboard, the patch, the answers delayed 60 +- 20 ms", 30, 4,
+                _offboard("attack+link_delay", _LINK_DELAY), link="plain"),
+        LoopRow("link_drop", "offboard, the patch, the answers lost", 30, 4, _offboard("attack+link_drop"), link="plain"),
+        LoopRow("link_spoof_plain", "offboard, the patch, a man in the middle answering 5 m, plain link", 30, 4,
+                _offboard("attack+link_spoof", _LINK_SPOOF), link="plain"),
+        LoopRow("link_spoof_curve", "offboard, the patch, a man in the middle answering 5 m, CurveZMQ link", 30, 4,
+                _offboard("attack+link_spoof", _LINK_SPOOF), link="curve"),
+    ),
+    drives=(),
+    offline_presets=(),
+)
+
 #: Every released battery, by name.
-BATTERIES = {"racf-1": _RACF_1, "racf-2": _RACF_2, "racf-3": _RACF_3, "racf-4": _RACF_4, "racf-5": _RACF_5}
+BATTERIES = {"racf-1": _RACF_1, "racf-2": _RACF_2, "racf-3": _RACF_3, "racf-4": _RACF_4, "racf-5": _RACF_5,
+             "racf-link": _RACF_LINK}
 DEFAULT_BATTERY = "racf-4"

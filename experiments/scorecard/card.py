@@ -13,6 +13,7 @@ from __future__ import annotations
 import hashlib
 import json
 import time
+from contextlib import nullcontext
 from dataclasses import replace
 from pathlib import Path
 
@@ -22,6 +23,7 @@ from racf.experiments.episode import TrialSpec
 from racf.experiments.scorecard.battery import PENALTIES, Battery
 from racf.experiments.scorecard.detection import detection_rows
 from racf.experiments.scorecard.drives import driving_rows
+from racf.experiments.scorecard.link import link_services
 from racf.provenance import atomic_write
 from racf.experiments.sweeps.store import ResultStore
 from racf.experiments.sweeps.summary import plugin_measures, stealth_summary, summarize
@@ -110,21 +112,25 @@ def run_card(defence: str, battery: Battery, out: Path, *, quick: bool = False, 
     card: dict = {"battery": battery.name + ("-quick" if quick else ""), "quick": quick, "defence": defence,
                   "version": card_version(defence), "sensor_profile": "qcar2", "closed_loop": {}, "drives": {}}
     timing: dict = {}
-    plan = []
-    for row in battery.rows():
-        specs = row.specs(defence, quick)
-        if options:
-            specs = [replace(s, estimator_options=options) for s in specs]
-        if service:
-            specs = [replace(s, **service) for s in specs]
-        plan.append((row, specs))
-    # One batch for the whole card: one pool of workers, each keeping its env and models from
-    # episode to episode, and the long drives first so that no worker idles at the end.
-    unique = {s.trial_id: s for _, specs in sorted(plan, key=lambda p: p[0] not in battery.drives) for s in specs}
-    store = ResultStore(out / "episodes")
-    t_run = time.perf_counter()
-    _, ran = run_episodes(list(unique.values()), store, backend, workers, address, log_steps=True,
-                          progress=progress, desc=f"{defence}: episodes")
+    links = {row.link for row in battery.rows() if row.link}
+    with link_services(defence, options, links, out) if links else nullcontext({}) as served:
+        plan = []
+        for row in battery.rows():
+            specs = row.specs(defence, quick)
+            if options:
+                specs = [replace(s, estimator_options=options) for s in specs]
+            if row.link:  # the battery's own service for this row's link
+                specs = [replace(s, **served[row.link]) for s in specs]
+            elif service:
+                specs = [replace(s, **service) for s in specs]
+            plan.append((row, specs))
+        # One batch for the whole card: one pool of workers, each keeping its env and models from
+        # episode to episode, and the long drives first so that no worker idles at the end.
+        unique = {s.trial_id: s for _, specs in sorted(plan, key=lambda p: p[0] not in battery.drives) for s in specs}
+        store = ResultStore(out / "episodes")
+        t_run = time.perf_counter()
+        _, ran = run_episodes(list(unique.values()), store, backend, workers, address, log_steps=True,
+                              progress=progress, desc=f"{defence}: episodes")
     timing.update(episodes_s=time.perf_counter() - t_run, episodes=len(unique), episodes_run=ran)
     loop_logs: list[pd.DataFrame] = []
     for row, specs in plan:

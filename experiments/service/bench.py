@@ -9,52 +9,20 @@ beside it, so the service's own cost reads as the difference.
 
 from __future__ import annotations
 
-import subprocess
-import sys
-import tempfile
 import time
-from contextlib import contextmanager
-from typing import Iterator
 
 import numpy as np
 
 from racf.experiments.episode.estimators import make_estimator
 from racf.experiments.episode.remote import RemoteEstimator
+from racf.experiments.sweeps.service_process import service_process
 
 __all__ = ["service_process", "record_samples", "measure", "PAPER_CYCLE_MS"]
+
 
 #: The paper's offboard cycle: "approximately 49 ms per frame (~20 Hz), including perception
 #: transmission, ODCA inference, and control feedback".
 PAPER_CYCLE_MS = 49.0
-
-
-@contextmanager
-def service_process(defence: str, options: dict | None = None, bind: str = "tcp://127.0.0.1:0") -> Iterator[tuple]:
-    """A ``racf serve`` process for ``defence``; yields (endpoint, process) and stops it after."""
-    import json
-
-    cmd = [sys.executable, "-m", "racf.experiments.cli", "serve", "--defence", defence, "--bind", bind]
-    for key, value in (options or {}).items():
-        cmd += ["--estimator-option", f"{key}={json.dumps(value)}"]
-    # Its log goes to a file: a pipe nobody reads would fill and stop the service mid-run.
-    log = tempfile.TemporaryFile("w+")
-    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=log, text=True)
-    try:
-        line = proc.stdout.readline()
-        if not line.startswith("listening at "):
-            proc.kill()
-            proc.wait()
-            log.seek(0)
-            raise RuntimeError(f"racf serve did not start: {line.strip()} {log.read().strip()[-2000:]}")
-        yield line.split("listening at ", 1)[1].split()[0], proc
-    finally:
-        if proc.poll() is None:
-            proc.terminate()
-            try:
-                proc.wait(timeout=10)
-            except subprocess.TimeoutExpired:
-                proc.kill()
-        log.close()
 
 
 class _Recorder:
