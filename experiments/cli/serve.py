@@ -55,6 +55,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="a running `racf serve` (default: start one on a free loopback port)")
     b.add_argument("--sign", type=int, default=1, help="the stop sign of the episode whose samples are sent (default 1)")
     b.add_argument("--setting", default=None, help="that episode's setting (default attack+DEFENCE)")
+    b.add_argument("--curve", action="store_true",
+                   help="over CurveZMQ: the started service with fresh keys, the car pinning them")
     b.add_argument("--json", action="store_true", help="print one JSON object")
     estimator_option_flag(b)
     b.set_defaults(handler=_bench)
@@ -114,7 +116,12 @@ def _keys(args: argparse.Namespace) -> int:
 
 def _bench(args: argparse.Namespace) -> int:
     from racf.experiments.episode import TrialSpec
-    from racf.experiments.service.bench import measure, record_samples, service_process
+    import tempfile
+    from pathlib import Path
+
+    from racf.experiments.episode.curve import CarKeys, make_keys
+    from racf.experiments.service.bench import measure, record_samples
+    from racf.experiments.sweeps.service_process import service_process
     from racf.plugins import ESTIMATORS
 
     if args.defence not in ESTIMATORS:
@@ -128,18 +135,28 @@ def _bench(args: argparse.Namespace) -> int:
         spec = TrialSpec(setting, args.sign, 1.0, 0, estimator_options=options)
     except ValueError as err:
         fail("bench service", str(err))
+    if args.curve and args.endpoint is not None:
+        fail("bench service", "--curve starts its own service with fresh keys: drop --endpoint")
     calls, calibration = record_samples(spec)
     if args.endpoint is not None:
         result = measure(args.endpoint, spec.estimator, calls, calibration, args.n, options)
     else:
-        with service_process(spec.estimator, options) as (endpoint, _):
-            result = measure(endpoint, spec.estimator, calls, calibration, args.n, options)
+        with tempfile.TemporaryDirectory() as tmp:
+            keys = None
+            if args.curve:
+                keys = Path(tmp) / "keys"
+                make_keys(keys)
+            with service_process(spec.estimator, options, keys=keys) as (endpoint, _):
+                result = measure(endpoint, spec.estimator, calls, calibration, args.n, options,
+                                 keys=CarKeys.load(keys) if keys else None)
     result["episode"] = spec.trial_id
+    result["link"] = "curve" if args.curve else "plain"
     if args.json:
         print(json.dumps(result, indent=2, allow_nan=False))
         return 0
     rt, local = result["round_trip"], result["in_process"]
-    print(f"racf serve ({result['defence']}) at {result['endpoint']}: {rt['n']} steps of episode {spec.trial_id}")
+    print(f"racf serve ({result['defence']}) at {result['endpoint']}, {result['link']} link: {rt['n']} steps of "
+          f"episode {spec.trial_id}")
     print(f"{'':<22}{'p50':>8}{'p90':>8}{'p99':>8}{'p99.9':>8}{'max':>8}   ms")
     for name, row in (("round trip (service)", rt), ("in-process estimate", local)):
         print(f"{name:<22}{row['p50_ms']:>8.3f}{row['p90_ms']:>8.3f}{row['p99_ms']:>8.3f}{row['p999_ms']:>8.3f}"

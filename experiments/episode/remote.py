@@ -16,7 +16,12 @@ step and the service's defence (one instance per car) answers. What the car must
 - **No answer.** After ``timeout_ms`` the car falls back to its own perception's depth
   distance (``d_meas``, no repair) for that step, logs it (``service_fallback``), and asks the
   service again after ``retry_s`` of its own time; a service that comes back starts its defence
-  afresh (``reset``), and that is logged too (``service_restarts`` in the result row).
+  afresh (``reset``), and that is logged too (``service_restarts`` in the result row). An answer
+  that is not a message (:mod:`~racf.experiments.episode.wire`), or a defence the service had to
+  rebuild, is no answer either.
+- **A peer that is not the service.** On a CurveZMQ link (``keys``) the car talks only to the
+  service whose key it pins; a man in the middle fails the handshake or the box, the car falls
+  back and counts it (``service_refusals``), and logs the first in one line.
 """
 
 from __future__ import annotations

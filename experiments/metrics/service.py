@@ -28,6 +28,8 @@ class ServiceMeasures(Metric):
         Field("service_fallback_steps", 0, "steps", "steps with no answer in time: the car's own depth distance"),
         Field("service_fallback", False, "", "the car fell back at least once", summary="rate"),
         Field("service_restarts", 0, "", "times the service answered again after a failure (its defence restarted)"),
+        Field("service_refusals", 0, "", "answers lost to a failed authentication: a peer that is not the service "
+                                         "the car pins (a man in the middle on a CurveZMQ link)"),
     )
 
     def score(self, episode: Episode) -> dict:
@@ -44,4 +46,5 @@ class ServiceMeasures(Metric):
                 "service_rtt_p99_ms": float(np.percentile(answered, 99)) if answered.size else math.nan,
                 "service_late_steps": int((answered >= dt * 1000.0).sum()),
                 "service_fallback_steps": fallback, "service_fallback": fallback > 0,
-                "service_restarts": int(log["service_restarts"].max()) if "service_restarts" in log else 0}
+                "service_restarts": int(log["service_restarts"].max()) if "service_restarts" in log else 0,
+                "service_refusals": int(log["service_refusals"].max()) if "service_refusals" in log else 0}

@@ -37,6 +37,32 @@ def table_differences(in_process: dict, served: dict) -> tuple[int, list[str]]:
     return len(keys), differ
 
 
+def served_table(local: dict, served: dict, how: str) -> list[str]:
+    """The paper's table through the service (over ``how``) beside the in-process one."""
+    n, differ = table_differences(local, served)
+    lines = [f"The paper's table through the service (`racf serve` on {how}) against the stored in-process table:", ""]
+    lines += meta_lines(served["meta"])
+    lines += ["| setting | N | SCR in process | SCR through the service | steps served | median round trip ms "
+              "| worst p99 ms | late steps | fallback steps |", "|---|---|---|---|---|---|---|---|---|"]
+    for name, row in served["settings"].items():
+        mine = local["settings"].get(name, {})
+        t = served.get("service", {}).get(name, {})
+        lines.append(f"| {name} | {row['n']} | {mine.get('scr', float('nan')):.2f} | {row['scr']:.2f} | "
+                     f"{t.get('steps', '-')} | {t.get('rtt_p50_ms_median', float('nan')):.2f} | "
+                     f"{t.get('rtt_p99_ms_max', float('nan')):.2f} | {t.get('late_steps', '-')} | "
+                     f"{t.get('fallback_steps', '-')} |")
+    late = sum(t.get("late_steps", 0) for t in served.get("service", {}).values())
+    steps = sum(t.get("steps", 0) for t in served.get("service", {}).values())
+    scr_moved = [k for k in differ if k.endswith(".scr")]
+    lines += ["", f"Of the {n} values of the two tables (every setting's rates, intervals, latencies and robustness), "
+              + (f"all {n} are equal." if not differ else
+                 f"{n - len(differ)} are equal and {len(differ)} differ: " + ", ".join(f"`{k}`" for k in differ[:12])
+                 + f". {late} of the {steps} answers came later than the 20 ms control period, and the measured "
+                   "latency delayed those actions by a step: the differences are theirs"
+                 + ("; no SCR moved." if not scr_moved else f"; SCR moved in {len(scr_moved)} settings.")), ""]
+    return lines
+
+
 def bags_and_service_markdown(d) -> list[str]:
     lines = ["## ROS 2 bags and the defence service", ""]
     if "bench-bags" in d:
@@ -64,32 +90,64 @@ def bags_and_service_markdown(d) -> list[str]:
                   f"{s['paper_cycle_ms']:.0f} ms. Distances that differed from the car's own: {s['distance_mismatches']}.", ""]
     else:
         lines += missing("bench-service", "racf bench service -n 10000 --json")
-    if "closed-loop-table-service" in d and "closed-loop-table" in d:
-        served, local = d["closed-loop-table-service"], d["closed-loop-table"]
-        n, differ = table_differences(local, served)
-        lines += ["The paper's table through the service (`racf serve` and one worker on 2 cores) against the stored "
-                  "in-process table:", ""]
-        lines += meta_lines(served["meta"])
-        lines += ["| setting | N | SCR in process | SCR through the service | steps served | median round trip ms "
-                  "| worst p99 ms | late steps | fallback steps |", "|---|---|---|---|---|---|---|---|---|"]
-        for name, row in served["settings"].items():
-            mine = local["settings"].get(name, {})
-            t = served.get("service", {}).get(name, {})
-            lines.append(f"| {name} | {row['n']} | {mine.get('scr', float('nan')):.2f} | {row['scr']:.2f} | "
-                         f"{t.get('steps', '-')} | {t.get('rtt_p50_ms_median', float('nan')):.2f} | "
-                         f"{t.get('rtt_p99_ms_max', float('nan')):.2f} | {t.get('late_steps', '-')} | "
-                         f"{t.get('fallback_steps', '-')} |")
-        late = sum(t.get("late_steps", 0) for t in served.get("service", {}).values())
-        steps = sum(t.get("steps", 0) for t in served.get("service", {}).values())
-        lines += ["", f"Of the {n} values of the two tables (every setting's rates, intervals, latencies and robustness), "
-                  + (f"all {n} are equal." if not differ else
-                     f"{n - len(differ)} are equal and {len(differ)} differ: " + ", ".join(f"`{k}`" for k in differ[:12])
-                     + f". {late} of the {steps} answers came later than the 20 ms control period (the defence's own "
-                       "compute: its slowest estimates take as long in the car's process, as the table above shows), "
-                       "and the measured latency delayed those actions by a step: the differences are theirs, in the "
-                       "settings that had them" + ("; no SCR moved." if not [k for k in differ if k.endswith(".scr")]
-                                                   else ".")),
-                  ""]
+    for name, how in (("closed-loop-table-service", "a plain link"), ("closed-loop-table-curve", "a CurveZMQ link")):
+        if name in d and "closed-loop-table" in d:
+            lines += served_table(d["closed-loop-table"], d[name], how)
+        else:
+            lines += missing(name, "racf trials --table -n 30 --json --estimator-endpoint ..."
+                             + (" --service-keys DIR" if "curve" in name else ""))
+    lines += link_markdown(d)
+    return lines
+
+
+def link_markdown(d) -> list[str]:
+    """The service under stress, CurveZMQ's cost, and ODCA onboard (issue 58)."""
+    lines: list[str] = []
+    if "service-stress" in d:
+        s = d["service-stress"]
+        f, c, cars = s["fuzz"], s["connections"], s["cars"]
+        drift = 100.0 * (cars["server_mb_end"] / cars["server_mb_start"] - 1.0)
+        lines += ["No message stops the service: `racf serve` (a separate process) under malformed requests, many "
+                  "connections at once and cars at the control rate:", ""]
+        lines += meta_lines(s["meta"]) + ["| trial | N | what must hold | measured |", "|---|---|---|---|"]
+        lines += [f"| fuzzed frame sets (any frames, any payload, broken requests) | {f['requests']} | a ping answered "
+                  f"after every batch | {f['pings_answered']} of {f['batches']} batches; alive: {f['alive']} |",
+                  f"| connections at once, one ping each | {c['connections']} | each answered | {c['answered']} |",
+                  f"| cars at {cars['hz']:g} Hz for {cars['seconds']:g} s | {cars['steps']} requests from {cars['cars']} "
+                  f"cars | no lost answer; memory within 5 % | {cars['lost']} lost; {cars['server_mb_start']:.1f} -> "
+                  f"{cars['server_mb_end']:.1f} MB ({drift:+.1f} %) |", "",
+                  f"The cars' round trips: p50 {cars['rtt_p50_ms']:.2f} ms, p99 {cars['rtt_p99_ms']:.2f} ms, p99.9 "
+                  f"{cars['rtt_p999_ms']:.2f} ms, longest {cars['rtt_max_ms']:.2f} ms (8 cars are threads of one "
+                  "process on 2 cores beside the server).", ""]
     else:
-        lines += missing("closed-loop-table-service", "racf trials --table -n 30 --json --estimator-endpoint ...")
+        lines += missing("service-stress", "racf bench service-stress --json")
+    if "bench-service-curve" in d and "bench-service" in d:
+        plain, curve = d["bench-service"]["round_trip"], d["bench-service-curve"]["round_trip"]
+        lines += ["CurveZMQ's cost on the round trip (the same samples, a fresh service each; authentication once per "
+                  "connection, then about 33 bytes and a box per message):", ""]
+        lines += meta_lines(d["bench-service-curve"]["meta"]) + ["| link | N | p50 ms | p99 ms | max ms |",
+                                                                 "|---|---|---|---|---|"]
+        for name, row in (("plain", plain), ("CurveZMQ", curve)):
+            lines.append(f"| {name} | {row['n']} | {row['p50_ms']:.3f} | {row['p99_ms']:.3f} | {row['max_ms']:.3f} |")
+        lines.append("")
+    else:
+        lines += missing("bench-service-curve", "racf bench service --curve -n 10000 --json")
+    if "odca-onboard" in d:
+        o = d["odca-onboard"]
+        lines += ["ODCA onboard: the prior and the head exported to ONNX (`racf odca export`) and run by onnxruntime on "
+                  "one thread, against the PyTorch path, step by step over the offline benchmark's test series:", ""]
+        lines += meta_lines(o["meta"])
+        lines += [f"Largest difference in the repaired distance over {o['steps']} steps ({o['series']} runs, clean and "
+                  f"the three presets): {o['max_abs_diff_m']:.1e} m; steps where the gate chose another source: "
+                  f"{o['source_changes']}.", "", "| one thread | p50 ms | p99 ms | max ms | steps over the 20 ms period |",
+                  "|---|---|---|---|---|"]
+        for name, label in (("torch", "PyTorch (the prior traced, the head in numpy)"), ("onnx", "onnxruntime (onboard)")):
+            row = o["latency"][name]
+            lines.append(f"| {label} | {row['p50_ms']:.3f} | {row['p99_ms']:.3f} | {row['max_ms']:.2f} | "
+                         f"{row['over_period']} |")
+        lines.append("")
+    else:
+        lines += missing("odca-onboard", "racf bench odca-onboard --json")
+    lines += ["The `racf-link` battery (the paper's offboard loop, its link delayed, lost and spoofed, on a plain and "
+              "on a CurveZMQ link) is on [the leaderboard](leaderboard.md).", ""]
     return lines

@@ -59,10 +59,11 @@ def _percentiles(ms: np.ndarray) -> dict:
             "p999_ms": float(np.percentile(ms, 99.9)), "max_ms": float(ms.max())}
 
 
-def measure(endpoint: str, defence: str, calls: list, calibration, n: int, options: dict | None = None) -> dict:
+def measure(endpoint: str, defence: str, calls: list, calibration, n: int, options: dict | None = None,
+            keys=None) -> dict:
     """Round trips of ``n`` estimate requests to the service at ``endpoint`` and the in-process cost of
     the same calls; the distances of both must agree (a check the service changes nothing)."""
-    remote = RemoteEstimator(endpoint, defence, options, timeout_ms=5000.0)
+    remote = RemoteEstimator(endpoint, defence, options, timeout_ms=5000.0, keys=keys)
     local = make_estimator(defence, options or {})
     for est in (remote, local):
         if callable(getattr(est, "use_calibration", None)):

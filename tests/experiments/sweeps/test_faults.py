@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-from racf.errors import EpisodeFailed, Interrupted
+from racf.errors import EpisodeFailed, Interrupted, UserError
 from racf.experiments.episode import TrialSpec
 from racf.experiments.sweeps.run import run_episodes
 from racf.experiments.sweeps.store import ResultStore
@@ -219,3 +219,29 @@ def test_a_scenario_plugins_fault_in_its_plan_or_its_world_names_the_plugin(tmp_
     assert "racf raised" not in line
     if target == "bad_plan":  # the failure line names the scenario's parameters too
         assert "bad_plan[lanes=2]" in line
+
+
+def test_a_batch_whose_service_dies_keeps_what_finished_and_says_how_to_resume(tmp_path):
+    """The service answers the preflight and about one episode, then no more: the episode it died in
+    drives on on its own depth, the next one cannot open a session, and the batch stops in one line
+    with the finished episodes stored (a rerun would resume from them)."""
+    from tests.conftest import start_service
+
+    stops: list = []
+    endpoint = start_service("raw", stops, max_requests=60)
+    specs = _specs("clean", 4, estimator_endpoint=endpoint)
+    store = ResultStore(tmp_path / "out")
+    try:
+        with pytest.raises(UserError) as caught:
+            run_episodes(specs, store, workers=1, progress=False)
+    finally:
+        for stop, thread in stops:
+            stop.set()
+            thread.join(5)
+    line = str(caught.value)
+    stored = store.done_ids()
+    assert 1 <= len(stored) < 4 and stored == {s.trial_id for s in specs[:len(stored)]}
+    for words in ("no defence service answers", f"{len(stored)} of 4 episodes stored", "run the same command again",
+                  "resumes without redoing them"):
+        assert words in line, line
+    assert "\n" not in line
