@@ -140,6 +140,19 @@ def _run(env: gym.Env, spec: TrialSpec, plan: EpisodePlan, estimator, on_step: S
     ending = tuple(c() for c in scenario.criteria if c.terminates)
     actions = ActionLine(delay_steps)
     rows: list[dict] = []
+    try:
+        _drive(env, obs, info, car, referee, scenario, plan, ending, actions, rows, truth_columns, on_step, dt)
+    finally:
+        close = getattr(car.estimator, "close", None)
+        if estimator is None and callable(close):  # a defence racf opened (a service's session) ends with it
+            close()
+    log = pd.DataFrame(rows)
+    log.insert(0, "trial_id", spec.trial_id)
+    return log
+
+
+def _drive(env, obs, info, car, referee, scenario, plan, ending, actions, rows, truth_columns, on_step, dt) -> None:
+    """The step loop: the car decides, the action line delivers, the referee logs, the world steps."""
     for _ in range(plan.max_steps):
         step = car.step(obs)
         applied = actions.push(step.action, late_steps(car.estimator, dt) if step.control else 0)
@@ -155,9 +168,6 @@ def _run(env: gym.Env, spec: TrialSpec, plan: EpisodePlan, estimator, on_step: S
             if info.get("collision_with"):  # the contact that ended it belongs to the last row's step
                 rows[-1]["collision_with"] = info["collision_with"]
             break
-    log = pd.DataFrame(rows)
-    log.insert(0, "trial_id", spec.trial_id)
-    return log
 
 
 class ActionLine:

@@ -68,7 +68,7 @@ class Sessions:
     Args:
         idle_s: a session unused this long is dropped.
         per_client: at most this many sessions per client (a car reconnecting opens a new one: the
-            oldest of that client is dropped to make room).
+            least recently used of that client is dropped to make room).
         total: at most this many in all; a hello beyond is refused.
     """
 
@@ -89,7 +89,9 @@ class Sessions:
     def open(self, identity: bytes, session: Session) -> str | None:
         """Adds ``session``; returns why it cannot be (None: opened)."""
         self.close(identity, "the car said hello again")
-        mine = sorted((s.opened, i) for i, s in self._open.items() if s.client == session.client)
+        # The client's least recently used sessions give way: a car asks every step, so these are
+        # the ones its cars have left (an episode that ended without its goodbye), never one driving.
+        mine = sorted((s.seen, i) for i, s in self._open.items() if s.client == session.client)
         for _, old in mine[:max(0, len(mine) - self.per_client + 1)]:
             self.close(old, f"more than {self.per_client} sessions from one client")
         if len(self._open) >= self.total:

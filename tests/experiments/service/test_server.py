@@ -165,3 +165,10 @@ def test_a_service_killed_and_restarted_mid_episode_gets_a_new_session(service):
     # A fallback step costs at most the timeout on top of the step's own work (margin 0.25 s).
     step_cost = float(np.median(walls))
     assert max(np.asarray(walls)[fell_back]) <= step_cost + timeout_ms / 1000.0 + 0.25
+
+
+def test_an_episode_ends_its_session_with_a_goodbye(service, caplog):
+    endpoint = service("raw")
+    with caplog.at_level("INFO", logger="racf.serve"):
+        run_trial(TrialSpec("clean", 1, 1.0, 3, run_up_m=0.6, estimator_endpoint=endpoint))
+    assert "ended (the car closed it): raw" in caplog.text and "round trip" in caplog.text

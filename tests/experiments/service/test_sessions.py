@@ -45,3 +45,15 @@ def test_a_goodbye_carries_the_cars_round_trips_into_the_line(caplog):
     with caplog.at_level(logging.INFO, logger="racf.serve"):
         sessions.close(b"a", "the car closed it", {"rtt_p50_ms": 1.5, "rtt_p99_ms": 4.0})
     assert "round trip 1.50/4.00 ms p50/p99 (car)" in caplog.text
+
+
+def test_the_least_recently_used_session_gives_way_not_one_that_drives():
+    import time
+
+    sessions = Sessions(per_client=2)
+    sessions.open(b"driving", _session("10.0.0.1"))
+    sessions.open(b"left", _session("10.0.0.1"))
+    time.sleep(0.01)
+    sessions.get(b"driving")  # asked a moment ago: it is driving
+    sessions.open(b"new", _session("10.0.0.1"))
+    assert sessions.get(b"driving") and sessions.get(b"new") and sessions.get(b"left") is None
