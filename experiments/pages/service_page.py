@@ -148,6 +148,20 @@ def link_markdown(d) -> list[str]:
         lines.append("")
     else:
         lines += missing("odca-onboard", "racf bench odca-onboard --json")
+    if "closed-loop-table-onnx" in d and "closed-loop-table" in d:
+        onboard, local = d["closed-loop-table-onnx"], d["closed-loop-table"]
+        n, differ = table_differences(local, onboard)
+        lines += ["The paper's table with ODCA onboard (`--estimator-option odca.runtime=onnx`) against the stored "
+                  "table with ODCA in PyTorch:", ""]
+        lines += meta_lines(onboard["meta"]) + ["| setting | N | SCR, PyTorch | SCR, onnxruntime |", "|---|---|---|---|"]
+        for name, row in onboard["settings"].items():
+            lines.append(f"| {name} | {row['n']} | {local['settings'].get(name, {}).get('scr', float('nan')):.2f} | "
+                         f"{row['scr']:.2f} |")
+        lines += ["", f"Of the {n} values of the two tables, " + (f"all {n} are equal." if not differ else
+                  f"{n - len(differ)} are equal and {len(differ)} differ: " + ", ".join(f"`{k}`" for k in differ[:12])
+                  + "."), ""]
+    else:
+        lines += missing("closed-loop-table-onnx", "racf trials --table -n 30 --json --estimator-option odca.runtime=onnx")
     lines += ["The `racf-link` battery (the paper's offboard loop, its link delayed, lost and spoofed, on a plain and "
               "on a CurveZMQ link) is on [the leaderboard](leaderboard.md).", ""]
     return lines
