@@ -75,22 +75,6 @@ def _export(module, args: tuple, path: Path, inputs: list[str], outputs: list[st
         program.save(str(path))
 
 
-def _prior_module(prior, n_patches: int):
-    import torch
-
-    model = prior.model
-
-    class QuantileForecast(torch.nn.Module):
-        def __init__(self) -> None:
-            super().__init__()
-            self.model = model
-
-        def forward(self, context, group_ids):
-            return self.model(context, group_ids=group_ids, num_output_patches=n_patches).quantile_preds
-
-    return QuantileForecast()
-
-
 def _head_module(head):
     import torch
 
@@ -128,7 +112,7 @@ def export_onnx(out: str | Path, checkpoint: str | Path | None = None) -> dict:
     patch = int(prior.pipeline.model_output_patch_size)
     n_patches = -(-cfg.horizon // patch)
     with _float_group_mask():
-        _export(_prior_module(prior, n_patches), (torch.zeros(1, prior.context_length), torch.arange(1)),
+        _export(prior.quantile_module(n_patches), (torch.zeros(1, prior.context_length), torch.arange(1)),
                 out / PRIOR_FILE, ["context", "group_ids"], ["quantiles"])
     _export(_head_module(model.head), (torch.zeros(1, len(FEATURE_NAMES)),), out / HEAD_FILE, ["features"], ["delta"])
     for name in ("odca.json", "head.npz"):

@@ -111,20 +111,27 @@ class Chronos2Prior:
         if key not in self._traced:
             import warnings
 
-            model = self.model
-
-            class _Quantiles(torch.nn.Module):
-                def __init__(self) -> None:
-                    super().__init__()
-                    self.model = model
-
-                def forward(self, context, group_ids):
-                    return self.model(context, group_ids=group_ids, num_output_patches=n_patches).quantile_preds
-
             with warnings.catch_warnings(), _quiet_transformers():
                 warnings.simplefilter("ignore")  # tracer warnings about Python values
-                self._traced[key] = torch.jit.trace(_Quantiles().eval(), (batch, self._group_ids), check_trace=False)
+                self._traced[key] = torch.jit.trace(self.quantile_module(n_patches), (batch, self._group_ids),
+                                                    check_trace=False)
         return self._traced[key](batch, self._group_ids)
+
+    def quantile_module(self, n_patches: int):
+        """The frozen model as a module of (context, group_ids) -> its quantile forecasts over
+        ``n_patches`` output patches: what is traced here and exported for the car
+        (:mod:`racf.odca.onnx_export`)."""
+        torch, model = self._torch, self.model
+
+        class QuantileForecast(torch.nn.Module):
+            def __init__(self) -> None:
+                super().__init__()
+                self.model = model
+
+            def forward(self, context, group_ids):
+                return self.model(context, group_ids=group_ids, num_output_patches=n_patches).quantile_preds
+
+        return QuantileForecast().eval()
 
     def forecast(self, context: np.ndarray, horizon: int) -> tuple[np.ndarray, np.ndarray]:
         """Median and quantile-spread std for each window; NaN where a window has no finite value.

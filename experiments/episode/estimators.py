@@ -17,8 +17,8 @@ gate repaired it; the EKF: its innovation test; Chronos-only: the depth lies mor
 answers ``would_pass(depth=..., ...)``: would a next step with this depth stay unflagged
 (the question a white-box attacker asks; it changes nothing).
 
-The ODCA checkpoint and the prior load once per process and are shared by the episodes a
-worker runs (loading takes about a second).
+The ODCA checkpoint and the prior load once per process and are shared by the estimators a
+worker or a service builds (loading takes about a second); each estimator keeps its own state.
 """
 
 from __future__ import annotations
@@ -66,7 +66,12 @@ class ODCAEstimator:
 
         if runtime not in RUNTIMES:
             raise ValueError(f"runtime must be one of {RUNTIMES}, got {runtime!r}")
-        self.model = _odca(checkpoint, runtime)
+        from racf.odca import ODCA
+
+        # The loaded parts (config, head, prior) are shared by the process's estimators; the state
+        # of an approach is each one's own: a service serves several cars at once.
+        shared = _odca(checkpoint, runtime)
+        self.model = ODCA(shared.config, shared.head, shared.prior)
         self.last = None
         self._had_depth = False
         self._size = (math.nan, math.nan)

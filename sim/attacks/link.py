@@ -24,7 +24,7 @@ from typing import Any
 
 import gymnasium as gym
 
-from racf.sim.attacks.base import AttackWrapper
+from racf.sim.attacks.base import AttackWrapper, attack_wrappers
 from racf.sim.attacks.schedule import AttackSchedule
 
 __all__ = ["LinkAttack", "LinkDelay", "LinkDrop", "LinkSpoof", "LinkVerdict", "link_attacks"]
@@ -154,9 +154,4 @@ class LinkSpoof(LinkAttack):
 
 def link_attacks(env: gym.Env) -> list[LinkAttack]:
     """The link attacks among ``env``'s wrappers, outermost first."""
-    found = []
-    while isinstance(env, gym.Wrapper):
-        if isinstance(env, LinkAttack):
-            found.append(env)
-        env = env.env
-    return found
+    return [w for w in attack_wrappers(env) if isinstance(w, LinkAttack)]

@@ -172,3 +172,33 @@ def test_an_episode_ends_its_session_with_a_goodbye(service, caplog):
     with caplog.at_level("INFO", logger="racf.serve"):
         run_trial(TrialSpec("clean", 1, 1.0, 3, run_up_m=0.6, estimator_endpoint=endpoint))
     assert "ended (the car closed it): raw" in caplog.text and "round trip" in caplog.text
+
+
+def test_two_cars_interleaved_each_get_the_answers_of_their_own_odca(service):
+    """ODCA's state is each car's: two approaches stepped in turn through one service give what each
+    gives alone (a model shared between sessions mixed the two: braked early through the service)."""
+    from racf.controllers import PerceptionSample
+    from racf.experiments.episode.estimators import make_estimator
+
+    endpoint = service("odca")
+    cars = [RemoteEstimator(endpoint, "odca"), RemoteEstimator(endpoint, "odca")]
+    starts = (3.0, 1.8)
+
+    def sample(i, k):
+        d = starts[i] - 0.02 * k
+        return PerceptionSample(None, d, 0.9, d + 0.05, 0.0)
+
+    for car in cars:
+        car.reset()
+    served = [[], []]
+    for k in range(60):  # the two cars' steps in turn
+        for i in (0, 1):
+            served[i].append(cars[i].estimate(sample(i, k), 1.0, 0.02))
+    alone = make_estimator("odca")
+    local = []
+    for i in (0, 1):  # each approach on its own, one after the other
+        alone.reset()
+        local.append([alone.estimate(sample(i, k), 1.0, 0.02) for k in range(60)])
+    assert np.array_equal(served, local, equal_nan=True)
+    for car in cars:
+        car.close()
