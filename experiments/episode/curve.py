@@ -107,7 +107,9 @@ _FAILURES = {
     "HANDSHAKE_FAILED_AUTH": "the service refused this car's key (not among its admitted cars)",
     "HANDSHAKE_FAILED_NO_DETAIL": "the peer is not the service whose key this car pins (a wrong key, or a "
                                   "man in the middle)",
-    "HANDSHAKE_FAILED_PROTOCOL": "the two ends disagree on CURVE (one has keys, the other not)",
+    # libzmq reports a box that fails its authentication after the handshake this way too.
+    "HANDSHAKE_FAILED_PROTOCOL": "the peer broke CurveZMQ: one end has no keys, or a message failed its "
+                                 "authentication (a man in the middle)",
 }
 
 

@@ -29,7 +29,7 @@ def test_an_admitted_car_is_answered_over_curve(service, keys):
 
 
 @pytest.mark.parametrize("who, words", [
-    ("no keys", "disagree on CURVE"),
+    ("no keys", "one end has no keys"),
     ("a car the service does not admit", "refused this car's key"),
     ("a car pinning another service's key", "not the service whose key this car pins"),
 ])

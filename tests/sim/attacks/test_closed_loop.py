@@ -15,6 +15,8 @@ from racf.experiments.episode.stack import plain_env, wrap_attacks
 from racf.plugins import ATTACKS
 
 BUILTIN = [name for name in ATTACKS if ATTACKS.plugin(name).builtin]
+#: The attacks on the link to a defence service act on its answers, not on the observation.
+ON_LINK = [name for name in BUILTIN if getattr(ATTACKS[name], "on_link", False)]
 
 
 class Tap(gym.Wrapper):
@@ -35,7 +37,7 @@ def test_every_builtin_attack_is_tested_here():
     assert len(BUILTIN) >= 11 and {"physical_patch", "lidar_spoof", "delay", "frustum_spoof"} <= set(BUILTIN)
 
 
-@pytest.mark.parametrize("name", BUILTIN)
+@pytest.mark.parametrize("name", [n for n in BUILTIN if n not in ON_LINK])
 def test_the_attack_acts_in_a_real_closed_loop_episode(name):
     spec = TrialSpec(setting_name([name], "raw"), 1, 1.5, 0, run_up_m=1.5)
     tap, changed, active = None, [], []
@@ -56,3 +58,22 @@ def test_the_attack_acts_in_a_real_closed_loop_episode(name):
     else:
         assert any(c for c, a in zip(changed, active) if a), "the car received what the env rendered"
         assert not any(c for c, a in zip(changed, active) if not a), "it acted outside its window"
+
+
+@pytest.mark.parametrize("name", ON_LINK)
+def test_a_link_attack_acts_on_the_answers_in_its_window_only(name, service):
+    """Served raw depth: the answer is the car's own depth unless the man in the middle acts."""
+    params = {"link_delay": {"delay_ms": 45.0, "jitter_ms": 0.0}, "link_spoof": {"distance_m": 7.5}}.get(name, {})
+    spec = TrialSpec(setting_name([name], "raw"), 1, 1.5, 0, run_up_m=1.5, estimator_endpoint=service("raw"),
+                     attack_params={name: params} if params else {}, estimator_timeout_ms=500.0)
+    result, log = run_trial(spec, clean_pass=False)
+    control = log["control"].astype(bool).to_numpy()
+    active = log["attack_active"].astype(bool).to_numpy() & control
+    assert active.any() and np.isfinite(result.attack_start_s), "its window never opened"
+    acted = {"link_delay": log["service_rtt_ms"].to_numpy() >= 45.0,
+             "link_drop": log["service_fallback"].to_numpy() == 1.0,
+             "link_spoof": log["d_fused"].to_numpy() == 7.5}[name]
+    assert acted[active].all(), "an answer in its window passed untouched"
+    # After a lost answer the car asks again only after retry_s: its fallback outlasts the window.
+    outside = control & ~active & (np.cumsum(active) == 0 if name == "link_drop" else True)
+    assert not acted[outside].any(), "it acted outside its window"
