@@ -151,16 +151,19 @@ def test_a_padded_foreign_frame_is_cropped_back_to_the_episode(exported, tmp_pat
         replay_bag(foreign, Mapping.load(mapping))
 
 
-@pytest.mark.parametrize("damage", ["random bytes", "cut in half"])
+@pytest.mark.parametrize("damage", ["random bytes", "cut in half", "a chunk scrambled"])
 def test_a_damaged_bag_is_one_line_with_what_to_do(exported, tmp_path, capsys, damage):
+    """Damage found on opening (no MCAP magic, no footer) or midway (a chunk that no longer decodes:
+    the bag opens, its messages break)."""
     import shutil
 
     bag = tmp_path / "damaged"
     shutil.copytree(exported.path, bag)
     data = next(bag.glob("*.mcap"))
-    size = data.stat().st_size
-    data.write_bytes(np.random.default_rng(0).bytes(size) if damage == "random bytes"
-                     else data.read_bytes()[:size // 2])
+    raw, rng = data.read_bytes(), np.random.default_rng(0)
+    size = len(raw)
+    data.write_bytes({"random bytes": rng.bytes(size), "cut in half": raw[:size // 2],
+                      "a chunk scrambled": raw[:size // 3] + rng.bytes(size // 3) + raw[2 * (size // 3):]}[damage])
     for argv in (["bag-info", str(bag)], ["replay-bag", str(bag), "--out", str(tmp_path / "o")]):
         code, _ = run_cli(argv)
         err = capsys.readouterr().err.strip()
