@@ -194,3 +194,15 @@ def test_the_wheels_take_the_newest_action_that_has_arrived(delay, lates):
     for k in range(len(lates)):
         arrived = [j for j in range(k + 1) if j + delay + lates[j] <= k]
         assert got[k] == (max(arrived) if arrived else 0), (k, got)
+
+
+def test_an_answer_within_the_control_period_is_in_time():
+    """Late steps are the whole periods an answer overran: 15 ms of a 20 ms period is none, 20 ms one."""
+    from racf.experiments.episode.runner import late_steps
+
+    class Answered:
+        latency_s = 0.0
+
+    for latency, late in ((0.0, 0), (0.015, 0), (0.0199, 0), (0.02, 1), (0.039, 1), (0.061, 3)):
+        Answered.latency_s = latency
+        assert late_steps(Answered(), 0.02) == late, latency

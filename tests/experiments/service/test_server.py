@@ -103,10 +103,11 @@ def test_a_defence_that_raises_is_restarted_for_that_car_alone(service, tmp_path
     car.reset(), other.reset()
     sample = PerceptionSample(None, 1.5, 0.9, 1.4, 0.0)
     with caplog.at_level("WARNING", logger="racf.serve"):
-        answers = [car.estimate(sample, 0.5, 0.02) for _ in range(8)]
-        assert all(other.estimate(sample, 0.5, 0.02) == 1.5 for _ in range(8))
-    assert car.diagnostics()["service_restarts"] == 1.0 and car.restarts == 1
-    assert answers == [1.5] * 8  # the 5th is the car's own depth: the same number, from the fallback
+        answers = [car.estimate(sample, 0.5, 0.02) for _ in range(10)]
+        assert all(other.estimate(sample, 0.5, 0.02) == 1.5 for _ in range(10))
+    # Rebuilt, it counts its calls afresh: it raises again at its own 5th (the car's 10th step).
+    assert car.diagnostics()["service_restarts"] == 2.0 and car.restarts == 2
+    assert answers == [1.5] * 10  # the 5th and 10th are the car's own depth: the same number, from the fallback
     assert "brittle raised in the session" in caplog.text and "lost its footing" in caplog.text
     car.close(), other.close()
 
@@ -228,3 +229,32 @@ def test_a_fallback_waits_the_timeout_in_milliseconds(service):
     thread.join(2.0)
     assert took and took[0] < 0.03 + 0.5, "the fallback waited far longer than its timeout"
     assert car.diagnostics()["service_fallback"] == 1.0
+
+
+def test_a_service_restarted_between_two_requests_opens_a_new_session(service):
+    """The service stops and another takes its port between two steps: the car's socket reconnects,
+    the new service answers "no session", and the car opens one and asks again, with no fallback."""
+    import threading
+
+    from racf.controllers import PerceptionSample
+    from tests.conftest import start_service
+
+    endpoint = f"tcp://127.0.0.1:{_free_port()}"
+    stops: list = []
+    start_service("raw", stops, endpoint=endpoint)
+    car = RemoteEstimator(endpoint, "raw", timeout_ms=3000.0)
+    car.reset()
+    sample = PerceptionSample(None, 1.5, 0.9, 1.4, 0.0)
+    assert car.estimate(sample, 0.5, 0.02) == 1.5
+    stop, thread = stops.pop()
+    stop.set()
+    thread.join(5)
+    start_service("raw", stops, endpoint=endpoint)
+    try:
+        assert car.estimate(sample, 0.5, 0.02) == 1.5
+        assert car.diagnostics()["service_fallback"] == 0.0 and car.restarts == 1
+    finally:
+        car.close()
+        for stop, thread in stops:
+            stop.set()
+            thread.join(5)
