@@ -141,7 +141,21 @@ def _run(env: gym.Env, spec: TrialSpec, plan: EpisodePlan, estimator, on_step: S
     actions = ActionLine(delay_steps)
     rows: list[dict] = []
     try:
-        _drive(env, obs, info, car, referee, scenario, plan, ending, actions, rows, truth_columns, on_step, dt)
+        for _ in range(plan.max_steps):
+            step = car.step(obs)
+            applied = actions.push(step.action, late_steps(car.estimator, dt) if step.control else 0)
+            truth = referee.observe(env, obs, info, step, car.target, car.perception)
+            rows.append(step_row({**car_columns(car, step, obs, info["time"], applied), **truth},
+                                 car.estimator.diagnostics(), truth_columns))
+            if on_step is not None:
+                on_step(env, obs, info, rows[-1])
+            if scenario.over(plan, rows) or any(c.fails_at(rows[-1]) for c in ending):
+                break
+            obs, _, terminated, truncated, info = env.step(applied)
+            if terminated or truncated:
+                if info.get("collision_with"):  # the contact that ended it belongs to the last row's step
+                    rows[-1]["collision_with"] = info["collision_with"]
+                break
     finally:
         close = getattr(car.estimator, "close", None)
         if estimator is None and callable(close):  # a defence racf opened (a service's session) ends with it
@@ -149,25 +163,6 @@ def _run(env: gym.Env, spec: TrialSpec, plan: EpisodePlan, estimator, on_step: S
     log = pd.DataFrame(rows)
     log.insert(0, "trial_id", spec.trial_id)
     return log
-
-
-def _drive(env, obs, info, car, referee, scenario, plan, ending, actions, rows, truth_columns, on_step, dt) -> None:
-    """The step loop: the car decides, the action line delivers, the referee logs, the world steps."""
-    for _ in range(plan.max_steps):
-        step = car.step(obs)
-        applied = actions.push(step.action, late_steps(car.estimator, dt) if step.control else 0)
-        truth = referee.observe(env, obs, info, step, car.target, car.perception)
-        rows.append(step_row({**car_columns(car, step, obs, info["time"], applied), **truth},
-                             car.estimator.diagnostics(), truth_columns))
-        if on_step is not None:
-            on_step(env, obs, info, rows[-1])
-        if scenario.over(plan, rows) or any(c.fails_at(rows[-1]) for c in ending):
-            break
-        obs, _, terminated, truncated, info = env.step(applied)
-        if terminated or truncated:
-            if info.get("collision_with"):  # the contact that ended it belongs to the last row's step
-                rows[-1]["collision_with"] = info["collision_with"]
-            break
 
 
 class ActionLine:

@@ -17,7 +17,7 @@ from racf.experiments.episode.estimators import make_estimator
 from racf.experiments.episode.remote import RemoteEstimator
 from racf.experiments.sweeps.service_process import service_process
 
-__all__ = ["service_process", "record_samples", "measure", "PAPER_CYCLE_MS"]
+__all__ = ["service_process", "record_samples", "measure", "percentiles", "PAPER_CYCLE_MS"]
 
 
 #: The paper's offboard cycle: "approximately 49 ms per frame (~20 Hz), including perception
@@ -53,7 +53,7 @@ def record_samples(spec) -> tuple[list, object]:
     return recorder.calls, plan_episode(spec).calibration
 
 
-def _percentiles(ms: np.ndarray) -> dict:
+def percentiles(ms: np.ndarray) -> dict:
     return {"n": int(ms.size), "mean_ms": float(ms.mean()), "p50_ms": float(np.percentile(ms, 50)),
             "p90_ms": float(np.percentile(ms, 90)), "p99_ms": float(np.percentile(ms, 99)),
             "p999_ms": float(np.percentile(ms, 99.9)), "max_ms": float(ms.max())}
@@ -86,6 +86,6 @@ def measure(endpoint: str, defence: str, calls: list, calibration, n: int, optio
             mismatches += not (d_remote == d_local or (np.isnan(d_remote) and np.isnan(d_local)))
             done += 1
     remote.close()
-    return {"defence": defence, "endpoint": endpoint, "round_trip": _percentiles(np.array(rtt)),
-            "in_process": _percentiles(np.array(cost)), "distance_mismatches": mismatches,
+    return {"defence": defence, "endpoint": endpoint, "round_trip": percentiles(np.array(rtt)),
+            "in_process": percentiles(np.array(cost)), "distance_mismatches": mismatches,
             "paper_cycle_ms": PAPER_CYCLE_MS}

@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from racf.experiments.episode.remote import RemoteEstimator
+from racf.experiments.service.bench import percentiles
 from racf.experiments.episode.wire import PROTOCOL, pack
 
 __all__ = ["fuzz_frames", "fuzz", "connections", "cars", "rss_mb", "ping"]
@@ -199,12 +200,8 @@ def cars(endpoint: str, defence: str, calls: list, calibration, k: int, hz: floa
         time.sleep(1.0)
         if progress is not None:
             progress(min(time.monotonic() - t0, seconds))
-    rtt = np.concatenate([np.asarray(r["rtt"], float) for r in results]) if results else np.array([])
+    rtt = np.concatenate([np.asarray(r["rtt"], float) for r in results])
     end_mb = rss_mb(server_pid) if server_pid else None
+    spread = {f"rtt_{k}": v for k, v in percentiles(rtt).items() if k != "n"} if rtt.size else {}
     return {"cars": k, "hz": hz, "seconds": seconds, "steps": sum(r["steps"] for r in results),
-            "lost": sum(r["lost"] for r in results),
-            "rtt_p50_ms": float(np.percentile(rtt, 50)) if rtt.size else None,
-            "rtt_p99_ms": float(np.percentile(rtt, 99)) if rtt.size else None,
-            "rtt_p999_ms": float(np.percentile(rtt, 99.9)) if rtt.size else None,
-            "rtt_max_ms": float(rtt.max()) if rtt.size else None,
-            "server_mb_start": start_mb, "server_mb_end": end_mb}
+            "lost": sum(r["lost"] for r in results), **spread, "server_mb_start": start_mb, "server_mb_end": end_mb}
