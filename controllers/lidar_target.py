@@ -131,7 +131,7 @@ class LidarTargetTracker:
             detection_bearing: bearing of the detection's centre from the optical axis,
                 rad, left positive; NaN without a detection.
             detection_span: (left, right) bearings of the detection box's edges, rad, or None.
-            target: "sign" or "obstacle", the kind the detection is of.
+            target: "sign", "obstacle" or "vehicle", the kind the detection is of.
             speed: forward speed of the car's reference point, m/s.
             yaw_rate: rad/s, counter-clockwise positive.
             dt: time since the previous step, s.
@@ -162,6 +162,7 @@ class LidarTargetTracker:
         if self._pos is not None and target != self._kind:
             self.reset()
         c = self.config
+        detection_depth += c.scan_behind_m(target)  # where the scan plane cuts what the camera sees
         if self._pos is not None:
             self._pos = _move(self._pos, speed * dt, lateral_speed * dt, yaw_rate * dt)
             self._age += dt
@@ -173,7 +174,7 @@ class LidarTargetTracker:
         if self._pos is not None and self._age > c.drop_after_s:
             self.reset_track()
         if self._pos is not None and self._reporting and self._age <= c.report_max_age_s:
-            self._value = self._pos[0] - c.camera_position_m[0]
+            self._value = self._pos[0] - c.camera_position_m[0] - c.scan_behind_m(self._kind)
         else:
             self._value = math.nan
         return self._value

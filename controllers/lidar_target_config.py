@@ -10,7 +10,7 @@ from dataclasses import dataclass
 __all__ = ["TARGET_KINDS", "LidarTargetConfig", "LidarTargetState"]
 
 #: Target kinds the tracker knows (``step(target=...)``).
-TARGET_KINDS = ("sign", "obstacle")
+TARGET_KINDS = ("sign", "obstacle", "vehicle")
 
 
 def _check_pair(name: str, value: tuple[float, float], lo: float, hi: float) -> None:
@@ -59,6 +59,13 @@ class LidarTargetConfig:
             return from 1.4 x or more the sign's distance, the background that a sign the
             scan plane misses leaves in its box.
         obstacle_box_height_max_m: the same for a crate.
+        vehicle_width_m, vehicle_box_width_m, vehicle_box_height_max_m: the same for a QCar 2 ahead.
+            The scan plane (0.193 m up) cuts another QCar 2 only at its own RPLIDAR (0.076 m
+            across) and, seen at an angle, its roof's edge; its box spans the car, flank included.
+        vehicle_scan_behind_m: how far behind the face the camera sees the scan plane cuts a car
+            ahead, m: its RPLIDAR's near side stands 0.16 m behind its rear bumper (its MJCF). The
+            tracker moves the camera's depth back by it to start a track, and reports the depth of
+            the car's rear (the track's depth less it), the quantity the camera's depth measures.
         gate_radius_m: association gate around the predicted position right after support.
         gate_growth_mps: the gate grows by this per second without support (slowly: odometry
             drifts little in a second, and a wide gate would take in other objects).
@@ -83,6 +90,10 @@ class LidarTargetConfig:
     obstacle_box_width_m: tuple[float, float] = (0.08, 0.32)
     sign_box_height_max_m: float = 0.125
     obstacle_box_height_max_m: float = 0.5
+    vehicle_width_m: tuple[float, float] = (0.03, 0.30)
+    vehicle_box_width_m: tuple[float, float] = (0.08, 0.60)
+    vehicle_box_height_max_m: float = 0.4
+    vehicle_scan_behind_m: float = 0.16
     gate_radius_m: float = 0.12
     gate_growth_mps: float = 0.1
     smoothing: float = 0.5
@@ -100,7 +111,8 @@ class LidarTargetConfig:
         _check_range("max_range_m", self.max_range_m, 0.2, 50.0, "m")
         _check_range("sector_half_angle_rad", self.sector_half_angle_rad, 0.05, math.radians(85.0), "rad")
         _check_range("bearing_margin_rad", self.bearing_margin_rad, 0.0, 0.5, "rad")
-        for name in ("sign_width_m", "obstacle_width_m", "sign_box_width_m", "obstacle_box_width_m"):
+        for name in ("sign_width_m", "obstacle_width_m", "sign_box_width_m", "obstacle_box_width_m", "vehicle_width_m",
+                     "vehicle_box_width_m"):
             _check_pair(name, getattr(self, name), 0.0, 2.0)
         _check_range("gate_radius_m", self.gate_radius_m, 0.01, 2.0, "m")
         _check_range("gate_growth_mps", self.gate_growth_mps, 0.0, 5.0, "m/s")
@@ -109,20 +121,26 @@ class LidarTargetConfig:
         _check_range("start_depth_tolerance_m", self.start_depth_tolerance_m, 0.0, 5.0, "m")
         _check_range("sign_box_height_max_m", self.sign_box_height_max_m, 0.01, 2.0, "m")
         _check_range("obstacle_box_height_max_m", self.obstacle_box_height_max_m, 0.01, 2.0, "m")
+        _check_range("vehicle_box_height_max_m", self.vehicle_box_height_max_m, 0.01, 2.0, "m")
+        _check_range("vehicle_scan_behind_m", self.vehicle_scan_behind_m, 0.0, 2.0, "m")
         _check_range("report_max_age_s", self.report_max_age_s, 0.0, 10.0, "s")
         _check_range("drop_after_s", self.drop_after_s, 0.0, 60.0, "s")
 
     def width_m(self, target: str) -> tuple[float, float]:
         """(min, max) LiDAR width of a target kind, metres."""
-        return self.sign_width_m if target == "sign" else self.obstacle_width_m
+        return getattr(self, f"{target}_width_m")
 
     def box_height_max_m(self, target: str) -> float:
         """The tallest a detection box of a target kind may be at the cluster's depth, metres."""
-        return self.sign_box_height_max_m if target == "sign" else self.obstacle_box_height_max_m
+        return getattr(self, f"{target}_box_height_max_m")
 
     def box_width_m(self, target: str) -> tuple[float, float]:
         """(min, max) width a detection box of a target kind implies, metres."""
-        return self.sign_box_width_m if target == "sign" else self.obstacle_box_width_m
+        return getattr(self, f"{target}_box_width_m")
+
+    def scan_behind_m(self, target: str | None) -> float:
+        """How far behind the face the camera sees the scan plane cuts a target kind, m."""
+        return self.vehicle_scan_behind_m if target == "vehicle" else 0.0
 
 
 @dataclass(frozen=True)

@@ -196,6 +196,7 @@ class ViewRenderer:
         mj.mj_forward(m, d)
         self.rig.invalidate()
         rgb, depth = self.rig.render(m, d)
+        self.last_depth = depth.copy()  # the frame's depth (the vehicle views' masks compare two)
         cam_pos, cam_mat = self.car.camera_pose(m, d)
         mask = np.zeros(rgb.shape[:2], bool)
         target = np.zeros(rgb.shape[:2], bool)

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
+from typing import Any
 
 import numpy as np
 
@@ -64,12 +65,15 @@ class CarCalibration:
 class Mission:
     """What the car is told before it starts: the route's path, its targets in order (the map's
     stop signs the route meets, and a crate's place when the operator put one on the route), the
-    cruise speed, and roughly where along the route it starts (None: anywhere)."""
+    cruise speed, roughly where along the route it starts (None: anywhere) and whether it follows
+    traffic."""
 
     path: Path
     targets: tuple[RouteTarget, ...]
     cruise_mps: float
     start_hint_m: float | None = None
+    #: Whether the car drives in traffic: its following stage is engaged (the operator's switch).
+    follow: bool = False
 
 
 @dataclass(frozen=True)
@@ -86,6 +90,7 @@ class CarStep:
     scan_new: bool
     tracked_xy: tuple[float, float]
     frame_new: bool = True
+    lead: Any = None  # the following stage's step (``LeadStep``), None when it is not engaged
 
 
 #: Where a sign the map does not list has its stop line: where the sign stands (the rule the map's
@@ -156,11 +161,13 @@ class Car:
         existence: the existence stage (``racf.experiments.episode.existence.ExistenceStage``) for a
             defence that answers ``stands()``: its witnesses reach the defence with each sample, and
             its verdict, not the detector's, drives the braker's track. None: the detector's.
+        lead: the following stage (``racf.experiments.episode.lead_stage.LeadStage``): its speed cap
+            joins the braker's. None: the car follows no one.
     """
 
     def __init__(self, calibration: CarCalibration, mission: Mission, perceptions: dict[str, Perception],
                  estimator, braking: BrakingConfig, dt: float, control_every: int = 1,
-                 localisation: str = "qcar2", existence=None) -> None:
+                 localisation: str = "qcar2", existence=None, lead=None) -> None:
         if localisation not in LOCALISATIONS:
             raise ValueError(f"localisation must be one of {LOCALISATIONS}, got {localisation!r}")
         if not mission.targets:
@@ -173,6 +180,8 @@ class Car:
         self.dt = float(dt)
         self.every = int(control_every)
         self.existence = existence
+        self.lead = lead
+        self._lead_step = None
         self.pose_filter = PoseFilter() if localisation == "qcar2" else None
         self._step = 0
         self._fix_time = -math.inf
@@ -260,6 +269,8 @@ class Car:
             self.follower = route_follower(self.mission.path, self.mission.cruise_mps, start_s)
             self._bumper_ahead_of_axle = self.calibration.bumper_x_m - self.follower.steering.config.front_axle_m
             self._begin(0)
+            if self.lead is not None:
+                self.lead.reset()
         # The car's own localisation and the map say which target is next (the env's rule, on the car's pose).
         slot = current_slot(self.mission.targets, self.slot, self.follower.progress_m + self._bumper_ahead_of_axle)
         if slot != self.slot:
@@ -298,9 +309,14 @@ class Car:
                 # The existence stage found the sign off its map entry (a moved sign): in view by where it was seen.
                 in_fov = self._unmapped_in_view()
             self._decision = self.braker.step(self._stands(), self._d_fused, speed, dt, expected_in_view=in_fov)
-            self._action = np.array(self.follower.act(x, y, yaw, speed, dt, self._decision.speed_cap_mps), np.float32)
+            cap = self._decision.speed_cap_mps
+            if self.lead is not None:
+                self._lead_step = self.lead.step(obs, self._pose, self.mission.path, self.follower.progress_m, speed,
+                                                 yaw_rate, lateral, dt, frame_new, scan_new, ages)
+                cap = min(cap, self._lead_step.decision.speed_cap_mps)
+            self._action = np.array(self.follower.act(x, y, yaw, speed, dt, cap), np.float32)
         self._step += 1
         track = self.perception.lidar.state.position  # camera-relative; + the camera's body position
         cam_x, cam_y = self.calibration.camera_xy_m
         return CarStep(self._action.copy(), control, self.slot, self._sample, self._d_fused, self._decision,
-                       self._pose.copy(), scan_new, (track[0] + cam_x, track[1] + cam_y), frame_new)
+                       self._pose.copy(), scan_new, (track[0] + cam_x, track[1] + cam_y), frame_new, self._lead_step)

@@ -88,8 +88,9 @@ def reset_options(spec: TrialSpec) -> dict:
     if drive is not None:
         return drive.reset_options()
     options = {spec.scenario.target: spec.sign, "cruise_speed": spec.speed}
-    if spec.run_up_m is not None:
-        options["run_up_m"] = float(spec.run_up_m)
+    run_up = spec.run_up_m if spec.run_up_m is not None else spec.scenario.run_up(spec)
+    if run_up is not None:
+        options["run_up_m"] = float(run_up)
     return options
 
 

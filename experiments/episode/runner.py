@@ -226,7 +226,19 @@ def car_columns(car, step, obs: dict, t: float, applied: np.ndarray) -> dict:
         "frame_new": step.frame_new, "scan_new": step.scan_new, "scan_fov": scan_fov(obs["lidar"]),
         # The LiDAR reference's tracked point in the body frame (NaN without a track), for viewers.
         "track_x": step.tracked_xy[0], "track_y": step.tracked_xy[1],
+        **lead_columns(step.lead),
     }
+
+
+def lead_columns(lead) -> dict:
+    """The following stage's part of a row (``LeadStep``; None: not engaged, its columns NaN/False)."""
+    from racf.experiments.episode.lead_stage import NO_LEAD
+
+    lead = lead or NO_LEAD
+    sample, decision = lead.sample, lead.decision
+    return {"lead_detected": sample.detected, "lead_d_meas": sample.d_meas, "lead_lidar": sample.lidar_m,
+            "lead_d_size": sample.d_size, "lead_d_fused": lead.d_fused, "lead_v_est": lead.lead_mps,
+            "lead_gap_est": decision.gap_m, "lead_cap": decision.speed_cap_mps, "lead_emergency": decision.emergency}
 
 
 def _result(spec: TrialSpec, plan: EpisodePlan, env: gym.Env, log: pd.DataFrame) -> TrialResult:

@@ -102,7 +102,34 @@ def build_car(spec: TrialSpec, plan: EpisodePlan, estimator=None, env: gym.Env |
     if callable(configure):
         configure(calib)
     return Car(calib, plan.mission, perceptions, estimator, spec.braking, plan.control_dt_s, every, plan.localisation,
-               existence_stage(estimator, calib, spec.detector))
+               existence_stage(estimator, calib, spec.detector), lead_stage(spec, calib) if plan.mission.follow else None)
+
+
+def lead_stage(spec: TrialSpec, calib: CarCalibration):
+    """The following stage of a car in traffic: the vehicle detector on its lane, and the spec's
+    defence for the lead's distance, its own instance."""
+    from racf.controllers.lead_perception import LeadPerception
+    from racf.experiments.episode.lead_stage import LeadStage
+
+    estimator = make_estimator(spec.estimator, spec.estimator_options)
+    configure = getattr(estimator, "use_calibration", None)
+    if callable(configure):
+        configure(calib)
+    perception = LeadPerception(calib.camera, _vehicle_detector(), tracker(calib))
+    return LeadStage(perception, estimator, calib.bumper_x_m - calib.camera_xy_m[0], calib.camera_xy_m)
+
+
+def _vehicle_detector():
+    """The process's vehicle detector (its network is loaded once; it keeps no state between frames)."""
+    global _VEHICLE_DETECTOR
+    if _VEHICLE_DETECTOR is None:
+        from racf.controllers.vehicle_detector import LearnedVehicleDetector
+
+        _VEHICLE_DETECTOR = LearnedVehicleDetector()
+    return _VEHICLE_DETECTOR
+
+
+_VEHICLE_DETECTOR = None
 
 
 def car_keys(spec: TrialSpec):

@@ -157,6 +157,10 @@ class Scenario:
     def check(self, spec: Any, values: dict[str, Any]) -> None:
         """Refuses (ValueError) a spec this scenario cannot run beyond its parameters' ranges."""
 
+    def run_up(self, spec: Any) -> float | None:
+        """The approach's run-up when the spec gives none, m (None: the route's default, 3 m)."""
+        return None
+
     def env_settings(self, spec: Any, values: dict[str, Any]) -> dict[str, Any]:
         """Env settings this scenario needs beyond the spec's sensors and signs."""
         return {}

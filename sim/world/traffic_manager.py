@@ -153,17 +153,17 @@ def _parsed(value: Any) -> tuple[list, tuple[float, float]]:
     return list(raw), conflict
 
 
-def traffic_body(index: int) -> str:
-    """Name of other car ``index``'s (mocap) body."""
-    return f"traffic_{index}"
+def traffic_body(index: int, prefix: str = "traffic") -> str:
+    """Name of other car ``index``'s (mocap) body (``prefix``: whose cars, for another manager's)."""
+    return f"{prefix}_{index}"
 
 
-def traffic_paint_geoms(index: int) -> tuple[str, ...]:
+def traffic_paint_geoms(index: int, prefix: str = "traffic") -> tuple[str, ...]:
     """Names of other car ``index``'s geoms that carry its colour."""
-    return tuple(f"traffic_{index}_{name}" for name in _PAINTED)
+    return tuple(f"{prefix}_{index}_{name}" for name in _PAINTED)
 
 
-def traffic_xml(index: int, car_xml: bytes) -> str:
+def traffic_xml(index: int, car_xml: bytes, prefix: str = "traffic") -> str:
     """Other car ``index``: the QCar 2's own bodies and geoms (from its MJCF), welded to one mocap
     body, renamed, in a group every sensor sees, colliding with the ego car's chassis only."""
     root = ET.fromstring(car_xml)
@@ -177,7 +177,7 @@ def traffic_xml(index: int, car_xml: bytes) -> str:
             else:
                 strip(child)
         if element.get("name"):
-            element.set("name", f"traffic_{index}_{element.get('name')}")
+            element.set("name", f"{prefix}_{index}_{element.get('name')}")
         if element.tag == "geom":
             # Contact bits: type 4 (no other car, wheel or floor has it in its affinity), affinity 2
             # (the ego chassis's type): a crash with the ego car registers, nothing else costs a contact.
@@ -186,7 +186,7 @@ def traffic_xml(index: int, car_xml: bytes) -> str:
                 element.set("contype", "4")
                 element.set("conaffinity", "2")
     strip(body)
-    body.set("name", traffic_body(index))
+    body.set("name", traffic_body(index, prefix))
     body.set("mocap", "true")
     body.set("pos", f"0 0 {PARKED_Z_M}")
     return "\n    " + ET.tostring(body, encoding="unicode")

@@ -1,0 +1,91 @@
+"""How the car followed: the gap to the lead, time-to-collision and headway, scored from the step log.
+
+Pure, like cross-traffic's scorer: it reads the referee's columns (the ego car's true pose and
+speed, the lead's ``lead_*`` columns, what the car touched) and nothing else.
+
+- **gap**: the clear distance between the ego car's front and the lead's rear, m: the distance
+  between the two body origins less one car length (both are QCar 2s, origins midway along them).
+  In the map's curves (radius >= 0.9 m) the chord this measures is within 2 % of the lane's arc
+  at the gaps that matter (under 1 m).
+- **time-to-collision** (TTC): the gap over the closing speed (the ego car's speed less the
+  lead's), while they close; the episode's smallest, before any contact (0 at contact with the
+  lead; NaN: they never closed).
+- **headway**: the gap over the ego car's speed; the time spent with it under ``MIN_HEADWAY_S``
+  while the car moves (a headway violation).
+- **hard brakes**: the ego car's decelerations past ``HARD_BRAKE_MPS2``, counted once per episode
+  of braking (what a phantom car ahead costs).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+
+import numpy as np
+import pandas as pd
+
+from racf.sim.world.traffic import CAR_FOOTPRINT_M
+
+__all__ = ["FollowingOutcome", "score_following", "MIN_HEADWAY_S", "HARD_BRAKE_MPS2", "MOVING_MPS"]
+
+#: Under this headway the car follows too close, s (half the following controller's 1 s policy:
+#: the two-second rule's half, scaled in time, not in size).
+MIN_HEADWAY_S = 0.5
+#: A deceleration past this is a hard brake, m/s^2 (0.3 g).
+HARD_BRAKE_MPS2 = 3.0
+#: Headway counts only while the car moves faster than this, m/s.
+MOVING_MPS = 0.1
+
+
+@dataclass(frozen=True)
+class FollowingOutcome:
+    """One episode's following (NaN/0 without a lead)."""
+
+    lead_collision: bool
+    min_gap_m: float
+    min_ttc_s: float
+    headway_violation_s: float
+    hard_brakes: int
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+def gaps(log: pd.DataFrame) -> np.ndarray:
+    """(n,) the clear gap to the lead at each step, m (NaN: no lead)."""
+    dx = log["lead_x"].to_numpy(float) - log["x"].to_numpy(float)
+    dy = log["lead_y"].to_numpy(float) - log["y"].to_numpy(float)
+    return np.hypot(dx, dy) - CAR_FOOTPRINT_M[0]
+
+
+def score_following(log: pd.DataFrame) -> FollowingOutcome:
+    """The following outcome of one episode's log."""
+    touched = log["collision_with"].astype(str).to_numpy() if "collision_with" in log else np.array([""] * len(log))
+    hits = np.flatnonzero(touched == "lead")
+    end = int(hits[0]) if hits.size else len(log)
+    if "lead_x" not in log or not np.isfinite(log["lead_x"].to_numpy(float)).any():
+        return FollowingOutcome(False, math.nan, math.nan, 0.0, 0)
+    gap = gaps(log)[:max(end, 1)]
+    ego = log["speed"].to_numpy(float)[:max(end, 1)]
+    lead = log["lead_speed"].to_numpy(float)[:max(end, 1)]
+    closing = ego - lead
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ttc = np.where(closing > 1e-3, np.maximum(gap, 0.0) / closing, np.inf)
+        headway = np.where(ego > MOVING_MPS, np.maximum(gap, 0.0) / ego, np.inf)
+    min_ttc = 0.0 if hits.size else (float(ttc.min()) if np.isfinite(ttc).any() else math.nan)
+    t = log["t"].to_numpy(float)[:max(end, 1)]
+    dt = np.diff(t, prepend=t[0])
+    return FollowingOutcome(bool(hits.size), float(np.nanmin(gap)), min_ttc,
+                            float(dt[headway < MIN_HEADWAY_S].sum()), hard_brakes(log))
+
+
+def hard_brakes(log: pd.DataFrame) -> int:
+    """How many times the ego car's deceleration went past ``HARD_BRAKE_MPS2`` (each run of steps once)."""
+    t, v = log["t"].to_numpy(float), log["speed"].to_numpy(float)
+    if len(t) < 3:
+        return 0
+    # Over 0.1 s, not a step: the wheels' contact makes the per-step speed jitter.
+    lag = max(1, int(round(0.1 / max(float(np.median(np.diff(t))), 1e-3))))
+    decel = (v[:-lag] - v[lag:]) / (t[lag:] - t[:-lag])
+    hard = decel > HARD_BRAKE_MPS2
+    return int(np.count_nonzero(hard[1:] & ~hard[:-1]) + (1 if hard.size and hard[0] else 0))

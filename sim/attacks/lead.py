@@ -1,0 +1,176 @@
+"""Attacks on the car ahead (the ``lead_vehicle`` scenario), each on the sensors as the literature
+poses it, from the attacker's ground truth of where the lead stands:
+
+- ``lead_patch``: the paper's patch injection on the depth inside the lead's box, reading it
+  ``bias_m`` far (the depth-estimation patch on a car's rear: Cheng et al., ECCV 2022);
+- ``lead_ramp``: the same bias grown at ``rate_mps`` (stealthy: each frame near the last);
+- ``lead_frustum``: the LiDAR's returns from the lead moved ``bias_m`` away along their beams
+  (LiDAR spoofing and the frustum attack: Cao et al., CCS 2019; Hallyburton et al., USENIX
+  Security 2022); with ``depth`` the camera's depth moves with them, so the two agree.
+
+They act from ``start_s`` (``trigger="at_time"``: before the lead brakes, by default) for the
+episode's ``t_atk``. The lead's pixels are its box (a QCar 2's, 0.425 x 0.192 x 0.2 m) projected
+into the frame, where the depth is no farther than the box's far side.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import cv2
+import gymnasium as gym
+import numpy as np
+
+from racf.sim.attacks.base import AttackWrapper
+from racf.sim.attacks.schedule import AttackSchedule, as_range
+
+__all__ = ["LeadPatch", "LeadRamp", "LeadFrustum", "lead_pixels", "lead_beams", "LEAD_BOX_M"]
+
+#: The lead's box as the attacker projects it: length, width, height, m.
+LEAD_BOX_M = (0.425, 0.192, 0.20)
+_MJ_TO_OPTICAL = np.diag([1.0, -1.0, -1.0])
+#: Where a lead attack starts by default, s into the episode (the scenario's lead brakes at 3 s).
+DEFAULT_START_S = 2.0
+
+
+def _lead(info: dict) -> tuple[float, float, float] | None:
+    x, y, yaw = (float(info.get(f"lead_{k}", math.nan)) for k in ("x", "y", "yaw"))
+    return None if not math.isfinite(x) else (x, y, yaw)
+
+
+def _corners(lead: tuple[float, float, float]) -> np.ndarray:
+    x, y, yaw = lead
+    length, width, height = LEAD_BOX_M
+    c, s = math.cos(yaw), math.sin(yaw)
+    out = []
+    for a in (-0.5, 0.5):
+        for b in (-0.5, 0.5):
+            px, py = x + c * a * length - s * b * width, y + s * a * length + c * b * width
+            out += [(px, py, 0.0), (px, py, height)]
+    return np.array(out)
+
+
+def lead_pixels(env: gym.Env, info: dict, depth: np.ndarray) -> np.ndarray:
+    """(H, W) bool: the lead's pixels in the frame (ground truth: the attacker's knowledge)."""
+    u = env.unwrapped
+    mask = np.zeros(depth.shape, bool)
+    lead = _lead(info)
+    if lead is None:
+        return mask
+    cam_pos, cam_mat = u.car.camera_pose(u.model, u.data)
+    k = u.truth.intrinsics
+    pts = (_MJ_TO_OPTICAL @ np.asarray(cam_mat).reshape(3, 3).T @ (_corners(lead) - cam_pos).T).T
+    if np.all(pts[:, 2] <= 0.05):
+        return mask
+    pts = pts[pts[:, 2] > 0.05]
+    uv = np.column_stack([k.cx + k.fx * pts[:, 0] / pts[:, 2], k.cy + k.fy * pts[:, 1] / pts[:, 2]])
+    hull = cv2.convexHull(np.clip(uv, -1e4, 1e4).astype(np.int32))
+    poly = np.zeros(depth.shape, np.uint8)
+    cv2.fillConvexPoly(poly, hull, 1)
+    poly = cv2.dilate(poly, np.ones((5, 5), np.uint8))  # the frame may be a camera period old
+    return poly.astype(bool) & (depth > 0) & (depth <= float(pts[:, 2].max()) + 0.05)
+
+
+def lead_beams(env: gym.Env, info: dict, scan: np.ndarray) -> np.ndarray:
+    """(N,) bool: the LiDAR beams whose return is the lead's."""
+    u = env.unwrapped
+    beams = np.zeros(len(scan), bool)
+    lead = _lead(info)
+    if lead is None:
+        return beams
+    lidar = u.data.site("lidar")
+    yaw = float(np.arctan2(lidar.xmat[3], lidar.xmat[0]))
+    corners = _corners(lead)[::2, :2] - lidar.xpos[:2]
+    bearings = np.arctan2(corners[:, 1], corners[:, 0]) - yaw
+    centre = math.atan2(lead[1] - lidar.xpos[1], lead[0] - lidar.xpos[0]) - yaw
+    rel = (bearings - centre + np.pi) % (2 * np.pi) - np.pi
+    angles = 2 * np.pi * np.arange(len(scan)) / len(scan)
+    diff = (angles - centre + np.pi) % (2 * np.pi) - np.pi
+    far = float(np.linalg.norm(corners, axis=1).max())
+    return (diff >= rel.min() - 0.01) & (diff <= rel.max() + 0.01) & np.isfinite(scan) & (scan > 0) & (scan <= far + 0.05)
+
+
+class _LeadAttack(AttackWrapper):
+    """A lead attack: on the ``at_time`` schedule from ``start_s`` unless told otherwise."""
+
+    targets = ("sign",)
+
+    def __init__(self, env: gym.Env, **schedule: Any) -> None:
+        schedule = {"trigger": "at_time", "start_s": DEFAULT_START_S, **schedule}
+        super().__init__(env, AttackSchedule(**schedule))
+
+    def reset(self, *, seed=None, options=None):
+        if not any(getattr(m, "name", None) == "lead" for m in getattr(self.env.unwrapped, "world", ())):
+            raise ValueError(f"{self.name} attacks the car ahead: run it in the lead_vehicle scenario "
+                             "(--target lead_vehicle)")
+        return super().reset(seed=seed, options=options)
+
+    def _shift_depth(self, obs: dict, info: dict, bias: float) -> dict:
+        depth = obs["depth"].copy()
+        plane = depth[..., 0]
+        where = lead_pixels(self, info, plane)
+        plane[where] = np.maximum(plane[where] + bias, 0.0).astype(depth.dtype)
+        obs["depth"] = depth
+        return obs
+
+
+class LeadPatch(_LeadAttack):
+    """The lead's depth read ``bias_m`` far inside its box (a value or a (low, high) range per episode)."""
+
+    name = "lead_patch"
+
+    def __init__(self, env: gym.Env, bias_m: Any = 1.0, **schedule: Any) -> None:
+        gym.utils.RecordConstructorArgs.__init__(self, bias_m=bias_m, **schedule)
+        self.bias_range = as_range("bias_m", bias_m, 0.0, 10.0)
+        super().__init__(env, **schedule)
+        self.bias = 0.0
+
+    def _on_reset(self) -> None:
+        self.bias = float(self.rng.uniform(*self.bias_range))
+
+    def _attack(self, obs: dict, info: dict) -> dict:
+        return self._shift_depth(obs, info, self.bias)
+
+
+class LeadRamp(_LeadAttack):
+    """The lead's depth read far by a bias growing at ``rate_mps`` up to ``max_m`` (stealthy)."""
+
+    name = "lead_ramp"
+
+    def __init__(self, env: gym.Env, rate_mps: float = 0.5, max_m: float = 2.0, **schedule: Any) -> None:
+        gym.utils.RecordConstructorArgs.__init__(self, rate_mps=rate_mps, max_m=max_m, **schedule)
+        if not (0.0 < rate_mps <= 10.0 and 0.0 < max_m <= 10.0):
+            raise ValueError(f"rate_mps must be in (0, 10] m/s and max_m in (0, 10] m, got {rate_mps!r}, {max_m!r}")
+        self.rate_mps, self.max_m = float(rate_mps), float(max_m)
+        super().__init__(env, **schedule)
+
+    def _attack(self, obs: dict, info: dict) -> dict:
+        start = self.schedule.windows[-1][0]
+        return self._shift_depth(obs, info, min(self.rate_mps * (float(info["time"]) - start), self.max_m))
+
+
+class LeadFrustum(_LeadAttack):
+    """The LiDAR's returns from the lead moved ``bias_m`` away along their beams; with ``depth`` the
+    camera's depth of the lead moves with them (the frustum attack: the two agree)."""
+
+    name = "lead_frustum"
+
+    def __init__(self, env: gym.Env, bias_m: Any = 1.0, depth: bool = False, **schedule: Any) -> None:
+        gym.utils.RecordConstructorArgs.__init__(self, bias_m=bias_m, depth=depth, **schedule)
+        self.bias_range = as_range("bias_m", bias_m, 0.0, 10.0)
+        if not isinstance(depth, bool):
+            raise ValueError(f"depth must be true or false, got {depth!r}")
+        self.with_depth = depth
+        super().__init__(env, **schedule)
+        self.bias = 0.0
+
+    def _on_reset(self) -> None:
+        self.bias = float(self.rng.uniform(*self.bias_range))
+
+    def _attack(self, obs: dict, info: dict) -> dict:
+        scan = np.asarray(obs["lidar"]).copy()
+        beams = lead_beams(self, info, scan)
+        scan[beams] += self.bias
+        obs["lidar"] = scan.astype(obs["lidar"].dtype)
+        return self._shift_depth(obs, info, self.bias) if self.with_depth else obs

@@ -1,0 +1,94 @@
+"""The car ahead's world manager: the lead car of ``racf.sim.world.lead`` driven in MuJoCo.
+
+The lead-vehicle scenario brings it (``world``); it reads the reset option ``lead`` (a
+``LeadCar.to_options()`` dict, or None: no lead this episode, parked out of sight) and logs its own
+ground truth: the lead's pose and speed (``lead_x``, ``lead_y``, ``lead_yaw``, ``lead_speed``).
+Its body is a QCar 2's, built the way cross-traffic's are (``traffic_xml``), named ``lead_0``; a
+contact with it is ``lead``.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import mujoco
+import numpy as np
+
+from racf.sim.world.lead import LeadCar
+from racf.sim.world.manager import TruthColumn, WorldManager
+from racf.sim.world.traffic import TRAFFIC_COLOURS
+from racf.sim.world.traffic_manager import PARKED_Z_M, traffic_body, traffic_paint_geoms, traffic_xml
+
+__all__ = ["LeadManager", "LEAD_PREFIX", "LEAD_COLUMNS"]
+
+#: The lead's body and geom names start with this.
+LEAD_PREFIX = "lead"
+#: Its ground-truth columns: (field, unit, meaning).
+LEAD_COLUMNS = (("x", "m", "position, map frame"), ("y", "m", "position, map frame"),
+                ("yaw", "rad", "heading, map frame"), ("speed", "m/s", "speed"))
+
+
+class LeadManager(WorldManager):
+    """One lead car on the ego car's lane, tabulated at each reset for the whole episode."""
+
+    name = "lead"
+    option = "lead"
+
+    def __init__(self) -> None:
+        self._mocap = -1
+        self._paint: list[int] = []
+        self._body = -1
+        self._lead: LeadCar | None = None
+        self._table = np.full((1, 4), math.nan)
+
+    def scene_xml(self) -> str:
+        from racf.sim.world.scene import car_xml
+
+        return traffic_xml(0, car_xml(), LEAD_PREFIX)
+
+    def bind(self, model: mujoco.MjModel) -> None:
+        self._body = model.body(traffic_body(0, LEAD_PREFIX)).id
+        self._mocap = int(model.body_mocapid[self._body])
+        self._paint = [model.geom(g).id for g in traffic_paint_geoms(0, LEAD_PREFIX)]
+
+    def reset(self, model, data, value, physics_dt_s, max_episode_s) -> None:
+        self._lead = None if value is None else LeadCar.from_options(value)
+        if self._lead is None:
+            self._table = np.full((1, 4), math.nan)
+        else:
+            steps = np.arange(int(round(max_episode_s / physics_dt_s)) + 2)
+            self._table = self._lead.states(steps * physics_dt_s)
+            model.geom_rgba[self._paint] = TRAFFIC_COLOURS[self._lead.colour]
+        self.before_physics(data, 0)
+
+    @property
+    def lead(self) -> LeadCar | None:
+        return self._lead
+
+    @property
+    def moving(self) -> bool:
+        return self._lead is not None
+
+    def state(self, substep: int) -> np.ndarray:
+        """(4,) x, y, yaw, speed of the lead at physics step ``substep`` (NaN: no lead)."""
+        return self._table[min(substep, len(self._table) - 1)].copy()
+
+    def before_physics(self, data, substep) -> None:
+        if self._lead is None:
+            data.mocap_pos[self._mocap] = (0.0, 0.0, PARKED_Z_M)
+            data.mocap_quat[self._mocap] = (1.0, 0.0, 0.0, 0.0)
+            return
+        x, y, yaw, _ = self.state(substep)
+        data.mocap_pos[self._mocap] = (x, y, 0.0)
+        data.mocap_quat[self._mocap] = (math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2))
+
+    def columns(self) -> tuple[TruthColumn, ...]:
+        return tuple(TruthColumn(f"lead_{field}", unit, f"ground truth: the lead car's {meaning} (NaN: no lead)")
+                     for field, unit, meaning in LEAD_COLUMNS)
+
+    def info(self, substep: int) -> dict[str, Any]:
+        return {f"lead_{field}": float(v) for (field, _, _), v in zip(LEAD_COLUMNS, self.state(substep))}
+
+    def owner_of(self, root_body: int) -> str | None:
+        return LEAD_PREFIX if root_body == self._body else None
