@@ -33,6 +33,9 @@ class FollowingConfig:
         agree_m: the witnesses agree when within this, m (the track learns the lead's speed then).
         alpha, beta: the range tracker's gains per new frame (position and rate).
         confirm_frames: agreeing frames before the lead's speed is used (0 before).
+        gate_m: an agreeing range this far off the track's prediction starts the track again
+            (the car ahead was out of sight, or another car took its place).
+        max_lead_mps: the fastest lead the estimate allows, m/s (the QCar 2's top speed).
     """
 
     time_headway_s: float = 1.0
@@ -42,10 +45,13 @@ class FollowingConfig:
     alpha: float = 0.4
     beta: float = 0.08
     confirm_frames: int = 6
+    gate_m: float = 0.25
+    max_lead_mps: float = 3.0
 
     def __post_init__(self) -> None:
         for name, lo, hi in (("time_headway_s", 0.1, 5.0), ("standstill_gap_m", 0.0, 2.0), ("ttc_brake_s", 0.0, 5.0),
-                             ("agree_m", 0.0, 2.0), ("alpha", 0.0, 1.0), ("beta", 0.0, 1.0)):
+                             ("agree_m", 0.0, 2.0), ("alpha", 0.0, 1.0), ("beta", 0.0, 1.0), ("gate_m", 0.0, 5.0),
+                             ("max_lead_mps", 0.0, 10.0)):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, (int, float)) or not lo <= value <= hi:
                 raise ValueError(f"{name} must be in [{lo}, {hi}], got {value!r}")
@@ -69,22 +75,27 @@ class LeadSpeed:
     @property
     def lead_mps(self) -> float:
         """The estimate used: 0 until ``confirm_frames`` agreeing frames, never negative."""
-        return 0.0 if self.frames < self.config.confirm_frames else max(self._lead, 0.0)
+        return 0.0 if self.frames < self.config.confirm_frames else min(max(self._lead, 0.0), self.config.max_lead_mps)
 
-    def update(self, depth_m: float, lidar_m: float, ego_mps: float, dt: float, new_frame: bool) -> float:
-        """One control step: ``depth_m`` and ``lidar_m`` the two witnesses' ranges (NaN: none), ``ego_mps``
-        the car's speed. Learns only on a new frame where they agree; returns :attr:`lead_mps`."""
+    def update(self, depth_m: float, lidar_m: float, size_m: float, ego_mps: float, dt: float,
+               new_frame: bool) -> float:
+        """One control step: ``depth_m`` the camera's depth of the lead, ``lidar_m`` the LiDAR track's,
+        ``size_m`` the size witness's (NaN: none), ``ego_mps`` the car's speed. Learns only on a new
+        frame where the depth agrees with the LiDAR or, when the scan plane misses the lead, with the
+        size witness (within ``agree_m`` or a tenth of the distance, the size's own spread); returns
+        :attr:`lead_mps`."""
         c = self.config
         self._since += dt
         if not new_frame:
             return self.lead_mps
-        agree = math.isfinite(depth_m) and math.isfinite(lidar_m) and abs(depth_m - lidar_m) <= c.agree_m
+        other = lidar_m if math.isfinite(lidar_m) else size_m
+        agree = math.isfinite(depth_m) and math.isfinite(other) and abs(depth_m - other) <= max(c.agree_m, 0.1 * depth_m)
         if agree:
-            z = 0.5 * (depth_m + lidar_m)
-            if not math.isfinite(self.range_m):
-                self.range_m, self.rate_mps = z, -ego_mps
+            z = depth_m
+            predicted = self.range_m + self.rate_mps * self._since
+            if not abs(z - predicted) <= c.gate_m:  # a first range, or one off the track: start again
+                self.range_m, self.rate_mps, self.frames = z, -ego_mps, 0
             else:
-                predicted = self.range_m + self.rate_mps * self._since
                 innovation = z - predicted
                 self.range_m = predicted + c.alpha * innovation
                 self.rate_mps += c.beta * innovation / max(self._since, 1e-3)

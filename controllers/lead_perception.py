@@ -20,7 +20,7 @@ from racf.controllers.distance import CameraModel
 from racf.controllers.lidar_target import LidarTargetTracker
 from racf.controllers.perception import Perception, PerceptionSample
 from racf.controllers.size_distance import SizeDistance
-from racf.controllers.vehicle_detector import VEHICLE_HEIGHT_M
+from racf.controllers.vehicle_detector import VEHICLE_BOX_HEIGHT_M
 
 __all__ = ["LeadPerception", "lane_in_camera"]
 
@@ -49,7 +49,7 @@ class LeadPerception(Perception):
     def __init__(self, camera: CameraModel, detector, lidar: LidarTargetTracker | None = None,
                  range_slack: float = 0.5) -> None:
         # The car's height, not its width, is the same from any side: a box at an angle is wider, never taller.
-        size = SizeDistance(camera, VEHICLE_HEIGHT_M, wider_than_tall=5.0)
+        size = SizeDistance(camera, VEHICLE_BOX_HEIGHT_M, wider_than_tall=5.0)
         super().__init__(camera, detector=detector, lidar=lidar, target="vehicle", size=size)
         self.range_slack = float(range_slack)
         self._lane = np.empty((0, 2))
@@ -74,7 +74,7 @@ class LeadPerception(Perception):
         left, right = self._span(detection)
         bearings = np.arctan2(lane[:, 1], lane[:, 0])
         fy = self.camera.fy if self.camera.fy is not None else self.camera.fx
-        implied = fy * VEHICLE_HEIGHT_M / max(detection.box[3] - detection.box[1], 1)
+        implied = fy * VEHICLE_BOX_HEIGHT_M / max(detection.box[3] - detection.box[1], 1)
         near = np.abs(lane[:, 0] - implied) <= self.range_slack * implied
         within = (bearings <= left + self.map_margin_rad) & (bearings >= right - self.map_margin_rad)
         return bool(np.any(near & within))

@@ -26,6 +26,11 @@ __all__ = ["LeadStage", "LeadStep", "LANE_AHEAD_M", "NO_LEAD"]
 
 #: How far along the lane ahead the car looks for a car, m.
 LANE_AHEAD_M = 4.0
+#: Unseen this long (no detection, no LiDAR track), the car ahead is lost: it drove out of sight (a
+#: curve takes it out of the camera's 70 degrees at 1 m), and a carried distance would hold the car
+#: back for nothing. The defence and the speed estimate start again, and the policy lets the car
+#: drive on, as a production adaptive cruise does, s.
+LOST_AFTER_S = 0.5
 
 
 @dataclass(frozen=True)
@@ -64,12 +69,14 @@ class LeadStage:
         self.follower = LeadFollower(self.config)
         self.speed = LeadSpeed(self.config)
         self.last = NO_LEAD
+        self._unseen_s = 0.0
 
     def reset(self) -> None:
         self.perception.reset()
         self.estimator.reset()
         self.speed.reset()
         self.last = NO_LEAD
+        self._unseen_s = 0.0
 
     def step(self, obs: dict, pose: np.ndarray, path, progress_m: float, speed: float, yaw_rate: float,
              lateral: float, dt: float, frame_new: bool, scan_new: bool, ages) -> LeadStep:
@@ -83,8 +90,16 @@ class LeadStage:
         sample = self.perception.process(obs["rgb"], obs["depth"][..., 0], obs["lidar"] if scan_new else None,
                                          lane=lane, speed=closing, yaw_rate=yaw_rate, lateral_speed=lateral, dt=dt,
                                          new_frame=frame_new, beam_age_s=ages)
-        d = float(self.estimator.estimate(sample, closing, dt, yaw_rate_radps=yaw_rate))
-        lead = self.speed.update(sample.d_meas, sample.lidar_m, speed, dt, frame_new)
+        seen = sample.detected or math.isfinite(sample.lidar_m)
+        self._unseen_s = 0.0 if seen else self._unseen_s + dt
+        if self._unseen_s > LOST_AFTER_S:
+            if math.isfinite(self.last.d_fused):  # lost just now
+                self.estimator.reset()
+                self.speed.reset()
+            d = math.nan
+        else:
+            d = float(self.estimator.estimate(sample, closing, dt, yaw_rate_radps=yaw_rate))
+        lead = self.speed.update(sample.d_meas, sample.lidar_m, sample.d_size, speed, dt, frame_new)
         decision = self.follower.step(d - self.bumper_m, speed - lead)
         self.last = LeadStep(sample, d, lead, decision)
         return self.last
