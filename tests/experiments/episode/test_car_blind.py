@@ -16,7 +16,9 @@ from racf.experiments.episode.stack import default_env
 
 #: What the car does and works out; none of it may depend on ``info``.
 CAR_COLUMNS = ["speed_cmd", "steer_cmd", "d_fused", "d_meas", "lidar", "detected", "brake", "phase", "slot",
-               "x_est", "y_est", "yaw_est"]
+               "x_est", "y_est", "yaw_est",
+               # The following stage (NaN where the car follows no one).
+               "lead_detected", "lead_d_meas", "lead_lidar", "lead_d_size", "lead_d_fused", "lead_v_est", "lead_cap"]
 #: ``time`` and ``dist_to_stop_line`` stay: the runner (the experimenter, not the car) ends
 #: the episode on them, and both runs must last the same number of steps to be compared.
 KEPT = {"time", "dist_to_stop_line", "collision", "off_road", "attack", "attack_active"}
@@ -59,8 +61,10 @@ class ScrambledInfo(gym.Wrapper):
                                   # The existence vote's witnesses, a sticker up from the start on a mapped sign.
                                   pytest.param(TrialSpec("clean+physical_patch+vote", 1, 1.5, 1, target="stale_map",
                                                          attack_params={"physical_patch": {"from_start": True}}),
-                                               marks=pytest.mark.slow)],
-                         ids=["empty", "traffic", "existence"])
+                                               marks=pytest.mark.slow),
+                                  # A car ahead, its depth read far: its pose and speed in info are scrambled too.
+                                  TrialSpec("clean+lead_patch+odca", 1, 1.0, 1, target="lead_vehicle")],
+                         ids=["empty", "traffic", "existence", "lead"])
 def test_the_car_does_the_same_with_info_scrambled(spec):
     result, log = run_trial(spec, clean_pass=False)
     _, blind = run_trial(spec, make_env=lambda s: ScrambledInfo(default_env(s)), clean_pass=False)
@@ -73,3 +77,5 @@ def test_the_car_does_the_same_with_info_scrambled(spec):
     assert not np.allclose(blind["x"], log["x"])
     if spec.target == "cross_traffic":
         assert not np.allclose(blind["traffic1_x"], log["traffic1_x"])
+    if spec.target == "lead_vehicle":
+        assert not np.allclose(blind["lead_x"], log["lead_x"]) and log["lead_detected"].any()

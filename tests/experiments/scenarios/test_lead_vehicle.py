@@ -1,0 +1,83 @@
+"""The lead_vehicle scenario: its plan, its refusals, its scorer and its episodes."""
+
+import math
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from racf.experiments.episode import TrialSpec, run_trial
+from racf.experiments.episode.plan import plan_episode
+from racf.experiments.scenarios.lead_vehicle import LeadVehicle, lead_rest_s
+from racf.experiments.scenarios.lead_vehicle.following import MIN_HEADWAY_S, hard_brakes, score_following
+from racf.sim.world.traffic import CAR_FOOTPRINT_M
+
+
+def spec(**params) -> TrialSpec:
+    return TrialSpec("clean", 1, 1.0, 0, target="lead_vehicle", scenario_params=params)
+
+
+def test_its_plan_puts_the_lead_its_gap_ahead_and_tells_the_car_to_follow():
+    plan = plan_episode(spec(gap_m=0.8, profile="hard_brake", speed=0.6, decel=3.0, brake_t=3.0))
+    lead = plan.extras["lead"]
+    assert plan.mission.follow and plan.reset_options["lead"] == lead.to_options()
+    assert lead.start_s - plan.start_s_m == pytest.approx(0.8 + CAR_FOOTPRINT_M[0])
+    assert lead.stop_s == pytest.approx(plan.mission.targets[-1].stop_s - plan.calibration.bumper_x_m)
+    assert plan.extras["lead_rest_s"] == pytest.approx(3.0 + 0.6 / 3.0, abs=0.03)
+    assert not plan_episode(TrialSpec("clean", 1, 1.0, 0)).mission.follow
+
+
+def test_it_refuses_what_it_cannot_run_saying_what_is_allowed():
+    with pytest.raises(ValueError, match="leaves the lead no road"):
+        plan_episode(TrialSpec("clean", 3, 1.0, 0, target="lead_vehicle", scenario_params={"gap_m": 2.0}))
+    with pytest.raises(ValueError, match="profile.*must be one of"):
+        spec(profile="swerve")
+    with pytest.raises(ValueError, match="no --estimator-endpoint"):
+        TrialSpec("clean+odca", 1, 1.0, 0, target="lead_vehicle", estimator_endpoint="tcp://127.0.0.1:5555")
+
+
+def log_of(gap, ego, lead, touched=None, dt=0.02) -> pd.DataFrame:
+    n = len(gap)
+    x = np.zeros(n)
+    return pd.DataFrame({"t": np.arange(n) * dt, "x": x, "y": x, "lead_x": np.asarray(gap) + CAR_FOOTPRINT_M[0],
+                         "lead_y": x, "speed": ego, "lead_speed": lead,
+                         "collision_with": touched or [""] * n})
+
+
+def test_the_scorer_reads_gap_time_to_collision_and_headway():
+    out = score_following(log_of([1.0, 0.8, 0.6, 0.45], [1.0] * 4, [0.0, 0.0, 0.0, 0.5]))
+    assert out.min_gap_m == pytest.approx(0.45) and out.min_ttc_s == pytest.approx(0.6)
+    # Under 0.5 s of headway at 1 m/s: the last step only.
+    assert out.headway_violation_s == pytest.approx(0.02) and not out.lead_collision
+    hit = score_following(log_of([0.2, 0.0], [1.0, 1.0], [0.0, 0.0], ["", "lead"]))
+    assert hit.lead_collision and hit.min_ttc_s == 0.0
+    apart = score_following(log_of([1.0, 1.1], [0.5, 0.5], [1.0, 1.0]))
+    assert math.isnan(apart.min_ttc_s) and apart.headway_violation_s == 0.0 and MIN_HEADWAY_S == 0.5
+
+
+def test_a_hard_brake_is_counted_once_per_run_of_braking():
+    t = np.arange(0, 3, 0.02)
+    v = np.where(t < 1, 1.0, np.maximum(1.0 - 5.0 * (t - 1), 0.0))
+    assert hard_brakes(pd.DataFrame({"t": t, "speed": v})) == 1
+    assert hard_brakes(pd.DataFrame({"t": t, "speed": np.ones_like(t)})) == 0
+
+
+def test_a_lead_that_never_stops_rests_at_the_horizon():
+    lead = plan_episode(spec(profile="cruise")).extras["lead"]
+    assert lead_rest_s(lead, 30.0) < 30.0  # a cruising lead still stops at the sign's line
+    assert LeadVehicle().run_up(spec()) == pytest.approx(7.0)
+
+
+def test_the_car_follows_a_hard_braking_lead_without_touching_it():
+    result, log = run_trial(spec(profile="hard_brake"), clean_pass=False)
+    row = result.to_dict()
+    assert row["no_lead_collision"] is True and row["min_gap_m"] > 0.1
+    # Over once both stood: well before the 30 s limit.
+    assert log["t"].iloc[-1] < 10.0 and log["lead_detected"].mean() > 0.5
+
+
+def test_the_patch_reading_the_lead_far_is_a_real_attack_on_raw_depth():
+    result, log = run_trial(TrialSpec("clean+lead_patch", 1, 1.0, 0, target="lead_vehicle", t_atk=6.0), clean_pass=False)
+    row = result.to_dict()
+    assert row["no_lead_collision"] is False and row["driving_score"] == pytest.approx(0.6)
+    assert log["collision_with"].iloc[-1] == "lead"  # the contact ended the episode
