@@ -57,6 +57,18 @@ def register(sub: argparse._SubParsersAction) -> None:
     td.add_argument("--json", action="store_true", help="print the training report as one JSON object")
     td.set_defaults(handler=_train_detector)
 
+    tv = sub.add_parser("train-vehicle-detector", help="render views of a QCar 2 ahead and train the vehicle segmenter "
+                                                       "on the CPU (about 5 min); writes a checkpoint")
+    tv.add_argument("--out", type=output_dir, default=Path("outputs/vehicle-segmenter"),
+                    help="checkpoint folder (default outputs/vehicle-segmenter; the shipped one is "
+                         "assets/checkpoints/vehicle-segmenter)")
+    tv.add_argument("--seed", type=int, default=0, help="views, initialisation and batch order seed")
+    tv.add_argument("--train", type=count, default=None, help="training views (default 4000)")
+    tv.add_argument("--heldout", type=count, default=None, help="held-out views (default 800)")
+    tv.add_argument("--epochs", type=count, default=None, help="passes over the training views (default 12)")
+    tv.add_argument("--json", action="store_true", help="print the training report as one JSON object")
+    tv.set_defaults(handler=_train_vehicle)
+
     op = sub.add_parser("optimise-patch", help="optimise an adversarial sticker against the learned segmenter "
                                                "(EOT over rendered views, differentiable warp); writes a PNG")
     op.add_argument("--data", type=Path, default=Path("data/detector"), help="views folder (racf detector data)")
@@ -134,6 +146,28 @@ def _train_detector(args: argparse.Namespace) -> int:
     print(f"trained {report['parameters']} parameters on {report['n_train']} views in {report['train_s'] / 60:.1f} min")
     print(f"held-out views (N = {h['n_positive']} with a sign): recall {h['recall']:.4f} {fmt_ci(*h['recall_ci'])}, "
           f"false-positive frames {h['n_fp']} / {h['n_frames']} = {100 * h['fp_rate']:.2f} %")
+    print(f"checkpoint in {args.out}")
+    return 0
+
+
+def _train_vehicle(args: argparse.Namespace) -> int:
+    from racf.experiments.detector.vehicle_train import VehicleTrainConfig, train_vehicle_segmenter
+
+    given = {"n_train": args.train, "n_heldout": args.heldout, "epochs": args.epochs}
+    try:
+        config = VehicleTrainConfig(seed=args.seed, **{k: v for k, v in given.items() if v is not None})
+    except ValueError as err:
+        fail("train-vehicle-detector", str(err))
+    _, report = train_vehicle_segmenter(config, args.out, progress=not args.json)
+    if args.json:
+        print(json.dumps(report, allow_nan=False))
+        return 0
+    h = report["heldout"]
+    print(f"trained {report['parameters']} parameters on {config.n_train} views in {report['train_s'] / 60:.1f} min")
+    for band, r in h["recall"].items():
+        print(f"held-out cars {band} away: found {r['found']} / {r['n']}")
+    fp = h["false_positive"]
+    print(f"held-out frames without a car: a car found in {fp['frames']} / {fp['n']}")
     print(f"checkpoint in {args.out}")
     return 0
 

@@ -24,8 +24,10 @@ GROUPS: dict[str, tuple[str, dict[str, str]]] = {
                "paired": "bench-paired"}),
     "odca": ("ODCA: pretrain its Chronos-2 prior, train its head, evaluate a checkpoint, export it for the car",
              {"pretrain-prior": "pretrain-prior", "train": "train", "evaluate": "evaluate", "export": "export-odca"}),
-    "detector": ("the learned stop-sign detector: render its views, train it, optimise a sticker against it",
-                 {"data": "detector-data", "train": "train-detector", "optimise-patch": "optimise-patch"}),
+    "detector": ("the learned detectors: render the sign segmenter's views, train it, optimise a sticker against it; "
+                 "train the vehicle segmenter",
+                 {"data": "detector-data", "train": "train-detector", "optimise-patch": "optimise-patch",
+                  "train-vehicle": "train-vehicle-detector"}),
     "bag": ("ROS 2 bags on Quanser's QCar 2 topics: export an episode, replay the car's software on a recording, "
             "show what a bag holds",
             {"export": "export-bag", "replay": "replay-bag", "info": "bag-info"}),

@@ -1,6 +1,6 @@
 """The vehicle segmenter: the sign segmenter's network given a vehicle class, trained on racf's renders.
 
-``racf detector vehicle OUT`` renders ``n_train`` views and ``n_heldout`` held-out ones (another
+``racf detector train-vehicle --out OUT`` renders ``n_train`` views and ``n_heldout`` held-out ones (another
 seed) with :class:`~racf.experiments.detector.vehicle_views.VehicleViews`, trains the network
 with the sign segmenter's loss and photometric jitter (``racf.experiments.detector.train``), and
 writes the checkpoint with its report: the held-out recall of cars by range (a car found: a
@@ -132,10 +132,3 @@ def train_vehicle_segmenter(config: VehicleTrainConfig = VehicleTrainConfig(), o
         save_segmenter(net, Path(out_dir), report)
     return net, report
 
-
-if __name__ == "__main__":
-    import json
-    import sys
-
-    _, report = train_vehicle_segmenter(out_dir=Path(sys.argv[1]))
-    print(json.dumps(report["heldout"], indent=2))

@@ -19,6 +19,7 @@ from typing import Callable
 from racf.experiments.pages.falsify_page import falsification_markdown
 from racf.experiments.pages.existence_page import existence_markdown
 from racf.experiments.pages.leaderboard_page import leaderboard_markdown
+from racf.experiments.pages.following_page import following_markdown
 from racf.experiments.pages.traffic_page import crossed_key, traffic_markdown
 from racf.experiments.pages.detector_page import detector_markdown
 from racf.experiments.pages.speed_page import speed_markdown
@@ -224,6 +225,14 @@ def paper_rows(d: _Data, link: str = "") -> list[str]:
                 f"attacked before t* (N {none['n_traffic_attack_before_t_star']}), ODCA "
                 f"{_rate(odca['collision_rate'], odca['collision_rate_ci'])} (N {odca['n_traffic']}) | "
                 f"[cross-traffic]({link}traffic.md) |")
+    if "following" in d:
+        rows = d["following"]["rows"]
+        none, odca = rows.get("clean+lead_patch|raw"), rows.get("clean+lead_patch|odca")
+        if none and odca:
+            lines.append(f"| following a car ahead, its depth read 1 m far: collision-free | - (the paper's future work) | "
+                         f"none {_rate(none['collision_free']['rate'], none['collision_free']['ci'])}, ODCA "
+                         f"{_rate(odca['collision_free']['rate'], odca['collision_free']['ci'])} (N {odca['n']}) | "
+                         f"[following]({link}following.md) |")
     if "persistence" in d:
         rows = d["persistence"]["persistence"]
         ours = " / ".join(f"{r['asr']:.2f} {_ci(r['asr_ci'])}" for r in rows)
@@ -278,6 +287,7 @@ def _index(d: _Data) -> str:
              "| [Detector and sticker](detector-and-sticker.md) | the learned segmenter and the printed sticker |",
              "| [Falsification](falsification.md) | searched worst cases per defence, and the regression suite |",
              "| [Cross-traffic](traffic.md) | the paper's settings with another car at the conflict point |",
+             "| [Following](following.md) | a car ahead that brakes, and the attacks on its distance |",
              "| [Existence](existence.md) | whether a sign stands: the vote against stickers, phantoms and stale maps |",
              "| [Speed](speed.md) | the simulator, whole episodes, ODCA's per-step cost, ROS 2 bags and the defence "
              "service |", "",
@@ -298,4 +308,5 @@ RESULT_PAGES: dict[str, Callable[[Path], str]] = {
                        ("detector-and-sticker", detector_markdown), ("speed", speed_markdown))}
 RESULT_PAGES["results/falsification.md"] = falsification_markdown
 RESULT_PAGES["results/traffic.md"] = traffic_markdown
+RESULT_PAGES["results/following.md"] = following_markdown
 RESULT_PAGES["results/existence.md"] = existence_markdown

@@ -416,3 +416,16 @@ def test_a_track_is_depth_confirmed_once_the_depth_agrees_with_it():
     assert not tracker.depth_confirmed
     tracker.step(**args, detection_depth=depth)
     assert tracker.depth_confirmed
+
+
+def test_a_car_ahead_is_reported_at_its_rear_though_the_scan_plane_cuts_its_lidar_behind_it():
+    rear = np.array([1.5, 0.03])
+    behind = LidarTargetConfig().vehicle_scan_behind_m
+    # The scan plane meets only the other car's RPLIDAR housing, 0.076 m across, behind its rear.
+    world = World(_box(rear + [behind, 0.0], 0.076, 0.076))
+    values, truths, states = _run(world, LidarTargetTracker(), rear, 40, target="vehicle", det_width=0.19)
+    assert np.isfinite(values[5:]).all() and states[-1].target == "vehicle"
+    np.testing.assert_allclose(values[5:], truths[5:], atol=0.02)
+    sign_sized = _run(World(_box(rear, 0.076, 0.076)), LidarTargetTracker(), rear, 40, target="sign")[0]
+    np.testing.assert_allclose(sign_sized[5:], _run(World(_box(rear, 0.076, 0.076)), LidarTargetTracker(), rear, 40,
+                                                    target="vehicle")[0][5:] + behind, atol=0.02)

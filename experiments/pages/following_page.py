@@ -1,0 +1,127 @@
+"""The following results page (``docs/results/following.md``): the car ahead and its attacks.
+
+Its data is the ``following`` stored result, made from the sweeps ``following.toml`` and
+``following-frustum.toml`` (their episodes' rows, ``parts/*.parquet``) by::
+
+    python -m racf.experiments.pages.following_page outputs/sweeps/following outputs/sweeps/following-frustum --out following.json
+
+and stored with ``results_store``. Per attack and defence: N, the collision-free rate with its
+Wilson interval, the smallest time-to-collision (median and bootstrap interval), the share of
+episodes with any time under the minimum headway, hard brakes, and the collision-free rate per
+lead profile.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from pathlib import Path
+
+import pandas as pd
+
+from racf.experiments.pages.results_format import meta_lines, missing, page_head, rate
+from racf.stats import median_ci, wilson_interval
+
+__all__ = ["summarise", "following_markdown", "FOLLOWING_COMMAND", "main"]
+
+FOLLOWING_COMMAND = ("racf sweep following.toml; racf sweep following-frustum.toml; python -m "
+                     "racf.experiments.pages.following_page outputs/sweeps/following outputs/sweeps/following-frustum")
+#: How an attack is named in the table.
+ATTACK_LABELS = {"clean": "none", "clean+lead_patch": "lead patch (depth read 1 m far)",
+                 "clean+lead_frustum": "frustum spoof (LiDAR returns 1 m away)",
+                 "clean+lead_frustum[depth]": "frustum spoof, depth moved too"}
+
+
+def _rows(folder: Path) -> pd.DataFrame:
+    parts = sorted((folder / "parts").glob("*.parquet"))
+    if not parts:
+        raise ValueError(f"{folder} holds no episodes (parts/*.parquet): give a sweep's output folder")
+    frame = pd.concat([pd.read_parquet(p) for p in parts], ignore_index=True)
+    spec = (folder / "spec.toml").read_text() if (folder / "spec.toml").exists() else ""
+    depth = "depth = [true]" in spec
+    attack = frame["setting"].str.replace(r"\+[a-z_0-9]+$", "", regex=True).where(frame["estimator"] != "raw",
+                                                                                 frame["setting"])
+    frame["attack"] = attack + ("[depth]" if depth else "")
+    return frame
+
+
+def _share(flags) -> dict:
+    k, n = int(sum(bool(f) for f in flags)), len(flags)
+    lo, hi = wilson_interval(k, n)
+    return {"k": k, "n": n, "rate": (k / n if n else None), "ci": [lo, hi]}
+
+
+def summarise(folders: list[Path]) -> dict:
+    """The following table's data from the sweeps' folders."""
+    frame = pd.concat([_rows(Path(f)) for f in folders], ignore_index=True)
+    out = {}
+    for (attack, estimator), group in frame.groupby(["attack", "estimator"], sort=True):
+        ttc = group["min_ttc_s"].to_numpy(float)
+        median, ci = median_ci(ttc[~pd.isna(ttc)])
+        out[f"{attack}|{estimator}"] = {
+            "attack": attack, "estimator": estimator, "n": len(group),
+            "collision_free": _share(group["no_lead_collision"].tolist()),
+            "min_ttc_median_s": median, "min_ttc_ci": ci,
+            "headway_violated": _share((group["headway_violation_s"] > 0).tolist()),
+            "hard_brakes_median": float(group["hard_brakes"].median()),
+            "by_profile": {p: _share(g["no_lead_collision"].tolist())
+                           for p, g in group.groupby("scenario_profile", sort=True)}}
+    return {"rows": out}
+
+
+def following_markdown(root: Path) -> str:
+    lines = page_head(
+        "Following the car ahead",
+        "The `lead_vehicle` scenario: a second QCar 2 drives the car's lane on sign 1's approach, in each of "
+        "its four profiles (cruise, slow down, hard brake at 3 m/s^2, stop and go), braking at 3 s; the car "
+        "follows it with its vehicle segmenter, the LiDAR's track and the size witness, a 1 s time-headway "
+        "policy and an emergency brake on time-to-collision. The attacks act from 2 s for 6 s. "
+        "[The tutorial](../tutorials/following.md) says how it works.")
+    path = Path(root) / "following.json"
+    if not path.exists():
+        return "\n".join(lines + missing("following", FOLLOWING_COMMAND))
+    data = json.loads(path.read_text())
+    lines += meta_lines(data["meta"])
+    lines += ["| attack | defence | N | collision-free [95 % CI] | min TTC s, median [95 % CI] | "
+              "any time under 0.5 s headway [95 % CI] | hard brakes, median |", "|---|---|---|---|---|---|---|"]
+    rows = data["rows"]
+    for r in rows.values():
+        cf, hw = r["collision_free"], r["headway_violated"]
+        ttc = "—" if r["min_ttc_median_s"] is None else rate(r["min_ttc_median_s"], r["min_ttc_ci"])
+        lines.append(f"| {ATTACK_LABELS.get(r['attack'], r['attack'])} | {r['estimator']} | {r['n']} | "
+                     f"{rate(cf['rate'], cf['ci'])} | {ttc} | {rate(hw['rate'], hw['ci'])} | "
+                     f"{r['hard_brakes_median']:g} |")
+    profiles = sorted({p for r in rows.values() for p in r["by_profile"]})
+    lines += ["", "Collision-free by the lead's profile (each cell: k / N):", "",
+              "| attack | defence | " + " | ".join(profiles) + " |", "|---|---|" + "---|" * len(profiles)]
+    for r in rows.values():
+        cells = [f"{r['by_profile'][p]['k']} / {r['by_profile'][p]['n']}" if p in r["by_profile"] else "—"
+                 for p in profiles]
+        lines.append(f"| {ATTACK_LABELS.get(r['attack'], r['attack'])} | {r['estimator']} | " + " | ".join(cells) + " |")
+    return "\n".join(lines + [""])
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m racf.experiments.pages.following_page",
+                                     description="The following table's data from sweep folders, as JSON.")
+    parser.add_argument("folders", nargs="+", type=Path, help="sweep output folders (following, following-frustum)")
+    parser.add_argument("--out", type=Path, default=None, help="write the JSON here (default: print it)")
+    args = parser.parse_args(argv)
+    try:
+        data = summarise(args.folders)
+    except (OSError, ValueError) as err:
+        print(f"following_page: {err}", file=sys.stderr)
+        return 2
+    text = json.dumps(data, indent=2, allow_nan=False, default=lambda v: None if v is None or
+                      (isinstance(v, float) and math.isnan(v)) else float(v))
+    if args.out is None:
+        print(text)
+    else:
+        args.out.write_text(text + "\n")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,50 @@
+"""The following page: a sweep's episodes summarised with intervals, and its table."""
+
+import json
+
+import pandas as pd
+import pytest
+
+from racf.experiments.pages.following_page import following_markdown, main, summarise
+
+
+def sweep(folder, rows, depth=False):
+    (folder / "parts").mkdir(parents=True)
+    (folder / "spec.toml").write_text("[params.lead_frustum]\ndepth = [true]\n" if depth else "")
+    for k, row in enumerate(rows):
+        pd.DataFrame([row]).to_parquet(folder / "parts" / f"p{k}.parquet")
+
+
+def row(setting, estimator, profile, free, ttc=1.0, headway=0.0):
+    return {"setting": setting, "estimator": estimator, "scenario_profile": profile, "no_lead_collision": free,
+            "min_ttc_s": ttc, "headway_violation_s": headway, "hard_brakes": 2}
+
+
+def test_it_counts_collision_free_episodes_per_attack_and_defence_with_wilson_intervals(tmp_path):
+    sweep(tmp_path / "a", [row("clean+lead_patch", "raw", "cruise", False, 0.0),
+                           row("clean+lead_patch", "raw", "hard_brake", True, 1.5, 0.2),
+                           row("clean+lead_patch+odca", "odca", "cruise", True, 1.2)])
+    sweep(tmp_path / "b", [row("clean+lead_frustum+odca", "odca", "cruise", True, None)], depth=True)
+    rows = summarise([tmp_path / "a", tmp_path / "b"])["rows"]
+    raw = rows["clean+lead_patch|raw"]
+    assert raw["n"] == 2 and raw["collision_free"]["k"] == 1 and raw["collision_free"]["ci"][0] < 0.5
+    assert raw["headway_violated"]["k"] == 1 and raw["by_profile"]["cruise"]["k"] == 0
+    assert rows["clean+lead_patch|odca"]["collision_free"]["rate"] == 1.0
+    frustum = rows["clean+lead_frustum[depth]|odca"]
+    assert frustum["min_ttc_median_s"] is None  # they never closed: no median to give
+
+
+def test_its_page_shows_the_table_and_says_how_to_make_what_is_missing(tmp_path):
+    assert "Not stored yet (`following`)" in following_markdown(tmp_path)
+    sweep(tmp_path / "s", [row("clean", "raw", "cruise", True)])
+    data = summarise([tmp_path / "s"])
+    data["meta"] = {"command": "racf sweep following.toml", "commit": "abc", "racf": "0.1.0", "machine": "m",
+                    "measured": "2026-11-27"}
+    (tmp_path / "following.json").write_text(json.dumps(data))
+    page = following_markdown(tmp_path)
+    assert "| none | raw | 1 | 1.00 [" in page and "| none | raw | 1 / 1 |" in page
+
+
+def test_a_folder_without_episodes_is_refused_in_one_line(tmp_path, capsys):
+    assert main([str(tmp_path)]) == 2
+    assert capsys.readouterr().err.count("\n") == 1
