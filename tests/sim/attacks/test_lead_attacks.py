@@ -1,0 +1,48 @@
+"""The attacks on the car ahead: they find the lead where the simulator has it, and move its depth
+and its LiDAR returns by what they say; outside the lead's scenario they refuse in one line."""
+
+import numpy as np
+import pytest
+
+from racf.experiments.episode import TrialSpec
+from racf.experiments.episode.plan import plan_episode
+from racf.experiments.episode.stack import default_env
+from racf.sim.attacks.lead import lead_beams, lead_pixels
+
+
+def attacked(setting: str, **params):
+    spec = TrialSpec(setting, 1, 1.0, 0, target="lead_vehicle", t_atk=5.0, scenario_params={"gap_m": 0.6},
+                     attack_params={setting.split("+")[1]: {"start_s": 0.0, **params}})
+    env = default_env(spec)
+    obs, info = env.reset(seed=0, options=plan_episode(spec).reset_options)
+    obs, *_, info = env.step(np.zeros(2, np.float32))
+    return env, obs, info, env.unwrapped.sensor_observation()
+
+
+def test_the_patch_reads_the_lead_s_pixels_far_and_no_others():
+    env, obs, info, clean = attacked("clean+lead_patch", bias_m=1.0)
+    assert info["attack_active"]
+    moved = obs["depth"][..., 0] != clean["depth"][..., 0]
+    where = lead_pixels(env, info, clean["depth"][..., 0])
+    assert moved.sum() > 500 and not (moved & ~where).any()
+    np.testing.assert_allclose(obs["depth"][..., 0][moved] - clean["depth"][..., 0][moved], 1.0, atol=1e-4)
+    # The lead's pixels are where it stands: about its rear's distance away (0.6 m gap, the camera 0.12 m behind the bumper).
+    assert np.median(clean["depth"][..., 0][where]) == pytest.approx(0.75, abs=0.1)
+    np.testing.assert_array_equal(obs["lidar"], clean["lidar"])
+
+
+def test_the_frustum_spoof_moves_the_lead_s_returns_and_with_depth_its_depth():
+    env, obs, info, clean = attacked("clean+lead_frustum", bias_m=0.8)
+    beams = lead_beams(env, info, clean["lidar"])
+    assert beams.any() and beams.sum() < 40
+    np.testing.assert_allclose(obs["lidar"][beams] - clean["lidar"][beams], 0.8, atol=1e-4)
+    np.testing.assert_array_equal(obs["lidar"][~beams], clean["lidar"][~beams])
+    np.testing.assert_array_equal(obs["depth"], clean["depth"])
+    _, both, _, clean = attacked("clean+lead_frustum", bias_m=0.8, depth=True)
+    assert (both["depth"] != clean["depth"]).sum() > 500
+
+
+def test_an_attack_on_the_car_ahead_refuses_a_scenario_without_one():
+    env = default_env(TrialSpec("clean+lead_patch", 1, 1.0, 0, t_atk=2.0))
+    with pytest.raises(ValueError, match="lead_vehicle scenario"):
+        env.reset(seed=0, options={"sign": 1, "cruise_speed": 1.0})
