@@ -229,7 +229,7 @@ def paper_rows(d: _Data, link: str = "") -> list[str]:
         rows = d["following"]["rows"]
         none, odca = rows.get("clean+lead_patch|raw"), rows.get("clean+lead_patch|odca")
         if none and odca:
-            lines.append(f"| following a car ahead, its depth read 1 m far: collision-free | - (the paper's future work) | "
+            lines.append(f"| following a car ahead, its depth read 1 m far: collision-free | - (not in the paper) | "
                          f"none {_rate(none['collision_free']['rate'], none['collision_free']['ci'])}, ODCA "
                          f"{_rate(odca['collision_free']['rate'], odca['collision_free']['ci'])} (N {odca['n']}) | "
                          f"[following]({link}following.md) |")
