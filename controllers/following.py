@@ -102,9 +102,11 @@ class LeadSpeed:
             self._lead = ego_mps + self.rate_mps
             self.frames += 1
         elif math.isfinite(self.range_m):
-            # Carried: the range moves at the lead's last speed against the car's own.
-            self.range_m += (self.lead_mps - ego_mps) * self._since
-            self.rate_mps = self.lead_mps - ego_mps
+            # Carried: the range moves at the lead's last estimated speed against the car's own (the track's
+            # own estimate, confirmed or not: carried at the car's speed, a moving lead would leave the gate).
+            lead = min(max(self._lead, 0.0), c.max_lead_mps)
+            self.range_m += (lead - ego_mps) * self._since
+            self.rate_mps = lead - ego_mps
         self._since = 0.0
         return self.lead_mps
 

@@ -70,6 +70,7 @@ class LeadStage:
         self.speed = LeadSpeed(self.config)
         self.last = NO_LEAD
         self._unseen_s = 0.0
+        self._lost = False
 
     def reset(self) -> None:
         self.perception.reset()
@@ -77,6 +78,7 @@ class LeadStage:
         self.speed.reset()
         self.last = NO_LEAD
         self._unseen_s = 0.0
+        self._lost = False
 
     def step(self, obs: dict, pose: np.ndarray, path, progress_m: float, speed: float, yaw_rate: float,
              lateral: float, dt: float, frame_new: bool, scan_new: bool, ages) -> LeadStep:
@@ -93,11 +95,13 @@ class LeadStage:
         seen = sample.detected or math.isfinite(sample.lidar_m)
         self._unseen_s = 0.0 if seen else self._unseen_s + dt
         if self._unseen_s > LOST_AFTER_S:
-            if math.isfinite(self.last.d_fused):  # lost just now
+            if not self._lost:  # lost just now: what the car knew of this lead is of no use for the next
                 self.estimator.reset()
                 self.speed.reset()
+                self._lost = True
             d = math.nan
         else:
+            self._lost = False
             d = float(self.estimator.estimate(sample, closing, dt, yaw_rate_radps=yaw_rate))
         lead = self.speed.update(sample.d_meas, sample.lidar_m, sample.d_size, speed, dt, frame_new)
         decision = self.follower.step(d - self.bumper_m, speed - lead)

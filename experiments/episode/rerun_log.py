@@ -20,7 +20,9 @@ then replays the log and those frames into a recording on the ``sim_time`` timel
   ``diagnostics()``), every step, sent with ``send_columns``; ``existence/*``: a defence that
   answers whether a sign stands (``vote``, ``detectors_or``, ``map_only``) logs each witness
   (``wit_det0``/``wit_det1`` the detectors at the hypothesis, ``wit_depth`` the plate in the depth
-  image, ``wit_lidar``, ``wit_blind``, ``wit_map``) and its verdict ``stands``.
+  image, ``wit_lidar``, ``wit_blind``, ``wit_map``) and its verdict ``stands``;
+- ``following/*``: with a car ahead, its distance from the camera as each witness sees it (the
+  depth, the LiDAR's track, the size witness), the defence's, and the truth (to the lead's rear).
 
 A default blueprint lays these out so the story reads at a glance.
 """
@@ -36,8 +38,8 @@ import pandas as pd
 
 from racf.experiments.episode.record import STEP_LOG
 
-__all__ = ["FrameRecorder", "write_rrd", "EXISTENCE_COLUMNS", "SERIES", "CONTROL", "STYLE", "CAR_HALF_SIZE_M",
-           "ACTOR_RGB", "actors"]
+__all__ = ["FrameRecorder", "write_rrd", "EXISTENCE_COLUMNS", "SERIES", "CONTROL", "FOLLOWING", "STYLE", "CAR_HALF_SIZE_M",
+           "ACTOR_RGB", "actors", "lead_depth_true"]
 
 #: The step-log columns of an existence defence's witnesses (``ExistenceWitnesses.columns``, ``stands``).
 EXISTENCE_COLUMNS = ("wit_", "seen_det", "map_depth_m", "stands")
@@ -45,6 +47,10 @@ EXISTENCE_COLUMNS = ("wit_", "seen_det", "map_depth_m", "stands")
 SERIES = {"d_true": "d_true", "d_clean": "d_clean", "d_meas": "d_meas", "lidar": "lidar", "d_fused": "d_fused",
           "d_kin": "d_kin"}
 CONTROL = {"gate_w": "w", "flag": "flag", "brake": "brake", "attack_active": "attack_active"}
+#: The following stage's distance series (entity name -> log column; ``lead_d_true`` is the referee's, made
+#: from the poses by :func:`lead_depth_true`).
+FOLLOWING = {"lead_d_true": "lead_d_true", "lead_d_meas": "lead_d_meas", "lead_lidar": "lead_lidar",
+             "lead_d_size": "lead_d_size", "lead_d_fused": "lead_d_fused"}
 #: Each series' colour (RGB) and legend name: one hue family per kind of signal, no two alike.
 STYLE: dict[str, tuple[tuple[int, int, int], str]] = {
     "d_true": ((40, 40, 40), "d_true (ground truth, sign in view)"),
@@ -57,6 +63,11 @@ STYLE: dict[str, tuple[tuple[int, int, int], str]] = {
     "flag": ((227, 119, 194), "flag (the defence's detector)"),
     "brake": ((140, 86, 75), "brake"),
     "attack_active": ((188, 189, 34), "attack active"),
+    "lead_d_true": ((110, 110, 110), "the car ahead's rear (ground truth)"),
+    "lead_d_meas": ((255, 152, 150), "its depth (depth camera)"),
+    "lead_lidar": ((158, 218, 229), "its LiDAR track"),
+    "lead_d_size": ((255, 187, 120), "its size witness"),
+    "lead_d_fused": ((174, 199, 232), "the defence's distance (what the car follows)"),
 }
 #: A car's body (a QCar 2: its footprint, 0.425 x 0.192 m, 0.20 m tall), centred over the axles' midpoint, m.
 CAR_HALF_SIZE_M = (0.2125, 0.096, 0.10)
@@ -64,6 +75,20 @@ CAR_HALF_SIZE_M = (0.2125, 0.096, 0.10)
 #: are the other cars' paint: red, blue, yellow, white).
 ACTOR_RGB = ((200, 20, 20), (25, 65, 190), (230, 190, 25), (235, 235, 235), (240, 130, 20), (120, 60, 160))
 _CAR_CENTRE_Z_M = 0.10
+
+
+def lead_depth_true(log: pd.DataFrame) -> np.ndarray:
+    """(n,) the car ahead's rear along the camera's optical axis, from the true poses, m (NaN: no lead)."""
+    from racf.experiments.episode.plan import car_calibration
+
+    cx, cy = car_calibration(320, 240).camera_xy_m
+    c, s = np.cos(log["yaw"].to_numpy(float)), np.sin(log["yaw"].to_numpy(float))
+    cam_x = log["x"].to_numpy(float) + c * cx - s * cy
+    cam_y = log["y"].to_numpy(float) + s * cx + c * cy
+    lead_yaw = log["lead_yaw"].to_numpy(float)
+    rear_x = log["lead_x"].to_numpy(float) - np.cos(lead_yaw) * CAR_HALF_SIZE_M[0]
+    rear_y = log["lead_y"].to_numpy(float) - np.sin(lead_yaw) * CAR_HALF_SIZE_M[0]
+    return c * (rear_x - cam_x) + s * (rear_y - cam_y)
 
 
 def _shown(log: pd.DataFrame, column: str) -> np.ndarray:
@@ -136,6 +161,7 @@ def _blueprint():
                 rrb.TimeSeriesView(origin="series", name="distances (m)"),
                 rrb.TimeSeriesView(origin="control", name="gate w, brake, attack"),
                 rrb.TimeSeriesView(origin="existence", name="existence witnesses (1: says a sign stands)"),
+                rrb.TimeSeriesView(origin="following", name="the car ahead (m from the camera)"),
             ),
             rrb.Vertical(
                 rrb.Spatial2DView(origin="map", name="map (top view)"),
@@ -212,12 +238,16 @@ def write_rrd(path: str | Path, log: pd.DataFrame, recorder: FrameRecorder | Non
 
     # Every step: the signals, as columns.
     times = rr.TimeColumn("sim_time", duration=log["t"].to_numpy(float))
-    shown = set(SERIES.values()) | set(CONTROL.values())
+    shown = set(SERIES.values()) | set(CONTROL.values()) | set(FOLLOWING.values())
     own = {f"{'existence' if c.startswith(EXISTENCE_COLUMNS) else 'estimator'}/{c}": c for c in log.columns
            # the estimator's diagnostics beyond the declared log; an existence defence's witnesses apart
            if c not in STEP_LOG and c not in shown and pd.api.types.is_numeric_dtype(log[c])}
+    following = {}
+    if {"lead_x", "x"} <= set(log.columns) and np.isfinite(log["lead_x"].to_numpy(float)).any():
+        log = log.assign(lead_d_true=lead_depth_true(log))
+        following = {f"following/{k}": v for k, v in FOLLOWING.items()}
     for name, column in {**{f"series/{k}": v for k, v in SERIES.items()},
-                         **{f"control/{k}": v for k, v in CONTROL.items()}, **own}.items():
+                         **{f"control/{k}": v for k, v in CONTROL.items()}, **own, **following}.items():
         if column in log:
             key = name.split("/", 1)[1]
             if key in STYLE:

@@ -4,6 +4,8 @@ with its perception pipelines and estimator. The car itself is :class:`racf.expe
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 import gymnasium as gym
 
 from racf import sim
@@ -119,17 +121,12 @@ def lead_stage(spec: TrialSpec, calib: CarCalibration):
     return LeadStage(perception, estimator, calib.bumper_x_m - calib.camera_xy_m[0], calib.camera_xy_m)
 
 
+@lru_cache(maxsize=1)
 def _vehicle_detector():
     """The process's vehicle detector (its network is loaded once; it keeps no state between frames)."""
-    global _VEHICLE_DETECTOR
-    if _VEHICLE_DETECTOR is None:
-        from racf.controllers.vehicle_detector import LearnedVehicleDetector
+    from racf.controllers.vehicle_detector import LearnedVehicleDetector
 
-        _VEHICLE_DETECTOR = LearnedVehicleDetector()
-    return _VEHICLE_DETECTOR
-
-
-_VEHICLE_DETECTOR = None
+    return LearnedVehicleDetector()
 
 
 def car_keys(spec: TrialSpec):

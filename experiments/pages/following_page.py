@@ -1,9 +1,10 @@
 """The following results page (``docs/results/following.md``): the car ahead and its attacks.
 
-Its data is the ``following`` stored result, made from the sweeps ``following.toml`` and
-``following-frustum.toml`` (their episodes' rows, ``parts/*.parquet``) by::
+Its data is the ``following`` stored result, made from the sweeps ``following.toml``,
+``following-frustum.toml`` and ``following-hide.toml`` (their episodes' rows, ``parts/*.parquet``) by::
 
-    python -m racf.experiments.pages.following_page outputs/sweeps/following outputs/sweeps/following-frustum --out following.json
+    python -m racf.experiments.pages.following_page outputs/sweeps/following outputs/sweeps/following-frustum \
+        outputs/sweeps/following-hide --out following.json
 
 and stored with ``results_store``. Per attack and defence: N, the collision-free rate with its
 Wilson interval, the smallest time-to-collision (median and bootstrap interval), the share of
@@ -26,12 +27,14 @@ from racf.stats import median_ci, wilson_interval
 
 __all__ = ["summarise", "following_markdown", "FOLLOWING_COMMAND", "main"]
 
-FOLLOWING_COMMAND = ("racf sweep following.toml; racf sweep following-frustum.toml; python -m "
-                     "racf.experiments.pages.following_page outputs/sweeps/following outputs/sweeps/following-frustum")
+FOLLOWING_COMMAND = ("racf sweep following.toml; racf sweep following-frustum.toml; racf sweep following-hide.toml; "
+                     "python -m racf.experiments.pages.following_page outputs/sweeps/following "
+                     "outputs/sweeps/following-frustum outputs/sweeps/following-hide")
 #: How an attack is named in the table.
 ATTACK_LABELS = {"clean": "none", "clean+lead_patch": "lead patch (depth read 1 m far)",
                  "clean+lead_frustum": "frustum spoof (LiDAR returns 1 m away)",
-                 "clean+lead_frustum[depth]": "frustum spoof, depth moved too"}
+                 "clean+lead_frustum[depth]": "frustum spoof, depth moved too",
+                 "clean+lead_hide": "the lead hidden from camera and LiDAR"}
 
 
 def _rows(folder: Path) -> pd.DataFrame:
@@ -40,6 +43,12 @@ def _rows(folder: Path) -> pd.DataFrame:
         raise ValueError(f"{folder} holds no episodes (parts/*.parquet): give a sweep's output folder")
     frame = pd.concat([pd.read_parquet(p) for p in parts], ignore_index=True)
     spec = (folder / "spec.toml").read_text() if (folder / "spec.toml").exists() else ""
+    if spec:  # the sweep's episodes as this code makes them: a part left from older code is not one of them
+        from racf.experiments.sweeps.spec import parse_spec
+
+        frame = frame[frame["trial_id"].isin({s.trial_id for s in parse_spec(spec).episodes()})]
+        if frame.empty:
+            raise ValueError(f"{folder}'s episodes were run by other code; run its sweep again")
     depth = "depth = [true]" in spec
     attack = frame["setting"].str.replace(r"\+[a-z_0-9]+$", "", regex=True).where(frame["estimator"] != "raw",
                                                                                  frame["setting"])
@@ -111,7 +120,7 @@ def following_markdown(root: Path) -> str:
 
 
 #: The table's order: attacks by strength, raw first then the defences.
-_ATTACKS = ("clean", "clean+lead_patch", "clean+lead_frustum", "clean+lead_frustum[depth]")
+_ATTACKS = ("clean", "clean+lead_patch", "clean+lead_frustum", "clean+lead_frustum[depth]", "clean+lead_hide")
 _DEFENCES = ("raw", "odca", "ekf", "chronos")
 
 

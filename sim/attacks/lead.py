@@ -6,7 +6,10 @@ poses it, from the attacker's ground truth of where the lead stands:
 - ``lead_ramp``: the same bias grown at ``rate_mps`` (stealthy: each frame near the last);
 - ``lead_frustum``: the LiDAR's returns from the lead moved ``bias_m`` away along their beams
   (LiDAR spoofing and the frustum attack: Cao et al., CCS 2019; Hallyburton et al., USENIX
-  Security 2022); with ``depth`` the camera's depth moves with them, so the two agree.
+  Security 2022); with ``depth`` the camera's depth moves with them, so the two agree;
+- ``lead_hide``: the lead hidden from camera and LiDAR together, what MSF-ADV's object achieves
+  (Cao et al., S&P 2021): its pixels painted over from their surroundings, no depth return
+  there and no LiDAR return from it.
 
 They act from ``start_s`` (``trigger="at_time"``: before the lead brakes, by default) for the
 episode's ``t_atk``. The lead's pixels are its box (a QCar 2's, 0.425 x 0.192 x 0.2 m) projected
@@ -25,7 +28,7 @@ import numpy as np
 from racf.sim.attacks.base import AttackWrapper
 from racf.sim.attacks.schedule import AttackSchedule, as_range
 
-__all__ = ["LeadPatch", "LeadRamp", "LeadFrustum", "lead_pixels", "lead_beams", "LEAD_BOX_M"]
+__all__ = ["LeadPatch", "LeadRamp", "LeadFrustum", "LeadHide", "lead_pixels", "lead_beams", "LEAD_BOX_M"]
 
 #: The lead's box as the attacker projects it: length, width, height, m.
 LEAD_BOX_M = (0.425, 0.192, 0.20)
@@ -52,13 +55,16 @@ def _corners(lead: tuple[float, float, float]) -> np.ndarray:
 
 
 def lead_pixels(env: gym.Env, info: dict, depth: np.ndarray) -> np.ndarray:
-    """(H, W) bool: the lead's pixels in the frame (ground truth: the attacker's knowledge)."""
+    """(H, W) bool: the lead's pixels in the frame (ground truth: the attacker's knowledge), its box
+    projected from where the camera and the lead stood when the frame was taken."""
     u = env.unwrapped
     mask = np.zeros(depth.shape, bool)
-    lead = _lead(info)
-    if lead is None:
+    manager = next((m for m in u.world if getattr(m, "name", None) == "lead"), None)
+    if manager is None or _lead(info) is None:
         return mask
-    cam_pos, cam_mat = u.car.camera_pose(u.model, u.data)
+    cam_pos, cam_mat = u.truth.frame_camera
+    xpos, xmat = u.truth.frame_body(manager.body)
+    lead = (float(xpos[0]), float(xpos[1]), math.atan2(float(xmat[3]), float(xmat[0])))
     k = u.truth.intrinsics
     pts = (_MJ_TO_OPTICAL @ np.asarray(cam_mat).reshape(3, 3).T @ (_corners(lead) - cam_pos).T).T
     if np.all(pts[:, 2] <= 0.05):
@@ -68,7 +74,7 @@ def lead_pixels(env: gym.Env, info: dict, depth: np.ndarray) -> np.ndarray:
     hull = cv2.convexHull(np.clip(uv, -1e4, 1e4).astype(np.int32))
     poly = np.zeros(depth.shape, np.uint8)
     cv2.fillConvexPoly(poly, hull, 1)
-    poly = cv2.dilate(poly, np.ones((5, 5), np.uint8))  # the frame may be a camera period old
+    poly = cv2.dilate(poly, np.ones((3, 3), np.uint8))  # the box's edges fall between pixels
     return poly.astype(bool) & (depth > 0) & (depth <= float(pts[:, 2].max()) + 0.05)
 
 
@@ -174,3 +180,26 @@ class LeadFrustum(_LeadAttack):
         scan[beams] += self.bias
         obs["lidar"] = scan.astype(obs["lidar"].dtype)
         return self._shift_depth(obs, info, self.bias) if self.with_depth else obs
+
+
+class LeadHide(_LeadAttack):
+    """The lead gone from every sensor: its pixels inpainted from their surroundings (OpenCV's Telea),
+    its depth no return, and the LiDAR's returns from it no return."""
+
+    name = "lead_hide"
+
+    def __init__(self, env: gym.Env, **schedule: Any) -> None:
+        gym.utils.RecordConstructorArgs.__init__(self, **schedule)
+        super().__init__(env, **schedule)
+
+    def _attack(self, obs: dict, info: dict) -> dict:
+        depth = obs["depth"].copy()
+        plane = depth[..., 0]
+        where = lead_pixels(self, info, plane)
+        rgb = cv2.inpaint(np.ascontiguousarray(obs["rgb"]), cv2.dilate(where.astype(np.uint8), np.ones((5, 5), np.uint8)), 5,
+                          cv2.INPAINT_TELEA)
+        plane[where] = 0.0
+        scan = np.asarray(obs["lidar"]).copy()
+        scan[lead_beams(self, info, scan)] = np.inf
+        obs.update(rgb=rgb, depth=depth, lidar=scan.astype(obs["lidar"].dtype))
+        return obs

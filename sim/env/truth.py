@@ -63,6 +63,15 @@ class WorldTruth:
         self._camera = (np.array(cam_pos, dtype=np.float64), np.array(cam_mat, dtype=np.float64).reshape(3, 3))
         self.bodies.hold_frame(data)
 
+    @property
+    def frame_camera(self) -> tuple[np.ndarray, np.ndarray]:
+        """The held frame's camera pose: (position (3,), camera-to-world rotation (3, 3))."""
+        return self._camera
+
+    def frame_body(self, body: int) -> tuple[np.ndarray, np.ndarray]:
+        """Where body ``body`` stood when the held frame was taken: (position (3,), rotation (9,))."""
+        return self.bodies._frame_xpos[body].copy(), self.bodies._frame_xmat[body].copy()
+
     def forget_view(self) -> None:
         """The world changed under the held frame (a reset, a sticker put up): compute the view anew."""
         self._view = None

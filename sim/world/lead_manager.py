@@ -67,6 +67,11 @@ class LeadManager(WorldManager):
         return self._lead
 
     @property
+    def body(self) -> int:
+        """The lead's body id in the model."""
+        return self._body
+
+    @property
     def moving(self) -> bool:
         return self._lead is not None
 

@@ -70,3 +70,13 @@ def test_bad_settings_are_refused():
         FollowingConfig(time_headway_s=0.0)
     with pytest.raises(ValueError, match="confirm_frames"):
         FollowingConfig(confirm_frames=-1)
+
+
+def test_the_lead_speed_is_used_only_once_confirmed_and_never_past_a_plausible_one():
+    speed = LeadSpeed(FollowingConfig(confirm_frames=6))
+    assert run(speed, 0.6, 1.0, 10) == 0.0 and speed.frames == 5  # five agreeing frames: not yet
+    assert run(speed, 0.6, 1.0, 2, start=speed.range_m) > 0.1
+    runaway = LeadSpeed(FollowingConfig(confirm_frames=0, max_lead_mps=3.0))
+    for k in range(200):  # the range grows 0.08 m a frame (within the gate): 4 m/s faster than the car
+        runaway.update(1.0 + 0.08 * k, 1.0 + 0.08 * k, math.nan, 0.0, 0.02, True)
+    assert runaway.lead_mps == 3.0

@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 
 from racf.experiments.episode import TrialSpec, run_trial
-from racf.experiments.episode.rerun_log import CONTROL, SERIES, STYLE, FrameRecorder, _blueprint, _shown, write_rrd
+from racf.experiments.episode.rerun_log import (CONTROL, FOLLOWING, SERIES, STYLE, FrameRecorder, _blueprint, _shown, lead_depth_true,
+                                               write_rrd)
 
 
 @pytest.fixture(scope="module")
@@ -72,7 +73,7 @@ def test_trials_record_every_trial_they_run(tmp_path):
 
 def test_every_series_has_its_own_colour_and_legend_and_gaps_where_undefined(recorded):
     _, log, _ = recorded
-    assert set(STYLE) == set(SERIES) | set(CONTROL)
+    assert set(STYLE) == set(SERIES) | set(CONTROL) | set(FOLLOWING)
     colours = [colour for colour, _ in STYLE.values()]
     assert len(set(colours)) == len(colours)
     shown = _shown(log, "d_true")
@@ -85,7 +86,8 @@ def test_the_default_layout_shows_the_story():
     blueprint = _blueprint()
     names = [view.name for view in _views(blueprint.root_container)]
     assert names == ["camera (detection green, patch magenta)", "depth", "distances (m)", "gate w, brake, attack",
-                     "existence witnesses (1: says a sign stands)", "map (top view)", "car, camera and LiDAR"]
+                     "existence witnesses (1: says a sign stands)", "the car ahead (m from the camera)", "map (top view)",
+                     "car, camera and LiDAR"]
 
 
 def _views(container):
@@ -108,6 +110,20 @@ def test_other_cars_appear_in_the_world_and_on_the_map(tmp_path):
         assert rows[f"/map/actors/traffic{k}/now"] == len(recorder.frames)
         assert f"/map/actors/traffic{k}/path" in rows
     assert "/map/actors/conflict" in rows and "/world/actors/traffic2" not in rows
+
+
+def test_the_car_ahead_and_its_witnesses_are_drawn(tmp_path):
+    recorder = FrameRecorder(every=25)
+    _, log = run_trial(TrialSpec("clean+odca", 1, 1.0, 0, target="lead_vehicle"), on_step=recorder, clean_pass=False)
+    rows: dict[str, int] = {}
+    for chunk in _chunks(write_rrd(tmp_path / "lead.rrd", log, recorder)):
+        rows[str(chunk.entity_path)] = rows.get(str(chunk.entity_path), 0) + chunk.num_rows
+    assert rows["/world/actors/lead"] == len(recorder.frames) and "/map/actors/lead/path" in rows
+    assert {f"/following/{k}" for k in ("lead_d_true", "lead_d_meas", "lead_lidar", "lead_d_size", "lead_d_fused")} <= set(rows)
+    # The truth is the lead's rear from the camera: the LiDAR's track of it reads it within a few centimetres.
+    true, lidar = lead_depth_true(log), log["lead_lidar"].to_numpy(float)
+    both = np.isfinite(lidar)
+    assert both.sum() > 50 and np.median(np.abs(lidar[both] - true[both])) < 0.05
 
 
 @pytest.mark.slow

@@ -1,6 +1,7 @@
 """The following page: a sweep's episodes summarised with intervals, and its table."""
 
 import json
+from pathlib import Path
 
 import pandas as pd
 import pytest
@@ -8,15 +9,15 @@ import pytest
 from racf.experiments.pages.following_page import following_markdown, main, summarise
 
 
-def sweep(folder, rows, depth=False):
+def sweep(folder, rows):
     (folder / "parts").mkdir(parents=True)
-    (folder / "spec.toml").write_text("[params.lead_frustum]\ndepth = [true]\n" if depth else "")
+    (folder / "spec.toml").write_text("")
     for k, row in enumerate(rows):
         pd.DataFrame([row]).to_parquet(folder / "parts" / f"p{k}.parquet")
 
 
 def row(setting, estimator, profile, free, ttc=1.0, headway=0.0):
-    return {"setting": setting, "estimator": estimator, "scenario_profile": profile, "no_lead_collision": free,
+    return {"trial_id": f"{setting}-{profile}", "setting": setting, "estimator": estimator, "scenario_profile": profile, "no_lead_collision": free,
             "min_ttc_s": ttc, "headway_violation_s": headway, "hard_brakes": 2}
 
 
@@ -24,13 +25,13 @@ def test_it_counts_collision_free_episodes_per_attack_and_defence_with_wilson_in
     sweep(tmp_path / "a", [row("clean+lead_patch", "raw", "cruise", False, 0.0),
                            row("clean+lead_patch", "raw", "hard_brake", True, 1.5, 0.2),
                            row("clean+lead_patch+odca", "odca", "cruise", True, 1.2)])
-    sweep(tmp_path / "b", [row("clean+lead_frustum+odca", "odca", "cruise", True, None)], depth=True)
+    sweep(tmp_path / "b", [row("clean+lead_frustum+odca", "odca", "cruise", True, None)])
     rows = summarise([tmp_path / "a", tmp_path / "b"])["rows"]
     raw = rows["clean+lead_patch|raw"]
     assert raw["n"] == 2 and raw["collision_free"]["k"] == 1 and raw["collision_free"]["ci"][0] < 0.5
     assert raw["headway_violated"]["k"] == 1 and raw["by_profile"]["cruise"]["k"] == 0
     assert rows["clean+lead_patch|odca"]["collision_free"]["rate"] == 1.0
-    frustum = rows["clean+lead_frustum[depth]|odca"]
+    frustum = rows["clean+lead_frustum|odca"]
     assert frustum["min_ttc_median_s"] is None  # they never closed: no median to give
 
 
@@ -43,6 +44,17 @@ def test_its_page_shows_the_table_and_says_how_to_make_what_is_missing(tmp_path)
     (tmp_path / "following.json").write_text(json.dumps(data))
     page = following_markdown(tmp_path)
     assert "| none | raw | 1 | 1.00 [" in page and "| none | raw | 1 / 1 |" in page
+
+
+def test_a_part_from_older_code_is_left_out(tmp_path):
+    from racf.experiments.sweeps.spec import parse_spec
+
+    text = (Path(__file__).resolve().parents[3] / "experiments/sweeps/specs/following-hide.toml").read_text()
+    episodes = parse_spec(text).episodes()
+    current = {**row("clean+lead_hide", "raw", "cruise", False), "trial_id": episodes[0].trial_id}
+    sweep(tmp_path / "s", [current, row("clean+lead_hide", "raw", "cruise", True)])
+    (tmp_path / "s" / "spec.toml").write_text(text)
+    assert summarise([tmp_path / "s"])["rows"]["clean+lead_hide|raw"]["n"] == 1
 
 
 def test_a_folder_without_episodes_is_refused_in_one_line(tmp_path, capsys):

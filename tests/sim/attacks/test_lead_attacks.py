@@ -46,3 +46,14 @@ def test_an_attack_on_the_car_ahead_refuses_a_scenario_without_one():
     env = default_env(TrialSpec("clean+lead_patch", 1, 1.0, 0, t_atk=2.0))
     with pytest.raises(ValueError, match="lead_vehicle scenario"):
         env.reset(seed=0, options={"sign": 1, "cruise_speed": 1.0})
+
+
+def test_the_lead_hidden_leaves_no_return_and_no_car_for_the_detector():
+    from racf.controllers.vehicle_detector import LearnedVehicleDetector
+
+    env, obs, info, clean = attacked("clean+lead_hide")
+    where = lead_pixels(env, info, clean["depth"][..., 0])
+    assert where.sum() > 500 and (obs["depth"][..., 0][where] == 0).all()
+    assert np.isinf(obs["lidar"][lead_beams(env, info, clean["lidar"])]).all()
+    detector = LearnedVehicleDetector()
+    assert detector.passing(clean["rgb"]) and not detector.passing(obs["rgb"])
