@@ -115,7 +115,9 @@ def following_markdown(root: Path) -> str:
               "branch on the closing speed. Moving the LiDAR's returns alone harms no one (raw depth does not read "
               "the LiDAR; the defences outvote it). Moving them with the depth, so that the two range sensors agree, "
               "is the harder case: ODCA holds in three profiles and loses half the hard brakes, where only the size "
-              "witness and the carried closing speed still disagree with the two."]
+              "witness and the carried closing speed still disagree with the two. Hiding the lead from every sensor "
+              "leaves no witness at all: every defence drives into it in most episodes, and none can be asked to do "
+              "better without a sensor that still sees it."]
     return "\n".join(lines + [""])
 
 
