@@ -46,7 +46,10 @@ def test_it_carries_its_estimate_while_the_witnesses_disagree():
     speed = LeadSpeed()
     learnt = run(speed, 0.6, 1.0, 150)
     # The depth read 1 m far: a lead that runs away, if it were believed.
+    before = speed.range_m
     assert run(speed, 0.6, 1.0, 100, depth_bias=1.0, start=speed.range_m) == pytest.approx(learnt)
+    # Its range is carried at the lead's speed against the car's, not at the car's alone.
+    assert speed.range_m - before == pytest.approx((learnt - 1.0) * 2.0, abs=0.03)
 
 
 def test_a_range_off_its_track_starts_it_again_and_waits_to_confirm():

@@ -54,7 +54,8 @@ def test_a_part_from_older_code_is_left_out(tmp_path):
     current = {**row("clean+lead_hide", "raw", "cruise", False), "trial_id": episodes[0].trial_id}
     sweep(tmp_path / "s", [current, row("clean+lead_hide", "raw", "cruise", True)])
     (tmp_path / "s" / "spec.toml").write_text(text)
-    assert summarise([tmp_path / "s"])["rows"]["clean+lead_hide|raw"]["n"] == 1
+    kept = summarise([tmp_path / "s"])["rows"]["clean+lead_hide|raw"]
+    assert kept["n"] == 1 and kept["collision_free"]["k"] == 0  # the current episode's, not the old one's
 
 
 def test_a_folder_without_episodes_is_refused_in_one_line(tmp_path, capsys):

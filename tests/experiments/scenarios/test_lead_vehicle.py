@@ -51,6 +51,9 @@ def test_the_scorer_reads_gap_time_to_collision_and_headway():
     assert out.headway_violation_s == pytest.approx(0.02) and not out.lead_collision
     hit = score_following(log_of([0.2, 0.0], [1.0, 1.0], [0.0, 0.0], ["", "lead"]))
     assert hit.lead_collision and hit.min_ttc_s == 0.0
+    # Creeping up at 0.05 m/s, 2 cm behind: under the moving speed, no headway to keep.
+    creeping = score_following(log_of([0.3, 0.02], [0.05, 0.05], [0.0, 0.0]))
+    assert creeping.headway_violation_s == 0.0
     apart = score_following(log_of([1.0, 1.1], [0.5, 0.5], [1.0, 1.0]))
     assert math.isnan(apart.min_ttc_s) and apart.headway_violation_s == 0.0 and MIN_HEADWAY_S == 0.5
 

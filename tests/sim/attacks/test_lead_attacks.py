@@ -46,6 +46,10 @@ def test_an_attack_on_the_car_ahead_refuses_a_scenario_without_one():
     env = default_env(TrialSpec("clean+lead_patch", 1, 1.0, 0, t_atk=2.0))
     with pytest.raises(ValueError, match="lead_vehicle scenario"):
         env.reset(seed=0, options={"sign": 1, "cruise_speed": 1.0})
+    # Other cars in the world are not the car ahead.
+    crossing = TrialSpec("clean+lead_patch", 1, 1.0, 0, t_atk=2.0, target="cross_traffic")
+    with pytest.raises(ValueError, match="lead_vehicle scenario"):
+        default_env(crossing).reset(seed=0, options=plan_episode(crossing).reset_options)
 
 
 def test_the_lead_hidden_leaves_no_return_and_no_car_for_the_detector():
