@@ -220,8 +220,17 @@ class RemoteEstimator:
         if self._socket is None:
             self._socket = self._open()
         start = time.perf_counter()
-        self._socket.send(pack(message))
-        if not self._socket.poll(self.timeout_ms if timeout_ms is None else timeout_ms, zmq.POLLIN):
+        wait_ms = self.timeout_ms if timeout_ms is None else timeout_ms
+        # A REQ socket whose connection a failed handshake just dropped has no peer to queue for: without a
+        # send timeout it would block until one came back, which a refused car's never does.
+        self._socket.setsockopt(zmq.SNDTIMEO, max(1, int(wait_ms)))
+        try:
+            self._socket.send(pack(message))
+            sent = True
+        except zmq.Again:
+            sent = False
+        left_ms = max(0.0, wait_ms - (time.perf_counter() - start) * 1000.0)
+        if not sent or not self._socket.poll(left_ms, zmq.POLLIN):
             failure = handshake_failure(self._monitor)
             self._close()  # a REQ socket that got no answer cannot send again: open a new one next time
             raise TimeoutError(f"the service at {self.endpoint} cannot be authenticated: {failure}" if failure else "")
