@@ -156,24 +156,14 @@ def _loss(logits: torch.Tensor, target: torch.Tensor, pos_weight: float, hard_we
     return bce + 0.5 * dice + hard_weight * hard
 
 
-def train_segmenter(config: TrainConfig = TrainConfig(), data_root: Path = Path("data/detector"),
-                    out_dir: Path | None = None, progress: bool = True) -> tuple[SignSegmenterNet, dict]:
-    """Trains a segmenter on ``data_root``'s training split; evaluates it on the held-out split.
-
-    Returns the network and a report (settings, losses per epoch, held-out recall and
-    false-positive frames, seconds); with ``out_dir`` also writes the checkpoint there.
-    """
+def fit_segmenter(images: torch.Tensor, targets: torch.Tensor, config, g: torch.Generator, progress: bool,
+                  desc: str, mix=None) -> tuple[SignSegmenterNet, list[float], float]:
+    """A fresh segmenter fitted to ``images`` (N, 3, H, W uint8) and half-resolution ``targets``: AdamW on a
+    cosine schedule, each batch mirrored half the time, ``mix(x, y)`` (in place: hard negatives), then the
+    photometric jitter. ``config`` gives epochs, batch, lr, weight_decay, pos_weight and hard_weight.
+    Returns (the network in eval mode, the mean loss per epoch, seconds)."""
     from tqdm import tqdm
 
-    torch.set_num_threads(config.threads)
-    torch.manual_seed(config.seed)
-    g = torch.Generator().manual_seed(config.seed)
-    train = load_split(data_root, "train")
-    heldout = load_split(data_root, "heldout")
-    images = torch.from_numpy(train["rgb"]).permute(0, 3, 1, 2)  # uint8, a view of the array
-    masks = torch.from_numpy(train["mask"]).unsqueeze(1).float()
-    targets = F.avg_pool2d(masks, 2)  # a half-resolution cell's share of face
-    del masks
     net = SignSegmenterNet(SegmenterConfig()).to(memory_format=torch.channels_last)
     opt = torch.optim.AdamW(net.parameters(), lr=config.lr, weight_decay=config.weight_decay)
     n = len(images)
@@ -182,7 +172,7 @@ def train_segmenter(config: TrainConfig = TrainConfig(), data_root: Path = Path(
     sched = torch.optim.lr_scheduler.LambdaLR(opt, lambda s: 0.5 * (1 + math.cos(math.pi * min(s, total) / total)))
     t0 = time.perf_counter()
     losses = []
-    bar = tqdm(range(config.epochs), desc="train-detector", unit="epoch", disable=not progress)
+    bar = tqdm(range(config.epochs), desc=desc, unit="epoch", disable=not progress)
     for _ in bar:
         net.train()
         order = torch.randperm(n, generator=g)
@@ -191,9 +181,10 @@ def train_segmenter(config: TrainConfig = TrainConfig(), data_root: Path = Path(
             idx = order[s * config.batch:(s + 1) * config.batch]
             x = images[idx].float().div_(255.0)
             y = targets[idx]
-            if torch.rand(1, generator=g).item() < 0.5:  # a stop sign mirrored is a stop sign
+            if torch.rand(1, generator=g).item() < 0.5:  # a stop sign, or a car, mirrored is one still
                 x, y = x.flip(-1), y.flip(-1)
-            paste_red_shapes(x, y, g, config.red_shape_p)
+            if mix is not None:
+                mix(x, y)
             x = _augment(x, g).contiguous(memory_format=torch.channels_last)
             loss = _loss(net(x), y, config.pos_weight, config.hard_weight)
             opt.zero_grad(set_to_none=True)
@@ -203,7 +194,28 @@ def train_segmenter(config: TrainConfig = TrainConfig(), data_root: Path = Path(
             running += float(loss.detach())
         losses.append(running / max(steps_per_epoch, 1))
         bar.set_postfix(loss=f"{losses[-1]:.4f}")
-    train_s = time.perf_counter() - t0
+    return net.eval(), losses, time.perf_counter() - t0
+
+
+def train_segmenter(config: TrainConfig = TrainConfig(), data_root: Path = Path("data/detector"),
+                    out_dir: Path | None = None, progress: bool = True) -> tuple[SignSegmenterNet, dict]:
+    """Trains a segmenter on ``data_root``'s training split; evaluates it on the held-out split.
+
+    Returns the network and a report (settings, losses per epoch, held-out recall and
+    false-positive frames, seconds); with ``out_dir`` also writes the checkpoint there.
+    """
+    torch.set_num_threads(config.threads)
+    torch.manual_seed(config.seed)
+    g = torch.Generator().manual_seed(config.seed)
+    train = load_split(data_root, "train")
+    heldout = load_split(data_root, "heldout")
+    images = torch.from_numpy(train["rgb"]).permute(0, 3, 1, 2)  # uint8, a view of the array
+    masks = torch.from_numpy(train["mask"]).unsqueeze(1).float()
+    targets = F.avg_pool2d(masks, 2)  # a half-resolution cell's share of face
+    del masks
+    n = len(images)
+    net, losses, train_s = fit_segmenter(images, targets, config, g, progress, "train-detector",
+                                         lambda x, y: paste_red_shapes(x, y, g, config.red_shape_p))
     net.eval()
     counts = evaluate_split(LearnedSignDetector(net=net), heldout, progress=progress)
     report = {"config": asdict(config), "n_train": n, "n_heldout": len(heldout["rgb"]), "epoch_loss": losses,

@@ -10,8 +10,6 @@ The shipped checkpoint is ``assets/checkpoints/vehicle-segmenter``.
 
 from __future__ import annotations
 
-import math
-import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
@@ -20,9 +18,9 @@ import torch
 from torch.nn import functional as F
 
 from racf.controllers.learned_detector import save_segmenter
-from racf.controllers.segmenter_net import SegmenterConfig, SignSegmenterNet
+from racf.controllers.segmenter_net import SignSegmenterNet
 from racf.controllers.vehicle_detector import LearnedVehicleDetector
-from racf.experiments.detector.train import _augment, _loss
+from racf.experiments.detector.train import fit_segmenter
 
 __all__ = ["VehicleTrainConfig", "render_views", "train_vehicle_segmenter", "heldout_report", "RANGE_BINS_M"]
 
@@ -90,8 +88,6 @@ def heldout_report(detector: LearnedVehicleDetector, data: dict[str, np.ndarray]
 def train_vehicle_segmenter(config: VehicleTrainConfig = VehicleTrainConfig(), out_dir: Path | None = None,
                             progress: bool = True) -> tuple[SignSegmenterNet, dict]:
     """Renders the views, trains the network and evaluates it on the held-out views."""
-    from tqdm import tqdm
-
     torch.set_num_threads(config.threads)
     torch.manual_seed(config.seed)
     g = torch.Generator().manual_seed(config.seed)
@@ -99,33 +95,8 @@ def train_vehicle_segmenter(config: VehicleTrainConfig = VehicleTrainConfig(), o
     heldout = render_views(config.n_heldout, config.seed + 1_000_003, progress)
     images = torch.from_numpy(train["rgb"]).permute(0, 3, 1, 2)
     targets = F.avg_pool2d(torch.from_numpy(train["mask"]).unsqueeze(1).float(), 2)
-    net = SignSegmenterNet(SegmenterConfig()).to(memory_format=torch.channels_last)
-    opt = torch.optim.AdamW(net.parameters(), lr=config.lr, weight_decay=config.weight_decay)
-    steps = len(images) // config.batch
-    total = steps * config.epochs
-    sched = torch.optim.lr_scheduler.LambdaLR(opt, lambda s: 0.5 * (1 + math.cos(math.pi * min(s, total) / total)))
-    t0, losses = time.perf_counter(), []
-    bar = tqdm(range(config.epochs), desc="train vehicle segmenter", unit="epoch", disable=not progress)
-    for _ in bar:
-        net.train()
-        order = torch.randperm(len(images), generator=g)
-        running = 0.0
-        for s in range(steps):
-            idx = order[s * config.batch:(s + 1) * config.batch]
-            x, y = images[idx].float().div_(255.0), targets[idx]
-            if torch.rand(1, generator=g).item() < 0.5:  # a car mirrored is a car
-                x, y = x.flip(-1), y.flip(-1)
-            x = _augment(x, g).contiguous(memory_format=torch.channels_last)
-            loss = _loss(net(x), y, config.pos_weight, config.hard_weight)
-            opt.zero_grad(set_to_none=True)
-            loss.backward()
-            opt.step()
-            sched.step()
-            running += float(loss.detach())
-        losses.append(running / max(steps, 1))
-        bar.set_postfix(loss=f"{losses[-1]:.4f}")
-    net.eval()
-    report = {"config": asdict(config), "epoch_loss": losses, "train_s": time.perf_counter() - t0,
+    net, losses, train_s = fit_segmenter(images, targets, config, g, progress, "train vehicle segmenter")
+    report = {"config": asdict(config), "epoch_loss": losses, "train_s": train_s,
               "heldout": heldout_report(LearnedVehicleDetector(net=net), heldout), "torch": torch.__version__,
               "parameters": sum(p.numel() for p in net.parameters())}
     if out_dir is not None:

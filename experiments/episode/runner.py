@@ -28,6 +28,7 @@ import numpy as np
 import pandas as pd
 
 from racf.controllers import DistanceEstimator
+from racf.experiments.episode.lead_stage import NO_LEAD
 from racf.experiments.episode.record import step_row, world_columns
 from racf.experiments.episode.referee import Referee
 from racf.experiments.episode.spec import TrialSpec
@@ -232,8 +233,6 @@ def car_columns(car, step, obs: dict, t: float, applied: np.ndarray) -> dict:
 
 def lead_columns(lead) -> dict:
     """The following stage's part of a row (``LeadStep``; None: not engaged, its columns NaN/False)."""
-    from racf.experiments.episode.lead_stage import NO_LEAD
-
     lead = lead or NO_LEAD
     sample, decision = lead.sample, lead.decision
     return {"lead_detected": sample.detected, "lead_d_meas": sample.d_meas, "lead_lidar": sample.lidar_m,

@@ -43,16 +43,20 @@ def _rows(folder: Path) -> pd.DataFrame:
         raise ValueError(f"{folder} holds no episodes (parts/*.parquet): give a sweep's output folder")
     frame = pd.concat([pd.read_parquet(p) for p in parts], ignore_index=True)
     spec = (folder / "spec.toml").read_text() if (folder / "spec.toml").exists() else ""
+    specs = {}
     if spec:  # the sweep's episodes as this code makes them: a part left from older code is not one of them
         from racf.experiments.sweeps.spec import parse_spec
 
-        frame = frame[frame["trial_id"].isin({s.trial_id for s in parse_spec(spec).episodes()})]
+        specs = {s.trial_id: s for s in parse_spec(spec).episodes()}
+        frame = frame[frame["trial_id"].isin(specs)]
         if frame.empty:
             raise ValueError(f"{folder}'s episodes were run by other code; run its sweep again")
-    depth = "depth = [true]" in spec
     attack = frame["setting"].str.replace(r"\+[a-z_0-9]+$", "", regex=True).where(frame["estimator"] != "raw",
                                                                                  frame["setting"])
-    frame["attack"] = attack + ("[depth]" if depth else "")
+    # The frustum spoof that moves the depth too is its own row.
+    depth = frame["trial_id"].map(lambda i: "[depth]" if i in specs and specs[i].attack_params.get(
+        "lead_frustum", {}).get("depth") else "")
+    frame["attack"] = attack + depth
     return frame
 
 

@@ -61,3 +61,13 @@ def test_a_part_from_older_code_is_left_out(tmp_path):
 def test_a_folder_without_episodes_is_refused_in_one_line(tmp_path, capsys):
     assert main([str(tmp_path)]) == 2
     assert capsys.readouterr().err.count("\n") == 1
+
+
+def test_the_frustum_spoof_that_moves_the_depth_too_is_its_own_row(tmp_path):
+    from racf.experiments.sweeps.spec import parse_spec
+
+    text = (Path(__file__).resolve().parents[3] / "experiments/sweeps/specs/following-frustum.toml").read_text()
+    first = parse_spec(text).episodes()[0]
+    sweep(tmp_path / "s", [{**row(first.setting, first.estimator, "cruise", True), "trial_id": first.trial_id}])
+    (tmp_path / "s" / "spec.toml").write_text(text)
+    assert list(summarise([tmp_path / "s"])["rows"]) == [f"clean+lead_frustum[depth]|{first.estimator}"]
