@@ -89,6 +89,8 @@ class ExistenceWitnesses:
         map_depth_m: the camera depth the map's sign will have at its line plus the route's distance to
             that line, from the car's own localisation, m (NaN: the map lists none ahead).
         source: where the hypothesis came from (``map``, ``detector``; empty: none).
+        moving: what the depth shows at the map's place runs along the camera's ray as no standing
+            thing does (:mod:`racf.controllers.static_world`): the depth there is outvoted.
     """
 
     seen: tuple[bool, ...]
@@ -101,13 +103,14 @@ class ExistenceWitnesses:
     depth_m: float
     map_depth_m: float
     source: str
+    moving: bool = False
 
     def columns(self) -> dict[str, float]:
         """The witnesses as step-log columns (1.0 / 0.0)."""
         out = {f"wit_det{k}": float(v) for k, v in enumerate(self.detectors)}
         out |= {f"seen_det{k}": float(v) for k, v in enumerate(self.seen)}
         return out | {"wit_depth": float(self.depth), "wit_lidar": float(self.lidar), "wit_blind": float(self.blind), "wit_map": float(self.mapped),
-                      "wit_depth_m": self.depth_m, "map_depth_m": self.map_depth_m}
+                      "wit_moving": float(self.moving), "wit_depth_m": self.depth_m, "map_depth_m": self.map_depth_m}
 
 
 NO_WITNESSES = ExistenceWitnesses((False, False), (math.nan, math.nan), (False, False), False, False, False, False,
@@ -118,11 +121,13 @@ def vote(witnesses: ExistenceWitnesses) -> bool:
     """RACF's existence vote: a physical witness and a semantic one agree that a sign stands.
 
     The depth image is the physical witness. Where it is blind (no return at all where the plate
-    would show), the LiDAR stands in for it (alone, the A2M12's sparse, often dropped beams make
-    empty space out of a wall seen obliquely and would pass a poster), and where the map lists a
-    sign there, the map is not outvoted: only a sensor that sees through the place can say that
-    nothing stands in it."""
-    physical = witnesses.depth or (witnesses.blind and (witnesses.lidar or witnesses.mapped))
+    would show) or caught moving (what it shows at the map's place runs along the ray as no
+    standing thing does), the LiDAR stands in for it (alone, the A2M12's sparse, often dropped
+    beams make empty space out of a wall seen obliquely and would pass a poster), and where the
+    map lists a sign there, the map is not outvoted: only a sensor that sees through the place,
+    and holds still while it does, can say that nothing stands in it."""
+    unreliable = witnesses.blind or witnesses.moving
+    physical = witnesses.depth or (unreliable and (witnesses.lidar or witnesses.mapped))
     semantic = any(witnesses.detectors) or witnesses.mapped
     return bool(physical and semantic)
 

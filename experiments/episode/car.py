@@ -298,7 +298,8 @@ class Car:
             if self.existence is not None and frame_new:
                 to_line = self.target.stop_s - (self.follower.progress_m + self._bumper_ahead_of_axle)
                 witnesses = self.existence.observe(obs["rgb"], obs["depth"][..., 0], obs["lidar"], self.target,
-                                                   self._pose, to_line, self.perception, self._sample)
+                                                   self._pose, to_line, self.perception, self._sample,
+                                                   t_s=self._frame_time)
                 self._sample = replace(self._sample, witnesses=witnesses)
             elif self.existence is not None:
                 self._sample = replace(self._sample, witnesses=self.existence.witnesses)

@@ -4,7 +4,9 @@ It runs for a defence that answers ``stands()`` (``existence = True``), on the c
 reads the frame, the scan, the car's own pose and the map, never ``info``. It holds the second
 detector (the defence's ``second_detector``; None: only the car's), forms the hypothesis (the
 map's entry, else where a detector sees a sign) and reads the physical witnesses there
-(:mod:`racf.controllers.existence`).
+(:mod:`racf.controllers.existence`). At the map's plate it also carries what the depth shows from
+frame to frame by the car's own motion: a depth that runs away from it, as no standing thing's does,
+is caught (:mod:`racf.controllers.static_world`) and outvoted there for the rest of the approach.
 """
 
 from __future__ import annotations
@@ -16,6 +18,7 @@ import numpy as np
 from racf.controllers import DepthDistance, Perception, PerceptionSample
 from racf.controllers.existence import (NO_WITNESSES, ExistenceWitnesses, Hypothesis, depth_hole, depth_witness,
                                         detection_hypothesis, lidar_witness)
+from racf.controllers.static_world import CameraPose, StaticWorldCheck
 from racf.experiments.episode.car import CarCalibration, camera_offset, map_bearing, sign_depth_at_line
 from racf.sim.world.drives import RouteTarget
 
@@ -42,14 +45,23 @@ class ExistenceStage:
         self.second = Perception(calibration.camera, detector=second) if second is not None else None
         self.depth = DepthDistance()
         self.witnesses = NO_WITNESSES
+        self.static = StaticWorldCheck()
+        self._target = None
 
     def reset(self) -> None:
         self.witnesses = NO_WITNESSES
+        self.static.reset()
+        self._target = None
 
     def observe(self, rgb: np.ndarray, depth: np.ndarray, scan: np.ndarray, target: RouteTarget, pose: np.ndarray,
-                to_line_m: float, primary: Perception, sample: PerceptionSample) -> ExistenceWitnesses:
+                to_line_m: float, primary: Perception, sample: PerceptionSample,
+                t_s: float = math.nan) -> ExistenceWitnesses:
         """The witnesses on a new frame (``sample``: the car's perception of it; ``to_line_m``: how far
-        the car's own localisation puts its bumper before the target's line along the route)."""
+        the car's own localisation puts its bumper before the target's line along the route; ``t_s``:
+        the frame's time on the car's clock, NaN: no static-world check)."""
+        if target is not self._target:  # a new approach: nothing has been caught moving yet
+            self.static.reset()
+            self._target = target
         mapped = target.mapped
         bearing = map_bearing(self.calibration, target, pose) if mapped else None
         second = self.second.detect(rgb, bearing) if self.second is not None else None
@@ -63,7 +75,9 @@ class ExistenceStage:
         half_fov = self.calibration.camera.half_hfov_rad
         if mapped and math.isfinite(bearing) and abs(bearing) < half_fov and ahead > 0 and math.isfinite(map_depth):
             # Where the camera could see the map's sign: are the plate and its witnesses there?
-            found = self._at(self._map_hypothesis(target, bearing, ahead), depth, scan, seen)
+            place = self._map_hypothesis(target, bearing, ahead)
+            found = self._at(place, depth, scan, seen)
+            self._check_static(t_s, depth, pose, place)
         if found is None:  # nothing where the map says (or it says nothing): where a detector sees a sign
             raw = (primary.last_raw_detection, self.second.last_raw_detection if self.second else None)
             for detection in (d for d in raw if d is not None):
@@ -76,8 +90,25 @@ class ExistenceStage:
             found = (tuple(d is not None for d in seen), False, False, False, math.nan, "map" if mapped else "")
         detectors, by_depth, by_lidar, blind, depth_m, source = found
         self.witnesses = ExistenceWitnesses(tuple(d is not None for d in seen), seen_depth, detectors, by_depth,
-                                            by_lidar, blind, source == "map", depth_m, map_depth, source)
+                                            by_lidar, blind, source == "map", depth_m, map_depth, source,
+                                            moving=mapped and self.static.moving)
         return self.witnesses
+
+    def _check_static(self, t_s: float, depth: np.ndarray, pose: np.ndarray, place: Hypothesis) -> None:
+        """Hands the static-world check this frame's pixels at the map's plate, and where the camera stood."""
+        calib, camera = self.calibration, self.calibration.camera
+        x, y, yaw = (float(v) for v in pose)
+        c, s = math.cos(yaw), math.sin(yaw)
+        cam_x, cam_y = calib.camera_xy_m
+        where = CameraPose(x + c * cam_x - s * cam_y, y + s * cam_x + c * cam_y, calib.camera_height_m, yaw)
+        top, bottom = place.rows
+        quarter = (bottom - top) / 5  # the plate's middle rows, as its witness reads them
+        rows = np.arange(max(int(round(top + quarter)), 0), min(int(round(bottom - quarter)), depth.shape[0] - 1) + 1)
+        centre = camera.cx - camera.fx * math.tan(place.bearing_rad) - 0.5
+        half = camera.fx * _PLATE_HALF_M / max(place.depth_m, 0.1)
+        cols = np.arange(max(int(math.ceil(centre - half)), 0), min(int(math.floor(centre + half)), depth.shape[1] - 1) + 1)
+        rr, cc = (g.ravel() for g in np.meshgrid(rows, cols, indexing="ij"))
+        self.static.observe(t_s, depth, camera, where, rr, cc)
 
     def _at(self, hypothesis: Hypothesis, depth: np.ndarray, scan: np.ndarray, detections,
             keep_empty: bool = False):

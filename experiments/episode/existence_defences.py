@@ -9,7 +9,8 @@ brakes on the distance ``estimate`` returns. A user's defence takes part the sam
 - ``vote``: RACF's existence vote (:func:`racf.controllers.existence.vote`) over the two detectors,
   the depth and LiDAR witnesses and the map; its distance is an inner defence's (ODCA by
   default) while the car's detector sees the sign, else the physical witnesses' depth (where
-  they are blind at the map's sign, the map's);
+  they are blind at the map's sign, the map's). Where the depth at the map's sign is caught
+  moving, the map's: the inner defence reads that same depth;
 - ``detectors_or``: the two detectors OR-ed (a sign stands when either sees it); its distance
   is the inner defence's, else the depth at the second detector's detection;
 - ``map_only``: stop at every line the map lists (a sign stands whenever the map lists one
@@ -67,7 +68,7 @@ class _Existence:
         d = float(self.inner.estimate(sample, speed_mps, dt, yaw_rate_radps=yaw_rate_radps))
         self._witnesses = sample.witnesses if sample.witnesses is not None else NO_WITNESSES
         self._stands = self.verdict(self._witnesses)
-        if not math.isfinite(d):
+        if not math.isfinite(d) or self.distrusts_inner(self._witnesses):
             d = self.fallback_distance(self._witnesses)
         # With no witness left (the sign went out of the picture on a bend), the last distance is
         # carried on by odometry, as ODCA's kinematic branch does: the braker decides whether the
@@ -81,6 +82,10 @@ class _Existence:
     def fallback_distance(self, witnesses: ExistenceWitnesses) -> float:
         """The distance when the inner defence has none (the car's detector does not see the sign)."""
         return math.nan
+
+    def distrusts_inner(self, witnesses: ExistenceWitnesses) -> bool:
+        """Whether the witnesses show the inner defence's distance is not to be used this step."""
+        return False
 
     def stands(self) -> bool | None:
         return self._stands
@@ -112,10 +117,14 @@ class ExistenceVote(_WithSecondDetector):
         return vote(witnesses)
 
     def fallback_distance(self, witnesses: ExistenceWitnesses) -> float:
-        """The physical witnesses' depth; where the depth is blind at the map's sign, the map's."""
-        if witnesses.blind and witnesses.mapped and not math.isfinite(witnesses.depth_m):
+        """The physical witnesses' depth; where the depth is blind at the map's sign, the map's, and
+        where it is caught moving there, the map's whatever it reads."""
+        if witnesses.mapped and (witnesses.moving or (witnesses.blind and not math.isfinite(witnesses.depth_m))):
             return witnesses.map_depth_m
         return witnesses.depth_m
+
+    def distrusts_inner(self, witnesses: ExistenceWitnesses) -> bool:
+        return witnesses.mapped and witnesses.moving  # the inner defence reads the depth that was caught
 
 
 class DetectorsOr(_WithSecondDetector):

@@ -9,7 +9,10 @@ poses it, from the attacker's ground truth of where the lead stands:
   Security 2022); with ``depth`` the camera's depth moves with them, so the two agree;
 - ``lead_hide``: the lead hidden from camera and LiDAR together, what MSF-ADV's object achieves
   (Cao et al., S&P 2021): its pixels painted over from their surroundings, no depth return
-  there and no LiDAR return from it.
+  there and no LiDAR return from it;
+- ``lead_phantom``: a phantom car ahead (Nassi et al., CCS 2020: a car's picture projected or
+  shown where none stands): the camera sees a QCar 2's rear ``distance_m`` ahead in the lane,
+  while the depth and the LiDAR see what is really there (a picture has no depth).
 
 They act from ``start_s`` (``trigger="at_time"``: before the lead brakes, by default) for the
 episode's ``t_atk``. The lead's pixels are its box (a QCar 2's, 0.425 x 0.192 x 0.2 m) projected
@@ -28,7 +31,8 @@ import numpy as np
 from racf.sim.attacks.base import AttackWrapper
 from racf.sim.attacks.schedule import AttackSchedule, as_range
 
-__all__ = ["LeadPatch", "LeadRamp", "LeadFrustum", "LeadHide", "lead_pixels", "lead_beams", "LEAD_BOX_M"]
+__all__ = ["LeadPatch", "LeadRamp", "LeadFrustum", "LeadHide", "LeadPhantom", "lead_pixels", "lead_beams",
+           "LEAD_BOX_M"]
 
 #: The lead's box as the attacker projects it: length, width, height, m.
 LEAD_BOX_M = (0.425, 0.192, 0.20)
@@ -202,4 +206,48 @@ class LeadHide(_LeadAttack):
         scan = np.asarray(obs["lidar"]).copy()
         scan[lead_beams(self, info, scan)] = np.inf
         obs.update(rgb=rgb, depth=depth, lidar=scan.astype(obs["lidar"].dtype))
+        return obs
+
+
+class LeadPhantom(_LeadAttack):
+    """A phantom car ``distance_m`` ahead of the camera: the colour image only.
+
+    The attacker's picture is a QCar 2's rear as the camera sees the real one, drawn as it would
+    look at ``distance_m`` (a value or a (low, high) range per episode) at the same bearing and
+    height: the lead's pixels scaled by (its depth / ``distance_m``) about the principal point,
+    which is where every point of a car moved along its rays to that depth projects. The depth
+    and the LiDAR are left as they are: what a picture on the road, a projector's or a screen's,
+    gives the range sensors is the road (Nassi et al., CCS 2020). While the lead is out of the
+    frame there is no picture to draw from, and the frame is left alone.
+    """
+
+    name = "lead_phantom"
+
+    def __init__(self, env: gym.Env, distance_m: Any = 0.5, **schedule: Any) -> None:
+        gym.utils.RecordConstructorArgs.__init__(self, distance_m=distance_m, **schedule)
+        self.distance_range = as_range("distance_m", distance_m, 0.2, 5.0)
+        super().__init__(env, **schedule)
+        self.distance = 0.5
+
+    def _on_reset(self) -> None:
+        self.distance = float(self.rng.uniform(*self.distance_range))
+
+    def _attack(self, obs: dict, info: dict) -> dict:
+        plane = np.asarray(obs["depth"])[..., 0]
+        where = lead_pixels(self, info, plane)
+        if where.sum() < 4:
+            return obs
+        scale = float(np.median(plane[where])) / self.distance
+        if scale <= 1.0:
+            return obs  # the lead stands nearer than the phantom would: a picture behind it is hidden by it
+        k = self.unwrapped.truth.intrinsics
+        # Scaling about the principal point: the image of the same car moved along its rays.
+        warp = np.array([[scale, 0.0, k.cx * (1 - scale)], [0.0, scale, k.cy * (1 - scale)]])
+        rgb = np.ascontiguousarray(obs["rgb"])
+        size = (rgb.shape[1], rgb.shape[0])
+        picture = cv2.warpAffine(rgb, warp, size, flags=cv2.INTER_LINEAR)
+        shown = cv2.warpAffine(where.astype(np.uint8), warp, size, flags=cv2.INTER_NEAREST).astype(bool)
+        out = rgb.copy()
+        out[shown] = picture[shown]
+        obs["rgb"] = out
         return obs

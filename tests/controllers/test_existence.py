@@ -22,16 +22,24 @@ from racf.controllers.existence import (
 CAMERA = CameraModel(width=320, fx=227.6, cx=154.25, fy=229.7, cy=106.8)
 
 
-def _witnesses(detectors=(False, False), depth=False, lidar=False, blind=False, mapped=False) -> ExistenceWitnesses:
+def _witnesses(detectors=(False, False), depth=False, lidar=False, blind=False, mapped=False,
+               moving=False) -> ExistenceWitnesses:
     return ExistenceWitnesses(detectors, (math.nan, math.nan), detectors, depth, lidar, blind, mapped, math.nan,
-                              math.nan, "map" if mapped else "detector")
+                              math.nan, "map" if mapped else "detector", moving=moving)
 
 
-@given(st.tuples(st.booleans(), st.booleans()), st.booleans(), st.booleans(), st.booleans(), st.booleans())
-def test_a_sign_stands_when_a_physical_and_a_semantic_witness_agree(detectors, depth, lidar, blind, mapped):
-    w = _witnesses(detectors, depth, lidar, blind, mapped)
-    physical = depth or (blind and (lidar or mapped))
+@given(st.tuples(st.booleans(), st.booleans()), st.booleans(), st.booleans(), st.booleans(), st.booleans(),
+       st.booleans())
+def test_a_sign_stands_when_a_physical_and_a_semantic_witness_agree(detectors, depth, lidar, blind, mapped, moving):
+    w = _witnesses(detectors, depth, lidar, blind, mapped, moving)
+    physical = depth or ((blind or moving) and (lidar or mapped))
     assert vote(w) == (physical and (any(detectors) or mapped))
+
+
+def test_a_depth_caught_moving_does_not_outvote_the_map():
+    assert vote(_witnesses(mapped=True, moving=True))  # the frustum attack on a mapped sign
+    assert not vote(_witnesses(moving=True))  # nothing says a stop sign stands there
+    assert _witnesses(moving=True).columns()["wit_moving"] == 1.0
 
 
 def test_no_single_witness_decides():

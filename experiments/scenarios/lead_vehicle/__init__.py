@@ -22,7 +22,7 @@ import numpy as np
 from racf.experiments.episode.criteria import Criterion, NoContact
 from racf.experiments.episode.fields import Field
 from racf.experiments.scenarios.base import Param, Scenario
-from racf.experiments.scenarios.lead_vehicle.following import MIN_HEADWAY_S, score_following
+from racf.experiments.scenarios.lead_vehicle.following import MIN_HEADWAY_S, NEEDLESS_TTC_S, score_following
 from racf.sim.world.lead import LEAD_PROFILES, LeadCar
 from racf.sim.world.lead_manager import LeadManager
 from racf.sim.world.traffic import CAR_FOOTPRINT_M, TRAFFIC_COLOURS
@@ -61,6 +61,9 @@ class KeepsHeadway(Criterion):
         Field("headway_violation_s", 0.0, "s", f"time spent under {MIN_HEADWAY_S} s of headway while moving",
               summary="median"),
         Field("hard_brakes", 0, "", "decelerations past 3 m/s^2 (each run of steps once)", summary="median"),
+        Field("needless_hard_brakes", 0, "", f"hard brakes begun while the real lead asked for none (time-to-"
+                                             f"collision over {NEEDLESS_TTC_S} s, headway at least {MIN_HEADWAY_S} s)",
+              summary="median"),
     )
 
     def passed(self, episode) -> bool:

@@ -13,7 +13,10 @@ speed, the lead's ``lead_*`` columns, what the car touched) and nothing else.
 - **headway**: the gap over the ego car's speed; the time spent with it under ``MIN_HEADWAY_S``
   while the car moves (a headway violation).
 - **hard brakes**: the ego car's decelerations past ``HARD_BRAKE_MPS2``, counted once per episode
-  of braking (what a phantom car ahead costs).
+  of braking;
+- **needless hard brakes**: those that begin while the real lead asks for none: its time-to-collision
+  over ``NEEDLESS_TTC_S`` (or they do not close) and the headway at least ``MIN_HEADWAY_S`` (what a
+  phantom car ahead costs; the catch-up to a lead first seen close, or its own hard brake, are not).
 """
 
 from __future__ import annotations
@@ -26,7 +29,7 @@ import pandas as pd
 
 from racf.sim.world.traffic import CAR_FOOTPRINT_M
 
-__all__ = ["FollowingOutcome", "score_following", "MIN_HEADWAY_S", "HARD_BRAKE_MPS2", "MOVING_MPS"]
+__all__ = ["FollowingOutcome", "score_following", "MIN_HEADWAY_S", "HARD_BRAKE_MPS2", "MOVING_MPS", "NEEDLESS_TTC_S"]
 
 #: Under this headway the car follows too close, s (half the following controller's 1 s policy:
 #: the two-second rule's half, scaled in time, not in size).
@@ -35,6 +38,9 @@ MIN_HEADWAY_S = 0.5
 HARD_BRAKE_MPS2 = 3.0
 #: Headway counts only while the car moves faster than this, m/s.
 MOVING_MPS = 0.1
+#: A hard brake is needless when it begins with the real time-to-collision over this, s (2.5 x the
+#: following controller's 0.8 s emergency threshold: nothing real asked for it).
+NEEDLESS_TTC_S = 2.0
 
 
 @dataclass(frozen=True)
@@ -46,6 +52,7 @@ class FollowingOutcome:
     min_ttc_s: float
     headway_violation_s: float
     hard_brakes: int
+    needless_hard_brakes: int = 0
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -64,7 +71,7 @@ def score_following(log: pd.DataFrame) -> FollowingOutcome:
     hits = np.flatnonzero(touched == "lead")
     end = int(hits[0]) if hits.size else len(log)
     if "lead_x" not in log or not np.isfinite(log["lead_x"].to_numpy(float)).any():
-        return FollowingOutcome(False, math.nan, math.nan, 0.0, 0)
+        return FollowingOutcome(False, math.nan, math.nan, 0.0, 0, needless_hard_brakes(log))
     gap = gaps(log)[:max(end, 1)]
     ego = log["speed"].to_numpy(float)[:max(end, 1)]
     lead = log["lead_speed"].to_numpy(float)[:max(end, 1)]
@@ -76,16 +83,38 @@ def score_following(log: pd.DataFrame) -> FollowingOutcome:
     t = log["t"].to_numpy(float)[:max(end, 1)]
     dt = np.diff(t, prepend=t[0])
     return FollowingOutcome(bool(hits.size), float(np.nanmin(gap)), min_ttc,
-                            float(dt[headway < MIN_HEADWAY_S].sum()), hard_brakes(log))
+                            float(dt[headway < MIN_HEADWAY_S].sum()), hard_brakes(log), needless_hard_brakes(log))
 
 
-def hard_brakes(log: pd.DataFrame) -> int:
-    """How many times the ego car's deceleration went past ``HARD_BRAKE_MPS2`` (each run of steps once)."""
+def _brake_starts(log: pd.DataFrame) -> np.ndarray:
+    """The steps where a run of decelerations past ``HARD_BRAKE_MPS2`` begins."""
     t, v = log["t"].to_numpy(float), log["speed"].to_numpy(float)
     if len(t) < 3:
-        return 0
+        return np.empty(0, int)
     # Over 0.1 s, not a step: the wheels' contact makes the per-step speed jitter.
     lag = max(1, int(round(0.1 / max(float(np.median(np.diff(t))), 1e-3))))
     decel = (v[:-lag] - v[lag:]) / (t[lag:] - t[:-lag])
     hard = decel > HARD_BRAKE_MPS2
-    return int(np.count_nonzero(hard[1:] & ~hard[:-1]) + (1 if hard.size and hard[0] else 0))
+    return np.flatnonzero(hard & ~np.concatenate([[False], hard[:-1]]))
+
+
+def hard_brakes(log: pd.DataFrame) -> int:
+    """How many times the ego car's deceleration went past ``HARD_BRAKE_MPS2`` (each run of steps once)."""
+    return int(len(_brake_starts(log)))
+
+
+def needless_hard_brakes(log: pd.DataFrame) -> int:
+    """How many hard brakes began while the real lead asked for none: no lead at all, or its
+    time-to-collision over ``NEEDLESS_TTC_S`` (or not closing) and the headway at least ``MIN_HEADWAY_S``."""
+    starts = _brake_starts(log)
+    if not len(starts):
+        return 0
+    if "lead_x" not in log or not np.isfinite(log["lead_x"].to_numpy(float)).any():
+        return int(len(starts))
+    gap = np.maximum(gaps(log)[starts], 0.0)
+    ego = log["speed"].to_numpy(float)[starts]
+    closing = ego - log["lead_speed"].to_numpy(float)[starts]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ttc = np.where(closing > 1e-3, gap / closing, np.inf)
+        headway = np.where(ego > MOVING_MPS, gap / ego, np.inf)
+    return int(np.count_nonzero((ttc > NEEDLESS_TTC_S) & (headway >= MIN_HEADWAY_S)))

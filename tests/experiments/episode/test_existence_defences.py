@@ -22,9 +22,9 @@ def _sample(witnesses, d_meas=math.nan, detected=False):
 
 
 def _w(seen=(False, False), detectors=(False, False), depth=False, blind=False, mapped=False, depth_m=math.nan,
-       map_depth_m=math.nan, seen_depth=(math.nan, math.nan)):
+       map_depth_m=math.nan, seen_depth=(math.nan, math.nan), moving=False):
     return ExistenceWitnesses(seen, seen_depth, detectors, depth, False, blind, mapped, depth_m, map_depth_m,
-                              "map" if mapped else "detector")
+                              "map" if mapped else "detector", moving=moving)
 
 
 def _ready(defence):
@@ -48,6 +48,14 @@ def test_the_vote_keeps_the_inner_defences_distance_while_the_detector_sees_the_
 def test_a_blinded_mapped_place_brakes_at_the_maps_distance():
     vote = _ready(ExistenceVote(inner="raw"))
     assert vote.estimate(_sample(_w(blind=True, mapped=True, map_depth_m=1.4)), 1.0, 0.02) == 1.4 and vote.stands()
+
+
+def test_a_depth_caught_moving_at_a_mapped_place_brakes_at_the_maps_distance_not_the_inner_defences():
+    vote = _ready(ExistenceVote(inner="raw"))
+    caught = _w(detectors=(True, False), mapped=True, moving=True, depth_m=5.0, map_depth_m=1.4)
+    assert vote.estimate(_sample(caught, 5.1, True), 1.0, 0.02) == 1.4 and vote.stands()
+    unmapped = _w(detectors=(True, False), depth=True, moving=True, depth_m=5.0)  # no map entry to hold to
+    assert vote.estimate(_sample(unmapped, 5.1, True), 1.0, 0.02) == 5.1
 
 
 def test_the_vote_carries_its_last_distance_on_by_odometry_once_no_witness_is_left():
