@@ -9,28 +9,20 @@ the defence for the distance with the *relative* motion (the car's speed less th
 estimator's kinematics, ODCA's branch and the EKF's prediction, then follow a target that moves
 at a constant speed; and turns the defended gap into a speed cap (:class:`LeadFollower`). Like
 the rest of the car, it reads the observation, the map and its own estimates, never ``info``.
-
-A defence that answers whether its target stands (``existence = True``, the vote) is given the
-car ahead's witnesses (:func:`~racf.controllers.lead_existence.lead_witnesses`) with each sample,
-and the depth's distance is the upright surface's in the detector's mask. The car then follows a
-car only once the defence says one stands, and lets it go when it has not said so for
-``DOUBT_AFTER_S``: a picture of a car (a phantom) never holds the car back.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
-from racf.controllers.existence import NO_WITNESSES
 from racf.controllers.following import FollowDecision, FollowingConfig, LeadFollower, LeadSpeed
-from racf.controllers.lead_existence import lead_witnesses
 from racf.controllers.lead_perception import LeadPerception, lane_in_camera
 from racf.controllers.perception import PerceptionSample
 
-__all__ = ["LeadStage", "LeadStep", "LANE_AHEAD_M", "NO_LEAD", "DOUBT_AFTER_S"]
+__all__ = ["LeadStage", "LeadStep", "LANE_AHEAD_M", "NO_LEAD"]
 
 #: How far along the lane ahead the car looks for a car, m.
 LANE_AHEAD_M = 4.0
@@ -39,9 +31,6 @@ LANE_AHEAD_M = 4.0
 #: back for nothing. The defence and the speed estimate start again, and the policy lets the car
 #: drive on, as a production adaptive cruise does, s.
 LOST_AFTER_S = 0.5
-#: With a defence that answers whether a car stands: a followed car that it has not said stands for
-#: this long is let go (its vote may drop for a frame or two: the car ahead at the picture's edge), s.
-DOUBT_AFTER_S = 0.3
 
 
 @dataclass(frozen=True)
@@ -52,7 +41,6 @@ class LeadStep:
     d_fused: float
     lead_mps: float
     decision: FollowDecision
-    stands: float = math.nan  # the defence's verdict that a car stands ahead (1/0; NaN: it gives none)
 
 
 NO_LEAD = LeadStep(PerceptionSample(None, math.nan, 0.0, math.nan, math.nan), math.nan, math.nan,
@@ -83,9 +71,6 @@ class LeadStage:
         self.last = NO_LEAD
         self._unseen_s = 0.0
         self._lost = False
-        self.existence = bool(getattr(estimator, "existence", False))
-        self._witnesses = NO_WITNESSES
-        self._doubt_s = math.inf  # since the defence last said a car stands ahead (inf: never)
 
     def reset(self) -> None:
         self.perception.reset()
@@ -94,8 +79,6 @@ class LeadStage:
         self.last = NO_LEAD
         self._unseen_s = 0.0
         self._lost = False
-        self._witnesses = NO_WITNESSES
-        self._doubt_s = math.inf
 
     def step(self, obs: dict, pose: np.ndarray, path, progress_m: float, speed: float, yaw_rate: float,
              lateral: float, dt: float, frame_new: bool, scan_new: bool, ages) -> LeadStep:
@@ -109,9 +92,6 @@ class LeadStage:
         sample = self.perception.process(obs["rgb"], obs["depth"][..., 0], obs["lidar"] if scan_new else None,
                                          lane=lane, speed=closing, yaw_rate=yaw_rate, lateral_speed=lateral, dt=dt,
                                          new_frame=frame_new, beam_age_s=ages)
-        stands = math.nan
-        if self.existence:
-            sample = self._with_witnesses(sample, obs, frame_new)
         seen = sample.detected or math.isfinite(sample.lidar_m)
         self._unseen_s = 0.0 if seen else self._unseen_s + dt
         if self._unseen_s > LOST_AFTER_S:
@@ -119,25 +99,11 @@ class LeadStage:
                 self.estimator.reset()
                 self.speed.reset()
                 self._lost = True
-                self._doubt_s = math.inf
             d = math.nan
         else:
             self._lost = False
             d = float(self.estimator.estimate(sample, closing, dt, yaw_rate_radps=yaw_rate))
-            if self.existence:
-                stands = float(bool(self.estimator.stands()))
-                self._doubt_s = 0.0 if stands else self._doubt_s + dt
-                if self._doubt_s > DOUBT_AFTER_S:
-                    d = math.nan  # no car said to stand ahead (yet, or for a while): nothing to follow
         lead = self.speed.update(sample.d_meas, sample.lidar_m, sample.d_size, speed, dt, frame_new)
         decision = self.follower.step(d - self.bumper_m, speed - lead)
-        self.last = LeadStep(sample, d, lead, decision, stands)
+        self.last = LeadStep(sample, d, lead, decision)
         return self.last
-
-    def _with_witnesses(self, sample: PerceptionSample, obs: dict, frame_new: bool) -> PerceptionSample:
-        """The sample with the car ahead's witnesses (read on new frames, carried between them), and the
-        depth's distance the upright surface's where one stands in the mask."""
-        if frame_new:
-            self._witnesses = lead_witnesses(sample, obs["depth"][..., 0], self.perception.camera)
-        w = self._witnesses
-        return replace(sample, witnesses=w, d_meas=w.depth_m if w.depth else sample.d_meas)

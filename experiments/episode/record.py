@@ -106,8 +106,6 @@ STEP_COLUMNS: tuple[Column, ...] = (
     _c(CAR, "lead_gap_est", "m", "following: the gap the policy acts on, bumper to the lead's rear (NaN: none)"),
     _c(CAR, "lead_cap", "m/s", "following: the policy's speed cap (inf: none)"),
     _c(CAR, "lead_emergency", "bool", "following: the emergency brake on time-to-collision is on"),
-    _c(CAR, "lead_stands", "", "following: the defence's verdict that a car stands ahead (1/0; NaN: a defence "
-                               "that does not answer it)"),
     _c(REFEREE, "d_true", "m", "ground truth: the target's depth along the camera axis"),
     _c(REFEREE, "d_clean", "m", "the car's perception on the unattacked readings (the protocol's pseudo ground "
                                 "truth; NaN under attack without the clean pass)"),

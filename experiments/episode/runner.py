@@ -237,8 +237,7 @@ def lead_columns(lead) -> dict:
     sample, decision = lead.sample, lead.decision
     return {"lead_detected": sample.detected, "lead_d_meas": sample.d_meas, "lead_lidar": sample.lidar_m,
             "lead_d_size": sample.d_size, "lead_d_fused": lead.d_fused, "lead_v_est": lead.lead_mps,
-            "lead_gap_est": decision.gap_m, "lead_cap": decision.speed_cap_mps, "lead_emergency": decision.emergency,
-            "lead_stands": lead.stands}
+            "lead_gap_est": decision.gap_m, "lead_cap": decision.speed_cap_mps, "lead_emergency": decision.emergency}
 
 
 def _result(spec: TrialSpec, plan: EpisodePlan, env: gym.Env, log: pd.DataFrame) -> TrialResult:

@@ -6,7 +6,8 @@ Its data is the ``following`` stored result, made from the sweeps ``following.to
     python -m racf.experiments.pages.following_page outputs/sweeps/following outputs/sweeps/following-frustum \
         outputs/sweeps/following-hide --out following.json
 
-and stored with ``results_store``. Per attack and defence: N, the collision-free rate with its
+and stored with ``results_store``; the phantom car ahead's table is the ``following-phantom`` stored
+result, made the same way from the sweep ``following-phantom.toml``. Per attack and defence: N, the collision-free rate with its
 Wilson interval, the smallest time-to-collision (median and bootstrap interval), the share of
 episodes with any time under the minimum headway, hard brakes, and the collision-free rate per
 lead profile.
@@ -27,6 +28,8 @@ from racf.stats import median_ci, wilson_interval
 
 __all__ = ["summarise", "following_markdown", "FOLLOWING_COMMAND", "main"]
 
+PHANTOM_COMMAND = ("racf sweep following-phantom.toml; python -m racf.experiments.pages.following_page "
+                   "outputs/sweeps/following-phantom")
 FOLLOWING_COMMAND = ("racf sweep following.toml; racf sweep following-frustum.toml; racf sweep following-hide.toml; "
                      "python -m racf.experiments.pages.following_page outputs/sweeps/following "
                      "outputs/sweeps/following-frustum outputs/sweeps/following-hide")
@@ -34,7 +37,8 @@ FOLLOWING_COMMAND = ("racf sweep following.toml; racf sweep following-frustum.to
 ATTACK_LABELS = {"clean": "none", "clean+lead_patch": "lead patch (depth read 1 m far)",
                  "clean+lead_frustum": "frustum spoof (LiDAR returns 1 m away)",
                  "clean+lead_frustum[depth]": "frustum spoof, depth moved too",
-                 "clean+lead_hide": "the lead hidden from camera and LiDAR"}
+                 "clean+lead_hide": "the lead hidden from camera and LiDAR",
+                 "clean+lead_phantom": "a phantom car 0.5 m ahead (camera only)"}
 
 
 def _rows(folder: Path) -> pd.DataFrame:
@@ -79,6 +83,8 @@ def summarise(folders: list[Path]) -> dict:
             "min_ttc_median_s": median, "min_ttc_ci": ci,
             "headway_violated": _share((group["headway_violation_s"] > 0).tolist()),
             "hard_brakes_median": float(group["hard_brakes"].median()),
+            **({"needless_hard_brake": _share((group["needless_hard_brakes"] > 0).tolist())}
+               if "needless_hard_brakes" in group else {}),
             "by_profile": {p: _share(g["no_lead_collision"].tolist())
                            for p, g in group.groupby("scenario_profile", sort=True)}}
     return {"rows": out}
@@ -94,7 +100,7 @@ def following_markdown(root: Path) -> str:
         "[The tutorial](../tutorials/following.md) says how it works.")
     path = Path(root) / "following.json"
     if not path.exists():
-        return "\n".join(lines + missing("following", FOLLOWING_COMMAND))
+        return "\n".join(lines + missing("following", FOLLOWING_COMMAND) + _phantom_lines(Path(root)) + [""])
     data = json.loads(path.read_text())
     lines += meta_lines(data["meta"])
     lines += ["| attack | defence | N | collision-free [95 % CI] | min TTC s, median [95 % CI] | "
@@ -122,7 +128,29 @@ def following_markdown(root: Path) -> str:
               "witness and the carried closing speed still disagree with the two. Hiding the lead from every sensor "
               "leaves no witness at all: every defence drives into it in most episodes, and none can be asked to do "
               "better without a sensor that still sees it."]
-    return "\n".join(lines + [""])
+    return "\n".join(lines + _phantom_lines(Path(root)) + [""])
+
+
+def _phantom_lines(root: Path) -> list[str]:
+    """The phantom car ahead's section, from the ``following-phantom`` stored result."""
+    lines = ["", "## A phantom car ahead", "",
+             "From 2 s for 6 s the camera sees a QCar 2's rear 0.5 m ahead in the lane (a picture: drawn from the "
+             "real lead's, Nassi et al., CCS 2020), while the depth and the LiDAR see what is really there. A hard "
+             "brake is needless when it begins while the real lead asks for none: its time-to-collision over 3 s "
+             "(or not closing) and the headway at least 0.5 s.", ""]
+    path = root / "following-phantom.json"
+    if not path.exists():
+        return lines + missing("following-phantom", PHANTOM_COMMAND)
+    data = json.loads(path.read_text())
+    lines += meta_lines(data["meta"])
+    lines += ["| attack | defence | N | any needless hard brake [95 % CI] | collision-free [95 % CI] | "
+              "hard brakes, median |", "|---|---|---|---|---|---|"]
+    for r in sorted(data["rows"].values(), key=lambda r: (r["attack"] != "clean", _order(r))):
+        needless, cf = r["needless_hard_brake"], r["collision_free"]
+        lines.append(f"| {ATTACK_LABELS.get(r['attack'], r['attack'])} | {r['estimator']} | {r['n']} | "
+                     f"{rate(needless['rate'], needless['ci'])} | {rate(cf['rate'], cf['ci'])} | "
+                     f"{r['hard_brakes_median']:g} |")
+    return lines
 
 
 #: The table's order: attacks by strength, raw first then the defences.

@@ -38,9 +38,10 @@ MIN_HEADWAY_S = 0.5
 HARD_BRAKE_MPS2 = 3.0
 #: Headway counts only while the car moves faster than this, m/s.
 MOVING_MPS = 0.1
-#: A hard brake is needless when it begins with the real time-to-collision over this, s (2.5 x the
-#: following controller's 0.8 s emergency threshold: nothing real asked for it).
-NEEDLESS_TTC_S = 2.0
+#: A hard brake is needless when it begins with the real time-to-collision over this, s: past where
+#: a forward-collision warning sounds (about 2.5 s), nothing real asks for braking at 0.3 g. The
+#: catch-up to a lead first seen out of a bend (2 s at 0.4 m/s of closing) is not needless.
+NEEDLESS_TTC_S = 3.0
 
 
 @dataclass(frozen=True)

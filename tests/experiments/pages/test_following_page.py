@@ -71,3 +71,19 @@ def test_the_frustum_spoof_that_moves_the_depth_too_is_its_own_row(tmp_path):
     sweep(tmp_path / "s", [{**row(first.setting, first.estimator, "cruise", True), "trial_id": first.trial_id}])
     (tmp_path / "s" / "spec.toml").write_text(text)
     assert list(summarise([tmp_path / "s"])["rows"]) == [f"clean+lead_frustum[depth]|{first.estimator}"]
+
+
+def test_the_phantom_s_section_counts_episodes_with_a_needless_hard_brake(tmp_path):
+    assert "Not stored yet (`following-phantom`)" in following_markdown(tmp_path)
+    phantom = [{**row("clean+lead_phantom", "raw", p, True), "needless_hard_brakes": n}
+               for p, n in (("cruise", 2), ("slow_down", 0), ("hard_brake", 1))]
+    sweep(tmp_path / "s", phantom + [{**row("clean", "raw", "cruise", True), "needless_hard_brakes": 0}])
+    data = summarise([tmp_path / "s"])
+    attacked = data["rows"]["clean+lead_phantom|raw"]["needless_hard_brake"]
+    assert (attacked["k"], attacked["n"]) == (2, 3) and attacked["ci"][0] < 2 / 3 < attacked["ci"][1]
+    data["meta"] = {"command": "racf sweep following-phantom.toml", "commit": "abc", "racf": "0.1.0", "machine": "m",
+                    "measured": "2026-11-27"}
+    (tmp_path / "following-phantom.json").write_text(json.dumps(data))
+    page = following_markdown(tmp_path)
+    assert "| a phantom car 0.5 m ahead (camera only) | raw | 3 | 0.67 [" in page
+    assert page.index("| none | raw | 1 | 0.00 [") < page.index("| a phantom car")  # clean first

@@ -9,7 +9,8 @@ import pytest
 from racf.experiments.episode import TrialSpec, run_trial
 from racf.experiments.episode.plan import plan_episode
 from racf.experiments.scenarios.lead_vehicle import LeadVehicle, lead_rest_s
-from racf.experiments.scenarios.lead_vehicle.following import MIN_HEADWAY_S, hard_brakes, score_following
+from racf.experiments.scenarios.lead_vehicle.following import (MIN_HEADWAY_S, NEEDLESS_TTC_S, hard_brakes,
+                                                             needless_hard_brakes, score_following)
 from racf.sim.world.traffic import CAR_FOOTPRINT_M
 
 
@@ -63,6 +64,27 @@ def test_a_hard_brake_is_counted_once_per_run_of_braking():
     v = np.where(t < 1, 1.0, np.maximum(1.0 - 5.0 * (t - 1), 0.0))
     assert hard_brakes(pd.DataFrame({"t": t, "speed": v})) == 1
     assert hard_brakes(pd.DataFrame({"t": t, "speed": np.ones_like(t)})) == 0
+
+
+def test_a_hard_brake_is_needless_only_when_the_real_lead_asked_for_none():
+    t = np.arange(0, 2, 0.02)
+    v = np.where(t < 1, 1.0, np.maximum(1.0 - 5.0 * (t - 1), 0.0))  # one hard brake at 1 s
+    n = len(t)
+
+    def braking(gap_m, lead_mps):
+        frame = log_of([gap_m] * n, v, [lead_mps] * n)
+        frame["t"] = t
+        return frame
+
+    # The lead 1.5 m ahead at the car's own speed: nothing asked for a brake (a phantom did).
+    assert needless_hard_brakes(braking(1.5, 1.0)) == 1 and score_following(braking(1.5, 1.0)).needless_hard_brakes == 1
+    # Closing at 1 m/s from 1.5 m: 1.5 s to collision, under NEEDLESS_TTC_S; the brake was asked for.
+    assert needless_hard_brakes(braking(1.5, 0.0)) == 0 and NEEDLESS_TTC_S == 3.0
+    # 0.4 m behind at 1 m/s: under the minimum headway, the brake was asked for.
+    assert needless_hard_brakes(braking(0.4, 1.0)) == 0
+    # No lead at all: every hard brake is needless.
+    no_lead = braking(1.5, 1.0).assign(lead_x=np.nan)
+    assert needless_hard_brakes(no_lead) == 1 and hard_brakes(no_lead) == 1
 
 
 def test_a_lead_that_never_stops_rests_at_the_horizon():

@@ -61,3 +61,20 @@ def test_the_lead_hidden_leaves_no_return_and_no_car_for_the_detector():
     assert np.isinf(obs["lidar"][lead_beams(env, info, clean["lidar"])]).all()
     detector = LearnedVehicleDetector()
     assert detector.passing(clean["rgb"]) and not detector.passing(obs["rgb"])
+
+
+def test_the_phantom_draws_a_nearer_car_in_the_colour_image_only():
+    from racf.controllers.vehicle_detector import LearnedVehicleDetector
+
+    env, obs, info, clean = attacked("clean+lead_phantom", distance_m=0.4)
+    np.testing.assert_array_equal(obs["depth"], clean["depth"])
+    np.testing.assert_array_equal(obs["lidar"], clean["lidar"])
+    drawn = np.any(obs["rgb"] != clean["rgb"], axis=-1)
+    where = lead_pixels(env, info, clean["depth"][..., 0])
+    assert drawn.sum() > 2 * where.sum()  # about (0.75 / 0.4)^2 the lead's pixels
+    detector = LearnedVehicleDetector()
+    real, phantom = (max(detector.passing(img), key=lambda d: d.box[3] - d.box[1]) for img in (clean["rgb"], obs["rgb"]))
+    assert phantom.box[3] - phantom.box[1] > 1.5 * (real.box[3] - real.box[1])  # taller: the size says nearer
+    # A phantom further than the lead would stand behind it: nothing is drawn.
+    _, behind, _, clean = attacked("clean+lead_phantom", distance_m=1.5)
+    np.testing.assert_array_equal(behind["rgb"], clean["rgb"])
