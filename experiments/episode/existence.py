@@ -22,7 +22,7 @@ from racf.controllers.static_world import CameraPose, StaticWorldCheck
 from racf.experiments.episode.car import CarCalibration, camera_offset, map_bearing, sign_depth_at_line
 from racf.sim.world.drives import RouteTarget
 
-__all__ = ["ExistenceStage", "MAP_TOLERANCE_M", "MAP_LATERAL_M"]
+__all__ = ["ExistenceStage", "camera_pose", "MAP_TOLERANCE_M", "MAP_LATERAL_M"]
 
 #: How far from the map's depth the object may stand: the car's localisation error along the lane, m.
 MAP_TOLERANCE_M = 0.35
@@ -30,6 +30,14 @@ MAP_TOLERANCE_M = 0.35
 MAP_LATERAL_M = 0.15
 #: Half a plate's height, m (the map's signs: 0.10 m across flats).
 _PLATE_HALF_M = 0.05
+
+
+def camera_pose(calibration: CarCalibration, pose: np.ndarray) -> CameraPose:
+    """Where the camera of a car at ``pose`` (x, y, yaw: its own estimate) stands in the map's frame."""
+    x, y, yaw = (float(v) for v in pose)
+    c, s = math.cos(yaw), math.sin(yaw)
+    cam_x, cam_y = calibration.camera_xy_m
+    return CameraPose(x + c * cam_x - s * cam_y, y + s * cam_x + c * cam_y, calibration.camera_height_m, yaw)
 
 
 class ExistenceStage:
@@ -96,11 +104,7 @@ class ExistenceStage:
 
     def _check_static(self, t_s: float, depth: np.ndarray, pose: np.ndarray, place: Hypothesis) -> None:
         """Hands the static-world check this frame's pixels at the map's plate, and where the camera stood."""
-        calib, camera = self.calibration, self.calibration.camera
-        x, y, yaw = (float(v) for v in pose)
-        c, s = math.cos(yaw), math.sin(yaw)
-        cam_x, cam_y = calib.camera_xy_m
-        where = CameraPose(x + c * cam_x - s * cam_y, y + s * cam_x + c * cam_y, calib.camera_height_m, yaw)
+        camera = self.calibration.camera
         top, bottom = place.rows
         quarter = (bottom - top) / 5  # the plate's middle rows, as its witness reads them
         rows = np.arange(max(int(round(top + quarter)), 0), min(int(round(bottom - quarter)), depth.shape[0] - 1) + 1)
@@ -108,7 +112,7 @@ class ExistenceStage:
         half = camera.fx * _PLATE_HALF_M / max(place.depth_m, 0.1)
         cols = np.arange(max(int(math.ceil(centre - half)), 0), min(int(math.floor(centre + half)), depth.shape[1] - 1) + 1)
         rr, cc = (g.ravel() for g in np.meshgrid(rows, cols, indexing="ij"))
-        self.static.observe(t_s, depth, camera, where, rr, cc)
+        self.static.observe(t_s, depth, camera, camera_pose(self.calibration, pose), rr, cc)
 
     def _at(self, hypothesis: Hypothesis, depth: np.ndarray, scan: np.ndarray, detections,
             keep_empty: bool = False):

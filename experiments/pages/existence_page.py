@@ -119,6 +119,9 @@ def _claims(cards: dict) -> list[str]:
     lines.append(f"| unmapped temporary signs, clean: SCR >= 0.98, within detector-only's interval | vote "
                  f"{text('vote', 'temporary_clean')}; detector-only {text('odca', 'temporary_clean')} | {same} |")
     lines.append("| unmapped signs with a sticker: reported for every defence | see the table | reported |")
+    lines.append("| the sign's depth and LiDAR returns moved away at 3 m/s (with the sticker): SCR >= 0.9 with the "
+                 f"vote's static-world check | vote {text('vote', 'mapped_sticker_spoof')}; detector-only "
+                 f"{text('odca', 'mapped_sticker_spoof')} | {holds('vote', 'mapped_sticker_spoof', lambda v: v >= 0.9)} |")
     white = [(key, value("vote", key)) for key in ("mapped_sticker_blind", "mapped_sticker_spoof")]
     white = [(k, v) for k, v in white if v is not None and v[1] is not None]
     if white:
@@ -130,9 +133,11 @@ def _claims(cards: dict) -> list[str]:
                     "witness at all: the vote, like every defence, needs something that says *stop sign*. A "
                     "class-agnostic witness (a free-standing plate of a stop sign's size and height beside the lane) "
                     "would stand in, at the price of stopping for any such plate.",
-                    "- **A spoof that moves the plate's depth and its LiDAR returns together** leaves a free plate at "
-                    "the map's bearing at the wrong range: the vote reads it as no sign there. Holding the map where "
-                    "a plate stands at its bearing but moves against the car's own odometry (ODCA's kinematic "
-                    "cross-check, applied to the map's range) is the next witness to add.",
+                    "- **A spoof that moves the plate's depth and its LiDAR returns together** is caught while it "
+                    "moves: the static-world check carries what the depth shows at the map's plate from frame to "
+                    "frame by the car's own motion, and a depth that runs away from it is outvoted. A spoof that "
+                    "holds a constant offset from before the sign comes into view never moves while the car looks: "
+                    "it reads as a sign that is gone. A plate-shaped hole that reads further than what surrounds it "
+                    "is the witness that would catch it.",
                     "- **A sticker optimised against both detectors at once** (the same EOT over the approach) is not "
                     "measured yet: the classical detector has no gradient, so it needs a differentiable stand-in.", ""]

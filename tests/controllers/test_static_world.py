@@ -42,15 +42,18 @@ def _plate_pixels(pose: CameraPose):
     return rr.ravel(), cc.ravel()
 
 
-def _drive(check, speed=1.5, yaw_rate=0.0, offset_m=0.0, bias_rate=0.0, frames=20, jump_at=None):
-    """Approaches the plate from 2 m before it, turning at ``yaw_rate``; returns ``check.moving``."""
+def _drive(check, speed=1.5, yaw_rate=0.0, offset_m=0.0, bias_rate=0.0, frames=20, jump_at=None, jump_m=0.05,
+           ramp_from=0, every=1):
+    """Approaches the plate from 2 m before it, turning at ``yaw_rate``, its depth read further at
+    ``bias_rate`` from frame ``ramp_from``, the check fed every ``every`` frames; returns ``check.moving``."""
     x, y, yaw = PLATE[0] - 2.0, offset_m, 0.0
-    for k in range(frames):
+    for k in range(frames * every):
         t = k * FRAME_S
-        pose = CameraPose(x, y, 0.17, yaw)
-        depth = _render(pose, bias_rate * t)
-        believed = CameraPose(x + (0.05 if jump_at is not None and k >= jump_at else 0.0), y, 0.17, yaw)
-        check.observe(t, depth, CAMERA, believed, *_plate_pixels(believed))
+        if k % every == 0:
+            pose = CameraPose(x, y, 0.17, yaw)
+            depth = _render(pose, bias_rate * max(t - ramp_from * FRAME_S, 0.0))
+            believed = CameraPose(x + (jump_m if jump_at is not None and k >= jump_at else 0.0), y, 0.17, yaw)
+            check.observe(t, depth, CAMERA, believed, *_plate_pixels(believed))
         x += speed * FRAME_S * math.cos(yaw)
         y += speed * FRAME_S * math.sin(yaw)
         yaw += yaw_rate * FRAME_S
@@ -82,6 +85,25 @@ def test_a_plate_read_further_and_further_is_caught(bias_rate, speed, yaw_rate):
 def test_a_slow_drift_and_a_localisation_jump_are_not_caught():
     assert not _drive(StaticWorldCheck(), bias_rate=0.5)  # slower than the rate
     assert not _drive(StaticWorldCheck(), jump_at=8)  # a fix moves the car's pose 5 cm once
+    # A 0.4 m fix: the window's fit runs faster than the rate, but it jumps, it does not run in a line.
+    assert not _drive(StaticWorldCheck(), jump_at=8, jump_m=0.4)
+
+
+def test_a_ramp_that_begins_late_is_judged_on_the_window_not_the_whole_approach():
+    assert _drive(StaticWorldCheck(), speed=0.5, bias_rate=3.0, ramp_from=30, frames=45)
+
+
+def test_a_few_frames_far_apart_are_not_enough():
+    check = StaticWorldCheck()
+    assert not _drive(check, bias_rate=3.0, frames=4, every=3)  # 4 frames over 0.3 s: under min_frames
+
+
+def test_a_place_at_the_picture_s_edge_is_read_where_it_is_in_the_picture():
+    check = StaticWorldCheck()
+    pose = CameraPose(0.0, 0.0, 0.17, 0.0)
+    rows, cols = np.array([-3, 100, 239, 240]), np.array([5, 319, 0, -1])
+    check.observe(0.0, _render(pose), CAMERA, pose, rows, cols)
+    assert len(check._points) == 2
 
 
 def test_once_caught_the_depth_stays_outvoted_until_reset():

@@ -29,7 +29,7 @@ def test_without_the_stored_cards_the_page_names_the_command(tmp_path):
 
 def test_each_row_shows_scr_or_needless_stops_and_the_claims_are_checked(tmp_path):
     vote = {"mapped_sticker": _real(0.98), "mapped_sticker_top": _real(0.90), "removed": _none(0.0),
-            "phantom": _none(0.10), "temporary_clean": _real(1.0)}
+            "phantom": _none(0.10), "temporary_clean": _real(1.0), "mapped_sticker_spoof": _real(0.85)}
     odca = {"mapped_sticker": _real(0.27), "mapped_sticker_top": _real(0.0), "removed": _none(0.0),
             "phantom": _none(1.0), "temporary_clean": _real(1.0)}
     data = {"meta": META, "cards": [_card("odca", odca), _card("vote", vote)]}
@@ -44,5 +44,7 @@ def test_each_row_shows_scr_or_needless_stops_and_the_claims_are_checked(tmp_pat
     assert "**not met**" in claims["| mapped signs, the 0.4 top-edge sticker up from the start: SCR >= 0.95 with the vote"]
     assert "**not met**" in claims["| phantoms: needless-stop rate <= 0.05 with the vote"]
     assert claims["| removed mapped signs: needless-stop rate <= 0.05 with the vote"].endswith("holds |")
+    moving = "| the sign's depth and LiDAR returns moved away at 3 m/s (with the sticker): SCR >= 0.9 with the vote's static-world check"
+    assert "**not met**" in claims[moving] and "0.85" in claims[moving]
     # The driving score: a needless stop at x 0.70, a sign run at x 0.80.
     assert "| `phantom` | 0.970 | 0.700 |" in text and "| `mapped_sticker` | 0.996 | 0.854 |" in text
