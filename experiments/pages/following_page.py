@@ -150,7 +150,11 @@ def _phantom_lines(root: Path) -> list[str]:
         lines.append(f"| {ATTACK_LABELS.get(r['attack'], r['attack'])} | {r['estimator']} | {r['n']} | "
                      f"{rate(needless['rate'], needless['ci'])} | {rate(cf['rate'], cf['ci'])} | "
                      f"{r['hard_brakes_median']:g} |")
-    return lines
+    return lines + ["", "Why ODCA can fare worst, as single episodes show it: its gate takes the size witness as "
+                    "one-sided. An occluder or a sticker can only shrink a box, so a depth or a LiDAR beyond the box's "
+                    "distance is vetoed; a phantom's box is bigger than the car's, and the gate then vetoes the honest "
+                    "depth and follows the picture. No defence here asks whether anything stands where the box says: "
+                    "an existence check for the car ahead is not built yet."]
 
 
 #: The table's order: attacks by strength, raw first then the defences.
