@@ -20,7 +20,8 @@ then replays the log and those frames into a recording on the ``sim_time`` timel
   ``diagnostics()``), every step, sent with ``send_columns``; ``existence/*``: a defence that
   answers whether a sign stands (``vote``, ``detectors_or``, ``map_only``) logs each witness
   (``wit_det0``/``wit_det1`` the detectors at the hypothesis, ``wit_depth`` the plate in the depth
-  image, ``wit_lidar``, ``wit_blind``, ``wit_map``) and its verdict ``stands``;
+  image, ``wit_lidar``, ``wit_blind``, ``wit_map``, ``wit_moving`` the depth caught moving by the
+  static-world check) and its verdict ``stands``;
 - ``following/*``: with a car ahead, its distance from the camera as each witness sees it (the
   depth, the LiDAR's track, the size witness), the defence's, and the truth (to the lead's rear).
 

@@ -31,10 +31,11 @@ def test_a_removed_sign_stops_map_only_and_not_the_vote():
 
 
 def test_the_frustum_attack_on_a_mapped_sign_is_caught_moving_and_the_vote_stops():
-    # racf-5's white box on the vote: the sticker, and the sign's depth and LiDAR returns moved away at 3 m/s.
+    # racf-5's white box on the vote: the sticker, and the sign's depth and LiDAR returns moved away at 3 m/s
+    # (its episode 36: sign 0 at 1.68 m/s; the vote stopped at 1 of racf-5's 60 before the check, 54 with it).
     spoof = {"physical_patch": {"texture": "learned-approach", "size": 0.6, "from_start": True},
              "frustum_spoof": {"trigger": "always", "rate_mps": 3.0}}
-    result, log = run_trial(TrialSpec("attack+frustum_spoof+physical_patch+vote", 1, 1.5, 1, target="stale_map",
+    result, log = run_trial(TrialSpec("attack+frustum_spoof+physical_patch+vote", 0, 1.68, 36, target="stale_map",
                                       scenario_params={"case": "mapped"}, attack_params=spoof, t_atk=(60.0, 60.0)),
                             clean_pass=False)
     assert result.success and log["wit_moving"].max() == 1.0
