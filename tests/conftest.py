@@ -6,6 +6,7 @@ import os
 import shutil
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import json
@@ -187,7 +188,9 @@ def start_service(defence, stops: list, max_requests: float = float("inf"), keys
                               kwargs={"ready": lambda e: (bound.append(e), ready.set()), "max_requests": max_requests,
                                       "stop": stop, "keys": keys, **kwargs}, daemon=True)
     thread.start()
-    assert ready.wait(60)
+    deadline = time.monotonic() + 60
+    while not ready.wait(0.05):  # bound, or the thread is gone (its bind refused): no minute's wait for nothing
+        assert thread.is_alive() and time.monotonic() < deadline, f"the service at {endpoint} did not start"
     stops.append((stop, thread))
     return bound[0]
 
