@@ -119,14 +119,14 @@ class StaticWorldCheck:
     def observe(self, t_s: float, depth: np.ndarray, camera: CameraModel, pose: CameraPose, rows: np.ndarray,
                 cols: np.ndarray) -> bool:
         """A new frame at ``t_s`` from ``pose``, with the pixels of the place to watch. Returns :attr:`moving`."""
-        depth = np.asarray(depth, np.float64)
+        depth = np.asarray(depth)  # only the place's pixels are read (as float64), not the whole frame copied
         h, w = depth.shape
         if self._points.size and math.isfinite(t_s):
             r, c, ahead = world_to_camera(self._points, camera, pose)
             inside = np.isfinite(r) & np.isfinite(c) & (ahead > 0.05)
             ri, ci = np.round(r[inside]).astype(int), np.round(c[inside]).astype(int)
             on = (ri >= 0) & (ri < h) & (ci >= 0) & (ci < w)
-            now = depth[ri[on], ci[on]]
+            now = depth[ri[on], ci[on]].astype(np.float64)
             seen = np.isfinite(now) & (now > 0.05)
             if np.count_nonzero(seen) >= self.config.min_points:
                 self.receded_m += float(np.median(now[seen] - ahead[inside][on][seen]))
@@ -134,7 +134,7 @@ class StaticWorldCheck:
         rows, cols = np.asarray(rows, int), np.asarray(cols, int)
         inside = (rows >= 0) & (rows < h) & (cols >= 0) & (cols < w)  # a place at the picture's edge
         rows, cols = rows[inside], cols[inside]
-        d = depth[rows, cols]
+        d = depth[rows, cols].astype(np.float64)
         keep = np.isfinite(d) & (d > 0.05)
         self._points = pixels_to_world(rows[keep], cols[keep], d[keep], camera, pose)
         return self.moving

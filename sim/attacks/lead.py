@@ -102,13 +102,25 @@ def lead_beams(env: gym.Env, info: dict, scan: np.ndarray) -> np.ndarray:
 
 
 class _LeadAttack(AttackWrapper):
-    """A lead attack: on the ``at_time`` schedule from ``start_s`` unless told otherwise."""
+    """A lead attack: on the ``at_time`` schedule from ``start_s`` unless told otherwise.
+
+    One that names a ``drawn`` parameter, (name, lowest, highest), takes it as a value or a (low,
+    high) range and draws it once an episode into ``self.drawn_value``."""
 
     targets = ("sign",)
+    drawn: tuple[str, float, float] | None = None
 
-    def __init__(self, env: gym.Env, **schedule: Any) -> None:
+    def __init__(self, env: gym.Env, drawn_value: Any = None, **schedule: Any) -> None:
+        if self.drawn is not None:
+            name, lo, hi = self.drawn
+            self.drawn_range = as_range(name, drawn_value, lo, hi)
+            self.drawn_value = self.drawn_range[0]
         schedule = {"trigger": "at_time", "start_s": DEFAULT_START_S, **schedule}
         super().__init__(env, AttackSchedule(**schedule))
+
+    def _on_reset(self) -> None:
+        if self.drawn is not None:
+            self.drawn_value = float(self.rng.uniform(*self.drawn_range))
 
     def reset(self, *, seed=None, options=None):
         if not any(getattr(m, "name", None) == "lead" for m in getattr(self.env.unwrapped, "world", ())):
@@ -129,18 +141,14 @@ class LeadPatch(_LeadAttack):
     """The lead's depth read ``bias_m`` far inside its box (a value or a (low, high) range per episode)."""
 
     name = "lead_patch"
+    drawn = ("bias_m", 0.0, 10.0)
 
     def __init__(self, env: gym.Env, bias_m: Any = 1.0, **schedule: Any) -> None:
         gym.utils.RecordConstructorArgs.__init__(self, bias_m=bias_m, **schedule)
-        self.bias_range = as_range("bias_m", bias_m, 0.0, 10.0)
-        super().__init__(env, **schedule)
-        self.bias = 0.0
-
-    def _on_reset(self) -> None:
-        self.bias = float(self.rng.uniform(*self.bias_range))
+        super().__init__(env, bias_m, **schedule)
 
     def _attack(self, obs: dict, info: dict) -> dict:
-        return self._shift_depth(obs, info, self.bias)
+        return self._shift_depth(obs, info, self.drawn_value)
 
 
 class LeadRamp(_LeadAttack):
@@ -165,25 +173,21 @@ class LeadFrustum(_LeadAttack):
     camera's depth of the lead moves with them (the frustum attack: the two agree)."""
 
     name = "lead_frustum"
+    drawn = ("bias_m", 0.0, 10.0)
 
     def __init__(self, env: gym.Env, bias_m: Any = 1.0, depth: bool = False, **schedule: Any) -> None:
         gym.utils.RecordConstructorArgs.__init__(self, bias_m=bias_m, depth=depth, **schedule)
-        self.bias_range = as_range("bias_m", bias_m, 0.0, 10.0)
         if not isinstance(depth, bool):
             raise ValueError(f"depth must be true or false, got {depth!r}")
         self.with_depth = depth
-        super().__init__(env, **schedule)
-        self.bias = 0.0
-
-    def _on_reset(self) -> None:
-        self.bias = float(self.rng.uniform(*self.bias_range))
+        super().__init__(env, bias_m, **schedule)
 
     def _attack(self, obs: dict, info: dict) -> dict:
         scan = np.asarray(obs["lidar"]).copy()
         beams = lead_beams(self, info, scan)
-        scan[beams] += self.bias
+        scan[beams] += self.drawn_value
         obs["lidar"] = scan.astype(obs["lidar"].dtype)
-        return self._shift_depth(obs, info, self.bias) if self.with_depth else obs
+        return self._shift_depth(obs, info, self.drawn_value) if self.with_depth else obs
 
 
 class LeadHide(_LeadAttack):
@@ -222,22 +226,18 @@ class LeadPhantom(_LeadAttack):
     """
 
     name = "lead_phantom"
+    drawn = ("distance_m", 0.2, 5.0)
 
     def __init__(self, env: gym.Env, distance_m: Any = 0.5, **schedule: Any) -> None:
         gym.utils.RecordConstructorArgs.__init__(self, distance_m=distance_m, **schedule)
-        self.distance_range = as_range("distance_m", distance_m, 0.2, 5.0)
-        super().__init__(env, **schedule)
-        self.distance = 0.5
-
-    def _on_reset(self) -> None:
-        self.distance = float(self.rng.uniform(*self.distance_range))
+        super().__init__(env, distance_m, **schedule)
 
     def _attack(self, obs: dict, info: dict) -> dict:
         plane = np.asarray(obs["depth"])[..., 0]
         where = lead_pixels(self, info, plane)
         if where.sum() < 4:
             return obs
-        scale = float(np.median(plane[where])) / self.distance
+        scale = float(np.median(plane[where])) / self.drawn_value
         if scale <= 1.0:
             return obs  # the lead stands nearer than the phantom would: a picture behind it is hidden by it
         k = self.unwrapped.truth.intrinsics
