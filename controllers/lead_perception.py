@@ -12,11 +12,13 @@ it or crossing further on spans no such point.
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 
 from racf.controllers.detector import Detection
 from racf.controllers.distance import CameraModel
+from racf.controllers.lead_existence import NO_EVIDENCE, LeadExistenceCheck
 from racf.controllers.lidar_target import LidarTargetTracker
 from racf.controllers.perception import Perception, PerceptionSample
 from racf.controllers.size_distance import SizeDistance
@@ -44,22 +46,40 @@ class LeadPerception(Perception):
         lidar: the LiDAR tracker.
         range_slack: a lane point agrees with a box when its distance is within this share of the
             distance the box's height implies.
+        existence: the check of whether the box is a car or a picture of one (None: none); its
+            evidence reaches the defence as the sample's ``witnesses``.
     """
 
     def __init__(self, camera: CameraModel, detector, lidar: LidarTargetTracker | None = None,
-                 range_slack: float = 0.5) -> None:
+                 range_slack: float = 0.5, existence: LeadExistenceCheck | None = None) -> None:
         # The car's height, not its width, is the same from any side: a box at an angle is wider, never taller.
         size = SizeDistance(camera, VEHICLE_BOX_HEIGHT_M, wider_than_tall=5.0)
         super().__init__(camera, detector=detector, lidar=lidar, target="vehicle", size=size)
         self.range_slack = float(range_slack)
+        self.existence = existence
         self._lane = np.empty((0, 2))
+        self._clock_s = 0.0
+
+    def reset(self) -> None:
+        super().reset()
+        if self.existence is not None:
+            self.existence.reset()
 
     def process(self, rgb, depth, scan, *, lane: np.ndarray | None = None, **kwargs) -> PerceptionSample:
         """:meth:`Perception.process`, with ``lane``: the lane's centre ahead in the camera frame ((N, 2)
         z, y, m; :func:`lane_in_camera`) for the new frame's check (None: no lane known, no car found)."""
-        if kwargs.get("new_frame", True):
+        new_frame = kwargs.get("new_frame", True)
+        self._clock_s += float(kwargs.get("dt", 0.02))
+        if new_frame:
             self._lane = np.empty((0, 2)) if lane is None else np.asarray(lane, float)
-        return super().process(rgb, depth, scan, map_bearing=None, **kwargs)
+        sample = super().process(rgb, depth, scan, map_bearing=None, **kwargs)
+        if self.existence is None:
+            return sample
+        if new_frame:
+            self.existence.update(np.asarray(depth), sample.detection, sample.d_size, sample.lidar_m, self._lane,
+                                 self._clock_s)
+        evidence = self.existence.last if sample.detected else NO_EVIDENCE
+        return replace(sample, witnesses=evidence)
 
     def _detect(self, rgb: np.ndarray, map_bearing: float | None) -> Detection | None:
         passing = self.detector.passing(rgb)

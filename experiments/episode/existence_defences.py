@@ -22,9 +22,11 @@ Detector-only (what every defence did before) is any defence without ``existence
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 from racf.controllers import PerceptionSample
 from racf.controllers.existence import NO_WITNESSES, ExistenceWitnesses, vote
+from racf.controllers.lead_existence import LeadEvidence
 
 __all__ = ["ExistenceVote", "DetectorsOr", "MapOnly"]
 
@@ -44,6 +46,7 @@ class _Existence:
         self._stands: bool | None = None
         self._witnesses = NO_WITNESSES
         self._carried = math.nan
+        self._lead_carried = math.nan
 
     @property
     def n_parameters(self) -> int:
@@ -63,8 +66,11 @@ class _Existence:
         self._stands = None
         self._witnesses = NO_WITNESSES
         self._carried = math.nan
+        self._lead_carried = math.nan
 
     def estimate(self, sample: PerceptionSample, speed_mps: float, dt: float, yaw_rate_radps: float = 0.0) -> float:
+        if isinstance(sample.witnesses, LeadEvidence):  # the car ahead: no map lists it
+            return self.lead_estimate(sample, speed_mps, dt, yaw_rate_radps)
         d = float(self.inner.estimate(sample, speed_mps, dt, yaw_rate_radps=yaw_rate_radps))
         self._witnesses = sample.witnesses if sample.witnesses is not None else NO_WITNESSES
         self._stands = self.verdict(self._witnesses)
@@ -78,6 +84,10 @@ class _Existence:
 
     def verdict(self, witnesses: ExistenceWitnesses) -> bool:
         raise NotImplementedError
+
+    def lead_estimate(self, sample: PerceptionSample, closing_mps: float, dt: float, yaw_rate_radps: float) -> float:
+        """The distance to the car ahead (the sample's witnesses: ``LeadEvidence``): the inner defence's."""
+        return float(self.inner.estimate(sample, closing_mps, dt, yaw_rate_radps=yaw_rate_radps))
 
     def fallback_distance(self, witnesses: ExistenceWitnesses) -> float:
         """The distance when the inner defence has none (the car's detector does not see the sign)."""
@@ -125,6 +135,31 @@ class ExistenceVote(_WithSecondDetector):
 
     def distrusts_inner(self, witnesses: ExistenceWitnesses) -> bool:
         return witnesses.mapped and witnesses.moving  # the inner defence reads the depth that was caught
+
+    def lead_estimate(self, sample: PerceptionSample, closing_mps: float, dt: float, yaw_rate_radps: float) -> float:
+        """The inner defence's distance, unless the box is taken for a picture of a car. Then the box is
+        no witness (the inner defence reads its size and the depth in its mask): the distance is the
+        nearer of the LiDAR's track and the nearest upright thing on the lane in the box, else the
+        last distance carried by the closing speed. The inner defence does not read the picture, and
+        starts afresh when it goes (what it carried from before it is stale)."""
+        evidence = sample.witnesses
+        if evidence.picture:
+            self._in_picture = True
+            seen = [v for v in (sample.lidar_m, evidence.nearest_m) if math.isfinite(v)]
+            d = min(seen) if seen else self._lead_carried - closing_mps * dt
+        else:
+            if self._in_picture:
+                self.inner.reset()
+                self._in_picture = False
+            d = float(self.inner.estimate(sample, closing_mps, dt, yaw_rate_radps=yaw_rate_radps))
+        self._lead_carried = d
+        return d
+
+    def reset(self) -> None:
+        super().reset()
+        self._in_picture = False
+
+    _in_picture = False
 
 
 class DetectorsOr(_WithSecondDetector):

@@ -106,6 +106,10 @@ STEP_COLUMNS: tuple[Column, ...] = (
     _c(CAR, "lead_gap_est", "m", "following: the gap the policy acts on, bumper to the lead's rear (NaN: none)"),
     _c(CAR, "lead_cap", "m/s", "following: the policy's speed cap (inf: none)"),
     _c(CAR, "lead_emergency", "bool", "following: the emergency brake on time-to-collision is on"),
+    _c(CAR, "lead_support", "share", "following: the share of the lead's box that the depth finds upright at the box's "
+                                     "size distance (NaN: no verdict)"),
+    _c(CAR, "lead_nearest", "m", "following: the nearest upright thing the depth finds in the lead's box (NaN: none)"),
+    _c(CAR, "lead_picture", "bool", "following: the lead's box is taken for a picture of a car (its size no witness)"),
     _c(REFEREE, "d_true", "m", "ground truth: the target's depth along the camera axis"),
     _c(REFEREE, "d_clean", "m", "the car's perception on the unattacked readings (the protocol's pseudo ground "
                                 "truth; NaN under attack without the clean pass)"),

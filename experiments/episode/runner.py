@@ -28,6 +28,7 @@ import numpy as np
 import pandas as pd
 
 from racf.controllers import DistanceEstimator
+from racf.controllers.lead_existence import NO_EVIDENCE, LeadEvidence
 from racf.experiments.episode.lead_stage import NO_LEAD
 from racf.experiments.episode.record import step_row, world_columns
 from racf.experiments.episode.referee import Referee
@@ -235,9 +236,11 @@ def lead_columns(lead) -> dict:
     """The following stage's part of a row (``LeadStep``; None: not engaged, its columns NaN/False)."""
     lead = lead or NO_LEAD
     sample, decision = lead.sample, lead.decision
+    evidence = sample.witnesses if isinstance(sample.witnesses, LeadEvidence) else NO_EVIDENCE
     return {"lead_detected": sample.detected, "lead_d_meas": sample.d_meas, "lead_lidar": sample.lidar_m,
             "lead_d_size": sample.d_size, "lead_d_fused": lead.d_fused, "lead_v_est": lead.lead_mps,
-            "lead_gap_est": decision.gap_m, "lead_cap": decision.speed_cap_mps, "lead_emergency": decision.emergency}
+            "lead_gap_est": decision.gap_m, "lead_cap": decision.speed_cap_mps, "lead_emergency": decision.emergency,
+            **evidence.columns()}
 
 
 def _result(spec: TrialSpec, plan: EpisodePlan, env: gym.Env, log: pd.DataFrame) -> TrialResult:

@@ -110,6 +110,7 @@ def build_car(spec: TrialSpec, plan: EpisodePlan, estimator=None, env: gym.Env |
 def lead_stage(spec: TrialSpec, calib: CarCalibration):
     """The following stage of a car in traffic: the vehicle detector on its lane, and the spec's
     defence for the lead's distance, its own instance."""
+    from racf.controllers.lead_existence import LeadExistenceCheck
     from racf.controllers.lead_perception import LeadPerception
     from racf.experiments.episode.lead_stage import LeadStage
 
@@ -117,7 +118,8 @@ def lead_stage(spec: TrialSpec, calib: CarCalibration):
     configure = getattr(estimator, "use_calibration", None)
     if callable(configure):
         configure(calib)
-    perception = LeadPerception(calib.camera, _vehicle_detector(), tracker(calib))
+    perception = LeadPerception(calib.camera, _vehicle_detector(), tracker(calib),
+                                existence=LeadExistenceCheck(calib.camera, calib.camera_height_m))
     return LeadStage(perception, estimator, calib.bumper_x_m - calib.camera_xy_m[0], calib.camera_xy_m)
 
 

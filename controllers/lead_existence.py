@@ -1,0 +1,195 @@
+"""Whether the car ahead the camera sees is a car or a picture of one.
+
+A car is a solid: where its box stands in the picture, the depth finds something upright at the
+distance the box's size implies. A picture of a car (projected, on a screen, drawn into the
+camera's image: the phantom of Nassi et al., CCS 2020) gives the camera a box and the range
+sensors nothing there: the depth and the LiDAR see the road and what stands behind it.
+
+A box the depth does not hold up is not proof of a picture on its own: the depth may be the one
+attacked (a patch that reads the car far, Cheng et al., ECCV 2022), and then the box is the honest
+witness. Two things tell the two apart, and the check asks for one of them:
+- the LiDAR's track agrees with the nearest upright thing in the box, not with the box's size;
+- the box was held up a moment ago, and what stands on the lane in it has not moved further than
+  a car can since: the box left the car, not the car the box (a car does not appear out of nowhere
+  in front of another; a picture does). A depth read far moves the car away from its box instead.
+Once caught, the picture is remembered until the check is reset (a new episode): any later box the depth does
+not hold up is taken for one, as an attacker still projecting would make it.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from racf.controllers.detector import Detection
+from racf.controllers.distance import CameraModel
+
+__all__ = ["LeadExistenceConfig", "LeadEvidence", "LeadExistenceCheck", "NO_EVIDENCE", "box_points", "in_lane"]
+
+
+@dataclass(frozen=True)
+class LeadExistenceConfig:
+    """The check's settings.
+
+    Attributes:
+        lane_half_width_m: what stands within this of the lane's centre is on the lane, m (the car
+            ahead is; the walls and what stands beside the lane are not).
+        support_tol: a depth within this share of the box's size distance (plus ``support_abs_m``)
+            stands where the box says.
+        support_abs_m: the absolute part of that tolerance, m (the depth's noise at short range).
+        min_support: the share of the box's pixels on the lane that must show something upright
+            there for the box to be held up (a real car's rear fills most of its box).
+        min_pixels: the fewest pixels on the lane a box needs for a verdict (fewer: no verdict).
+        closing_mps: the fastest the car ahead closes or draws away, m/s (the QCar 2's top speed).
+        jump_margin_m: what the nearest upright thing may move on top of that between two frames,
+            m (the depth's own noise).
+        memory_s: how long a held-up box is remembered for the jump test, s.
+        nearest_quantile: the nearest upright thing is this quantile of the upright depths (a low
+            one, robust to a stray pixel).
+    """
+
+    lane_half_width_m: float = 0.15
+    support_tol: float = 0.15
+    support_abs_m: float = 0.05
+    min_support: float = 0.25
+    min_pixels: int = 20
+    closing_mps: float = 3.0
+    jump_margin_m: float = 0.15
+    memory_s: float = 1.0
+    nearest_quantile: float = 0.1
+
+    def __post_init__(self) -> None:
+        for name, lo, hi in (("lane_half_width_m", 0.0, 1.0), ("support_tol", 0.0, 1.0), ("support_abs_m", 0.0, 1.0),
+                             ("min_support", 0.0, 1.0), ("closing_mps", 0.0, 20.0), ("jump_margin_m", 0.0, 5.0), ("memory_s", 0.0, 10.0),
+                             ("nearest_quantile", 0.0, 1.0)):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not lo <= value <= hi:
+                raise ValueError(f"{name} must be in [{lo}, {hi}], got {value!r}")
+        if isinstance(self.min_pixels, bool) or not isinstance(self.min_pixels, int) or self.min_pixels < 1:
+            raise ValueError(f"min_pixels must be an int >= 1, got {self.min_pixels!r}")
+
+    def tolerance(self, distance_m: float) -> float:
+        """How far a depth may lie from ``distance_m`` and stand there, m."""
+        return self.support_abs_m + self.support_tol * distance_m
+
+
+@dataclass(frozen=True)
+class LeadEvidence:
+    """What the check made of one frame's box.
+
+    Attributes:
+        support: the share of the box's pixels on the lane that show something upright at its size
+            distance (NaN: no verdict: no box, no size, or too few pixels on the lane).
+        nearest_m: the nearest upright thing on the lane in the box, m (NaN: none seen).
+        picture: the box is taken for a picture: its size is no witness, and the distance is
+            ``nearest_m``'s.
+        caught: a picture was caught (latched until :meth:`LeadExistenceCheck.reset`).
+    """
+
+    support: float
+    nearest_m: float
+    picture: bool
+    caught: bool
+
+    def columns(self) -> dict[str, float]:
+        """The step log's columns."""
+        return {"lead_support": self.support, "lead_nearest": self.nearest_m, "lead_picture": float(self.picture)}
+
+
+NO_EVIDENCE = LeadEvidence(math.nan, math.nan, False, False)
+
+
+def box_points(depth: np.ndarray, box: tuple[int, int, int, int], camera: CameraModel,
+               camera_height_m: float, step_rows: int = 2) -> tuple[np.ndarray, np.ndarray]:
+    """What the depth shows in ``box`` (x0, y0, x1, y1): (N, 2) points as (z ahead along the optical
+    axis, y left), m, and (N,) bool, whether each shows something upright.
+
+    A pixel is upright where the depth barely changes down its column: the floor's depth falls by
+    z^2 / (fy h) per row (h the camera's height), an upright face's by nothing. The test reads that
+    slope, not the pixel's height, so a car pitching under braking does not turn the floor upright."""
+    h, w = depth.shape
+    x0, y0, x1, y1 = max(int(box[0]), 0), max(int(box[1]), 0), min(int(box[2]), w), min(int(box[3]), h - step_rows)
+    if x1 <= x0 or y1 <= y0:
+        return np.empty((0, 2)), np.empty(0, bool)
+    z = depth[y0:y1, x0:x1].astype(float)
+    below = depth[y0 + step_rows:y1 + step_rows, x0:x1].astype(float)
+    fy = camera.fy if camera.fy is not None else camera.fx
+    rows, cols = np.nonzero(np.isfinite(z) & (z > 0))
+    ahead, under = z[rows, cols], below[rows, cols]
+    floor_fall = step_rows * ahead * ahead / (fy * camera_height_m)
+    upright = np.isfinite(under) & (under > 0) & (np.abs(ahead - under) < 0.5 * floor_fall)
+    left = (camera.cx - (cols + x0 + 0.5)) * ahead / camera.fx
+    return np.column_stack([ahead, left]), upright
+
+
+def in_lane(points: np.ndarray, lane: np.ndarray, half_width_m: float) -> np.ndarray:
+    """(N,) bool: the ``points`` (z, y) within ``half_width_m`` of a point of ``lane`` ((M, 2) z, y)."""
+    if not len(points) or not len(lane):
+        return np.zeros(len(points), bool)
+    gaps = np.hypot(points[:, None, 0] - lane[None, :, 0], points[:, None, 1] - lane[None, :, 1])
+    return gaps.min(axis=1) <= half_width_m
+
+
+class LeadExistenceCheck:
+    """Per new frame: whether the detection's box stands where its size says (:class:`LeadEvidence`).
+
+    Args:
+        camera: the camera's intrinsics.
+        camera_height_m: its height above the floor, m.
+        config: the settings.
+    """
+
+    def __init__(self, camera: CameraModel, camera_height_m: float, config: LeadExistenceConfig | None = None) -> None:
+        self.camera = camera
+        self.camera_height_m = float(camera_height_m)
+        self.config = config or LeadExistenceConfig()
+        self.reset()
+
+    def reset(self) -> None:
+        """A new episode: forget the last box and any picture caught."""
+        self.last = NO_EVIDENCE
+        self._caught = False
+        self._held: tuple[float, float] | None = None  # (t, nearest) of the last held-up box
+
+    def update(self, depth: np.ndarray, detection: Detection | None, size_m: float, lidar_m: float,
+               lane: np.ndarray, t_s: float) -> LeadEvidence:
+        """One new frame: ``depth`` (H, W) m, the lead's ``detection`` and its size witness ``size_m``,
+        the LiDAR track's distance ``lidar_m`` (NaN: none), the lane's centre ahead ((N, 2) z, y in
+        the camera's frame), at ``t_s`` s."""
+        c = self.config
+        if detection is None:
+            self.last = LeadEvidence(math.nan, math.nan, False, self._caught)
+            return self.last
+        points, upright = box_points(depth, detection.box, self.camera, self.camera_height_m)
+        on_lane = in_lane(points, lane, c.lane_half_width_m)
+        standing = points[on_lane & upright, 0]
+        nearest = float(np.quantile(standing, c.nearest_quantile)) if len(standing) else math.nan
+        # The share of the lane the box covers (floor or not) that stands at the box's distance.
+        lane_z = points[on_lane, 0]
+        support = float(np.mean(upright[on_lane] & (np.abs(lane_z - size_m) <= c.tolerance(size_m)))) \
+            if len(lane_z) >= c.min_pixels and math.isfinite(size_m) else math.nan
+        # A box the depth does not hold up; without a verdict (no size, too little lane) it is not caught by.
+        unsupported = support < c.min_support
+        jumped = self._jumped(nearest, t_s)
+        lidar_sides = (math.isfinite(lidar_m) and math.isfinite(nearest) and abs(lidar_m - nearest) <= c.tolerance(nearest)
+                       and not abs(lidar_m - size_m) <= c.tolerance(size_m))
+        if unsupported and (jumped or lidar_sides):
+            self._caught = True
+        # Once a picture was caught, a box the depth does not hold up (or cannot judge) is taken for one,
+        # unless what stands on the lane in it is nearer than it says (then the box errs safe).
+        picture = self._caught and not support >= c.min_support and not nearest <= size_m
+        if support >= c.min_support and math.isfinite(nearest):
+            self._held = (t_s, nearest)
+        self.last = LeadEvidence(support, nearest, picture, self._caught)
+        return self.last
+
+    def _jumped(self, nearest_m: float, t_s: float) -> bool:
+        """Whether a box was held up within ``memory_s`` and what stands on the lane has stayed with it."""
+        c = self.config
+        if self._held is None or not math.isfinite(nearest_m):
+            return False
+        t_held, nearest_held = self._held
+        elapsed = t_s - t_held
+        return 0.0 <= elapsed <= c.memory_s and abs(nearest_m - nearest_held) <= c.jump_margin_m + c.closing_mps * elapsed
