@@ -22,6 +22,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from racf.controllers.detector import Detection
 from racf.controllers.distance import CameraModel
@@ -128,8 +129,8 @@ def in_lane(points: np.ndarray, lane: np.ndarray, half_width_m: float) -> np.nda
     """(N,) bool: the ``points`` (z, y) within ``half_width_m`` of a point of ``lane`` ((M, 2) z, y)."""
     if not len(points) or not len(lane):
         return np.zeros(len(points), bool)
-    gaps = np.hypot(points[:, None, 0] - lane[None, :, 0], points[:, None, 1] - lane[None, :, 1])
-    return gaps.min(axis=1) <= half_width_m
+    gaps, _ = cKDTree(lane).query(points, distance_upper_bound=half_width_m * 1.0001)
+    return gaps <= half_width_m
 
 
 class LeadExistenceCheck:
@@ -175,7 +176,8 @@ class LeadExistenceCheck:
         jumped = self._jumped(nearest, t_s)
         lidar_sides = (math.isfinite(lidar_m) and math.isfinite(nearest) and abs(lidar_m - nearest) <= c.tolerance(nearest)
                        and not abs(lidar_m - size_m) <= c.tolerance(size_m))
-        if unsupported and (jumped or lidar_sides):
+        bare = support == 0.0 and not len(standing)  # the depth sees the bare floor where the box stands
+        if unsupported and (jumped or lidar_sides or bare):
             self._caught = True
         # Once a picture was caught, a box the depth does not hold up (or cannot judge) is taken for one,
         # unless what stands on the lane in it is nearer than it says (then the box errs safe).

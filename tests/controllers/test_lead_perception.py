@@ -71,3 +71,16 @@ def test_of_two_cars_on_the_lane_the_nearer_is_followed_and_its_size_gives_its_d
     near, far = box_at(0.8, 160.0), box_at(2.0, 160.0)
     sample = perceive([far, near], STRAIGHT)
     assert sample.detection is near and sample.d_size == pytest.approx(0.8, rel=0.05)
+
+
+def test_the_existence_check_s_evidence_reaches_the_defence_with_the_sample():
+    from racf.controllers.lead_existence import NO_EVIDENCE, LeadEvidence, LeadExistenceCheck
+
+    perception = LeadPerception(CAMERA, Boxes([box_at(1.0, 160.0)]), existence=LeadExistenceCheck(CAMERA, 0.172))
+    image, wall = np.zeros((240, 320, 3), np.uint8), np.full((240, 320), 1.0, np.float32)
+    sample = perception.process(image, wall, None, lane=STRAIGHT)
+    assert isinstance(sample.witnesses, LeadEvidence) and sample.witnesses.support > 0.9
+    assert sample.witnesses.nearest_m == pytest.approx(1.0)
+    perception.detector = Boxes([])
+    assert perception.process(image, wall, None, lane=STRAIGHT).witnesses is NO_EVIDENCE
+    assert perceive([box_at(1.0, 160.0)], STRAIGHT).witnesses is None  # no check: no evidence

@@ -64,6 +64,47 @@ def test_the_vote_carries_its_last_distance_on_by_odometry_once_no_witness_is_le
     assert vote.estimate(_sample(_w()), 1.0, 0.1) == pytest.approx(0.9) and vote.stands() is False
 
 
+def _lead(evidence, d_meas=1.0, lidar=math.nan, size=1.0):
+    import numpy as np
+
+    from racf.controllers.detector import Detection
+
+    detection = Detection(np.zeros((4, 4), bool), (0, 0, 2, 2), 0.9, 4, (1.0, 1.0))
+    return PerceptionSample(detection, d_meas, 0.9, lidar, 0.0, d_size=size, size_std=0.05, witnesses=evidence)
+
+
+class _Inner:
+    """An inner defence that reads the depth and counts its resets."""
+
+    def __init__(self):
+        self.resets, self.seen = 0, []
+
+    def reset(self):
+        self.resets += 1
+
+    def estimate(self, sample, speed_mps, dt, yaw_rate_radps=0.0):
+        self.seen.append(sample)
+        return sample.d_meas
+
+
+def test_the_vote_follows_what_stands_on_the_lane_while_the_car_ahead_s_box_is_a_picture():
+    from racf.controllers.lead_existence import LeadEvidence
+
+    vote = _ready(ExistenceVote(inner="raw"))
+    vote.inner = inner = _Inner()
+    held = LeadEvidence(0.9, 1.6, False, False)
+    assert vote.estimate(_lead(held, d_meas=1.6), 0.5, 0.02) == 1.6 and vote.stands() is None
+    picture = LeadEvidence(0.0, 1.6, True, True)
+    assert vote.estimate(_lead(picture, d_meas=0.9, size=0.5), 0.5, 0.02) == 1.6  # not the box's depth
+    assert vote.estimate(_lead(picture, d_meas=0.9, lidar=1.5), 0.5, 0.02) == 1.5  # the nearer of the two
+    assert len(inner.seen) == 1  # the inner defence never reads the picture
+    # Nothing stands in the box and no LiDAR: the last distance carried by the closing speed.
+    assert vote.estimate(_lead(LeadEvidence(0.0, math.nan, True, True)), 0.5, 0.1) == pytest.approx(1.45)
+    # The picture gone, the inner defence starts afresh on the car's own box.
+    assert vote.estimate(_lead(LeadEvidence(0.9, 1.4, False, True), d_meas=1.4), 0.5, 0.02) == 1.4
+    assert inner.resets == 1 and len(inner.seen) == 2
+
+
 def test_the_baselines_answer_by_their_own_rule():
     either = _ready(DetectorsOr(inner="raw"))
     assert either.estimate(_sample(_w(seen=(False, True), seen_depth=(math.nan, 0.9))), 1.0, 0.02) == 0.9
