@@ -11,7 +11,13 @@ witness. Two things tell the two apart, and the check asks for one of them:
 - the LiDAR's track agrees with the nearest upright thing in the box, not with the box's size;
 - the box was held up a moment ago, and what stands on the lane in it has not moved further than
   a car can since: the box left the car, not the car the box (a car does not appear out of nowhere
-  in front of another; a picture does). A depth read far moves the car away from its box instead.
+  in front of another; a picture does).
+What moved decides the other way too: where the box stayed and what stood in it jumped away (a
+depth read far, the frustum attack moving the depth and the LiDAR together), the range sensors are
+the ones attacked, and the check catches no picture for the rest of the episode.
+At a first sight with no held-up box before it, the LiDAR siding with the depth against the box
+is taken for a picture: the frustum attack on both range sensors, begun before the car first saw
+the car ahead, looks the same, and there the check errs.
 Once caught, the picture is remembered until the check is reset (a new episode): any later box the depth does
 not hold up is taken for one, as an attacker still projecting would make it.
 """
@@ -44,8 +50,8 @@ class LeadExistenceConfig:
             there for the box to be held up (a real car's rear fills most of its box).
         min_pixels: the fewest pixels on the lane a box needs for a verdict (fewer: no verdict).
         closing_mps: the fastest the car ahead closes or draws away, m/s (the QCar 2's top speed).
-        jump_margin_m: what the nearest upright thing may move on top of that between two frames,
-            m (the depth's own noise).
+        jump_margin_m: what the nearest upright thing, or the box's size distance, may move on top of
+            that between two frames, m (their own noise).
         memory_s: how long a held-up box is remembered for the jump test, s.
         nearest_quantile: the nearest upright thing is this quantile of the upright depths (a low
             one, robust to a stray pixel).
@@ -152,7 +158,8 @@ class LeadExistenceCheck:
         """A new episode: forget the last box and any picture caught."""
         self.last = NO_EVIDENCE
         self._caught = False
-        self._held: tuple[float, float] | None = None  # (t, nearest) of the last held-up box
+        self._moved = False
+        self._held: tuple[float, float, float] | None = None  # (t, nearest, size) of the last held-up box
 
     def update(self, depth: np.ndarray, detection: Detection | None, size_m: float, lidar_m: float,
                lane: np.ndarray, t_s: float) -> LeadEvidence:
@@ -173,25 +180,30 @@ class LeadExistenceCheck:
             if len(lane_z) >= c.min_pixels and math.isfinite(size_m) else math.nan
         # A box the depth does not hold up; without a verdict (no size, too little lane) it is not caught by.
         unsupported = support < c.min_support
-        jumped = self._jumped(nearest, t_s)
+        # Since the last held-up box (None: none to compare with), did what stands stay, and did the box?
+        stood, boxed = self._stayed(nearest, 1, t_s), self._stayed(size_m, 2, t_s)
+        if unsupported and boxed is True and stood is False:
+            self._moved = True  # what stood in the box moved away from it: the range sensors are attacked
         lidar_sides = (math.isfinite(lidar_m) and math.isfinite(nearest) and abs(lidar_m - nearest) <= c.tolerance(nearest)
                        and not abs(lidar_m - size_m) <= c.tolerance(size_m))
         bare = support == 0.0 and not len(standing)  # the depth sees the bare floor where the box stands
-        if unsupported and (jumped or lidar_sides or bare):
+        jumped = stood is True and boxed is False  # the box left what stands there
+        if unsupported and not self._moved and (jumped or lidar_sides or bare):
             self._caught = True
         # Once a picture was caught, a box the depth does not hold up (or cannot judge) is taken for one,
         # unless what stands on the lane in it is nearer than it says (then the box errs safe).
         picture = self._caught and not support >= c.min_support and not nearest <= size_m
         if support >= c.min_support and math.isfinite(nearest):
-            self._held = (t_s, nearest)
+            self._held = (t_s, nearest, size_m)
         self.last = LeadEvidence(support, nearest, picture, self._caught)
         return self.last
 
-    def _jumped(self, nearest_m: float, t_s: float) -> bool:
-        """Whether a box was held up within ``memory_s`` and what stands on the lane has stayed with it."""
+    def _stayed(self, distance_m: float, which: int, t_s: float) -> bool | None:
+        """Whether ``distance_m`` (what stands on the lane: ``which`` 1; the box's size: 2) is where it was
+        in the last held-up box, as far as a car can have moved since (None: no held-up box within
+        ``memory_s``, or no distance now)."""
         c = self.config
-        if self._held is None or not math.isfinite(nearest_m):
-            return False
-        t_held, nearest_held = self._held
-        elapsed = t_s - t_held
-        return 0.0 <= elapsed <= c.memory_s and abs(nearest_m - nearest_held) <= c.jump_margin_m + c.closing_mps * elapsed
+        if self._held is None or not math.isfinite(distance_m) or not 0.0 <= t_s - self._held[0] <= c.memory_s:
+            return None
+        elapsed = t_s - self._held[0]
+        return bool(abs(distance_m - self._held[which]) <= c.jump_margin_m + c.closing_mps * elapsed)

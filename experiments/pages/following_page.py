@@ -7,7 +7,8 @@ Its data is the ``following`` stored result, made from the sweeps ``following.to
         outputs/sweeps/following-hide --out following.json
 
 and stored with ``results_store``; the phantom car ahead's table is the ``following-phantom`` stored
-result, made the same way from the sweep ``following-phantom.toml``. Per attack and defence: N, the collision-free rate with its
+result, made the same way from the sweep ``following-phantom.toml``, and the existence check's the
+``following-existence`` stored result, from the existence vote's sweeps (``EXISTENCE_COMMAND``). Per attack and defence: N, the collision-free rate with its
 Wilson interval, the smallest time-to-collision (median and bootstrap interval), the share of
 episodes with any time under the minimum headway, hard brakes, and the collision-free rate per
 lead profile.
@@ -30,6 +31,11 @@ __all__ = ["summarise", "following_markdown", "FOLLOWING_COMMAND", "main"]
 
 PHANTOM_COMMAND = ("racf sweep following-phantom.toml; python -m racf.experiments.pages.following_page "
                    "outputs/sweeps/following-phantom")
+EXISTENCE_COMMAND = ("racf sweep following-phantom.toml --estimator vote --out outputs/sweeps/vote-phantom; "
+                     "racf sweep following-phantom.toml --estimator vote --estimator-option vote.inner=ekf "
+                     "--out outputs/sweeps/vote-ekf-phantom; racf sweep following.toml --estimator vote "
+                     "--out outputs/sweeps/vote-following; python -m racf.experiments.pages.following_page "
+                     "outputs/sweeps/vote-phantom outputs/sweeps/vote-ekf-phantom outputs/sweeps/vote-following")
 FOLLOWING_COMMAND = ("racf sweep following.toml; racf sweep following-frustum.toml; racf sweep following-hide.toml; "
                      "python -m racf.experiments.pages.following_page outputs/sweeps/following "
                      "outputs/sweeps/following-frustum outputs/sweeps/following-hide")
@@ -61,7 +67,14 @@ def _rows(folder: Path) -> pd.DataFrame:
     depth = frame["trial_id"].map(lambda i: "[depth]" if i in specs and specs[i].attack_params.get(
         "lead_frustum", {}).get("depth") else "")
     frame["attack"] = attack + depth
+    # A defence run with options is its own row: ``vote (inner=ekf)``.
+    frame["estimator"] = [_label(e, specs[i].estimator_options if i in specs else {})
+                          for e, i in zip(frame["estimator"], frame["trial_id"])]
     return frame
+
+
+def _label(estimator: str, options: dict) -> str:
+    return estimator + (f" ({', '.join(f'{k}={v}' for k, v in sorted(options.items()))})" if options else "")
 
 
 def _share(flags) -> dict:
@@ -100,7 +113,7 @@ def following_markdown(root: Path) -> str:
         "[The tutorial](../tutorials/following.md) says how it works.")
     path = Path(root) / "following.json"
     if not path.exists():
-        return "\n".join(lines + missing("following", FOLLOWING_COMMAND) + _phantom_lines(Path(root)) + [""])
+        return "\n".join(lines + missing("following", FOLLOWING_COMMAND) + _phantom_lines(Path(root)) + _existence_lines(Path(root)) + [""])
     data = json.loads(path.read_text())
     lines += meta_lines(data["meta"])
     lines += ["| attack | defence | N | collision-free [95 % CI] | min TTC s, median [95 % CI] | "
@@ -128,7 +141,7 @@ def following_markdown(root: Path) -> str:
               "witness and the carried closing speed still disagree with the two. Hiding the lead from every sensor "
               "leaves no witness at all: every defence drives into it in most episodes, and none can be asked to do "
               "better without a sensor that still sees it."]
-    return "\n".join(lines + _phantom_lines(Path(root)) + [""])
+    return "\n".join(lines + _phantom_lines(Path(root)) + _existence_lines(Path(root)) + [""])
 
 
 def _phantom_lines(root: Path) -> list[str]:
@@ -153,12 +166,36 @@ def _phantom_lines(root: Path) -> list[str]:
     return lines + ["", "Why ODCA can fare worst, as single episodes show it: its gate takes the size witness as "
                     "one-sided. An occluder or a sticker can only shrink a box, so a depth or a LiDAR beyond the box's "
                     "distance is vetoed; a phantom's box is bigger than the car's, and the gate then vetoes the honest "
-                    "depth and follows the picture. No defence here asks whether anything stands where the box says: "
-                    "an existence check for the car ahead is not built yet."]
+                    "depth and follows the picture. None of these defences asks whether anything stands where the box "
+                    "says; the existence vote does (next section)."]
+
+
+def _existence_lines(root: Path) -> list[str]:
+    """The existence check's section, from the ``following-existence`` stored result."""
+    lines = ["", "## The existence check of the car ahead", "",
+             "The existence vote (`vote`) reads the car's check of whether the box ahead is a car or a picture of one "
+             "(`racf.controllers.lead_existence`: something upright must stand on the lane at the box's distance; "
+             "[the tutorial](../tutorials/following.md) says how it decides). While the box is taken for a picture "
+             "it follows what stands there; otherwise its inner defence's distance (ODCA, or the EKF with "
+             "`vote.inner=ekf`). The same episodes as above, the vote's own rows:", ""]
+    path = root / "following-existence.json"
+    if not path.exists():
+        return lines + missing("following-existence", EXISTENCE_COMMAND)
+    data = json.loads(path.read_text())
+    lines += meta_lines(data["meta"])
+    lines += ["| attack | defence | N | collision-free [95 % CI] | any needless hard brake [95 % CI] | "
+              "hard brakes, median |", "|---|---|---|---|---|---|"]
+    for r in sorted(data["rows"].values(), key=_order):
+        needless, cf = r["needless_hard_brake"], r["collision_free"]
+        lines.append(f"| {ATTACK_LABELS.get(r['attack'], r['attack'])} | {r['estimator']} | {r['n']} | "
+                     f"{rate(cf['rate'], cf['ci'])} | {rate(needless['rate'], needless['ci'])} | "
+                     f"{r['hard_brakes_median']:g} |")
+    return lines
 
 
 #: The table's order: attacks by strength, raw first then the defences.
-_ATTACKS = ("clean", "clean+lead_patch", "clean+lead_frustum", "clean+lead_frustum[depth]", "clean+lead_hide")
+_ATTACKS = ("clean", "clean+lead_patch", "clean+lead_frustum", "clean+lead_frustum[depth]", "clean+lead_hide",
+            "clean+lead_phantom")
 _DEFENCES = ("raw", "odca", "ekf", "chronos")
 
 

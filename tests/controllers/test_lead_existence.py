@@ -86,6 +86,24 @@ def test_a_depth_read_far_moves_what_stands_away_from_the_box_and_is_no_picture(
     assert evidence.support == 0.0 and not evidence.caught and not evidence.picture
 
 
+def test_once_what_stood_in_the_box_moved_away_no_picture_is_caught_for_the_episode():
+    # The frustum attack on both range sensors: the depth and the LiDAR 1 m far, together, the box honest.
+    c = check()
+    c.update(scene(1.6), box_at(1.6), 1.6, 1.6, LANE, 0.0)
+    moved = scene(1.6, bias_m=1.0)
+    assert not c.update(moved, box_at(1.6), 1.6, 2.6, LANE, FRAME_S).caught
+    later = c.config.memory_s + 0.5  # the held-up box long forgotten: the LiDAR still sides with the depth
+    assert not c.update(moved, box_at(1.6), 1.6, 2.6, LANE, later).caught
+    c.reset()
+    assert c.update(moved, box_at(1.6), 1.6, 2.6, LANE, 0.0).caught  # at a first sight the check errs
+
+
+def test_a_picture_over_the_bare_floor_after_a_held_up_box_is_still_caught():
+    c = check()
+    c.update(scene(1.6, wall_m=6.0), box_at(1.6), 1.6, math.nan, LANE, 0.0)
+    assert c.update(scene(wall_m=6.0), box_at(0.5), 0.5, math.nan, LANE, FRAME_S).caught
+
+
 def test_a_held_up_box_is_forgotten_after_the_memory():
     c = check()
     c.update(scene(1.6), box_at(1.6), 1.6, math.nan, LANE, 0.0)

@@ -87,3 +87,22 @@ def test_the_phantom_s_section_counts_episodes_with_a_needless_hard_brake(tmp_pa
     page = following_markdown(tmp_path)
     assert "| a phantom car 0.5 m ahead (camera only) | raw | 3 | 0.67 [" in page
     assert page.index("| none | raw | 1 | 0.00 [") < page.index("| a phantom car")  # clean first
+
+
+def test_the_existence_section_shows_each_vote_by_its_options_and_says_how_to_make_it(tmp_path):
+    from racf.experiments.sweeps.spec import parse_spec
+
+    assert "Not stored yet (`following-existence`)" in following_markdown(tmp_path)
+    text = (Path(__file__).resolve().parents[3] / "experiments/sweeps/specs/following-phantom.toml").read_text()
+    text = text.replace('estimator = ["raw", "odca", "ekf", "chronos"]', 'estimator = ["vote"]')
+    text += '\n[estimators.vote]\ninner = "ekf"\n'
+    episodes = [e for e in parse_spec(text).episodes() if e.setting == "clean+lead_phantom+vote"]
+    assert episodes and episodes[0].estimator_options == {"inner": "ekf"}
+    sweep(tmp_path / "s", [{**row(e.setting, "vote", "cruise", True), "trial_id": e.trial_id,
+                            "needless_hard_brakes": k % 2} for k, e in enumerate(episodes[:4])])
+    (tmp_path / "s" / "spec.toml").write_text(text)
+    data = summarise([tmp_path / "s"])
+    assert list(data["rows"]) == ["clean+lead_phantom|vote (inner=ekf)"]
+    data["meta"] = {"command": "racf sweep", "commit": "abc", "racf": "0.1.0", "machine": "m", "measured": "2026-11-27"}
+    (tmp_path / "following-existence.json").write_text(json.dumps(data))
+    assert "| a phantom car 0.5 m ahead (camera only) | vote (inner=ekf) | 4 | 1.00 [" in following_markdown(tmp_path)
