@@ -116,7 +116,7 @@ def test_once_caught_a_box_without_a_verdict_is_a_picture_a_held_up_one_is_not_a
     c.update(scene(1.6), box_at(0.5), 0.5, 1.6, LANE, 0.0)
     assert c.update(scene(1.6), box_at(0.5), math.nan, math.nan, LANE, FRAME_S).picture  # its size not measured
     assert not c.update(scene(1.6), box_at(1.6), 1.6, math.nan, LANE, 2 * FRAME_S).picture
-    assert not c.update(scene(0.4), box_at(0.5), 0.5, math.nan, LANE, 3 * FRAME_S).picture  # nearer: errs safe
+    assert not c.update(scene(0.3), box_at(0.5), 0.5, math.nan, LANE, 3 * FRAME_S).picture  # nearer: errs safe
     c.reset()
     assert not c.update(scene(1.6), box_at(0.5), 0.5, math.nan, LANE, 0.0).picture
 
@@ -165,3 +165,63 @@ def test_in_lane_keeps_what_lies_near_the_lane_s_centre():
 def test_the_settings_say_what_is_allowed(field, value):
     with pytest.raises(ValueError, match=field):
         LeadExistenceConfig(**{field: value})
+
+
+def test_the_nearest_thing_on_the_lane_is_the_car_not_the_wall_behind_it():
+    evidence = check().update(scene(1.6, wall_m=3.0), box_at(0.5), 0.5, math.nan, LANE, 0.0)
+    assert evidence.nearest_m == pytest.approx(1.6, abs=0.01)
+
+
+def test_points_left_of_the_principal_point_lie_left():
+    points, upright = box_points(np.full((240, 320), 2.0, np.float32), (0, 100, 320, 110), CAMERA, HEIGHT_M)
+    u = np.tile(np.arange(320), 10)
+    assert upright.all() and (points[u < 150, 1] > 0).all() and (points[u > 170, 1] < 0).all()
+
+
+def test_in_lane_is_as_wide_as_its_half_width():
+    assert in_lane(np.array([[1.0, 0.14], [1.0, 0.2]]), LANE, 0.15).tolist() == [True, False]
+
+
+def loose(z: float, extra_rows: int) -> Detection:
+    """A car's box at ``z`` that reaches ``extra_rows`` further down, over the floor."""
+    box = box_at(z)
+    x0, y0, x1, y1 = box.box
+    return Detection(box.mask, (x0, y0, x1, min(y1 + extra_rows, 240)), 0.9, box.area_px, box.centroid)
+
+
+def test_a_loose_box_over_a_car_whose_lidar_agrees_with_its_size_is_no_picture():
+    evidence = check().update(scene(1.6), loose(1.6, 80), 1.6, 1.6, LANE, 0.0)
+    assert evidence.support < 0.25 and not evidence.caught
+
+
+def test_a_box_that_stays_while_most_of_what_stood_in_it_reads_far_is_no_picture():
+    # Most of the car's rows read 1 m far (a patch on its upper part); its lowest rows and its box stay.
+    c = check()
+    c.update(scene(1.6), box_at(1.6), 1.6, math.nan, LANE, 0.0)
+    depth = scene(1.6)
+    x0, y0, x1, y1 = box_at(1.6).box
+    depth[y0:y1 - 4, x0:x1] += 1.0
+    evidence = c.update(depth, box_at(1.6), 1.6, math.nan, LANE, FRAME_S)
+    assert evidence.support < 0.25 and evidence.nearest_m == pytest.approx(1.6, abs=0.01) and not evidence.caught
+
+
+def test_only_a_box_the_depth_held_up_is_remembered():
+    c = check()
+    c.update(scene(1.6), box_at(1.6), 1.6, math.nan, LANE, 0.0)
+    c.update(scene(1.6), loose(1.6, 80), 1.6, math.nan, LANE, c.config.memory_s - 0.1)  # not held up: not remembered
+    assert not c.update(scene(1.6), box_at(0.5), 0.5, math.nan, LANE, c.config.memory_s + 0.05).caught
+
+
+def test_a_far_box_held_up_long_ago_is_forgotten_even_where_a_car_could_have_come_that_far():
+    c = check()
+    c.update(scene(4.0, wall_m=6.0), box_at(4.0), 4.0, math.nan, LANE, 0.0)
+    late = c.config.memory_s + 0.05
+    assert not c.update(scene(4.0, wall_m=6.0), box_at(0.3), 0.3, math.nan, LANE, late).caught
+
+
+def test_a_box_that_jumped_where_nothing_it_held_stayed_does_not_block_a_later_catch():
+    # The car ahead gone from the depth (hidden), a picture over the wall behind: neither stayed.
+    c = check()
+    c.update(scene(1.6, wall_m=3.0), box_at(1.6), 1.6, math.nan, LANE, 0.0)
+    assert not c.update(scene(wall_m=3.0), box_at(0.5), 0.5, math.nan, LANE, FRAME_S).caught
+    assert c.update(scene(wall_m=3.0), box_at(0.5), 0.5, 3.0, LANE, 2 * FRAME_S).caught  # the LiDAR sides with it

@@ -84,3 +84,20 @@ def test_the_existence_check_s_evidence_reaches_the_defence_with_the_sample():
     perception.detector = Boxes([])
     assert perception.process(image, wall, None, lane=STRAIGHT).witnesses is NO_EVIDENCE
     assert perceive([box_at(1.0, 160.0)], STRAIGHT).witnesses is None  # no check: no evidence
+
+
+def test_the_existence_check_runs_on_new_frames_only():
+    from racf.controllers.lead_existence import LeadExistenceCheck
+
+    class Counting(LeadExistenceCheck):
+        updates = 0
+
+        def update(self, *args, **kwargs):
+            Counting.updates += 1
+            return super().update(*args, **kwargs)
+
+    perception = LeadPerception(CAMERA, Boxes([box_at(1.0, 160.0)]), existence=Counting(CAMERA, 0.172))
+    image, wall = np.zeros((240, 320, 3), np.uint8), np.full((240, 320), 1.0, np.float32)
+    perception.process(image, wall, None, lane=STRAIGHT)
+    held = perception.process(None, None, None, lane=None, new_frame=False)
+    assert Counting.updates == 1 and held.witnesses.support > 0.9  # the frame's evidence, held with it

@@ -18,7 +18,8 @@ from racf.experiments.episode.stack import default_env
 CAR_COLUMNS = ["speed_cmd", "steer_cmd", "d_fused", "d_meas", "lidar", "detected", "brake", "phase", "slot",
                "x_est", "y_est", "yaw_est",
                # The following stage (NaN where the car follows no one).
-               "lead_detected", "lead_d_meas", "lead_lidar", "lead_d_size", "lead_d_fused", "lead_v_est", "lead_cap"]
+               "lead_detected", "lead_d_meas", "lead_lidar", "lead_d_size", "lead_d_fused", "lead_v_est", "lead_cap",
+               "lead_support", "lead_nearest", "lead_picture"]
 #: ``time`` and ``dist_to_stop_line`` stay: the runner (the experimenter, not the car) ends
 #: the episode on them, and both runs must last the same number of steps to be compared.
 KEPT = {"time", "dist_to_stop_line", "collision", "off_road", "attack", "attack_active"}
