@@ -9,12 +9,13 @@ A box the depth does not hold up is not proof of a picture on its own: the depth
 attacked (a patch that reads the car far, Cheng et al., ECCV 2022), and then the box is the honest
 witness. Two things tell the two apart, and the check asks for one of them:
 - the LiDAR's track agrees with the nearest upright thing in the box, not with the box's size;
-- the box was held up a moment ago, and what stands on the lane in it has not moved further than
-  a car can since: the box left the car, not the car the box (a car does not appear out of nowhere
-  in front of another; a picture does).
-What moved decides the other way too: where the box stayed and what stood in it jumped away (a
-depth read far, the frustum attack moving the depth and the LiDAR together), the range sensors are
-the ones attacked, and the check catches no picture for the rest of the episode.
+- the box was held up a moment ago, and since then it has moved further than what stands on the
+  lane in it: the box left the car, not the car the box (a car does not appear out of nowhere in
+  front of another; a picture does).
+What moved decides the other way too: where the box stayed (as far as a car can move) and what
+stood in it did not (a depth read far, the frustum attack moving the depth and the LiDAR
+together), the range sensors are the ones attacked, and the check catches no picture for the rest
+of the episode.
 At a first sight with no held-up box before it, the LiDAR siding with the depth against the box
 is taken for a picture: the frustum attack on both range sensors, begun before the car first saw
 the car ahead, looks the same, and there the check errs.
@@ -182,12 +183,15 @@ class LeadExistenceCheck:
         unsupported = support < c.min_support
         # Since the last held-up box (None: none to compare with), did what stands stay, and did the box?
         stood, boxed = self._stayed(nearest, 1, t_s), self._stayed(size_m, 2, t_s)
+        jumped = False
         if unsupported and boxed is True and stood is False:
             self._moved = True  # what stood in the box moved away from it: the range sensors are attacked
+        elif unsupported and stood is not None and boxed is not None:
+            # The box moved further from where it was than what stands there did: it left the car.
+            jumped = abs(size_m - self._held[2]) > abs(nearest - self._held[1])
         lidar_sides = (math.isfinite(lidar_m) and math.isfinite(nearest) and abs(lidar_m - nearest) <= c.tolerance(nearest)
                        and not abs(lidar_m - size_m) <= c.tolerance(size_m))
         bare = support == 0.0 and not len(standing)  # the depth sees the bare floor where the box stands
-        jumped = stood is True and boxed is False  # the box left what stands there
         if unsupported and not self._moved and (jumped or lidar_sides or bare):
             self._caught = True
         # Once a picture was caught, a box the depth does not hold up (or cannot judge) is taken for one,
