@@ -34,8 +34,10 @@ PHANTOM_COMMAND = ("racf sweep following-phantom.toml; python -m racf.experiment
 EXISTENCE_COMMAND = ("racf sweep following-phantom.toml --estimator vote --out outputs/sweeps/vote-phantom; "
                      "racf sweep following-phantom.toml --estimator vote --estimator-option vote.inner=ekf "
                      "--out outputs/sweeps/vote-ekf-phantom; racf sweep following.toml --estimator vote "
-                     "--out outputs/sweeps/vote-following; python -m racf.experiments.pages.following_page "
-                     "outputs/sweeps/vote-phantom outputs/sweeps/vote-ekf-phantom outputs/sweeps/vote-following")
+                     "--out outputs/sweeps/vote-following; racf sweep following-frustum.toml --estimator vote "
+                     "--out outputs/sweeps/vote-frustum; python -m racf.experiments.pages.following_page "
+                     "outputs/sweeps/vote-phantom outputs/sweeps/vote-ekf-phantom outputs/sweeps/vote-following "
+                     "outputs/sweeps/vote-frustum")
 FOLLOWING_COMMAND = ("racf sweep following.toml; racf sweep following-frustum.toml; racf sweep following-hide.toml; "
                      "python -m racf.experiments.pages.following_page outputs/sweeps/following "
                      "outputs/sweeps/following-frustum outputs/sweeps/following-hide")
