@@ -7,8 +7,8 @@ Its data is the ``following`` stored result, made from the sweeps ``following.to
         outputs/sweeps/following-hide --out following.json
 
 and stored with ``results_store``; the phantom car ahead's table is the ``following-phantom`` stored
-result, made the same way from the sweep ``following-phantom.toml``, and the existence check's the
-``following-existence`` stored result, from the existence vote's sweeps (``EXISTENCE_COMMAND``). Per attack and defence: N, the collision-free rate with its
+result, made the same way from the sweep ``following-phantom.toml``, and the existence check's
+section reads the defences' ``racf-6`` cards (``scorecard-racf-6``, ``RACF6_COMMAND``). Per attack and defence: N, the collision-free rate with its
 Wilson interval, the smallest time-to-collision (median and bootstrap interval), the share of
 episodes with any time under the minimum headway, hard brakes, and the collision-free rate per
 lead profile.
@@ -31,13 +31,8 @@ __all__ = ["summarise", "following_markdown", "FOLLOWING_COMMAND", "main"]
 
 PHANTOM_COMMAND = ("racf sweep following-phantom.toml; python -m racf.experiments.pages.following_page "
                    "outputs/sweeps/following-phantom")
-EXISTENCE_COMMAND = ("racf sweep following-phantom.toml --estimator vote --out outputs/sweeps/vote-phantom; "
-                     "racf sweep following-phantom.toml --estimator vote --estimator-option vote.inner=ekf "
-                     "--out outputs/sweeps/vote-ekf-phantom; racf sweep following.toml --estimator vote "
-                     "--out outputs/sweeps/vote-following; racf sweep following-frustum.toml --estimator vote "
-                     "--out outputs/sweeps/vote-frustum; python -m racf.experiments.pages.following_page "
-                     "outputs/sweeps/vote-phantom outputs/sweeps/vote-ekf-phantom outputs/sweeps/vote-following "
-                     "outputs/sweeps/vote-frustum")
+#: The battery of the car ahead, every built-in defence that follows a moving target carded on it.
+RACF6_COMMAND = "racf scorecard --defence raw odca ekf chronos vote --battery racf-6 --json"
 FOLLOWING_COMMAND = ("racf sweep following.toml; racf sweep following-frustum.toml; racf sweep following-hide.toml; "
                      "python -m racf.experiments.pages.following_page outputs/sweeps/following "
                      "outputs/sweeps/following-frustum outputs/sweeps/following-hide")
@@ -173,32 +168,41 @@ def _phantom_lines(root: Path) -> list[str]:
 
 
 def _existence_lines(root: Path) -> list[str]:
-    """The existence check's section, from the ``following-existence`` stored result."""
+    """The existence check's section: each defence's ``racf-6`` card (the ``scorecard-racf-6`` stored
+    result), clean and under the phantom."""
     lines = ["", "## The existence check of the car ahead", "",
              "The existence vote (`vote`) reads the car's check of whether the box ahead is a car or a picture of one "
              "(`racf.controllers.lead_existence`: something upright must stand on the lane at the box's distance; "
              "[the tutorial](../tutorials/following.md) says how it decides). While the box is taken for a picture "
-             "it follows what stands there; otherwise its inner defence's distance (ODCA, or the EKF with "
-             "`vote.inner=ekf`). The same episodes as above, the vote's own rows:", ""]
-    path = root / "following-existence.json"
+             "it follows what stands there; otherwise its inner defence's distance (ODCA). Battery `racf-6` rates "
+             "every defence that follows a moving target on the same episodes as the tables above "
+             "([the leaderboard](leaderboard.md) has every row); here, the phantom and the frustum spoof that "
+             "moves both range sensors, the check's two hard cases:", ""]
+    path = root / "scorecard-racf-6.json"
     if not path.exists():
-        return lines + missing("following-existence", EXISTENCE_COMMAND)
+        return lines + missing("scorecard-racf-6", RACF6_COMMAND)
     data = json.loads(path.read_text())
     lines += meta_lines(data["meta"])
-    lines += ["| attack | defence | N | collision-free [95 % CI] | any needless hard brake [95 % CI] | "
-              "hard brakes, median |", "|---|---|---|---|---|---|"]
-    for r in sorted(data["rows"].values(), key=_order):
-        needless, cf = r["needless_hard_brake"], r["collision_free"]
-        lines.append(f"| {ATTACK_LABELS.get(r['attack'], r['attack'])} | {r['estimator']} | {r['n']} | "
-                     f"{rate(cf['rate'], cf['ci'])} | {rate(needless['rate'], needless['ci'])} | "
-                     f"{r['hard_brakes_median']:g} |")
+    keys = ("following_clean", "following_phantom", "following_frustum_depth")
+    lines += ["| defence | " + " | ".join(f"{k.removeprefix('following_').replace('_', ' ')}: {m}" for k in keys
+                                         for m in ("collision-free", "needless hard brake")) + " |",
+              "|---|" + "---|" * (2 * len(keys))]
+    for card in sorted(data["cards"], key=lambda c: _order({"attack": "", "estimator": c["defence"]})):
+        cells = []
+        for key in keys:
+            r = card["closed_loop"].get(key)
+            cells += ["—", "—"] if r is None else [rate(r["collision_free"], r["collision_free_ci"]),
+                                                   rate(r["needless_hard_brake"], r["needless_hard_brake_ci"])]
+        lines.append(f"| {card['defence']} | " + " | ".join(cells) + " |")
+    n = {card["closed_loop"][k]["n_following"] for card in data["cards"] for k in keys if k in card["closed_loop"]}
+    lines += ["", f"N per cell: {', '.join(str(v) for v in sorted(n))} (15 seeds x the lead's four profiles)."]
     return lines
 
 
 #: The table's order: attacks by strength, raw first then the defences.
 _ATTACKS = ("clean", "clean+lead_patch", "clean+lead_frustum", "clean+lead_frustum[depth]", "clean+lead_hide",
             "clean+lead_phantom")
-_DEFENCES = ("raw", "odca", "ekf", "chronos")
+_DEFENCES = ("raw", "odca", "ekf", "chronos", "vote")
 
 
 def _order(row: dict) -> tuple:

@@ -2,6 +2,10 @@
 defence is rated on. A battery never changes once released: a change is a new name
 (``racf-2``), so two cards of one battery always rate the same thing.
 
+``racf-6`` rates following a car ahead (issue 59): the ``lead_vehicle`` scenario in its four
+profiles, clean and under each attack on the car ahead, by the collision-free rate and needless
+hard brakes.
+
 ``racf-link`` rates a defence served offboard, as the paper ran it, with its link attacked: delayed,
 lost, spoofed, on a plain and on a CurveZMQ link (issue 58).
 
@@ -271,6 +275,47 @@ _RACF_5 = Battery(
     offline_presets=(),
 )
 
+#: The lead's four profiles (``lead_vehicle``), each in a quarter of a following row's episodes.
+LEAD_PROFILES = ("cruise", "slow_down", "hard_brake", "stop_and_go")
+
+
+def _following(attack: str, params: dict | None = None) -> Callable[[str, int], list[TrialSpec]]:
+    """Following episodes (the ``lead_vehicle`` scenario on sign 1's approach at 1 m/s, the lead braking
+    at 3 s), paired over defences: ``n // 4`` seeds at each of the lead's profiles, the attack from 2 s
+    for 6 s (the sweeps ``following*.toml``'s grid)."""
+    def make(defence: str, n: int) -> list[TrialSpec]:
+        space = {"attack": [attack], "estimator": [defence], "rho": [0.95], "t_atk": [6.0], "speed": [1.0], "sign": [1]}
+        spec = SweepSpec(f"following-{attack}", mode="grid", repeats=max(1, n // len(LEAD_PROFILES)), seed=0,
+                         space=space, params=params or {}, log_steps=True, detector=_CAR, target="lead_vehicle",
+                         scenario={"lead_vehicle": {"profile": list(LEAD_PROFILES)}})
+        return spec.episodes()
+    return make
+
+
+#: ``racf-6``: the car ahead (issue 59). Following a second QCar 2 in the car's lane through its four
+#: profiles, clean and under each attack on the car ahead from 2 s (before it brakes) for 6 s: the
+#: patch reading its depth 1 m far, the frustum spoof moving the LiDAR's returns from it 1 m away
+#: (alone, and with the depth), the lead hidden from camera and LiDAR, and a phantom car 0.5 m
+#: ahead in the camera alone. Rated by the collision-free rate and needless hard brakes (no SCR:
+#: the lead stops on the sign's line, and the car behind it).
+_RACF_6 = Battery(
+    name="racf-6",
+    loop=(
+        LoopRow("following_clean", "following the car ahead, clean", 60, 4, _following("none"), attacked=False),
+        LoopRow("following_patch", "the lead's depth read 1 m far (patch on its rear)", 60, 4, _following("lead_patch")),
+        LoopRow("following_frustum", "the LiDAR's returns from the lead moved 1 m away (frustum spoof)", 60, 4,
+                _following("lead_frustum")),
+        LoopRow("following_frustum_depth", "the frustum spoof with the depth moved too (the range sensors agree)", 60, 4,
+                _following("lead_frustum", {"lead_frustum": {"depth": [True]}})),
+        LoopRow("following_hide", "the lead hidden from camera and LiDAR", 60, 4, _following("lead_hide")),
+        LoopRow("following_phantom", "a phantom car 0.5 m ahead, camera only (needless hard brakes)", 60, 4,
+                _following("lead_phantom")),
+    ),
+    drives=(),
+    offline_presets=(),
+)
+
+
 #: The paper's offboard loop: the control step at 20 Hz, the defence in a ``racf serve`` process
 #: ("approximately 49 ms per frame (~20 Hz)"); the endpoint the card fills in for each row's link.
 PAPER_LOOP_HZ = 20.0
@@ -310,5 +355,5 @@ _RACF_LINK = Battery(
 
 #: Every released battery, by name.
 BATTERIES = {"racf-1": _RACF_1, "racf-2": _RACF_2, "racf-3": _RACF_3, "racf-4": _RACF_4, "racf-5": _RACF_5,
-             "racf-link": _RACF_LINK}
+             "racf-link": _RACF_LINK, "racf-6": _RACF_6}
 DEFAULT_BATTERY = "racf-4"

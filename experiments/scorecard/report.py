@@ -52,8 +52,13 @@ def card_rows(card: dict) -> list[tuple[str, str, str, float | None, list | None
     battery = BATTERIES.get(card["battery"].removesuffix("-quick"))
     order = [r.key for r in battery.rows()] if battery else []
     for key, r in sorted(card["closed_loop"].items(), key=lambda kv: order.index(kv[0]) if kv[0] in order else 99):
-        if r.get("scr") is not None or "n_needless" not in r:  # no SCR where no sign stands (needless stops)
-            rows.append(("closed loop", r["title"], "SCR", r["scr"], r["scr_ci"], r["n"], True))
+        if r.get("scr") is not None or not ("n_needless" in r or "n_following" in r):  # no SCR where no sign
+            rows.append(("closed loop", r["title"], "SCR", r["scr"], r["scr_ci"], r["n"], True))  # is the target
+        if r.get("n_following"):  # the car ahead: collisions and needless hard brakes
+            rows.append(("closed loop", r["title"], "collision-free", r["collision_free"], r["collision_free_ci"],
+                         r["n_following"], True))
+            rows.append(("closed loop", r["title"], "needless hard brake", r["needless_hard_brake"],
+                         r["needless_hard_brake_ci"], r["n_following"], False))
         if r.get("n_attack_before_t_star"):
             rows.append(("closed loop", r["title"], "SCR, attack before t*", r["scr_attack_before_t_star"],
                          r["scr_attack_before_t_star_ci"], r["n_attack_before_t_star"], True))

@@ -89,10 +89,9 @@ def test_the_phantom_s_section_counts_episodes_with_a_needless_hard_brake(tmp_pa
     assert page.index("| none | raw | 1 | 0.00 [") < page.index("| a phantom car")  # clean first
 
 
-def test_the_existence_section_shows_each_vote_by_its_options_and_says_how_to_make_it(tmp_path):
+def test_a_defence_run_with_options_is_its_own_row(tmp_path):
     from racf.experiments.sweeps.spec import parse_spec
 
-    assert "Not stored yet (`following-existence`)" in following_markdown(tmp_path)
     text = (Path(__file__).resolve().parents[3] / "experiments/sweeps/specs/following-phantom.toml").read_text()
     text = text.replace('estimator = ["raw", "odca", "ekf", "chronos"]', 'estimator = ["vote"]')
     text += '\n[estimators.vote]\ninner = "ekf"\n'
@@ -101,8 +100,20 @@ def test_the_existence_section_shows_each_vote_by_its_options_and_says_how_to_ma
     sweep(tmp_path / "s", [{**row(e.setting, "vote", "cruise", True), "trial_id": e.trial_id,
                             "needless_hard_brakes": k % 2} for k, e in enumerate(episodes[:4])])
     (tmp_path / "s" / "spec.toml").write_text(text)
-    data = summarise([tmp_path / "s"])
-    assert list(data["rows"]) == ["clean+lead_phantom|vote (inner=ekf)"]
-    data["meta"] = {"command": "racf sweep", "commit": "abc", "racf": "0.1.0", "machine": "m", "measured": "2026-11-27"}
-    (tmp_path / "following-existence.json").write_text(json.dumps(data))
-    assert "| a phantom car 0.5 m ahead (camera only) | vote (inner=ekf) | 4 | 1.00 [" in following_markdown(tmp_path)
+    assert list(summarise([tmp_path / "s"])["rows"]) == ["clean+lead_phantom|vote (inner=ekf)"]
+
+
+def test_the_existence_section_sets_each_defence_s_racf_6_card_side_by_side(tmp_path):
+    assert "Not stored yet (`scorecard-racf-6`)" in following_markdown(tmp_path)
+
+    def card(defence, free, needless):
+        cell = {"n_following": 60, "collision_free": free, "collision_free_ci": [free - 0.1, 1.0],
+                "needless_hard_brake": needless, "needless_hard_brake_ci": [0.0, needless + 0.1]}
+        return {"defence": defence, "closed_loop": {"following_clean": cell, "following_phantom": cell}}
+
+    meta = {"command": "racf scorecard", "commit": "abc", "racf": "0.1.0", "machine": "m", "measured": "2026-11-27"}
+    (tmp_path / "scorecard-racf-6.json").write_text(json.dumps({"meta": meta, "cards": [card("vote", 1.0, 0.05),
+                                                                                        card("raw", 0.9, 0.2)]}))
+    page = following_markdown(tmp_path)
+    assert "| raw | 0.90 [" in page and page.index("| raw |") < page.index("| vote | 1.00 [")
+    assert "| — | — |" in page and "N per cell: 60" in page  # no frustum-with-depth row stored: a dash

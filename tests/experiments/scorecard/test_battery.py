@@ -49,3 +49,38 @@ def test_a_battery_in_a_scenario_is_named_with_its_parameters_and_stored_apart()
     paths = {_card_path(Path("out"), b.name, "raw") for b in (removed, phantom)}
     assert len(paths) == 2 and Path("out/cards/racf-4@stale_map_case=removed_shift_m=1.0/raw.json") in paths
     assert BATTERIES["racf-4"].in_scenario("sign").name == "racf-4@sign"
+
+
+def test_racf_6_follows_the_car_ahead_through_its_profiles_paired_over_defences():
+    six = BATTERIES["racf-6"]
+    assert [r.key for r in six.rows()] == ["following_clean", "following_patch", "following_frustum",
+                                          "following_frustum_depth", "following_hide", "following_phantom"]
+    for row in six.rows():
+        specs = row.specs("odca")
+        assert len(specs) == 60 and {s.target for s in specs} == {"lead_vehicle"}
+        profiles = [s.scenario_params["profile"] for s in specs]
+        assert {profiles.count(p) for p in ("cruise", "slow_down", "hard_brake", "stop_and_go")} == {15}
+        # The same episodes for every defence: only the defence differs.
+        assert [(s.seed, s.scenario_params) for s in row.specs("raw")] == [(s.seed, s.scenario_params) for s in specs]
+    depth = next(r for r in six.loop if r.key == "following_frustum_depth").specs("odca")[0]
+    assert depth.attack_params == {"lead_frustum": {"depth": True}}
+    assert not six.rows()[0].attacked and six.rows()[0].specs("odca")[0].setting == "clean+odca"
+    assert six.offline_presets == () and six.drives == ()
+
+
+def test_a_following_row_is_rated_by_collisions_and_needless_hard_brakes_not_by_scr():
+    import pandas as pd
+
+    from racf.experiments.scorecard.card import _following_summary
+    from racf.experiments.scorecard.report import card_rows
+
+    frame = pd.DataFrame({"no_lead_collision": [True, True, True, False, None], "needless_hard_brakes": [0, 2, 0, 1, 3]})
+    summary = {"scr": None, "scr_ci": [None, None]} | _following_summary(frame)
+    assert summary["n_following"] == 4  # an episode the criterion does not apply to is left out
+    assert summary["collision_free"] == 0.75 and summary["needless_hard_brake"] == 0.5
+    assert summary["collision_free_ci"][0] < 0.75 < summary["collision_free_ci"][1]
+    card = {"battery": "racf-6", "closed_loop": {"following_phantom": {"title": "t", "n": 4, **summary}}, "drives": {},
+            "cost": {"parameters": {"from": "none", "trainable": 0}}}
+    measures = {m: (v, n) for _, _, m, v, _, n, _ in card_rows(card)}
+    assert "SCR" not in measures and measures["collision-free"] == (0.75, 4)
+    assert measures["needless hard brake"] == (0.5, 4)
