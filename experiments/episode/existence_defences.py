@@ -22,7 +22,6 @@ Detector-only (what every defence did before) is any defence without ``existence
 from __future__ import annotations
 
 import math
-from dataclasses import replace
 
 from racf.controllers import PerceptionSample
 from racf.controllers.existence import NO_WITNESSES, ExistenceWitnesses, vote
