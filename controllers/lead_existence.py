@@ -7,20 +7,22 @@ sensors nothing there: the depth and the LiDAR see the road and what stands behi
 
 A box the depth does not hold up is not proof of a picture on its own: the depth may be the one
 attacked (a patch that reads the car far, Cheng et al., ECCV 2022), and then the box is the honest
-witness. Two things tell the two apart, and the check asks for one of them:
-- the LiDAR's track agrees with the nearest upright thing in the box, not with the box's size;
+witness. What moved tells the two apart. The check takes the box for a picture when:
+- the depth sees nothing upright on the lane in the box at all, only the floor; or
 - the box was held up a moment ago, and since then it has moved further than what stands on the
   lane in it: the box left the car, not the car the box (a car does not appear out of nowhere in
   front of another; a picture does).
-What moved decides the other way too: where the box stayed (as far as a car can move) and what
-stood in it did not (a depth read far, the frustum attack moving the depth and the LiDAR
-together), the range sensors are the ones attacked, and the check catches no picture for the rest
-of the episode.
-At a first sight with no held-up box before it, the LiDAR siding with the depth against the box
-is taken for a picture: the frustum attack on both range sensors, begun before the car first saw
-the car ahead, looks the same, and there the check errs.
-Once caught, the picture is remembered until the check is reset (a new episode): any later box the depth does
-not hold up is taken for one, as an attacker still projecting would make it.
+Where the box stayed (as far as a car can move) and what stood in it did not (a depth read far,
+the frustum attack moving the depth and the LiDAR together), the range sensors are the ones
+attacked, and the check catches no picture for the rest of the episode. The LiDAR is no second
+witness here: its tracker picks its cluster near the depth it is given, so at a first sight it
+sides with whatever the depth reads, attacked or not. A picture that stands over a car from the
+first frame the car sees it is therefore not caught: the check errs towards braking for nothing,
+never towards driving into a car.
+
+Once caught, the picture is remembered while no box is held up (a box at the image's edge, whose
+size cannot be measured, is still the picture); a held-up box ends it, and a next picture must be
+caught again. The check forgets everything when the car ahead is lost from sight.
 """
 
 from __future__ import annotations
@@ -61,7 +63,7 @@ class LeadExistenceConfig:
     lane_half_width_m: float = 0.15
     support_tol: float = 0.15
     support_abs_m: float = 0.05
-    min_support: float = 0.25
+    min_support: float = 0.15
     min_pixels: int = 20
     closing_mps: float = 3.0
     jump_margin_m: float = 0.15
@@ -93,7 +95,7 @@ class LeadEvidence:
         nearest_m: the nearest upright thing on the lane in the box, m (NaN: none seen).
         picture: the box is taken for a picture: its size is no witness, and the distance is
             ``nearest_m``'s.
-        caught: a picture was caught (latched until :meth:`LeadExistenceCheck.reset`).
+        caught: a picture was caught, and no box has been held up since.
     """
 
     support: float
@@ -162,11 +164,10 @@ class LeadExistenceCheck:
         self._moved = False
         self._held: tuple[float, float, float] | None = None  # (t, nearest, size) of the last held-up box
 
-    def update(self, depth: np.ndarray, detection: Detection | None, size_m: float, lidar_m: float,
-               lane: np.ndarray, t_s: float) -> LeadEvidence:
+    def update(self, depth: np.ndarray, detection: Detection | None, size_m: float, lane: np.ndarray,
+               t_s: float) -> LeadEvidence:
         """One new frame: ``depth`` (H, W) m, the lead's ``detection`` and its size witness ``size_m``,
-        the LiDAR track's distance ``lidar_m`` (NaN: none), the lane's centre ahead ((N, 2) z, y in
-        the camera's frame), at ``t_s`` s."""
+        the lane's centre ahead ((N, 2) z, y in the camera's frame), at ``t_s`` s."""
         c = self.config
         if detection is None:
             self.last = LeadEvidence(math.nan, math.nan, False, self._caught)
@@ -187,18 +188,20 @@ class LeadExistenceCheck:
         if unsupported and boxed is True and stood is False:
             self._moved = True  # what stood in the box moved away from it: the range sensors are attacked
         elif unsupported and stood is not None and boxed is not None:
-            # The box moved further from where it was than what stands there did: it left the car.
-            jumped = abs(size_m - self._held[2]) > abs(nearest - self._held[1])
-        lidar_sides = (math.isfinite(lidar_m) and math.isfinite(nearest) and abs(lidar_m - nearest) <= c.tolerance(nearest)
-                       and not abs(lidar_m - size_m) <= c.tolerance(size_m))
+            # The box moved further from where it was than what stands there did (by more than the size's
+            # own noise, a row or two of the box): it left the car.
+            jumped = abs(size_m - self._held[2]) - abs(nearest - self._held[1]) > c.jump_margin_m
         bare = support == 0.0 and not len(standing)  # the depth sees the bare floor where the box stands
-        if unsupported and not self._moved and (jumped or lidar_sides or bare):
+        if unsupported and not self._moved and (jumped or bare):
             self._caught = True
-        # Once a picture was caught, a box the depth does not hold up (or cannot judge) is taken for one,
-        # unless what stands on the lane in it is nearer than it says (then the box errs safe).
-        picture = self._caught and not support >= c.min_support and not nearest <= size_m
-        if support >= c.min_support and math.isfinite(nearest):
-            self._held = (t_s, nearest, size_m)
+        held_up = support >= c.min_support
+        if held_up:
+            self._caught = False  # the picture has gone: a next one must be caught again
+            if math.isfinite(nearest):
+                self._held = (t_s, nearest, size_m)
+        # Once caught, a box the depth does not hold up (or cannot judge) is taken for the picture until a
+        # box is held up again, unless what stands on the lane in it is nearer than it says (it errs safe).
+        picture = self._caught and not held_up and not nearest <= size_m
         self.last = LeadEvidence(support, nearest, picture, self._caught)
         return self.last
 

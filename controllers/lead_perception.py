@@ -62,6 +62,10 @@ class LeadPerception(Perception):
 
     def reset(self) -> None:
         super().reset()
+        self.lose()
+
+    def lose(self) -> None:
+        """The car ahead is lost (out of sight): the existence check starts afresh with the next one."""
         if self.existence is not None:
             self.existence.reset()
 
@@ -76,8 +80,7 @@ class LeadPerception(Perception):
         if self.existence is None:
             return sample
         if new_frame:
-            self.existence.update(np.asarray(depth), sample.detection, sample.d_size, sample.lidar_m, self._lane,
-                                 self._clock_s)
+            self.existence.update(np.asarray(depth), sample.detection, sample.d_size, self._lane, self._clock_s)
         evidence = self.existence.last if sample.detected else NO_EVIDENCE
         return replace(sample, witnesses=evidence)
 

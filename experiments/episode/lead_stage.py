@@ -98,6 +98,7 @@ class LeadStage:
             if not self._lost:  # lost just now: what the car knew of this lead is of no use for the next
                 self.estimator.reset()
                 self.speed.reset()
+                self.perception.lose()
                 self._lost = True
             d = math.nan
         else:

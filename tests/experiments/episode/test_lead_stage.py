@@ -20,10 +20,13 @@ class Seen:
     """A perception that reports a given sample and remembers what it was asked."""
 
     def __init__(self, sample):
-        self.sample, self.asked = sample, []
+        self.sample, self.asked, self.lost = sample, [], 0
 
     def reset(self):
         pass
+
+    def lose(self):
+        self.lost += 1
 
     def process(self, rgb, depth, scan, **kwargs):
         self.asked.append(kwargs)
@@ -82,3 +85,4 @@ def test_a_lead_unseen_too_long_is_lost_and_the_defence_starts_again():
     lost = step(s)
     assert math.isnan(lost.d_fused) and lost.decision.speed_cap_mps == math.inf and s.estimator.resets == 1
     assert step(s).decision.speed_cap_mps == math.inf and s.estimator.resets == 1  # reset once, when lost
+    assert s.perception.lost == 1  # and the existence check forgets this lead
