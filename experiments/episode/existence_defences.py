@@ -118,9 +118,19 @@ class _WithSecondDetector(_Existence):
 
 
 class ExistenceVote(_WithSecondDetector):
-    """RACF's vote: a physical witness (depth, LiDAR) and a semantic one (either detector, the map)."""
+    """RACF's vote: a physical witness (depth, LiDAR) and a semantic one (either detector, the map).
+
+    ``lead_check``: whether the vote acts on the car ahead's existence check (a box taken for a picture
+    of a car is no witness). Off by default: on battery ``racf-6`` it cut needless hard brakes under a
+    phantom car but cost collisions under the patch and the frustum spoof with the depth (the stored
+    result ``racf-6-vote-lead-check``), and a defence that adds collisions is worse than none.
+    """
 
     name = "vote"
+
+    def __init__(self, inner: str = "odca", second_detector: str = "learned", lead_check: bool = False) -> None:
+        super().__init__(inner, second_detector)
+        self.lead_check = bool(lead_check)
 
     def verdict(self, witnesses: ExistenceWitnesses) -> bool:
         return vote(witnesses)
@@ -136,13 +146,13 @@ class ExistenceVote(_WithSecondDetector):
         return witnesses.mapped and witnesses.moving  # the inner defence reads the depth that was caught
 
     def lead_estimate(self, sample: PerceptionSample, closing_mps: float, dt: float, yaw_rate_radps: float) -> float:
-        """The inner defence's distance, unless the box is taken for a picture of a car. Then the box is
-        no witness (the inner defence reads its size and the depth in its mask): the distance is the
+        """The inner defence's distance, unless ``lead_check`` is on and the box is taken for a picture of
+        a car. Then the box is no witness (the inner defence reads its size and the depth in its mask): the distance is the
         nearer of the LiDAR's track and the nearest upright thing on the lane in the box, else the
         last distance carried by the closing speed. The inner defence does not read the picture, and
         starts afresh when it goes (what it carried from before it is stale)."""
         evidence = sample.witnesses
-        if evidence.picture:
+        if evidence.picture and self.lead_check:
             self._in_picture = True
             seen = [v for v in (sample.lidar_m, evidence.nearest_m) if math.isfinite(v)]
             d = min(seen) if seen else self._lead_carried - closing_mps * dt

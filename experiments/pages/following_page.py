@@ -167,35 +167,49 @@ def _phantom_lines(root: Path) -> list[str]:
                     "says; the existence vote does (next section)."]
 
 
+#: The vote with the car ahead's existence check on, carded on racf-6 where that was its default.
+LEAD_CHECK_RESULT = "racf-6-vote-lead-check"
+
+
 def _existence_lines(root: Path) -> list[str]:
-    """The existence check's section: each defence's ``racf-6`` card (the ``scorecard-racf-6`` stored
-    result), clean and under the phantom."""
+    """The existence check's section: the vote with the check on (``racf-6-vote-lead-check``) beside each
+    defence's ``racf-6`` card (``scorecard-racf-6``), clean, under the phantom and under the frustum
+    spoof that moves both range sensors."""
     lines = ["", "## The existence check of the car ahead", "",
-             "The existence vote (`vote`) reads the car's check of whether the box ahead is a car or a picture of one "
-             "(`racf.controllers.lead_existence`: something upright must stand on the lane at the box's distance; "
-             "[the tutorial](../tutorials/following.md) says how it decides). While the box is taken for a picture "
-             "it follows what stands there; otherwise its inner defence's distance (ODCA). Battery `racf-6` rates "
-             "every defence that follows a moving target on the same episodes as the tables above "
-             "([the leaderboard](leaderboard.md) has every row); here, the phantom and the frustum spoof that "
-             "moves both range sensors, the check's two hard cases:", ""]
-    path = root / "scorecard-racf-6.json"
-    if not path.exists():
-        return lines + missing("scorecard-racf-6", RACF6_COMMAND)
-    data = json.loads(path.read_text())
-    lines += meta_lines(data["meta"])
-    keys = ("following_clean", "following_phantom", "following_frustum_depth")
-    lines += ["| defence | " + " | ".join(f"{k.removeprefix('following_').replace('_', ' ')}: {m}" for k in keys
-                                         for m in ("collision-free", "needless hard brake")) + " |",
-              "|---|" + "---|" * (2 * len(keys))]
-    for card in sorted(data["cards"], key=lambda c: _order({"attack": "", "estimator": c["defence"]})):
+             "The car checks whether the box ahead is a car or a picture of one (`racf.controllers.lead_existence`: "
+             "something upright must stand on the lane at the box's distance; [the tutorial](../tutorials/following.md) "
+             "says how it decides which of the box and the depth lies). The existence vote acts on it with "
+             "`--estimator-option vote.lead_check=true`: while the box is taken for a picture it follows what stands "
+             "there. Battery `racf-6` rates the defences on the same episodes as the tables above "
+             "([the leaderboard](leaderboard.md) has every row). Collision-free and any needless hard brake, "
+             "[95 % CI]:", ""]
+    cards, metas = [], []
+    for name, label in ((LEAD_CHECK_RESULT, "vote (lead_check=true)"), ("scorecard-racf-6", None)):
+        path = root / f"{name}.json"
+        if not path.exists():
+            lines += missing(name, RACF6_COMMAND if label is None else RACF6_COMMAND.replace(
+                "--defence raw odca ekf chronos vote", "--defence vote --estimator-option vote.lead_check=true"))
+            continue
+        data = json.loads(path.read_text())
+        metas.append((name, data["meta"]))
+        cards += [(label or c["defence"], c) for c in data["cards"]]
+    if not cards:
+        return lines
+    for name, meta in metas:
+        lines += [f"`{name}`:"] + meta_lines(meta)
+    keys = ("following_clean", "following_phantom", "following_frustum_depth", "following_patch")
+    lines += ["| defence | " + " | ".join(k.removeprefix("following_").replace("_", " ") for k in keys) + " |",
+              "|---|" + "---|" * len(keys)]
+    for label, card in sorted(cards, key=lambda lc: _order({"attack": "", "estimator": lc[0]})):
         cells = []
         for key in keys:
             r = card["closed_loop"].get(key)
-            cells += ["—", "—"] if r is None else [rate(r["collision_free"], r["collision_free_ci"]),
-                                                   rate(r["needless_hard_brake"], r["needless_hard_brake_ci"])]
-        lines.append(f"| {card['defence']} | " + " | ".join(cells) + " |")
-    n = {card["closed_loop"][k]["n_following"] for card in data["cards"] for k in keys if k in card["closed_loop"]}
-    lines += ["", f"N per cell: {', '.join(str(v) for v in sorted(n))} (15 seeds x the lead's four profiles)."]
+            cells.append("—" if r is None else f"{rate(r['collision_free'], r['collision_free_ci'])}; "
+                                                f"{rate(r['needless_hard_brake'], r['needless_hard_brake_ci'])}")
+        lines.append(f"| {label} | " + " | ".join(cells) + " |")
+    n = {card["closed_loop"][k]["n_following"] for _, card in cards for k in keys if k in card["closed_loop"]}
+    lines += ["", f"N per cell: {', '.join(str(v) for v in sorted(n))} (15 seeds x the lead's four profiles). Each "
+              "cell: collision-free; any needless hard brake."]
     return lines
 
 

@@ -90,7 +90,9 @@ class _Inner:
 def test_the_vote_follows_what_stands_on_the_lane_while_the_car_ahead_s_box_is_a_picture():
     from racf.controllers.lead_existence import LeadEvidence
 
-    vote = _ready(ExistenceVote(inner="raw"))
+    off = _ready(ExistenceVote(inner="raw"))  # by default the vote leaves the car ahead to its inner defence
+    assert off.estimate(_lead(LeadEvidence(0.0, 1.6, True, True), d_meas=0.9, size=0.5), 0.5, 0.02) == 0.9
+    vote = _ready(ExistenceVote(inner="raw", lead_check=True))
     vote.inner = inner = _Inner()
     held = LeadEvidence(0.9, 1.6, False, False)
     assert vote.estimate(_lead(held, d_meas=1.6), 0.5, 0.02) == 1.6 and vote.stands() is None

@@ -103,8 +103,9 @@ def test_a_defence_run_with_options_is_its_own_row(tmp_path):
     assert list(summarise([tmp_path / "s"])["rows"]) == ["clean+lead_phantom|vote (inner=ekf)"]
 
 
-def test_the_existence_section_sets_each_defence_s_racf_6_card_side_by_side(tmp_path):
+def test_the_existence_section_sets_the_vote_with_the_check_beside_each_racf_6_card(tmp_path):
     assert "Not stored yet (`scorecard-racf-6`)" in following_markdown(tmp_path)
+    assert "Not stored yet (`racf-6-vote-lead-check`)" in following_markdown(tmp_path)
 
     def card(defence, free, needless):
         cell = {"n_following": 60, "collision_free": free, "collision_free_ci": [free - 0.1, 1.0],
@@ -112,8 +113,10 @@ def test_the_existence_section_sets_each_defence_s_racf_6_card_side_by_side(tmp_
         return {"defence": defence, "closed_loop": {"following_clean": cell, "following_phantom": cell}}
 
     meta = {"command": "racf scorecard", "commit": "abc", "racf": "0.1.0", "machine": "m", "measured": "2026-11-27"}
-    (tmp_path / "scorecard-racf-6.json").write_text(json.dumps({"meta": meta, "cards": [card("vote", 1.0, 0.05),
+    (tmp_path / "scorecard-racf-6.json").write_text(json.dumps({"meta": meta, "cards": [card("odca", 1.0, 0.1),
                                                                                         card("raw", 0.9, 0.2)]}))
+    (tmp_path / "racf-6-vote-lead-check.json").write_text(json.dumps({"meta": meta, "cards": [card("vote", 0.8, 0.05)]}))
     page = following_markdown(tmp_path)
-    assert "| raw | 0.90 [" in page and page.index("| raw |") < page.index("| vote | 1.00 [")
+    assert "| raw | 0.90 [" in page and page.index("| raw |") < page.index("| odca | 1.00 [")
+    assert "| vote (lead_check=true) | 0.80 [0.70, 1.00]; 0.05 [0.00, 0.15] |" in page
     assert "| — | — |" in page and "N per cell: 60" in page  # no frustum-with-depth row stored: a dash
