@@ -209,7 +209,11 @@ def _existence_lines(root: Path) -> list[str]:
         lines.append(f"| {label} | " + " | ".join(cells) + " |")
     n = {card["closed_loop"][k]["n_following"] for _, card in cards for k in keys if k in card["closed_loop"]}
     lines += ["", f"N per cell: {', '.join(str(v) for v in sorted(n))} (15 seeds x the lead's four profiles). Each "
-              "cell: collision-free; any needless hard brake."]
+              "cell: collision-free; any needless hard brake.", "",
+              "What it shows: with the check on, the vote no longer drives into the lead under the phantom and brakes "
+              "for it less often than ODCA, but the patch and the frustum spoof with the depth then cost it collisions "
+              "that ODCA alone avoids, which is why the check is off by default. The EKF, which brakes least for the "
+              "phantom, follows the attacks on the range sensors into the lead. No defence here holds both."]
     return lines
 
 
