@@ -59,13 +59,14 @@ def card_rows(card: dict) -> list[tuple[str, str, str, float | None, list | None
                          r["n_following"], True))
             rows.append(("closed loop", r["title"], "needless hard brake", r["needless_hard_brake"],
                          r["needless_hard_brake_ci"], r["n_following"], False))
-        if r.get("n_attack_before_t_star"):
+        following = bool(r.get("n_following"))  # the stop rule's measures say nothing of following a car
+        if r.get("n_attack_before_t_star") and not following:
             rows.append(("closed loop", r["title"], "SCR, attack before t*", r["scr_attack_before_t_star"],
                          r["scr_attack_before_t_star_ci"], r["n_attack_before_t_star"], True))
         if r.get("undetected_error_median") is not None:
             rows.append(("closed loop", r["title"], "undetected error m, median", r["undetected_error_median"],
                          r["undetected_error_ci"], r["n"], False))
-        if r.get("robustness_median_m") is not None:  # the stop rule's STL robustness (episode.robustness)
+        if r.get("robustness_median_m") is not None and not following:  # the stop rule's STL robustness
             rows.append(("closed loop", r["title"], "STL robustness m, median", r["robustness_median_m"],
                          r["robustness_ci"], r["n"], True))
         if r.get("n_traffic"):  # cross-traffic: what a missed stop cost

@@ -75,12 +75,15 @@ def test_a_following_row_is_rated_by_collisions_and_needless_hard_brakes_not_by_
     from racf.experiments.scorecard.report import card_rows
 
     frame = pd.DataFrame({"no_lead_collision": [True, True, True, False, None], "needless_hard_brakes": [0, 2, 0, 1, 3]})
-    summary = {"scr": None, "scr_ci": [None, None]} | _following_summary(frame)
+    summary = {"scr": None, "scr_ci": [None, None], "n_attack_before_t_star": 3, "scr_attack_before_t_star": 0.0,
+               "scr_attack_before_t_star_ci": [0.0, 0.5], "robustness_median_m": 1.0, "robustness_ci": [0.5, 2.0]}
+    summary |= _following_summary(frame)
     assert summary["n_following"] == 4  # an episode the criterion does not apply to is left out
     assert summary["collision_free"] == 0.75 and summary["needless_hard_brake"] == 0.5
     assert summary["collision_free_ci"][0] < 0.75 < summary["collision_free_ci"][1]
     card = {"battery": "racf-6", "closed_loop": {"following_phantom": {"title": "t", "n": 4, **summary}}, "drives": {},
             "cost": {"parameters": {"from": "none", "trainable": 0}}}
     measures = {m: (v, n) for _, _, m, v, _, n, _ in card_rows(card)}
-    assert "SCR" not in measures and measures["collision-free"] == (0.75, 4)
+    assert not {"SCR", "SCR, attack before t*", "STL robustness m, median"} & set(measures)  # the stop rule's
+    assert measures["collision-free"] == (0.75, 4)
     assert measures["needless hard brake"] == (0.5, 4)
