@@ -237,3 +237,19 @@ def test_a_box_that_jumped_where_nothing_it_held_stayed_does_not_block_a_later_c
     c.update(scene(1.6, wall_m=3.0), box_at(1.6), 1.6, LANE, 0.0)
     assert not c.update(scene(wall_m=3.0), box_at(0.5), 0.5, LANE, FRAME_S).caught
     assert c.update(scene(wall_m=6.0), box_at(0.5), 0.5, LANE, 2 * FRAME_S).caught  # then over the bare floor
+
+
+def test_after_the_depth_moved_away_from_a_box_even_a_bare_floor_is_no_picture():
+    # The patch on the depth, then the depth of the car's place wiped to the floor behind it: the range
+    # sensors were caught lying first, so the box is believed.
+    c = check()
+    c.update(scene(1.6, wall_m=6.0), box_at(1.6), 1.6, LANE, 0.0)
+    assert not c.update(scene(1.6, wall_m=6.0, bias_m=1.0), box_at(1.6), 1.6, LANE, FRAME_S).caught
+    assert not c.update(scene(wall_m=6.0), box_at(1.6), 1.6, LANE, 2 * FRAME_S).caught
+
+
+def test_a_size_that_moved_a_little_more_than_what_stands_is_not_a_jump():
+    c = check()
+    c.update(scene(0.34), box_at(0.34), 0.34, LANE, 0.0)
+    evidence = c.update(scene(0.34), box_at(0.34), 0.22, LANE, FRAME_S)  # 0.12 m nearer: under the margin
+    assert evidence.support == 0.0 and not evidence.caught
