@@ -130,7 +130,9 @@ def _free_port() -> int:
 
 
 def test_a_service_killed_and_restarted_mid_episode_gets_a_new_session(service):
-    """The first service stops answering after 60 requests; a new one listens on its port at once.
+    """The first service stops answering after 60 requests; a new one listens on its port 0.5 s later
+    (longer than the car's timeout, so that the car must fall back: restarted at once, the new
+    service could answer the car's next request in time on a fast machine, and the test would race).
     The car falls back (each fallback step waits no longer than its timeout), asks again after
     retry_s of its own time, opens a new session and is answered again."""
     import threading
@@ -142,7 +144,7 @@ def test_a_service_killed_and_restarted_mid_episode_gets_a_new_session(service):
 
     start_service("odca", stops, max_requests=60, endpoint=endpoint)
     first_stop, first = stops[0]
-    threading.Thread(target=lambda: (first.join(), start_service("odca", stops, endpoint=endpoint)),
+    threading.Thread(target=lambda: (first.join(), time.sleep(0.5), start_service("odca", stops, endpoint=endpoint)),
                      daemon=True).start()
     walls, last = [], [time.perf_counter()]
 
