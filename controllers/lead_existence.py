@@ -162,7 +162,7 @@ class LeadExistenceCheck:
         self.last = NO_EVIDENCE
         self._caught = False
         self._moved = False
-        self._held: tuple[float, float, float] | None = None  # (t, nearest, size) of the last held-up box
+        self._held: _HeldBox | None = None  # the last box the depth held up
 
     def update(self, depth: np.ndarray, detection: Detection | None, size_m: float, lane: np.ndarray,
                t_s: float) -> LeadEvidence:
@@ -183,14 +183,16 @@ class LeadExistenceCheck:
         # A box the depth does not hold up; without a verdict (no size, too little lane) it is not caught by.
         unsupported = support < c.min_support
         # Since the last held-up box (None: none to compare with), did what stands stay, and did the box?
-        stood, boxed = self._stayed(nearest, 1, t_s), self._stayed(size_m, 2, t_s)
+        held = self._held if self._held is not None and 0.0 <= t_s - self._held.t_s <= c.memory_s else None
+        stood = None if held is None else self._stayed(nearest, held.nearest_m, t_s - held.t_s)
+        boxed = None if held is None else self._stayed(size_m, held.size_m, t_s - held.t_s)
         jumped = False
         if unsupported and boxed is True and stood is False:
             self._moved = True  # what stood in the box moved away from it: the range sensors are attacked
         elif unsupported and stood is not None and boxed is not None:
             # The box moved further from where it was than what stands there did (by more than the size's
             # own noise, a row or two of the box): it left the car.
-            jumped = abs(size_m - self._held[2]) - abs(nearest - self._held[1]) > c.jump_margin_m
+            jumped = abs(size_m - held.size_m) - abs(nearest - held.nearest_m) > c.jump_margin_m
         bare = support == 0.0 and not len(standing)  # the depth sees the bare floor where the box stands
         if unsupported and not self._moved and (jumped or bare):
             self._caught = True
@@ -198,19 +200,25 @@ class LeadExistenceCheck:
         if held_up:
             self._caught = False  # the picture has gone: a next one must be caught again
             if math.isfinite(nearest):
-                self._held = (t_s, nearest, size_m)
+                self._held = _HeldBox(t_s, nearest, size_m)
         # Once caught, a box the depth does not hold up (or cannot judge) is taken for the picture until a
         # box is held up again, unless what stands on the lane in it is nearer than it says (it errs safe).
         picture = self._caught and not held_up and not nearest <= size_m
         self.last = LeadEvidence(support, nearest, picture, self._caught)
         return self.last
 
-    def _stayed(self, distance_m: float, which: int, t_s: float) -> bool | None:
-        """Whether ``distance_m`` (what stands on the lane: ``which`` 1; the box's size: 2) is where it was
-        in the last held-up box, as far as a car can have moved since (None: no held-up box within
-        ``memory_s``, or no distance now)."""
-        c = self.config
-        if self._held is None or not math.isfinite(distance_m) or not 0.0 <= t_s - self._held[0] <= c.memory_s:
+    def _stayed(self, distance_m: float, then_m: float, elapsed_s: float) -> bool | None:
+        """Whether ``distance_m`` is where it was (``then_m``) ``elapsed_s`` ago, as far as a car can have
+        moved since (None: no distance now)."""
+        if not math.isfinite(distance_m):
             return None
-        elapsed = t_s - self._held[0]
-        return bool(abs(distance_m - self._held[which]) <= c.jump_margin_m + c.closing_mps * elapsed)
+        return bool(abs(distance_m - then_m) <= self.config.jump_margin_m + self.config.closing_mps * elapsed_s)
+
+
+@dataclass(frozen=True)
+class _HeldBox:
+    """The last box the depth held up: when, what stood nearest in it and its size's distance."""
+
+    t_s: float
+    nearest_m: float
+    size_m: float

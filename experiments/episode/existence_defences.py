@@ -45,7 +45,6 @@ class _Existence:
         self._stands: bool | None = None
         self._witnesses = NO_WITNESSES
         self._carried = math.nan
-        self._lead_carried = math.nan
 
     @property
     def n_parameters(self) -> int:
@@ -65,7 +64,6 @@ class _Existence:
         self._stands = None
         self._witnesses = NO_WITNESSES
         self._carried = math.nan
-        self._lead_carried = math.nan
 
     def estimate(self, sample: PerceptionSample, speed_mps: float, dt: float, yaw_rate_radps: float = 0.0) -> float:
         if isinstance(sample.witnesses, LeadEvidence):  # the car ahead: no map lists it
@@ -131,6 +129,8 @@ class ExistenceVote(_WithSecondDetector):
     def __init__(self, inner: str = "odca", second_detector: str = "learned", lead_check: bool = False) -> None:
         super().__init__(inner, second_detector)
         self.lead_check = bool(lead_check)
+        self._in_picture = False  # the car ahead's box was a picture on the last step
+        self._lead_carried = math.nan
 
     def verdict(self, witnesses: ExistenceWitnesses) -> bool:
         return vote(witnesses)
@@ -167,8 +167,7 @@ class ExistenceVote(_WithSecondDetector):
     def reset(self) -> None:
         super().reset()
         self._in_picture = False
-
-    _in_picture = False
+        self._lead_carried = math.nan
 
 
 class DetectorsOr(_WithSecondDetector):
