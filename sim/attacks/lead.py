@@ -6,7 +6,10 @@ poses it, from the attacker's ground truth of where the lead stands:
 - ``lead_ramp``: the same bias grown at ``rate_mps`` (stealthy: each frame near the last);
 - ``lead_frustum``: the LiDAR's returns from the lead moved ``bias_m`` away along their beams
   (LiDAR spoofing and the frustum attack: Cao et al., CCS 2019; Hallyburton et al., USENIX
-  Security 2022); with ``depth`` the camera's depth moves with them, so the two agree;
+  Security 2022); with ``depth`` the camera's depth moves with them, so the two agree; with
+  ``scale_box`` the camera's picture of the lead too, drawn as small as it would look there, and
+  with ``rate_mps`` the move grows at that rate (the adaptive attack on ODCA: every witness, the
+  size and the relative motion included, tells the same story of a lead that drives away);
 - ``lead_hide``: the lead hidden from camera and LiDAR together, what MSF-ADV's object achieves
   (Cao et al., S&P 2021): its pixels painted over from their surroundings, no depth return
   there and no LiDAR return from it;
@@ -29,6 +32,7 @@ import gymnasium as gym
 import numpy as np
 
 from racf.sim.attacks.base import AttackWrapper
+from racf.sim.attacks.image_scale import scale_region
 from racf.sim.attacks.schedule import AttackSchedule, as_range
 
 __all__ = ["LeadPatch", "LeadRamp", "LeadFrustum", "LeadHide", "LeadPhantom", "lead_pixels", "lead_beams",
@@ -170,24 +174,62 @@ class LeadRamp(_LeadAttack):
 
 class LeadFrustum(_LeadAttack):
     """The LiDAR's returns from the lead moved ``bias_m`` away along their beams; with ``depth`` the
-    camera's depth of the lead moves with them (the frustum attack: the two agree)."""
+    camera's depth of the lead moves with them (the frustum attack: the two agree).
+
+    With ``scale_box`` the colour image's lead (and, with ``depth``, its depth) is redrawn as the
+    same car moved along the camera's rays to its spoofed distance: scaled by d / (d + bias) about
+    the principal point, its old pixels filled from around them, so the size witness agrees too.
+    With ``rate_mps`` > 0 the move grows at that rate from the attack's start up to ``bias_m``, as
+    a lead pulling away would, instead of jumping there: the relative motion agrees as well.
+    """
 
     name = "lead_frustum"
     drawn = ("bias_m", 0.0, 10.0)
 
-    def __init__(self, env: gym.Env, bias_m: Any = 1.0, depth: bool = False, **schedule: Any) -> None:
-        gym.utils.RecordConstructorArgs.__init__(self, bias_m=bias_m, depth=depth, **schedule)
-        if not isinstance(depth, bool):
-            raise ValueError(f"depth must be true or false, got {depth!r}")
-        self.with_depth = depth
+    def __init__(self, env: gym.Env, bias_m: Any = 1.0, depth: bool = False, scale_box: bool = False,
+                 rate_mps: float = 0.0, **schedule: Any) -> None:
+        gym.utils.RecordConstructorArgs.__init__(self, bias_m=bias_m, depth=depth, scale_box=scale_box,
+                                                 rate_mps=rate_mps, **schedule)
+        for flag, value in (("depth", depth), ("scale_box", scale_box)):
+            if not isinstance(value, bool):
+                raise ValueError(f"{flag} must be true or false, got {value!r}")
+        if not (isinstance(rate_mps, (int, float)) and 0.0 <= rate_mps <= 10.0):
+            raise ValueError(f"rate_mps must be in [0, 10] m/s (0: the whole move at once), got {rate_mps!r}")
+        self.with_depth, self.scale_box, self.rate_mps = depth, scale_box, float(rate_mps)
         super().__init__(env, bias_m, **schedule)
 
+    def bias(self, info: dict) -> float:
+        """The move now, m: all of ``bias_m`` at once, or grown at ``rate_mps`` since the attack began."""
+        if self.rate_mps == 0.0:
+            return self.drawn_value
+        return min(self.rate_mps * (float(info["time"]) - self.schedule.windows[-1][0]), self.drawn_value)
+
     def _attack(self, obs: dict, info: dict) -> dict:
+        bias = self.bias(info)
         scan = np.asarray(obs["lidar"]).copy()
         beams = lead_beams(self, info, scan)
-        scan[beams] += self.drawn_value
+        scan[beams] += bias
         obs["lidar"] = scan.astype(obs["lidar"].dtype)
-        return self._shift_depth(obs, info, self.drawn_value) if self.with_depth else obs
+        if not self.scale_box:
+            return self._shift_depth(obs, info, bias) if self.with_depth else obs
+        return self._redraw_farther(obs, info, bias)
+
+    def _redraw_farther(self, obs: dict, info: dict, bias: float) -> dict:
+        plane = np.asarray(obs["depth"])[..., 0]
+        where = lead_pixels(self, info, plane)
+        if where.sum() < 4 or bias <= 0.0:
+            return self._shift_depth(obs, info, bias) if self.with_depth else obs
+        d = float(np.median(plane[where]))
+        k = self.unwrapped.truth.intrinsics
+        factor, centre = d / (d + bias), (k.cx, k.cy)
+        obs["rgb"] = scale_region(np.ascontiguousarray(obs["rgb"]), where, factor, centre)
+        if self.with_depth:
+            moved = np.where(where, plane + bias, plane).astype(np.float32)
+            shifted = scale_region(moved, where, factor, centre)
+            depth = obs["depth"].copy()
+            depth[..., 0] = shifted.astype(depth.dtype)
+            obs["depth"] = depth
+        return obs
 
 
 class LeadHide(_LeadAttack):

@@ -78,3 +78,41 @@ def test_the_phantom_draws_a_nearer_car_in_the_colour_image_only():
     # A phantom further than the lead would stand behind it: nothing is drawn.
     _, behind, _, clean = attacked("clean+lead_phantom", distance_m=1.5)
     np.testing.assert_array_equal(behind["rgb"], clean["rgb"])
+
+
+def test_the_adaptive_frustum_moves_every_witness_the_picture_too_and_grows_at_its_rate():
+    from racf.controllers.vehicle_detector import LearnedVehicleDetector
+
+    env, obs, info, clean = attacked("clean+lead_frustum", bias_m=0.8, depth=True, scale_box=True)
+    plane, seen = clean["depth"][..., 0], obs["depth"][..., 0]
+    where = lead_pixels(env, info, plane)
+    d = float(np.median(plane[where]))
+    # The lead's depth in the picture reads d + 0.8, and there is less of it: (d / (d + 0.8))^2 the pixels.
+    moved = np.abs(seen - (plane + 0.8)) < 0.05
+    farther = np.abs(seen - (d + 0.8)) < 0.1
+    assert farther.sum() == pytest.approx(where.sum() * (d / (d + 0.8)) ** 2, rel=0.35)
+    assert not (moved & where).all()
+    detector = LearnedVehicleDetector()
+    real, spoofed = (max(detector.passing(img), key=lambda b: b.box[3] - b.box[1]) for img in (clean["rgb"], obs["rgb"]))
+    # Smaller by about d / (d + 0.8): the size says the lead is 0.8 m farther, as the depth and the LiDAR do.
+    ratio = (spoofed.box[3] - spoofed.box[1]) / (real.box[3] - real.box[1])
+    assert ratio == pytest.approx(d / (d + 0.8), abs=0.12)
+    beams = lead_beams(env, info, clean["lidar"])
+    np.testing.assert_allclose(obs["lidar"][beams] - clean["lidar"][beams], 0.8, atol=1e-4)
+    # With a rate the move grows from nothing at that rate, as the LiDAR reads it.
+    env, obs, info, _ = attacked("clean+lead_frustum", bias_m=0.8, depth=True, scale_box=True, rate_mps=1.0)
+    assert env.bias(info) == 0.0
+    t0 = float(info["time"])
+    for _ in range(5):
+        obs, *_, info = env.step(np.zeros(2, np.float32))
+    clean = env.unwrapped.sensor_observation()
+    assert env.bias(info) == pytest.approx(float(info["time"]) - t0, abs=1e-6) and env.bias(info) > 0.05
+    beams = lead_beams(env, info, clean["lidar"])
+    np.testing.assert_allclose(obs["lidar"][beams] - clean["lidar"][beams], env.bias(info), atol=1e-4)
+
+
+@pytest.mark.parametrize("params, message", [({"scale_box": 1}, "scale_box must be true or false"),
+                                             ({"rate_mps": -1.0}, r"rate_mps must be in \[0, 10\]")])
+def test_the_frustum_spoof_refuses_a_bad_option_in_one_line(params, message):
+    with pytest.raises(ValueError, match=message):
+        attacked("clean+lead_frustum", **params)
