@@ -29,6 +29,8 @@ from racf.stats import median_ci, wilson_interval
 
 __all__ = ["summarise", "following_markdown", "FOLLOWING_COMMAND", "main"]
 
+ADAPTIVE_COMMAND = ("racf sweep following-adaptive.toml; python -m racf.experiments.pages.following_page "
+                    "outputs/sweeps/following-adaptive")
 PHANTOM_COMMAND = ("racf sweep following-phantom.toml; python -m racf.experiments.pages.following_page "
                    "outputs/sweeps/following-phantom")
 #: The battery of the car ahead, every built-in defence that follows a moving target carded on it.
@@ -40,6 +42,8 @@ FOLLOWING_COMMAND = ("racf sweep following.toml; racf sweep following-frustum.to
 ATTACK_LABELS = {"clean": "none", "clean+lead_patch": "lead patch (depth read 1 m far)",
                  "clean+lead_frustum": "frustum spoof (LiDAR returns 1 m away)",
                  "clean+lead_frustum[depth]": "frustum spoof, depth moved too",
+                 "clean+lead_frustum[adaptive]": "adaptive frustum spoof: depth, LiDAR and picture moved away at "
+                                                 "0.5 m/s up to 2 m",
                  "clean+lead_hide": "the lead hidden from camera and LiDAR",
                  "clean+lead_phantom": "a phantom car 0.5 m ahead (camera only)"}
 
@@ -60,14 +64,17 @@ def _rows(folder: Path) -> pd.DataFrame:
             raise ValueError(f"{folder}'s episodes were run by other code; run its sweep again")
     attack = frame["setting"].str.replace(r"\+[a-z_0-9]+$", "", regex=True).where(frame["estimator"] != "raw",
                                                                                  frame["setting"])
-    # The frustum spoof that moves the depth too is its own row.
-    depth = frame["trial_id"].map(lambda i: "[depth]" if i in specs and specs[i].attack_params.get(
-        "lead_frustum", {}).get("depth") else "")
-    frame["attack"] = attack + depth
+    # The frustum spoof that moves the depth too is its own row, and the one that moves the picture too.
+    frame["attack"] = attack + frame["trial_id"].map(
+        lambda i: _frustum_kind(specs[i].attack_params.get("lead_frustum", {})) if i in specs else "")
     # A defence run with options is its own row: ``vote (inner=ekf)``.
     frame["estimator"] = [_label(e, specs[i].estimator_options if i in specs else {})
                           for e, i in zip(frame["estimator"], frame["trial_id"])]
     return frame
+
+
+def _frustum_kind(params: dict) -> str:
+    return "[adaptive]" if params.get("scale_box") else "[depth]" if params.get("depth") else ""
 
 
 def _label(estimator: str, options: dict) -> str:
@@ -110,7 +117,7 @@ def following_markdown(root: Path) -> str:
         "[The tutorial](../tutorials/following.md) says how it works.")
     path = Path(root) / "following.json"
     if not path.exists():
-        return "\n".join(lines + missing("following", FOLLOWING_COMMAND) + _phantom_lines(Path(root)) + _existence_lines(Path(root)) + [""])
+        return "\n".join(lines + missing("following", FOLLOWING_COMMAND) + _sections(Path(root)) + [""])
     data = json.loads(path.read_text())
     lines += meta_lines(data["meta"])
     lines += ["| attack | defence | N | collision-free [95 % CI] | min TTC s, median [95 % CI] | "
@@ -138,7 +145,34 @@ def following_markdown(root: Path) -> str:
               "witness and the carried closing speed still disagree with the two. Hiding the lead from every sensor "
               "leaves no witness at all: every defence drives into it in most episodes, and none can be asked to do "
               "better without a sensor that still sees it."]
-    return "\n".join(lines + _phantom_lines(Path(root)) + _existence_lines(Path(root)) + [""])
+    return "\n".join(lines + _sections(Path(root)) + [""])
+
+
+def _sections(root: Path) -> list[str]:
+    return _adaptive_lines(root) + _phantom_lines(root) + _existence_lines(root)
+
+
+def _adaptive_lines(root: Path) -> list[str]:
+    """The adaptive attack's section, from the ``following-adaptive`` stored result."""
+    lines = ["", "## The adaptive attack: every witness moved", "",
+             "The frustum spoof that knows ODCA's witnesses (`lead_frustum` with `depth`, `scale_box` and "
+             "`rate_mps`): from 2 s the lead's LiDAR returns, its depth and its picture (drawn as small as the car "
+             "would look there) move away together, growing at 0.5 m/s up to 2 m, as a lead that pulls away would. "
+             "The depth, the LiDAR, the size and the relative motion then agree with each other and not with the "
+             "world; only a witness outside the car's sensors could tell.", ""]
+    path = root / "following-adaptive.json"
+    if not path.exists():
+        return lines + missing("following-adaptive", ADAPTIVE_COMMAND)
+    data = json.loads(path.read_text())
+    lines += meta_lines(data["meta"])
+    lines += ["| attack | defence | N | collision-free [95 % CI] | min TTC s, median [95 % CI] | hard brakes, median |",
+              "|---|---|---|---|---|---|"]
+    for r in sorted(data["rows"].values(), key=_order):
+        cf = r["collision_free"]
+        ttc = "—" if r["min_ttc_median_s"] is None else rate(r["min_ttc_median_s"], r["min_ttc_ci"])
+        lines.append(f"| {ATTACK_LABELS.get(r['attack'], r['attack'])} | {r['estimator']} | {r['n']} | "
+                     f"{rate(cf['rate'], cf['ci'])} | {ttc} | {r['hard_brakes_median']:g} |")
+    return lines
 
 
 def _phantom_lines(root: Path) -> list[str]:
@@ -218,7 +252,8 @@ def _existence_lines(root: Path) -> list[str]:
 
 
 #: The table's order: attacks by strength, raw first then the defences.
-_ATTACKS = ("clean", "clean+lead_patch", "clean+lead_frustum", "clean+lead_frustum[depth]", "clean+lead_hide",
+_ATTACKS = ("clean", "clean+lead_patch", "clean+lead_frustum", "clean+lead_frustum[depth]",
+            "clean+lead_frustum[adaptive]", "clean+lead_hide",
             "clean+lead_phantom")
 _DEFENCES = ("raw", "odca", "ekf", "chronos", "vote")
 

@@ -120,3 +120,22 @@ def test_the_existence_section_sets_the_vote_with_the_check_beside_each_racf_6_c
     assert "| raw | 0.90 [" in page and page.index("| raw |") < page.index("| odca | 1.00 [")
     assert "| vote (lead_check=true) | 0.80 [0.70, 1.00]; 0.05 [0.00, 0.15] |" in page
     assert "| — | — |" in page and "N per cell: 60" in page  # no frustum-with-depth row stored: a dash
+
+
+def test_the_adaptive_frustum_spoof_is_its_own_row_and_its_own_section(tmp_path):
+    from racf.experiments.sweeps.spec import parse_spec
+
+    assert "Not stored yet (`following-adaptive`)" in following_markdown(tmp_path)
+    text = (Path(__file__).resolve().parents[3] / "experiments/sweeps/specs/following-adaptive.toml").read_text()
+    episodes = [e for e in parse_spec(text).episodes() if e.estimator == "odca"][:3]
+    sweep(tmp_path / "s", [{**row(e.setting, e.estimator, "cruise", k == 0), "trial_id": e.trial_id}
+                           for k, e in enumerate(episodes)])
+    (tmp_path / "s" / "spec.toml").write_text(text)
+    data = summarise([tmp_path / "s"])
+    assert list(data["rows"]) == ["clean+lead_frustum[adaptive]|odca"]
+    data["meta"] = {"command": "racf sweep following-adaptive.toml", "commit": "abc", "racf": "0.1.0", "machine": "m",
+                    "measured": "2026-11-27"}
+    (tmp_path / "following-adaptive.json").write_text(json.dumps(data))
+    page = following_markdown(tmp_path)
+    assert "## The adaptive attack: every witness moved" in page
+    assert "| adaptive frustum spoof: depth, LiDAR and picture moved away at 0.5 m/s up to 2 m | odca | 3 | 0.33 [" in page
