@@ -20,6 +20,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     t.add_argument("--out", type=output_dir, default=Path("outputs/trial"), help="output folder")
     t.add_argument("--rerun", type=Path, default=None, metavar="PATH",
                    help="also record the episode to a rerun file (.rrd; open it with `racf view PATH`)")
+    t.add_argument("--json", action="store_true", help="print the result row as one JSON object instead of a summary")
     t.set_defaults(handler=_trial)
 
     ts = sub.add_parser("trials", help="a batch of trials over the four signs and speeds 1.0/1.5/2.0 m/s: SCR, latency")
@@ -84,13 +85,33 @@ def _trial(args: argparse.Namespace) -> int:
     args.out.mkdir(parents=True, exist_ok=True)
     log_path = atomic_write(args.out / f"{spec.trial_id}.parquet", log)
     atomic_write(args.out / f"{spec.trial_id}.json", json.dumps(result.to_dict(), indent=2, allow_nan=False))
-    print(json.dumps({**result.to_dict(), "log": str(log_path)}, indent=2, allow_nan=False))
     row = result.to_dict()
+    if args.json:
+        print(json.dumps({**row, "log": str(log_path)}, allow_nan=False))
+    else:
+        print(trial_summary(row, log_path, args.out / f"{spec.trial_id}.json"))
     if row.get("service_fallback"):  # said where it is read, not only in a field
         print(f"racf trial: the defence service gave no answer in time on {row['service_fallback_steps']} of "
               f"{row['service_fallback_steps'] + row['service_steps']} steps; the car drove on its own depth "
               f"distance there ({row['service_restarts']} new sessions)", file=sys.stderr)
     return 0
+
+
+#: What names the trial (its header line), not what it measured.
+_IDENTITY = ("trial_id", "setting", "estimator", "target", "sign", "speed", "seed")
+
+
+def trial_summary(row: dict, log: Path, result: Path) -> str:
+    """One trial's result for a reader: what ran, then each measure it has (those it has not are
+    left out), then where its log and its full row are."""
+    head = (f"racf trial: {row['setting']} on {row['target']} {row['sign']} at {row['speed']:g} m/s, seed "
+            f"{row['seed']}: {'success' if row.get('success') else 'no success'}"
+            + (f" ({row['failure']})" if row.get("failure") else ""))
+    shown = {k: v for k, v in row.items() if k not in _IDENTITY and k not in ("success", "failure") and v is not None}
+    width = max(map(len, shown), default=0)
+    body = [f"  {k.ljust(width)}  {v:.3g}" if isinstance(v, float) else f"  {k.ljust(width)}  {v}"
+            for k, v in shown.items()]
+    return "\n".join([head, *body, f"log: {log}; row: {result} (--json prints it)"])
 
 
 def _trials(args: argparse.Namespace) -> int:

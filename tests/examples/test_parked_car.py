@@ -24,7 +24,7 @@ def test_a_trial_runs_it_and_the_van_hides_the_sign_for_the_far_part(parked_car_
     first_seen = {}
     for target in ("sign", "parked_car"):
         code, out = run_cli(["trial", "--target", target, "--sign", "1", "--speed", "1.0",
-                             "--out", str(tmp_path / target)])
+                             "--out", str(tmp_path / target), "--json"])
         assert code == 0
         row = json.loads(out)
         log = pd.read_parquet(row["log"])

@@ -26,7 +26,7 @@ def test_the_scenario_is_listed_with_its_parameters_and_criteria(pedestrian_inst
 
 def _trial(tmp_path, gap_s: float) -> tuple[dict, pd.DataFrame]:
     code, out = run_cli(["trial", "--target", "pedestrian_crossing", "--sign", "2", "--speed", "1.0",
-                         "--scenario-param", f"gap_s={gap_s}", "--out", str(tmp_path / f"gap{gap_s}")])
+                         "--scenario-param", f"gap_s={gap_s}", "--out", str(tmp_path / f"gap{gap_s}"), "--json"])
     assert code == 0
     row = json.loads(out)
     return row, pd.read_parquet(row["log"])

@@ -1,6 +1,7 @@
 """``racf trial`` and ``racf trials``: what they print and write."""
 
 import json
+from pathlib import Path
 
 import pandas as pd
 import pytest
@@ -18,8 +19,10 @@ def test_cli_trials_json(tmp_path, capsys):
 
 
 def test_cli_trial_writes_log_and_result(tmp_path, capsys):
-    assert main(["trial", "--sign", "2", "--speed", "1.0", "--seed", "0", "--out", str(tmp_path)]) == 0
-    out = json.loads(capsys.readouterr().out)
+    assert main(["trial", "--sign", "2", "--speed", "1.0", "--seed", "0", "--out", str(tmp_path), "--json"]) == 0
+    printed = capsys.readouterr().out
+    assert printed.count("\n") == 1  # one JSON object on one line, as its siblings print
+    out = json.loads(printed)
     assert out["success"] is True
     log = pd.read_parquet(out["log"])
     assert set(PROTOCOL_SIGNALS) <= set(log.columns)
@@ -37,7 +40,7 @@ def test_cli_attack_trials_json_has_lost_frames(tmp_path, capsys):
 
 def test_cli_trial_with_traffic_reports_the_conflict(tmp_path, capsys):
     assert main(["trial", "--sign", "3", "--speed", "1.5", "--seed", "0", "--traffic-cars", "1",
-                 "--out", str(tmp_path)]) == 0
+                 "--out", str(tmp_path), "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
     assert out["traffic_cars"] == 1 and out["conflict"] == "yielded" and out["collision"] is False
     assert pd.read_parquet(out["log"])["traffic0_x"].notna().all()
@@ -47,3 +50,14 @@ def test_cli_trial_with_traffic_reports_the_conflict(tmp_path, capsys):
     assert "--traffic-gap set scenario 'cross_traffic' (a sign approach); --target obstacle" in capsys.readouterr().err
     assert main(["trial", "--traffic-cars", "9"]) == 2
     assert "parameter 'cars' must be an int in [1, 4]" in capsys.readouterr().err
+
+
+def test_cli_trial_prints_a_summary_a_reader_can_scan(tmp_path, capsys):
+    assert main(["trial", "--sign", "2", "--speed", "1.0", "--seed", "0", "--out", str(tmp_path)]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[0] == "racf trial: clean on sign 2 at 1 m/s, seed 0: success"
+    measures = dict(line.split(None, 1) for line in lines[1:-1])
+    assert measures["stopped"] == "True" and float(measures["stop_distance_m"]) < 0.5
+    assert "t_star_s" in measures and not any(v == "None" for v in measures.values())  # unmeasured: left out
+    row = json.loads(Path(lines[-1].split("row: ")[1].split(" (")[0]).read_text())
+    assert row["success"] is True and lines[-1].startswith("log: ")
