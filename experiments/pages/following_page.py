@@ -172,7 +172,13 @@ def _adaptive_lines(root: Path) -> list[str]:
         ttc = "—" if r["min_ttc_median_s"] is None else rate(r["min_ttc_median_s"], r["min_ttc_ci"])
         lines.append(f"| {ATTACK_LABELS.get(r['attack'], r['attack'])} | {r['estimator']} | {r['n']} | "
                      f"{rate(cf['rate'], cf['ci'])} | {ttc} | {r['hard_brakes_median']:g} |")
-    return lines
+    return lines + ["", "What it shows: this is the attack no defence built on the car's own sensors can answer. "
+                    "ODCA's gate repairs the depth when its witnesses disagree; here none does, and the relative "
+                    "motion, grown as smoothly as a lead that speeds up, gives its kinematic branch nothing to "
+                    "outvote. The bound it sets: a car that trusts only its own sensors can be led into the car "
+                    "ahead by an attacker who moves all of them. What would answer it is a witness the attacker "
+                    "does not reach (a radar's Doppler, a second camera, the lead's own broadcast speed), which "
+                    "the QCar 2 does not carry."]
 
 
 def _phantom_lines(root: Path) -> list[str]:
