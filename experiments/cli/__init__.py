@@ -9,6 +9,7 @@ traceback."""
 from __future__ import annotations
 
 import argparse
+import os
 import signal
 import sys
 from contextlib import contextmanager
@@ -60,6 +61,9 @@ def main(argv: list[str] | None = None) -> int:
             if getattr(args, "address", None) is not None and args.backend != "ray":
                 fail(args.command, "--address joins a Ray cluster: it needs --backend ray")
             return args.handler(args)
+    except BrokenPipeError:  # the reader stopped reading (`racf ... | head`): what it took is all it wanted
+        _quiet_stdout()
+        return 0
     except (UserError, OSError) as err:  # a path, value, spec, plug-in, checkpoint or dataset that cannot be used
         _say(args, command, _words(err))
         return EXIT_USAGE
@@ -81,6 +85,16 @@ def main(argv: list[str] | None = None) -> int:
         log = _write_log(args, fault)
         _say(args, command, f"{fault.where} raised {fault.error}; traceback in {log}")
         return EXIT_FAILED
+
+
+def _quiet_stdout() -> None:
+    """Points stdout at /dev/null, so that Python's flush at exit does not meet the closed pipe again
+    (the recipe of Python's `signal` documentation)."""
+    try:
+        fd = sys.stdout.fileno()
+    except (AttributeError, OSError, ValueError):  # not a file (a test's capture): nothing to flush to a pipe
+        return
+    os.dup2(os.open(os.devnull, os.O_WRONLY), fd)
 
 
 def _say(args, guess: str, message: str) -> None:

@@ -69,3 +69,11 @@ def test_odca_commands_are_listed_and_latency_prints_json(capsys):
 def test_train_without_a_dataset_is_a_clear_error(tmp_path, capsys):
     assert main(["train", "--dataset", str(tmp_path / "none")]) == 2
     assert "racf collect" in capsys.readouterr().err
+
+
+def test_a_reader_that_stops_reading_is_no_error():
+    """`racf bag info BAG | head` once ended with "racf bag info: Broken pipe": a closed pipe ends the
+    command quietly, whichever command it is (the reader here closes it before racf writes)."""
+    done = subprocess.run(["bash", "-o", "pipefail", "-c", f"'{sys.executable}' -m racf.experiments.cli list --json | true"],
+                          capture_output=True, text=True, timeout=120)
+    assert (done.returncode, done.stderr) == (0, "")
