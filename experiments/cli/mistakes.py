@@ -98,6 +98,8 @@ MISTAKES: list[tuple[str, str]] = [
     ("serve --defence tinfoil", "unknown defence 'tinfoil'"),
     ("serve --estimator-option checkpoint=x", "name it with --defence"),
     ("trial --estimator-endpoint localhost:5555", "estimator_endpoint must be tcp://HOST:PORT"),
+    ("trial --setting attack+odca --estimator-endpoint tcp://127.0.0.1:9 --estimator-timeout-ms 100",
+     "start one there with `racf serve --bind tcp://127.0.0.1:9 --defence odca`"),
     ("trial --estimator-timeout-ms 20", "--estimator-timeout-ms applies with --estimator-endpoint"),
     ("trial --service-keys {keys}", "--service-keys applies with --estimator-endpoint"),
     ("trial --estimator-endpoint tcp://127.0.0.1:9 --service-keys {tmp}/nowhere", "make a key folder with"),

@@ -91,8 +91,8 @@ class RemoteEstimator:
             self._close()
             why = (f"{err}; give the car the key folder the service was started with (--service-keys DIR, "
                    f"made by `racf serve keys DIR`)" if str(err) else
-                   f"no defence service answers at {endpoint}; start one with `racf serve` (or "
-                   f"`racf serve --defence {name}`)")
+                   f"no defence service answers at {endpoint}; start one there with "
+                   f"`racf serve --bind {endpoint} --defence {name}`")
             raise UserError(why) from None
         except (ServiceError, WireError) as err:
             self._close()

@@ -70,7 +70,9 @@ def test_a_service_serving_another_defence_or_none_is_one_line(service, capsys):
     code, _ = run_cli(["trial", "--setting", "attack+odca", "--estimator-endpoint", "tcp://127.0.0.1:9",
                        "--estimator-timeout-ms", "200"])
     err = capsys.readouterr().err.strip()
-    assert code == 2 and "\n" not in err and "racf serve" in err and "no defence service answers" in err
+    assert code == 2 and "\n" not in err and "no defence service answers" in err
+    # The service to start is the one asked for, where it was asked for: not the default port.
+    assert "`racf serve --bind tcp://127.0.0.1:9 --defence odca`" in err
 
 
 BRITTLE = '''
