@@ -209,6 +209,9 @@ class Replay:
     attacks: tuple[str, ...] = ()
     scores: dict = field(default_factory=dict)
     frames: object = None
+    #: What the replayed data has seen, as a setting: the recording's own attacks, those the replay
+    #: added, and the defence that ran (``spec.setting`` names only what the replay applies).
+    setting: str = ""
 
 
 def replay_bag(path: str | Path, mapping: Mapping | None = None, defence: str | None = None,
@@ -227,7 +230,7 @@ def replay_bag(path: str | Path, mapping: Mapping | None = None, defence: str | 
     check_attacks(attacks)
     recording = Recording.open(path, mapping)
     spec = recording.spec
-    bag_estimator = parse_setting(spec.setting)[1]
+    recording_attacks, bag_estimator = parse_setting(spec.setting)
     estimator = defence or bag_estimator
     # The recording already holds the attacks it was made under; the replay adds only those asked for.
     setting = setting_name(tuple(attacks), estimator) if attacks or defence else spec.setting
@@ -275,7 +278,8 @@ def replay_bag(path: str | Path, mapping: Mapping | None = None, defence: str | 
     absent = tuple(c for c in referee if c not in present)
     log = log.drop(columns=list(absent))
     log.attrs["absent_ground_truth"] = list(absent)
-    return Replay(log, spec, absent, tuple(attacks), offline_scores(log), frames)
+    seen = setting_name(tuple(dict.fromkeys(recording_attacks + tuple(attacks))), estimator)
+    return Replay(log, spec, absent, tuple(attacks), offline_scores(log), frames, seen)
 
 
 def _height(plan) -> int:

@@ -101,7 +101,7 @@ def _replay(args: argparse.Namespace) -> int:
     name = args.bag.name + ("+" + "+".join(attacks) if attacks else "") + (f"+{args.defence}" if args.defence else "")
     log_path = atomic_write(args.out / f"{name}.parquet", replay.log)
     simulated = float(replay.log["t"].iloc[-1] - replay.log["t"].iloc[0]) if len(replay.log) > 1 else 0.0
-    summary = {"bag": str(args.bag), "log": str(log_path), "setting": replay.spec.setting,
+    summary = {"bag": str(args.bag), "log": str(log_path), "setting": replay.setting,
                "mapping": mapping.source, "steps": len(replay.log), "recorded_s": round(simulated, 3),
                "wall_s": round(wall, 2), "wall_per_recorded_s": round(wall / max(simulated, 1e-9), 3),
                "ground_truth": not {"d_true", "x"} <= set(replay.absent),

@@ -190,6 +190,9 @@ def test_a_foreign_bag_needs_its_mission(exported, tmp_path):
 def test_an_observation_attack_acts_on_a_recording_and_a_scene_attack_is_refused(exported, tmp_path, capsys):
     replay = replay_bag(exported.path, attacks=("depth_bias",),
                         attack_params={"depth_bias": {"trigger": "at_time", "start_s": 1.0}})
+    # What the data has seen: the recorded patch, the replayed bias, and the defence asked for.
+    assert replay.setting == "attack+depth_bias" and replay.spec.setting == "clean+depth_bias"
+    assert replay_bag(exported.path, defence="odca").setting == "attack+odca"
     hit = replay.log["attack_active"].astype(bool).to_numpy()
     assert hit.any() and replay.log["t"][hit].min() == pytest.approx(1.0, abs=0.03)
     shifted = hit & replay.log["d_meas"].notna().to_numpy() & exported.log["d_meas"].notna().to_numpy()
@@ -206,6 +209,7 @@ def test_the_cli_replays_and_records_it_in_rerun(exported, tmp_path):
 
     summary = json.loads(out)
     assert code == 0 and summary["steps"] == exported.steps and summary["ground_truth"]
+    assert summary["setting"] == "attack"  # the recording's own attack, as recorded
     assert (tmp_path / "r.rrd").stat().st_size > 10_000 and Path(summary["log"]).exists()
 
 
