@@ -121,6 +121,8 @@ MISTAKES: list[tuple[str, str]] = [
     ("falsify --defence odca --attack laser", "unknown attack"),
     ("falsify --defence odca --space {bad.toml}", "not valid TOML"),
     ("falsify --defence odca --space {tmp}/nowhere.toml", "cannot read the space"),
+    ("falsify --defence odca --attack stealth_ramp --space {space_bound.toml} --out {tmp}/falsified",
+     "the space's attack.stealth_ramp.rate_mps = 30.0 is out of what the episode takes"),
     ("falsify --defence odca --budget 0", "budget must be"),
     ("falsify --defence odca --seeds 0", "--seeds must be"),
     ("falsify --defence odca --sampler annealing", "invalid choice"),
@@ -184,6 +186,7 @@ def make_files(root: Path) -> dict[str, str]:
              "wrongtype.toml": 'name = "x"\nrepeats = "two"\n[space]\nattack = ["none"]\n',
              "schedule.toml": 'name = "x"\n[space]\nattack = ["depth_bias"]\n[params.depth_bias]\n'
                               'trigger = ["at_time"]\nstart_s = [500.0]\n',
+             "space_bound.toml": "[attack.stealth_ramp]\nrate_mps = {low = 0.1, high = 30.0}\n",
              "bad.rrd": "not a recording", "plugin_broken.py": "raise RuntimeError('boom')\n",
              "defences.py": _DEFENCES, "incomplete.py": _INCOMPLETE}
     for name, text in texts.items():

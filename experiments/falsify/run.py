@@ -21,6 +21,7 @@ from racf.experiments.falsify.cases import distinct, save_case
 from racf.experiments.falsify.pool import EpisodePool
 from racf.experiments.falsify.report import plot_convergence, summarize_searches, violations_by_value
 from racf.experiments.falsify.search import SearchConfig, episode_seed, run_searches
+from racf.experiments.episode.preflight import check_specs
 from racf.experiments.falsify.space import load_space
 from racf.provenance import atomic_write
 from racf.experiments.sweeps.store import ResultStore
@@ -37,6 +38,7 @@ def falsify(defence: str, attacks: tuple[str, ...], out: str | Path, budget: int
     t0 = time.perf_counter()
     out = Path(out)
     space = load_space(defence, attacks, space_path, fixed)
+    check_specs(space.extremes())  # a bound out of range is refused now: nothing drawn, nothing written
     cfg = SearchConfig(space, tuple(samplers), tuple(seeds), budget, batch, stop_at_violation, objective)
     store = ResultStore(out / "episodes")
     try:

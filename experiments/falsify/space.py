@@ -85,6 +85,10 @@ class Dimension:
         """A value of this dimension as the episode takes it (stored trials may hold 3.0 for 3)."""
         return int(round(value)) if self.integer else value
 
+    def bounds(self) -> tuple:
+        """The values at this dimension's edges: every choice, or a range's two ends."""
+        return self.choices if self.choices is not None else (self.cast(self.low), self.cast(self.high))
+
     def to_json(self) -> dict:
         if self.choices is not None:
             return {"choices": list(self.choices)}
@@ -139,6 +143,21 @@ class SearchSpace:
             fields["run_up_m"] = min(float(fields["run_up_m"]), math.floor(longest * 1e6) / 1e6)
         return TrialSpec(self.setting, speed=float(fields.pop("speed", 1.5)), sign=sign, seed=int(seed),
                          attack_params=attack_params, **fields)
+
+    def extremes(self) -> list[TrialSpec]:
+        """An episode at each bound of each dimension, the others at their first bound: a value the
+        episode refuses anywhere in the space is refused at one of these, before any draw.
+
+        Raises ValueError naming the dimension and the value the episode refuses."""
+        first = {d.name: d.bounds()[0] for d in self.dimensions}
+        specs = []
+        for d in self.dimensions:
+            for value in d.bounds():
+                try:
+                    specs.append(self.trial_spec({**first, d.name: value}, 0))
+                except ValueError as err:
+                    raise ValueError(f"the space's {d.name} = {value!r} is out of what the episode takes: {err}") from None
+        return specs
 
     def to_json(self) -> dict:
         return {"defence": self.defence, "attacks": list(self.attacks),

@@ -48,3 +48,27 @@ def test_integer_dimensions_give_integers_back():
     assert dim.cast(3.0) == 3 and isinstance(dim.cast(3.0), int)
     with pytest.raises(ValueError, match="integer bounds"):
         Dimension.parse("scans", {"low": 1.5, "high": 8, "int": True})
+
+
+@pytest.mark.parametrize("text, named", [
+    ("[scenario]\nspeed = {low = 1.0, high = 9.0}\n", "speed = 9.0"),
+    ("[scenario]\nstable_steps = {low = -5, high = 60, int = true}\n", "stable_steps = -5"),
+    ("[attack.stealth_ramp]\nrate_mps = {low = 0.1, high = 30.0}\n", "attack.stealth_ramp.rate_mps = 30.0")])
+def test_a_bound_the_episode_refuses_is_refused_before_a_draw_and_nothing_is_written(tmp_path, text, named):
+    from racf.errors import UserError
+    from racf.experiments.falsify.run import falsify
+
+    (tmp_path / "space.toml").write_text(text)
+    with pytest.raises(ValueError, match=named):
+        load_space("odca", ("stealth_ramp",), tmp_path / "space.toml").extremes()
+    with pytest.raises((ValueError, UserError), match=named):
+        falsify("odca", ("stealth_ramp",), tmp_path / "out", budget=2, seeds=(0,), space_path=tmp_path / "space.toml",
+                progress=False)
+    assert not (tmp_path / "out").exists()  # no study file, no empty folders
+
+
+def test_the_extremes_are_every_bound_of_every_dimension():
+    space = load_space("odca", ("frustum_spoof",))
+    specs = space.extremes()
+    assert {s.sign for s in specs} == {0, 1, 2, 3} and {s.speed for s in specs} == {1.0, 2.0}
+    assert {s.attack_params["frustum_spoof"]["scale_box"] for s in specs} == {False, True}
