@@ -93,13 +93,27 @@ def trial_flags(p: argparse.ArgumentParser) -> None:
     from racf.plugins import SCENARIOS
 
     episode_flags(p)
-    p.add_argument("--sign", type=sign, default=2,
-                   help="stop sign 0-3, or crate 0-1 with --target obstacle (default 2)")
+    p.add_argument("--sign", type=sign, default=None,
+                   help="stop sign 0-3, or crate 0-1 with --target obstacle (default 2, or 0 where the scenario "
+                        "has fewer: a drive, a crate)")
     p.add_argument("--target", choices=tuple(SCENARIOS), default="sign", metavar="SCENARIO",
                    help=f"the scenario: {', '.join(SCENARIOS)} (default sign: approach a stop sign; obstacle: a "
                         "crate; drive: a random 20-60 s drive, --sign 0; `racf list scenarios` says what each is)")
     p.add_argument("--speed", type=speed, default=1.0, help="cruise speed m/s, 0.1-3.0 (default 1.0)")
     p.add_argument("--seed", type=int, default=0)
+
+
+#: The stop sign an episode approaches unless told: sign 2, as the paper's figures.
+DEFAULT_SIGN = 2
+
+
+def default_index(target: str) -> int:
+    """The target an episode of scenario ``target`` goes to unless told: sign 2, or 0 where the
+    scenario has no third (a drive has one, the obstacle two crates)."""
+    from racf.experiments.episode.spec import TARGETS
+    from racf.plugins import SCENARIOS
+
+    return DEFAULT_SIGN if TARGETS[SCENARIOS[target].target] > DEFAULT_SIGN else 0
 
 
 def trial_spec(args: argparse.Namespace, command: str):
@@ -109,7 +123,8 @@ def trial_spec(args: argparse.Namespace, command: str):
     setting, params = episode_params(args, command)
     params["estimator_options"] = params["estimator_options"].get(parse_setting(setting)[1], {})
     try:
-        return TrialSpec(setting, args.sign, args.speed, args.seed, **params)
+        index = args.sign if args.sign is not None else default_index(params.get("target", "sign"))
+        return TrialSpec(setting, index, args.speed, args.seed, **params)
     except ValueError as err:
         fail(command, str(err))
 

@@ -61,3 +61,15 @@ def test_cli_trial_prints_a_summary_a_reader_can_scan(tmp_path, capsys):
     assert "t_star_s" in measures and not any(v == "None" for v in measures.values())  # unmeasured: left out
     row = json.loads(Path(lines[-1].split("row: ")[1].split(" (")[0]).read_text())
     assert row["success"] is True and lines[-1].startswith("log: ")
+
+
+@pytest.mark.parametrize("argv, index", [([], 2), (["--target", "drive"], 0), (["--target", "obstacle"], 0),
+                                         (["--target", "obstacle", "--sign", "1"], 1)])
+def test_an_episode_goes_to_sign_2_unless_its_scenario_has_no_third_target(argv, index):
+    """`racf bag export --target drive` once said "drive index must be 0..0, got 2": the default was sign 2's."""
+    from racf.experiments.cli import build_parser
+    from racf.experiments.cli.episode_flags import trial_spec
+
+    for command in ("trial", "export-bag"):
+        args = build_parser().parse_args([command, *(["/tmp/racf-unused-bag"] if command == "export-bag" else []), *argv])
+        assert trial_spec(args, command).sign == index
