@@ -163,6 +163,28 @@ def _results_pages() -> None:
 
 
 _results_pages()
+#: The stored cards' pages: a folder written whole from the stored results (a page whose card is gone goes).
+CARD_FOLDER = "results/cards"
+
+
+def _card_pages() -> None:
+    from racf.experiments.pages.leaderboard_page import card_pages
+
+    for name, make in card_pages(_DOCS / "results" / "data").items():
+        PAGES[f"results/{name}"] = make
+
+
+_card_pages()
+
+
+def _board_js() -> str:
+    from racf.experiments.scorecard.board import BOARD_JS
+
+    return BOARD_JS.read_text()
+
+
+#: The board's sorting script, kept once in the package (a scorecard's page inlines it).
+PAGES["javascripts/board.js"] = _board_js
 #: The changelog is kept once, at the top of the repository; the site shows that file.
 PAGES["changelog.md"] = lambda: (_DOCS.parent / "CHANGELOG.md").read_text()
 
@@ -177,6 +199,9 @@ def write_pages(docs: Path) -> list[Path]:
             path.parent.mkdir(parents=True, exist_ok=True)
             path.write_text(text)
         out.append(path)
+    for stale in sorted((Path(docs) / CARD_FOLDER).glob("*.md")):
+        if f"{CARD_FOLDER}/{stale.name}" not in PAGES:
+            stale.unlink()
     return out
 
 

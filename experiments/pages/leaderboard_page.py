@@ -1,33 +1,51 @@
-"""The leaderboard page: the built-in defences' scorecards, one column a defence and one table a
-battery (the newest first), written from the stored cards (``docs/results/data/scorecard-<battery>.json``)
-and the cold run's time (``scorecard-timing.json``) by :mod:`racf.experiments.pages.results_pages`."""
+"""The leaderboard page: the defences' scorecards at a glance, one board a battery (the newest
+first; :mod:`racf.experiments.scorecard.board`), and a page per card (:func:`card_pages`), written from
+the stored cards (``docs/results/data/scorecard-<battery>.json``) and the cold run's time
+(``scorecard-timing.json``) by :mod:`racf.experiments.pages.results_pages`."""
 
 from __future__ import annotations
 
+from functools import partial
+from typing import Callable
+
 from racf.experiments.pages.results_format import page_head as _page_head
-from racf.experiments.pages.results_format import ci as _ci
 from racf.experiments.pages.results_format import meta_lines as _meta
 from racf.experiments.pages.results_format import missing as _missing
 
-__all__ = ["leaderboard_markdown"]
+__all__ = ["leaderboard_markdown", "card_pages", "BATTERY_TITLES"]
+
+#: Where a battery's rows are from, for its heading.
+BATTERY_TITLES = {"racf-6": "following the car ahead", "racf-5": "whether the car stops where a sign stands, and only there",
+                  "racf-link": "the defence served over the link, and attacks on the link",
+                  "racf-4": "stop signs, with cross-traffic", "racf-3": "stop signs, a placed sticker",
+                  "racf-2": "stop signs, white-box attacks", "racf-1": "stop signs, the paper's protocol"}
+
+#: The page gives the table of contents' width to the boards (the menu stays, to go elsewhere).
+_FRONT_MATTER = ["---", "hide:", "  - toc", "---", ""]
+
 
 def leaderboard_markdown(d) -> str:
     """The leaderboard page from the stored cards (``scorecard-<battery>``, newest battery first)
-    and the cold run's time."""
+    and the cold run's time: per battery, the board at a glance (``board_html``)."""
+    from racf.experiments.scorecard.board import board_html
     from racf.experiments.scorecard.battery import BATTERIES, DEFAULT_BATTERY
 
-    lines = [*_page_head("Leaderboard: the defences on the scorecard's batteries"),
-             "`racf scorecard --defence NAME` rates a defence, built-in or plug-in, on the same fixed battery "
-             "([the tutorial](../tutorials/scorecard.md) says what is in it). Each column is one defence's card; "
-             "its version names the code it ran (a plug-in's source included). Bold: the best value of a row "
-             "where its interval does not overlap the runner-up's. A battery never changes: a new row makes a "
-             "new battery, and its table stands above the older ones.", ""]
+    lines = [*_FRONT_MATTER, *_page_head("Leaderboard: which defence holds, and where each fails"),
+             "`racf scorecard --defence NAME` rates a defence, built-in or plug-in, on a fixed battery "
+             "([the tutorial](../tutorials/scorecard.md) says what is in it; [submit yours](../tutorials/submit-a-card.md)). "
+             "Per battery: one line per defence, its worst attacked row first (click a column's head to sort by it; "
+             "a name opens the defence's card), then every row of the battery, coloured from red (bad) to green "
+             "(good) whichever way its measure points, with its interval and N beneath (and on hover). "
+             "A battery never changes: a new row makes a new battery, and its board stands above the older ones.", ""]
     stored = [name for name in reversed(list(BATTERIES)) if f"scorecard-{name}" in d]
     if not stored:
         return "\n".join(lines + _missing(f"scorecard-{DEFAULT_BATTERY}",
                                           "racf scorecard --defence raw ekf chronos odca chi2 cusum"))
     for name in stored:
-        lines += [f"## `{name}`", ""] + _battery_table(d[f"scorecard-{name}"])
+        data = d[f"scorecard-{name}"]
+        title = BATTERY_TITLES.get(name)
+        lines += [f"## `{name}`" + (f": {title}" if title else ""), "", *_meta(data["meta"]),
+                  board_html(data["cards"], name), "", _penalties(data["cards"]), ""]
     if "scorecard-timing" in d:
         cold = d["scorecard-timing"]
         walls = ", ".join(f"`{name}` {t['wall_s'] / 60:.1f} min" for name, t in cold["cold_run"]["cards"].items())
@@ -39,47 +57,32 @@ def leaderboard_markdown(d) -> str:
     return "\n".join(lines)
 
 
-def _battery_table(data: dict) -> list[str]:
-    """One battery's stored cards as one table."""
-    from racf.experiments.scorecard.report import card_rows
-
-    lines = []
-    cards = data["cards"]
-    lines += _meta(data["meta"])
-    names = [c["defence"] for c in cards]
-    table: dict = {}
-    for card in cards:
-        for section, row, measure, value, ci, n, hib in card_rows(card):
-            table.setdefault((section, row, measure), {})[card["defence"]] = (value, ci, n, hib)
-    lines += ["| section | row | measure | " + " | ".join(f"`{n}`" for n in names) + " |",
-              "|---|---|---|" + "---|" * len(names),
-              "| | | version | " + " | ".join(f"`{c['version'].rsplit('_', 1)[-1]}`" for c in cards) + " |"]
-    for (section, row, measure), cells in table.items():
-        # an undetected error is no contest: raw depth's is small where the attack hides the depth
-        best = None if measure.startswith("undetected error m, median") and section == "closed loop" else _best(cells)
-        digits = 0 if measure == "trainable" else 3
-        out = []
-        for name in names:
-            if name not in cells or cells[name][0] is None:
-                out.append("-")
-                continue
-            value, ci, n, _ = cells[name]
-            text = f"{value:.{digits}f}{(' ' + _ci(ci, digits)) if ci and ci[0] is not None else ''}" + (
-                f" ({n})" if n is not None else "")
-            out.append(f"**{text}**" if name == best else text)
-        lines.append(f"| {section} | {row} | {measure} | " + " | ".join(out) + " |")
+def _penalties(cards: list[dict]) -> str:
     penalties = cards[0]["penalties"]
-    lines += ["", "N in brackets. Driving-score penalties: " + ", ".join(f"{k.replace('_', ' ')} x {v}"
-                                                                  for k, v in penalties.items()) + ".", ""]
-    return lines
+    return ("Pooled rates are successes over episodes across the rows of that kind, with their Wilson interval. "
+            "Driving-score penalties: " + ", ".join(f"{k.replace('_', ' ')} x {v}" for k, v in penalties.items()) + ".")
 
 
-def _best(cells: dict) -> str | None:
-    """The defence whose value beats every other's with non-overlapping intervals (None: no clear best)."""
-    scored = [(name, v, ci, hib) for name, (v, ci, _, hib) in cells.items() if v is not None and ci and ci[0] is not None]
-    if len(scored) < 2:
-        return None
-    scored.sort(key=lambda x: x[1], reverse=scored[0][3])
-    (name, _, ci, hib), (_, _, ci2, _) = scored[0], scored[1]
-    apart = ci[0] > ci2[1] if hib else ci[1] < ci2[0]
-    return name if apart else None
+def card_pages(root) -> dict[str, Callable[[], str]]:
+    """Every stored card's page, by its path under ``docs/results/`` (``cards/<battery>-<defence>.md``),
+    each written when asked."""
+    from racf.experiments.scorecard.board import card_page_name
+    from racf.experiments.pages.results_format import StoredResults
+
+    d = StoredResults(root)
+    pages = {}
+    for path in sorted(d.root.glob("scorecard-*.json")):
+        for card in d[path.stem].get("cards", []):
+            pages[card_page_name(card["battery"], card["defence"])] = partial(_card_page, d, path.stem, card["defence"])
+    return pages
+
+
+def _card_page(d, result: str, defence: str) -> str:
+    from racf.experiments.scorecard.card_page import card_fragment
+
+    data = d[result]
+    card = next(c for c in data["cards"] if c["defence"] == defence)
+    return "\n".join([*_FRONT_MATTER, f"# `{defence}` on battery `{card['battery']}`", "",
+                      f"One defence's card, beside raw depth's and the best of the other defences carded on "
+                      f"`{card['battery']}` ([the leaderboard](../leaderboard.md) sets them all side by side).", "",
+                      *_meta(data["meta"]), card_fragment(card, data["cards"]), ""])

@@ -1,7 +1,8 @@
 """A scorecard's outputs: ``scorecard.json`` (strict), ``scorecard.md`` (one card per defence,
-row by row) and ``scorecard.html`` (the same tables with the plots: the detection ROC, SCR per
-attack with Wilson bands, and the undetected error against the stealth ramp's rate); and two
-cards side by side."""
+row by row, the quick battery said once at the top), ``scorecard.html`` (the cards at a glance)
+and ``card-<defence>.html`` (each card's page: ``card_page``, with its plots under their
+sections: the detection ROC, or why there is none, and the undetected error against the stealth
+ramp's rate); and two cards side by side."""
 
 from __future__ import annotations
 
@@ -11,6 +12,7 @@ import io
 import json
 from pathlib import Path
 
+from racf.experiments.scorecard.rows import card_rows
 from racf.provenance import atomic_write
 from racf.stats import ci
 
@@ -44,80 +46,8 @@ def _ci(pair, digits: int = 2) -> str:
     return f" {text}" if text else ""
 
 
-def card_rows(card: dict) -> list[tuple[str, str, str, float | None, list | None, int | None, bool]]:
-    """Every row of a card as (section, row, measure, value, interval, N, higher_is_better)."""
-    from racf.experiments.scorecard.battery import BATTERIES
-
-    rows = []
-    battery = BATTERIES.get(card["battery"].removesuffix("-quick"))
-    order = [r.key for r in battery.rows()] if battery else []
-    for key, r in sorted(card["closed_loop"].items(), key=lambda kv: order.index(kv[0]) if kv[0] in order else 99):
-        if r.get("scr") is not None or not ("n_needless" in r or "n_following" in r):  # no SCR where no sign
-            rows.append(("closed loop", r["title"], "SCR", r["scr"], r["scr_ci"], r["n"], True))  # is the target
-        if r.get("n_following"):  # the car ahead: collisions and needless hard brakes
-            rows.append(("closed loop", r["title"], "collision-free", r["collision_free"], r["collision_free_ci"],
-                         r["n_following"], True))
-            rows.append(("closed loop", r["title"], "needless hard brake", r["needless_hard_brake"],
-                         r["needless_hard_brake_ci"], r["n_following"], False))
-        following = bool(r.get("n_following"))  # the stop rule's measures say nothing of following a car
-        if r.get("n_attack_before_t_star") and not following:
-            rows.append(("closed loop", r["title"], "SCR, attack before t*", r["scr_attack_before_t_star"],
-                         r["scr_attack_before_t_star_ci"], r["n_attack_before_t_star"], True))
-        if r.get("undetected_error_median") is not None:
-            rows.append(("closed loop", r["title"], "undetected error m, median", r["undetected_error_median"],
-                         r["undetected_error_ci"], r["n"], False))
-        if r.get("robustness_median_m") is not None and not following:  # the stop rule's STL robustness
-            rows.append(("closed loop", r["title"], "STL robustness m, median", r["robustness_median_m"],
-                         r["robustness_ci"], r["n"], True))
-        if r.get("n_traffic"):  # cross-traffic: what a missed stop cost
-            rows.append(("closed loop", r["title"], "collision rate", r["collision_rate"], r["collision_rate_ci"],
-                         r["n_traffic"], False))
-            if r.get("n_traffic_attack_before_t_star"):
-                rows.append(("closed loop", r["title"], "collision rate, attack before t*",
-                             r["collision_rate_attack_before_t_star"], r["collision_rate_attack_before_t_star_ci"],
-                             r["n_traffic_attack_before_t_star"], False))
-        if r.get("driving_score") is not None:
-            rows.append(("closed loop", r["title"], "driving score", r["driving_score"], r["driving_score_ci"], r["n"],
-                         True))
-        for m in r.get("measures", []):  # the plug-in metrics' declared fields (card.plugin_measures)
-            rows.append(("closed loop", r["title"], m["measure"], m["value"], m["ci"], m["n"], m["higher_is_better"]))
-    for key, r in card["drives"].items():
-        rows.append(("drives", r["title"], "driving score", r["driving_score"], r["driving_score_ci"], r["n"], True))
-        rows.append(("drives", r["title"], "route completion", r["route_completion"], None, r["n"], True))
-    d = card.get("detection")
-    if d:
-        rows += [("detection", "all closed-loop steps", "TPR", d["tpr"], d["tpr_ci"], d["n_positive_steps"], True),
-                 ("detection", "all closed-loop steps", "FPR", d["fpr"], d["fpr_ci"], d["n_negative_steps"], False),
-                 ("detection", "all closed-loop steps", f"AUROC (from the {d['auroc_from']})", d["auroc"], None,
-                  d["n_positive_steps"] + d["n_negative_steps"], True),
-                 ("detection", "attacked episodes", "median time to detect, s", d["time_to_detect_median_s"],
-                  d["time_to_detect_ci"], d["n_attacked_episodes"], False),
-                 ("detection", "attacked episodes", f"undetected error m, median, at {d['undetected_error_at']}",
-                  d["undetected_error_median_m"], d["undetected_error_ci"], d["n_attacked_episodes"], False)]
-    off = card.get("offline")
-    if off:
-        for preset in ("weak", "mid", "strong"):
-            if preset in off:
-                r = off[preset]
-                rows.append(("offline", f"{preset} preset ({off.get('split', 'by_series')}, {r['n_draws']} draws)",
-                             "RMSE m", r["rmse"], r["rmse_ci"], r["n"], False))
-        if off.get("strong_ratio_to_chronos") is not None:
-            rows.append(("offline", "strong preset", "RMSE / Chronos-only's", off["strong_ratio_to_chronos"], None,
-                         off["strong"]["n"], False))
-        p = off["clean_pass_through"]
-        rows.append(("offline", "clean input", "unchanged share", p["unchanged_share"], None, p["n_depth"], True))
-    params = card["cost"]["parameters"]
-    rows.append(("cost", f"parameters ({params['from']})", "trainable", params["trainable"], None, None, False))
-    step = card.get("timing", {}).get("step_time")
-    if step:
-        rows.append(("cost", "per step, one thread", "p99 ms (a timing: varies run to run)", step["p99_ms"], None,
-                     step["n_steps"], False))
-    return rows
-
-
 def card_markdown(card: dict) -> str:
-    quick = " **(quick battery: small N, for development only)**" if card["quick"] else ""
-    lines = [f"## `{card['defence']}` on battery `{card['battery']}`{quick}", "",
+    lines = [f"## `{card['defence']}` on battery `{card['battery']}`", "",
              f"Version `{card['version']}`, sensor profile `{card['sensor_profile']}`; "
              f"wall time {card['timing']['wall_s']:.0f} s. Intervals are 95 % (Wilson for rates, bootstrap otherwise).",
              "", "| section | row | measure | value [95% CI] | N |", "|---|---|---|---|---|"]
@@ -159,81 +89,94 @@ def _png(fig) -> str:
     return base64.b64encode(buf.getvalue()).decode()
 
 
-def _plots(cards: list[dict]) -> list[str]:
+def _img(fig, alt: str) -> str:
+    return f'<img alt="{html.escape(alt, quote=True)}" src="data:image/png;base64,{_png(fig)}">'
+
+
+def card_plots(card: dict) -> dict[str, list[str]]:
+    """The plots of one card, by the section they belong under: the detection ROC (or why there is
+    none) and the undetected error against the stealth ramp's rate (where the battery runs it)."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    images = []
-    fig, ax = plt.subplots(figsize=(5.2, 4.2))
-    for card in cards:
-        d = card.get("detection")
-        if d and d.get("roc"):
-            ax.plot(d["roc"]["fpr"], d["roc"]["tpr"], label=f"{card['defence']} (AUROC {d['auroc']:.2f})")
-    ax.plot([0, 1], [0, 1], color="grey", lw=0.8, ls="--")
-    ax.set(xlabel="false-positive rate (clean steps flagged)", ylabel="true-positive rate (attacked steps flagged)",
-           title="Detection ROC over the closed-loop steps")
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    images.append(_png(fig))
-    plt.close(fig)
-    keys = [k for k, r in cards[0]["closed_loop"].items() if r.get("scr") is not None]  # rows where a sign stands
-    fig, ax = plt.subplots(figsize=(8.5, 4.2))
-    width = 0.8 / len(cards)
-    for i, card in enumerate(cards):
-        rows = [card["closed_loop"][k] for k in keys]
-        x = [j + i * width for j in range(len(keys))]
-        scr = [r["scr"] for r in rows]
-        err = [[r["scr"] - r["scr_ci"][0] for r in rows], [r["scr_ci"][1] - r["scr"] for r in rows]]
-        ax.bar(x, scr, width, yerr=err, capsize=2, label=card["defence"])
-    ax.set_xticks([j + 0.4 - width / 2 for j in range(len(keys))], keys, rotation=30, ha="right", fontsize=8)
-    ax.set(ylabel="SCR (95 % Wilson)", ylim=(0, 1.05), title="Stop compliance per closed-loop row")
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    images.append(_png(fig))
-    plt.close(fig)
-    fig, ax = plt.subplots(figsize=(5.2, 4.2))
-    for card in cards:
-        rates = {}
-        for key in RAMP_ROWS:  # the stealth ramp at every rate the battery runs
-            rates.update(card["closed_loop"].get(key, {}).get("by_rate", {}))
-        points = sorted((float(r), v) for r, v in rates.items() if v.get("undetected_error_median") is not None)
-        if points:
-            xs = [p[0] for p in points]
-            ys = [p[1]["undetected_error_median"] for p in points]
-            lo = [p[1]["undetected_error_ci"][0] for p in points]
-            hi = [p[1]["undetected_error_ci"][1] for p in points]
-            line, = ax.plot(xs, ys, marker="o", label=card["defence"])
-            ax.fill_between(xs, lo, hi, color=line.get_color(), alpha=0.15)
-    ax.set(xscale="log", xlabel="stealth_ramp rate r (m/s)", ylabel="undetected error, m (median, 95 % bootstrap)",
-           title="Undetected error against the attack's rate")
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    images.append(_png(fig))
-    plt.close(fig)
-    return images
+    out: dict[str, list[str]] = {}
+    d = card.get("detection")
+    if d:
+        roc = d.get("roc") or {}
+        if roc.get("fpr") and max(roc.get("tpr", [0.0])) > 0.0:
+            fig, ax = plt.subplots(figsize=(5.2, 4.2))
+            ax.plot(roc["fpr"], roc["tpr"], label=f"{card['defence']} (AUROC {d['auroc']:.2f})")
+            ax.plot([0, 1], [0, 1], color="grey", lw=0.8, ls="--", label="chance")
+            ax.set(xlabel="false-positive rate (clean steps flagged)", ylabel="true-positive rate (attacked steps flagged)",
+                   title=f"Detection ROC of {card['defence']} over the closed-loop steps")
+            ax.legend(fontsize=8, loc="lower right")
+            fig.tight_layout()
+            out["detection"] = [_img(fig, f"detection ROC of {card['defence']}")]
+            plt.close(fig)
+        else:
+            out["detection"] = [f'<p class="racf-unplotted">No ROC to draw: <code>{html.escape(card["defence"])}'
+                                "</code> never flags an attacked step, so there is no trade-off between catching "
+                                "attacks and false alarms to show.</p>"]
+    rates = {}
+    for key in RAMP_ROWS:  # the stealth ramp at every rate the battery runs
+        rates.update(card["closed_loop"].get(key, {}).get("by_rate", {}))
+    points = sorted((float(r), v) for r, v in rates.items() if v.get("undetected_error_median") is not None)
+    if points:
+        fig, ax = plt.subplots(figsize=(5.2, 4.2))
+        xs = [p[0] for p in points]
+        line, = ax.plot(xs, [p[1]["undetected_error_median"] for p in points], marker="o", label=card["defence"])
+        ax.fill_between(xs, [p[1]["undetected_error_ci"][0] for p in points],
+                        [p[1]["undetected_error_ci"][1] for p in points], color=line.get_color(), alpha=0.15,
+                        label="95 % bootstrap interval")
+        ax.set(xscale="log", xlabel="stealth_ramp rate r (m/s)", ylabel="undetected error, m (median)",
+               title="Undetected error against the attack's rate")
+        ax.legend(fontsize=8)
+        fig.tight_layout()
+        out["closed loop"] = [_img(fig, "undetected error against the stealth ramp's rate")]
+        plt.close(fig)
+    return out
 
 
-def _html(cards: list[dict], text: str) -> str:
-    """The page: the plots, then the Markdown's tables rendered as HTML tables (Python-Markdown)."""
-    import markdown
+def _index_html(cards: list[dict], others: list[dict], quick: bool) -> str:
+    """``scorecard.html``: the run's cards at a glance (the board), each name leading to its page."""
+    from racf.experiments.scorecard.board import BOARD_JS, board_html
+    from racf.experiments.scorecard.card_page import CARD_CSS
 
-    images = "".join(f'<img alt="plot" src="data:image/png;base64,{png}">' for png in _plots(cards))
-    body = markdown.markdown(html.escape(text, quote=False), extensions=["tables"])
-    return ("<!doctype html><html><head><meta charset='utf-8'><title>racf scorecard</title>"
-            "<style>body{font-family:sans-serif;max-width:1100px;margin:auto}img{max-width:48%}"
-            "table{border-collapse:collapse;margin:1em 0}th,td{border:1px solid #ccc;padding:2px 8px;"
-            "text-align:left}th{background:#f3f3f3}</style></head><body>" + images + body + "</body></html>\n")
+    battery = cards[0]["battery"]
+    shown = cards + [c for c in others if c["battery"] == battery and c["defence"] not in {x["defence"] for x in cards}]
+    mine = {c["defence"] for c in cards}  # only this run's cards have a page here
+    board = board_html(shown, battery, href=lambda _, defence: f"card-{defence}.html" if defence in mine else None)
+    note = ('<p class="racf-quick"><b>Quick battery</b>: a few episodes a row, for development; not for '
+            "reporting.</p>") if quick else ""
+    return ("<!doctype html><html lang='en'><head><meta charset='utf-8'>"
+            "<meta name='viewport' content='width=device-width, initial-scale=1'><title>racf scorecard</title><style>"
+            "body{font-family:system-ui,sans-serif;max-width:1200px;margin:1em auto;padding:0 1em}"
+            "table{border-collapse:collapse;width:100%;font-size:.85em}th,td{padding:3px 6px;text-align:left;"
+            "vertical-align:top}th{background:#f3f3f3}" + CARD_CSS + "</style></head><body>"
+            f"<h1>racf scorecard: battery <code>{html.escape(battery)}</code></h1>{note}"
+            "<p>Each defence's headline; its name opens its card. Green is good, red bad, whichever way a measure "
+            "points; intervals are 95 % (Wilson); click a column's head to sort.</p>" + board
+            + f"<script>{BOARD_JS.read_text()}</script></body></html>\n")
 
 
-def write_scorecard(cards: list[dict], out: Path) -> dict[str, Path]:
-    """Writes ``scorecard.json``, ``scorecard.md`` and ``scorecard.html`` under ``out``."""
+def write_scorecard(cards: list[dict], out: Path, others: list[dict] = ()) -> dict[str, Path]:
+    """Writes ``scorecard.json``, ``scorecard.md``, ``scorecard.html`` (the cards at a glance) and
+    ``card-<defence>.html`` for each card (its page, beside ``others``: raw's and other defences'
+    cards on the same battery) under ``out``."""
+    from racf.experiments.scorecard.card_page import card_document
+
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     quick = any(c["quick"] for c in cards)
     head = ["# racf scorecard" + (" (QUICK battery: small N, not for reporting)" if quick else ""), ""]
     markdown = "\n".join(head + [card_markdown(c) for c in cards])
-    return {"json": atomic_write(out / "scorecard.json", strict_json({"cards": cards})),
-            "md": atomic_write(out / "scorecard.md", markdown),
-            "html": atomic_write(out / "scorecard.html", _html(cards, markdown))}
+    peers = list(cards) + [c for c in others if c["defence"] not in {x["defence"] for x in cards}]
+    paths = {"json": atomic_write(out / "scorecard.json", strict_json({"cards": cards})),
+             "md": atomic_write(out / "scorecard.md", markdown),
+             "html": atomic_write(out / "scorecard.html", _index_html(cards, others, quick))}
+    for card in cards:
+        paths[f"card {card['defence']}"] = atomic_write(out / f"card-{card['defence']}.html",
+                                                         card_document(card, peers, card_plots(card)))
+    return paths

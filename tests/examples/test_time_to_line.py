@@ -44,7 +44,7 @@ def test_a_sweep_scores_summarises_and_reports_it(time_to_line_installed, tmp_pa
 def test_a_scorecard_row_shows_it(time_to_line_installed, tmp_path, monkeypatch, capsys):
     from racf.experiments.scorecard import battery as battery_module
     from racf.experiments.scorecard.battery import Battery, LoopRow, _paper
-    from racf.experiments.scorecard.report import card_rows
+    from racf.experiments.scorecard.rows import card_rows
     from tests.conftest import write_bench_dataset
 
     tiny = Battery(name="tiny-ttl", loop=(LoopRow("paper_attack", "attack", 1, 1, _paper("attack")),), drives=(),

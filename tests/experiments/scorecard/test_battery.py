@@ -72,7 +72,7 @@ def test_a_following_row_is_rated_by_collisions_and_needless_hard_brakes_not_by_
     import pandas as pd
 
     from racf.experiments.scorecard.card import _following_summary
-    from racf.experiments.scorecard.report import card_rows
+    from racf.experiments.scorecard.rows import card_rows
 
     frame = pd.DataFrame({"no_lead_collision": [True, True, True, False, None], "needless_hard_brakes": [0, 2, 0, 1, 3]})
     summary = {"scr": None, "scr_ci": [None, None], "n_attack_before_t_star": 3, "scr_attack_before_t_star": 0.0,

@@ -44,8 +44,9 @@ def test_a_card_fills_every_section_and_a_rerun_reuses_everything(tmp_path, data
     assert card["timing"]["episodes_run"] == card["timing"]["episodes"] == 5 and again["timing"]["episodes_run"] == 0
     paths = write_scorecard([card], tmp_path)
     assert "NaN" not in paths["json"].read_text() and "quick battery" in paths["md"].read_text()
-    page = paths["html"].read_text()
-    assert page.count("data:image/png;base64") == 3 and "<table>" in page and "|---" not in page  # tables, not Markdown
+    page = paths["card ekf"].read_text()  # its page: the ROC (or why none) and the ramp's plot, under their sections
+    assert page.count("data:image/png;base64") + page.count("No ROC to draw") == 2
+    assert "<table" in page and "|---" not in page  # tables, not Markdown
 
 
 def test_compare_marks_rows_whose_intervals_do_not_overlap():

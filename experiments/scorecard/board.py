@@ -1,0 +1,116 @@
+"""The leaderboard at a glance, as HTML inside the Markdown page: per battery, one line per defence
+with its headline (sortable by any column: ``docs/javascripts/board.js``), then a heatmap of the
+battery's rows against the defences, each cell coloured by its rate, its interval beneath and its N
+on hover. A defence's name leads to its card page (``cards/<battery>-<defence>.md``).
+
+The colour says how good a value is (green good, red bad), whichever way its measure points; the
+numbers stay in the cell, so the colour is never the only carrier (and the heatmap reads in grey).
+"""
+
+from __future__ import annotations
+
+import html
+from pathlib import Path
+from typing import Callable
+
+from racf.experiments.scorecard.headline import HEADLINE_COLUMNS, Rate, headline, row_rates
+
+__all__ = ["board_html", "card_page_name", "heat_colour", "BOARD_JS"]
+
+
+def card_page_name(battery: str, defence: str) -> str:
+    """The card page of a defence on a battery, relative to ``docs/results/``."""
+    return f"cards/{battery}-{defence}.md"
+
+
+def heat_colour(value: float, higher_is_better: bool) -> str:
+    """A background from red (bad) through amber to green (good) for a rate in [0, 1]."""
+    good = min(max(value if higher_is_better else 1.0 - value, 0.0), 1.0)
+    return f"hsl({round(120 * good)}, 70%, {round(88 - 10 * good)}%)"
+
+
+def _interval(rate: Rate, digits: int = 2) -> str:
+    return f"[{rate.ci[0]:.{digits}f}, {rate.ci[1]:.{digits}f}]" if rate.ci else ""
+
+
+def _rate_cell(rate: Rate | None, higher_is_better: bool, what: str, note: str = "") -> str:
+    """A rate's cell: coloured, the value, its interval and N beneath, all of it on hover."""
+    if rate is None:
+        return '<td data-sort="">-</td>'
+    hover = html.escape(f"{what}: {rate.value:.3f} {_interval(rate, 3)}, N {rate.n}", quote=True)
+    extra = f"<br><small>{html.escape(note)}</small>" if note else ""
+    return (f'<td data-sort="{rate.value:.6f}" title="{hover}" style="background:{heat_colour(rate.value, higher_is_better)}">'
+            f'<b>{rate.value:.2f}</b><br><small>{_interval(rate)} N {rate.n}</small>{extra}</td>')
+
+
+def _headline_table(cards: list[dict], battery: str, href) -> list[str]:
+    heads = [headline(c) for c in cards]
+    columns = [(key, label, hib) for key, label, hib in HEADLINE_COLUMNS
+               if any(h.get(key) is not None for h in heads)]
+    out = ['<table class="racf-board racf-sortable">', "<thead><tr><th>defence</th>"
+           + "".join(f'<th title="click to sort">{html.escape(label)}</th>' for _, label, _ in columns) + "</tr></thead>",
+           "<tbody>"]
+    for h in sorted(heads, key=lambda h: -(h.worst.value if h.worst else -1)):
+        name = html.escape(h.defence)
+        cells = [f'<td data-sort="{name}">{_name(h.defence, battery, href)}</td>']
+        for key, label, hib in columns:
+            value = h.get(key)
+            if key == "trainable":
+                cells.append(f'<td data-sort="{value if value is not None else ""}">'
+                             f'{"-" if value is None else f"{value:,}"}</td>')
+            elif key == "worst" and value is not None:
+                cells.append(_rate_cell(value, hib, f"{label} ({value.row})", note=str(value.row)))
+            else:
+                cells.append(_rate_cell(value, hib, label))
+        out.append("<tr>" + "".join(cells) + "</tr>")
+    return out + ["</tbody></table>"]
+
+
+def _heatmap(cards: list[dict], battery: str, href) -> list[str]:
+    names = [c["defence"] for c in cards]
+    grid: dict[tuple[str, str], dict[str, tuple[Rate, bool]]] = {}
+    titles: dict[str, str] = {}
+    for card in cards:
+        for key, title, measure, rate, hib, _ in row_rates(card):
+            grid.setdefault((key, measure), {})[card["defence"]] = (rate, hib)
+            titles[key] = title
+    head = "".join(f"<th>{_name(n, battery, href)}</th>" for n in names)
+    out = ['<table class="racf-heatmap">', f"<thead><tr><th>row</th><th>measure</th>{head}</tr></thead>", "<tbody>"]
+    measures = {}
+    for key, measure in grid:
+        measures[key] = measures.get(key, 0) + 1
+    shown = set()
+    for (key, measure), cells in grid.items():
+        row = [] if key in shown else [
+            f'<td class="racf-row" rowspan="{measures[key]}" title="{html.escape(key, quote=True)}">'
+            f"{html.escape(titles[key])}</td>"]
+        shown.add(key)
+        row.append(f"<td>{html.escape(measure)}</td>")
+        for name in names:
+            rate, hib = cells.get(name, (None, True))
+            row.append(_rate_cell(rate, hib, f"{name}, {measure}"))
+        out.append("<tr>" + "".join(row) + "</tr>")
+    return out + ["</tbody></table>"]
+
+
+def _name(defence: str, battery: str, href) -> str:
+    code = f"<code>{html.escape(defence)}</code>"
+    link = None if href is None else href(battery, defence)
+    return code if link is None else f'<a href="{html.escape(link, quote=True)}">{code}</a>'
+
+
+def card_page_name_for_site(battery: str, defence: str) -> str:
+    """A card's page as the results site links it (from ``results/leaderboard.md``)."""
+    return card_page_name(battery, defence)
+
+
+def board_html(cards: list[dict], battery: str, href: Callable[[str], str] | None = card_page_name_for_site) -> str:
+    """A battery's board: the sortable headline table, then the heatmap (one HTML block each).
+    ``href(battery, defence)`` gives the link of a defence's card (None: no links)."""
+    return "\n".join(["<div class=\"racf-board-wrap\" markdown=\"0\">", *_headline_table(cards, battery, href),
+                      "</div>", "", "<div class=\"racf-heatmap-wrap\" markdown=\"0\">",
+                      *_heatmap(cards, battery, href), "</div>"])
+
+
+#: The board's sorting script (the site loads it as ``javascripts/board.js``; a scorecard's page inlines it).
+BOARD_JS = Path(__file__).with_name("assets") / "board.js"
