@@ -17,7 +17,7 @@ from pathlib import Path
 from typing import Iterator
 
 from racf.errors import EpisodeFailed, Interrupted, UserError
-from racf.experiments.cli import (bags, bench, data, detector, falsify, odca, onboard, scorecard, serve, stress, sweep,
+from racf.experiments.cli import (bags, bench, board, data, detector, falsify, odca, onboard, scorecard, serve, stress, sweep,
                                   trials, view)
 from racf.experiments.cli.common import Parser, fail, load_plugins_from_argv
 from racf.experiments.cli.groups import add_groups, canonical_argv
@@ -25,7 +25,7 @@ from racf.experiments.cli.groups import add_groups, canonical_argv
 __all__ = ["main", "build_parser", "GROUPS"]
 
 #: The command groups, in the order ``racf --help`` lists their commands.
-GROUPS = (view, trials, sweep, scorecard, falsify, data, odca, onboard, detector, bench, bags, serve, stress)
+GROUPS = (view, trials, sweep, scorecard, board, falsify, data, odca, onboard, detector, bench, bags, serve, stress)
 
 #: Exit codes: a user's mistake, episodes that failed, an interrupt (128 + SIGINT, as shells use).
 EXIT_USAGE, EXIT_FAILED, EXIT_INTERRUPTED = 2, 1, 130

@@ -37,15 +37,19 @@ def leaderboard_markdown(d) -> str:
              "a name opens the defence's card), then every row of the battery, coloured from red (bad) to green "
              "(good) whichever way its measure points, with its interval and N beneath (and on hover). "
              "A battery never changes: a new row makes a new battery, and its board stands above the older ones.", ""]
-    stored = [name for name in reversed(list(BATTERIES)) if f"scorecard-{name}" in d]
-    if not stored:
+    boards = _boards(d)
+    if not boards:
         return "\n".join(lines + _missing(f"scorecard-{DEFAULT_BATTERY}",
                                           "racf scorecard --defence raw ekf chronos odca chi2 cusum"))
-    for name in stored:
-        data = d[f"scorecard-{name}"]
+    for name in [b for b in reversed(list(BATTERIES)) if b in boards]:
+        meta, cards, submitted = boards[name]
         title = BATTERY_TITLES.get(name)
-        lines += [f"## `{name}`" + (f": {title}" if title else ""), "", *_meta(data["meta"]),
-                  board_html(data["cards"], name), "", _penalties(data["cards"]), ""]
+        lines += [f"## `{name}`" + (f": {title}" if title else ""), ""]
+        lines += _meta(meta) if meta else []
+        if submitted:
+            lines += ["Submitted, each measured by its own command (its card page names it and where its code is): "
+                      + ", ".join(f"`{c['defence']}`" for c in submitted) + ".", ""]
+        lines += [board_html(cards + submitted, name), "", _penalties(cards + submitted), ""]
     if "scorecard-timing" in d:
         cold = d["scorecard-timing"]
         walls = ", ".join(f"`{name}` {t['wall_s'] / 60:.1f} min" for name, t in cold["cold_run"]["cards"].items())
@@ -63,26 +67,50 @@ def _penalties(cards: list[dict]) -> str:
             "Driving-score penalties: " + ", ".join(f"{k.replace('_', ' ')} x {v}" for k, v in penalties.items()) + ".")
 
 
+def _boards(d) -> dict[str, tuple[dict | None, list[dict], list[dict]]]:
+    """Per battery: the stored result's provenance, racf's own cards, and the submitted cards
+    (``docs/results/submissions/``, beside the data folder), each marked ``submitted``."""
+    from racf.experiments.scorecard.submission import load_submissions
+
+    boards: dict = {}
+    for path in sorted(d.root.glob("scorecard-*.json")):
+        data = d[path.stem]
+        for card in data.get("cards", []):
+            boards.setdefault(card["battery"], (data["meta"], [], []))[1].append(card)
+    for sub in load_submissions(d.root.parent / "submissions"):
+        battery = sub.card["battery"]
+        boards.setdefault(battery, (None, [], []))[2].append({**sub.card, "submitted": sub.submitted})
+    return boards
+
+
 def card_pages(root) -> dict[str, Callable[[], str]]:
-    """Every stored card's page, by its path under ``docs/results/`` (``cards/<battery>-<defence>.md``),
-    each written when asked."""
-    from racf.experiments.scorecard.board import card_page_name
+    """Every stored or submitted card's page, by its path under ``docs/results/``
+    (``cards/<battery>-<defence>.md``), each written when asked."""
     from racf.experiments.pages.results_format import StoredResults
+    from racf.experiments.scorecard.board import card_page_name
 
     d = StoredResults(root)
     pages = {}
-    for path in sorted(d.root.glob("scorecard-*.json")):
-        for card in d[path.stem].get("cards", []):
-            pages[card_page_name(card["battery"], card["defence"])] = partial(_card_page, d, path.stem, card["defence"])
+    for battery, (_, cards, submitted) in _boards(d).items():
+        for card in cards + submitted:
+            pages[card_page_name(battery, card["defence"])] = partial(_card_page, d, battery, card["defence"])
     return pages
 
 
-def _card_page(d, result: str, defence: str) -> str:
+def _card_page(d, battery: str, defence: str) -> str:
     from racf.experiments.scorecard.card_page import card_fragment
+    from racf.experiments.scorecard.submission import load_submissions
 
-    data = d[result]
-    card = next(c for c in data["cards"] if c["defence"] == defence)
-    return "\n".join([*_FRONT_MATTER, f"# `{defence}` on battery `{card['battery']}`", "",
-                      f"One defence's card, beside raw depth's and the best of the other defences carded on "
-                      f"`{card['battery']}` ([the leaderboard](../leaderboard.md) sets them all side by side).", "",
-                      *_meta(data["meta"]), card_fragment(card, data["cards"]), ""])
+    meta, cards, submitted = _boards(d)[battery]
+    card = next(c for c in cards + submitted if c["defence"] == defence)
+    lines = [*_FRONT_MATTER, f"# `{defence}` on battery `{battery}`", "",
+             f"One defence's card, beside raw depth's and the best of the other defences carded on `{battery}` "
+             "([the leaderboard](../leaderboard.md) sets them all side by side).", ""]
+    if card.get("submitted"):
+        sub = next(s for s in load_submissions(d.root.parent / "submissions")
+                   if (s.card["battery"], s.card["defence"]) == (battery, defence))
+        lines += [f"*Submitted* {sub.submitted}: measured by `{sub.command}` on racf commit `{card['commit']}`; "
+                  f"its code: `{sub.code}`.", ""]
+    elif meta:
+        lines += _meta(meta)
+    return "\n".join(lines + [card_fragment(card, cards + submitted), ""])

@@ -45,6 +45,7 @@ def _rate_cell(rate: Rate | None, higher_is_better: bool, what: str, note: str =
 
 def _headline_table(cards: list[dict], battery: str, href) -> list[str]:
     heads = [headline(c) for c in cards]
+    submitted = {c["defence"]: bool(c.get("submitted")) for c in cards}
     columns = [(key, label, hib) for key, label, hib in HEADLINE_COLUMNS
                if any(h.get(key) is not None for h in heads)]
     out = ['<table class="racf-board racf-sortable">', "<thead><tr><th>defence</th>"
@@ -52,7 +53,8 @@ def _headline_table(cards: list[dict], battery: str, href) -> list[str]:
            "<tbody>"]
     for h in sorted(heads, key=lambda h: -(h.worst.value if h.worst else -1)):
         name = html.escape(h.defence)
-        cells = [f'<td data-sort="{name}">{_name(h.defence, battery, href)}</td>']
+        mark = " <small>submitted</small>" if submitted.get(h.defence) else ""
+        cells = [f'<td data-sort="{name}">{_name(h.defence, battery, href)}{mark}</td>']
         for key, label, hib in columns:
             value = h.get(key)
             if key == "trainable":

@@ -24,11 +24,19 @@ from racf.experiments.scorecard.battery import PENALTIES, Battery
 from racf.experiments.scorecard.detection import detection_rows
 from racf.experiments.scorecard.drives import driving_rows
 from racf.experiments.scorecard.link import link_services
-from racf.provenance import atomic_write
+from racf.provenance import atomic_write, commit
 from racf.experiments.sweeps.store import ResultStore
 from racf.experiments.sweeps.summary import plugin_measures, stealth_summary, summarize
 
-__all__ = ["run_card", "card_version"]
+__all__ = ["run_card", "card_version", "racf_commit"]
+
+
+def racf_commit() -> str:
+    """The commit of the racf checkout the card runs (``+changes`` if its code differs from it; not a
+    checkout, for an installed wheel): what ``racf board check`` asks of a card for the board."""
+    import racf
+
+    return commit(Path(racf.__file__).resolve().parents[1])
 
 
 def card_version(defence: str) -> str:
@@ -125,7 +133,8 @@ def run_card(defence: str, battery: Battery, out: Path, *, quick: bool = False, 
     t0 = time.perf_counter()
     out = Path(out)
     card: dict = {"battery": battery.name + ("-quick" if quick else ""), "quick": quick, "defence": defence,
-                  "version": card_version(defence), "sensor_profile": "qcar2", "closed_loop": {}, "drives": {}}
+                  "version": card_version(defence), "commit": racf_commit(), "options": dict(options or {}),
+                  "sensor_profile": "qcar2", "closed_loop": {}, "drives": {}}
     timing: dict = {}
     links = {row.link for row in battery.rows() if row.link}
     with link_services(defence, options, links, out) if links else nullcontext({}) as served:

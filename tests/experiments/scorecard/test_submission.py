@@ -1,0 +1,88 @@
+"""A card's way onto the board: the check (full battery, full N, a version and a committed tree),
+the submission file, and the regenerated board with the submitted card beside racf's own."""
+
+import json
+
+import pytest
+
+from racf.errors import UserError
+from racf.experiments.cli import main
+from racf.experiments.scorecard.battery import BATTERIES
+from racf.experiments.scorecard.submission import Submission, card_problems, load_card
+
+
+def full_card(defence="mine", battery="racf-link", **extra):
+    rows = {row.key: {"title": row.title, "scr": 0.9, "scr_ci": [0.8, 0.95], "n": row.n}
+            for row in BATTERIES[battery].rows()}
+    return {"defence": defence, "battery": battery, "quick": False, "version": "racf 0.1.0, code 0123456789ab",
+            "commit": "abc1234", "sensor_profile": "qcar2", "closed_loop": rows, "drives": {}, "detection": None,
+            "penalties": {"ran_stop_sign": 0.8}, "timing": {"wall_s": 1.0},
+            "cost": {"parameters": {"trainable": 3, "from": "declared"}}, **extra}
+
+
+def test_a_full_card_on_a_committed_tree_may_go_on_the_board():
+    assert card_problems(full_card()) == []
+
+
+@pytest.mark.parametrize("change, words", [
+    (lambda c: c.update(quick=True), "quick card"),
+    (lambda c: c["closed_loop"].pop("link_drop"), "row 'link_drop' is missing"),
+    (lambda c: c["closed_loop"]["link_drop"].update(n=4), "row 'link_drop' has N 4, the battery's is 30"),
+    (lambda c: c.update(commit="abc1234+changes"), "uncommitted changes"),
+    (lambda c: c.pop("commit"), "names no commit"),
+    (lambda c: c.update(version="racf 0.1.0"), "names no code digest"),
+    (lambda c: c.update(battery="racf-9"), "is none of racf's"),
+])
+def test_each_thing_that_keeps_a_card_off_the_board_is_named(change, words):
+    card = full_card()
+    change(card)
+    assert any(words in p for p in card_problems(card))
+
+
+def test_a_card_with_nan_or_no_card_at_all_is_one_line(tmp_path):
+    (tmp_path / "nan.json").write_text('{"defence": "x", "battery": "racf-5", "closed_loop": {"r": NaN}}')
+    with pytest.raises(UserError, match="strict JSON"):
+        load_card(tmp_path / "nan.json")
+    (tmp_path / "list.json").write_text("[1, 2]")
+    with pytest.raises(UserError, match="not a card"):
+        load_card(tmp_path / "list.json")
+
+
+def test_a_name_the_board_has_is_refused():
+    with pytest.raises(UserError, match="already has a defence named 'odca'"):
+        Submission.make(full_card("odca"), "racf", "racf scorecard --defence odca", taken={"odca"})
+
+
+def test_a_submitted_card_appears_on_the_regenerated_board_beside_racf_s_own(tmp_path, capsys):
+    from racf.experiments.pages.leaderboard_page import card_pages, leaderboard_markdown
+    from racf.experiments.pages.results_format import StoredResults
+
+    data = tmp_path / "results" / "data"
+    data.mkdir(parents=True)
+    meta = {"command": "racf scorecard", "commit": "abc1234", "racf": "0.1.0", "machine": "m", "measured": "d"}
+    (data / "scorecard-racf-link.json").write_text(json.dumps({"meta": meta, "cards": [full_card("raw")]}))
+    (tmp_path / "mine.json").write_text(json.dumps(full_card("mine")))
+    into = tmp_path / "results" / "submissions"
+    code = main(["board", "submit", str(tmp_path / "mine.json"), "--code", "racf-mine==1.0",
+                 "--command", "racf scorecard --defence mine --battery racf-link --json", "--into", str(into)])
+    assert code == 0 and (into / "racf-link-mine.json").exists()
+    page = leaderboard_markdown(StoredResults(data))
+    assert "<code>raw</code>" in page and "<code>mine</code></a> <small>submitted</small>" in page
+    pages = card_pages(data)
+    assert "`racf-mine==1.0`" in pages["cards/racf-link-mine.md"]() and "cards/racf-link-raw.md" in pages
+    # A quick card is refused in one line, and nothing is written.
+    (tmp_path / "quick.json").write_text(json.dumps(full_card("quick", quick=True)))
+    capsys.readouterr()
+    assert main(["board", "submit", str(tmp_path / "quick.json"), "--code", "x", "--command", "racf scorecard",
+                 "--into", str(into)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "quick card" in err and not (into / "racf-link-quick.json").exists()
+
+
+def test_board_check_says_per_card_whether_it_may_go(tmp_path, capsys):
+    (tmp_path / "ok.json").write_text(json.dumps(full_card()))
+    (tmp_path / "dirty.json").write_text(json.dumps(full_card(commit="abc1234+changes")))
+    assert main(["board", "check", str(tmp_path / "ok.json")]) == 0
+    assert main(["board", "check", str(tmp_path / "ok.json"), str(tmp_path / "dirty.json")]) == 2
+    out = capsys.readouterr().out
+    assert "ok.json: mine on racf-link: may go on the board" in out and "dirty.json" in out and "not yet" in out
