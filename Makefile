@@ -16,7 +16,7 @@ export MUJOCO_GL ?= egl
 # every test process, spawned worker and `racf` subprocess compile racf and the tests again.
 unexport PYTHONDONTWRITEBYTECODE
 
-.PHONY: demo test test-all check-slow check-speed docs bench bench-sim snapshot trials bench-detector clean
+.PHONY: browser demo test test-all check-slow check-speed docs bench bench-sim snapshot trials bench-detector clean
 
 $(PY):
 	$(PYTHON) -m venv $(VENV)
@@ -45,8 +45,13 @@ test: $(STAMP)
 test-all: $(STAMP)
 	$(PY) -m pytest -q -m "" --durations=10
 
+# Debian's Chromium for the browser test (tests/docs/test_site_browser.py): the machine's package,
+# never a browser that pip or Playwright downloads. Installs it where it is missing (as root).
+browser:
+	@command -v chromium >/dev/null || (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium >/dev/null)
+
 # The slow checks, spread test by test over the cores (a page's slow blocks are one test each).
-check-slow: $(STAMP)
+check-slow: $(STAMP) browser
 	$(SINGLE_THREAD) $(PY) -m pytest -q -m slow -n auto --dist load --durations=15
 
 # The speed guard: the closed loop's step cost over bare physics, on one core, against the ratio

@@ -102,8 +102,9 @@ def _name(defence: str, battery: str, href) -> str:
 
 
 def card_page_name_for_site(battery: str, defence: str) -> str:
-    """A card's page as the results site links it (from ``results/leaderboard.md``)."""
-    return card_page_name(battery, defence)
+    """A card's page as the results site links it from ``results/leaderboard.html``: the built page
+    (mkdocs rewrites the links of Markdown, not those of the HTML the board is written in)."""
+    return card_page_name(battery, defence).removesuffix(".md") + ".html"
 
 
 def board_html(cards: list[dict], battery: str, href: Callable[[str], str] | None = card_page_name_for_site) -> str:
