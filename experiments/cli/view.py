@@ -1,4 +1,5 @@
-"""``racf demo``, ``racf snapshot`` and ``racf view``: the story, a picture of the map, recordings."""
+"""``racf demo``, ``racf snapshot``, ``racf moment`` and ``racf view``: the story, a picture of the map,
+an episode's moment, recordings."""
 
 from __future__ import annotations
 
@@ -8,6 +9,7 @@ import sys
 from pathlib import Path
 
 from racf.experiments.cli.common import output_dir, positive, sensor_flags, sign, speed
+from racf.experiments.cli.episode_flags import trial_flags
 
 __all__ = ["register"]
 
@@ -31,9 +33,56 @@ def register(sub: argparse._SubParsersAction) -> None:
     sensor_flags(d)
     d.set_defaults(handler=_demo)
 
+    m = sub.add_parser("moment", help="a picture of an episode at the moment that matters: the camera and the depth "
+                                       "when the attack acts and the defence answers, and the distances over the approach",
+                       description="Runs the episode racf trial's flags name (or, with --sweep and --episode, one "
+                                   "of a sweep's) and draws, from the episode itself, what the car's camera and "
+                                   "depth showed at the moment the attack acted and the defence answered, beside what "
+                                   "stood there, and the distances over the approach with that moment marked.")
+    trial_flags(m)
+    m.add_argument("--sweep", type=Path, default=None, metavar="FOLDER",
+                   help="a sweep's output folder (holding spec.toml): with --episode, draw one of its episodes")
+    m.add_argument("--episode", default=None, metavar="ID", help="the episode's id (its trial_id) in --sweep")
+    m.add_argument("--out", type=Path, default=Path("outputs/moment.png"), metavar="PNG",
+                   help="the picture to write (default outputs/moment.png)")
+    m.set_defaults(handler=_moment)
+
     vw = sub.add_parser("view", help="open a rerun recording (.rrd) in the rerun viewer")
     vw.add_argument("path", type=Path, help="the .rrd file (racf demo, racf trial --rerun)")
     vw.set_defaults(handler=_view)
+
+
+def _moment(args: argparse.Namespace) -> int:
+    from racf.experiments.cli.common import fail
+    from racf.experiments.cli.episode_flags import trial_spec
+    from racf.experiments.viz.moment import moment_figure
+
+    if (args.sweep is None) != (args.episode is None):
+        fail("moment", "--sweep and --episode go together: the sweep's folder and one of its episode ids")
+    spec = _sweep_episode(args.sweep, args.episode) if args.sweep is not None else trial_spec(args, "moment")
+    path = moment_figure(spec, args.out)
+    print(f"wrote {path}: {spec.trial_id}")
+    return 0
+
+
+def _sweep_episode(folder: Path, episode: str):
+    """The spec of one episode of the sweep in ``folder``, by its id."""
+    from racf.errors import UserError
+    from racf.experiments.sweeps.spec import parse_spec
+
+    spec_file = folder / "spec.toml"
+    if not spec_file.is_file():
+        raise UserError(f"{folder} holds no sweep (no spec.toml): give the folder racf sweep wrote")
+    episodes = {s.trial_id: s for s in parse_spec(spec_file.read_text()).episodes()}
+    if episode not in episodes:
+        stem = episode.rsplit("_", 1)[0]
+        if any(i.rsplit("_", 1)[0] == stem for i in episodes):
+            raise UserError(f"episode {episode!r} was run by other code than this checkout's (its ids end in "
+                            f"{next(iter(episodes)).rsplit('_', 1)[1]!r}): check out the commit the sweep ran on")
+        first = next(iter(episodes), None)
+        raise UserError(f"the sweep in {folder} has no episode {episode!r} (its ids look like {first!r}; "
+                        "the parts/*.parquet rows name them)")
+    return episodes[episode]
 
 
 def _snapshot(args: argparse.Namespace) -> int:

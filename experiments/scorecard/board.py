@@ -33,14 +33,16 @@ def _interval(rate: Rate, digits: int = 2) -> str:
     return f"[{rate.ci[0]:.{digits}f}, {rate.ci[1]:.{digits}f}]" if rate.ci else ""
 
 
-def _rate_cell(rate: Rate | None, higher_is_better: bool, what: str, note: str = "") -> str:
-    """A rate's cell: coloured, the value, its interval and N beneath, all of it on hover."""
+def _rate_cell(rate: Rate | None, higher_is_better: bool, what: str, note: str = "", show_n: bool = True) -> str:
+    """A rate's cell: coloured, the value, its interval beneath (and N, unless the table says it
+    elsewhere), all of it on hover."""
     if rate is None:
         return '<td data-sort="">-</td>'
     hover = html.escape(f"{what}: {rate.value:.3f} {_interval(rate, 3)}, N {rate.n}", quote=True)
     extra = f"<br><small>{html.escape(note)}</small>" if note else ""
+    n = f" N {rate.n}" if show_n else ""
     return (f'<td data-sort="{rate.value:.6f}" title="{hover}" style="background:{heat_colour(rate.value, higher_is_better)}">'
-            f'<b>{rate.value:.2f}</b><br><small>{_interval(rate)} N {rate.n}</small>{extra}</td>')
+            f'<b>{rate.value:.2f}</b><br><small>{_interval(rate)}{n}</small>{extra}</td>')
 
 
 def _headline_table(cards: list[dict], battery: str, href) -> list[str]:
@@ -77,20 +79,23 @@ def _heatmap(cards: list[dict], battery: str, href) -> list[str]:
             grid.setdefault((key, measure), {})[card["defence"]] = (rate, hib)
             titles[key] = title
     head = "".join(f"<th>{_name(n, battery, href)}</th>" for n in names)
-    out = ['<table class="racf-heatmap">', f"<thead><tr><th>row</th><th>measure</th>{head}</tr></thead>", "<tbody>"]
+    out = ['<table class="racf-heatmap">', f"<thead><tr><th>row</th><th>N</th><th>measure</th>{head}</tr></thead>",
+           "<tbody>"]
     measures = {}
     for key, measure in grid:
         measures[key] = measures.get(key, 0) + 1
     shown = set()
     for (key, measure), cells in grid.items():
+        counts = sorted({rate.n for rate, _ in cells.values()})
         row = [] if key in shown else [
             f'<td class="racf-row" rowspan="{measures[key]}" title="{html.escape(key, quote=True)}">'
-            f"{html.escape(titles[key])}</td>"]
+            f"{html.escape(titles[key])}</td>",
+            f'<td rowspan="{measures[key]}">{"/".join(map(str, counts))}</td>']
         shown.add(key)
         row.append(f"<td>{html.escape(measure)}</td>")
-        for name in names:
+        for name in names:  # N stands once a row, beside its title (every defence runs the same episodes)
             rate, hib = cells.get(name, (None, True))
-            row.append(_rate_cell(rate, hib, f"{name}, {measure}"))
+            row.append(_rate_cell(rate, hib, f"{name}, {measure}", show_n=False))
         out.append("<tr>" + "".join(row) + "</tr>")
     return out + ["</tbody></table>"]
 

@@ -29,7 +29,8 @@ DEMO_SETTINGS = ("clean", "attack", "attack+odca")
 def run_demo(out_dir: Path, sign: int = 1, speed: float = 1.5, seed: int = 0,
              settings: tuple[str, ...] = DEMO_SETTINGS, progress: bool = True, sensor_profile: str = "qcar2",
              sign_geometry: str = "plate") -> dict:
-    """Runs the settings at one sign and writes ``<setting>.rrd``, ``<setting>.parquet`` and ``demo_traces.png``."""
+    """Runs the settings at one sign and writes ``<setting>.rrd``, ``<setting>.parquet``, ``demo_traces.png``
+    and ``moment.png`` (the defended run at the moment the attack acts: ``racf.experiments.viz.moment``)."""
     from tqdm import tqdm
 
     from racf.experiments.episode import TrialSpec
@@ -50,8 +51,15 @@ def run_demo(out_dir: Path, sign: int = 1, speed: float = 1.5, seed: int = 0,
                      "stop_distance_m": r["stop_distance_m"], "trigger_delay_s": r["trigger_delay_s"],
                      "dt_brake_s": r["dt_brake_s"], "failure": r["failure"], "rrd": str(rrd)})
     png = traces_figure(logs, out_dir / "demo_traces.png", sign, speed)
-    return {"sign": sign, "speed": speed, "seed": seed, "sensor_profile": sensor_profile,
-            "sign_geometry": sign_geometry, "runs": rows, "png": str(png)}
+    summary = {"sign": sign, "speed": speed, "seed": seed, "sensor_profile": sensor_profile,
+               "sign_geometry": sign_geometry, "runs": rows, "png": str(png)}
+    defended = next((s for s in settings if s.startswith("attack+")), None)
+    if defended is not None:  # the moment the attack acts and the defence answers (the README's figure)
+        from racf.experiments.viz.moment import moment_figure
+
+        spec = TrialSpec(defended, sign, speed, seed, sensor_profile=sensor_profile, sign_geometry=sign_geometry)
+        summary["moment_png"] = str(moment_figure(spec, out_dir / "moment.png", logs[defended]))
+    return summary
 
 
 def demo_table(summary: dict) -> str:

@@ -2,8 +2,9 @@
 on a virtual screen): ``python -m racf.experiments.viz.screenshot REC.rrd OUT.png``.
 
 It needs what rerun's viewer needs without a display: ``xvfb-run`` and a Vulkan driver for the
-CPU (Debian: ``apt-get install xvfb mesa-vulkan-drivers``). The docs' picture of the recording
-(``docs/recording.png``) is made by it from ``make demo``'s ``attack_odca.rrd``.
+CPU (Debian: ``apt-get install xvfb mesa-vulkan-drivers``). rerun's viewer opens a recording at a
+time of its own choosing (0.41 cannot set its cursor from a blueprint), so the docs' pictures of a
+moment are drawn from the episode instead (``racf moment``, :mod:`racf.experiments.viz.moment`).
 """
 
 from __future__ import annotations

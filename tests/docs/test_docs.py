@@ -94,7 +94,8 @@ def _run_page(page: Path, tmp_path: Path, slow: bool, monkeypatch) -> None:
     code = _runnable(page, slow)
     env = {**os.environ, "MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl"),
            "PATH": f"{Path(sys.executable).parent}{os.pathsep}{os.environ.get('PATH', '')}"}
-    (tmp_path / "examples").symlink_to(ROOT / "examples")  # pages name the examples from the checkout's root
+    for shared in ("examples", "docs"):  # pages name the examples and the stored results from the checkout's root
+        (tmp_path / shared).symlink_to(ROOT / shared)
     monkeypatch.chdir(tmp_path)
     # A page's Python blocks share one namespace, in order, run as a script is (a spawned worker's
     # __main__ guard holds, as it does when a user pastes the block into a file).

@@ -99,9 +99,11 @@ def test_the_leaderboard_sorts_and_its_boards_fit_1280_px(site, browser):
             assert box.evaluate("e => e.scrollWidth - e.clientWidth") <= 0, (battery, wrap)
         # The heatmap shows every defence and every row the stored cards have.
         cards = json.loads((ROOT / "docs/results/data" / f"scorecard-{battery}.json").read_text())["cards"]
+        submitted = [json.loads(p.read_text())["card"]["defence"]
+                     for p in sorted((ROOT / "docs/results/submissions").glob(f"{battery}-*.json"))]
         heat = heading.locator("xpath=following::table[contains(@class, 'racf-heatmap')][1]")
         shown = heat.locator("thead th code").all_inner_texts()
-        assert shown == [c["defence"] for c in cards]
+        assert shown == [c["defence"] for c in cards] + submitted
         assert heat.locator("td.racf-row").count() == len(cards[0]["closed_loop"])
     board = page.locator("table.racf-sortable").first
     head = board.locator("th", has_text="attacked rows, pooled")
@@ -132,4 +134,13 @@ def test_a_card_shows_its_headline_in_the_first_screen(site, browser):
 def test_a_phone_reads_the_leaderboard_without_scrolling_the_page_sideways(site, browser):
     page, problems = open_page(browser, (site / "results" / "leaderboard.html").as_uri(), width=390)
     assert page.evaluate("document.documentElement.scrollWidth - document.documentElement.clientWidth") <= 0
+    assert problems == []
+
+
+def test_the_recording_page_shows_the_moment(site, browser):
+    page, problems = open_page(browser, (site / "getting-started.html").as_uri())
+    picture = page.locator("img[src$='moment.png']")
+    assert picture.count() == 1 and picture.evaluate("i => i.complete && i.naturalWidth > 1000")
+    SHOTS.mkdir(parents=True, exist_ok=True)
+    picture.screenshot(path=str(SHOTS / "moment.png"))
     assert problems == []
