@@ -30,7 +30,7 @@ def leaderboard_markdown(d) -> str:
     from racf.experiments.scorecard.board import board_html
     from racf.experiments.scorecard.battery import BATTERIES, DEFAULT_BATTERY
 
-    lines = [*_FRONT_MATTER, *_page_head("Leaderboard: which defence holds, and where each fails"),
+    lines = [*_page_head("Leaderboard: which defence holds, and where each fails"),
              "`racf scorecard --defence NAME` rates a defence, built-in or plug-in, on a fixed battery "
              "([the tutorial](../tutorials/scorecard.md) says what is in it; [submit yours](../tutorials/submit-a-card.md)). "
              "Per battery: one line per defence, its worst attacked row first (click a column's head to sort by it; "

@@ -15,9 +15,13 @@ NOTE = ("Written by `racf.experiments.pages.results_pages` from the stored resul
         "95 %: Wilson for rates, bootstrap for medians and RMSE.")
 
 
+#: A results page gives the table of contents' width to its tables (the menu stays).
+FRONT_MATTER = ["---", "hide:", "  - toc", "---", ""]
+
+
 def page_head(title: str, *intro: str) -> list[str]:
-    """A results page's first lines: its title, where its numbers come from, and its intro."""
-    lines = [f"# {title}", "", NOTE, ""]
+    """A results page's first lines: its settings, its title, where its numbers come from, and its intro."""
+    lines = [*FRONT_MATTER, f"# {title}", "", NOTE, ""]
     for paragraph in intro:
         lines += [paragraph, ""]
     return lines

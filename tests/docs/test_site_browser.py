@@ -74,6 +74,10 @@ def test_every_page_loads_clean_fits_1280_px_and_its_links_and_images_resolve(si
         overflow = page.evaluate("document.documentElement.scrollWidth - document.documentElement.clientWidth")
         if overflow > 0:
             problems.append(f"{overflow} px of horizontal scroll at {WIDTH} px")
+        # Nor a table that scrolls sideways in its own box (the theme wraps each in one).
+        wide = page.evaluate("Array.from(document.querySelectorAll('.md-typeset__scrollwrap, .racf-board-wrap, "
+                             ".racf-heatmap-wrap')).map(e => e.scrollWidth - e.clientWidth).filter(d => d > 1)")
+        problems += [f"a table {d} px wider than its column at {WIDTH} px" for d in wide]
         broken = page.evaluate("Array.from(document.images).filter(i => !i.complete || i.naturalWidth === 0)"
                                ".map(i => i.getAttribute('src'))")
         problems += [f"image does not load: {src}" for src in broken]
