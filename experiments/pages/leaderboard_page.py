@@ -42,10 +42,11 @@ def leaderboard_markdown(d) -> str:
         return "\n".join(lines + _missing(f"scorecard-{DEFAULT_BATTERY}",
                                           "racf scorecard --defence raw ekf chronos odca chi2 cusum"))
     for name in [b for b in reversed(list(BATTERIES)) if b in boards]:
-        meta, cards, submitted = boards[name]
+        metas, cards, submitted = boards[name]
         title = BATTERY_TITLES.get(name)
         lines += [f"## `{name}`" + (f": {title}" if title else ""), ""]
-        lines += _meta(meta) if meta else []
+        for meta in metas:
+            lines += _meta(meta)
         if submitted:
             lines += ["Submitted, each measured by its own command (its card page names it and where its code is): "
                       + ", ".join(f"`{c['defence']}`" for c in submitted) + ".", ""]
@@ -67,19 +68,23 @@ def _penalties(cards: list[dict]) -> str:
             "Driving-score penalties: " + ", ".join(f"{k.replace('_', ' ')} x {v}" for k, v in penalties.items()) + ".")
 
 
-def _boards(d) -> dict[str, tuple[dict | None, list[dict], list[dict]]]:
-    """Per battery: the stored result's provenance, racf's own cards, and the submitted cards
+def _boards(d) -> dict[str, tuple[list[dict], list[dict], list[dict]]]:
+    """Per battery: the provenance of each stored result that holds its cards, racf's own cards
+    (each with its result's provenance under ``_meta``), and the submitted cards
     (``docs/results/submissions/``, beside the data folder), each marked ``submitted``."""
     from racf.experiments.scorecard.submission import load_submissions
 
     boards: dict = {}
     for path in sorted(d.root.glob("scorecard-*.json")):
         data = d[path.stem]
-        for card in data.get("cards", []):
-            boards.setdefault(card["battery"], (data["meta"], [], []))[1].append(card)
+        for card in data.get("cards", []):  # a battery's cards may come from several stored results
+            metas, cards, _ = boards.setdefault(card["battery"], ([], [], []))
+            if not metas or metas[-1] is not data["meta"]:
+                metas.append(data["meta"])
+            cards.append({**card, "_meta": data["meta"]})
     for sub in load_submissions(d.root.parent / "submissions"):
         battery = sub.card["battery"]
-        boards.setdefault(battery, (None, [], []))[2].append({**sub.card, "submitted": sub.submitted})
+        boards.setdefault(battery, ([], [], []))[2].append({**sub.card, "submitted": sub.submitted})
     return boards
 
 
@@ -101,8 +106,9 @@ def _card_page(d, battery: str, defence: str) -> str:
     from racf.experiments.scorecard.card_page import card_fragment
     from racf.experiments.scorecard.submission import load_submissions
 
-    meta, cards, submitted = _boards(d)[battery]
+    _, cards, submitted = _boards(d)[battery]
     card = next(c for c in cards + submitted if c["defence"] == defence)
+    meta = card.get("_meta")
     lines = [*_FRONT_MATTER, f"# `{defence}` on battery `{battery}`", "",
              f"One defence's card, beside raw depth's and the best of the other defences carded on `{battery}` "
              "([the leaderboard](../leaderboard.md) sets them all side by side).", ""]

@@ -86,3 +86,20 @@ def test_board_check_says_per_card_whether_it_may_go(tmp_path, capsys):
     assert main(["board", "check", str(tmp_path / "ok.json"), str(tmp_path / "dirty.json")]) == 2
     out = capsys.readouterr().out
     assert "ok.json: mine on racf-link: may go on the board" in out and "dirty.json" in out and "not yet" in out
+
+
+def test_a_battery_s_cards_from_two_stored_results_share_one_board_each_with_its_provenance(tmp_path):
+    from racf.experiments.pages.leaderboard_page import card_pages, leaderboard_markdown
+    from racf.experiments.pages.results_format import StoredResults
+
+    def meta(commit):
+        return {"command": f"racf scorecard ({commit})", "commit": commit, "racf": "0.1.0", "machine": "m",
+                "measured": "d"}
+
+    (tmp_path / "scorecard-racf-link.json").write_text(json.dumps({"meta": meta("aaa1111"), "cards": [full_card("raw")]}))
+    (tmp_path / "scorecard-racf-link-more.json").write_text(json.dumps({"meta": meta("bbb2222"),
+                                                                        "cards": [full_card("vote")]}))
+    page = leaderboard_markdown(StoredResults(tmp_path))
+    assert page.count("## `racf-link`") == 1 and "`aaa1111`" in page and "`bbb2222`" in page
+    assert "<code>raw</code>" in page and "<code>vote</code>" in page
+    assert "`bbb2222`" in card_pages(tmp_path)["cards/racf-link-vote.md"]()
