@@ -113,14 +113,22 @@ _FAILURES = {
 }
 
 
-def handshake_failure(monitor) -> str | None:
+def handshake_failure(monitor, wait_ms: float = 0.0) -> str | None:
     """The newest handshake failure among the events waiting on ``monitor`` (a socket's monitor
-    socket), in words; None when there was none."""
+    socket), in words; None when there was none. With ``wait_ms``, events still on their way are
+    waited for up to that long while no failure has come (a loaded machine delivers them late)."""
+    import time
+
     import zmq
     from zmq.utils.monitor import recv_monitor_message
 
     failure = None
-    while monitor is not None and monitor.poll(0):
+    deadline = time.monotonic() + wait_ms / 1000.0
+
+    def left_ms() -> int:
+        return 0 if failure is not None else max(0, int((deadline - time.monotonic()) * 1000.0))
+
+    while monitor is not None and monitor.poll(left_ms()):
         event = zmq.Event(recv_monitor_message(monitor)["event"])
         if event.name in _FAILURES:
             failure = _FAILURES[event.name]

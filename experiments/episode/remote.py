@@ -45,6 +45,9 @@ __all__ = ["RemoteEstimator", "ServiceError", "encode_sample", "decode_sample", 
 LOG = logging.getLogger("racf.link")
 #: How long a car waits for a service to answer at all before it says none is there.
 PING_TIMEOUT_S = 2.0
+#: How long the first request's failure waits for the handshake's events to say why, ms: only when
+#: the session opens (a step's timeout never waits for them: the car falls back at once).
+HANDSHAKE_WAIT_MS = 1000.0
 #: How long closing a session waits for the service to take the car's goodbye.
 BYE_TIMEOUT_MS = 200.0
 
@@ -85,7 +88,7 @@ class RemoteEstimator:
         self.refusals = 0  # answers lost to a failed handshake (a peer that is not the pinned service)
         self.connect_s = float(connect_s)
         try:  # a live service answers a ping at once; the hello may wait while it builds the defence
-            self._request({"op": "ping"}, PING_TIMEOUT_S * 1000.0)
+            self._request({"op": "ping"}, PING_TIMEOUT_S * 1000.0, handshake_wait_ms=HANDSHAKE_WAIT_MS)
             hello = self._hello()
         except TimeoutError as err:
             self._close()
@@ -211,7 +214,7 @@ class RemoteEstimator:
         sock.connect(self.endpoint)
         return sock
 
-    def _request(self, message: dict, timeout_ms: float | None = None) -> dict:
+    def _request(self, message: dict, timeout_ms: float | None = None, handshake_wait_ms: float = 0.0) -> dict:
         """The service's answer to ``message``. TimeoutError when none came in time (its message
         says why where the handshake failed), ServiceError for an error answer, WireError for one
         that is not a message."""
@@ -231,7 +234,7 @@ class RemoteEstimator:
             sent = False
         left_ms = max(0.0, wait_ms - (time.perf_counter() - start) * 1000.0)
         if not sent or not self._socket.poll(left_ms, zmq.POLLIN):
-            failure = handshake_failure(self._monitor)
+            failure = handshake_failure(self._monitor, handshake_wait_ms)
             self._close()  # a REQ socket that got no answer cannot send again: open a new one next time
             raise TimeoutError(f"the service at {self.endpoint} cannot be authenticated: {failure}" if failure else "")
         reply = unpack(self._socket.recv())
