@@ -37,3 +37,12 @@ def test_the_colour_is_green_for_good_and_red_for_bad_whichever_way_a_measure_po
     hue = lambda colour: int(re.match(r"hsl\((\d+)", colour).group(1))
     assert hue(heat_colour(1.0, True)) == 120 and hue(heat_colour(0.0, True)) == 0
     assert hue(heat_colour(0.0, False)) == 120 and hue(heat_colour(0.9, False)) < 20
+
+
+def test_a_row_with_two_measures_is_titled_once_across_both():
+    following = {"title": "the patch", "n": 60, "n_following": 60, "scr": None, "collision_free": 0.9,
+                 "collision_free_ci": [0.8, 0.95], "needless_hard_brake": 0.1, "needless_hard_brake_ci": [0.05, 0.2]}
+    card = {"defence": "odca", "battery": "racf-6", "closed_loop": {"following_patch": following}, "drives": {},
+            "cost": {"parameters": {"trainable": 0, "from": "declared"}}}
+    heat = board_html([card], "racf-6").split("racf-heatmap-wrap")[1]
+    assert heat.count("the patch</td>") == 1 and 'rowspan="2" title="following_patch"' in heat

@@ -39,6 +39,9 @@ def test_a_card_fills_every_section_and_a_rerun_reuses_everything(tmp_path, data
     assert card["detection"]["n_positive_steps"] > 0 and card["detection"]["auroc_from"] == "score"
     assert card["offline"]["strong"]["rmse"] is not None and "strong_ratio_to_chronos" in card["offline"]
     assert card["cost"]["parameters"] == {"trainable": 0, "frozen": 0, "from": "declared"}
+    from racf.experiments.scorecard.card import racf_commit
+
+    assert card["commit"] == racf_commit() and card["options"] == {}  # what `racf board check` asks of it
     again = run_card("ekf", TINY, tmp_path, quick=True, dataset=dataset, workers=1, progress=False)
     assert strict_json(_without_timing(again)) == strict_json(_without_timing(card))
     assert card["timing"]["episodes_run"] == card["timing"]["episodes"] == 5 and again["timing"]["episodes_run"] == 0

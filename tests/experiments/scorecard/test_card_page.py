@@ -47,3 +47,15 @@ def test_write_scorecard_writes_a_page_per_card_and_a_board(tmp_path, capsys):
     board = paths["html"].read_text()
     assert 'href="card-vote.html"' in board and "<script>" in board
     assert capsys.readouterr().err == ""
+
+
+def test_an_undetected_error_has_no_best_other():
+    """Raw's undetected error is small where the attack hides the depth: no contest to win."""
+    def with_error(defence, error):
+        c = card(defence, 0.5)
+        c["closed_loop"]["mapped_sticker"].update(undetected_error_median=error, undetected_error_ci=[0.0, error])
+        return c
+
+    page = card_fragment(with_error("vote", 0.3), [with_error("odca", 0.1)])
+    row = next(r for r in page.split("<tr>") if "undetected error" in r).split("</tr>")[0]
+    assert row.endswith('<td class="num">-</td>')

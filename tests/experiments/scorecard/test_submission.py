@@ -32,6 +32,8 @@ def test_a_full_card_on_a_committed_tree_may_go_on_the_board():
     (lambda c: c.pop("commit"), "names no commit"),
     (lambda c: c.update(version="racf 0.1.0"), "names no code digest"),
     (lambda c: c.update(battery="racf-9"), "is none of racf's"),
+    (lambda c: c.update(battery="racf-4", closed_loop=full_card(battery="racf-4")["closed_loop"]),
+     "the offline rows are missing"),
 ])
 def test_each_thing_that_keeps_a_card_off_the_board_is_named(change, words):
     card = full_card()
