@@ -1,7 +1,8 @@
-"""The leaderboard at a glance, as HTML inside the Markdown page: per battery, one line per defence
-with its headline (sortable by any column: ``docs/javascripts/board.js``), then a heatmap of the
-battery's rows against the defences, each cell coloured by its rate, its interval beneath and its N
-on hover. A defence's name leads to its card page (``cards/<battery>-<defence>.md``).
+"""The leaderboard at a glance, as HTML (inside the site's Markdown page, or a scorecard's own page):
+per battery, one line per defence with its headline (sortable by any column: ``assets/board.js``),
+then a heatmap of the battery's rows against the defences, each cell coloured by its rate with its
+interval beneath, a row's N beside its title and everything on hover. A defence's name leads to its
+card page (``href``; on the site ``cards/<battery>-<defence>.html``).
 
 The colour says how good a value is (green good, red bad), whichever way its measure points; the
 numbers stay in the cell, so the colour is never the only carrier (and the heatmap reads in grey).
@@ -81,16 +82,16 @@ def _heatmap(cards: list[dict], battery: str, href) -> list[str]:
     head = "".join(f"<th>{_name(n, battery, href)}</th>" for n in names)
     out = ['<table class="racf-heatmap">', f"<thead><tr><th>row</th><th>N</th><th>measure</th>{head}</tr></thead>",
            "<tbody>"]
-    measures = {}
-    for key, measure in grid:
-        measures[key] = measures.get(key, 0) + 1
+    spans: dict[str, int] = {}  # a row's title stands once, across its measures
+    for key, _ in grid:
+        spans[key] = spans.get(key, 0) + 1
     shown = set()
     for (key, measure), cells in grid.items():
         counts = sorted({rate.n for rate, _ in cells.values()})
         row = [] if key in shown else [
-            f'<td class="racf-row" rowspan="{measures[key]}" title="{html.escape(key, quote=True)}">'
+            f'<td class="racf-row" rowspan="{spans[key]}" title="{html.escape(key, quote=True)}">'
             f"{html.escape(titles[key])}</td>",
-            f'<td rowspan="{measures[key]}">{"/".join(map(str, counts))}</td>']
+            f'<td rowspan="{spans[key]}">{"/".join(map(str, counts))}</td>']
         shown.add(key)
         row.append(f"<td>{html.escape(measure)}</td>")
         for name in names:  # N stands once a row, beside its title (every defence runs the same episodes)
@@ -112,7 +113,8 @@ def card_page_name_for_site(battery: str, defence: str) -> str:
     return card_page_name(battery, defence).removesuffix(".md") + ".html"
 
 
-def board_html(cards: list[dict], battery: str, href: Callable[[str], str] | None = card_page_name_for_site) -> str:
+def board_html(cards: list[dict], battery: str,
+               href: Callable[[str, str], str | None] | None = card_page_name_for_site) -> str:
     """A battery's board: the sortable headline table, then the heatmap (one HTML block each).
     ``href(battery, defence)`` gives the link of a defence's card (None: no links)."""
     return "\n".join(["<div class=\"racf-board-wrap\" markdown=\"0\">", *_headline_table(cards, battery, href),
