@@ -69,6 +69,19 @@ def _best(key, hib: bool, others: list[dict]) -> tuple[str, float] | None:
     return max(found, key=lambda dv: dv[1] if hib else -dv[1])
 
 
+def _headline_value(key: str, value) -> str:
+    """One headline cell: a count as a number, a rate as a bar with its interval (and its row)."""
+    if value is None:
+        return "-"
+    if key == "trainable":
+        return f"{value:,}"
+    return _value("SCR", value.value, value.ci, 2) + (f"<br><small>{html.escape(value.row)}</small>" if value.row else "")
+
+
+def _score(value) -> float:
+    return value if isinstance(value, int) else value.value
+
+
 def _headline_rows(card: dict, raw: dict | None, others: list[dict]) -> list[str]:
     mine = headline(card)
     theirs = {c["defence"]: headline(c) for c in others}
@@ -81,20 +94,12 @@ def _headline_rows(card: dict, raw: dict | None, others: list[dict]) -> list[str
         value = mine.get(key)
         if value is None:
             continue
-
-        def show(v) -> str:
-            if v is None:
-                return "-"
-            if key == "trainable":
-                return f"{v:,}"
-            return _value("SCR", v.value, v.ci, 2) + (f"<br><small>{html.escape(v.row)}</small>" if v.row else "")
-
         ranked = [(name, h.get(key)) for name, h in theirs.items() if h.get(key) is not None]
-        score = (lambda v: v if isinstance(v, int) else v.value)
-        best = max(ranked, key=lambda nv: score(nv[1]) if hib else -score(nv[1]), default=None)
-        best_text = "-" if best is None else f"<code>{html.escape(best[0])}</code> {show(best[1])}"
-        raw_cell = f"<td>{show(raw_h.get(key))}</td>" if beside else ""
-        out.append(f"<tr><td>{html.escape(label)}</td><td>{show(value)}</td>{raw_cell}<td>{best_text}</td></tr>")
+        best = max(ranked, key=lambda nv: _score(nv[1]) if hib else -_score(nv[1]), default=None)
+        best_text = "-" if best is None else f"<code>{html.escape(best[0])}</code> {_headline_value(key, best[1])}"
+        raw_cell = f"<td>{_headline_value(key, raw_h.get(key))}</td>" if beside else ""
+        out.append(f"<tr><td>{html.escape(label)}</td><td>{_headline_value(key, value)}</td>{raw_cell}"
+                   f"<td>{best_text}</td></tr>")
     return out + ["</tbody></table>"]
 
 
