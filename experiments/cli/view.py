@@ -104,6 +104,8 @@ def _demo(args: argparse.Namespace) -> int:
     for run in summary["runs"]:
         print(f"  {run['rrd']}")
     print(f"distance traces: {summary['png']}")
+    if "moment_png" in summary:
+        print(f"the moment the attack acts and the defence answers: {summary['moment_png']}")
     return 0
 
 

@@ -47,6 +47,7 @@ def test_demo_tells_the_story_and_writes_three_recordings(tmp_path, capsys):
     assert "stopped in the band" in out and "failed: confirmed_lost" in out  # clean / attack+odca stop; attack does not
     assert sorted(p.name for p in tmp_path.glob("*.rrd")) == ["attack.rrd", "attack_odca.rrd", "clean.rrd"]
     assert (tmp_path / "demo_traces.png").stat().st_size > 20000
+    assert (tmp_path / "moment.png").stat().st_size > 20000 and "the moment the attack acts" in out
 
 
 def test_view_rejects_what_is_not_a_recording(tmp_path, capsys):
