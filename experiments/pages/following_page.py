@@ -124,8 +124,7 @@ def following_markdown(root: Path) -> str:
               "any time under 0.5 s headway [95 % CI] | hard brakes, median |", "|---|---|---|---|---|---|---|"]
     rows = dict(sorted(data["rows"].items(), key=lambda kv: _order(kv[1])))
     for r in rows.values():
-        cf, hw = r["collision_free"], r["headway_violated"]
-        ttc = "—" if r["min_ttc_median_s"] is None else rate(r["min_ttc_median_s"], r["min_ttc_ci"])
+        cf, hw, ttc = r["collision_free"], r["headway_violated"], _ttc(r)
         lines.append(f"| {ATTACK_LABELS.get(r['attack'], r['attack'])} | {r['estimator']} | {r['n']} | "
                      f"{rate(cf['rate'], cf['ci'])} | {ttc} | {rate(hw['rate'], hw['ci'])} | "
                      f"{r['hard_brakes_median']:g} |")
@@ -148,6 +147,19 @@ def following_markdown(root: Path) -> str:
     return "\n".join(lines + _sections(Path(root)) + [""])
 
 
+def _stored(root: Path, name: str, command: str) -> tuple[dict | None, list[str]]:
+    """A section's stored result and its provenance lines, or None and what to run to make it."""
+    path = root / f"{name}.json"
+    if not path.exists():
+        return None, missing(name, command)
+    data = json.loads(path.read_text())
+    return data, meta_lines(data["meta"])
+
+
+def _ttc(r: dict) -> str:
+    return "—" if r["min_ttc_median_s"] is None else rate(r["min_ttc_median_s"], r["min_ttc_ci"])
+
+
 def _sections(root: Path) -> list[str]:
     return _adaptive_lines(root) + _phantom_lines(root) + _existence_lines(root)
 
@@ -160,18 +172,16 @@ def _adaptive_lines(root: Path) -> list[str]:
              "would look there) move away together, growing at 0.5 m/s up to 2 m, as a lead that pulls away would. "
              "The depth, the LiDAR, the size and the relative motion then agree with each other and not with the "
              "world; only a witness outside the car's sensors could tell.", ""]
-    path = root / "following-adaptive.json"
-    if not path.exists():
-        return lines + missing("following-adaptive", ADAPTIVE_COMMAND)
-    data = json.loads(path.read_text())
-    lines += meta_lines(data["meta"])
+    data, provenance = _stored(root, "following-adaptive", ADAPTIVE_COMMAND)
+    lines += provenance
+    if data is None:
+        return lines
     lines += ["| attack | defence | N | collision-free [95 % CI] | min TTC s, median [95 % CI] | hard brakes, median |",
               "|---|---|---|---|---|---|"]
     for r in sorted(data["rows"].values(), key=_order):
         cf = r["collision_free"]
-        ttc = "—" if r["min_ttc_median_s"] is None else rate(r["min_ttc_median_s"], r["min_ttc_ci"])
         lines.append(f"| {ATTACK_LABELS.get(r['attack'], r['attack'])} | {r['estimator']} | {r['n']} | "
-                     f"{rate(cf['rate'], cf['ci'])} | {ttc} | {r['hard_brakes_median']:g} |")
+                     f"{rate(cf['rate'], cf['ci'])} | {_ttc(r)} | {r['hard_brakes_median']:g} |")
     return lines + ["", "What it shows: this is the attack no defence built on the car's own sensors can answer. "
                     "ODCA's gate repairs the depth when its witnesses disagree; here none does, and the relative "
                     "motion, grown as smoothly as a lead that speeds up, gives its kinematic branch nothing to "
@@ -188,11 +198,10 @@ def _phantom_lines(root: Path) -> list[str]:
              "real lead's, Nassi et al., CCS 2020), while the depth and the LiDAR see what is really there. A hard "
              "brake is needless when it begins while the real lead asks for none: its time-to-collision over 3 s "
              "(or not closing) and the headway at least 0.5 s.", ""]
-    path = root / "following-phantom.json"
-    if not path.exists():
-        return lines + missing("following-phantom", PHANTOM_COMMAND)
-    data = json.loads(path.read_text())
-    lines += meta_lines(data["meta"])
+    data, provenance = _stored(root, "following-phantom", PHANTOM_COMMAND)
+    lines += provenance
+    if data is None:
+        return lines
     lines += ["| attack | defence | N | any needless hard brake [95 % CI] | collision-free [95 % CI] | "
               "hard brakes, median |", "|---|---|---|---|---|---|"]
     for r in sorted(data["rows"].values(), key=lambda r: (r["attack"] != "clean", _order(r))):
