@@ -59,11 +59,16 @@ def _value(measure: str, value, interval, digits: int = 3) -> str:
             f'<span style="width:{100 * value:.1f}%"></span>{whisker}</span>{shown}')
 
 
-def _best(key, hib: bool, others: list[dict]) -> tuple[str, float] | None:
+def _values(card: dict) -> dict[tuple[str, str, str], float]:
+    """A card's values by (section, row, measure), the ones it has."""
+    return {(s, r, m): v for s, r, m, v, _, _, _ in card_rows(card) if v is not None}
+
+
+def _best(key, hib: bool, others: dict[str, dict]) -> tuple[str, float] | None:
+    """The other card best in row ``key`` (``others``: each other defence's ``_values``)."""
     if key[2].startswith("undetected error"):  # no contest: raw's is small where the attack hides the depth
         return None
-    found = [(c["defence"], v) for c in others for s, r, m, v, _, _, _ in card_rows(c) if (s, r, m) == key
-             and v is not None]
+    found = [(defence, values[key]) for defence, values in others.items() if key in values]
     if not found:
         return None
     return max(found, key=lambda dv: dv[1] if hib else -dv[1])
@@ -119,17 +124,18 @@ def card_fragment(card: dict, others: list[dict] = (), plots: dict[str, list[str
     sections: dict[str, list] = {}
     for row in card_rows(card):
         sections.setdefault(row[0], []).append(row)
+    beside = raw is not None
+    raw_rows = _values(raw) if beside else {}
+    other_rows = {c["defence"]: _values(c) for c in others}  # each other card's rows, read once
     for section, rows in sections.items():
         out.append(f"<h2>{html.escape(section.capitalize())}</h2>")
-        beside = raw is not None
         out.append('<table class="racf-card-table"><thead><tr><th>row</th><th>measure</th><th>value [95 % CI]</th>'
                    "<th>N</th>" + ("<th><code>raw</code></th>" if beside else "") + "<th>best other</th></tr></thead><tbody>")
-        raw_rows = {(s, r, m): v for s, r, m, v, _, _, _ in card_rows(raw)} if beside else {}
         for s, r, m, v, interval, n, hib in rows:
             key = (s, r, m)
             raw_cell = (f'<td class="num">{_value(m, raw_rows[key], None) if key in raw_rows else "-"}</td>'
                         if beside else "")
-            best = _best(key, hib, others)
+            best = _best(key, hib, other_rows)
             best_cell = "-" if best is None else f"<code>{html.escape(best[0])}</code> {_value(m, best[1], None)}"
             out.append(f"<tr><td>{html.escape(r)}</td><td>{html.escape(m)}</td><td class=\"num\">{_value(m, v, interval)}</td>"
                        f"<td>{n if n is not None else '-'}</td>{raw_cell}<td class=\"num\">{best_cell}</td></tr>")
