@@ -9,6 +9,7 @@ from functools import partial
 from typing import Callable
 
 from racf.experiments.pages.results_format import page_head as _page_head
+from racf.experiments.pages.results_format import FRONT_MATTER
 from racf.experiments.pages.results_format import meta_lines as _meta
 from racf.experiments.pages.results_format import missing as _missing
 
@@ -19,9 +20,6 @@ BATTERY_TITLES = {"racf-6": "following the car ahead", "racf-5": "whether the ca
                   "racf-link": "the defence served over the link, and attacks on the link",
                   "racf-4": "stop signs, with cross-traffic", "racf-3": "stop signs, a placed sticker",
                   "racf-2": "stop signs, white-box attacks", "racf-1": "stop signs, the paper's protocol"}
-
-#: The page gives the table of contents' width to the boards (the menu stays, to go elsewhere).
-_FRONT_MATTER = ["---", "hide:", "  - toc", "---", ""]
 
 
 def leaderboard_markdown(d) -> str:
@@ -90,33 +88,32 @@ def _boards(d) -> dict[str, tuple[list[dict], list[dict], list[dict]]]:
 
 def card_pages(root) -> dict[str, Callable[[], str]]:
     """Every stored or submitted card's page, by its path under ``docs/results/``
-    (``cards/<battery>-<defence>.md``), each written when asked."""
+    (``cards/<battery>-<defence>.md``), each written when asked (the stored results read once)."""
     from racf.experiments.pages.results_format import StoredResults
     from racf.experiments.scorecard.board import card_page_name
+    from racf.experiments.scorecard.submission import load_submissions
 
     d = StoredResults(root)
+    submissions = {(s.card["battery"], s.card["defence"]): s for s in load_submissions(d.root.parent / "submissions")}
     pages = {}
     for battery, (_, cards, submitted) in _boards(d).items():
         for card in cards + submitted:
-            pages[card_page_name(battery, card["defence"])] = partial(_card_page, d, battery, card["defence"])
+            pages[card_page_name(battery, card["defence"])] = partial(
+                _card_page, card, cards + submitted, submissions.get((battery, card["defence"])))
     return pages
 
 
-def _card_page(d, battery: str, defence: str) -> str:
+def _card_page(card: dict, peers: list[dict], submission) -> str:
+    """One card's page: its provenance (or its submission's command and code), then the card beside ``peers``."""
     from racf.experiments.scorecard.card_page import card_fragment
-    from racf.experiments.scorecard.submission import load_submissions
 
-    _, cards, submitted = _boards(d)[battery]
-    card = next(c for c in cards + submitted if c["defence"] == defence)
-    meta = card.get("_meta")
-    lines = [*_FRONT_MATTER, f"# `{defence}` on battery `{battery}`", "",
+    defence, battery = card["defence"], card["battery"]
+    lines = [*FRONT_MATTER, f"# `{defence}` on battery `{battery}`", "",
              f"One defence's card, beside raw depth's and the best of the other defences carded on `{battery}` "
              "([the leaderboard](../leaderboard.md) sets them all side by side).", ""]
-    if card.get("submitted"):
-        sub = next(s for s in load_submissions(d.root.parent / "submissions")
-                   if (s.card["battery"], s.card["defence"]) == (battery, defence))
-        lines += [f"*Submitted* {sub.submitted}: measured by `{sub.command}` on racf commit `{card['commit']}`; "
-                  f"its code: `{sub.code}`.", ""]
-    elif meta:
-        lines += _meta(meta)
-    return "\n".join(lines + [card_fragment(card, cards + submitted), ""])
+    if submission is not None:
+        lines += [f"*Submitted* {submission.submitted}: measured by `{submission.command}` on racf commit "
+                  f"`{card['commit']}`; its code: `{submission.code}`.", ""]
+    elif card.get("_meta"):
+        lines += _meta(card["_meta"])
+    return "\n".join(lines + [card_fragment(card, peers), ""])
