@@ -69,8 +69,9 @@ def _submit(args: argparse.Namespace) -> int:
 
 
 def _board_defences(battery: str) -> set[str]:
-    """The defences racf's own stored cards name on ``battery`` (a submission may not take their names)."""
+    """The defences racf's own stored cards name on ``battery``, from every stored scorecard that holds
+    some (a submission may not take their names)."""
     import json
 
-    stored = Path("docs/results/data") / f"scorecard-{battery}.json"
-    return {c["defence"] for c in json.loads(stored.read_text())["cards"]} if stored.exists() else set()
+    return {card["defence"] for path in Path("docs/results/data").glob("scorecard-*.json")
+            for card in json.loads(path.read_text()).get("cards", []) if card["battery"] == battery}

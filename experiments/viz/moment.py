@@ -12,6 +12,7 @@ a second on (the attack acting); else the brake's onset; else the step nearest t
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -104,20 +105,25 @@ def _frame_at(spec, step: int) -> dict:
     from racf.experiments.episode import run_trial
 
     seen: dict = {}
+    steps = itertools.count()
 
     def keep(env, obs, info, row) -> None:
-        if keep.step == step:
+        if next(steps) == step:
             clean = env.unwrapped.sensor_observation()  # the world without the attack: for the referee's eye
             changed = np.any(obs["rgb"] != clean["rgb"], axis=-1) | (obs["depth"][..., 0] != clean["depth"][..., 0])
             seen.update(rgb=obs["rgb"].copy(), clean=clean["rgb"].copy(), depth=obs["depth"][..., 0].copy(),
                         changed=changed, row=dict(row))
-        keep.step += 1
 
-    keep.step = 0
     run_trial(spec, on_step=keep)
     if not seen:
         raise ValueError(f"the episode ran fewer than {step + 1} steps this time: it did not reproduce")
     return seen
+
+
+def _detection(row: dict) -> tuple[float, float, float, float] | None:
+    """The car's detection box at that step (x0, y0, x1, y1 px), or None where it had none."""
+    box = tuple(row.get(k, math.nan) for k in ("det_x0", "det_y0", "det_x1", "det_y1"))
+    return box if all(isinstance(v, (int, float)) and math.isfinite(v) for v in box) else None
 
 
 def _crop(frame: dict, shape: tuple[int, int]) -> tuple[slice, slice]:
@@ -127,9 +133,8 @@ def _crop(frame: dict, shape: tuple[int, int]) -> tuple[slice, slice]:
     if frame["changed"].any():
         rows, cols = np.nonzero(frame["changed"])
         boxes.append((cols.min(), rows.min(), cols.max() + 1, rows.max() + 1))
-    row = frame["row"]
-    det = [row.get(k, math.nan) for k in ("det_x0", "det_y0", "det_x1", "det_y1")]
-    if all(isinstance(v, (int, float)) and math.isfinite(v) for v in det):
+    det = _detection(frame["row"])
+    if det is not None:
         boxes.append(tuple(int(v) for v in det))
     h, w = shape
     if not boxes:
@@ -193,8 +198,8 @@ def moment_figure(spec, out: str | Path, log: pd.DataFrame | None = None, title:
         r, c = np.nonzero(frame["changed"])
         for ax in (seen, dep):
             _outline(ax, (c.min(), r.min(), c.max() + 1, r.max() + 1), "#ff2bd6", "the attack", origin)
-    det = [row.get(k, math.nan) for k in ("det_x0", "det_y0", "det_x1", "det_y1")]
-    if all(isinstance(v, (int, float)) and math.isfinite(v) for v in det):
+    det = _detection(row)
+    if det is not None:
         _outline(seen, det, "#00e0ff", "the car's detection", origin)
     for ax in (clean, seen, dep):
         ax.set_xticks([]), ax.set_yticks([])

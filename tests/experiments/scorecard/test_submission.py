@@ -105,3 +105,14 @@ def test_a_battery_s_cards_from_two_stored_results_share_one_board_each_with_its
     assert page.count("## `racf-link`") == 1 and "`aaa1111`" in page and "`bbb2222`" in page
     assert "<code>raw</code>" in page and "<code>vote</code>" in page
     assert "`bbb2222`" in card_pages(tmp_path)["cards/racf-link-vote.md"]()
+
+
+def test_submit_refuses_a_name_from_any_stored_result_of_the_battery(tmp_path, monkeypatch, capsys):
+    data = tmp_path / "docs" / "results" / "data"
+    data.mkdir(parents=True)
+    meta = {"command": "racf scorecard", "commit": "abc1234", "racf": "0.1.0", "machine": "m", "measured": "d"}
+    (data / "scorecard-racf-link-more.json").write_text(json.dumps({"meta": meta, "cards": [full_card("vote")]}))
+    (tmp_path / "vote.json").write_text(json.dumps(full_card("vote")))
+    monkeypatch.chdir(tmp_path)
+    assert main(["board", "submit", "vote.json", "--code", "x", "--command", "racf scorecard --defence vote"]) == 2
+    assert "already has a defence named 'vote'" in capsys.readouterr().err
