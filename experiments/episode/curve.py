@@ -115,21 +115,24 @@ _FAILURES = {
 
 def handshake_failure(monitor, wait_ms: float = 0.0) -> str | None:
     """The newest handshake failure among the events waiting on ``monitor`` (a socket's monitor
-    socket), in words; None when there was none. With ``wait_ms``, events still on their way are
-    waited for up to that long while no failure has come (a loaded machine delivers them late)."""
+    socket), in words; None when there was none. With ``wait_ms``, where the socket reached a peer but
+    no failure has come yet, the handshake's events are waited for up to that long (a loaded machine
+    delivers them late); where nothing listens there is no handshake to wait for."""
     import time
 
     import zmq
     from zmq.utils.monitor import recv_monitor_message
 
-    failure = None
+    failure, connected = None, False
     deadline = time.monotonic() + wait_ms / 1000.0
 
     def left_ms() -> int:
-        return 0 if failure is not None else max(0, int((deadline - time.monotonic()) * 1000.0))
+        waiting = connected and failure is None
+        return max(0, int((deadline - time.monotonic()) * 1000.0)) if waiting else 0
 
     while monitor is not None and monitor.poll(left_ms()):
         event = zmq.Event(recv_monitor_message(monitor)["event"])
+        connected |= event == zmq.EVENT_CONNECTED
         if event.name in _FAILURES:
             failure = _FAILURES[event.name]
         elif event == zmq.EVENT_HANDSHAKE_SUCCEEDED:
