@@ -310,16 +310,23 @@ def service_flags(p: argparse.ArgumentParser) -> None:
     p.add_argument("--service-keys", default=None, metavar="DIR",
                    help="with --estimator-endpoint: the key folder of `racf serve keys DIR`; the car pins the "
                         "service's key and shows its own (CurveZMQ); default: a plain link")
+    p.add_argument("--service-car", default=None, metavar="NAME",
+                   help="with --service-keys: the car whose key the car shows (DIR/cars/NAME.key_secret); "
+                        "default: the only car the folder holds")
 
 
 def service_params(args: argparse.Namespace, command: str) -> dict:
     """The spec fields the service flags give (none without an endpoint)."""
     if args.estimator_endpoint is None:
-        for flag, value in (("--estimator-timeout-ms", args.estimator_timeout_ms), ("--service-keys", args.service_keys)):
+        for flag, value in (("--estimator-timeout-ms", args.estimator_timeout_ms), ("--service-keys", args.service_keys),
+                            ("--service-car", args.service_car)):
             if value is not None:
                 flag_error(command, f"{flag} applies with --estimator-endpoint")
         return {}
-    out = {"estimator_endpoint": args.estimator_endpoint, "estimator_keys": args.service_keys}
+    if args.service_car is not None and args.service_keys is None:
+        flag_error(command, "--service-car names a car of the key folder: give --service-keys DIR too")
+    out = {"estimator_endpoint": args.estimator_endpoint, "estimator_keys": args.service_keys,
+           "estimator_car": args.service_car}
     if args.estimator_timeout_ms is not None:
         out["estimator_timeout_ms"] = args.estimator_timeout_ms
     return out

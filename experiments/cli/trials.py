@@ -91,9 +91,11 @@ def _trial(args: argparse.Namespace) -> int:
     else:
         print(trial_summary(row, log_path, args.out / f"{spec.trial_id}.json"))
     if row.get("service_fallback"):  # said where it is read, not only in a field
-        print(f"racf trial: the defence service gave no answer in time on {row['service_fallback_steps']} of "
+        print(f"racf trial: the defence service gave no answer the car could act on, on {row['service_fallback_steps']} of "
               f"{row['service_fallback_steps'] + row['service_steps']} steps; the car drove on its own depth "
-              f"distance there ({row['service_restarts']} new sessions)", file=sys.stderr)
+              f"distance there ({row['service_invalid']} answers refused by the protocol's check, "
+              f"{row['service_restarts']} defence restarts, {row['service_new_sessions']} new sessions)",
+              file=sys.stderr)
     return 0
 
 
@@ -163,8 +165,11 @@ def _trials(args: argparse.Namespace) -> int:
     print(table_text({setting: summary}))
     if "service_fallback" in results and results["service_fallback"].astype(bool).any():
         fell = results[results["service_fallback"].astype(bool)]
-        print(f"the defence service gave no answer in time in {len(fell)} of {len(results)} episodes "
-              f"({int(fell['service_fallback_steps'].sum())} steps): the car drove on its own depth there")
+        counts = ", ".join(f"{int(fell[c].sum())} {words}" for c, words in (
+            ("service_invalid", "answers refused by the protocol's check"), ("service_restarts", "defence restarts"),
+            ("service_new_sessions", "new sessions")) if c in fell)
+        print(f"the defence service gave no answer the car could act on in {len(fell)} of {len(results)} episodes "
+              f"({int(fell['service_fallback_steps'].sum())} steps; {counts}): the car drove on its own depth there")
     print(f"results: {out / 'results.parquet'}; per-step logs: {out / 'trials'}")
     return 0
 

@@ -7,6 +7,9 @@ A key folder (``racf serve keys DIR``) holds the service's pair and each car's:
     DIR/cars/NAME.key_secret  a car's pair: only that car reads it
     DIR/admitted/NAME.key     a car's public key: the service admits the cars listed here
 
+Secret files are created readable by their owner alone (mode 0600, in folders of mode 0700): no
+moment exists in which another user of the machine could read one.
+
 With CURVE (ZMTP's CURVE mechanism, libsodium's Curve25519 bundled in pyzmq's wheels) the car
 authenticates the service by the key it pins and the service admits only listed cars, once per
 connection; every message is then encrypted and authenticated. A man in the middle can neither
@@ -23,9 +26,12 @@ from pathlib import Path
 
 from racf.errors import UserError
 
-__all__ = ["CarKeys", "ServerKeys", "make_keys", "handshake_failure", "is_loopback", "DEFAULT_CAR"]
+__all__ = ["CarKeys", "ServerKeys", "make_keys", "handshake_failure", "is_loopback", "DEFAULT_CAR", "car_names",
+           "refusal", "Handshake"]
 
 DEFAULT_CAR = "car"
+#: Who may read what racf serve keys writes: secrets their owner alone, folders their owner alone.
+SECRET_MODE, FOLDER_MODE, PUBLIC_MODE = 0o600, 0o700, 0o644
 
 
 @dataclass(frozen=True)
@@ -35,13 +41,27 @@ class CarKeys:
     public: bytes
     secret: bytes
     server: bytes
+    name: str = DEFAULT_CAR
+    folder: str = ""
 
     @classmethod
-    def load(cls, folder: str | Path, car: str = DEFAULT_CAR) -> "CarKeys":
+    def load(cls, folder: str | Path, car: str | None = None) -> "CarKeys":
+        """The pair of car ``car`` in ``folder`` (None: the only car there)."""
         folder = Path(folder)
+        cars = car_names(folder)
+        if car is None:
+            if len(cars) != 1:
+                have = f"it holds {', '.join(cars)}: name one with --service-car NAME" if cars else \
+                    f"it holds none; make a key folder with `racf serve keys {folder}`"
+                raise UserError(f"which car's key in {folder / 'cars'}? {have}")
+            car = cars[0]
+        elif car not in cars:
+            held = f"it holds {', '.join(cars)}" if cars else "it holds none"
+            raise UserError(f"no key of car {car!r} in {folder / 'cars'} ({held}); make one with "
+                            f"`racf serve keys DIR --car {car}` and admit it where the service runs")
         public, secret = _load(folder / "cars" / f"{car}.key_secret", "this car's key pair", folder)
         server, _ = _load(folder / "server.key", "the service's public key", folder)
-        return cls(public, secret, server)
+        return cls(public, secret, server, car, str(folder))
 
     def apply(self, socket) -> None:
         """Makes ``socket`` (before it connects) a CURVE client that talks only to the pinned service."""
@@ -66,6 +86,11 @@ class ServerKeys:
         return cls(public, secret, admitted)
 
 
+def car_names(folder: str | Path) -> list[str]:
+    """The cars whose pairs ``folder`` holds (``cars/NAME.key_secret``), sorted."""
+    return sorted(p.name[:-len(".key_secret")] for p in (Path(folder) / "cars").glob("*.key_secret"))
+
+
 def _load(path: Path, what: str, folder: Path) -> tuple[bytes, bytes | None]:
     import zmq.auth
 
@@ -80,26 +105,46 @@ def _load(path: Path, what: str, folder: Path) -> tuple[bytes, bytes | None]:
 
 def make_keys(folder: str | Path, cars: tuple[str, ...] = (DEFAULT_CAR,)) -> list[Path]:
     """Writes the service's pair and one pair per car into ``folder`` (refusing to overwrite any);
-    returns the files written."""
-    import zmq.auth
+    returns the files written. Each secret file is created with mode 0600 (never wider, not even
+    for a moment), in folders of mode 0700."""
+    import zmq
 
     folder = Path(folder)
     targets = [folder / "server.key_secret", *(folder / "cars" / f"{car}.key_secret" for car in cars)]
     existing = [p for p in targets if p.exists()]
     if existing:
         raise UserError(f"{existing[0]} exists; keys are never overwritten (choose another folder or remove it)")
-    for sub in ("cars", "admitted"):
-        (folder / sub).mkdir(parents=True, exist_ok=True)
-    written = [Path(p) for p in zmq.auth.create_certificates(folder, "server")]
-    for car in cars:
-        public, secret = (Path(p) for p in zmq.auth.create_certificates(folder / "cars", car))
-        admitted = folder / "admitted" / public.name
-        admitted.write_bytes(public.read_bytes())
-        public.unlink()  # the car's public key lives where the service admits it
-        secret.chmod(0o600)
-        written += [secret, admitted]
-    (folder / "server.key_secret").chmod(0o600)
+    for sub in (folder, folder / "cars", folder / "admitted"):
+        sub.mkdir(mode=FOLDER_MODE, parents=True, exist_ok=True)
+    (folder / "cars").chmod(FOLDER_MODE)  # mkdir's mode is cut by the umask; an existing folder keeps its own
+    folder.chmod(FOLDER_MODE)
+    written = []
+    for name, secret_path, public_path in (("server", folder / "server.key_secret", folder / "server.key"),
+                                           *((car, folder / "cars" / f"{car}.key_secret",
+                                              folder / "admitted" / f"{car}.key") for car in cars)):
+        public, secret = zmq.curve_keypair()
+        _write_certificate(secret_path, public, secret, SECRET_MODE)
+        _write_certificate(public_path, public, None, PUBLIC_MODE)
+        written += [public_path, secret_path] if name == "server" else [secret_path, public_path]
     return written
+
+
+def _write_certificate(path: Path, public: bytes, secret: bytes | None, mode: int) -> None:
+    """A ZeroMQ certificate (the format ``zmq.auth.load_certificate`` reads), created with ``mode``:
+    opened with it, exclusively, so the file never exists with another."""
+    import datetime
+    import os
+
+    what = "**Secret** Certificate\n#   Do not give this file to anyone" if secret else "Public Certificate"
+    text = (f"#   ****  Generated on {datetime.datetime.now()} by racf serve keys  ****\n#   ZeroMQ CURVE {what}\n\n"
+            f"metadata\ncurve\n    public-key = \"{public.decode()}\"\n"
+            + (f"    secret-key = \"{secret.decode()}\"\n" if secret else ""))
+    fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, mode)
+    try:
+        os.fchmod(fd, mode)  # os.open's mode is cut by the umask: the file may be narrower, never wider
+        os.write(fd, text.encode())
+    finally:
+        os.close(fd)
 
 
 #: What each handshake failure a car's socket reports means, from the car's side.
@@ -113,31 +158,56 @@ _FAILURES = {
 }
 
 
-def handshake_failure(monitor, wait_ms: float = 0.0) -> str | None:
-    """The newest handshake failure among the events waiting on ``monitor`` (a socket's monitor
-    socket), in words; None when there was none. With ``wait_ms``, where the socket reached a peer but
-    no failure has come yet, the handshake's events are waited for up to that long (a loaded machine
-    delivers them late); where nothing listens there is no handshake to wait for."""
+def refusal(failure: str, keys: "CarKeys | None", endpoint: str) -> str:
+    """What a car that failed the handshake with ``endpoint`` must be told, in one line: it has no keys,
+    it pins another service's key, or the service does not admit its key (``failure``: the event's words)."""
+    if keys is None:
+        return (f"the service at {endpoint} speaks CurveZMQ and this car has no keys: give it the key folder the "
+                f"service was started with (--service-keys DIR, made by `racf serve keys DIR`)")
+    where = f"{keys.folder}/cars/{keys.name}.key_secret" if keys.folder else f"car {keys.name!r}"
+    if failure == _FAILURES["HANDSHAKE_FAILED_AUTH"]:
+        return (f"the service at {endpoint} does not admit this car's key ({where}): copy "
+                f"admitted/{keys.name}.key into the admitted/ folder of the keys the service runs with, and "
+                f"restart it")
+    if failure == _FAILURES["HANDSHAKE_FAILED_NO_DETAIL"]:
+        return (f"the peer at {endpoint} is not the service whose key this car pins ({keys.folder}/server.key): "
+                f"the wrong key folder, or a man in the middle")
+    return (f"the service at {endpoint} cannot be authenticated: {failure}; give the car the key folder the "
+            f"service was started with (--service-keys DIR)")
+
+
+@dataclass(frozen=True)
+class Handshake:
+    """What a car's socket monitor said of its link: whether it reached a peer (a TCP connection: something
+    listens) and the newest handshake failure, in words (None: none)."""
+
+    connected: bool
+    failure: str | None
+
+
+def handshake_failure(monitor, wait_ms: float = 0.0) -> Handshake:
+    """Reads the events waiting on ``monitor`` (a socket's monitor socket). With ``wait_ms``, where the
+    socket reached a peer but its handshake has not ended yet, its events are waited for up to that
+    long (a loaded machine delivers them late); where nothing listens there is no handshake to wait for."""
     import time
 
     import zmq
     from zmq.utils.monitor import recv_monitor_message
 
-    failure, connected = None, False
+    failure, connected, ended = None, False, False
     deadline = time.monotonic() + wait_ms / 1000.0
 
     def left_ms() -> int:
-        waiting = connected and failure is None
-        return max(0, int((deadline - time.monotonic()) * 1000.0)) if waiting else 0
+        return max(0, int((deadline - time.monotonic()) * 1000.0)) if connected and not ended else 0
 
     while monitor is not None and monitor.poll(left_ms()):
         event = zmq.Event(recv_monitor_message(monitor)["event"])
         connected |= event == zmq.EVENT_CONNECTED
         if event.name in _FAILURES:
-            failure = _FAILURES[event.name]
+            failure, ended = _FAILURES[event.name], True
         elif event == zmq.EVENT_HANDSHAKE_SUCCEEDED:
-            failure = None
-    return failure
+            failure, ended = None, True
+    return Handshake(connected, failure)
 
 
 def is_loopback(endpoint: str) -> bool:

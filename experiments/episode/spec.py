@@ -145,6 +145,8 @@ class TrialSpec:
         estimator_keys: with an endpoint, the key folder of ``racf serve keys`` whose car pair and
             service key make the link CurveZMQ (None: a plain link). The id records that the link was
             authenticated, not where the keys lie.
+        estimator_car: with keys, the car whose pair (``cars/NAME.key_secret``) the car uses (None:
+            the only one the folder holds). Not in the id: which car's key, not what ran.
     """
 
     setting: str
@@ -170,6 +172,7 @@ class TrialSpec:
     estimator_endpoint: str | None = None
     estimator_timeout_ms: float = DEFAULT_TIMEOUT_MS
     estimator_keys: str | None = None
+    estimator_car: str | None = None
 
     def __post_init__(self) -> None:
         attacks, estimator = parse_setting(self.setting)
@@ -233,6 +236,9 @@ class TrialSpec:
                                                 or not isinstance(self.estimator_keys, str)):
             raise ValueError(f"estimator_keys is a key folder for the link to an estimator_endpoint, got "
                              f"{self.estimator_keys!r} with endpoint {self.estimator_endpoint!r}")
+        if self.estimator_car is not None and (self.estimator_keys is None or not isinstance(self.estimator_car, str)):
+            raise ValueError(f"estimator_car names a car of the key folder estimator_keys, got {self.estimator_car!r} "
+                             f"with keys {self.estimator_keys!r}")
         if not (isinstance(self.estimator_timeout_ms, (int, float)) and 1.0 <= self.estimator_timeout_ms <= 10_000.0):
             raise ValueError(f"estimator_timeout_ms must be in [1, 10000] ms, got {self.estimator_timeout_ms!r}")
         if self.control_hz is not None and not 1.0 <= self.control_hz <= 50.0:
@@ -285,6 +291,8 @@ class TrialSpec:
             del out["estimator_endpoint"], out["estimator_timeout_ms"]
         if self.estimator_keys is None:
             del out["estimator_keys"]
+        if self.estimator_car is None:
+            del out["estimator_car"]
         return out
 
     @classmethod
@@ -314,6 +322,7 @@ class TrialSpec:
             spec["estimator_service"] = True
         if spec.pop("estimator_keys", None) is not None:  # an authenticated link, whoever holds the keys
             spec["estimator_curve"] = True
+        spec.pop("estimator_car", None)
         payload = {"spec": spec, "env": asdict(EnvConfig()), "code": code_version(*EPISODE_CODE)}
         extra = plugin_sources(self)
         if extra:  # racf's own parts add nothing: the ids of built-in episodes stay as they were

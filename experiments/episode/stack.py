@@ -135,7 +135,7 @@ def car_keys(spec: TrialSpec):
     """The car's CURVE keys for its link to the service (None: a plain link)."""
     from racf.experiments.episode.curve import CarKeys
 
-    return None if spec.estimator_keys is None else CarKeys.load(spec.estimator_keys)
+    return None if spec.estimator_keys is None else CarKeys.load(spec.estimator_keys, spec.estimator_car)
 
 
 def link_endpoint(env: gym.Env | None, spec: TrialSpec) -> str:

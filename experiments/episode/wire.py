@@ -20,10 +20,19 @@ from racf.controllers import PerceptionSample
 from racf.controllers.detector import Detection
 from racf.controllers.existence import ExistenceWitnesses
 
-__all__ = ["WireError", "MAX_MESSAGE_BYTES", "DEFAULT_TIMEOUT_MS", "DEFAULT_RETRY_S", "pack", "unpack", "encode_sample", "decode_sample", "PROTOCOL"]
+__all__ = ["WireError", "InvalidAnswer", "MAX_MESSAGE_BYTES", "DEFAULT_TIMEOUT_MS", "DEFAULT_RETRY_S", "pack",
+           "unpack", "encode_sample", "decode_sample", "PROTOCOL", "DISTANCE_RANGE_M", "MAX_REQUEST_ID", "wire_distance",
+           "check_answer"]
 
-#: The wire protocol's version: a server answers a hello from another version with an error.
-PROTOCOL = 1
+#: The wire protocol's version: a server answers a hello from another version with an error, and a
+#: car refuses a service that speaks another. 2: every request carries an id its answer names, and a
+#: distance is a number in DISTANCE_RANGE_M or None (no target).
+PROTOCOL = 2
+#: The distance a defence may answer, m (the car's sensors see less than 50 m; ODCA's output is
+#: NaN or within this range). Anything else is no answer.
+DISTANCE_RANGE_M = (0.0, 50.0)
+#: Request ids are counters below this (msgpack's int64).
+MAX_REQUEST_ID = 2 ** 63 - 1
 #: How long a car waits for an answer before it falls back, and how much of its own time then
 #: passes before it asks again. Set from the measured round trip with a margin: 8 cars at 50 Hz
 #: on 2 cores (``racf bench service-stress --cars 8 --seconds 120 --timeout-ms 2000``) had a
@@ -44,6 +53,16 @@ _DTYPES = frozenset(np.dtype(t).str for t in ("u1", "i4", "i8", "f4", "f8", "?")
 
 class WireError(ValueError):
     """A message that is not what the protocol allows (says what is wrong)."""
+
+
+class InvalidAnswer(ValueError):
+    """An answer the car must not act on. ``kind`` names the rule it broke (the car logs each kind
+    once an episode): stale (it names another request), error, no_session, restarted (the service
+    rebuilt its defence), protocol (another protocol's service), missing, wrong_type, out_of_range."""
+
+    def __init__(self, kind: str, why: str) -> None:
+        super().__init__(why)
+        self.kind = kind
 
 
 def _array(a: np.ndarray) -> dict:
@@ -147,3 +166,80 @@ def _detection(det: dict) -> Detection:
     mask = np.unpackbits(packed, count=h * w).reshape(h, w).astype(bool)
     return Detection(mask, tuple(int(v) for v in det["box"]), float(det["confidence"]), int(det["area_px"]),
                      tuple(float(v) for v in det["centroid"]))
+
+
+
+def wire_distance(distance) -> float | None:
+    """A distance as the protocol carries it: None for no target (NaN, as the defences say it), else
+    a finite number in DISTANCE_RANGE_M. InvalidAnswer for anything else: the server refuses to send
+    it and the car refuses to act on it (one rule, both ends)."""
+    if distance is None:
+        return None
+    if not isinstance(distance, (int, float, np.floating, np.integer)) or isinstance(distance, (bool, np.bool_)):
+        raise InvalidAnswer("wrong_type", f"a distance is a number or None, got {type(distance).__name__}")
+    distance = float(distance)
+    if math.isnan(distance):
+        return None
+    lo, hi = DISTANCE_RANGE_M
+    if not lo <= distance <= hi:
+        raise InvalidAnswer("out_of_range", f"distance {distance!r} m is outside the protocol's [{lo:g}, {hi:g}] m")
+    return distance
+
+
+def _optional_bool(value) -> bool | None:
+    if value is not None and not isinstance(value, bool):
+        raise InvalidAnswer("wrong_type", f"a verdict is true, false or None, got {type(value).__name__}")
+    return value
+
+
+def _bool(value) -> bool:
+    if not isinstance(value, bool):
+        raise InvalidAnswer("wrong_type", f"an answer is true or false, got {type(value).__name__}")
+    return value
+
+
+def _diagnostics(value) -> dict:
+    if not isinstance(value, dict) or not all(isinstance(k, str) and isinstance(v, (int, float, str))
+                                              for k, v in value.items()):
+        raise InvalidAnswer("wrong_type", "diagnostics are a map of names to numbers or words")
+    return value
+
+
+def _protocol(value) -> int:
+    if value != PROTOCOL:
+        spoken = "1 (it names none)" if value is None else repr(value)
+        raise InvalidAnswer("protocol", f"the service speaks protocol {spoken}; this car speaks {PROTOCOL}: run the "
+                                        f"same racf on both ends")
+    return value
+
+
+#: What each request's answer must hold: field -> its check (a field not listed passes as it is).
+_ANSWERS = {
+    "ping": {"protocol": _protocol},
+    "hello": {"protocol": _protocol},
+    "estimate": {"distance": wire_distance, "stands": _optional_bool, "diagnostics": _diagnostics},
+    "would_pass": {"answer": _bool},
+    "calibrate": {}, "reset": {}, "bye": {},
+}
+
+
+def check_answer(op: str, reply: dict, request_id: int) -> dict:
+    """The answer to request ``request_id`` (an ``op``) with its fields checked, or InvalidAnswer
+    naming the rule it broke. The one gate between what a service sends and what the car acts on."""
+    if "protocol" in _ANSWERS[op] and "error" not in reply and "refused" not in reply:
+        _protocol(reply.get("protocol"))  # first: another protocol's answers carry no ids
+    if reply.get("id") != request_id or isinstance(reply.get("id"), bool):
+        raise InvalidAnswer("stale", f"an answer to request {reply.get('id')!r}, not to request {request_id}")
+    if "error" in reply:
+        kind = "no_session" if reply.get("no_session") is True else "error"
+        raise InvalidAnswer(kind, f"the service answered an error: {str(reply['error'])[:200]}")
+    if "restarted" in reply:
+        raise InvalidAnswer("restarted", f"the service rebuilt its defence: {str(reply['restarted'])[:200]}")
+    if "refused" in reply:  # a hello it refused: the car is told why (not a step's answer)
+        return reply
+    out = dict(reply)
+    for key, check in _ANSWERS[op].items():
+        if key not in reply:
+            raise InvalidAnswer("missing", f"an answer to {op} without {key}")
+        out[key] = check(reply[key])
+    return out

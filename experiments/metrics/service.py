@@ -25,9 +25,14 @@ class ServiceMeasures(Metric):
         Field("service_rtt_p50_ms", math.nan, "ms", "median round trip of a step's request", summary="median"),
         Field("service_rtt_p99_ms", math.nan, "ms", "99th percentile of the round trips", summary="median"),
         Field("service_late_steps", 0, "steps", "actions delayed a control period or more by a slow answer"),
-        Field("service_fallback_steps", 0, "steps", "steps with no answer in time: the car's own depth distance"),
+        Field("service_fallback_steps", 0, "steps", "steps with no answer the car may act on (none in time, one "
+                                                    "the protocol's check refused): the car's own depth distance"),
         Field("service_fallback", False, "", "the car fell back at least once", summary="rate"),
-        Field("service_restarts", 0, "", "times the service answered again after a failure (its defence restarted)"),
+        Field("service_invalid", 0, "", "answers the protocol's check refused (out of range, of the wrong kind, an "
+                                        "error, an answer to another request)"),
+        Field("service_restarts", 0, "", "defence restarts: times the service rebuilt the car's defence after it "
+                                         "raised"),
+        Field("service_new_sessions", 0, "", "new sessions: times the car opened its session again after a failure"),
         Field("service_refusals", 0, "", "answers lost to a failed authentication: a peer that is not the service "
                                          "the car pins (a man in the middle on a CurveZMQ link)"),
     )
@@ -46,5 +51,14 @@ class ServiceMeasures(Metric):
                 "service_rtt_p99_ms": float(np.percentile(answered, 99)) if answered.size else math.nan,
                 "service_late_steps": int((answered >= dt * 1000.0).sum()),
                 "service_fallback_steps": fallback, "service_fallback": fallback > 0,
-                "service_restarts": int(log["service_restarts"].max()) if "service_restarts" in log else 0,
-                "service_refusals": int(log["service_refusals"].max()) if "service_refusals" in log else 0}
+                **{name: _last_count(log, name) for name in ("service_invalid", "service_restarts",
+                                                             "service_new_sessions", "service_refusals")}}
+
+
+def _last_count(log, column: str) -> int:
+    """A counter the car carries through the episode: its last value (0 where never logged)."""
+    if column not in log:
+        return 0
+    values = log[column].to_numpy(float)
+    values = values[np.isfinite(values)]
+    return int(values.max()) if values.size else 0

@@ -4,7 +4,9 @@
 built as an episode builds it; the first of a kind is warmed up first, so that what it loads on
 first use is loaded before the car's first timed request), ``calibrate`` hands the estimator the
 car's build, ``reset`` / ``estimate`` / ``would_pass`` are the ``DistanceEstimator`` protocol,
-``bye`` ends the session, ``ping`` asks whether anyone is there.
+``bye`` ends the session, ``ping`` asks whether anyone is there (and which protocol it speaks).
+Every request carries an id (an int) and every answer names it, errors included, so that a car
+refuses an answer to another request.
 
 Every request is untrusted: one that is not what the protocol allows is answered with an
 error naming what is wrong (:class:`BadRequest`), and a defence that raises is rebuilt for that
@@ -18,8 +20,9 @@ import time
 from racf.controllers import CameraModel
 from racf.experiments.episode.car import CarCalibration
 from racf.experiments.episode.estimators import make_estimator
-from racf.experiments.episode.wire import PROTOCOL, WireError, decode_sample
-from racf.experiments.service.sessions import LOG, Session, Sessions, warn
+from racf.experiments.episode.wire import (MAX_REQUEST_ID, PROTOCOL, InvalidAnswer, WireError, decode_sample,
+                                           wire_distance)
+from racf.experiments.service.sessions import Session, Sessions, warn
 
 __all__ = ["DefenceService", "BadRequest", "warm_up"]
 
@@ -52,7 +55,8 @@ class DefenceService:
         self._warm: set[str] = set()
         if names:
             self._warm_up(names[0], options or {})
-        self.sessions = sessions or Sessions()
+        # Not `sessions or Sessions()`: Sessions has a length, and an empty one is falsy.
+        self.sessions = Sessions() if sessions is None else sessions
         self.requests = 0
 
     def _warm_up(self, name: str, options: dict) -> None:
@@ -61,15 +65,28 @@ class DefenceService:
             warm_up(make_estimator(name, options))
             self._warm.add(key)
 
-    def handle(self, identity: bytes, client: str, message: dict) -> dict:
-        """The answer to one decoded request from the car at socket ``identity`` (``client``: who)."""
+    def handle(self, identity: bytes, client: str, message: dict, connection: int | None = None) -> dict:
+        """The answer to one decoded request from the car at socket ``identity`` (``client``: who;
+        ``connection``: the connection it came on, whose end ends the session), naming its id."""
+        request_id = message.get("id")
+        reply = self._handle(identity, client, message, connection)
+        if isinstance(request_id, int) and not isinstance(request_id, bool) and 0 <= request_id <= MAX_REQUEST_ID:
+            reply["id"] = request_id
+        return reply
+
+    def _handle(self, identity: bytes, client: str, message: dict, connection: int | None) -> dict:
         self.requests += 1
         op = message.get("op")
         try:
+            if op == "hello" and message.get("protocol") != PROTOCOL:  # first: another protocol's car sends no id
+                return {"error": f"protocol {message.get('protocol')!r}; this service speaks {PROTOCOL}"}
+            request_id = message.get("id")
+            if not isinstance(request_id, int) or isinstance(request_id, bool) or not 0 <= request_id <= MAX_REQUEST_ID:
+                raise BadRequest(f"id must be an int in [0, {MAX_REQUEST_ID}] (protocol {PROTOCOL}), got {request_id!r}")
             if op == "ping":
-                return {"pong": True}
+                return {"pong": True, "protocol": PROTOCOL}
             if op == "hello":
-                return self._hello(identity, client, message)
+                return self._hello(identity, client, message, connection)
             session = self.sessions.get(identity)
             if session is None:
                 return {"error": "no session: say hello first", "no_session": True}
@@ -84,9 +101,7 @@ class DefenceService:
             warn("request", "bad %s request from %s: %s", op if isinstance(op, str) else "?", client, err)
             return {"error": f"bad request: {err}"}
 
-    def _hello(self, identity: bytes, client: str, message: dict) -> dict:
-        if message.get("protocol") != PROTOCOL:
-            return {"error": f"protocol {message.get('protocol')!r}; this service speaks {PROTOCOL}"}
+    def _hello(self, identity: bytes, client: str, message: dict, connection: int | None = None) -> dict:
         name, options = message.get("estimator"), message.get("options") or {}
         if not isinstance(name, str) or not isinstance(options, dict):
             raise BadRequest("hello needs estimator (a name) and options (a map)")
@@ -106,7 +121,7 @@ class DefenceService:
             estimator = make_estimator(name, options)
         except Exception as err:  # a plug-in may raise anything on options it refuses
             return {"refused": f"{name} with options {options} cannot be built: {type(err).__name__}: {err}"}
-        why = self.sessions.open(identity, Session(estimator, client, name, dict(options)))
+        why = self.sessions.open(identity, Session(estimator, client, name, dict(options), connection=connection))
         if why is not None:
             return {"refused": why}
         return {"estimator": name, "options": options, "protocol": PROTOCOL,
@@ -122,8 +137,8 @@ class DefenceService:
             reply = call(session.estimator)
         except Exception as err:  # the defence's own fault: this car's defence starts afresh
             session.restarts += 1
-            LOG.warning("%s raised in the session of %s (%s: %s); restarted it", session.name, session.client,
-                        type(err).__name__, err)
+            warn("restart", "%s raised in the session of %s (%s: %s); restarted it", session.name, session.client,
+                 type(err).__name__, err)
             session.estimator = make_estimator(session.name, session.options)
             if session.calibration is not None:
                 _calibrate(session, session.calibration)(session.estimator)
@@ -163,8 +178,12 @@ def _estimate(session: Session, message: dict):
 
     def apply(est):
         d = est.estimate(sample, speed, dt, yaw_rate_radps=yaw)
+        try:
+            distance = wire_distance(d)  # the protocol's rule, the one the car applies
+        except InvalidAnswer as err:
+            return {"error": f"{session.name} answered no distance the protocol allows: {err}"}
         verdict = getattr(est, "stands", None)
-        return {"distance": float(d), "diagnostics": _floats(est.diagnostics()),
+        return {"distance": distance, "diagnostics": _floats(est.diagnostics()),
                 "stands": verdict() if callable(verdict) else None}
 
     return apply

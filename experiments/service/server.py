@@ -7,6 +7,11 @@ from a DEALER) is dropped, a payload that is not a message is answered with an e
 one logged line; ZeroMQ's ``MAXMSGSIZE`` cuts off a peer that sends more than a message may
 hold. With keys (:mod:`~racf.experiments.episode.curve`) the socket is a CURVE server and a
 ZAP handler admits only the listed cars.
+
+A session ends with its connection: the socket's monitor reports each closed connection by its
+file descriptor, and each request says which descriptor it came on (``SRCFD``). libzmq's one I/O
+thread reports a closed connection before it accepts the next, so a descriptor the system hands out
+again is read as ended before any request arrives on it (the monitor is drained before each request).
 """
 
 from __future__ import annotations
@@ -18,6 +23,10 @@ from racf.experiments.episode.curve import ServerKeys
 from racf.experiments.episode.wire import MAX_MESSAGE_BYTES, WireError, pack, unpack
 from racf.experiments.service.handler import DefenceService, warm_up
 from racf.experiments.service.sessions import LOG, Sessions, warn
+
+#: On a plain link a client is its address: any process on the car's host, or behind its NAT, is the same client.
+PLAIN_CAPS = ("plain link: the per-client cap counts network addresses, which every process on a host (or behind "
+              "a NAT) shares; it bounds mistakes, not attackers (serve with --keys to cap per car key)")
 
 __all__ = ["DefenceService", "serve", "warm_up"]
 
@@ -39,27 +48,50 @@ def serve(endpoint: str, names: tuple[str, ...] | None = None, options: dict | N
     sock.setsockopt(zmq.MAXMSGSIZE, MAX_MESSAGE_BYTES)
     if keys is not None:
         sock.curve_secretkey, sock.curve_publickey, sock.curve_server = keys.secret, keys.public, True
+    monitor = sock.get_monitor_socket(zmq.EVENT_DISCONNECTED)
     try:
         sock.bind(endpoint)
     except zmq.ZMQError as err:
+        sock.disable_monitor()
+        monitor.close(0)
         sock.close(0)
         if auth is not None:
             auth.stop()
         raise UserError(f"cannot listen at {endpoint}: {err}") from None
     bound = sock.getsockopt_string(zmq.LAST_ENDPOINT)
+    if keys is None:
+        LOG.warning(PLAIN_CAPS)
     if ready is not None:
         ready(bound)
+    poller = zmq.Poller()
+    poller.register(sock, zmq.POLLIN)
+    poller.register(monitor, zmq.POLLIN)
     try:
         while service.requests < max_requests and not (stop is not None and stop.is_set()):
             service.sessions.expire()
-            if sock.poll(100):
+            ready_sockets = dict(poller.poll(100))
+            _end_closed_connections(monitor, service.sessions)
+            if sock in ready_sockets:
                 _answer(sock, service)
     finally:
         service.sessions.close_all("the service stopped")
+        sock.disable_monitor()
+        monitor.close(0)
         sock.close(0)
         if auth is not None:
             auth.stop()
     return service.requests
+
+
+def _end_closed_connections(monitor, sessions: Sessions) -> None:
+    """Ends the sessions of every connection the monitor reports closed (those waiting now)."""
+    import zmq
+    from zmq.utils.monitor import recv_monitor_message
+
+    while monitor.poll(0):
+        event = recv_monitor_message(monitor)
+        if event["event"] == zmq.EVENT_DISCONNECTED:
+            sessions.end_connection(int(event["value"]))
 
 
 def _answer(sock, service: DefenceService) -> None:
@@ -83,7 +115,7 @@ def _answer(sock, service: DefenceService) -> None:
         reply = {"error": f"bad message: {err}"}
     else:
         try:
-            reply = service.handle(identity, client, message)
+            reply = service.handle(identity, client, message, connection=_connection(frames[-1]))
         except Exception as err:  # the service's own fault: the car hears it, the service lives on
             LOG.exception("request %r from %s raised", message.get("op"), client)
             reply = {"error": f"{type(err).__name__}: {err}"}
@@ -91,15 +123,27 @@ def _answer(sock, service: DefenceService) -> None:
 
 
 def _client(frame) -> str:
-    """Who sent a frame: the car's CURVE key where it authenticated, else its address."""
+    """Who sent a frame: the car's CURVE key where it authenticated (all of it: the per-client cap is
+    per key), else its address."""
     for prop in ("User-Id", "Peer-Address"):
         try:
             value = frame.get(prop)
         except Exception:  # a property this transport does not have (inproc, ipc)
             continue
         if value:
-            return value if prop == "Peer-Address" else f"car key {value[:8]}"
+            return value if prop == "Peer-Address" else f"car key {value}"
     return "a local peer"
+
+
+def _connection(frame) -> int | None:
+    """The file descriptor of the connection a frame came on (None where the transport has none)."""
+    import zmq
+
+    try:
+        fd = frame.get(zmq.SRCFD)
+    except Exception:  # inproc has no descriptor
+        return None
+    return fd if isinstance(fd, int) and fd >= 0 else None
 
 
 def _authenticator(ctx, keys: ServerKeys):

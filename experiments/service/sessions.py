@@ -1,5 +1,6 @@
-"""The service's sessions: one defence per car, bounded per client and in all, idle ones expired,
-each logged in one line when it ends."""
+"""The service's sessions: one defence per car, bounded per client and in all, ended with their
+connection or when idle, each logged in one line when it ends (at most one a second for a kind
+of ending: a flood of short sessions is not a flood of lines)."""
 
 from __future__ import annotations
 
@@ -9,25 +10,38 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["Session", "Sessions", "LOG", "warn"]
+__all__ = ["Session", "Sessions", "LOG", "warn", "Throttle"]
 
 LOG = logging.getLogger("racf.serve")
 #: A flood of bad requests must not become a flood of log lines: one line per kind per second,
 #: with the count of those it stood for.
 _WARN_EVERY_S = 1.0
-_warned: dict[str, list] = {}
+
+
+class Throttle:
+    """Logs at most one line of a kind per ``every_s``, saying how many like it it stands for."""
+
+    def __init__(self, every_s: float = _WARN_EVERY_S) -> None:
+        self.every_s = every_s
+        self._last: dict[str, list] = {}
+
+    def log(self, level: int, kind: str, message: str, *args) -> None:
+        now = time.monotonic()
+        last = self._last.setdefault(kind, [-float("inf"), 0])
+        if now - last[0] < self.every_s:
+            last[1] += 1
+            return
+        more = f" (and {last[1]} more like it since the last line)" if last[1] else ""
+        self._last[kind] = [now, 0]
+        LOG.log(level, message + more, *args)
+
+
+_THROTTLE = Throttle()
 
 
 def warn(kind: str, message: str, *args) -> None:
     """Logs a warning of ``kind`` at most once per second, saying how many like it it stands for."""
-    now = time.monotonic()
-    last = _warned.setdefault(kind, [-float("inf"), 0])
-    if now - last[0] < _WARN_EVERY_S:
-        last[1] += 1
-        return
-    more = f" (and {last[1]} more like it since the last line)" if last[1] else ""
-    _warned[kind] = [now, 0]
-    LOG.warning(message + more, *args)
+    _THROTTLE.log(logging.WARNING, kind, message, *args)
 
 
 @dataclass
@@ -45,6 +59,7 @@ class Session:
     name: str
     options: dict
     calibration: dict | None = None
+    connection: int | None = None  # the connection's file descriptor at the server: its end ends the session
     steps: int = 0
     restarts: int = 0
     service_ms: list = field(default_factory=list)
@@ -67,8 +82,9 @@ class Sessions:
 
     Args:
         idle_s: a session unused this long is dropped.
-        per_client: at most this many sessions per client (a car reconnecting opens a new one: the
-            least recently used of that client is dropped to make room).
+        per_client: at most this many sessions per client (a car key, else an address); a hello
+            beyond is refused. Never does a new hello end another car's session: a session ends
+            with its connection, so a car that reconnects has freed its old one.
         total: at most this many in all; a hello beyond is refused.
     """
 
@@ -76,6 +92,7 @@ class Sessions:
         self.idle_s, self.per_client, self.total = idle_s, per_client, total
         self._open: dict[bytes, Session] = {}
         self._swept = time.monotonic()
+        self._lines = Throttle()
 
     def __len__(self) -> int:
         return len(self._open)
@@ -89,11 +106,9 @@ class Sessions:
     def open(self, identity: bytes, session: Session) -> str | None:
         """Adds ``session``; returns why it cannot be (None: opened)."""
         self.close(identity, "the car said hello again")
-        # The client's least recently used sessions give way: a car asks every step, so these are
-        # the ones its cars have left (an episode that ended without its goodbye), never one driving.
-        mine = sorted((s.seen, i) for i, s in self._open.items() if s.client == session.client)
-        for _, old in mine[:max(0, len(mine) - self.per_client + 1)]:
-            self.close(old, f"more than {self.per_client} sessions from one client")
+        if sum(s.client == session.client for s in self._open.values()) >= self.per_client:
+            return (f"{session.client} holds this service's most sessions per client ({self.per_client}); "
+                    f"end one, or try again later")
         if len(self._open) >= self.total:
             return f"this service holds its most sessions ({self.total}); try again later"
         self._open[identity] = session
@@ -102,7 +117,12 @@ class Sessions:
     def close(self, identity: bytes, why: str, car: dict | None = None) -> None:
         session = self._open.pop(identity, None)
         if session is not None:
-            LOG.info(session.line(why, car))
+            self._lines.log(logging.INFO, why, "%s", session.line(why, car))
+
+    def end_connection(self, connection: int) -> None:
+        """Ends the sessions opened on ``connection`` (its file descriptor), which has closed."""
+        for identity in [i for i, s in self._open.items() if s.connection == connection]:
+            self.close(identity, "its connection closed")
 
     def expire(self, every_s: float = 1.0) -> None:
         """Drops the sessions idle for ``idle_s`` (looked at once per ``every_s``)."""

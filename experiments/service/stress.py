@@ -46,7 +46,7 @@ def _value(rng: np.random.Generator, depth: int = 0):
     if kind == 7:  # an array whose header lies about its bytes, or names a dtype it may not
         return {"__nd__": True, "dtype": str(rng.choice(["|O", "<f8", "|u1", "<U4", "|V8", "x"])),
                 "shape": [int(n) for n in rng.integers(-1, 1 << 20, rng.integers(0, 6))], "data": rng.bytes(16)}
-    return {"op": _OPS[rng.integers(len(_OPS))], "protocol": PROTOCOL, "estimator": "raw",
+    return {"op": _OPS[rng.integers(len(_OPS))], "id": _value(rng, depth + 1), "protocol": PROTOCOL, "estimator": "raw",
             "sample": _value(rng, depth + 1), "speed": _value(rng, depth + 1), "dt": _value(rng, depth + 1),
             "yaw_rate": 0.0, "calibration": _value(rng, depth + 1), "kwargs": _value(rng, depth + 1),
             "options": _value(rng, depth + 1)}
@@ -67,7 +67,8 @@ def fuzz_frames(rng: np.random.Generator) -> list[bytes]:
 
 
 def _request(rng: np.random.Generator) -> dict:
-    return {"op": _OPS[rng.integers(len(_OPS))], "protocol": PROTOCOL, "estimator": "raw", "options": {},
+    return {"op": _OPS[rng.integers(len(_OPS))], "id": int(rng.integers(0, 1 << 20)), "protocol": PROTOCOL,
+            "estimator": "raw", "options": {},
             "sample": _value(rng, 1), "speed": _value(rng, 2), "dt": 0.02, "yaw_rate": 0.0}
 
 
@@ -89,7 +90,7 @@ def ping(endpoint: str, timeout_s: float = 5.0, keys=None) -> bool:
         keys.apply(sock)
     sock.connect(endpoint)
     try:
-        sock.send(pack({"op": "ping"}))
+        sock.send(pack({"op": "ping", "id": 1}))
         return bool(sock.poll(timeout_s * 1000.0)) and unpack(sock.recv()).get("pong") is True
     finally:
         sock.close(0)

@@ -82,7 +82,7 @@ _DEFAULTS = {"attack": ["patch_occlusion"], "estimator": ["raw"], "rho": [0.95],
              "sign": [0, 1, 2, 3]}
 _TOP_KEYS = {"name", "mode", "repeats", "n", "seed", "space", "params", "estimators", "log_steps", "sensor_profile",
              "sign_geometry", "detector", "target", "scenario", "metrics", "estimator_endpoint",
-             "estimator_timeout_ms", "estimator_keys"}
+             "estimator_timeout_ms", "estimator_keys", "estimator_car"}
 
 
 #: The example specs shipped with the project.
@@ -112,6 +112,7 @@ class SweepSpec:
     estimator_endpoint: str | None = None
     estimator_timeout_ms: float = DEFAULT_TIMEOUT_MS
     estimator_keys: str | None = None
+    estimator_car: str | None = None
 
     def __post_init__(self) -> None:
         if self.detector not in DETECTORS:
@@ -297,7 +298,7 @@ def _trial(cell: tuple, estimator: str, seed: int, sweep: SweepSpec, params: dic
                      attack_params=params or {}, detector=sweep.detector,
                      estimator_options=sweep.estimators.get(estimator, {}), metrics=tuple(sweep.metrics),
                      estimator_endpoint=sweep.estimator_endpoint, estimator_timeout_ms=sweep.estimator_timeout_ms,
-                     estimator_keys=sweep.estimator_keys,
+                     estimator_keys=sweep.estimator_keys, estimator_car=sweep.estimator_car,
                      target=target or sweep.target, scenario_params=situation or {})
 
 
@@ -344,7 +345,7 @@ def parse_spec(text: str, source: str = "spec", default_name: str = "sweep") -> 
                          scenario=raw.get("scenario", {}), metrics=raw.get("metrics", []),
                          estimator_endpoint=raw.get("estimator_endpoint"),
                          estimator_timeout_ms=raw.get("estimator_timeout_ms", DEFAULT_TIMEOUT_MS),
-                         estimator_keys=raw.get("estimator_keys"))
+                         estimator_keys=raw.get("estimator_keys"), estimator_car=raw.get("estimator_car"))
         episodes = spec.episodes()
     except ValueError as err:
         raise ValueError(f"{source}: {err}") from None

@@ -28,27 +28,96 @@ def test_an_admitted_car_is_answered_over_curve(service, keys):
     car.close()
 
 
-@pytest.mark.parametrize("who, words", [
-    ("no keys", "one end has no keys"),
-    ("a car the service does not admit", "refused this car's key"),
-    ("a car pinning another service's key", "not the service whose key this car pins"),
-])
-def test_a_car_that_cannot_authenticate_is_refused_in_one_line(service, keys, who, words):
-    endpoint = service("raw", keys=ServerKeys.load(keys / "ours"))
-    ours, theirs = CarKeys.load(keys / "ours"), CarKeys.load(keys / "theirs")
-    car_keys = {"no keys": None, "a car the service does not admit": CarKeys(theirs.public, theirs.secret, ours.server),
-                "a car pinning another service's key": CarKeys(ours.public, ours.secret, theirs.server)}[who]
-    with pytest.raises(UserError, match=words) as err:
-        RemoteEstimator(endpoint, "raw", keys=car_keys)
-    assert "\n" not in str(err.value) and "--service-keys" in str(err.value)
+WHO = {"no keys": "speaks CurveZMQ and this car has no keys",
+       "a car the service does not admit": "does not admit this car's key",
+       "a car pinning another service's key": "is not the service whose key this car pins"}
 
 
-def test_a_trial_that_cannot_authenticate_stops_before_any_episode(service, keys, capsys):
+@pytest.mark.parametrize("who", WHO)
+def test_a_car_that_cannot_authenticate_is_told_why_in_its_own_line_within_3_s(service, keys, who, capsys):
+    """Three causes, three lines, each through the command line (exit 2) before any episode."""
+    import time
+
     endpoint = service("raw", keys=ServerKeys.load(keys / "ours"))
+    folder = {"no keys": None, "a car the service does not admit": keys / "stranger",
+              "a car pinning another service's key": keys / "theirs"}[who]
+    if who == "a car the service does not admit":  # our service's key pinned, a car key it never admitted
+        if not folder.exists():
+            make_keys(folder)
+            (folder / "server.key").write_bytes((keys / "ours" / "server.key").read_bytes())
+    start = time.monotonic()
     code, _ = run_cli(["trial", "--setting", "attack", "--estimator-endpoint", endpoint,
-                       "--service-keys", str(keys / "theirs")])
+                       *(["--service-keys", str(folder)] if folder else [])])
+    took = time.monotonic() - start
     err = capsys.readouterr().err.strip()
-    assert code == 2 and "\n" not in err and "not the service whose key this car pins" in err
+    assert code == 2 and "\n" not in err and WHO[who] in err
+    assert all(words not in err for other, words in WHO.items() if other != who)
+    assert took < 3.0, f"told after {took:.1f} s"
+
+
+def test_the_car_uses_the_key_it_is_told_to_or_the_only_one(tmp_path, service):
+    make_keys(tmp_path / "k", cars=("other",))
+    endpoint = service("raw", keys=ServerKeys.load(tmp_path / "k"))
+    RemoteEstimator(endpoint, "raw", keys=CarKeys.load(tmp_path / "k")).close()  # the only car: taken
+    assert CarKeys.load(tmp_path / "k", "other").name == "other"
+    make_keys(tmp_path / "two", cars=("a", "b"))
+    with pytest.raises(UserError, match="it holds a, b: name one with --service-car NAME"):
+        CarKeys.load(tmp_path / "two")
+    with pytest.raises(UserError, match="no key of car 'c'.*it holds a, b"):
+        CarKeys.load(tmp_path / "two", "c")
+
+
+def test_a_trial_names_its_car_with_service_car(tmp_path, service, capsys):
+    make_keys(tmp_path / "k", cars=("a", "b"))
+    endpoint = service("raw", keys=ServerKeys.load(tmp_path / "k"))
+    code, _ = run_cli(["trial", "--setting", "clean", "--speed", "2.0", "--estimator-endpoint", endpoint,
+                       "--service-keys", str(tmp_path / "k"), "--service-car", "b", "--json"])
+    assert code == 0, capsys.readouterr().err
+    code, _ = run_cli(["trial", "--setting", "clean", "--estimator-endpoint", endpoint,
+                       "--service-keys", str(tmp_path / "k")])
+    assert code == 2 and "--service-car" in capsys.readouterr().err
+
+
+def test_secret_files_are_0600_from_the_moment_they_exist(tmp_path, monkeypatch):
+    """Every write into a key file finds it already owner-only: no moment in which another user could
+    read a secret (the old way wrote 0644 and then narrowed it)."""
+    import os
+    import stat
+
+    seen = []
+    real_write = os.write
+
+    def watched(fd, data):
+        seen.append(stat.S_IMODE(os.fstat(fd).st_mode))
+        return real_write(fd, data)
+
+    monkeypatch.setattr(os, "write", watched)
+    monkeypatch.setattr(os, "umask", os.umask)  # restored after
+    old = os.umask(0)  # the widest a process may ask for
+    try:
+        written = make_keys(tmp_path / "k", cars=("a", "b"))
+    finally:
+        os.umask(old)
+    secrets = [p for p in written if p.name.endswith(".key_secret")]
+    assert len(secrets) == 3 and seen.count(0o600) == 3 and all(m in (0o600, 0o644) for m in seen)
+    assert all(stat.S_IMODE(p.stat().st_mode) == 0o600 for p in secrets)
+    for folder in (tmp_path / "k", tmp_path / "k" / "cars"):
+        assert stat.S_IMODE(folder.stat().st_mode) == 0o700
+
+
+def test_racf_serve_keys_writes_owner_only_secrets_under_any_umask(tmp_path):
+    """The command itself, in a process whose umask lets everything through."""
+    import os
+    import stat
+    import subprocess
+    import sys
+
+    script = ("import os, sys; os.umask(0); from racf.experiments.cli import main; "
+              f"sys.exit(main(['serve', 'keys', {str(tmp_path / 'k')!r}, '--car', 'a']))")
+    subprocess.run([sys.executable, "-c", script], check=True, capture_output=True)
+    for path in (tmp_path / "k" / "server.key_secret", tmp_path / "k" / "cars" / "a.key_secret"):
+        assert stat.S_IMODE(path.stat().st_mode) == 0o600
+    assert stat.S_IMODE((tmp_path / "k").stat().st_mode) == 0o700
 
 
 def test_keys_are_never_overwritten_and_a_missing_pair_is_named(keys):

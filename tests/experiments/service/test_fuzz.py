@@ -49,7 +49,8 @@ def _hello_then(endpoint: str, request: dict) -> dict:
     sock.setsockopt(zmq.LINGER, 0)
     sock.connect(endpoint)
     try:
-        for message in ({"op": "hello", "protocol": PROTOCOL, "estimator": "raw", "options": {}}, request):
+        hello = {"op": "hello", "id": 1, "protocol": PROTOCOL, "estimator": "raw", "options": {}}
+        for message in (hello, {"id": 2, **request} if isinstance(request, dict) else request):
             sock.send(pack(message) if isinstance(message, dict) else message)
             assert sock.poll(5000)
             answer = unpack(sock.recv())
@@ -62,10 +63,10 @@ ND = {"__nd__": True, "dtype": "<f8", "shape": [2], "data": b"\0" * 16}
 #: (what, frames after the identity, words of the error; None: dropped without an answer)
 CORPUS = [
     ("five frames", [b"", b"a", b"b", b"c", b"d"], None),
-    ("a non-empty delimiter", [b"x", pack({"op": "ping"})], None),
+    ("a non-empty delimiter", [b"x", pack({"op": "ping", "id": 1})], None),
     ("no frames but the delimiter", [b""], "not a msgpack message"),
     ("random bytes", [b"", b"\xc1\xff\x00garbage"], "not a msgpack message"),
-    ("trailing bytes", [b"", pack({"op": "ping"}) + b"\x01"], "not a msgpack message"),
+    ("trailing bytes", [b"", pack({"op": "ping", "id": 1}) + b"\x01"], "not a msgpack message"),
     ("a list", [b"", msgpack.packb([1, 2, 3])], "a message is a map, got list"),
     ("a number, without the delimiter", [msgpack.packb(7)], "a message is a map, got int"),
     ("an object array", [b"", pack({"op": "ping", "a": {**ND, "dtype": "|O"}})], "dtype '|O' is not allowed"),
@@ -73,10 +74,15 @@ CORPUS = [
     ("a negative shape", [b"", pack({"op": "ping", "a": {**ND, "shape": [-2]}})], "not a list of at most 4 sizes"),
     ("a deep nest", [b"", msgpack.packb({"a": [[[[[[[[[[1]]]]]]]]]] * 5000})], "not a msgpack message"),
     ("a long string", [b"", msgpack.packb({"op": "x" * 10_000})], "not a msgpack message"),
-    ("estimate before hello", [b"", pack({"op": "estimate"})], "no session"),
-    ("an unknown op", [b"", pack({"op": "launch"})], "no session"),
-    ("another protocol", [b"", pack({"op": "hello", "protocol": 99})], "this service speaks 1"),
-    ("a name that is a number", [b"", pack({"op": "hello", "protocol": PROTOCOL, "estimator": 5})], "needs estimator"),
+    ("estimate before hello", [b"", pack({"op": "estimate", "id": 1})], "no session"),
+    ("an unknown op", [b"", pack({"op": "launch", "id": 1})], "no session"),
+    ("another protocol", [b"", pack({"op": "hello", "protocol": 99})], f"this service speaks {PROTOCOL}"),
+    ("a name that is a number", [b"", pack({"op": "hello", "id": 1, "protocol": PROTOCOL, "estimator": 5})],
+     "needs estimator"),
+    ("a request without an id", [b"", pack({"op": "ping"})], "id must be an int"),
+    ("an id that is not an int", [b"", pack({"op": "ping", "id": "7"})], "id must be an int"),
+    ("an id that is a bool", [b"", pack({"op": "ping", "id": True})], "id must be an int"),
+    ("a negative id", [b"", pack({"op": "ping", "id": -1})], "id must be an int"),
 ]
 
 

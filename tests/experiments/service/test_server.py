@@ -110,6 +110,7 @@ def test_a_defence_that_raises_is_restarted_for_that_car_alone(service, tmp_path
         assert all(other.estimate(sample, 0.5, 0.02) == 1.5 for _ in range(10))
     # Rebuilt, it counts its calls afresh: it raises again at its own 5th (the car's 10th step).
     assert car.diagnostics()["service_restarts"] == 2.0 and car.restarts == 2
+    assert car.diagnostics()["service_new_sessions"] == 0.0  # the session stood: only its defence was rebuilt
     assert answers == [1.5] * 10  # the 5th and 10th are the car's own depth: the same number, from the fallback
     assert "brittle raised in the session" in caplog.text and "lost its footing" in caplog.text
     car.close(), other.close()
@@ -168,7 +169,8 @@ def test_a_service_killed_and_restarted_mid_episode_gets_a_new_session(service):
     back = first_down + int(np.argmax(~fell_back[first_down:]))
     # (Later fallbacks may be real timeouts of a loaded machine; the outage is the first run of them.)
     assert fell_back.any() and back > first_down and fell_back[first_down:back].all()
-    assert log["service_restarts"].to_numpy()[back] == 1.0 and result.service_restarts >= 1
+    assert log["service_new_sessions"].to_numpy()[back] == 1.0 and result.service_new_sessions >= 1
+    assert result.service_restarts == 0  # the defence itself never raised: no defence restart
     # A fallback step costs at most the timeout on top of the step's own work (margin 0.25 s).
     step_cost = float(np.median(walls))
     assert max(np.asarray(walls)[fell_back]) <= step_cost + timeout_ms / 1000.0 + 0.25
@@ -265,7 +267,7 @@ def test_a_service_restarted_between_two_requests_opens_a_new_session(service):
     time.sleep(0.5)
     try:
         assert car.estimate(sample, 0.5, 0.02) == 1.5
-        assert car.diagnostics()["service_fallback"] == 0.0 and car.restarts == 1
+        assert car.diagnostics()["service_fallback"] == 0.0 and car.new_sessions == 1 and car.restarts == 0
     finally:
         car.close()
         for stop, thread in stops:

@@ -11,14 +11,14 @@ def _session(client: str) -> Session:
     return Session(object(), client, "raw", {})
 
 
-def test_a_client_over_its_bound_gives_up_its_oldest_session(caplog):
+def test_a_client_at_its_bound_is_refused_and_no_session_of_its_is_ended():
     sessions = Sessions(per_client=2, total=10)
-    with caplog.at_level(logging.INFO, logger="racf.serve"):
-        for identity in (b"a", b"b", b"c"):
-            assert sessions.open(identity, _session("10.0.0.1")) is None
-        assert sessions.open(b"d", _session("10.0.0.2")) is None
-    assert sessions.get(b"a") is None and sessions.get(b"b") and sessions.get(b"c") and sessions.get(b"d")
-    assert "more than 2 sessions from one client" in caplog.text
+    for identity in (b"a", b"b"):
+        assert sessions.open(identity, _session("10.0.0.1")) is None
+    why = sessions.open(b"c", _session("10.0.0.1"))
+    assert "10.0.0.1 holds this service's most sessions per client (2)" in why
+    assert sessions.open(b"d", _session("10.0.0.2")) is None  # another client is not counted against it
+    assert sessions.get(b"a") and sessions.get(b"b") and sessions.get(b"c") is None and len(sessions) == 3
 
 
 def test_a_full_service_refuses_a_hello():
@@ -47,13 +47,50 @@ def test_a_goodbye_carries_the_cars_round_trips_into_the_line(caplog):
     assert "round trip 1.50/4.00 ms p50/p99 (car)" in caplog.text
 
 
-def test_the_least_recently_used_session_gives_way_not_one_that_drives():
+def test_a_driving_session_is_never_evicted_by_a_new_hello_from_its_address():
+    sessions = Sessions(per_client=1)
+    sessions.open(b"driving", _session("10.0.0.1"))
+    for k in range(20):  # a process cycling hellos from the car's address
+        assert sessions.open(b"cycler%d" % k, _session("10.0.0.1")) is not None
+    assert sessions.get(b"driving") is not None and len(sessions) == 1
+
+
+def test_a_hello_again_on_the_same_socket_replaces_its_own_session_within_the_bound():
+    sessions = Sessions(per_client=1)
+    sessions.open(b"car", _session("10.0.0.1"))
+    first = sessions.get(b"car")
+    assert sessions.open(b"car", _session("10.0.0.1")) is None
+    assert sessions.get(b"car") is not first and len(sessions) == 1
+
+
+def test_a_session_ends_with_its_connection_and_only_its_own(caplog):
+    sessions = Sessions()
+    sessions.open(b"a", Session(object(), "x", "raw", {}, connection=11))
+    sessions.open(b"b", Session(object(), "x", "raw", {}, connection=12))
+    with caplog.at_level(logging.INFO, logger="racf.serve"):
+        sessions.end_connection(11)
+    assert sessions.get(b"a") is None and sessions.get(b"b") is not None
+    assert "session of x ended (its connection closed)" in caplog.text
+
+
+def test_idle_is_measured_from_the_last_request_not_the_opening():
     import time
 
-    sessions = Sessions(per_client=2)
-    sessions.open(b"driving", _session("10.0.0.1"))
-    sessions.open(b"left", _session("10.0.0.1"))
-    time.sleep(0.01)
-    sessions.get(b"driving")  # asked a moment ago: it is driving
-    sessions.open(b"new", _session("10.0.0.1"))
-    assert sessions.get(b"driving") and sessions.get(b"new") and sessions.get(b"left") is None
+    sessions = Sessions(idle_s=0.05)
+    sessions.open(b"a", _session("x"))
+    sessions.get(b"a").opened -= 10.0  # opened long ago, asked just now
+    sessions.expire(every_s=0.0)
+    assert sessions.get(b"a") is not None
+    time.sleep(0.06)
+    sessions.expire(every_s=0.0)
+    assert sessions.get(b"a") is None
+
+
+def test_a_flood_of_ended_sessions_is_one_line_a_second_with_its_count(caplog):
+    sessions = Sessions()
+    with caplog.at_level(logging.INFO, logger="racf.serve"):
+        for k in range(300):
+            sessions.open(b"%d" % k, _session("x"))
+            sessions.close(b"%d" % k, "the car closed it")
+    lines = [r for r in caplog.records if "ended (the car closed it)" in r.getMessage()]
+    assert 1 <= len(lines) <= 3 and len(sessions) == 0
