@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 
 from racf.experiments.cli.common import estimator_help, estimator_option_flag, estimator_options, fail, plugin_flag
 
@@ -29,9 +30,11 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="serve a non-loopback address without keys: anyone on the network may ask, and anyone "
                         "between may answer")
     s.add_argument("--idle-s", type=float, default=600.0, metavar="S",
-                   help="drop a car's session unused this long (default 600)")
+                   help="drop a car's session unused this long (default 600); a session also ends when its "
+                        "car's connection closes")
     s.add_argument("--sessions-per-client", type=int, default=16, metavar="N",
-                   help="at most N sessions per car key or address; the oldest gives way (default 16)")
+                   help="at most N sessions per car key (CurveZMQ) or address (plain link); a hello beyond is "
+                        "refused, and no car's session is ended for it (default 16)")
     s.add_argument("--max-sessions", type=int, default=1024, metavar="N",
                    help="at most N sessions in all; a hello beyond is refused (default 1024)")
     estimator_option_flag(s)
@@ -88,6 +91,10 @@ def _serve(args: argparse.Namespace) -> int:
             fail("serve", f"{flag} must be >= {lo}, got {value}")
     keys = ServerKeys.load(args.keys) if args.keys is not None else None
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(name)s: %(message)s", datefmt="%H:%M:%S")
+    if args.insecure and keys is None and not is_loopback(args.bind):
+        print(f"racf serve: warning: {args.bind} is served without keys (--insecure): anyone on the network may "
+              f"ask, and anyone between a car and this service may read and change its answers", file=sys.stderr,
+              flush=True)
 
     def ready(endpoint: str) -> None:
         link = f"CurveZMQ, cars admitted from {keys.admitted}" if keys else "plain link, no authentication"
@@ -110,7 +117,7 @@ def _keys(args: argparse.Namespace) -> int:
     for path in make_keys(args.dir, cars):
         print(path)
     print(f"serve with `racf serve --keys {args.dir}`; give each car `--service-keys {args.dir}` (it reads "
-          f"cars/NAME.key_secret and server.key)")
+          f"server.key and cars/NAME.key_secret: --service-car NAME where the folder holds several)")
     return 0
 
 

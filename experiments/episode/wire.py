@@ -21,7 +21,7 @@ from racf.controllers.detector import Detection
 from racf.controllers.existence import ExistenceWitnesses
 
 __all__ = ["WireError", "InvalidAnswer", "MAX_MESSAGE_BYTES", "DEFAULT_TIMEOUT_MS", "DEFAULT_RETRY_S", "pack",
-           "unpack", "encode_sample", "decode_sample", "PROTOCOL", "DISTANCE_RANGE_M", "MAX_REQUEST_ID", "wire_distance",
+           "unpack", "encode_sample", "decode_sample", "PROTOCOL", "DISTANCE_RANGE_M", "MAX_REQUEST_ID", "wire_distance", "check_distance",
            "check_answer"]
 
 #: The wire protocol's version: a server answers a hello from another version with an error, and a
@@ -169,21 +169,28 @@ def _detection(det: dict) -> Detection:
 
 
 
-def wire_distance(distance) -> float | None:
-    """A distance as the protocol carries it: None for no target (NaN, as the defences say it), else
-    a finite number in DISTANCE_RANGE_M. InvalidAnswer for anything else: the server refuses to send
-    it and the car refuses to act on it (one rule, both ends)."""
+def check_distance(distance) -> float | None:
+    """A distance as the wire carries it: None (no target, said explicitly) or a finite number in
+    DISTANCE_RANGE_M. InvalidAnswer for anything else, NaN and inf included: the car acts on no number
+    the protocol does not allow, and the server sends none."""
     if distance is None:
         return None
     if not isinstance(distance, (int, float, np.floating, np.integer)) or isinstance(distance, (bool, np.bool_)):
         raise InvalidAnswer("wrong_type", f"a distance is a number or None, got {type(distance).__name__}")
     distance = float(distance)
-    if math.isnan(distance):
-        return None
     lo, hi = DISTANCE_RANGE_M
-    if not lo <= distance <= hi:
-        raise InvalidAnswer("out_of_range", f"distance {distance!r} m is outside the protocol's [{lo:g}, {hi:g}] m")
+    if not lo <= distance <= hi:  # NaN fails this too: "no target" is None, never a NaN by accident
+        raise InvalidAnswer("out_of_range", f"distance {distance!r} m is not a number in the protocol's "
+                                            f"[{lo:g}, {hi:g}] m")
     return distance
+
+
+def wire_distance(distance) -> float | None:
+    """A defence's distance as the server sends it: its NaN (how defences say "no target") as None,
+    anything else as :func:`check_distance` allows it."""
+    if isinstance(distance, (float, np.floating)) and math.isnan(distance):
+        return None
+    return check_distance(distance)
 
 
 def _optional_bool(value) -> bool | None:
@@ -217,7 +224,7 @@ def _protocol(value) -> int:
 _ANSWERS = {
     "ping": {"protocol": _protocol},
     "hello": {"protocol": _protocol},
-    "estimate": {"distance": wire_distance, "stands": _optional_bool, "diagnostics": _diagnostics},
+    "estimate": {"distance": check_distance, "stands": _optional_bool, "diagnostics": _diagnostics},
     "would_pass": {"answer": _bool},
     "calibrate": {}, "reset": {}, "bye": {},
 }

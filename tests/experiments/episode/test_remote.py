@@ -1,0 +1,182 @@
+"""The car trusts nothing a service sends: an answer counts only if the protocol's check passes it,
+anything else is a counted fallback step on the car's own depth, and nothing a service says ends
+an episode."""
+
+from __future__ import annotations
+
+import logging
+import math
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from racf.controllers import PerceptionSample
+from racf.errors import UserError
+from racf.experiments.episode import TrialSpec, run_trial
+from racf.experiments.episode.remote import RemoteEstimator
+from racf.experiments.episode.wire import DISTANCE_RANGE_M, PROTOCOL, InvalidAnswer, check_answer
+from tests.experiments.episode.fake_service import LIES, FakeService
+
+
+def _sample(k: int) -> PerceptionSample:
+    d = 3.0 - 0.02 * k
+    return PerceptionSample(None, d, 0.9, d + 0.05, 0.0)
+
+
+def _drive(car: RemoteEstimator, steps: int) -> tuple[list[float], list[dict]]:
+    car.reset()
+    out, diagnostics = [], []
+    for k in range(steps):
+        out.append(car.estimate(_sample(k), 1.0, 0.02))
+        diagnostics.append(car.diagnostics())
+    return out, diagnostics
+
+
+@pytest.mark.parametrize("lie", LIES)
+def test_every_lie_is_a_counted_fallback_on_the_cars_own_depth(lie, caplog):
+    with FakeService(lie, honest=30) as fake, caplog.at_level(logging.WARNING, logger="racf.link"):
+        car = RemoteEstimator(fake.endpoint, "raw", timeout_ms=1000.0, retry_s=0.1)
+        distances, diagnostics = _drive(car, 80)
+        car.close()
+    # Honest or not, every step's distance is the car's own depth here (the fake answers d_meas honestly).
+    assert np.allclose(distances, [_sample(k).d_meas for k in range(80)])
+    fell = [d["service_fallback"] for d in diagnostics]
+    assert fell[:30] == [0.0] * 30 and all(fell[30:])  # every step after the first lie is no answer
+    assert fake.lies >= 3 and car.invalid == fake.lies == diagnostics[-1]["service_invalid"]
+    assert car.new_sessions == fake.lies - 1 and car.restarts == 0  # each lie: a pause, then a new session
+    lines = [r for r in caplog.records if "falls back" in r.getMessage()]
+    assert len(lines) == 1  # the first lie of its kind said once, not once a step
+
+
+def test_a_step_that_asks_nothing_waits_for_nothing():
+    with FakeService("nan", honest=1) as fake:
+        car = RemoteEstimator(fake.endpoint, "raw", timeout_ms=1000.0, retry_s=0.1)
+        car.reset()
+        car.estimate(_sample(0), 1.0, 0.02)
+        car.estimate(_sample(1), 1.0, 0.02)  # the lie: the car pauses for retry_s of its own time
+        car.estimate(_sample(2), 1.0, 0.02)
+        assert car.latency_s == 0.0 and car.diagnostics()["service_fallback"] == 1.0
+        car.close()
+
+
+def test_no_target_is_said_explicitly_and_read_as_nan():
+    with FakeService(None) as fake:
+        car = RemoteEstimator(fake.endpoint, "raw")
+        car.reset()
+        assert math.isnan(car.estimate(PerceptionSample(None, math.nan, 0.0, math.nan, math.nan), 1.0, 0.02))
+        assert car.diagnostics()["service_fallback"] == 0.0
+        car.close()
+
+
+answers = st.dictionaries(st.sampled_from(["id", "distance", "stands", "diagnostics", "error", "restarted",
+                                           "no_session"]),
+                          st.none() | st.booleans() | st.integers(-5, 2**70) | st.floats() | st.text(max_size=5)
+                          | st.lists(st.integers(), max_size=2) | st.dictionaries(st.text(max_size=3), st.floats(),
+                                                                                  max_size=2), max_size=7)
+
+
+@settings(max_examples=300, deadline=None)
+@given(answers, st.integers(0, 10))
+def test_an_answer_passes_the_check_only_if_the_protocol_allows_it(reply, request_id):
+    try:
+        checked = check_answer("estimate", reply, request_id)
+    except InvalidAnswer as err:
+        assert err.kind in {"stale", "error", "no_session", "restarted", "missing", "wrong_type", "out_of_range"}
+        return
+    lo, hi = DISTANCE_RANGE_M
+    assert reply["id"] == request_id and not isinstance(reply["id"], bool)
+    assert "error" not in reply and "restarted" not in reply
+    d = checked["distance"]
+    assert d is None or (isinstance(d, float) and lo <= d <= hi)
+    assert checked["stands"] in (None, True, False)
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(answers)
+def test_whatever_a_service_answers_the_car_acts_on_a_checked_distance_or_its_own_depth(reply):
+    def lie(rid, honest):
+        return {**reply, "id": reply["id"] + rid if isinstance(reply.get("id"), int) and reply["id"] == 0 else
+                reply.get("id", rid)}
+
+    with FakeService(lie, honest=0) as fake:
+        car = RemoteEstimator(fake.endpoint, "raw", timeout_ms=1000.0)
+        car.reset()
+        d = car.estimate(_sample(0), 1.0, 0.02)
+        fell = car.diagnostics()["service_fallback"] == 1.0
+        car.close()
+    lo, hi = DISTANCE_RANGE_M
+    if fell:  # refused by the check, or the service said it rebuilt its defence
+        assert d == _sample(0).d_meas and car.invalid + car.restarts == 1
+    else:
+        assert math.isnan(d) or lo <= d <= hi
+        assert car.invalid == car.restarts == 0
+
+
+def test_a_protocol_1_service_is_refused_in_one_line():
+    with FakeService(pong={"pong": True}) as fake:
+        with pytest.raises(UserError) as err:
+            RemoteEstimator(fake.endpoint, "raw")
+    assert f"speaks protocol 1 (it names none); this car speaks {PROTOCOL}" in str(err.value)
+    assert "\n" not in str(err.value)
+
+
+@pytest.mark.parametrize("what, hellos", [
+    ("a refused re-hello", lambda n, honest: honest if n == 1 else {"refused": "full", "id": honest["id"]}),
+    ("a re-hello never answered", lambda n, honest: honest if n == 1 else None),
+    ("a re-hello answered with an error", lambda n, honest: honest if n == 1 else {"error": "x", "id": honest["id"]}),
+])
+def test_a_failed_new_session_is_a_fallback_and_the_car_keeps_trying(what, hellos):
+    with FakeService("error", honest=5, hellos=hellos) as fake:
+        car = RemoteEstimator(fake.endpoint, "raw", timeout_ms=100.0, retry_s=0.1)
+        distances, diagnostics = _drive(car, 40)
+        car.close()
+    assert np.allclose(distances, [_sample(k).d_meas for k in range(40)])
+    assert all(d["service_fallback"] == 1.0 for d in diagnostics[5:])
+    assert fake.hellos >= 4 and car.new_sessions == 0  # it kept asking, on its retry period, and never got one
+
+
+#: The paper's protocol, through a lying service: sign 1 at 1 m/s, seed 3.
+SPEC = TrialSpec("clean", 1, 1.0, 3)
+
+
+def _outcome(result) -> dict:
+    return {k: v for k, v in result.to_dict().items() if not k.startswith(("service", "trial_id"))}
+
+
+def _lying_episode(lie: str):
+    with FakeService(lie, honest=30) as fake:
+        result, log = run_trial(replace(SPEC, estimator_endpoint=fake.endpoint, estimator_timeout_ms=1000.0))
+        return result, log, fake.lies
+
+
+@pytest.fixture(scope="module")
+def own_depth():
+    """The car's own depth fallback for the same seed: the raw defence, in the car's process."""
+    return run_trial(SPEC)
+
+
+def _check_lying_episode(lie: str, own_depth) -> None:
+    result, log, lies = _lying_episode(lie)
+    expected, _ = own_depth
+    control = log["control"].astype(bool).to_numpy()
+    fell = log["service_fallback"].to_numpy()[control] == 1.0
+    assert not fell[:30].any() and fell[30:].all()
+    row = result.to_dict()
+    assert lies >= 1 and row["service_invalid"] == lies and row["service_fallback_steps"] == int(fell.sum())
+    late = np.flatnonzero(log["service_rtt_ms"].to_numpy() >= 20.0)
+    if not late.size:  # a loaded machine's late answer delays the car, as it should: then only the counts hold
+        assert _outcome(result) == _outcome(expected)
+
+
+@pytest.mark.parametrize("lie", ["nan", "stale"])
+def test_a_lying_service_leaves_the_outcome_of_the_cars_own_depth(lie, own_depth):
+    _check_lying_episode(lie, own_depth)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("lie", ["negative", "inf", "far", "string", "error"])
+def test_every_lie_leaves_the_outcome_of_the_cars_own_depth(lie, own_depth):
+    _check_lying_episode(lie, own_depth)

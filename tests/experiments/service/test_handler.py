@@ -1,0 +1,109 @@
+"""The service's answers, called directly: every answer names its request, a defence's distance goes out
+only as the protocol allows, the options a service was started with are the only ones it serves, and
+a defence rebuilt after it raised is calibrated again."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from racf.controllers import PerceptionSample
+from racf.experiments.episode.plan import car_calibration
+from racf.experiments.episode.wire import PROTOCOL, check_answer, encode_sample
+from racf.experiments.service.handler import DefenceService
+from racf.experiments.service.sessions import Sessions
+from racf.plugins import load_plugin_file
+
+HELLO = {"op": "hello", "id": 1, "protocol": PROTOCOL, "estimator": "raw", "options": {}}
+
+
+def _estimate(d: float, rid: int = 2) -> dict:
+    return {"op": "estimate", "id": rid, "sample": encode_sample(PerceptionSample(None, d, 0.9, d, 0.0)),
+            "speed": 1.0, "dt": 0.02, "yaw_rate": 0.0}
+
+
+def test_every_answer_names_its_request_errors_too():
+    service = DefenceService(("raw",))
+    assert service.handle(b"a", "x", {"op": "ping", "id": 7}) == {"pong": True, "protocol": PROTOCOL, "id": 7}
+    assert service.handle(b"a", "x", {"op": "estimate", "id": 8})["id"] == 8  # no session: an error, named
+    assert "id" not in service.handle(b"a", "x", {"op": "ping", "id": "7"})  # an id that is not one is not echoed
+    assert check_answer("hello", service.handle(b"a", "x", HELLO), 1)["protocol"] == PROTOCOL
+
+
+@pytest.mark.parametrize("d, words", [(math.inf, "not a number in the protocol's [0, 50] m"),
+                                      (-0.5, "not a number in the protocol's [0, 50] m"),
+                                      (50.5, "not a number in the protocol's [0, 50] m")])
+def test_a_distance_the_protocol_does_not_allow_is_never_sent(d, words):
+    service = DefenceService(("raw",))
+    service.handle(b"a", "x", HELLO)
+    reply = service.handle(b"a", "x", _estimate(d))
+    assert "distance" not in reply and words in reply["error"] and reply["id"] == 2
+
+
+def test_no_target_goes_out_as_none_and_an_answer_in_range_as_it_is():
+    service = DefenceService(("raw",))
+    service.handle(b"a", "x", HELLO)
+    assert service.handle(b"a", "x", _estimate(math.nan))["distance"] is None
+    for d in (0.0, 1.25, 50.0):
+        assert service.handle(b"a", "x", _estimate(d))["distance"] == d
+
+
+def test_the_options_a_service_was_started_with_are_the_only_ones_it_serves():
+    service = DefenceService(("ekf",), {"config": {"depth_std_m": 0.05}})
+    hello = {**HELLO, "estimator": "ekf"}
+    assert "refused" in service.handle(b"a", "x", {**hello, "options": {"config": {"depth_std_m": 0.2}}})
+    assert "refused" in service.handle(b"a", "x", hello)  # no options is other options too
+    assert "refused" not in service.handle(b"a", "x", {**hello, "options": {"config": {"depth_std_m": 0.05}}})
+
+
+def test_another_protocols_hello_is_told_which_this_service_speaks():
+    reply = DefenceService(("raw",)).handle(b"a", "x", {"op": "hello", "protocol": 1, "estimator": "raw"})
+    assert reply["error"] == f"protocol 1; this service speaks {PROTOCOL}"
+
+
+def test_the_sessions_given_are_the_sessions_used_even_empty():
+    sessions = Sessions(per_client=1)
+    service = DefenceService(("raw",), sessions=sessions)
+    assert service.sessions is sessions
+    service.handle(b"a", "x", HELLO)
+    assert "refused" in service.handle(b"b", "x", HELLO)
+
+
+CALIBRATED = '''
+from racf.controllers.estimators import RawDepthEstimator
+
+
+class Calibrated(RawDepthEstimator):
+    name = "calibrated"
+
+    def __init__(self):
+        super().__init__()
+        self.calibration, self.calls = None, 0
+
+    def use_calibration(self, calibration):
+        self.calibration = calibration
+
+    def estimate(self, sample, speed_mps, dt, yaw_rate_radps=0.0):
+        self.calls += 1
+        if self.calls == 2:
+            raise RuntimeError("tripped")
+        return 1.0 if self.calibration is not None else 2.0
+'''
+
+
+def test_a_defence_rebuilt_after_it_raised_is_calibrated_and_reset_again(tmp_path, plugin_env):
+    import dataclasses
+
+    path = tmp_path / "calibrated.py"
+    path.write_text(CALIBRATED)
+    load_plugin_file(path)
+    service = DefenceService(("calibrated",))
+    service.handle(b"a", "x", {**HELLO, "estimator": "calibrated"})
+    calibration = dataclasses.asdict(car_calibration(320, 240))
+    assert service.handle(b"a", "x", {"op": "calibrate", "id": 2, "calibration": calibration}) == {"id": 2}
+    assert service.handle(b"a", "x", _estimate(3.0, 3))["distance"] == 1.0
+    assert "restarted" in service.handle(b"a", "x", _estimate(3.0, 4))
+    session = service.sessions.get(b"a")
+    assert session.restarts == 1 and session.estimator.calibration is not None
+    assert service.handle(b"a", "x", _estimate(3.0, 5))["distance"] == 1.0  # calibrated, not the 2.0 of a bare one

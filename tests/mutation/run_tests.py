@@ -1,0 +1,49 @@
+"""cosmic-ray's test command for `make mutate`: the tests that mirror the mutated module, stopping at
+the first failure. The mutant lies on disk, so git names the module; each module's tests are listed
+fastest-killing first. Exit 0: the mutant survived; anything else: killed."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+SERVICE = "tests/experiments/service"
+EPISODE = "tests/experiments/episode"
+#: The tests that must kill a mutant of each module.
+TESTS = {
+    "experiments/episode/wire.py": [f"{EPISODE}/test_wire.py", f"{EPISODE}/test_remote.py", f"{SERVICE}/test_fuzz.py"],
+    "experiments/episode/remote.py": [f"{EPISODE}/test_remote.py", f"{SERVICE}/test_auth.py", f"{SERVICE}/test_server.py",
+                                      f"{SERVICE}/test_limits.py"],
+    "experiments/episode/curve.py": [f"{SERVICE}/test_auth.py"],
+    "experiments/service/handler.py": [f"{SERVICE}/test_handler.py", f"{SERVICE}/test_fuzz.py",
+                                       f"{SERVICE}/test_server.py"],
+    "experiments/service/sessions.py": [f"{SERVICE}/test_sessions.py", f"{SERVICE}/test_limits.py"],
+    "experiments/service/server.py": [f"{SERVICE}/test_limits.py", f"{SERVICE}/test_fuzz.py",
+                                      f"{SERVICE}/test_server.py"],
+}
+
+
+def mutated() -> list[str]:
+    out = subprocess.run(["git", "diff", "--name-only", "--", *TESTS], cwd=ROOT, capture_output=True, text=True,
+                         check=True).stdout
+    return out.split()
+
+
+def main() -> int:
+    modules = mutated()
+    if len(modules) != 1:
+        print(f"expected one mutated module, git shows {modules}", file=sys.stderr)
+        return 3
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}  # cosmic-ray sets it: a cold start
+    env.update(OMP_NUM_THREADS="1", MKL_NUM_THREADS="1", MUJOCO_GL=env.get("MUJOCO_GL", "egl"))
+    tests = [t for t in TESTS[modules[0]] if (ROOT / t).exists()]
+    return subprocess.run([sys.executable, "-m", "pytest", "-x", "-q", "-p", "no:cacheprovider", "-p", "no:xdist",
+                           "-m", "not slow", *tests], cwd=ROOT, env=env, stdout=subprocess.DEVNULL,
+                          stderr=subprocess.DEVNULL).returncode
+
+
+if __name__ == "__main__":
+    sys.exit(main())
