@@ -1,0 +1,104 @@
+"""`make mutate`: cosmic-ray over the link's code, resumable, then its score.
+
+The session lives in outputs/mutation/: a run interrupted resumes where it stopped (`make mutate`
+again), and one whose modules, tests or configuration changed since starts afresh (its fingerprint
+names what made it). The score is killed / (all - the equivalent mutants argued in equivalent.toml),
+printed with every survivor that is not argued, so that one can be killed by a new test.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import sqlite3
+import subprocess
+import sys
+import tomllib
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parents[1]
+CONFIG = HERE / "cosmic-ray.toml"
+OUT = ROOT / "outputs" / "mutation"
+SESSION = OUT / "session.sqlite"
+#: The score the link's tests must keep over its non-equivalent mutants.
+GOAL = 0.90
+
+
+def _modules() -> list[str]:
+    return tomllib.loads(CONFIG.read_text())["cosmic-ray"]["module-path"]
+
+
+def fingerprint() -> str:
+    """What made the session: the configuration, the modules, the tests that run, the runner."""
+    sys.path.insert(0, str(HERE))
+    from run_tests import TESTS
+
+    files = sorted({CONFIG, HERE / "run_tests.py", *(ROOT / m for m in _modules()),
+                    *(ROOT / t for tests in TESTS.values() for t in tests if (ROOT / t).exists())})
+    digest = hashlib.sha256()
+    for path in files:
+        digest.update(str(path.relative_to(ROOT)).encode() + b"\0" + path.read_bytes())
+    return digest.hexdigest()[:16]
+
+
+def _tool(name: str, *args: str) -> None:
+    subprocess.run([str(Path(sys.executable).parent / name), *args], cwd=ROOT, check=True)
+
+
+def main() -> int:
+    dirty = subprocess.run(["git", "status", "--porcelain", "--", *_modules()], cwd=ROOT, capture_output=True,
+                           text=True).stdout.strip()
+    if dirty:
+        print(f"make mutate: commit or stash the changes to {dirty.split()[-1]} first (a mutant is found by git diff)",
+              file=sys.stderr)
+        return 2
+    OUT.mkdir(parents=True, exist_ok=True)
+    stamp = OUT / "fingerprint"
+    made_by = fingerprint()
+    if not SESSION.exists() or not stamp.exists() or stamp.read_text() != made_by:
+        SESSION.unlink(missing_ok=True)
+        _tool("cosmic-ray", "init", str(CONFIG), str(SESSION), "--force")
+        _tool("cr-filter-operators", str(SESSION), str(CONFIG))
+        stamp.write_text(made_by)
+    else:
+        print(f"make mutate: resuming {SESSION} (made by {made_by})")
+    _tool("cosmic-ray", "exec", str(CONFIG), str(SESSION))
+    return report()
+
+
+def report() -> int:
+    db = sqlite3.connect(SESSION)
+    rows = db.execute("""select m.module_path, m.operator_name, m.occurrence, m.start_pos_row, r.test_outcome,
+                                r.worker_outcome
+                         from mutation_specs m join work_results r on r.job_id = m.job_id""").fetchall()
+    pending = db.execute("select count(*) from work_items where job_id not in (select job_id from work_results)"
+                         ).fetchone()[0]
+    tried = [r for r in rows if r[5] != "SKIPPED"]
+    equivalent = tomllib.loads((HERE / "equivalent.toml").read_text()).get("mutant", [])
+    argued = {(e["module"], e["operator"], e["line"]) for e in equivalent}
+    survivors = [r for r in tried if r[4] == "SURVIVED"]
+    unargued = [r for r in survivors if (r[0], r[1], r[3]) not in argued]
+    killed = sum(r[4] == "KILLED" for r in tried)
+    counted = len(tried) - (len(survivors) - len(unargued))
+    score = killed / counted if counted else float("nan")
+    print(f"mutants tried {len(tried)} (pending {pending}), killed {killed}, survived {len(survivors)} "
+          f"({len(survivors) - len(unargued)} argued equivalent in tests/mutation/equivalent.toml)")
+    by_module = {}
+    for r in tried:
+        k = by_module.setdefault(r[0], [0, 0])
+        k[0] += r[4] == "KILLED"
+        k[1] += 1
+    for module, (k, n) in sorted(by_module.items()):
+        print(f"  {module:<36} killed {k:>4} of {n:>4}")
+    for r in unargued:
+        print(f"  survived: {r[0]}:{r[3]} {r[1]} (occurrence {r[2]})")
+    print(f"score {score:.3f} over the non-equivalent mutants (goal {GOAL:.2f})")
+    (OUT / "score.json").write_text(json.dumps({"tried": len(tried), "pending": pending, "killed": killed,
+                                                "survived": len(survivors), "argued": len(survivors) - len(unargued),
+                                                "score": score if counted else None}, indent=2))
+    return 0 if pending == 0 and score >= GOAL else 1
+
+
+if __name__ == "__main__":
+    sys.exit(report() if sys.argv[1:] == ["--report"] else main())
