@@ -37,12 +37,34 @@ def main() -> int:
     if len(modules) != 1:
         print(f"expected one mutated module, git shows {modules}", file=sys.stderr)
         return 3
-    env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}  # cosmic-ray sets it: a cold start
+    # cosmic-ray turns bytecode off, which makes every run compile all of racf: it is on here, and the
+    # mutated module's own bytecode is removed before and after (two mutants of one size written in
+    # one second would otherwise share a stale .pyc).
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
     env.update(OMP_NUM_THREADS="1", MKL_NUM_THREADS="1", MUJOCO_GL=env.get("MUJOCO_GL", "egl"))
     tests = [t for t in TESTS[modules[0]] if (ROOT / t).exists()]
-    return subprocess.run([sys.executable, "-m", "pytest", "-x", "-q", "-p", "no:cacheprovider", "-p", "no:xdist",
-                           "-m", "not slow", *tests], cwd=ROOT, env=env, stdout=subprocess.DEVNULL,
-                          stderr=subprocess.DEVNULL).returncode
+    forget_bytecode(modules[0])
+    try:
+        run = subprocess.run([sys.executable, "-m", "pytest", "-x", "-q", "-p", "no:cacheprovider", "-p", "no:xdist",
+                              "-m", "not slow", *tests], cwd=ROOT, env=env, capture_output=True, text=True)
+    finally:
+        forget_bytecode(modules[0])
+    last = (run.stdout.strip().splitlines() or [""])[-1]
+    if run.returncode not in (0, 1):  # not a verdict on the mutant: collection failed, no tests, ...
+        print(f"RUNNER ERROR: pytest exited {run.returncode}: {last} {run.stderr[-500:]}")
+        return 1
+    print(f"{modules[0]}: {last}")
+    return run.returncode
+
+
+def forget_bytecode(module: str) -> None:
+    """Removes the compiled forms of ``module`` wherever Python may have cached them (beside the file
+    and beside its link in the development install)."""
+    stem = Path(module).stem
+    for cache in [ROOT / Path(module).parent / "__pycache__", *(ROOT / "build").glob(
+            f"__editable__*/racf/{Path(module).parent.relative_to(Path(module).parts[0])}/__pycache__")]:
+        for pyc in cache.glob(f"{stem}.*.pyc"):
+            pyc.unlink(missing_ok=True)
 
 
 if __name__ == "__main__":

@@ -56,22 +56,27 @@ def main() -> int:
     OUT.mkdir(parents=True, exist_ok=True)
     stamp = OUT / "fingerprint"
     made_by = fingerprint()
+    # The configuration as run: its test command in this Python (a bare `python` may be another one).
+    config = OUT / "cosmic-ray.toml"
+    config.write_text(CONFIG.read_text().replace('test-command = "python ', f'test-command = "{sys.executable} '))
     if not SESSION.exists() or not stamp.exists() or stamp.read_text() != made_by:
         SESSION.unlink(missing_ok=True)
-        _tool("cosmic-ray", "init", str(CONFIG), str(SESSION), "--force")
-        _tool("cr-filter-operators", str(SESSION), str(CONFIG))
+        _tool("cosmic-ray", "init", str(config), str(SESSION), "--force")
+        _tool("cr-filter-operators", str(SESSION), str(config))
         stamp.write_text(made_by)
     else:
         print(f"make mutate: resuming {SESSION} (made by {made_by})")
-    _tool("cosmic-ray", "exec", str(CONFIG), str(SESSION))
+    _tool("cosmic-ray", "exec", str(config), str(SESSION))
     return report()
 
 
 def report() -> int:
     db = sqlite3.connect(SESSION)
     rows = db.execute("""select m.module_path, m.operator_name, m.occurrence, m.start_pos_row, r.test_outcome,
-                                r.worker_outcome
+                                r.worker_outcome, coalesce(r.output, '')
                          from mutation_specs m join work_results r on r.job_id = m.job_id""").fetchall()
+    errors = [r for r in rows if "RUNNER ERROR" in r[6]]  # no verdict: neither killed nor survived
+    rows = [r for r in rows if "RUNNER ERROR" not in r[6]]
     pending = db.execute("select count(*) from work_items where job_id not in (select job_id from work_results)"
                          ).fetchone()[0]
     tried = [r for r in rows if r[5] != "SKIPPED"]
@@ -93,11 +98,13 @@ def report() -> int:
         print(f"  {module:<36} killed {k:>4} of {n:>4}")
     for r in unargued:
         print(f"  survived: {r[0]}:{r[3]} {r[1]} (occurrence {r[2]})")
+    for r in errors:
+        print(f"  no verdict: {r[0]}:{r[3]} {r[1]}: {r[6].strip()[:200]}")
     print(f"score {score:.3f} over the non-equivalent mutants (goal {GOAL:.2f})")
     (OUT / "score.json").write_text(json.dumps({"tried": len(tried), "pending": pending, "killed": killed,
                                                 "survived": len(survivors), "argued": len(survivors) - len(unargued),
                                                 "score": score if counted else None}, indent=2))
-    return 0 if pending == 0 and score >= GOAL else 1
+    return 0 if pending == 0 and not errors and score >= GOAL else 1
 
 
 if __name__ == "__main__":
