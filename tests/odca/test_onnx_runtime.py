@@ -32,6 +32,16 @@ def test_the_exported_prior_forecasts_what_pytorch_forecasts():
         assert np.nanmax(np.abs(x - y)) < 1e-5
 
 
+def test_a_context_shorter_than_the_priors_forecasts_what_pytorch_forecasts():
+    """A short window is padded with missing values, as the PyTorch prior reads it (zeros would be
+    distances of 0 m)."""
+    torch_prior, onnx_prior = Chronos2Prior(), OnnxPrior(SHIPPED_ONNX)
+    short = 2.0 - 0.02 * np.arange(min(12, onnx_prior.context_length - 1), dtype=float)[None, :]
+    a, b = torch_prior.forecast(short, 16), onnx_prior.forecast(short, 16)
+    for x, y in zip(a, b):
+        assert np.nanmax(np.abs(x - y)) < 1e-5
+
+
 def test_onboard_odca_repairs_an_attacked_approach_as_pytorch_does(models):
     torch_model, onnx_model = models
     rng = np.random.default_rng(1)

@@ -41,9 +41,12 @@ class FakeService:
         hellos: a function (the hello's number, from 1; its honest answer) -> the answer, or None
             for no answer at all (None: every hello answered honestly).
         pong: the answer to a ping (None: protocol 2's).
+        ping_delay_s: how long the service takes to answer a ping (a loaded one).
     """
 
-    def __init__(self, lie=None, honest: int = 30, hellos=None, pong: dict | None = None) -> None:
+    def __init__(self, lie=None, honest: int = 30, hellos=None, pong: dict | None = None,
+                 ping_delay_s: float = 0.0) -> None:
+        self.ping_delay_s = ping_delay_s
         self.lie = LIES[lie] if isinstance(lie, str) else lie
         self.hello_answer, self.pong = hellos, pong
         self.raw_lie = lie == "not a map"
@@ -69,6 +72,7 @@ class FakeService:
     def _answer(self, message: dict) -> bytes | None:
         op, rid = message["op"], message.get("id")
         if op == "ping":
+            self._stop.wait(self.ping_delay_s)
             return pack(self.pong if self.pong is not None else {"pong": True, "protocol": PROTOCOL, "id": rid})
         if op == "hello":
             self.hellos += 1

@@ -82,6 +82,7 @@ def test_a_dropped_answer_is_a_fallback_and_a_delayed_one_a_late_step(service):
     result, log = run_trial(spec)
     rtt = log.loc[log["control"].astype(bool), "service_rtt_ms"].iloc[1:]
     assert rtt.min() >= 45.0 and result.service_late_steps >= rtt.size  # each answer overran the 20 ms period
+    assert result.service_invalid == 0  # held, not reordered: each answer names its own request
 
 
 def test_a_link_attack_needs_a_link():

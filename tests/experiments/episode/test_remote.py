@@ -138,6 +138,22 @@ def test_a_failed_new_session_is_a_fallback_and_the_car_keeps_trying(what, hello
     assert fake.hellos >= 4 and car.new_sessions == 0  # it kept asking, on its retry period, and never got one
 
 
+def test_a_late_service_and_no_service_are_two_lines(caplog):
+    with FakeService(ping_delay_s=5.0) as fake:  # listens, but answers nothing within connect_s
+        with pytest.raises(UserError) as late:
+            RemoteEstimator(fake.endpoint, "raw", connect_s=2.5)
+        port = fake.endpoint.rsplit(":", 1)[1]
+    with pytest.raises(UserError) as silent:
+        RemoteEstimator(f"tcp://127.0.0.1:{port}", "raw", connect_s=2.5)
+    assert "answers late" in str(late.value) and "--estimator-timeout-ms" in str(late.value)
+    assert "round trip seen: none" in str(late.value) and "nothing listens" not in str(late.value)
+    assert "nothing listens there" in str(silent.value) and "answers late" not in str(silent.value)
+    with FakeService(ping_delay_s=0.3) as fake, caplog.at_level(logging.WARNING, logger="racf.link"):
+        car = RemoteEstimator(fake.endpoint, "raw", timeout_ms=100.0)  # late, but there: it drives, warned
+        car.close()
+    assert "answers late: its first answer took" in caplog.text and "--estimator-timeout-ms" in caplog.text
+
+
 #: The paper's protocol, through a lying service: sign 1 at 1 m/s, seed 3.
 SPEC = TrialSpec("clean", 1, 1.0, 3)
 

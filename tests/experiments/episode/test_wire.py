@@ -36,3 +36,14 @@ def test_a_sample_survives_the_wire(detected, witnessed, d, c, lidar, bearing, h
         assert math.isnan(back.witnesses.depth_m)
     else:
         assert back.witnesses is None
+
+
+def test_unpack_refuses_a_message_over_the_limit_itself():
+    """Not only ZeroMQ's MAXMSGSIZE: a message read by any other path is measured too."""
+    import pytest
+
+    from racf.experiments.episode.wire import MAX_MESSAGE_BYTES, WireError
+
+    with pytest.raises(WireError, match=f"message of {MAX_MESSAGE_BYTES + 1} bytes"):
+        unpack(pack({"op": "x"}) + b"\0" * (MAX_MESSAGE_BYTES + 1 - len(pack({"op": "x"}))))
+    assert unpack(pack({"op": "x"})) == {"op": "x"}

@@ -160,3 +160,20 @@ def test_a_thousand_fuzzed_frame_sets_in_batches(endpoint):
     out = fuzz(endpoint, 1000, seed=1, batch=250)
     assert out == {**out, "requests": 1000, "batches": 4, "pings_answered": 4} and out["replies"] > 0
     assert not math.isnan(out["replies"])
+
+
+def test_a_flood_of_bad_requests_is_a_few_log_lines_with_their_count(endpoint, caplog):
+    """300 junk requests or more, over 2.5 s: a line a second for their kind, each with the count of
+    those it stands for."""
+    import logging
+    import time
+
+    sent, start = 0, time.monotonic()
+    with caplog.at_level(logging.WARNING, logger="racf.serve"):
+        while sent < 300 or time.monotonic() - start < 2.5:
+            _send(endpoint, [b"", b"\xc1junk"], wait_ms=50)
+            sent += 1
+    took = time.monotonic() - start
+    lines = [r.getMessage() for r in caplog.records if "bad message" in r.getMessage()]
+    assert 2 <= len(lines) <= took + 1 and sent >= 300
+    assert all("more like it since the last line" in line for line in lines[1:])
