@@ -30,7 +30,7 @@ def test_an_admitted_car_is_answered_over_curve(service, keys):
 
 WHO = {"no keys": "speaks CurveZMQ and this car has no keys",
        "a car the service does not admit": "does not admit this car's key",
-       "a car pinning another service's key": "is not the service whose key this car pins"}
+       "a car pinning another service's key": "is not the service whose key this car pins ("}
 
 
 @pytest.mark.parametrize("who", WHO)
@@ -50,7 +50,7 @@ def test_a_car_that_cannot_authenticate_is_told_why_in_its_own_line_within_3_s(s
                        *(["--service-keys", str(folder)] if folder else [])])
     took = time.monotonic() - start
     err = capsys.readouterr().err.strip()
-    assert code == 2 and "\n" not in err and WHO[who] in err
+    assert code == 2 and "\n" not in err and WHO[who] in err and "cannot be authenticated" not in err
     assert all(words not in err for other, words in WHO.items() if other != who)
     assert took < 3.0, f"told after {took:.1f} s"
 
@@ -133,3 +133,18 @@ def test_keys_are_never_overwritten_and_a_missing_pair_is_named(keys):
                                                 ("tcp://192.168.1.4:5555", False), ("tcp://eth0:5555", False)])
 def test_only_loopback_may_serve_without_keys(endpoint, loopback):
     assert is_loopback(endpoint) is loopback
+
+
+def test_on_a_curve_link_the_per_client_cap_is_per_car_key(service, tmp_path):
+    """Two cars on one address, each with its own key: each has its own cap of one session."""
+    from racf.experiments.service.sessions import Sessions
+
+    make_keys(tmp_path / "k", cars=("a", "b"))
+    endpoint = service("raw", keys=ServerKeys.load(tmp_path / "k"), sessions=Sessions(per_client=1))
+    a, b = (RemoteEstimator(endpoint, "raw", keys=CarKeys.load(tmp_path / "k", car)) for car in ("a", "b"))
+    with pytest.raises(UserError, match=r"car key .* holds this service's most sessions per client \(1\)"):
+        RemoteEstimator(endpoint, "raw", keys=CarKeys.load(tmp_path / "k", "a"))
+    for car in (a, b):
+        car.reset()
+        assert car.estimate(PerceptionSample(None, 1.25, 0.9, 1.2, 0.0), 0.5, 0.02) == 1.25
+        car.close()
