@@ -196,3 +196,16 @@ def test_a_lying_service_leaves_the_outcome_of_the_cars_own_depth(lie, own_depth
 @pytest.mark.parametrize("lie", ["negative", "inf", "far", "string", "error"])
 def test_every_lie_leaves_the_outcome_of_the_cars_own_depth(lie, own_depth):
     _check_lying_episode(lie, own_depth)
+
+
+def test_racf_trial_says_what_the_service_did_with_one_name_for_each_count(tmp_path, capsys):
+    from tests.conftest import run_cli
+
+    with FakeService("far", honest=30) as fake:
+        code, _ = run_cli(["trial", "--setting", "clean", "--sign", "1", "--speed", "1.0", "--seed", "3",
+                           "--estimator-endpoint", fake.endpoint, "--estimator-timeout-ms", "1000",
+                           "--out", str(tmp_path)])
+        lies = fake.lies
+    err = capsys.readouterr().err
+    assert code == 0
+    assert f"({lies} answers refused by the protocol's check, 0 defence restarts, {lies - 1} new sessions)" in err
