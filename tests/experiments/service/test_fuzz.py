@@ -177,3 +177,25 @@ def test_a_flood_of_bad_requests_is_a_few_log_lines_with_their_count(endpoint, c
     lines = [r.getMessage() for r in caplog.records if "bad message" in r.getMessage()]
     assert 2 <= len(lines) <= took + 1 and sent >= 300
     assert all("more like it since the last line" in line for line in lines[1:])
+
+
+def test_a_request_the_service_itself_fails_on_is_an_error_and_it_serves_on(monkeypatch):
+    from racf.experiments.service.handler import DefenceService
+
+    original = DefenceService._handle
+
+    def flaky(self, identity, client, message, connection):
+        if message.get("op") == "boom":
+            raise RuntimeError("its own fault")
+        return original(self, identity, client, message, connection)
+
+    monkeypatch.setattr(DefenceService, "_handle", flaky)
+    stops = []
+    endpoint = start_service("raw", stops)
+    try:
+        assert _error(_send(endpoint, [b"", pack({"op": "boom", "id": 3})])) == "RuntimeError: its own fault"
+        assert ping(endpoint)
+    finally:
+        for stop, thread in stops:
+            stop.set()
+            thread.join(5)
