@@ -1,9 +1,11 @@
 """`make mutate`: cosmic-ray over the link's code, resumable, then its score.
 
 The session lives in outputs/mutation/: a run interrupted resumes where it stopped (`make mutate`
-again), and one whose modules, tests or configuration changed since starts afresh (its fingerprint
-names what made it). The score is killed / (all - the equivalent mutants argued in equivalent.toml),
-printed with every survivor that is not argued, so that one can be killed by a new test.
+again), and one whose modules, runner or configuration changed since starts afresh (its fingerprint
+names what made the mutants). Where only the tests changed, the mutants stand and every survivor
+is tried again against the new tests (a test added to kill one is checked to kill it). The score is
+killed / (all - the equivalent mutants argued in equivalent.toml), printed with every survivor that
+is not argued, so that one can be killed by a new test.
 """
 
 from __future__ import annotations
@@ -29,13 +31,15 @@ def _modules() -> list[str]:
     return tomllib.loads(CONFIG.read_text())["cosmic-ray"]["module-path"]
 
 
-def fingerprint() -> str:
-    """What made the session: the configuration, the modules, the tests that run, the runner."""
+def fingerprint(tests: bool = False) -> str:
+    """What made the mutants (the configuration, the modules, the runner), or with ``tests`` the tests
+    that judge them."""
     sys.path.insert(0, str(HERE))
     from run_tests import TESTS
 
-    files = sorted({CONFIG, HERE / "run_tests.py", *(ROOT / m for m in _modules()),
-                    *(ROOT / t for tests in TESTS.values() for t in tests if (ROOT / t).exists())})
+    files = sorted({ROOT / t for tests in TESTS.values() for t in tests if (ROOT / t).exists()}
+                   | {ROOT / "tests" / "experiments" / "episode" / "fake_service.py"} if tests else
+                   {CONFIG, HERE / "run_tests.py", *(ROOT / m for m in _modules())})
     digest = hashlib.sha256()
     for path in files:
         digest.update(str(path.relative_to(ROOT)).encode() + b"\0" + path.read_bytes())
@@ -54,8 +58,8 @@ def main() -> int:
               file=sys.stderr)
         return 2
     OUT.mkdir(parents=True, exist_ok=True)
-    stamp = OUT / "fingerprint"
-    made_by = fingerprint()
+    stamp, judged = OUT / "fingerprint", OUT / "tests-fingerprint"
+    made_by, tests = fingerprint(), fingerprint(tests=True)
     # The configuration as run: its test command in this Python (a bare `python` may be another one).
     config = OUT / "cosmic-ray.toml"
     config.write_text(CONFIG.read_text().replace('test-command = "python ', f'test-command = "{sys.executable} '))
@@ -66,8 +70,29 @@ def main() -> int:
         stamp.write_text(made_by)
     else:
         print(f"make mutate: resuming {SESSION} (made by {made_by})")
+        if judged.exists() and judged.read_text() != tests:
+            recheck(config)
+    judged.write_text(tests)
     _tool("cosmic-ray", "exec", str(config), str(SESSION))
     return report()
+
+
+def recheck(config: Path) -> None:
+    """Tries every survivor again against the tests as they are now; a kill is written to the session."""
+    db = sqlite3.connect(SESSION)
+    survivors = db.execute("""select m.job_id, m.module_path, m.operator_name, m.occurrence from mutation_specs m
+                              join work_results r on r.job_id = m.job_id where r.test_outcome = 'SURVIVED'""").fetchall()
+    command = tomllib.loads(config.read_text())["cosmic-ray"]["test-command"]
+    print(f"make mutate: the tests changed; trying the {len(survivors)} survivors again")
+    for job_id, module, operator, occurrence in survivors:
+        run = subprocess.run([str(Path(sys.executable).parent / "cosmic-ray"), "mutate-and-test", module, operator,
+                              str(occurrence), command], cwd=ROOT, capture_output=True, text=True)
+        result = json.loads(run.stdout.strip().splitlines()[-1])
+        if result.get("test_outcome") == "killed":
+            db.execute("update work_results set test_outcome = 'KILLED', output = ? where job_id = ?",
+                       (str(result.get("output", "")), job_id))
+            db.commit()
+            print(f"  killed now: {module} {operator} (occurrence {occurrence})")
 
 
 def report() -> int:
