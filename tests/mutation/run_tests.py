@@ -21,7 +21,7 @@ TESTS = {
     "experiments/service/handler.py": [f"{SERVICE}/test_handler.py", f"{SERVICE}/test_fuzz.py",
                                        f"{SERVICE}/test_server.py"],
     "experiments/service/sessions.py": [f"{SERVICE}/test_sessions.py", f"{SERVICE}/test_limits.py"],
-    "experiments/service/server.py": [f"{SERVICE}/test_limits.py", f"{SERVICE}/test_fuzz.py",
+    "experiments/service/server.py": [f"{SERVICE}/test_fuzz.py", f"{SERVICE}/test_limits.py",
                                       f"{SERVICE}/test_server.py"],
 }
 
@@ -45,16 +45,34 @@ def main() -> int:
     tests = [t for t in TESTS[modules[0]] if (ROOT / t).exists()]
     forget_bytecode(modules[0])
     try:
-        run = subprocess.run([sys.executable, "-m", "pytest", "-x", "-q", "-p", "no:cacheprovider", "-p", "no:xdist",
-                              "-m", "not slow", *tests], cwd=ROOT, env=env, capture_output=True, text=True)
+        server = os.environ.get("RACF_MUTATION_FORKSERVER")
+        if server and os.path.exists(server):  # a warm process forks the run (tests/mutation/forkserver.py)
+            rc, last = _forked(server, modules[0], tests)
+        else:
+            run = subprocess.run([sys.executable, "-m", "pytest", "-x", "-q", "-p", "no:cacheprovider", "-p",
+                                  "no:xdist", "-m", "not slow", *tests], cwd=ROOT, env=env, capture_output=True,
+                                 text=True)
+            rc, last = run.returncode, (run.stdout.strip().splitlines() or [""])[-1] + run.stderr[-300:]
     finally:
         forget_bytecode(modules[0])
-    last = (run.stdout.strip().splitlines() or [""])[-1]
-    if run.returncode not in (0, 1):  # not a verdict on the mutant: collection failed, no tests, ...
-        print(f"RUNNER ERROR: pytest exited {run.returncode}: {last} {run.stderr[-500:]}")
+    if rc not in (0, 1):  # not a verdict on the mutant: collection failed, no tests, ...
+        print(f"RUNNER ERROR: pytest exited {rc}: {last}")
         return 1
     print(f"{modules[0]}: {last}")
-    return run.returncode
+    return rc
+
+
+def _forked(path: str, module: str, tests: list[str]) -> tuple[int, str]:
+    import json
+    import socket
+
+    with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as conn:
+        conn.connect(path)
+        with conn.makefile("rw") as stream:
+            stream.write(json.dumps({"module": module, "tests": tests}) + "\n")
+            stream.flush()
+            answer = json.loads(stream.readline())
+    return answer["rc"], answer["last"]
 
 
 def forget_bytecode(module: str) -> None:

@@ -10,6 +10,7 @@ is not argued, so that one can be killed by a new test.
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import sqlite3
@@ -39,7 +40,7 @@ def fingerprint(tests: bool = False) -> str:
 
     files = sorted({ROOT / t for tests in TESTS.values() for t in tests if (ROOT / t).exists()}
                    | {ROOT / "tests" / "experiments" / "episode" / "fake_service.py"} if tests else
-                   {CONFIG, HERE / "run_tests.py", *(ROOT / m for m in _modules())})
+                   {CONFIG, HERE / "run_tests.py", HERE / "forkserver.py", *(ROOT / m for m in _modules())})
     digest = hashlib.sha256()
     for path in files:
         digest.update(str(path.relative_to(ROOT)).encode() + b"\0" + path.read_bytes())
@@ -73,8 +74,29 @@ def main() -> int:
         if judged.exists() and judged.read_text() != tests:
             recheck(config)
     judged.write_text(tests)
-    _tool("cosmic-ray", "exec", str(config), str(SESSION))
+    with forkserver():
+        _tool("cosmic-ray", "exec", str(config), str(SESSION))
     return report()
+
+
+@contextlib.contextmanager
+def forkserver():
+    """A warm process that forks each test run (tests/mutation/forkserver.py), for the runs inside."""
+    import os
+
+    path = OUT / "forkserver.sock"
+    path.unlink(missing_ok=True)
+    proc = subprocess.Popen([sys.executable, str(HERE / "forkserver.py"), str(path)], cwd=ROOT, stdout=subprocess.PIPE,
+                            text=True)
+    try:
+        if proc.stdout.readline().strip() != "ready":
+            raise RuntimeError("the mutation fork server did not start")
+        os.environ["RACF_MUTATION_FORKSERVER"] = str(path)
+        yield
+    finally:
+        os.environ.pop("RACF_MUTATION_FORKSERVER", None)
+        path.unlink(missing_ok=True)
+        proc.wait(10)
 
 
 def recheck(config: Path) -> None:
