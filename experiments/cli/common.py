@@ -318,8 +318,8 @@ def service_flags(p: argparse.ArgumentParser) -> None:
 def service_params(args: argparse.Namespace, command: str) -> dict:
     """The spec fields the service flags give (none without an endpoint)."""
     if args.estimator_endpoint is None:
-        for flag, value in (("--estimator-timeout-ms", args.estimator_timeout_ms), ("--service-keys", args.service_keys),
-                            ("--service-car", args.service_car)):
+        for flag, value in (("--estimator-timeout-ms", args.estimator_timeout_ms),
+                            ("--service-keys", args.service_keys), ("--service-car", args.service_car)):
             if value is not None:
                 flag_error(command, f"{flag} applies with --estimator-endpoint")
         return {}

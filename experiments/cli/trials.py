@@ -91,8 +91,8 @@ def _trial(args: argparse.Namespace) -> int:
     else:
         print(trial_summary(row, log_path, args.out / f"{spec.trial_id}.json"))
     if row.get("service_fallback"):  # said where it is read, not only in a field
-        print(f"racf trial: the defence service gave no answer the car could act on, on {row['service_fallback_steps']} of "
-              f"{row['service_fallback_steps'] + row['service_steps']} steps; the car drove on its own depth "
+        print(f"racf trial: the defence service gave no answer the car could act on, on "
+              f"{row['service_fallback_steps']} of {row['service_fallback_steps'] + row['service_steps']} steps; the car drove on its own depth "
               f"distance there ({row['service_invalid']} answers refused by the protocol's check, "
               f"{row['service_restarts']} defence restarts, {row['service_new_sessions']} new sessions)",
               file=sys.stderr)

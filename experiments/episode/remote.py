@@ -303,7 +303,8 @@ class RemoteEstimator:
             answered, handshake = False, None
         if not answered:
             if handshake is None or handshake.failure is None:
-                handshake = _merge(handshake, handshake_failure(self._monitor, HANDSHAKE_WAIT_MS if fail_fast_ms else 0.0))
+                wait = HANDSHAKE_WAIT_MS if fail_fast_ms else 0.0  # why, where the session opens; never on a step
+                handshake = _merge(handshake, handshake_failure(self._monitor, wait))
             self._close()  # a REQ socket that got no answer cannot send again: open a new one next time
             raise NoAnswer(handshake, (time.perf_counter() - start) * 1000.0)
         reply = unpack(self._socket.recv())

@@ -21,8 +21,8 @@ from racf.controllers.detector import Detection
 from racf.controllers.existence import ExistenceWitnesses
 
 __all__ = ["WireError", "InvalidAnswer", "MAX_MESSAGE_BYTES", "DEFAULT_TIMEOUT_MS", "DEFAULT_RETRY_S", "pack",
-           "unpack", "encode_sample", "decode_sample", "PROTOCOL", "DISTANCE_RANGE_M", "MAX_REQUEST_ID", "wire_distance", "check_distance",
-           "check_answer"]
+           "unpack", "encode_sample", "decode_sample", "PROTOCOL", "DISTANCE_RANGE_M", "MAX_REQUEST_ID",
+           "wire_distance", "check_distance", "check_answer"]
 
 #: The wire protocol's version: a server answers a hello from another version with an error, and a
 #: car refuses a service that speaks another. 2: every request carries an id its answer names, and a

@@ -82,7 +82,8 @@ class DefenceService:
                 return {"error": f"protocol {message.get('protocol')!r}; this service speaks {PROTOCOL}"}
             request_id = message.get("id")
             if not isinstance(request_id, int) or isinstance(request_id, bool) or not 0 <= request_id <= MAX_REQUEST_ID:
-                raise BadRequest(f"id must be an int in [0, {MAX_REQUEST_ID}] (protocol {PROTOCOL}), got {request_id!r}")
+                raise BadRequest(f"id must be an int in [0, {MAX_REQUEST_ID}] (protocol {PROTOCOL}), "
+                                 f"got {request_id!r}")
             if op == "ping":
                 return {"pong": True, "protocol": PROTOCOL}
             if op == "hello":
