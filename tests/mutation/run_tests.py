@@ -19,10 +19,10 @@ TESTS = {
                                       f"{SERVICE}/test_limits.py"],
     "experiments/episode/curve.py": [f"{SERVICE}/test_auth.py"],
     "experiments/service/handler.py": [f"{SERVICE}/test_handler.py", f"{SERVICE}/test_fuzz.py",
-                                       f"{SERVICE}/test_server.py"],
+                                       f"{SERVICE}/test_server.py", f"{SERVICE}/test_auth.py"],
     "experiments/service/sessions.py": [f"{SERVICE}/test_sessions.py", f"{SERVICE}/test_limits.py"],
-    "experiments/service/server.py": [f"{SERVICE}/test_fuzz.py", f"{SERVICE}/test_limits.py",
-                                      f"{SERVICE}/test_server.py"],
+    "experiments/service/server.py": [f"{SERVICE}/test_fuzz.py", f"{SERVICE}/test_auth.py",
+                                      f"{SERVICE}/test_limits.py", f"{SERVICE}/test_server.py"],
 }
 
 

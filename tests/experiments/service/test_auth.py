@@ -121,7 +121,7 @@ def test_racf_serve_keys_writes_owner_only_secrets_under_any_umask(tmp_path):
 
 
 def test_keys_are_never_overwritten_and_a_missing_pair_is_named(keys):
-    with pytest.raises(UserError, match="never overwritten"):
+    with pytest.raises(UserError, match=r"server.key_secret exists; keys are never overwritten"):
         make_keys(keys / "ours")
     with pytest.raises(UserError, match="racf serve keys"):
         CarKeys.load(keys / "nowhere")
