@@ -68,3 +68,16 @@ def test_the_facts_check_sees_a_wrong_count():
     text = "racf's own six metrics"
     word = re.findall(r"racf's own (\w+) metrics", text)[0]
     assert WORDS[word] != len(_own("metric"))
+
+
+def test_the_link_protocol_the_pages_state_is_the_one_the_code_speaks():
+    """The architecture page's table of requests: its version, the distance's range and the requests
+    themselves are what racf's wire module checks."""
+    from racf.experiments.episode import wire
+
+    text = " ".join((ROOT / "docs" / "concepts" / "architecture.md").read_text().split())
+    assert f"The protocol (version {wire.PROTOCOL})" in text and f"`pong: true, protocol: {wire.PROTOCOL}`" in text
+    lo, hi = wire.DISTANCE_RANGE_M
+    assert f"`distance` is a number in [{lo:g}, {hi:g}] m" in text
+    listed = re.findall(r"\| `(\w+)` \|", text)
+    assert set(listed) == set(wire._ANSWERS), listed
