@@ -65,10 +65,11 @@ check-speed: $(STAMP)
 # each mutant runs the tests that mirror its module. The session in outputs/mutation/ resumes where
 # it stopped; changed modules, tests or configuration start it afresh. Prints the score over the
 # non-equivalent mutants (goal 0.90) and every survivor not argued in tests/mutation/equivalent.toml.
-# Not in CI: about an hour on 2 cores.
+# Not in CI: over an hour on one core. `make mutate MODULES="experiments/service/server.py ..."` runs a
+# session of its own over some of them (two checkouts of one commit can share the cores that way).
 mutate: $(STAMP)
 	$(PY) -m pip install -qq "cosmic-ray>=8.7"
-	$(SINGLE_THREAD) $(PY) tests/mutation/session.py
+	$(SINGLE_THREAD) MUTATE_MODULES="$(MODULES)" $(PY) tests/mutation/session.py
 
 # The documentation site into site/ (the reference pages are written from the code first).
 # Serve it with: .venv/bin/mkdocs serve (http://127.0.0.1:8000), or open site/index.html.

@@ -13,6 +13,8 @@ from __future__ import annotations
 import contextlib
 import hashlib
 import json
+import os
+import re
 import sqlite3
 import subprocess
 import sys
@@ -22,14 +24,21 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
 CONFIG = HERE / "cosmic-ray.toml"
-OUT = ROOT / "outputs" / "mutation"
+#: `make mutate MODULES="a.py b.py"`: a session of its own over some of the modules (two checkouts can
+#: then share a machine's cores between them).
+ONLY = os.environ.get("MUTATE_MODULES", "").split()
+OUT = ROOT / "outputs" / "mutation" / ("only-" + "-".join(Path(m).stem for m in ONLY) if ONLY else "")
 SESSION = OUT / "session.sqlite"
 #: The score the link's tests must keep over its non-equivalent mutants.
 GOAL = 0.90
 
 
 def _modules() -> list[str]:
-    return tomllib.loads(CONFIG.read_text())["cosmic-ray"]["module-path"]
+    every = tomllib.loads(CONFIG.read_text())["cosmic-ray"]["module-path"]
+    unknown = [m for m in ONLY if m not in every]
+    if unknown:
+        raise SystemExit(f"make mutate: {unknown[0]} is not among the modules of {CONFIG.name}: {', '.join(every)}")
+    return ONLY or every
 
 
 def fingerprint(tests: bool = False) -> str:
@@ -63,7 +72,8 @@ def main() -> int:
     made_by, tests = fingerprint(), fingerprint(tests=True)
     # The configuration as run: its test command in this Python (a bare `python` may be another one).
     config = OUT / "cosmic-ray.toml"
-    config.write_text(CONFIG.read_text().replace('test-command = "python ', f'test-command = "{sys.executable} '))
+    text = CONFIG.read_text().replace('test-command = "python ', f'test-command = "{sys.executable} ')
+    config.write_text(re.sub(r"module-path = \[.*?\]", "module-path = " + json.dumps(_modules()), text, flags=re.S))
     if not SESSION.exists() or not stamp.exists() or stamp.read_text() != made_by:
         SESSION.unlink(missing_ok=True)
         _tool("cosmic-ray", "init", str(config), str(SESSION), "--force")
