@@ -107,3 +107,15 @@ def test_a_defence_rebuilt_after_it_raised_is_calibrated_and_reset_again(tmp_pat
     session = service.sessions.get(b"a")
     assert session.restarts == 1 and session.estimator.calibration is not None
     assert service.handle(b"a", "x", _estimate(3.0, 5))["distance"] == 1.0  # calibrated, not the 2.0 of a bare one
+
+
+def test_a_session_counts_its_estimates_and_diagnostics_keep_their_words():
+    from racf.experiments.service.handler import _floats
+
+    service = DefenceService(("raw",))
+    service.handle(b"a", "x", HELLO)
+    for k in range(3):
+        service.handle(b"a", "x", _estimate(2.0, 2 + k))
+    session = service.sessions.get(b"a")
+    assert session.steps == 3 and len(session.service_ms) == 3
+    assert _floats({"w": 1, "gate": "lidar", "bad": None}) == {"w": 1.0, "gate": "lidar", "bad": "None"}

@@ -95,3 +95,17 @@ def test_a_flood_of_ended_sessions_is_one_line_a_second_with_its_count(caplog):
             sessions.close(b"%d" % k, "the car closed it")
     lines = [r for r in caplog.records if "ended (the car closed it)" in r.getMessage()]
     assert 1 <= len(lines) <= 3 and len(sessions) == 0
+
+
+def test_a_throttled_line_says_exactly_how_many_it_stands_for(caplog):
+    import time
+
+    from racf.experiments.service.sessions import Throttle
+
+    throttle = Throttle(every_s=0.2)
+    with caplog.at_level(logging.WARNING, logger="racf.serve"):
+        for _ in range(5):
+            throttle.log(logging.WARNING, "kind", "a line")
+        time.sleep(0.25)
+        throttle.log(logging.WARNING, "kind", "a line")
+    assert [r.getMessage() for r in caplog.records] == ["a line", "a line (and 4 more like it since the last line)"]
