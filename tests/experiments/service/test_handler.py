@@ -119,3 +119,29 @@ def test_a_session_counts_its_estimates_and_diagnostics_keep_their_words():
     session = service.sessions.get(b"a")
     assert session.steps == 3 and len(session.service_ms) == 3
     assert _floats({"w": 1, "gate": "lidar", "bad": None}) == {"w": 1.0, "gate": "lidar", "bad": "None"}
+
+
+def test_the_largest_id_is_answered_and_one_beyond_refused():
+    from racf.experiments.episode.wire import MAX_REQUEST_ID
+
+    service = DefenceService(("raw",))
+    assert service.handle(b"a", "x", {"op": "ping", "id": MAX_REQUEST_ID})["id"] == MAX_REQUEST_ID
+    beyond = service.handle(b"a", "x", {"op": "ping", "id": MAX_REQUEST_ID + 1})
+    assert "id must be an int" in beyond["error"] and "id" not in beyond
+    assert service.handle(b"a", "x", {"op": "ping", "id": 0})["id"] == 0
+
+
+def test_a_defence_that_cannot_be_built_with_the_cars_options_is_refused_in_words():
+    service = DefenceService(("ekf",))
+    reply = service.handle(b"a", "x", {**HELLO, "estimator": "ekf", "options": {"bogus": 1}})
+    assert "ekf with options {'bogus': 1} cannot be built" in reply["refused"] and len(service.sessions) == 0
+
+
+def test_the_services_default_bounds_are_the_ones_racf_serve_states():
+    from racf.experiments.cli import build_parser
+    from racf.experiments.service.sessions import Sessions
+
+    args = build_parser().parse_args(["serve"])
+    bounds = Sessions()
+    assert (bounds.idle_s, bounds.per_client, bounds.total) == (args.idle_s, args.sessions_per_client,
+                                                                args.max_sessions)

@@ -109,3 +109,12 @@ def test_a_throttled_line_says_exactly_how_many_it_stands_for(caplog):
         time.sleep(0.25)
         throttle.log(logging.WARNING, "kind", "a line")
     assert [r.getMessage() for r in caplog.records] == ["a line", "a line (and 4 more like it since the last line)"]
+
+
+def test_a_goodbye_without_both_round_trips_leaves_them_out_of_the_line(caplog):
+    sessions = Sessions()
+    sessions.open(b"a", _session("x"))
+    with caplog.at_level(logging.INFO, logger="racf.serve"):
+        sessions.close(b"a", "the car closed it", {"rtt_p50_ms": 1.5})
+    assert "ended (the car closed it): raw, 0 steps, no estimates, 0 defence restarts" in caplog.text
+    assert "round trip" not in caplog.text
