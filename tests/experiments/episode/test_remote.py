@@ -97,9 +97,9 @@ def test_an_answer_passes_the_check_only_if_the_protocol_allows_it(reply, reques
 @settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(answers)
 def test_whatever_a_service_answers_the_car_acts_on_a_checked_distance_or_its_own_depth(reply):
-    def lie(rid, honest):
-        return {**reply, "id": reply["id"] + rid if isinstance(reply.get("id"), int) and reply["id"] == 0 else
-                reply.get("id", rid)}
+    def lie(rid, honest):  # a drawn id of 0, or none, names the request; any other id is another's
+        named = reply.get("id", 0)
+        return {**reply, "id": rid if named == 0 and not isinstance(named, bool) else named}
 
     with FakeService(lie, honest=0) as fake:
         car = RemoteEstimator(fake.endpoint, "raw", timeout_ms=1000.0)
