@@ -73,7 +73,7 @@ def test_no_target_is_said_explicitly_and_read_as_nan():
 
 answers = st.dictionaries(st.sampled_from(["id", "distance", "stands", "diagnostics", "error", "restarted",
                                            "no_session"]),
-                          st.none() | st.booleans() | st.integers(-5, 2**70) | st.floats() | st.text(max_size=5)
+                          st.none() | st.booleans() | st.integers(-5, 2**64 - 1) | st.floats() | st.text(max_size=5)
                           | st.lists(st.integers(), max_size=2) | st.dictionaries(st.text(max_size=3), st.floats(),
                                                                                   max_size=2), max_size=7)
 
