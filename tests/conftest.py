@@ -23,6 +23,9 @@ from racf.plugins import REGISTRIES
 # CI draws the same examples on every run (a failing CI blocks a landing, so nothing in it may
 # fail by chance); elsewhere hypothesis explores, and its database keeps what it found.
 settings.register_profile("ci", derandomize=True, deadline=None, print_blob=True)
+# make mutate: the same examples for every mutant, and none remembered from another mutant's run (a
+# failure kept in the database would be replayed against every mutant after it).
+settings.register_profile("mutation", derandomize=True, deadline=None, database=None)
 settings.load_profile("ci" if os.environ.get("CI") else "default")
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -52,8 +52,9 @@ def run(request: dict) -> dict:
                 os.dup2(out.fileno(), 2)
                 import pytest
 
-                code = pytest.main(["-x", "-q", "-p", "no:cacheprovider", "-p", "no:xdist", "-m", "not slow",
-                                    *request["tests"]])
+                from run_tests import PYTEST_ARGS
+
+                code = pytest.main([*PYTEST_ARGS, *request["tests"]])
             except BaseException:  # noqa: BLE001 - whatever happens, the child ends here
                 code = 3
             sys.stdout.flush()
@@ -67,7 +68,7 @@ def run(request: dict) -> dict:
 
 def main(path: str) -> int:
     os.chdir(ROOT)
-    sys.path.insert(0, str(ROOT))
+    sys.path[:0] = [str(ROOT), str(Path(__file__).resolve().parent)]
     warm()
     server = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
     server.bind(path)

@@ -12,6 +12,8 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[2]
 SERVICE = "tests/experiments/service"
 EPISODE = "tests/experiments/episode"
+#: How each mutant's tests run: to the first failure, the same hypothesis examples for every mutant.
+PYTEST_ARGS = ["-x", "-q", "-p", "no:cacheprovider", "-p", "no:xdist", "-m", "not slow", "--hypothesis-profile=mutation"]
 #: The tests that must kill a mutant of each module.
 TESTS = {
     "experiments/episode/wire.py": [f"{EPISODE}/test_wire.py", f"{EPISODE}/test_remote.py", f"{SERVICE}/test_fuzz.py"],
@@ -49,8 +51,7 @@ def main() -> int:
         if server and os.path.exists(server):  # a warm process forks the run (tests/mutation/forkserver.py)
             rc, last = _forked(server, modules[0], tests)
         else:
-            run = subprocess.run([sys.executable, "-m", "pytest", "-x", "-q", "-p", "no:cacheprovider", "-p",
-                                  "no:xdist", "-m", "not slow", *tests], cwd=ROOT, env=env, capture_output=True,
+            run = subprocess.run([sys.executable, "-m", "pytest", *PYTEST_ARGS, *tests], cwd=ROOT, env=env, capture_output=True,
                                  text=True)
             rc, last = run.returncode, (run.stdout.strip().splitlines() or [""])[-1] + run.stderr[-300:]
     finally:
