@@ -85,8 +85,24 @@ def main() -> int:
             recheck(config)
     judged.write_text(tests)
     with forkserver():
+        failing = baseline()
+        if failing:
+            print(f"make mutate: {failing} fail without any mutant: fix them first (every mutant would look killed)",
+                  file=sys.stderr)
+            return 1
         _tool("cosmic-ray", "exec", str(config), str(SESSION))
     return report()
+
+
+def baseline() -> str | None:
+    """The tests of each module on the code as it is: they must pass, or no kill means anything."""
+    for module in _modules():
+        run = subprocess.run([sys.executable, str(HERE / "run_tests.py"), "--baseline", module], cwd=ROOT,
+                             capture_output=True, text=True)
+        if run.returncode != 0:
+            return f"the tests of {module} ({run.stdout.strip()})"
+    print(f"make mutate: the tests of {len(_modules())} modules pass without a mutant")
+    return None
 
 
 @contextlib.contextmanager
