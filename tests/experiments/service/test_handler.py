@@ -28,7 +28,8 @@ def test_every_answer_names_its_request_errors_too():
     assert service.handle(b"a", "x", {"op": "ping", "id": 7}) == {"pong": True, "protocol": PROTOCOL, "id": 7}
     assert service.handle(b"a", "x", {"op": "estimate", "id": 8})["id"] == 8  # no session: an error, named
     assert "id" not in service.handle(b"a", "x", {"op": "ping", "id": "7"})  # an id that is not one is not echoed
-    assert check_answer("hello", service.handle(b"a", "x", HELLO), 1)["protocol"] == PROTOCOL
+    hello = check_answer("hello", service.handle(b"a", "x", HELLO), 1)
+    assert hello["protocol"] == PROTOCOL and hello["existence"] is False and hello["n_parameters"] == 0
 
 
 @pytest.mark.parametrize("d, words", [(math.inf, "not a number in the protocol's [0, 50] m"),
@@ -105,7 +106,7 @@ def test_a_defence_rebuilt_after_it_raised_is_calibrated_and_reset_again(tmp_pat
     assert service.handle(b"a", "x", _estimate(3.0, 3))["distance"] == 1.0
     assert "restarted" in service.handle(b"a", "x", _estimate(3.0, 4))
     session = service.sessions.get(b"a")
-    assert session.restarts == 1 and session.estimator.calibration is not None
+    assert session.restarts == 1 and session.estimator.calibration == car_calibration(320, 240)
     assert service.handle(b"a", "x", _estimate(3.0, 5))["distance"] == 1.0  # calibrated, not the 2.0 of a bare one
 
 
@@ -118,6 +119,7 @@ def test_a_session_counts_its_estimates_and_diagnostics_keep_their_words():
         service.handle(b"a", "x", _estimate(2.0, 2 + k))
     session = service.sessions.get(b"a")
     assert session.steps == 3 and len(session.service_ms) == 3
+    assert all(1e-4 < ms < 1000.0 for ms in session.service_ms)  # the defence's own time, in milliseconds
     assert _floats({"w": 1, "gate": "lidar", "bad": None}) == {"w": 1.0, "gate": "lidar", "bad": "None"}
 
 

@@ -140,3 +140,32 @@ def test_a_plain_service_says_once_that_per_address_caps_are_no_defence_and_inse
     assert text.count("per-client cap counts network addresses") == 1
     warnings = [line for line in text.splitlines() if "served without keys (--insecure)" in line]
     assert len(warnings) == 1 and warnings[0].startswith("racf serve: warning: tcp://0.0.0.0:0")
+
+
+def test_sessions_end_with_their_connections_long_before_they_idle():
+    """A service that keeps idle sessions ten minutes: cars that close their sockets free their places
+    at once (with a full service of two, a third car gets one within a second of theirs closing)."""
+    from racf.experiments.service.sessions import Sessions
+    from tests.conftest import start_service
+
+    stops = []
+    endpoint = start_service("raw", stops, sessions=Sessions(idle_s=600.0, per_client=5, total=2))
+    try:
+        first = [_hello(endpoint) for _ in range(2)]
+        assert all("refused" not in answer for _, answer in first)
+        late, answer = _hello(endpoint)
+        late.close(0)
+        assert "most sessions (2)" in answer["refused"]
+        _close(sock for sock, _ in first)
+        start = time.monotonic()
+        while True:
+            sock, answer = _hello(endpoint)
+            sock.close(0)
+            if "refused" not in answer:
+                break
+            assert time.monotonic() - start < 1.0, answer
+            time.sleep(0.05)
+    finally:
+        for stop, thread in stops:
+            stop.set()
+            thread.join(5)

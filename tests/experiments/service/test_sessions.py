@@ -37,7 +37,7 @@ def test_an_idle_session_expires_with_its_line(caplog):
         sessions.expire(every_s=0.0)
     assert len(sessions) == 0
     assert "session of x ended (idle 0 s): raw, 3 steps, service 2.00/2.98 ms p50/p99" in caplog.text
-    assert ", 0 defence restarts, " in caplog.text
+    assert ", 0 defence restarts, 0 s" in caplog.text
 
 
 def test_a_goodbye_carries_the_cars_round_trips_into_the_line(caplog):
