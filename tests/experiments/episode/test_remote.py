@@ -47,6 +47,8 @@ def test_every_lie_is_a_counted_fallback_on_the_cars_own_depth(lie, caplog):
     assert fell[:30] == [0.0] * 30 and all(fell[30:])  # every step after the first lie is no answer
     assert fake.lies >= 3 and car.invalid == fake.lies == diagnostics[-1]["service_invalid"]
     assert car.new_sessions == fake.lies - 1 and car.restarts == 0  # each lie: a pause, then a new session
+    assert car.refusals == 0 and diagnostics[-1]["service_refusals"] == 0.0  # a lie is no failed handshake
+    assert car.n_parameters == 0  # a service that names no parameters has none
     lines = [r for r in caplog.records if "falls back" in r.getMessage()]
     assert len(lines) == 1  # the first lie of its kind said once, not once a step
 
@@ -138,6 +140,7 @@ def test_a_failed_new_session_is_a_fallback_and_the_car_keeps_trying(what, hello
     assert np.allclose(distances, [_sample(k).d_meas for k in range(40)])
     assert all(d["service_fallback"] == 1.0 for d in diagnostics[5:])
     assert fake.hellos >= 4 and car.new_sessions == 0  # it kept asking, on its retry period, and never got one
+    assert car.refusals == 0  # a silence or a no is not a failed handshake
 
 
 def test_a_late_service_and_no_service_are_two_lines(caplog):

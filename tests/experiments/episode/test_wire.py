@@ -47,3 +47,17 @@ def test_unpack_refuses_a_message_over_the_limit_itself():
     with pytest.raises(WireError, match=f"message of {MAX_MESSAGE_BYTES + 1} bytes"):
         unpack(pack({"op": "x"}) + b"\0" * (MAX_MESSAGE_BYTES + 1 - len(pack({"op": "x"}))))
     assert unpack(pack({"op": "x"})) == {"op": "x"}
+
+
+def test_a_mask_whose_bits_do_not_fill_its_shape_is_refused():
+    import pytest
+
+    from racf.experiments.episode.wire import WireError
+
+    sample = encode_sample(PerceptionSample(Detection(np.ones((4, 8), bool), (0, 0, 8, 4), 0.9, 32, (4.0, 2.0)),
+                                            1.0, 0.9, 1.0, 0.0))
+    assert decode_sample(unpack(pack(sample))).detection.area_px == 32
+    for bad in (np.zeros(3, np.uint8), np.zeros(4, np.int32), [0, 0, 0, 0]):
+        sample["detection"]["mask"] = bad
+        with pytest.raises(WireError, match="the mask's bits do not fill its shape 4x8"):
+            decode_sample(unpack(pack(sample)))
