@@ -84,6 +84,7 @@ def main() -> int:
         if judged.exists() and judged.read_text() != tests:
             recheck(config)
     judged.write_text(tests)
+    skip_argued()
     with forkserver():
         failing = baseline()
         if failing:
@@ -92,6 +93,27 @@ def main() -> int:
             return 1
         _tool("cosmic-ray", "exec", str(config), str(SESSION))
     return report()
+
+
+def _argued() -> set[tuple[str, str, int]]:
+    equivalent = tomllib.loads((HERE / "equivalent.toml").read_text()).get("mutant", [])
+    return {(e["module"], e["operator"], e["line"]) for e in equivalent}
+
+
+def skip_argued() -> None:
+    """Marks the pending mutants argued equivalent in equivalent.toml as skipped: they would survive,
+    and they count neither way, so their runs (every test of their module) are saved."""
+    db = sqlite3.connect(SESSION)
+    argued = _argued()
+    pending = db.execute("""select m.job_id, m.module_path, m.operator_name, m.start_pos_row from mutation_specs m
+                            where m.job_id not in (select job_id from work_results)""").fetchall()
+    skipped = [job for job, module, operator, row in pending if (module, operator, row) in argued]
+    db.executemany("insert into work_results (worker_outcome, output, test_outcome, diff, job_id) "
+                   "values ('SKIPPED', 'argued equivalent in equivalent.toml', null, null, ?)",
+                   [(job,) for job in skipped])
+    db.commit()
+    if skipped:
+        print(f"make mutate: {len(skipped)} mutants argued equivalent are not run")
 
 
 def baseline() -> str | None:
@@ -128,11 +150,14 @@ def forkserver():
 def recheck(config: Path) -> None:
     """Tries every survivor again against the tests as they are now; a kill is written to the session."""
     db = sqlite3.connect(SESSION)
-    survivors = db.execute("""select m.job_id, m.module_path, m.operator_name, m.occurrence from mutation_specs m
-                              join work_results r on r.job_id = m.job_id where r.test_outcome = 'SURVIVED'""").fetchall()
+    argued = _argued()
+    survivors = [s for s in db.execute("""select m.job_id, m.module_path, m.operator_name, m.occurrence, m.start_pos_row
+                                          from mutation_specs m join work_results r on r.job_id = m.job_id
+                                          where r.test_outcome = 'SURVIVED'""").fetchall()
+                 if (s[1], s[2], s[4]) not in argued]  # an argued one would survive again
     command = tomllib.loads(config.read_text())["cosmic-ray"]["test-command"]
     print(f"make mutate: the tests changed; trying the {len(survivors)} survivors again")
-    for job_id, module, operator, occurrence in survivors:
+    for job_id, module, operator, occurrence, _ in survivors:
         run = subprocess.run([str(Path(sys.executable).parent / "cosmic-ray"), "mutate-and-test", module, operator,
                               str(occurrence), command], cwd=ROOT, capture_output=True, text=True)
         result = json.loads(run.stdout.strip().splitlines()[-1])
@@ -153,8 +178,7 @@ def report() -> int:
     pending = db.execute("select count(*) from work_items where job_id not in (select job_id from work_results)"
                          ).fetchone()[0]
     tried = [r for r in rows if r[5] != "SKIPPED"]
-    equivalent = tomllib.loads((HERE / "equivalent.toml").read_text()).get("mutant", [])
-    argued = {(e["module"], e["operator"], e["line"]) for e in equivalent}
+    argued = _argued()
     survivors = [r for r in tried if r[4] == "SURVIVED"]
     unargued = [r for r in survivors if (r[0], r[1], r[3]) not in argued]
     killed = sum(r[4] == "KILLED" for r in tried)
