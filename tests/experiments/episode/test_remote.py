@@ -38,7 +38,7 @@ def _drive(car: RemoteEstimator, steps: int) -> tuple[list[float], list[dict]]:
 @pytest.mark.parametrize("lie", LIES)
 def test_every_lie_is_a_counted_fallback_on_the_cars_own_depth(lie, caplog):
     with FakeService(lie, honest=30) as fake, caplog.at_level(logging.WARNING, logger="racf.link"):
-        car = RemoteEstimator(fake.endpoint, "raw", timeout_ms=1000.0, retry_s=0.1)
+        car = RemoteEstimator(fake.endpoint, "raw", timeout_ms=5000.0, retry_s=0.1)
         distances, diagnostics = _drive(car, 80)
         car.close()
     # Honest or not, every step's distance is the car's own depth here (the fake answers d_meas honestly).
@@ -55,7 +55,7 @@ def test_every_lie_is_a_counted_fallback_on_the_cars_own_depth(lie, caplog):
 
 def test_a_step_that_asks_nothing_waits_for_nothing():
     with FakeService("nan", honest=1) as fake:
-        car = RemoteEstimator(fake.endpoint, "raw", timeout_ms=1000.0, retry_s=0.1)
+        car = RemoteEstimator(fake.endpoint, "raw", timeout_ms=5000.0, retry_s=0.1)
         car.reset()
         car.estimate(_sample(0), 1.0, 0.02)
         car.estimate(_sample(1), 1.0, 0.02)  # the lie: the car pauses for retry_s of its own time
@@ -106,7 +106,7 @@ def test_whatever_a_service_answers_the_car_acts_on_a_checked_distance_or_its_ow
         return {**reply, "id": rid if named == 0 and not isinstance(named, bool) else named}
 
     with FakeService(lie, honest=0) as fake:
-        car = RemoteEstimator(fake.endpoint, "raw", timeout_ms=1000.0)
+        car = RemoteEstimator(fake.endpoint, "raw", timeout_ms=5000.0)
         car.reset()
         d = car.estimate(_sample(0), 1.0, 0.02)
         fell = car.diagnostics()["service_fallback"] == 1.0
@@ -169,7 +169,7 @@ def _outcome(result) -> dict:
 
 def _lying_episode(lie: str):
     with FakeService(lie, honest=30) as fake:
-        result, log = run_trial(replace(SPEC, estimator_endpoint=fake.endpoint, estimator_timeout_ms=1000.0))
+        result, log = run_trial(replace(SPEC, estimator_endpoint=fake.endpoint, estimator_timeout_ms=5000.0))
         return result, log, fake.lies
 
 
@@ -208,7 +208,7 @@ def test_racf_trial_says_what_the_service_did_with_one_name_for_each_count(tmp_p
 
     with FakeService("far", honest=30) as fake:
         code, _ = run_cli(["trial", "--setting", "clean", "--sign", "1", "--speed", "1.0", "--seed", "3",
-                           "--estimator-endpoint", fake.endpoint, "--estimator-timeout-ms", "1000",
+                           "--estimator-endpoint", fake.endpoint, "--estimator-timeout-ms", "5000",
                            "--out", str(tmp_path)])
         lies = fake.lies
     err = capsys.readouterr().err
