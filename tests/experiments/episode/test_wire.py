@@ -61,3 +61,31 @@ def test_a_mask_whose_bits_do_not_fill_its_shape_is_refused():
         sample["detection"]["mask"] = bad
         with pytest.raises(WireError, match="the mask's bits do not fill its shape 4x8"):
             decode_sample(unpack(pack(sample)))
+
+
+def test_a_msgpack_extension_is_never_read():
+    import msgpack
+    import pytest
+
+    from racf.experiments.episode.wire import WireError
+
+    for ext in (msgpack.ExtType(1, b""), msgpack.ExtType(1, b"x"), msgpack.ExtType(5, b"\0" * 8)):
+        with pytest.raises(WireError, match="not a msgpack message"):
+            unpack(msgpack.packb({"op": "ping", "id": 1, "x": ext}))
+
+
+def test_a_mask_is_1_to_4096_pixels_a_side():
+    import pytest
+
+    from racf.experiments.episode.wire import WireError
+
+    def sample(h, w):
+        mask = np.ones((h, w), bool)
+        return encode_sample(PerceptionSample(Detection(mask, (0, 0, w, h), 0.9, h * w, (w / 2, h / 2)),
+                                              1.0, 0.9, 1.0, 0.0))
+
+    for h, w in ((1, 1), (4096, 1), (1, 4096)):
+        assert decode_sample(unpack(pack(sample(h, w)))).detection.mask.shape == (h, w)
+    for h, w in ((4097, 1), (1, 4097)):
+        with pytest.raises(WireError, match="outside 1..4096 a side"):
+            decode_sample(unpack(pack(sample(h, w))))
