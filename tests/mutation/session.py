@@ -81,9 +81,6 @@ def main() -> int:
         stamp.write_text(made_by)
     else:
         print(f"make mutate: resuming {SESSION} (made by {made_by})")
-        if judged.exists() and judged.read_text() != tests:
-            recheck(config)
-    judged.write_text(tests)
     skip_argued()
     with forkserver():
         failing = baseline()
@@ -91,6 +88,9 @@ def main() -> int:
             print(f"make mutate: {failing} fail without any mutant: fix them first (every mutant would look killed)",
                   file=sys.stderr)
             return 1
+        if judged.exists() and judged.read_text() != tests:
+            recheck(config)
+        judged.write_text(tests)
         _tool("cosmic-ray", "exec", str(config), str(SESSION))
     return report()
 
