@@ -147,3 +147,14 @@ def test_the_services_default_bounds_are_the_ones_racf_serve_states():
     bounds = Sessions()
     assert (bounds.idle_s, bounds.per_client, bounds.total) == (args.idle_s, args.sessions_per_client,
                                                                 args.max_sessions)
+
+
+def test_would_pass_takes_a_map_of_names_and_answers_true_or_false():
+    service = DefenceService(("raw",))
+    service.handle(b"a", "x", HELLO)
+    reply = service.handle(b"a", "x", {"op": "would_pass", "id": 3,
+                                       "kwargs": {"depth": 1.5, "speed_mps": 1.0, "dt": 0.02}})
+    assert reply["answer"] in (True, False) and reply["id"] == 3
+    for kwargs in ({1: 2}, [1], "depth"):
+        reply = service.handle(b"a", "x", {"op": "would_pass", "id": 4, "kwargs": kwargs})
+        assert "would_pass needs kwargs (a map of names)" in reply["error"]

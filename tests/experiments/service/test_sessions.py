@@ -118,3 +118,12 @@ def test_a_goodbye_without_both_round_trips_leaves_them_out_of_the_line(caplog):
         sessions.close(b"a", "the car closed it", {"rtt_p50_ms": 1.5})
     assert "ended (the car closed it): raw, 0 steps, no estimates, 0 defence restarts" in caplog.text
     assert "round trip" not in caplog.text
+
+
+def test_a_stopping_service_ends_every_session_and_says_so(caplog):
+    sessions = Sessions()
+    for k in range(3):
+        sessions.open(b"%d" % k, _session(f"10.0.0.{k}"))
+    with caplog.at_level(logging.INFO, logger="racf.serve"):
+        sessions.close_all("the service stopped")
+    assert len(sessions) == 0 and caplog.text.count("ended (the service stopped)") >= 1
