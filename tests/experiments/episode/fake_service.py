@@ -103,3 +103,35 @@ class FakeService:
 
     def __exit__(self, *exc) -> None:
         self.stop()
+
+
+def main() -> None:
+    """Prints, for each lie from the 31st estimate on, what became of the episode (sign 1, 1 m/s, seed 3)
+    beside the car's own depth fallback: `python -m tests.experiments.episode.fake_service`."""
+    from dataclasses import replace
+
+    from racf.experiments.episode import TrialSpec, run_trial
+
+    spec = TrialSpec("clean", 1, 1.0, 3)
+    own, _ = run_trial(spec)
+
+    def outcome(result) -> dict:
+        return {k: v for k, v in result.to_dict().items() if not k.startswith(("service", "trial_id"))}
+
+    print(f"{'lie':<9}{'completed':>10}{'lies':>6}{'service_invalid':>17}{'fallback steps':>16}{'late steps':>12}"
+          f"{'outcome = own depth':>21}")
+    for lie in ("nan", "negative", "inf", "far", "string", "error", "stale"):
+        with FakeService(lie, honest=30) as fake:
+            result, _ = run_trial(replace(spec, estimator_endpoint=fake.endpoint, estimator_timeout_ms=5000.0))
+            lies = fake.lies
+        row = result.to_dict()
+        print(f"{lie:<9}{'yes':>10}{lies:>6}{row['service_invalid']:>17}{row['service_fallback_steps']:>16}"
+              f"{row['service_late_steps']:>12}{str(outcome(result) == outcome(own)):>21}")
+    print(f"the car's own depth (raw, in process): success {own.success}, failure {own.failure}")
+
+
+if __name__ == "__main__":
+    import logging
+
+    logging.disable(logging.WARNING)
+    main()
