@@ -45,7 +45,7 @@ class FakeService:
     """
 
     def __init__(self, lie=None, honest: int = 30, hellos=None, pong: dict | None = None,
-                 ping_delay_s: float = 0.0) -> None:
+                 ping_delay_s: float = 0.0, port: int | None = None) -> None:
         self.ping_delay_s = ping_delay_s
         self.lie = LIES[lie] if isinstance(lie, str) else lie
         self.hello_answer, self.pong = hellos, pong
@@ -55,7 +55,10 @@ class FakeService:
         ctx = zmq.Context.instance()
         self._sock = ctx.socket(zmq.ROUTER)
         self._sock.setsockopt(zmq.LINGER, 0)
-        port = self._sock.bind_to_random_port("tcp://127.0.0.1")
+        if port is None:
+            port = self._sock.bind_to_random_port("tcp://127.0.0.1")
+        else:
+            self._sock.bind(f"tcp://127.0.0.1:{port}")
         self.endpoint = f"tcp://127.0.0.1:{port}"
         self._thread = threading.Thread(target=self._serve, daemon=True)
         self._thread.start()

@@ -49,6 +49,7 @@ def test_every_lie_is_a_counted_fallback_on_the_cars_own_depth(lie, caplog):
     assert car.new_sessions == fake.lies - 1 and car.restarts == 0  # each lie: a pause, then a new session
     assert car.refusals == 0 and diagnostics[-1]["service_refusals"] == 0.0  # a lie is no failed handshake
     assert car.n_parameters == 0  # a service that names no parameters has none
+    assert 0.005 < diagnostics[0]["service_rtt_ms"] < 1000.0  # a loopback round trip, in milliseconds
     lines = [r for r in caplog.records if "falls back" in r.getMessage()]
     assert len(lines) == 1  # the first lie of its kind said once, not once a step
 
@@ -214,3 +215,37 @@ def test_racf_trial_says_what_the_service_did_with_one_name_for_each_count(tmp_p
     err = capsys.readouterr().err
     assert code == 0
     assert f"({lies} answers refused by the protocol's check, 0 defence restarts, {lies - 1} new sessions)" in err
+
+
+def test_a_car_that_cannot_be_answered_passes_and_closes_quietly():
+    fake = FakeService(None)
+    car = RemoteEstimator(fake.endpoint, "raw", timeout_ms=200.0)
+    car.reset()
+    assert car.would_pass(depth=1.0, speed_mps=1.0, dt=0.02) is True  # the fake answers no "answer": none
+    assert car.invalid == 1
+    fake.stop()
+    car._needs_session = False  # as if its session stood: the goodbye finds no one
+    car._socket = car._socket or car._open()
+    car.close()  # no raise: a goodbye is a courtesy
+
+
+def test_a_service_that_starts_listening_a_moment_late_is_reached():
+    """The first answer is waited for 2 s before the car says nothing listens: a service that binds
+    0.5 s after the car starts asking is reached."""
+    import socket
+    import threading
+    import time
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    started = []
+    threading.Thread(target=lambda: (time.sleep(0.5), started.append(FakeService(None, port=port))),
+                     daemon=True).start()
+    try:
+        car = RemoteEstimator(f"tcp://127.0.0.1:{port}", "raw", connect_s=10.0)
+        car.close()
+    finally:
+        time.sleep(0.6)
+        for fake in started:
+            fake.stop()

@@ -90,3 +90,19 @@ def test_a_mask_is_1_to_4096_pixels_a_side():
     for h, w in ((4097, 1), (1, 4097)):
         with pytest.raises(WireError, match="outside 1..4096 a side"):
             decode_sample(unpack(pack(sample(h, w))))
+
+
+def test_a_message_of_exactly_the_limit_is_read_and_an_array_has_at_most_4_axes():
+    import pytest
+
+    from racf.experiments.episode.wire import MAX_MESSAGE_BYTES, WireError
+
+    head = len(pack({"op": "x", "d": b""}))
+    for n in range(MAX_MESSAGE_BYTES - head - 8, MAX_MESSAGE_BYTES - head + 1):  # msgpack's size header grows
+        raw = pack({"op": "x", "d": b"\0" * n})
+        if len(raw) == MAX_MESSAGE_BYTES:
+            break
+    assert len(raw) == MAX_MESSAGE_BYTES and unpack(raw)["op"] == "x"
+    assert unpack(pack({"a": np.zeros((1, 1, 1, 2))}))["a"].shape == (1, 1, 1, 2)
+    with pytest.raises(WireError, match="not a list of at most 4 sizes"):
+        unpack(pack({"a": np.zeros((1, 1, 1, 1, 2))}))

@@ -148,3 +148,33 @@ def test_on_a_curve_link_the_per_client_cap_is_per_car_key(service, tmp_path):
         car.reset()
         assert car.estimate(PerceptionSample(None, 1.25, 0.9, 1.2, 0.0), 0.5, 0.02) == 1.25
         car.close()
+
+
+def test_a_refusal_stays_said_when_the_socket_connects_again():
+    """ZeroMQ reconnects after a failed handshake: the failure read from the monitor is the one that
+    happened, whatever connection follows it; a later success clears it."""
+    import struct
+
+    import zmq
+
+    from racf.experiments.episode.curve import handshake_failure
+
+    ctx = zmq.Context.instance()
+
+    def monitor_with(events):
+        a, b = ctx.socket(zmq.PAIR), ctx.socket(zmq.PAIR)
+        address = f"inproc://monitor-{id(a)}"
+        a.bind(address)
+        b.connect(address)
+        for event in events:
+            a.send_multipart([struct.pack("=hi", int(event), 0), b"tcp://127.0.0.1:1"])
+        return a, b
+
+    cases = [([zmq.EVENT_CONNECTED, zmq.EVENT_HANDSHAKE_FAILED_AUTH, zmq.EVENT_CONNECTED], "refused this car's key"),
+             ([zmq.EVENT_CONNECTED, zmq.EVENT_HANDSHAKE_FAILED_NO_DETAIL, zmq.EVENT_CONNECTED,
+               zmq.EVENT_HANDSHAKE_SUCCEEDED], None)]
+    for events, words in cases:
+        a, b = monitor_with(events)
+        seen = handshake_failure(b)
+        a.close(0), b.close(0)
+        assert seen.connected and (seen.failure is None if words is None else words in seen.failure)
