@@ -78,9 +78,9 @@ def test_a_trial_names_its_car_with_service_car(tmp_path, service, capsys):
     assert code == 2 and "--service-car" in capsys.readouterr().err
 
 
-def test_secret_files_are_0600_from_the_moment_they_exist(tmp_path, monkeypatch):
-    """Every write into a key file finds it already owner-only: no moment in which another user could
-    read a secret (the old way wrote 0644 and then narrowed it)."""
+def test_secret_files_are_0600_from_the_moment_they_exist(tmp_path, monkeypatch, capsys):
+    """`racf serve keys` under the widest umask: every write into a key file finds it already as narrow as
+    it will stay (the old way wrote 0644 and then narrowed it), in owner-only folders."""
     import os
     import stat
 
@@ -92,32 +92,17 @@ def test_secret_files_are_0600_from_the_moment_they_exist(tmp_path, monkeypatch)
         return real_write(fd, data)
 
     monkeypatch.setattr(os, "write", watched)
-    monkeypatch.setattr(os, "umask", os.umask)  # restored after
-    old = os.umask(0)  # the widest a process may ask for
+    old = os.umask(0)
     try:
-        written = make_keys(tmp_path / "k", cars=("a", "b"))
+        code, _ = run_cli(["serve", "keys", str(tmp_path / "k"), "--car", "a", "--car", "b"])
     finally:
         os.umask(old)
-    secrets = [p for p in written if p.name.endswith(".key_secret")]
-    assert len(secrets) == 3 and seen.count(0o600) == 3 and all(m in (0o600, 0o644) for m in seen)
+    assert code == 0, capsys.readouterr().err
+    secrets = sorted((tmp_path / "k").rglob("*.key_secret"))
+    assert len(secrets) == 3 and seen.count(0o600) == 3 and sorted(seen) == [0o600] * 3 + [0o644] * 3
     assert all(stat.S_IMODE(p.stat().st_mode) == 0o600 for p in secrets)
     for folder in (tmp_path / "k", tmp_path / "k" / "cars"):
         assert stat.S_IMODE(folder.stat().st_mode) == 0o700
-
-
-def test_racf_serve_keys_writes_owner_only_secrets_under_any_umask(tmp_path):
-    """The command itself, in a process whose umask lets everything through."""
-    import os
-    import stat
-    import subprocess
-    import sys
-
-    script = ("import os, sys; os.umask(0); from racf.experiments.cli import main; "
-              f"sys.exit(main(['serve', 'keys', {str(tmp_path / 'k')!r}, '--car', 'a']))")
-    subprocess.run([sys.executable, "-c", script], check=True, capture_output=True)
-    for path in (tmp_path / "k" / "server.key_secret", tmp_path / "k" / "cars" / "a.key_secret"):
-        assert stat.S_IMODE(path.stat().st_mode) == 0o600
-    assert stat.S_IMODE((tmp_path / "k").stat().st_mode) == 0o700
 
 
 def test_keys_are_never_overwritten_and_a_missing_pair_is_named(keys):
