@@ -10,7 +10,7 @@ import pytest
 
 from racf.controllers import PerceptionSample
 from racf.experiments.episode.plan import car_calibration
-from racf.experiments.episode.wire import PROTOCOL, check_answer, encode_sample
+from racf.experiments.episode.wire import PROTOCOL, check_answer, encode_sample, pack, unpack
 from racf.experiments.service.handler import DefenceService
 from racf.experiments.service.sessions import Sessions
 from racf.plugins import load_plugin_file
@@ -101,7 +101,8 @@ def test_a_defence_rebuilt_after_it_raised_is_calibrated_and_reset_again(tmp_pat
     load_plugin_file(path)
     service = DefenceService(("calibrated",))
     service.handle(b"a", "x", {**HELLO, "estimator": "calibrated"})
-    calibration = dataclasses.asdict(car_calibration(320, 240))
+    # As the car sends it: through msgpack, whose tuples come back as lists.
+    calibration = unpack(pack({"c": dataclasses.asdict(car_calibration(320, 240))}))["c"]
     assert service.handle(b"a", "x", {"op": "calibrate", "id": 2, "calibration": calibration}) == {"id": 2}
     assert service.handle(b"a", "x", _estimate(3.0, 3))["distance"] == 1.0
     assert "restarted" in service.handle(b"a", "x", _estimate(3.0, 4))
@@ -127,26 +128,17 @@ def test_the_largest_id_is_answered_and_one_beyond_refused():
     from racf.experiments.episode.wire import MAX_REQUEST_ID
 
     service = DefenceService(("raw",))
-    assert service.handle(b"a", "x", {"op": "ping", "id": MAX_REQUEST_ID})["id"] == MAX_REQUEST_ID
+    assert service.handle(b"a", "x", {"op": "ping", "id": MAX_REQUEST_ID}) == {"pong": True, "protocol": PROTOCOL,
+                                                                               "id": MAX_REQUEST_ID}
     beyond = service.handle(b"a", "x", {"op": "ping", "id": MAX_REQUEST_ID + 1})
     assert "id must be an int" in beyond["error"] and "id" not in beyond
-    assert service.handle(b"a", "x", {"op": "ping", "id": 0})["id"] == 0
+    assert service.handle(b"a", "x", {"op": "ping", "id": 0}) == {"pong": True, "protocol": PROTOCOL, "id": 0}
 
 
 def test_a_defence_that_cannot_be_built_with_the_cars_options_is_refused_in_words():
     service = DefenceService(("ekf",))
     reply = service.handle(b"a", "x", {**HELLO, "estimator": "ekf", "options": {"bogus": 1}})
     assert "ekf with options {'bogus': 1} cannot be built" in reply["refused"] and len(service.sessions) == 0
-
-
-def test_the_services_default_bounds_are_the_ones_racf_serve_states():
-    from racf.experiments.cli import build_parser
-    from racf.experiments.service.sessions import Sessions
-
-    args = build_parser().parse_args(["serve"])
-    bounds = Sessions()
-    assert (bounds.idle_s, bounds.per_client, bounds.total) == (args.idle_s, args.sessions_per_client,
-                                                                args.max_sessions)
 
 
 def test_would_pass_takes_a_map_of_names_and_answers_true_or_false():

@@ -127,3 +127,28 @@ def test_a_stopping_service_ends_every_session_and_says_so(caplog):
     with caplog.at_level(logging.INFO, logger="racf.serve"):
         sessions.close_all("the service stopped")
     assert len(sessions) == 0 and caplog.text.count("ended (the service stopped)") >= 1
+
+
+def test_the_services_default_bounds_are_the_ones_racf_serve_states():
+    from racf.experiments.cli import build_parser
+    from racf.experiments.service.sessions import Sessions
+
+    args = build_parser().parse_args(["serve"])
+    bounds = Sessions()
+    assert (bounds.idle_s, bounds.per_client, bounds.total) == (args.idle_s, args.sessions_per_client,
+                                                                args.max_sessions)
+
+
+def test_a_kind_of_line_is_said_once_a_second():
+    import time
+
+    from racf.experiments.service.sessions import Throttle
+
+    throttle, said = Throttle(), []
+    for wait in (0.0, 0.6, 0.5):  # at 0 s, 0.6 s (within the second) and 1.1 s
+        time.sleep(wait)
+        before = len(said)
+        throttle._last.setdefault("kind", [-float("inf"), 0])
+        throttle.log(logging.WARNING, "kind", "a line")
+        said.append(throttle._last["kind"][1] == 0)
+    assert said == [True, False, True]
