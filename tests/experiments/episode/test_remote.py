@@ -249,3 +249,33 @@ def test_a_service_that_starts_listening_a_moment_late_is_reached():
         time.sleep(0.6)
         for fake in started:
             fake.stop()
+
+
+def test_a_service_that_lost_the_session_gets_one_new_session_and_the_car_drives_on():
+    told = []
+
+    def forgot_once(rid, honest):  # the 31st estimate: "no session" (a service restarted); then honest again
+        if told:
+            return honest
+        told.append(rid)
+        return {"id": rid, "error": "no session: say hello first", "no_session": True}
+
+    with FakeService(forgot_once, honest=30) as fake:
+        car = RemoteEstimator(fake.endpoint, "raw", timeout_ms=5000.0)
+        distances, diagnostics = _drive(car, 45)
+        car.close()
+    # (The fake lies once, then tells the truth; the car asked again in a new session within the step.)
+    assert all(d["service_fallback"] == 0.0 for d in diagnostics[31:]) and car.new_sessions == 1
+    assert np.allclose(distances, [_sample(k).d_meas for k in range(45)])
+
+
+def test_a_step_that_waited_out_its_timeout_is_as_late_as_its_wait():
+    hellos = lambda n, honest: honest if n == 1 else None  # noqa: E731 - the service never opens a second session
+    with FakeService("error", honest=1, hellos=hellos) as fake:
+        car = RemoteEstimator(fake.endpoint, "raw", timeout_ms=100.0, retry_s=0.02)
+        car.reset()
+        car.estimate(_sample(0), 1.0, 0.02)  # honest
+        car.estimate(_sample(1), 1.0, 0.02)  # an error: the car waits retry_s of its own time
+        car.estimate(_sample(2), 1.0, 0.02)  # a new hello, never answered: it waited its timeout
+        assert car.diagnostics()["service_fallback"] == 1.0 and 0.09 <= car.latency_s < 1.0
+        car.close()

@@ -106,3 +106,32 @@ def test_a_message_of_exactly_the_limit_is_read_and_an_array_has_at_most_4_axes(
     assert unpack(pack({"a": np.zeros((1, 1, 1, 2))}))["a"].shape == (1, 1, 1, 2)
     with pytest.raises(WireError, match="not a list of at most 4 sizes"):
         unpack(pack({"a": np.zeros((1, 1, 1, 1, 2))}))
+
+
+def test_the_protocols_distance_is_0_to_50_m_and_a_message_at_most_1_mib():
+    import pytest
+
+    from racf.experiments.episode.wire import InvalidAnswer, WireError, check_distance
+
+    for d in (0.0, 1.25, 50.0):
+        assert check_distance(d) == d
+    assert check_distance(None) is None
+    for d in (-1e-9, 50.000001, math.nan, math.inf):
+        with pytest.raises(InvalidAnswer):
+            check_distance(d)
+    with pytest.raises(WireError, match="at most 1048576"):
+        unpack(b"\0" * (2 ** 20 + 1))
+    assert unpack(pack({"a": np.zeros(0)}))["a"].shape == (0,)  # an empty array is an array
+
+
+def test_a_mask_with_no_rows_is_refused():
+    import pytest
+
+    from racf.experiments.episode.wire import WireError
+
+    sample = encode_sample(PerceptionSample(Detection(np.ones((1, 5), bool), (0, 0, 5, 1), 0.9, 5, (2.5, 0.5)),
+                                            1.0, 0.9, 1.0, 0.0))
+    sample["detection"]["shape"] = [0, 5]
+    sample["detection"]["mask"] = np.zeros(0, np.uint8)
+    with pytest.raises(WireError, match="outside 1..4096 a side"):
+        decode_sample(unpack(pack(sample)))
