@@ -70,7 +70,7 @@ class DefenceService:
         ``connection``: the connection it came on, whose end ends the session), naming its id."""
         request_id = message.get("id")
         reply = self._handle(identity, client, message, connection)
-        if isinstance(request_id, int) and not isinstance(request_id, bool) and 0 <= request_id <= MAX_REQUEST_ID:
+        if _is_request_id(request_id):  # an id that is not one is not echoed
             reply["id"] = request_id
         return reply
 
@@ -81,7 +81,7 @@ class DefenceService:
             if op == "hello" and message.get("protocol") != PROTOCOL:  # first: another protocol's car sends no id
                 return {"error": f"protocol {message.get('protocol')!r}; this service speaks {PROTOCOL}"}
             request_id = message.get("id")
-            if not isinstance(request_id, int) or isinstance(request_id, bool) or not 0 <= request_id <= MAX_REQUEST_ID:
+            if not _is_request_id(request_id):
                 raise BadRequest(f"id must be an int in [0, {MAX_REQUEST_ID}] (protocol {PROTOCOL}), "
                                  f"got {request_id!r}")
             if op == "ping":
@@ -238,3 +238,8 @@ def _floats(values: dict) -> dict:
         except (TypeError, ValueError):
             out[str(key)] = str(value)
     return out
+
+
+def _is_request_id(value) -> bool:
+    """Whether ``value`` is a request id protocol 2 allows: an int (not a bool) in [0, MAX_REQUEST_ID]."""
+    return isinstance(value, int) and not isinstance(value, bool) and 0 <= value <= MAX_REQUEST_ID
