@@ -58,6 +58,7 @@ def test_a_spoofed_distance_reaches_a_car_on_a_plain_link(service):
     assert log["service_refusals"].max() == 0
 
 
+@pytest.mark.slow  # an episode through a relay on a CurveZMQ link: about 12 s
 def test_a_spoofed_answer_never_reaches_a_car_on_an_authenticated_link(service, keys):
     endpoint = service("raw", keys=ServerKeys.load(keys))
     result, log = run_trial(spoof(endpoint, estimator_keys=str(keys)))
@@ -70,6 +71,7 @@ def test_a_spoofed_answer_never_reaches_a_car_on_an_authenticated_link(service, 
     assert log["service_refusals"].max() >= 1
 
 
+@pytest.mark.slow  # two episodes through a relay: about 12 s
 def test_a_dropped_answer_is_a_fallback_and_a_delayed_one_a_late_step(service):
     endpoint = service("raw")
     spec = TrialSpec("clean+link_drop", 1, 1.0, 3, attack_params={"link_drop": ALWAYS}, estimator_endpoint=endpoint,

@@ -3,11 +3,14 @@ and print what must hold."""
 
 from __future__ import annotations
 
+import pytest
+
 import json
 
 from tests.conftest import run_cli
 
 
+@pytest.mark.slow  # the bench, small: about 10 s
 def test_the_stress_bench_prints_what_must_hold(capsys):
     code, out = run_cli(["bench", "service-stress", "--defence", "raw", "--fuzz", "300", "--connections", "30",
                          "--cars", "2", "--seconds", "2", "--json"])
