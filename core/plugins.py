@@ -1,5 +1,5 @@
 """The registries of racf's parts that a user can bring their own of: estimators (defences),
-attacks, stop-sign detectors, scenarios and metrics.
+attacks, stop-sign detectors, scenarios, metrics and car stages.
 
 Each registry is filled from one entry-point group of the installed distributions, racf's own
 parts registering the same way as a user's:
@@ -12,6 +12,7 @@ group                  an entry point names                                     
 ``racf.detectors``     a class or factory whose objects have ``detect(rgb)``        DETECTORS
 ``racf.scenarios``     a ``Scenario`` subclass (``racf.experiments.scenarios``)     SCENARIOS
 ``racf.metrics``       a ``Metric`` subclass (``racf.experiments.metrics``)         METRICS
+``racf.car_stages``    a ``CarStage`` subclass (``racf.experiments.car.stage``)     CAR_STAGES
 =====================  ==========================================================  ==========
 
 A user who has not packaged their code loads a file instead (``--plugin path/to/file.py`` on the
@@ -46,7 +47,7 @@ from typing import Any
 from racf.errors import UserError
 from racf.provenance import source_version
 
-__all__ = ["Plugin", "PluginError", "Registry", "ESTIMATORS", "ATTACKS", "DETECTORS", "SCENARIOS", "METRICS", "REGISTRIES",
+__all__ = ["Plugin", "PluginError", "Registry", "ESTIMATORS", "ATTACKS", "DETECTORS", "SCENARIOS", "METRICS", "CAR_STAGES", "REGISTRIES",
            "load_plugin_file", "plugin_files", "PLUGIN_ENV", "PART_KIND"]
 
 #: The environment variable that lists the plug-in files this process and its workers load.
@@ -291,6 +292,7 @@ def _subclass_of(kind: str) -> Callable[[Any], bool]:
 _is_attack = _subclass_of("attack")
 _is_scenario = _subclass_of("scenario")
 _is_metric = _subclass_of("metric")
+_is_car_stage = _subclass_of("car stage")
 
 
 def _is_detector(obj: Any) -> bool:
@@ -326,6 +328,7 @@ _SHAPES = {
     "detector": "a class (or factory) whose objects have detect(rgb) -> Detection | None",
     "scenario": "a subclass of racf.experiments.scenarios.Scenario with a 'name'",
     "metric": "a subclass of racf.experiments.metrics.Metric with a 'name'",
+    "car stage": "a subclass of racf.experiments.car.stage.CarStage with a 'name'",
 }
 
 #: Every part a user can bring, by name.
@@ -334,8 +337,9 @@ ATTACKS = Registry("racf.attacks", "attack", _is_attack)
 DETECTORS = Registry("racf.detectors", "detector", _is_detector)
 SCENARIOS = Registry("racf.scenarios", "scenario", _is_scenario)
 METRICS = Registry("racf.metrics", "metric", _is_metric)
+CAR_STAGES = Registry("racf.car_stages", "car stage", _is_car_stage)
 REGISTRIES: dict[str, Registry] = {"estimator": ESTIMATORS, "attack": ATTACKS, "detector": DETECTORS,
-                                   "scenario": SCENARIOS, "metric": METRICS}
+                                   "scenario": SCENARIOS, "metric": METRICS, "car stage": CAR_STAGES}
 
 _INTERACTIVE = "interactive"
 _CODE = "code:"
@@ -380,7 +384,7 @@ def load_plugin_file(path: str | os.PathLike) -> list[Plugin]:
                 found.append(registry.register(obj, origin=str(file)))
                 break
     if not found:
-        raise PluginError(f"--plugin {path} defines no estimator, attack, detector, scenario or metric"
+        raise PluginError(f"--plugin {path} defines no estimator, attack, detector, scenario, metric or car stage"
                           f"{_near_misses(module_name)}")
     listed = plugin_files()
     if str(file) not in listed:

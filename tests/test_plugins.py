@@ -69,7 +69,7 @@ def test_a_taken_name_and_a_non_part_are_refused(plugin_env):
 @pytest.mark.parametrize("text, message", [
     (None, "no such file"),
     ("import not_a_module_anywhere\n", "failed to import: ModuleNotFoundError"),
-    ("x = 1\n", "defines no estimator, attack, detector, scenario or metric"),
+    ("x = 1\n", "defines no estimator, attack, detector, scenario, metric or car stage"),
 ])
 def test_a_bad_plugin_file_is_named(plugin_env, tmp_path, text, message):
     path = tmp_path / "mine.py"

@@ -2,7 +2,7 @@
 
 A :class:`BagEnv` plays the recording back as the env's observations, step by step (the car's
 actions reach nothing: the recording already happened), so the car
-(:class:`racf.experiments.episode.car.Car`: perception, the LiDAR tracker, localisation, the
+(:class:`racf.experiments.car.software.Car`: perception, the LiDAR tracker, localisation, the
 defence, the braker) and observation-space attacks run on it exactly as in an episode. The
 per-step log has the episode's columns; the referee's are there only where the bag carries
 ground truth (``/racf/ground_truth/...``, a bag racf wrote), and the log says which are absent.

@@ -38,7 +38,7 @@ import numpy as np
 from racf import sim
 from racf.controllers.detectors import make_detector
 from racf.experiments.detector.evaluate import DetectionCounts, evaluate_split, resolvable, score_frame
-from racf.experiments.episode.car import route_follower
+from racf.experiments.car.software import route_follower
 from racf.stats import wilson_interval
 
 __all__ = ["DetectorBenchResult", "bench_detector", "occlude", "FRAME_PERIOD_MS", "BUDGET_MS"]

@@ -21,7 +21,7 @@ PARTS = {
     "lidar": (("sim/sensors/a2m12.py", ("sweep", "read", "begin")), ("sim/sensors/lidar.py", ("read",))),
     "physics": (("~", ("<built-in method mujoco._functions.mj_step>",)),),
     "perception": (("controllers/perception.py", ("process",)),),
-    "estimator": (("controllers/estimators.py", ("estimate",)), ("experiments/episode/estimators.py", ("estimate",)),
+    "estimator": (("controllers/estimators.py", ("estimate",)), ("experiments/car/estimators.py", ("estimate",)),
                   ("controllers/baselines/", ("estimate",))),
 }
 

@@ -267,7 +267,7 @@ def _bench_paired(args: argparse.Namespace) -> int:
 
 def _bench_traffic_views(args: argparse.Namespace) -> int:
     from racf.experiments.bench.traffic_views import CASES, OFF_M, measure_case
-    from racf.experiments.episode.estimators import ESTIMATORS
+    from racf.experiments.car.estimators import ESTIMATORS
 
     cases = args.case or list(CASES)
     bad = [c for c in cases if c not in CASES]

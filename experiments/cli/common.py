@@ -9,8 +9,8 @@ from pathlib import Path
 from typing import NoReturn
 
 from racf.errors import UserError
-from racf.experiments.episode.estimators import ESTIMATORS
-from racf.experiments.episode.wire import DEFAULT_TIMEOUT_MS
+from racf.experiments.car.estimators import ESTIMATORS
+from racf.experiments.link.wire import DEFAULT_TIMEOUT_MS
 from racf.sim.attacks import ATTACKS
 
 __all__ = ["UsageError", "Parser", "output_dir", "unwritable", "sign", "positive", "speed", "share",
@@ -178,7 +178,7 @@ def estimator_options(command: str, values: list[str], estimators: tuple[str, ..
     (the one estimator a command runs). Exits 2 naming a bad one."""
     import tomllib
 
-    from racf.experiments.episode.estimators import check_options, make_estimator
+    from racf.experiments.car.estimators import check_options, make_estimator
 
     out: dict[str, dict] = {}
     for item in values:

@@ -64,7 +64,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _falsify(args: argparse.Namespace) -> int:
-    from racf.experiments.episode.estimators import ESTIMATORS
+    from racf.experiments.car.estimators import ESTIMATORS
     from racf.experiments.falsify.run import falsify, render
 
     if args.defence not in ESTIMATORS:
@@ -87,7 +87,7 @@ def _falsify(args: argparse.Namespace) -> int:
 
 
 def _replay(args: argparse.Namespace) -> int:
-    from racf.experiments.episode.estimators import ESTIMATORS
+    from racf.experiments.car.estimators import ESTIMATORS
     from racf.experiments.falsify.cases import load_case, replay_case, reseed_case
 
     if args.defence is not None and args.defence not in ESTIMATORS:

@@ -193,7 +193,7 @@ def make_files(root: Path) -> dict[str, str]:
              "defences.py": _DEFENCES, "incomplete.py": _INCOMPLETE}
     for name, text in texts.items():
         (root / name).write_text(text)
-    from racf.experiments.episode.curve import make_keys
+    from racf.experiments.link.curve import make_keys
 
     make_keys(root / "keys")
     (root / "corrupt_bag").mkdir()

@@ -73,7 +73,7 @@ def step_log_markdown() -> str:
 
     from racf.experiments.episode.record import STEP_COLUMNS
     from racf.experiments.episode.runner import IDENTITY
-    from racf.plugins import METRICS
+    from racf.plugins import CAR_STAGES, METRICS
 
     lines = ["# The step log and the result row", "",
              "Every episode logs one row per 50 Hz step with these columns "
@@ -82,6 +82,12 @@ def step_log_markdown() -> str:
              "map; *referee*: ground truth, never seen by the car.", "",
              "| column | unit | side | meaning |", "|---|---|---|---|"]
     lines += [f"| `{c.name}` | {c.unit or '-'} | {c.side} | {c.meaning} |" for c in STEP_COLUMNS]
+    lines += ["", "## The car stages' columns", "",
+              "A car stage a mission engages (`racf.car_stages`: `Mission.stages`) adds the columns it declares "
+              "(`CarStage.columns`), on the car's side, after those above; an episode without it has none of them. "
+              "racf's own:", "", "| column | unit | stage | meaning |", "|---|---|---|---|"]
+    for name in (n for n in CAR_STAGES if CAR_STAGES.plugin(n).builtin):
+        lines += [f"| `{c.name}` | {c.unit or '-'} | `{name}` | {c.meaning} |" for c in CAR_STAGES[name].columns]
     lines += ["", "## The result row", "",
               "`TrialResult`, strict JSON (null for a missing number): which episode it is ("
               + ", ".join(f"`{name}`" for name in IDENTITY) + "), then the fields of each metric the episode "

@@ -68,7 +68,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 def _serve(args: argparse.Namespace) -> int:
     import logging
 
-    from racf.experiments.episode.curve import ServerKeys, is_loopback
+    from racf.experiments.link.curve import ServerKeys, is_loopback
     from racf.experiments.service.server import serve
     from racf.experiments.service.sessions import Sessions
     from racf.plugins import ESTIMATORS
@@ -108,7 +108,7 @@ def _serve(args: argparse.Namespace) -> int:
 
 
 def _keys(args: argparse.Namespace) -> int:
-    from racf.experiments.episode.curve import DEFAULT_CAR, make_keys
+    from racf.experiments.link.curve import DEFAULT_CAR, make_keys
 
     cars = tuple(args.car or (DEFAULT_CAR,))
     bad = [c for c in cars if not c.replace("-", "").replace("_", "").isalnum()]
@@ -126,7 +126,7 @@ def _bench(args: argparse.Namespace) -> int:
     import tempfile
     from pathlib import Path
 
-    from racf.experiments.episode.curve import CarKeys, make_keys
+    from racf.experiments.link.curve import CarKeys, make_keys
     from racf.experiments.service.bench import measure, record_samples
     from racf.experiments.sweeps.service_process import service_process
     from racf.plugins import ESTIMATORS

@@ -34,7 +34,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def _stress(args: argparse.Namespace) -> int:
     from racf.experiments.episode import TrialSpec
-    from racf.experiments.episode.wire import DEFAULT_TIMEOUT_MS
+    from racf.experiments.link.wire import DEFAULT_TIMEOUT_MS
     from racf.experiments.service.bench import record_samples
     from racf.experiments.sweeps.service_process import service_process
     from racf.experiments.service.stress import cars, connections, fuzz, ping, rss_mb

@@ -237,11 +237,11 @@ def _attack_study(args: argparse.Namespace) -> int:
 
 
 #: What ``racf list KIND`` lists.
-LIST_KINDS = ("attacks", "estimators", "detectors", "scenarios", "metrics")
+LIST_KINDS = ("attacks", "estimators", "detectors", "scenarios", "metrics", "stages")
 
 
 def _list(args: argparse.Namespace) -> int:
-    from racf.plugins import ATTACKS, DETECTORS, ESTIMATORS, METRICS, REGISTRIES, SCENARIOS
+    from racf.plugins import ATTACKS, CAR_STAGES, DETECTORS, ESTIMATORS, METRICS, REGISTRIES, SCENARIOS
 
     if args.markdown:
         print(registry_markdown())
@@ -264,7 +264,8 @@ def _list(args: argparse.Namespace) -> int:
     shown = {args.kind} if args.kind else set(LIST_KINDS)
     for kind, title, registry in (("attacks", "attacks (--attack, joined by ',' or '+')", ATTACKS),
                                   ("estimators", "estimators (--estimator)", ESTIMATORS),
-                                  ("detectors", "detectors (--detector)", DETECTORS)):
+                                  ("detectors", "detectors (--detector)", DETECTORS),
+                                  ("stages", "car stages (a scenario's mission engages them)", CAR_STAGES)):
         if kind in shown:
             print(title)
             for name, text in registry_rows(registry):

@@ -4,7 +4,7 @@ mission and calibration), car (the car's software: it sees observations and the 
 declaration), runner (the one step loop) and scoring (pure: per-step log -> outcome). Batches
 of episodes run in :mod:`racf.experiments.sweeps`."""
 
-from racf.experiments.episode.estimators import ESTIMATORS, make_estimator
+from racf.experiments.car.estimators import ESTIMATORS, make_estimator
 from racf.experiments.episode.plan import EpisodePlan, plan_episode, reset_options
 from racf.experiments.episode.record import STEP_COLUMNS, STEP_LOG
 from racf.experiments.episode.runner import TrialResult, run_trial

@@ -26,7 +26,7 @@ from functools import lru_cache
 import numpy as np
 
 from racf.controllers import CameraModel
-from racf.experiments.episode.car import CarCalibration, Mission
+from racf.experiments.car.software import CarCalibration, Mission
 from racf.experiments.episode.spec import TrialSpec
 from racf.sim.env.config import EnvConfig
 from racf.sim.sensors.calibration import car_build

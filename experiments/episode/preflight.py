@@ -7,7 +7,7 @@ from __future__ import annotations
 import json
 
 from racf.errors import UserError
-from racf.experiments.episode.estimators import make_estimator
+from racf.experiments.car.estimators import make_estimator
 from racf.experiments.episode.spec import TrialSpec
 from racf.experiments.episode.stack import car_keys, wrap_attacks
 from racf.plugins import PluginError
@@ -37,7 +37,7 @@ def check_specs(specs: list[TrialSpec]) -> None:
             raise UserError(f"estimator {spec.estimator!r} with options {spec.estimator_options} cannot be built: "
                             f"{_words(err)}") from None
     for spec in services.values():  # the service is there and serves the defence (it warms it now)
-        from racf.experiments.episode.remote import RemoteEstimator
+        from racf.experiments.link.remote import RemoteEstimator
 
         RemoteEstimator(spec.estimator_endpoint, spec.estimator, spec.estimator_options,
                         spec.estimator_timeout_ms, keys=car_keys(spec)).close()

@@ -6,8 +6,10 @@ the map: perception, estimator, braker, steering, its pose estimate) beside the 
 through :func:`step_row`, which refuses a row that leaves out a declared column or adds an
 undeclared one, so this table, the log, the scorer and the dataset cannot drift apart.
 
-A scenario's world managers add the ground-truth columns they declare
-(``WorldManager.columns()``: :func:`world_columns`), on the referee's side, after racf's own.
+The car stages a mission engages add the columns they declare (``CarStage.columns``:
+:func:`stage_columns`), on the car's side, after racf's own; a scenario's world managers add the
+ground-truth columns they declare (``WorldManager.columns()``: :func:`world_columns`), on the
+referee's side, after those.
 An estimator adds its own columns through ``diagnostics()`` (ODCA: ``w``, ``flag``,
 ``odca_source``, ``d_kin``; a plug-in: whatever it reports). ``w``, ``flag`` and ``score`` are declared
 (NaN when the estimator has none), the others ride along on the car's side.
@@ -24,7 +26,7 @@ from dataclasses import dataclass
 
 from racf.sim.sensors.state import STATE_FIELDS
 
-__all__ = ["Column", "STEP_COLUMNS", "STEP_LOG", "CAR", "REFEREE", "step_row", "columns_of", "world_columns"]
+__all__ = ["Column", "STEP_COLUMNS", "STEP_LOG", "CAR", "REFEREE", "step_row", "columns_of", "world_columns", "stage_columns"]
 
 CAR, REFEREE, EPISODE = "car", "referee", "episode"
 #: The unit of each field of the state sensor (a new field must be given one here).
@@ -97,19 +99,6 @@ STEP_COLUMNS: tuple[Column, ...] = (
     _c(CAR, "scan_fov", "m", "the LiDAR's forward sector, beams -40..+40 deg CCW from forward (inf: no return)"),
     _c(CAR, "track_x", "m", "the LiDAR track's point in the body frame, forward (NaN: no track)"),
     _c(CAR, "track_y", "m", "the LiDAR track's point in the body frame, left (NaN: no track)"),
-    _c(CAR, "lead_detected", "bool", "following: the vehicle detector found a car on the lane ahead"),
-    _c(CAR, "lead_d_meas", "m", "following: the depth distance of the car ahead (NaN: none, or not following)"),
-    _c(CAR, "lead_lidar", "m", "following: the LiDAR track's distance to the car ahead's rear (NaN: none)"),
-    _c(CAR, "lead_d_size", "m", "following: the size witness, from the box's height and a QCar 2's (NaN: none)"),
-    _c(CAR, "lead_d_fused", "m", "following: the defence's distance to the car ahead (NaN: none)"),
-    _c(CAR, "lead_v_est", "m/s", "following: the car's estimate of the lead's speed (NaN: not following)"),
-    _c(CAR, "lead_gap_est", "m", "following: the gap the policy acts on, bumper to the lead's rear (NaN: none)"),
-    _c(CAR, "lead_cap", "m/s", "following: the policy's speed cap (inf: none)"),
-    _c(CAR, "lead_emergency", "bool", "following: the emergency brake on time-to-collision is on"),
-    _c(CAR, "lead_support", "share", "following: the share of the lead's box that the depth finds upright at the box's "
-                                     "size distance (NaN: no verdict)"),
-    _c(CAR, "lead_nearest", "m", "following: the nearest upright thing the depth finds in the lead's box (NaN: none)"),
-    _c(CAR, "lead_picture", "bool", "following: the lead's box is taken for a picture of a car (its size no witness)"),
     _c(REFEREE, "d_true", "m", "ground truth: the target's depth along the camera axis"),
     _c(REFEREE, "d_clean", "m", "the car's perception on the unattacked readings (the protocol's pseudo ground "
                                 "truth; NaN under attack without the clean pass)"),
@@ -141,6 +130,20 @@ def columns_of(side: str) -> tuple[str, ...]:
     return tuple(c.name for c in STEP_COLUMNS if c.side == side)
 
 
+def stage_columns(stages) -> tuple[Column, ...]:
+    """The columns the car's stages declare (``CarStage.columns``), as step log columns on the car's
+    side. ValueError names one that racf's own columns or an earlier stage already hold."""
+    out: list[Column] = []
+    for stage in stages:
+        for column in stage.columns:
+            taken = column.name in STEP_LOG or any(c.name == column.name for c in out)
+            if taken:
+                raise ValueError(f"car stage {stage.name!r} declares the column {column.name!r}, which the step log "
+                                 "already holds; give it another name")
+            out.append(Column(column.name, column.unit, column.meaning, CAR))
+    return tuple(out)
+
+
 def world_columns(managers) -> tuple[Column, ...]:
     """The ground-truth columns a world's managers declare (``WorldManager.columns()``), as step log
     columns on the referee's side. ValueError names one that racf's own columns already hold."""
@@ -155,8 +158,8 @@ def world_columns(managers) -> tuple[Column, ...]:
 
 
 def step_row(values: dict, diagnostics: dict, world: tuple[Column, ...] = ()) -> dict:
-    """One step's row, in the declared order (racf's columns, then the ``world`` managers' columns),
-    then the estimator's own diagnostics.
+    """One step's row, in the declared order (racf's columns, then the ``world`` columns: the car
+    stages' and the world managers', in that order), then the estimator's own diagnostics.
 
     ``values`` holds every declared column but ``trial_id`` (added per log) and ``w``/``flag``/``score``
     (from ``diagnostics`` when the estimator reports them, else NaN). ValueError names a
@@ -167,8 +170,8 @@ def step_row(values: dict, diagnostics: dict, world: tuple[Column, ...] = ()) ->
     given = set(values) | _FROM_DIAGNOSTICS
     if given != declared:
         raise ValueError(f"step row: missing {sorted(declared - given)}, undeclared {sorted(given - declared)}; "
-                         "declare a new column in racf.experiments.episode.record.STEP_COLUMNS (racf's) or in its "
-                         "world manager's columns()")
+                         "declare a new column in racf.experiments.episode.record.STEP_COLUMNS (racf's), in its car "
+                         "stage's columns or in its world manager's columns()")
     row = {name: values[name] if name in values else diagnostics.get(name, float("nan"))
            for name in STEP_LOG if name != "trial_id"}
     for column in world:

@@ -19,7 +19,7 @@ import gymnasium as gym
 import numpy as np
 
 from racf.controllers import BrakingConfig, Perception, StopSignBraker
-from racf.experiments.episode.car import CarCalibration, CarStep, sign_depth_at_line
+from racf.experiments.car.software import CarCalibration, CarStep, sign_depth_at_line
 from racf.sim.world.drives import RouteTarget
 
 __all__ = ["Referee"]

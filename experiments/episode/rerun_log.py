@@ -22,8 +22,9 @@ then replays the log and those frames into a recording on the ``sim_time`` timel
   (``wit_det0``/``wit_det1`` the detectors at the hypothesis, ``wit_depth`` the plate in the depth
   image, ``wit_lidar``, ``wit_blind``, ``wit_map``, ``wit_moving`` the depth caught moving by the
   static-world check) and its verdict ``stands``;
-- ``following/*``: with a car ahead, its distance from the camera as each witness sees it (the
-  depth, the LiDAR's track, the size witness), the defence's, and the truth (to the lead's rear).
+- ``stages/NAME/*``: the distance series each car stage declares (``CarStage.series``: following's,
+  the car ahead from the camera as each witness sees it and the defence's) where its columns are
+  in the log, beside the truth to the lead's rear.
 
 A default blueprint lays these out so the story reads at a glance.
 """
@@ -39,7 +40,7 @@ import pandas as pd
 
 from racf.experiments.episode.record import STEP_LOG
 
-__all__ = ["FrameRecorder", "write_rrd", "EXISTENCE_COLUMNS", "SERIES", "CONTROL", "FOLLOWING", "STYLE", "CAR_HALF_SIZE_M",
+__all__ = ["FrameRecorder", "write_rrd", "EXISTENCE_COLUMNS", "SERIES", "CONTROL", "STYLE", "stage_series", "CAR_HALF_SIZE_M",
            "ACTOR_RGB", "actors", "lead_depth_true"]
 
 #: The step-log columns of an existence defence's witnesses (``ExistenceWitnesses.columns``, ``stands``).
@@ -48,10 +49,6 @@ EXISTENCE_COLUMNS = ("wit_", "seen_det", "map_depth_m", "stands")
 SERIES = {"d_true": "d_true", "d_clean": "d_clean", "d_meas": "d_meas", "lidar": "lidar", "d_fused": "d_fused",
           "d_kin": "d_kin"}
 CONTROL = {"gate_w": "w", "flag": "flag", "brake": "brake", "attack_active": "attack_active"}
-#: The following stage's distance series (entity name -> log column; ``lead_d_true`` is the referee's, made
-#: from the poses by :func:`lead_depth_true`).
-FOLLOWING = {"lead_d_true": "lead_d_true", "lead_d_meas": "lead_d_meas", "lead_lidar": "lead_lidar",
-             "lead_d_size": "lead_d_size", "lead_d_fused": "lead_d_fused"}
 #: Each series' colour (RGB) and legend name: one hue family per kind of signal, no two alike.
 STYLE: dict[str, tuple[tuple[int, int, int], str]] = {
     "d_true": ((40, 40, 40), "d_true (ground truth, sign in view)"),
@@ -65,10 +62,6 @@ STYLE: dict[str, tuple[tuple[int, int, int], str]] = {
     "brake": ((140, 86, 75), "brake"),
     "attack_active": ((188, 189, 34), "attack active"),
     "lead_d_true": ((110, 110, 110), "the car ahead's rear (ground truth)"),
-    "lead_d_meas": ((255, 152, 150), "its depth (depth camera)"),
-    "lead_lidar": ((158, 218, 229), "its LiDAR track"),
-    "lead_d_size": ((255, 187, 120), "its size witness"),
-    "lead_d_fused": ((174, 199, 232), "the defence's distance (what the car follows)"),
 }
 #: A car's body (a QCar 2: its footprint, 0.425 x 0.192 m, 0.20 m tall), centred over the axles' midpoint, m.
 CAR_HALF_SIZE_M = (0.2125, 0.096, 0.10)
@@ -90,6 +83,15 @@ def lead_depth_true(log: pd.DataFrame) -> np.ndarray:
     rear_x = log["lead_x"].to_numpy(float) - np.cos(lead_yaw) * CAR_HALF_SIZE_M[0]
     rear_y = log["lead_y"].to_numpy(float) - np.sin(lead_yaw) * CAR_HALF_SIZE_M[0]
     return c * (rear_x - cam_x) + s * (rear_y - cam_y)
+
+
+def stage_series(log: pd.DataFrame) -> dict[str, tuple[str, tuple]]:
+    """The car stages' distance series in ``log`` (``CarStage.series`` of every registered stage whose
+    columns it holds): entity path -> (column, (colour, legend))."""
+    from racf.plugins import CAR_STAGES
+
+    return {f"stages/{name}/{column}": (column, style) for name in CAR_STAGES
+            for column, style in CAR_STAGES[name].series.items() if column in log.columns}
 
 
 def _shown(log: pd.DataFrame, column: str) -> np.ndarray:
@@ -162,7 +164,7 @@ def _blueprint():
                 rrb.TimeSeriesView(origin="series", name="distances (m)"),
                 rrb.TimeSeriesView(origin="control", name="gate w, brake, attack"),
                 rrb.TimeSeriesView(origin="existence", name="existence witnesses (1: says a sign stands)"),
-                rrb.TimeSeriesView(origin="following", name="the car ahead (m from the camera)"),
+                rrb.TimeSeriesView(origin="stages", name="the car's stages (m from the camera)"),
             ),
             rrb.Vertical(
                 rrb.Spatial2DView(origin="map", name="map (top view)"),
@@ -239,20 +241,21 @@ def write_rrd(path: str | Path, log: pd.DataFrame, recorder: FrameRecorder | Non
 
     # Every step: the signals, as columns.
     times = rr.TimeColumn("sim_time", duration=log["t"].to_numpy(float))
-    shown = set(SERIES.values()) | set(CONTROL.values()) | set(FOLLOWING.values())
+    staged = stage_series(log)
+    shown = set(SERIES.values()) | set(CONTROL.values()) | {column for column, _ in staged.values()}
     own = {f"{'existence' if c.startswith(EXISTENCE_COLUMNS) else 'estimator'}/{c}": c for c in log.columns
            # the estimator's diagnostics beyond the declared log; an existence defence's witnesses apart
            if c not in STEP_LOG and c not in shown and pd.api.types.is_numeric_dtype(log[c])}
-    following = {}
     if {"lead_x", "x"} <= set(log.columns) and np.isfinite(log["lead_x"].to_numpy(float)).any():
         log = log.assign(lead_d_true=lead_depth_true(log))
-        following = {f"following/{k}": v for k, v in FOLLOWING.items()}
-    for name, column in {**{f"series/{k}": v for k, v in SERIES.items()},
-                         **{f"control/{k}": v for k, v in CONTROL.items()}, **own, **following}.items():
+        staged["stages/following/lead_d_true"] = ("lead_d_true", STYLE["lead_d_true"])
+    styles = {**{f"series/{k}": (v, STYLE.get(k)) for k, v in SERIES.items()},
+              **{f"control/{k}": (v, STYLE.get(k)) for k, v in CONTROL.items()},
+              **{name: (column, None) for name, column in own.items()}, **staged}
+    for name, (column, style) in styles.items():
         if column in log:
-            key = name.split("/", 1)[1]
-            if key in STYLE:
-                colour, legend = STYLE[key]
+            if style is not None:
+                colour, legend = style
                 rec.log(name, rr.SeriesLines(colors=[colour], names=[legend]), static=True)
             rec.send_columns(name, indexes=[times], columns=rr.Scalars.columns(scalars=_shown(log, column)))
 

@@ -1,4 +1,4 @@
-"""The one step loop: env -> the car (:mod:`~racf.experiments.episode.car`) -> env, with the referee
+"""The one step loop: env -> the car (:mod:`~racf.experiments.car.software`) -> env, with the referee
 (:mod:`~racf.experiments.episode.referee`) watching.
 
 Trials, dataset collection and the demo all run episodes through :func:`run_trial`. The car
@@ -28,9 +28,7 @@ import numpy as np
 import pandas as pd
 
 from racf.controllers import DistanceEstimator
-from racf.controllers.lead_existence import NO_EVIDENCE, LeadEvidence
-from racf.experiments.episode.lead_stage import NO_LEAD
-from racf.experiments.episode.record import step_row, world_columns
+from racf.experiments.episode.record import stage_columns, step_row, world_columns
 from racf.experiments.episode.referee import Referee
 from racf.experiments.episode.spec import TrialSpec
 from racf.experiments.episode.plan import EpisodePlan, plan_episode
@@ -137,6 +135,8 @@ def _run(env: gym.Env, spec: TrialSpec, plan: EpisodePlan, estimator, on_step: S
     scenario = spec.scenario
     # The world's own ground truth: every column the env's world managers declare, logged by name.
     truth_columns = world_columns(env.unwrapped.world)
+    # The car's stages' columns, on its side, before the truth's.
+    declared = stage_columns(car.stages) + truth_columns
     referee = Referee(car.calibration, spec.braking, dt, find_wrapper(env, AttackWrapper) is not None, clean_pass,
                       tuple(c.name for c in truth_columns))
     ending = tuple(c() for c in scenario.criteria if c.terminates)
@@ -148,7 +148,7 @@ def _run(env: gym.Env, spec: TrialSpec, plan: EpisodePlan, estimator, on_step: S
             applied = actions.push(step.action, late_steps(car.estimator, dt) if step.control else 0)
             truth = referee.observe(env, obs, info, step, car.target, car.perception)
             rows.append(step_row({**car_columns(car, step, obs, info["time"], applied), **truth},
-                                 car.estimator.diagnostics(), truth_columns))
+                                 car.estimator.diagnostics(), declared))
             if on_step is not None:
                 on_step(env, obs, info, rows[-1])
             if scenario.over(plan, rows) or any(c.fails_at(rows[-1]) for c in ending):
@@ -228,19 +228,9 @@ def car_columns(car, step, obs: dict, t: float, applied: np.ndarray) -> dict:
         "frame_new": step.frame_new, "scan_new": step.scan_new, "scan_fov": scan_fov(obs["lidar"]),
         # The LiDAR reference's tracked point in the body frame (NaN without a track), for viewers.
         "track_x": step.tracked_xy[0], "track_y": step.tracked_xy[1],
-        **lead_columns(step.lead),
+        # Each engaged car stage's own columns (``CarStage.columns``).
+        **{name: value for said in step.stages.values() for name, value in said.values.items()},
     }
-
-
-def lead_columns(lead) -> dict:
-    """The following stage's part of a row (``LeadStep``; None: not engaged, its columns NaN/False)."""
-    lead = lead or NO_LEAD
-    sample, decision = lead.sample, lead.decision
-    evidence = sample.witnesses if isinstance(sample.witnesses, LeadEvidence) else NO_EVIDENCE
-    return {"lead_detected": sample.detected, "lead_d_meas": sample.d_meas, "lead_lidar": sample.lidar_m,
-            "lead_d_size": sample.d_size, "lead_d_fused": lead.d_fused, "lead_v_est": lead.lead_mps,
-            "lead_gap_est": decision.gap_m, "lead_cap": decision.speed_cap_mps, "lead_emergency": decision.emergency,
-            **evidence.columns()}
 
 
 def _result(spec: TrialSpec, plan: EpisodePlan, env: gym.Env, log: pd.DataFrame) -> TrialResult:

@@ -24,8 +24,8 @@ import numpy as np
 
 from racf.controllers import BrakingConfig
 from racf.controllers.detectors import DETECTORS
-from racf.experiments.episode.estimators import ESTIMATORS, check_options
-from racf.experiments.episode.wire import DEFAULT_TIMEOUT_MS
+from racf.experiments.car.estimators import ESTIMATORS, check_options
+from racf.experiments.link.wire import DEFAULT_TIMEOUT_MS
 from racf.provenance import code_version
 from racf.sim.attacks import ATTACKS
 from racf.sim.attacks.schedule import as_range

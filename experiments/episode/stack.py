@@ -1,25 +1,25 @@
 """The parts an episode wires together: the env under the spec's attacks, and the car's software
 built from the episode's plan (:mod:`~racf.experiments.episode.plan`: its build, its mission)
-with its perception pipelines and estimator. The car itself is :class:`racf.experiments.episode.car.Car`."""
+with its perception pipelines and estimator. The car itself is :class:`racf.experiments.car.software.Car`."""
 
 from __future__ import annotations
-
-from functools import lru_cache
 
 import gymnasium as gym
 
 from racf import sim
 from racf.controllers import LidarTargetConfig, LidarTargetTracker, ObstacleDetector, Perception, SizeDistance
 from racf.controllers.detectors import make_detector
-from racf.experiments.episode.car import Car, CarCalibration
-from racf.experiments.episode.estimators import make_estimator
-from racf.experiments.episode.existence import ExistenceStage
+from racf.experiments.car.software import Car, CarCalibration
+from racf.experiments.car.stage import StageContext
+from racf.experiments.car.estimators import make_estimator
+from racf.experiments.car.existence import ExistenceStage
 from racf.experiments.episode.plan import DRIVE_MAX_EPISODE_S, EpisodePlan, env_settings
 from racf.experiments.episode.spec import TrialSpec
+from racf.plugins import CAR_STAGES
 from racf.sim.attacks import ATTACKS
 from racf.sim.world.stop_signs import SIGN_FACE_ACROSS_FLATS_M, SIGN_RED_FACE_ACROSS_FLATS_M
 
-__all__ = ["default_env", "wrap_attacks", "plain_env", "build_car", "car_keys", "link_endpoint", "existence_stage", "tracker", "outlined_size_m", "OUTLINED_SIZE_M",
+__all__ = ["default_env", "wrap_attacks", "plain_env", "build_car", "car_keys", "link_endpoint", "existence_stage", "car_stages", "tracker", "outlined_size_m", "OUTLINED_SIZE_M",
            "DRIVE_MAX_EPISODE_S"]
 
 #: The map's size, across flats, of each part of the sign a detector may outline (``BlobDetector.outline``).
@@ -95,7 +95,7 @@ def build_car(spec: TrialSpec, plan: EpisodePlan, estimator=None, env: gym.Env |
                    "obstacle": Perception(calib.camera, detector=ObstacleDetector(), lidar=tracker(calib),
                                           target="obstacle")}
     if estimator is None and spec.estimator_endpoint is not None:
-        from racf.experiments.episode.remote import RemoteEstimator
+        from racf.experiments.link.remote import RemoteEstimator
 
         estimator = RemoteEstimator(link_endpoint(env, spec), spec.estimator, spec.estimator_options,
                                     spec.estimator_timeout_ms, keys=car_keys(spec))
@@ -104,49 +104,44 @@ def build_car(spec: TrialSpec, plan: EpisodePlan, estimator=None, env: gym.Env |
     if callable(configure):
         configure(calib)
     return Car(calib, plan.mission, perceptions, estimator, spec.braking, plan.control_dt_s, every, plan.localisation,
-               existence_stage(estimator, calib, spec.detector), lead_stage(spec, calib) if plan.mission.follow else None)
+               existence_stage(estimator, calib, spec.detector), car_stages(spec, plan))
 
 
-def lead_stage(spec: TrialSpec, calib: CarCalibration):
-    """The following stage of a car in traffic: the vehicle detector on its lane, and the spec's
-    defence for the lead's distance, its own instance."""
-    from racf.controllers.lead_existence import LeadExistenceCheck
-    from racf.controllers.lead_perception import LeadPerception
-    from racf.experiments.episode.lead_stage import LeadStage
+def car_stages(spec: TrialSpec, plan: EpisodePlan) -> tuple:
+    """The stages the plan's mission engages (``racf.car_stages`` parts, by name), each built on the
+    car's build with its own instance of the spec's defence."""
+    if not plan.mission.stages:
+        return ()
+    calib = plan.calibration
 
-    estimator = make_estimator(spec.estimator, spec.estimator_options)
-    configure = getattr(estimator, "use_calibration", None)
-    if callable(configure):
-        configure(calib)
-    perception = LeadPerception(calib.camera, _vehicle_detector(), tracker(calib),
-                                existence=LeadExistenceCheck(calib.camera, calib.camera_height_m))
-    return LeadStage(perception, estimator, calib.bumper_x_m - calib.camera_xy_m[0], calib.camera_xy_m)
+    def make_defence():
+        estimator = make_estimator(spec.estimator, spec.estimator_options)
+        configure = getattr(estimator, "use_calibration", None)
+        if callable(configure):
+            configure(calib)
+        return estimator
 
-
-@lru_cache(maxsize=1)
-def _vehicle_detector():
-    """The process's vehicle detector (its network is loaded once; it keeps no state between frames)."""
-    from racf.controllers.vehicle_detector import LearnedVehicleDetector
-
-    return LearnedVehicleDetector()
+    context = StageContext(calib.camera, calib.camera_xy_m, calib.camera_height_m, calib.lidar_xy_m,
+                           calib.bumper_x_m - calib.camera_xy_m[0], make_defence, spec.detector)
+    return tuple(CAR_STAGES[name](context) for name in plan.mission.stages)
 
 
 def car_keys(spec: TrialSpec):
     """The car's CURVE keys for its link to the service (None: a plain link)."""
-    from racf.experiments.episode.curve import CarKeys
+    from racf.experiments.link.curve import CarKeys
 
     return None if spec.estimator_keys is None else CarKeys.load(spec.estimator_keys, spec.estimator_car)
 
 
 def link_endpoint(env: gym.Env | None, spec: TrialSpec) -> str:
     """Where the car reaches its served defence: the service itself, or, under link attacks, a man in
-    the middle (:class:`~racf.experiments.episode.link_relay.LinkRelay`) closed with the env."""
+    the middle (:class:`~racf.experiments.link.relay.LinkRelay`) closed with the env."""
     from racf.sim.attacks.link import link_attacks
 
     attacks = link_attacks(env) if env is not None else []
     if not attacks:
         return spec.estimator_endpoint
-    from racf.experiments.episode.link_relay import LinkRelay
+    from racf.experiments.link.relay import LinkRelay
 
     relay = LinkRelay(spec.estimator_endpoint, attacks)
     attacks[0].bind_link(relay)

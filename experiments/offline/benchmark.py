@@ -230,7 +230,7 @@ def _estimates(frame: pd.DataFrame, a, odca_model, forecasters: dict) -> tuple[d
 
 def _bench_estimator(name: str, odca_model):
     """The estimator ``name`` as the car builds it; ODCA with this split's trained model."""
-    from racf.experiments.episode.estimators import ODCAEstimator, make_estimator
+    from racf.experiments.car.estimators import ODCAEstimator, make_estimator
 
     return ODCAEstimator.of(odca_model) if name == "odca" else make_estimator(name)
 

@@ -16,7 +16,7 @@ LINKS = ("plain", "curve")
 @contextmanager
 def link_services(defence: str, options: dict | None, links: set[str], out: Path) -> Iterator[dict[str, dict]]:
     """For each of ``links``, a running service of ``defence`` and the spec fields that reach it."""
-    from racf.experiments.episode.curve import make_keys
+    from racf.experiments.link.curve import make_keys
     from racf.experiments.sweeps.service_process import service_process
 
     unknown = sorted(set(links) - set(LINKS))

@@ -28,13 +28,13 @@ _BOOTSTRAP = 1000
 
 
 def _make(name: str, options: dict | None = None):
-    from racf.experiments.episode.estimators import make_estimator
+    from racf.experiments.car.estimators import make_estimator
 
     return make_estimator(name, options)
 
 
 def _alignment():
-    from racf.experiments.episode.estimators import ODCAEstimator
+    from racf.experiments.car.estimators import ODCAEstimator
 
     return ODCAEstimator().model.config.alignment
 

@@ -13,8 +13,8 @@ import time
 
 import numpy as np
 
-from racf.experiments.episode.estimators import make_estimator
-from racf.experiments.episode.remote import RemoteEstimator
+from racf.experiments.car.estimators import make_estimator
+from racf.experiments.link.remote import RemoteEstimator
 from racf.experiments.sweeps.service_process import service_process
 
 __all__ = ["service_process", "record_samples", "measure", "percentiles", "PAPER_CYCLE_MS"]

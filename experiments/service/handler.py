@@ -18,9 +18,9 @@ from __future__ import annotations
 import time
 
 from racf.controllers import CameraModel
-from racf.experiments.episode.car import CarCalibration
-from racf.experiments.episode.estimators import make_estimator
-from racf.experiments.episode.wire import (MAX_REQUEST_ID, PROTOCOL, InvalidAnswer, WireError, decode_sample,
+from racf.experiments.car.software import CarCalibration
+from racf.experiments.car.estimators import make_estimator
+from racf.experiments.link.wire import (MAX_REQUEST_ID, PROTOCOL, InvalidAnswer, WireError, decode_sample,
                                            wire_distance)
 from racf.experiments.service.sessions import Session, Sessions, warn
 

@@ -1,11 +1,11 @@
 """``racf serve``: defences in their own process, one instance per car, behind ZeroMQ.
 
-A ROUTER socket takes each car's requests (``racf.experiments.episode.remote`` speaks the other
+A ROUTER socket takes each car's requests (``racf.experiments.link.remote`` speaks the other
 end; :mod:`~racf.experiments.service.handler` answers them). No message stops it: a frame set
 that is not a request (``[identity, b"", payload]`` from a REQ socket, ``[identity, payload]``
 from a DEALER) is dropped, a payload that is not a message is answered with an error, each in
 one logged line; ZeroMQ's ``MAXMSGSIZE`` cuts off a peer that sends more than a message may
-hold. With keys (:mod:`~racf.experiments.episode.curve`) the socket is a CURVE server and a
+hold. With keys (:mod:`~racf.experiments.link.curve`) the socket is a CURVE server and a
 ZAP handler admits only the listed cars.
 
 A session ends with its connection: the socket's monitor reports each closed connection by its
@@ -19,8 +19,8 @@ from __future__ import annotations
 import math
 
 from racf.errors import UserError
-from racf.experiments.episode.curve import ServerKeys
-from racf.experiments.episode.wire import MAX_MESSAGE_BYTES, WireError, pack, unpack
+from racf.experiments.link.curve import ServerKeys
+from racf.experiments.link.wire import MAX_MESSAGE_BYTES, WireError, pack, unpack
 from racf.experiments.service.handler import DefenceService, warm_up
 from racf.experiments.service.sessions import LOG, Sessions, warn
 

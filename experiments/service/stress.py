@@ -17,9 +17,9 @@ from pathlib import Path
 
 import numpy as np
 
-from racf.experiments.episode.remote import RemoteEstimator
+from racf.experiments.link.remote import RemoteEstimator
 from racf.experiments.service.bench import percentiles
-from racf.experiments.episode.wire import PROTOCOL, pack
+from racf.experiments.link.wire import PROTOCOL, pack
 
 __all__ = ["fuzz_frames", "fuzz", "connections", "cars", "rss_mb", "ping"]
 
@@ -82,7 +82,7 @@ def ping(endpoint: str, timeout_s: float = 5.0, keys=None) -> bool:
     """Whether a fresh car gets an answer to a ping within ``timeout_s``."""
     import zmq
 
-    from racf.experiments.episode.wire import unpack
+    from racf.experiments.link.wire import unpack
 
     sock = zmq.Context.instance().socket(zmq.REQ)
     sock.setsockopt(zmq.LINGER, 0)

@@ -40,7 +40,7 @@ car, on the same seed::
     speed = 1.0
 
 Attacks: any in ``racf.sim.attacks.ATTACKS`` (``patch_occlusion``, ``lidar_spoof``, ...) and
-``+``-combinations of them; estimators: any in ``racf.experiments.episode.estimators.ESTIMATORS``
+``+``-combinations of them; estimators: any in ``racf.experiments.car.estimators.ESTIMATORS``
 (``raw``, ``odca``, ``ekf``, ``chronos``), plug-ins included. An episode's seed depends on its cell and repeat but not on the
 estimator or the attack's ``[params]``, so estimators (and the settings of an attack) meet
 identical episodes (paired comparisons); so do the values of a scenario's own table. Everything is
@@ -65,8 +65,8 @@ import numpy as np
 from racf.controllers.detectors import DETECTORS
 from racf.plugins import METRICS, SCENARIOS
 from racf.experiments.episode import TrialSpec
-from racf.experiments.episode.wire import DEFAULT_TIMEOUT_MS
-from racf.experiments.episode.estimators import ESTIMATORS, check_options, make_estimator
+from racf.experiments.link.wire import DEFAULT_TIMEOUT_MS
+from racf.experiments.car.estimators import ESTIMATORS, check_options, make_estimator
 from racf.experiments.episode.spec import setting_name
 from racf.experiments.sweeps.scenario_tables import check_tables, scenario_tables, situations
 from racf.sim.attacks import ATTACKS

@@ -2,7 +2,7 @@
 
 The paper's car sent its perception offboard and braked on the answer: whoever sits on that
 network can slow, lose or replace the answers. Each attack here is a man in the middle on the
-service's TCP connection (``racf.experiments.episode.link_relay`` puts it there when a spec names
+service's TCP connection (``racf.experiments.link.relay`` puts it there when a spec names
 one) that sees ZeroMQ's frames as they pass:
 
 - ``link_delay``: holds each answer ``delay_ms`` (± ``jitter_ms``, drawn per answer);

@@ -73,7 +73,7 @@ def test_the_facts_check_sees_a_wrong_count():
 def test_the_link_protocol_the_pages_state_is_the_one_the_code_speaks():
     """The architecture page's table of requests: its version, the distance's range and the requests
     themselves are what racf's wire module checks."""
-    from racf.experiments.episode import wire
+    from racf.experiments.link import wire
 
     text = " ".join((ROOT / "docs" / "concepts" / "architecture.md").read_text().split())
     assert f"The protocol (version {wire.PROTOCOL})" in text and f"`pong: true, protocol: {wire.PROTOCOL}`" in text

@@ -24,7 +24,7 @@ ROOT = Path(__file__).resolve().parents[2]
 def third_party() -> list[str]:
     """The top-level modules importing racf's link and episode code loads, racf's own left out (read in
     a process of its own, so that this one never holds racf)."""
-    probe = ("import sys, racf.experiments.episode, racf.experiments.episode.remote, racf.experiments.service.server, "
+    probe = ("import sys, racf.experiments.episode, racf.experiments.link.remote, racf.experiments.service.server, "
              "racf.experiments.cli, pytest, hypothesis, xdist; "
              "print('\\n'.join(sorted({m.split('.')[0] for m in sys.modules})))")
     out = subprocess.run([sys.executable, "-c", probe], cwd=ROOT, capture_output=True, text=True, check=True).stdout

@@ -16,9 +16,9 @@ EPISODE = "tests/experiments/episode"
 PYTEST_ARGS = ["-x", "-q", "-p", "no:cacheprovider", "-p", "no:xdist", "-m", "not slow", "--hypothesis-profile=mutation"]
 #: The tests that must kill a mutant of each module.
 TESTS = {
-    "experiments/episode/wire.py": [f"{EPISODE}/test_wire.py", f"{EPISODE}/test_remote.py", f"{SERVICE}/test_fuzz.py"],
-    "experiments/episode/remote.py": [f"{EPISODE}/test_remote.py", f"{SERVICE}/test_auth.py", f"{SERVICE}/test_server.py"],
-    "experiments/episode/curve.py": [f"{SERVICE}/test_auth.py"],
+    "experiments/link/wire.py": [f"{EPISODE}/test_wire.py", f"{EPISODE}/test_remote.py", f"{SERVICE}/test_fuzz.py"],
+    "experiments/link/remote.py": [f"{EPISODE}/test_remote.py", f"{SERVICE}/test_auth.py", f"{SERVICE}/test_server.py"],
+    "experiments/link/curve.py": [f"{SERVICE}/test_auth.py"],
     "experiments/service/handler.py": [f"{SERVICE}/test_handler.py", f"{SERVICE}/test_fuzz.py",
                                        f"{SERVICE}/test_server.py", f"{SERVICE}/test_auth.py"],
     "experiments/service/sessions.py": [f"{SERVICE}/test_sessions.py", f"{SERVICE}/test_limits.py"],

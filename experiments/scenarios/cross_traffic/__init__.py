@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from racf.controllers import Phase
-from racf.experiments.episode.car import route_follower
+from racf.experiments.car.software import route_follower
 from racf.experiments.episode.criteria import TARGET_CRITERIA, NoContact
 from racf.experiments.scenarios.base import RUN_THROUGH_M, Param, Scenario
 from racf.experiments.scenarios.cross_traffic.conflict import NEAR_MISS_S

@@ -122,7 +122,7 @@ class LeadVehicle(Scenario):
         options = {**draft.reset_options, "lead": lead.to_options()}
         max_s = draft.max_steps * draft.control_dt_s
         # The car is told it drives in traffic: its following stage is engaged.
-        return self.replace(draft, reset_options=options, mission=dataclasses.replace(mission, follow=True),
+        return self.replace(draft, reset_options=options, mission=dataclasses.replace(mission, stages=(*mission.stages, "following")),
                             extras={**draft.extras, "lead": lead, "lead_rest_s": lead_rest_s(lead, max_s)})
 
     def over(self, plan, rows: list[dict]) -> bool:

@@ -6,7 +6,7 @@ import pytest
 
 from racf.experiments.cli import main
 from racf.experiments.cli.common import registry_markdown
-from racf.experiments.episode.estimators import ESTIMATORS
+from racf.experiments.car.estimators import ESTIMATORS
 from racf.sim.attacks import ATTACKS
 
 ROOT = Path(__file__).resolve().parents[3]

@@ -11,15 +11,12 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from racf.experiments.episode import TrialSpec, run_trial
-from racf.experiments.episode.stack import default_env
+from racf.experiments.episode import TrialSpec, plan_episode, run_trial
+from racf.experiments.episode.stack import car_stages, default_env
 
 #: What the car does and works out; none of it may depend on ``info``.
 CAR_COLUMNS = ["speed_cmd", "steer_cmd", "d_fused", "d_meas", "lidar", "detected", "brake", "phase", "slot",
-               "x_est", "y_est", "yaw_est",
-               # The following stage (NaN where the car follows no one).
-               "lead_detected", "lead_d_meas", "lead_lidar", "lead_d_size", "lead_d_fused", "lead_v_est", "lead_cap",
-               "lead_support", "lead_nearest", "lead_picture"]
+               "x_est", "y_est", "yaw_est"]
 #: ``time`` and ``dist_to_stop_line`` stay: the runner (the experimenter, not the car) ends
 #: the episode on them, and both runs must last the same number of steps to be compared.
 KEPT = {"time", "dist_to_stop_line", "collision", "off_road", "attack", "attack_active"}
@@ -63,20 +60,29 @@ class ScrambledInfo(gym.Wrapper):
                                   pytest.param(TrialSpec("clean+physical_patch+vote", 1, 1.5, 1, target="stale_map",
                                                          attack_params={"physical_patch": {"from_start": True}}),
                                                marks=pytest.mark.slow),
-                                  # A car ahead, its depth read far: its pose and speed in info are scrambled too.
-                                  TrialSpec("clean+lead_patch+odca", 1, 1.0, 1, target="lead_vehicle")],
-                         ids=["empty", "traffic", "existence", "lead"])
+                                  # A car ahead that brakes early, its depth read far from 0.5 s: its pose and
+                                  # speed in info are scrambled too (a short episode for the default run).
+                                  TrialSpec("clean+lead_patch+odca", 1, 1.0, 1, target="lead_vehicle",
+                                            scenario_params={"brake_t": 1.0},
+                                            attack_params={"lead_patch": {"start_s": 0.5}}),
+                                  # The lead's whole default profile: the long episode, in the slow run.
+                                  pytest.param(TrialSpec("clean+lead_patch+odca", 1, 1.0, 1, target="lead_vehicle"),
+                                               marks=pytest.mark.slow)],
+                         ids=["empty", "traffic", "existence", "lead", "lead-long"])
 def test_the_car_does_the_same_with_info_scrambled(spec):
     result, log = run_trial(spec, clean_pass=False)
     _, blind = run_trial(spec, make_env=lambda s: ScrambledInfo(default_env(s)), clean_pass=False)
     assert len(log) > 50 and log["attack_active"].any()
     witnesses = [c for c in log.columns if c.startswith("wit_") or c == "stands"]
+    # Every column an engaged car stage declares is the car's too (following's: the lead's witnesses, its cap).
+    staged = [c.name for stage in car_stages(spec, plan_episode(spec)) for c in stage.columns]
+    assert bool(staged) == (spec.target == "lead_vehicle") and set(staged) <= set(log.columns)
     assert bool(witnesses) == (spec.estimator == "vote")
     # A scenario may end its episode on the referee's truth (the lead's: once the car stands behind it, by its
     # true speed): scrambled, the experiment may run on longer. The car must do the same while both run.
     n = min(len(log), len(blind))
     assert n > 50 and (n == len(log) or spec.target == "lead_vehicle")
-    pd.testing.assert_frame_equal(blind[CAR_COLUMNS + witnesses].iloc[:n], log[CAR_COLUMNS + witnesses].iloc[:n])
+    pd.testing.assert_frame_equal(blind[CAR_COLUMNS + witnesses + staged].iloc[:n], log[CAR_COLUMNS + witnesses + staged].iloc[:n])
     # The scrambler did reach the runner: the referee's ground truth differs.
     assert not np.allclose(blind["d_true"].iloc[:n].fillna(-1), log["d_true"].iloc[:n].fillna(-1))
     assert not np.allclose(blind["x"].iloc[:n], log["x"].iloc[:n])

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from racf.experiments.episode import TrialSpec, run_trial
-from racf.experiments.episode.rerun_log import (CONTROL, FOLLOWING, SERIES, STYLE, FrameRecorder, _blueprint, _shown, lead_depth_true,
+from racf.experiments.episode.rerun_log import (CONTROL, SERIES, STYLE, FrameRecorder, _blueprint, _shown, lead_depth_true,
                                                write_rrd)
 
 
@@ -73,7 +73,7 @@ def test_trials_record_every_trial_they_run(tmp_path):
 
 def test_every_series_has_its_own_colour_and_legend_and_gaps_where_undefined(recorded):
     _, log, _ = recorded
-    assert set(STYLE) == set(SERIES) | set(CONTROL) | set(FOLLOWING)
+    assert set(STYLE) == set(SERIES) | set(CONTROL) | {"lead_d_true"}
     colours = [colour for colour, _ in STYLE.values()]
     assert len(set(colours)) == len(colours)
     shown = _shown(log, "d_true")
@@ -86,7 +86,7 @@ def test_the_default_layout_shows_the_story():
     blueprint = _blueprint()
     names = [view.name for view in _views(blueprint.root_container)]
     assert names == ["camera (detection green, patch magenta)", "depth", "distances (m)", "gate w, brake, attack",
-                     "existence witnesses (1: says a sign stands)", "the car ahead (m from the camera)", "map (top view)",
+                     "existence witnesses (1: says a sign stands)", "the car's stages (m from the camera)", "map (top view)",
                      "car, camera and LiDAR"]
 
 
@@ -119,7 +119,8 @@ def test_the_car_ahead_and_its_witnesses_are_drawn(tmp_path):
     for chunk in _chunks(write_rrd(tmp_path / "lead.rrd", log, recorder)):
         rows[str(chunk.entity_path)] = rows.get(str(chunk.entity_path), 0) + chunk.num_rows
     assert rows["/world/actors/lead"] == len(recorder.frames) and "/map/actors/lead/path" in rows
-    assert {f"/following/{k}" for k in ("lead_d_true", "lead_d_meas", "lead_lidar", "lead_d_size", "lead_d_fused")} <= set(rows)
+    # The following stage's own series (``FollowingStage.series``), under its name, beside the truth.
+    assert {f"/stages/following/{k}" for k in ("lead_d_true", "lead_d_meas", "lead_lidar", "lead_d_size", "lead_d_fused")} <= set(rows)
     # The truth is the lead's rear from the camera: the LiDAR's track of it reads it within a few centimetres.
     true, lidar = lead_depth_true(log), log["lead_lidar"].to_numpy(float)
     both = np.isfinite(lidar)

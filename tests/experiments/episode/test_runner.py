@@ -206,17 +206,3 @@ def test_an_answer_within_the_control_period_is_in_time():
     for latency, late in ((0.0, 0), (0.015, 0), (0.0199, 0), (0.02, 1), (0.039, 1), (0.061, 3)):
         Answered.latency_s = latency
         assert late_steps(Answered(), 0.02) == late, latency
-
-
-def test_the_lead_s_columns_carry_the_existence_check_s_evidence():
-    from dataclasses import replace
-
-    from racf.controllers.lead_existence import LeadEvidence
-    from racf.experiments.episode.lead_stage import NO_LEAD
-    from racf.experiments.episode.runner import lead_columns
-
-    none = lead_columns(None)
-    assert math.isnan(none["lead_support"]) and none["lead_picture"] == 0.0
-    step = replace(NO_LEAD, sample=replace(NO_LEAD.sample, witnesses=LeadEvidence(0.0, 1.6, True, True)))
-    cols = lead_columns(step)
-    assert (cols["lead_support"], cols["lead_nearest"], cols["lead_picture"]) == (0.0, 1.6, 1.0)

@@ -8,7 +8,7 @@ import pytest
 from racf.experiments.offline.forecasters import (NF_MODELS, ChronosForecaster, NFForecaster, NFSettings, _build,
                                              context_windows, train_nf, training_frame)
 from racf.controllers import EKFEstimator, RawDepthEstimator
-from racf.experiments.episode.estimators import ODCAEstimator
+from racf.experiments.car.estimators import ODCAEstimator
 from racf.experiments.offline.methods import (estimator_estimate, forecast_at, lidar_estimate, raw_estimate,
                                               split_arrays)
 from racf.odca import LastValuePrior, ODCA

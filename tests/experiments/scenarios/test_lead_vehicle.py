@@ -21,11 +21,11 @@ def spec(**params) -> TrialSpec:
 def test_its_plan_puts_the_lead_its_gap_ahead_and_tells_the_car_to_follow():
     plan = plan_episode(spec(gap_m=0.8, profile="hard_brake", speed=0.6, decel=3.0, brake_t=3.0))
     lead = plan.extras["lead"]
-    assert plan.mission.follow and plan.reset_options["lead"] == lead.to_options()
+    assert plan.mission.stages == ("following",) and plan.reset_options["lead"] == lead.to_options()
     assert lead.start_s - plan.start_s_m == pytest.approx(0.8 + CAR_FOOTPRINT_M[0])
     assert lead.stop_s == pytest.approx(plan.mission.targets[-1].stop_s - plan.calibration.bumper_x_m)
     assert plan.extras["lead_rest_s"] == pytest.approx(3.0 + 0.6 / 3.0, abs=0.03)
-    assert not plan_episode(TrialSpec("clean", 1, 1.0, 0)).mission.follow
+    assert plan_episode(TrialSpec("clean", 1, 1.0, 0)).mission.stages == ()
 
 
 def test_it_refuses_what_it_cannot_run_saying_what_is_allowed():

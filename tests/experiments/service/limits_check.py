@@ -9,8 +9,8 @@ import threading
 import time
 
 import zmq
-from racf.experiments.episode.wire import PROTOCOL, pack, unpack
-from racf.experiments.episode.remote import RemoteEstimator
+from racf.experiments.link.wire import PROTOCOL, pack, unpack
+from racf.experiments.link.remote import RemoteEstimator
 from racf.controllers import PerceptionSample
 
 

@@ -7,8 +7,8 @@ import pytest
 
 from racf.controllers import PerceptionSample
 from racf.errors import UserError
-from racf.experiments.episode.curve import CarKeys, ServerKeys, is_loopback, make_keys
-from racf.experiments.episode.remote import RemoteEstimator
+from racf.experiments.link.curve import CarKeys, ServerKeys, is_loopback, make_keys
+from racf.experiments.link.remote import RemoteEstimator
 from tests.conftest import run_cli
 
 
@@ -142,7 +142,7 @@ def test_a_refusal_stays_said_when_the_socket_connects_again():
 
     import zmq
 
-    from racf.experiments.episode.curve import handshake_failure
+    from racf.experiments.link.curve import handshake_failure
 
     ctx = zmq.Context.instance()
 

@@ -12,7 +12,7 @@ import zmq
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from racf.experiments.episode.wire import MAX_MESSAGE_BYTES, PROTOCOL, pack, unpack
+from racf.experiments.link.wire import MAX_MESSAGE_BYTES, PROTOCOL, pack, unpack
 from racf.experiments.service.stress import fuzz, ping
 from tests.conftest import start_service
 

@@ -10,7 +10,7 @@ import pytest
 
 from racf.controllers import PerceptionSample
 from racf.experiments.episode.plan import car_calibration
-from racf.experiments.episode.wire import PROTOCOL, check_answer, encode_sample, pack, unpack
+from racf.experiments.link.wire import PROTOCOL, check_answer, encode_sample, pack, unpack
 from racf.experiments.service.handler import DefenceService
 from racf.experiments.service.sessions import Sessions
 from racf.plugins import load_plugin_file
@@ -125,7 +125,7 @@ def test_a_session_counts_its_estimates_and_diagnostics_keep_their_words():
 
 
 def test_the_largest_id_is_answered_and_one_beyond_refused():
-    from racf.experiments.episode.wire import MAX_REQUEST_ID
+    from racf.experiments.link.wire import MAX_REQUEST_ID
 
     service = DefenceService(("raw",))
     assert service.handle(b"a", "x", {"op": "ping", "id": MAX_REQUEST_ID}) == {"pong": True, "protocol": PROTOCOL,

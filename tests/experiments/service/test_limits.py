@@ -13,8 +13,8 @@ import pytest
 import zmq
 
 from racf.controllers import PerceptionSample
-from racf.experiments.episode.remote import RemoteEstimator
-from racf.experiments.episode.wire import PROTOCOL, pack, unpack
+from racf.experiments.link.remote import RemoteEstimator
+from racf.experiments.link.wire import PROTOCOL, pack, unpack
 
 LIMITS = ["--max-sessions", "8", "--sessions-per-client", "4", "--idle-s", "1"]
 

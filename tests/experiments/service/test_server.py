@@ -11,7 +11,7 @@ import pytest
 
 from racf.errors import UserError
 from racf.experiments.episode import TrialSpec, run_trial
-from racf.experiments.episode.remote import RemoteEstimator
+from racf.experiments.link.remote import RemoteEstimator
 from tests.conftest import run_cli
 
 
@@ -190,7 +190,7 @@ def test_two_cars_interleaved_each_get_the_answers_of_their_own_odca(service):
     """ODCA's state is each car's: two approaches stepped in turn through one service give what each
     gives alone (a model shared between sessions mixed the two: braked early through the service)."""
     from racf.controllers import PerceptionSample
-    from racf.experiments.episode.estimators import make_estimator
+    from racf.experiments.car.estimators import make_estimator
 
     endpoint = service("odca")
     cars = [RemoteEstimator(endpoint, "odca"), RemoteEstimator(endpoint, "odca")]

@@ -58,7 +58,7 @@ def test_against_odca_a_noise_free_ramp_never_opens_the_gate_and_is_held_within_
     """ODCA as shipped, an honest LiDAR, a straight approach: the ramp rides the gate's edge
     (the depth may sit tau off the LiDAR, and re-anchor the kinematic branch there)."""
     from racf.controllers import PerceptionSample
-    from racf.experiments.episode.estimators import make_estimator
+    from racf.experiments.car.estimators import make_estimator
 
     odca = make_estimator("odca")
     odca.reset()

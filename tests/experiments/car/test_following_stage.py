@@ -9,7 +9,8 @@ import pytest
 
 from racf.controllers.following import FollowingConfig
 from racf.controllers.perception import PerceptionSample
-from racf.experiments.episode.lead_stage import LOST_AFTER_S, LeadStage
+from racf.experiments.car.following.stage import LOST_AFTER_S, FollowingStage
+from racf.experiments.car.stage import CarView, StageContext
 
 PATH = SimpleNamespace(arclength=np.linspace(0.0, 5.0, 51), points=np.column_stack([np.linspace(0.0, 5.0, 51),
                                                                                     np.zeros(51)]))
@@ -47,12 +48,17 @@ class Asked:
         return sample.d_meas
 
 
+CONTEXT = StageContext(None, (0.095, 0.032), 0.172, (0.0, 0.0), 0.12, make_defence=Asked)
+
+
 def stage(sample, config=FollowingConfig(confirm_frames=0)):
-    return LeadStage(Seen(sample), Asked(), 0.12, (0.095, 0.032), config)
+    return FollowingStage(CONTEXT, Seen(sample), config=config)
 
 
 def step(s, speed=1.0, frame_new=True):
-    return s.step(OBS, np.zeros(3), PATH, 0.0, speed, 0.0, 0.0, 0.02, frame_new, False, None)
+    said = s.step(CarView(OBS, np.zeros(3), PATH, 0.0, speed, 0.0, 0.0, 0.02, frame_new, False, None))
+    assert said.speed_cap_mps == said.detail.decision.speed_cap_mps and set(said.values) == {c.name for c in s.columns}
+    return said.detail
 
 
 def test_the_defence_and_the_tracker_are_given_the_closing_speed():

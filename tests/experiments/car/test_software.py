@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from racf.controllers import CameraModel
-from racf.experiments.episode import car
-from racf.experiments.episode.car import CarCalibration, map_bearing, sign_depth_at_line
+from racf.experiments.car import software as car
+from racf.experiments.car.software import CarCalibration, map_bearing, sign_depth_at_line
 
 CAL = CarCalibration(CameraModel(width=320, fx=230.0, cx=160.0), camera_xy_m=(0.2, 0.0), bumper_x_m=0.25,
                      rear_axle_x_m=-0.128, lidar_xy_m=(-0.012, 0.0))

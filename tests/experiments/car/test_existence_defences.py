@@ -1,4 +1,4 @@
-"""Defences that answer whether a sign stands (racf.experiments.episode.existence_defences), and the car
+"""Defences that answer whether a sign stands (racf.experiments.car.existence_defences), and the car
 acting on that answer."""
 
 import math
@@ -7,7 +7,7 @@ import pytest
 
 from racf.controllers import PerceptionSample
 from racf.controllers.existence import ExistenceWitnesses
-from racf.experiments.episode.existence_defences import DetectorsOr, ExistenceVote, MapOnly
+from racf.experiments.car.existence_defences import DetectorsOr, ExistenceVote, MapOnly
 from racf.experiments.episode.plan import car_calibration
 from racf.experiments.episode.stack import existence_stage
 

@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 from racf.controllers import PerceptionSample
 from racf.controllers.detector import Detection
 from racf.controllers.existence import NO_WITNESSES
-from racf.experiments.episode.wire import decode_sample, encode_sample, pack, unpack
+from racf.experiments.link.wire import decode_sample, encode_sample, pack, unpack
 
 finite_or_nan = st.one_of(st.floats(-50, 50), st.just(math.nan))
 
@@ -42,7 +42,7 @@ def test_unpack_refuses_a_message_over_the_limit_itself():
     """Not only ZeroMQ's MAXMSGSIZE: a message read by any other path is measured too."""
     import pytest
 
-    from racf.experiments.episode.wire import MAX_MESSAGE_BYTES, WireError
+    from racf.experiments.link.wire import MAX_MESSAGE_BYTES, WireError
 
     with pytest.raises(WireError, match=f"message of {MAX_MESSAGE_BYTES + 1} bytes"):
         unpack(pack({"op": "x"}) + b"\0" * (MAX_MESSAGE_BYTES + 1 - len(pack({"op": "x"}))))
@@ -52,7 +52,7 @@ def test_unpack_refuses_a_message_over_the_limit_itself():
 def test_a_mask_whose_bits_do_not_fill_its_shape_is_refused():
     import pytest
 
-    from racf.experiments.episode.wire import WireError
+    from racf.experiments.link.wire import WireError
 
     sample = encode_sample(PerceptionSample(Detection(np.ones((4, 8), bool), (0, 0, 8, 4), 0.9, 32, (4.0, 2.0)),
                                             1.0, 0.9, 1.0, 0.0))
@@ -68,7 +68,7 @@ def test_a_msgpack_extension_that_carries_bytes_is_never_read():
     import msgpack
     import pytest
 
-    from racf.experiments.episode.wire import WireError
+    from racf.experiments.link.wire import WireError
 
     for ext in (msgpack.ExtType(1, b"x"), msgpack.ExtType(5, b"\0" * 8)):
         with pytest.raises(WireError, match="not a msgpack message"):
@@ -78,7 +78,7 @@ def test_a_msgpack_extension_that_carries_bytes_is_never_read():
 def test_a_mask_is_1_to_4096_pixels_a_side():
     import pytest
 
-    from racf.experiments.episode.wire import WireError
+    from racf.experiments.link.wire import WireError
 
     def sample(h, w):
         mask = np.ones((h, w), bool)
@@ -95,7 +95,7 @@ def test_a_mask_is_1_to_4096_pixels_a_side():
 def test_a_message_of_exactly_the_limit_is_read_and_an_array_has_at_most_4_axes():
     import pytest
 
-    from racf.experiments.episode.wire import MAX_MESSAGE_BYTES, WireError
+    from racf.experiments.link.wire import MAX_MESSAGE_BYTES, WireError
 
     head = len(pack({"op": "x", "d": b""}))
     for n in range(MAX_MESSAGE_BYTES - head - 8, MAX_MESSAGE_BYTES - head + 1):  # msgpack's size header grows
@@ -111,7 +111,7 @@ def test_a_message_of_exactly_the_limit_is_read_and_an_array_has_at_most_4_axes(
 def test_the_protocols_distance_is_0_to_50_m_and_a_message_at_most_1_mib():
     import pytest
 
-    from racf.experiments.episode.wire import InvalidAnswer, WireError, check_distance
+    from racf.experiments.link.wire import InvalidAnswer, WireError, check_distance
 
     for d in (0.0, 1.25, 50.0):
         assert check_distance(d) == d
@@ -127,7 +127,7 @@ def test_the_protocols_distance_is_0_to_50_m_and_a_message_at_most_1_mib():
 def test_a_mask_with_no_rows_is_refused():
     import pytest
 
-    from racf.experiments.episode.wire import WireError
+    from racf.experiments.link.wire import WireError
 
     sample = encode_sample(PerceptionSample(Detection(np.ones((1, 5), bool), (0, 0, 5, 1), 0.9, 5, (2.5, 0.5)),
                                             1.0, 0.9, 1.0, 0.0))

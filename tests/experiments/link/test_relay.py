@@ -10,8 +10,8 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from racf.experiments.episode import TrialSpec, run_trial
-from racf.experiments.episode.curve import ServerKeys, make_keys
-from racf.experiments.episode.link_relay import ZmtpFrames, frame_bytes
+from racf.experiments.link.curve import ServerKeys, make_keys
+from racf.experiments.link.relay import ZmtpFrames, frame_bytes
 
 ALWAYS = {"trigger": "always"}
 #: On from the first step to the end of the episode.

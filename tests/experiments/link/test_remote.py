@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import logging
 import math
+import socket
 from dataclasses import replace
 
 import numpy as np
@@ -16,9 +17,9 @@ from hypothesis import strategies as st
 from racf.controllers import PerceptionSample
 from racf.errors import UserError
 from racf.experiments.episode import TrialSpec, run_trial
-from racf.experiments.episode.remote import RemoteEstimator
-from racf.experiments.episode.wire import DISTANCE_RANGE_M, PROTOCOL, InvalidAnswer, check_answer
-from tests.experiments.episode.fake_service import LIES, FakeService
+from racf.experiments.link.remote import RemoteEstimator
+from racf.experiments.link.wire import DISTANCE_RANGE_M, PROTOCOL, InvalidAnswer, check_answer
+from tests.experiments.link.fake_service import LIES, FakeService
 
 
 def _sample(k: int) -> PerceptionSample:
@@ -148,9 +149,11 @@ def test_a_late_service_and_no_service_are_two_lines(caplog):
     with FakeService(ping_delay_s=5.0) as fake:  # listens, but answers nothing within connect_s
         with pytest.raises(UserError) as late:
             RemoteEstimator(fake.endpoint, "raw", connect_s=2.5)
-        port = fake.endpoint.rsplit(":", 1)[1]
-    with pytest.raises(UserError) as silent:
-        RemoteEstimator(f"tcp://127.0.0.1:{port}", "raw", connect_s=2.5)
+    # A port held bound but not listening: nothing answers there, and no other test can take it meanwhile.
+    with socket.socket() as held:
+        held.bind(("127.0.0.1", 0))
+        with pytest.raises(UserError) as silent:
+            RemoteEstimator(f"tcp://127.0.0.1:{held.getsockname()[1]}", "raw", connect_s=2.5)
     assert "answers late" in str(late.value) and "--estimator-timeout-ms" in str(late.value)
     assert "round trip seen: none" in str(late.value) and "nothing listens" not in str(late.value)
     assert "nothing listens there" in str(silent.value) and "answers late" not in str(silent.value)

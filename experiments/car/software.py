@@ -13,13 +13,13 @@ once before the episode (:mod:`racf.experiments.episode.plan`). Ground truth is 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
-from typing import Any
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from racf.controllers import (BrakeDecision, BrakingConfig, CameraModel, Perception, PerceptionSample, PoseFilter,
                          RouteFollower, StopSignBraker)
+from racf.experiments.car.stage import CarView
 from racf.sim.sensors import TIMESTAMP_FIELDS
 from racf.sim.sensors.localiser import LOCALISATIONS
 from racf.sim.world.drives import RouteTarget
@@ -65,15 +65,16 @@ class CarCalibration:
 class Mission:
     """What the car is told before it starts: the route's path, its targets in order (the map's
     stop signs the route meets, and a crate's place when the operator put one on the route), the
-    cruise speed, roughly where along the route it starts (None: anywhere) and whether it follows
-    traffic."""
+    cruise speed, roughly where along the route it starts (None: anywhere) and the stages it engages
+    beside the car's own loop (the names of ``racf.car_stages`` parts: ``following`` to follow the
+    car ahead, a plug-in's)."""
 
     path: Path
     targets: tuple[RouteTarget, ...]
     cruise_mps: float
     start_hint_m: float | None = None
-    #: Whether the car drives in traffic: its following stage is engaged (the operator's switch).
-    follow: bool = False
+    #: The car stages engaged (``racf.experiments.car.stage``), by name, in the order they run.
+    stages: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -90,7 +91,8 @@ class CarStep:
     scan_new: bool
     tracked_xy: tuple[float, float]
     frame_new: bool = True
-    lead: Any = None  # the following stage's step (``LeadStep``), None when it is not engaged
+    #: Each engaged stage's last word (``StageLimit``), by stage name.
+    stages: dict = field(default_factory=dict)
 
 
 #: Where a sign the map does not list has its stop line: where the sign stands (the rule the map's
@@ -158,16 +160,16 @@ class Car:
         localisation: the env's (``racf.sim.sensors.localiser.LOCALISATIONS``): ``qcar2``, the car runs its
             own filter on odometry, the gyro and the localiser's fixes; ``true``, the fix is the
             true pose at every step and the car takes it as it is (the ablation).
-        existence: the existence stage (``racf.experiments.episode.existence.ExistenceStage``) for a
+        existence: the existence stage (``racf.experiments.car.existence.ExistenceStage``) for a
             defence that answers ``stands()``: its witnesses reach the defence with each sample, and
             its verdict, not the detector's, drives the braker's track. None: the detector's.
-        lead: the following stage (``racf.experiments.episode.lead_stage.LeadStage``): its speed cap
-            joins the braker's. None: the car follows no one.
+        stages: the stages the mission engages (``racf.experiments.car.stage.CarStage``): each one's
+            speed cap joins the braker's, the lowest wins.
     """
 
     def __init__(self, calibration: CarCalibration, mission: Mission, perceptions: dict[str, Perception],
                  estimator, braking: BrakingConfig, dt: float, control_every: int = 1,
-                 localisation: str = "qcar2", existence=None, lead=None) -> None:
+                 localisation: str = "qcar2", existence=None, stages=()) -> None:
         if localisation not in LOCALISATIONS:
             raise ValueError(f"localisation must be one of {LOCALISATIONS}, got {localisation!r}")
         if not mission.targets:
@@ -180,8 +182,8 @@ class Car:
         self.dt = float(dt)
         self.every = int(control_every)
         self.existence = existence
-        self.lead = lead
-        self._lead_step = None
+        self.stages = tuple(stages)
+        self._said = {stage.name: stage.idle() for stage in self.stages}
         self.pose_filter = PoseFilter() if localisation == "qcar2" else None
         self._step = 0
         self._fix_time = -math.inf
@@ -269,8 +271,8 @@ class Car:
             self.follower = route_follower(self.mission.path, self.mission.cruise_mps, start_s)
             self._bumper_ahead_of_axle = self.calibration.bumper_x_m - self.follower.steering.config.front_axle_m
             self._begin(0)
-            if self.lead is not None:
-                self.lead.reset()
+            for stage in self.stages:
+                stage.reset()
         # The car's own localisation and the map say which target is next (the env's rule, on the car's pose).
         slot = current_slot(self.mission.targets, self.slot, self.follower.progress_m + self._bumper_ahead_of_axle)
         if slot != self.slot:
@@ -311,13 +313,15 @@ class Car:
                 in_fov = self._unmapped_in_view()
             self._decision = self.braker.step(self._stands(), self._d_fused, speed, dt, expected_in_view=in_fov)
             cap = self._decision.speed_cap_mps
-            if self.lead is not None:
-                self._lead_step = self.lead.step(obs, self._pose, self.mission.path, self.follower.progress_m, speed,
-                                                 yaw_rate, lateral, dt, frame_new, scan_new, ages)
-                cap = min(cap, self._lead_step.decision.speed_cap_mps)
+            if self.stages:
+                view = CarView(obs, self._pose, self.mission.path, self.follower.progress_m, speed, yaw_rate, lateral,
+                               dt, frame_new, scan_new, ages)
+                for stage in self.stages:
+                    self._said[stage.name] = stage.step(view)
+                cap = min(cap, *(said.speed_cap_mps for said in self._said.values()))
             self._action = np.array(self.follower.act(x, y, yaw, speed, dt, cap), np.float32)
         self._step += 1
         track = self.perception.lidar.state.position  # camera-relative; + the camera's body position
         cam_x, cam_y = self.calibration.camera_xy_m
         return CarStep(self._action.copy(), control, self.slot, self._sample, self._d_fused, self._decision,
-                       self._pose.copy(), scan_new, (track[0] + cam_x, track[1] + cam_y), frame_new, self._lead_step)
+                       self._pose.copy(), scan_new, (track[0] + cam_x, track[1] + cam_y), frame_new, dict(self._said))

@@ -9,7 +9,7 @@ car its own session on one server, and a loopback round trip is tens of microsec
 
 :class:`RemoteEstimator` is a ``DistanceEstimator`` like any other: the car calls it each
 step and the service's defence (one instance per car) answers. The car trusts nothing it is
-sent: an answer counts only if the protocol's check (:func:`~racf.experiments.episode.wire.check_answer`)
+sent: an answer counts only if the protocol's check (:func:`~racf.experiments.link.wire.check_answer`)
 passes it: it names this request's id, and its distance is a finite number in [0, 50] m or
 says "no target". Anything else is a step without an answer, and nothing a service says ends
 the episode:
@@ -40,8 +40,8 @@ import numpy as np
 
 from racf.controllers import PerceptionSample
 from racf.errors import UserError
-from racf.experiments.episode.curve import CarKeys, Handshake, handshake_failure, refusal
-from racf.experiments.episode.wire import (DEFAULT_RETRY_S, DEFAULT_TIMEOUT_MS, MAX_MESSAGE_BYTES, PROTOCOL,
+from racf.experiments.link.curve import CarKeys, Handshake, handshake_failure, refusal
+from racf.experiments.link.wire import (DEFAULT_RETRY_S, DEFAULT_TIMEOUT_MS, MAX_MESSAGE_BYTES, PROTOCOL,
                                            InvalidAnswer, WireError, check_answer, decode_sample, encode_sample,
                                            pack, unpack)
 
@@ -84,7 +84,7 @@ class RemoteEstimator:
         retry_s: after a failure, how much of the car's own time passes before it asks again.
         connect_s: how long the car waits for the service to open its session (before it drives:
             the service may build and warm the defence first).
-        keys: the car's CURVE keys and the service key it pins (``racf.experiments.episode.curve``);
+        keys: the car's CURVE keys and the service key it pins (``racf.experiments.link.curve``);
             None: a plain link.
     """
 

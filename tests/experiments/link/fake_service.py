@@ -9,7 +9,7 @@ import threading
 
 import zmq
 
-from racf.experiments.episode.wire import PROTOCOL, decode_sample, pack, unpack
+from racf.experiments.link.wire import PROTOCOL, decode_sample, pack, unpack
 
 __all__ = ["FakeService", "LIES"]
 
@@ -110,7 +110,7 @@ class FakeService:
 
 def main() -> None:
     """Prints, for each lie from the 31st estimate on, what became of the episode (sign 1, 1 m/s, seed 3)
-    beside the car's own depth fallback: `python -m tests.experiments.episode.fake_service`."""
+    beside the car's own depth fallback: `python -m tests.experiments.link.fake_service`."""
     from dataclasses import replace
 
     from racf.experiments.episode import TrialSpec, run_trial

@@ -19,7 +19,7 @@ from racf.controllers import DepthDistance, Perception, PerceptionSample
 from racf.controllers.existence import (NO_WITNESSES, ExistenceWitnesses, Hypothesis, depth_hole, depth_witness,
                                         detection_hypothesis, lidar_witness)
 from racf.controllers.static_world import CameraPose, StaticWorldCheck
-from racf.experiments.episode.car import CarCalibration, camera_offset, map_bearing, sign_depth_at_line
+from racf.experiments.car.software import CarCalibration, camera_offset, map_bearing, sign_depth_at_line
 from racf.sim.world.drives import RouteTarget
 
 __all__ = ["ExistenceStage", "camera_pose", "MAP_TOLERANCE_M", "MAP_LATERAL_M"]

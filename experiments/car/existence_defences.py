@@ -38,7 +38,7 @@ class _Existence:
     second_detector: str | None = "learned"
 
     def __init__(self, inner: str = "odca") -> None:
-        from racf.experiments.episode.estimators import make_estimator
+        from racf.experiments.car.estimators import make_estimator
 
         self.inner_name = inner
         self.inner = make_estimator(inner, {})

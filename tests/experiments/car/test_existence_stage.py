@@ -1,5 +1,5 @@
 """The existence stage's static-world check: the pixels of the map's plate and where the camera stood,
-from the car's own pose (racf.experiments.episode.existence)."""
+from the car's own pose (racf.experiments.car.existence)."""
 
 import copy
 import math
@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from racf.controllers.existence import Hypothesis
-from racf.experiments.episode.existence import ExistenceStage, camera_pose
+from racf.experiments.car.existence import ExistenceStage, camera_pose
 from racf.experiments.episode.plan import car_calibration
 
 CALIB = car_calibration(320, 240)

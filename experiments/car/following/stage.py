@@ -1,0 +1,171 @@
+"""The car's following stage (``following``): the car ahead perceived, its distance defended, and a speed cap.
+
+A :class:`~racf.experiments.car.stage.CarStage` that a mission engages by name (the lead-vehicle
+scenario does: the operator's adaptive cruise switch). Each control step it places the lane ahead
+in the camera from the map and the car's own pose, perceives the car ahead on it
+(:class:`~racf.controllers.lead_perception.LeadPerception`), asks its own defence instance for the
+distance with the *relative* motion (the car's speed less the lead's, as
+:class:`~racf.controllers.following.LeadSpeed` estimates it while the witnesses agree): every
+estimator's kinematics, ODCA's branch and the EKF's prediction, then follow a target that moves
+at a constant speed; and turns the defended gap into a speed cap (:class:`LeadFollower`). It
+declares its step-log columns (``lead_*``) and the distance series a viewer draws. Like the rest of
+the car, it reads the view and the map, never ``info``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import lru_cache
+
+from racf.controllers import LidarTargetConfig, LidarTargetTracker
+from racf.controllers.following import FollowDecision, FollowingConfig, LeadFollower, LeadSpeed
+from racf.controllers.lead_existence import NO_EVIDENCE, LeadEvidence, LeadExistenceCheck
+from racf.controllers.lead_perception import LeadPerception, lane_in_camera
+from racf.controllers.perception import PerceptionSample
+from racf.experiments.car.stage import CarStage, CarView, StageColumn, StageContext, StageLimit
+
+__all__ = ["FollowingStage", "LeadStep", "LANE_AHEAD_M", "NO_LEAD", "COLUMNS"]
+
+#: How far along the lane ahead the car looks for a car, m.
+LANE_AHEAD_M = 4.0
+#: Unseen this long (no detection, no LiDAR track), the car ahead is lost: it drove out of sight (a
+#: curve takes it out of the camera's 70 degrees at 1 m), and a carried distance would hold the car
+#: back for nothing. The defence and the speed estimate start again, and the policy lets the car
+#: drive on, as a production adaptive cruise does, s.
+LOST_AFTER_S = 0.5
+
+
+@dataclass(frozen=True)
+class LeadStep:
+    """What the following stage made of one control step (for the log)."""
+
+    sample: PerceptionSample
+    d_fused: float
+    lead_mps: float
+    decision: FollowDecision
+
+
+NO_LEAD = LeadStep(PerceptionSample(None, math.nan, 0.0, math.nan, math.nan), math.nan, math.nan,
+                   FollowDecision(math.inf, math.nan, math.nan, False))
+
+
+#: The stage's step-log columns (the evidence's from ``LeadEvidence.columns()``).
+COLUMNS = (
+    StageColumn("lead_detected", "bool", "following: the vehicle detector found a car on the lane ahead"),
+    StageColumn("lead_d_meas", "m", "following: the depth distance of the car ahead (NaN: none)"),
+    StageColumn("lead_lidar", "m", "following: the LiDAR track's distance to the car ahead's rear (NaN: none)"),
+    StageColumn("lead_d_size", "m", "following: the size witness, from the box's height and a QCar 2's (NaN: none)"),
+    StageColumn("lead_d_fused", "m", "following: the defence's distance to the car ahead (NaN: none)"),
+    StageColumn("lead_v_est", "m/s", "following: the car's estimate of the lead's speed (NaN: none)"),
+    StageColumn("lead_gap_est", "m", "following: the gap the policy acts on, bumper to the lead's rear (NaN: none)"),
+    StageColumn("lead_cap", "m/s", "following: the policy's speed cap (inf: none)"),
+    StageColumn("lead_emergency", "bool", "following: the emergency brake on time-to-collision is on"),
+    StageColumn("lead_support", "share", "following: the share of the lead's box that the depth finds upright at "
+                                         "the box's size distance (NaN: no verdict)"),
+    StageColumn("lead_nearest", "m", "following: the nearest upright thing the depth finds in the lead's box "
+                                     "(NaN: none)"),
+    StageColumn("lead_picture", "bool", "following: the lead's box is taken for a picture of a car (its size no "
+                                        "witness)"),
+)
+
+
+def _columns(step: LeadStep) -> dict:
+    sample, decision = step.sample, step.decision
+    evidence = sample.witnesses if isinstance(sample.witnesses, LeadEvidence) else NO_EVIDENCE
+    return {"lead_detected": sample.detected, "lead_d_meas": sample.d_meas, "lead_lidar": sample.lidar_m,
+            "lead_d_size": sample.d_size, "lead_d_fused": step.d_fused, "lead_v_est": step.lead_mps,
+            "lead_gap_est": decision.gap_m, "lead_cap": decision.speed_cap_mps, "lead_emergency": decision.emergency,
+            **evidence.columns()}
+
+
+@lru_cache(maxsize=1)
+def _vehicle_detector():
+    """The process's vehicle detector (its network is loaded once; it keeps no state between frames)."""
+    from racf.controllers.vehicle_detector import LearnedVehicleDetector
+
+    return LearnedVehicleDetector()
+
+
+def lead_perception(context: StageContext) -> LeadPerception:
+    """The vehicle detector on the lane, the car's LiDAR tracker and the existence check, on the car's build."""
+    tracker = LidarTargetTracker(LidarTargetConfig(lidar_position_m=context.lidar_xy_m,
+                                                   camera_position_m=context.camera_xy_m))
+    return LeadPerception(context.camera, _vehicle_detector(), tracker,
+                          existence=LeadExistenceCheck(context.camera, context.camera_height_m))
+
+
+class FollowingStage(CarStage):
+    """Perception, defence and policy for the car ahead.
+
+    Args:
+        context: the car's build and the episode's defence.
+        perception: the lead's perception pipeline (default: :func:`lead_perception`).
+        estimator: the defence for its distance (default: a new instance of the episode's, so its
+            state is the lead's).
+        config: the following controller's settings.
+    """
+
+    name = "following"
+    columns = COLUMNS
+    series = {
+        "lead_d_meas": ((255, 152, 150), "its depth (depth camera)"),
+        "lead_lidar": ((158, 218, 229), "its LiDAR track"),
+        "lead_d_size": ((255, 187, 120), "its size witness"),
+        "lead_d_fused": ((174, 199, 232), "the defence's distance (what the car follows)"),
+    }
+
+    def __init__(self, context: StageContext, perception=None, estimator=None,
+                 config: FollowingConfig | None = None) -> None:
+        super().__init__(context)
+        self.perception = perception if perception is not None else lead_perception(context)
+        self.estimator = estimator if estimator is not None else context.make_defence()
+        self.bumper_m = float(context.bumper_ahead_of_camera_m)
+        self.camera_xy_m = context.camera_xy_m
+        self.config = config or FollowingConfig()
+        self.follower = LeadFollower(self.config)
+        self.speed = LeadSpeed(self.config)
+        self.last = NO_LEAD
+        self._unseen_s = 0.0
+        self._lost = False
+
+    def idle(self) -> StageLimit:
+        return StageLimit(math.inf, _columns(NO_LEAD), NO_LEAD)
+
+    def reset(self) -> None:
+        self.perception.reset()
+        self.estimator.reset()
+        self.speed.reset()
+        self.last = NO_LEAD
+        self._unseen_s = 0.0
+        self._lost = False
+
+    def step(self, view: CarView) -> StageLimit:
+        """One control step on the view; its cap is the following policy's."""
+        lane = None
+        if view.frame_new:
+            path = view.path
+            ahead = (path.arclength >= view.progress_m) & (path.arclength <= view.progress_m + LANE_AHEAD_M)
+            lane = lane_in_camera(path.points[ahead], view.pose, self.camera_xy_m)
+        speed, dt = view.speed_mps, view.dt
+        closing = speed - self.speed.lead_mps
+        # The tracker carries the lead's point by the relative motion, as the defence does.
+        sample = self.perception.process(view.obs["rgb"], view.obs["depth"][..., 0], view.scan, lane=lane,
+                                         speed=closing, yaw_rate=view.yaw_rate_radps, lateral_speed=view.lateral_mps,
+                                         dt=dt, new_frame=view.frame_new, beam_age_s=view.beam_age_s)
+        seen = sample.detected or math.isfinite(sample.lidar_m)
+        self._unseen_s = 0.0 if seen else self._unseen_s + dt
+        if self._unseen_s > LOST_AFTER_S:
+            if not self._lost:  # lost just now: what the car knew of this lead is of no use for the next
+                self.estimator.reset()
+                self.speed.reset()
+                self.perception.lose()
+                self._lost = True
+            d = math.nan
+        else:
+            self._lost = False
+            d = float(self.estimator.estimate(sample, closing, dt, yaw_rate_radps=view.yaw_rate_radps))
+        lead = self.speed.update(sample.d_meas, sample.lidar_m, sample.d_size, speed, dt, view.frame_new)
+        decision = self.follower.step(d - self.bumper_m, speed - lead)
+        self.last = LeadStep(sample, d, lead, decision)
+        return StageLimit(decision.speed_cap_mps, _columns(self.last), self.last)
