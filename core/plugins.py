@@ -362,7 +362,7 @@ def load_plugin_file(path: str | os.PathLike) -> list[Plugin]:
             else "is not a Python file (.py)" if file.suffix != ".py" else None)
     if what is not None:
         raise PluginError(f"--plugin {path}: {what}; give the path of a .py file that defines an estimator, an "
-                          f"attack, a detector, a scenario or a metric")
+                          f"attack, a detector, a scenario, a metric or a car stage")
     module_name = f"racf_plugin_{file.stem}_{hashlib.sha256(str(file).encode()).hexdigest()[:8]}"
     if module_name not in sys.modules:
         spec = importlib.util.spec_from_file_location(module_name, file)

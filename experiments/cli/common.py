@@ -120,8 +120,10 @@ def output_dir(value: str) -> Path:
 
 
 def fail(command: str, message: str) -> NoReturn:
-    """Stops the command: ``racf COMMAND: MESSAGE`` on stderr, and exit code 2."""
-    raise UsageError(f"racf {command}: {message}")
+    """Stops the command: ``racf COMMAND: MESSAGE`` on stderr, and exit code 2. A message that already
+    holds the prefix (a UsageError caught and raised again as another's message) keeps it once."""
+    prefix = f"racf {command}: "
+    raise UsageError(prefix + str(message).removeprefix(prefix))
 
 
 def flag_error(command: str, message: str) -> NoReturn:

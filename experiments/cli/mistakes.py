@@ -22,6 +22,8 @@ MISTAKES: list[tuple[str, str]] = [
     ("trial --attack laser", "unknown attack"),
     ("trial --detector yolo", "invalid choice"),
     ("trial --setting attack --target obstacle --sign 0", "cannot act on target 'obstacle'"),
+    ("trial --setting clean+lead_patch+odca", "acts on a vehicle that the scenario's world declares; scenario 'sign' "
+                                              "declares none"),
     ("trials --sign 3", "unrecognized arguments: --sign 3"),
     # scenarios and metrics
     ("trial --target parking_lot", "invalid choice"),
@@ -59,6 +61,11 @@ MISTAKES: list[tuple[str, str]] = [
     ("trial --plugin {plugin_broken.py}", "failed to import: RuntimeError: boom"),
     ("trial --plugin {incomplete.py}", "class Incomplete (an estimator?) lacks would_pass()"),
     ("list --plugin", "--plugin needs a file"),
+    # a scenario's or a car stage's declarations, checked before any simulator is built
+    ("trial --plugin {worlds.py} --target clashing_truth", "declares the column 'd_true', which racf's step log"),
+    ("trial --plugin {worlds.py} --target far_start", "options['run_up_m'] for sign 2 must be in [0.3,"),
+    ("trial --plugin {worlds.py} --target clashing_stage", "car stage 'loud' declares the column 'brake'"),
+    ("trial --plugin {worlds.py} --target unknown_stage", "unknown car stage 'cruise_control'"),
     # specs
     ("sweep {tmp}/nowhere.toml", "no sweep spec"),
     ("sweep {bad.toml}", "not valid TOML"),
@@ -161,6 +168,63 @@ class SlowStart(AttackWrapper):
         super().__init__(env, AttackSchedule(**{**schedule, "trigger": "at_time", "start_s": 200.0}))
 '''
 
+#: Scenarios a user may get wrong: a truth column named like racf's, a run-up the sign does not allow,
+#: a car stage whose column is racf's, a stage nobody registered.
+_WORLDS = '''
+import dataclasses
+
+from racf.experiments.car.stage import CarStage, StageColumn
+from racf.experiments.scenarios import Scenario
+from racf.sim.world.manager import TruthColumn, WorldManager
+
+
+class Clashing(WorldManager):
+    name = "clashing"
+
+    def columns(self):
+        return (TruthColumn("d_true", "m", "mine"),)
+
+
+class ClashingTruth(Scenario):
+    name = "clashing_truth"
+
+    def world(self, spec, values):
+        return (Clashing(),)
+
+
+class FarStart(Scenario):
+    name = "far_start"
+
+    def run_up(self, spec):
+        return 9.0
+
+
+class Loud(CarStage):
+    name = "loud"
+    columns = (StageColumn("brake", "bool", "mine"),)
+
+    def step(self, view):
+        raise AssertionError("never built")
+
+
+class _Staged(Scenario):
+    stage = ""
+
+    def plan(self, spec, values, draft):
+        mission = dataclasses.replace(draft.mission, stages=(self.stage,))
+        return self.replace(draft, mission=mission)
+
+
+class ClashingStage(_Staged):
+    name = "clashing_stage"
+    stage = "loud"
+
+
+class UnknownStage(_Staged):
+    name = "unknown_stage"
+    stage = "cruise_control"
+'''
+
 _INCOMPLETE = '''
 class Incomplete:
     name = "incomplete"
@@ -190,7 +254,7 @@ def make_files(root: Path) -> dict[str, str]:
                               'trigger = ["at_time"]\nstart_s = [500.0]\n',
              "space_bound.toml": "[attack.stealth_ramp]\nrate_mps = {low = 0.1, high = 30.0}\n",
              "bad.rrd": "not a recording", "plugin_broken.py": "raise RuntimeError('boom')\n",
-             "defences.py": _DEFENCES, "incomplete.py": _INCOMPLETE}
+             "defences.py": _DEFENCES, "incomplete.py": _INCOMPLETE, "worlds.py": _WORLDS}
     for name, text in texts.items():
         (root / name).write_text(text)
     from racf.experiments.link.curve import make_keys

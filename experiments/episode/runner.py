@@ -115,9 +115,9 @@ def run_trial(spec: TrialSpec, estimator: DistanceEstimator | None = None, make_
             ``d_clean`` is NaN under attack and everything else, the result row included, is
             the same. Sweeps that keep no per-step log skip it.
     """
+    plan = plan_episode(spec)  # pure: a plan the spec cannot have fails before the simulator is built
     env = make_env(spec) if make_env is not None else default_env(spec)
     try:
-        plan = plan_episode(spec)
         log = _run(env, spec, plan, estimator, on_step, clean_pass)
         return _result(spec, plan, env, log), log
     finally:

@@ -196,6 +196,7 @@ class TrialSpec:
             if kind not in ATTACKS[name].targets:
                 raise ValueError(f"attack {name!r} cannot act on target {self.target!r}: it acts on "
                                  f"{list(ATTACKS[name].targets)}")
+        _check_declared_targets(self, attacks)
         if self.sensor_profile not in SENSOR_PROFILES:
             raise ValueError(f"sensor_profile must be one of {tuple(SENSOR_PROFILES)}, got {self.sensor_profile!r}")
         if self.sign_geometry not in SIGN_GEOMETRIES:
@@ -355,3 +356,17 @@ def plugin_sources(spec: TrialSpec) -> dict[str, str]:
         if isinstance(value, str) and value and os.path.exists(value):
             out[f"option:{key}"] = source_version(os.path.abspath(value))
     return out
+
+
+def _check_declared_targets(spec: TrialSpec, attacks) -> None:
+    """An attack that aims at a kind of declared target (``AttackWrapper.acts_on``) needs the
+    scenario's world to declare one (``WorldManager.targets()``): checked here, before any simulator."""
+    wanted = {name: ATTACKS[name].acts_on for name in attacks if getattr(ATTACKS[name], "acts_on", None)}
+    if not wanted:
+        return
+    declared = {t.kind for manager in spec.scenario.world(spec, spec.scenario_params) for t in manager.targets()}
+    for name, kind in wanted.items():
+        if kind not in declared:
+            raise ValueError(f"attack {name!r} acts on a {kind} that the scenario's world declares; scenario "
+                             f"{spec.target!r} declares {sorted(declared) or 'none'} (a world manager declares its "
+                             "bodies in targets(); racf's lead_vehicle declares a vehicle)")

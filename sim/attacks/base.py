@@ -34,6 +34,10 @@ class AttackWrapper(gym.Wrapper, gym.utils.RecordConstructorArgs):
     #: The targets it can act on (``TrialSpec.target``): a stop sign approach, an obstacle crate's,
     #: a drive (which meets stop signs). An episode that asks for another is refused before it runs.
     targets: tuple[str, ...] = ("sign", "obstacle", "drive")
+    #: The kind of declared target it aims at (``racf.sim.world.manager.TARGET_KINDS``: a vehicle, a
+    #: person), found through the world's ``WorldManager.targets()``; None: the map's sign or crate.
+    #: An episode whose world declares no target of this kind is refused before it runs.
+    acts_on: str | None = None
     #: Why it cannot act on a recording (empty: it reads only the observation and ``info``): an
     #: attack that places things in the scene or aims from the simulator's geometry says so here.
     needs_simulator: str = ""

@@ -1,5 +1,6 @@
-"""Attacks on the car ahead (the ``lead_vehicle`` scenario), each on the sensors as the literature
-poses it, from the attacker's ground truth of where the lead stands:
+"""Attacks on a vehicle ahead (``acts_on = "vehicle"``: the first vehicle a scenario's world declares,
+``WorldManager.targets()``; the ``lead_vehicle`` scenario's lead, or a user's own car), each on the
+sensors as the literature poses it, from the attacker's ground truth of where that vehicle stands:
 
 - ``lead_patch``: the paper's patch injection on the depth inside the lead's box, reading it
   ``bias_m`` far (the depth-estimation patch on a car's rear: Cheng et al., ECCV 2022);
@@ -18,8 +19,8 @@ poses it, from the attacker's ground truth of where the lead stands:
   while the depth and the LiDAR see what is really there (a picture has no depth).
 
 They act from ``start_s`` (``trigger="at_time"``: before the lead brakes, by default) for the
-episode's ``t_atk``. The lead's pixels are its box (a QCar 2's, 0.425 x 0.192 x 0.2 m) projected
-into the frame, where the depth is no farther than the box's far side.
+episode's ``t_atk``. The lead's pixels are its declared box (``WorldTarget.size_m``; a QCar 2's,
+0.425 x 0.192 x 0.2 m) projected into the frame, where the depth is no farther than the box's far side.
 """
 
 from __future__ import annotations
@@ -34,25 +35,24 @@ import numpy as np
 from racf.sim.attacks.base import AttackWrapper
 from racf.sim.attacks.image_scale import scale_region
 from racf.sim.attacks.schedule import AttackSchedule, as_range
+from racf.sim.world.manager import WorldTarget, world_targets
 
 __all__ = ["LeadPatch", "LeadRamp", "LeadFrustum", "LeadHide", "LeadPhantom", "lead_pixels", "lead_beams",
-           "LEAD_BOX_M"]
-
-#: The lead's box as the attacker projects it: length, width, height, m.
-LEAD_BOX_M = (0.425, 0.192, 0.20)
+           "attacked_vehicle"]
 _MJ_TO_OPTICAL = np.diag([1.0, -1.0, -1.0])
 #: Where a lead attack starts by default, s into the episode (the scenario's lead brakes at 3 s).
 DEFAULT_START_S = 2.0
 
 
-def _lead(info: dict) -> tuple[float, float, float] | None:
-    x, y, yaw = (float(info.get(f"lead_{k}", math.nan)) for k in ("x", "y", "yaw"))
-    return None if not math.isfinite(x) else (x, y, yaw)
+def attacked_vehicle(env: gym.Env) -> WorldTarget | None:
+    """The vehicle these attacks aim at: the first one the env's world declares (None: none)."""
+    found = world_targets(getattr(env.unwrapped, "world", ()), "vehicle")
+    return found[0] if found else None
 
 
-def _corners(lead: tuple[float, float, float]) -> np.ndarray:
+def _corners(lead: tuple[float, float, float], size_m: tuple[float, float, float]) -> np.ndarray:
     x, y, yaw = lead
-    length, width, height = LEAD_BOX_M
+    length, width, height = size_m
     c, s = math.cos(yaw), math.sin(yaw)
     out = []
     for a in (-0.5, 0.5):
@@ -67,14 +67,14 @@ def lead_pixels(env: gym.Env, info: dict, depth: np.ndarray) -> np.ndarray:
     projected from where the camera and the lead stood when the frame was taken."""
     u = env.unwrapped
     mask = np.zeros(depth.shape, bool)
-    manager = next((m for m in u.world if getattr(m, "name", None) == "lead"), None)
-    if manager is None or _lead(info) is None:
+    target = attacked_vehicle(env)
+    if target is None or target.pose(info) is None:
         return mask
     cam_pos, cam_mat = u.truth.frame_camera
-    xpos, xmat = u.truth.frame_body(manager.body)
+    xpos, xmat = u.truth.frame_body(u.model.body(target.body).id)
     lead = (float(xpos[0]), float(xpos[1]), math.atan2(float(xmat[3]), float(xmat[0])))
     k = u.truth.intrinsics
-    pts = (_MJ_TO_OPTICAL @ np.asarray(cam_mat).reshape(3, 3).T @ (_corners(lead) - cam_pos).T).T
+    pts = (_MJ_TO_OPTICAL @ np.asarray(cam_mat).reshape(3, 3).T @ (_corners(lead, target.size_m) - cam_pos).T).T
     if np.all(pts[:, 2] <= 0.05):
         return mask
     pts = pts[pts[:, 2] > 0.05]
@@ -90,12 +90,13 @@ def lead_beams(env: gym.Env, info: dict, scan: np.ndarray) -> np.ndarray:
     """(N,) bool: the LiDAR beams whose return is the lead's."""
     u = env.unwrapped
     beams = np.zeros(len(scan), bool)
-    lead = _lead(info)
+    target = attacked_vehicle(env)
+    lead = None if target is None else target.pose(info)
     if lead is None:
         return beams
     lidar = u.data.site("lidar")
     yaw = float(np.arctan2(lidar.xmat[3], lidar.xmat[0]))
-    corners = _corners(lead)[::2, :2] - lidar.xpos[:2]
+    corners = _corners(lead, target.size_m)[::2, :2] - lidar.xpos[:2]
     bearings = np.arctan2(corners[:, 1], corners[:, 0]) - yaw
     centre = math.atan2(lead[1] - lidar.xpos[1], lead[0] - lidar.xpos[0]) - yaw
     rel = (bearings - centre + np.pi) % (2 * np.pi) - np.pi
@@ -112,6 +113,7 @@ class _LeadAttack(AttackWrapper):
     high) range and draws it once an episode into ``self.drawn_value``."""
 
     targets = ("sign",)
+    acts_on = "vehicle"
     drawn: tuple[str, float, float] | None = None
 
     def __init__(self, env: gym.Env, drawn_value: Any = None, **schedule: Any) -> None:
@@ -125,12 +127,6 @@ class _LeadAttack(AttackWrapper):
     def _on_reset(self) -> None:
         if self.drawn is not None:
             self.drawn_value = float(self.rng.uniform(*self.drawn_range))
-
-    def reset(self, *, seed=None, options=None):
-        if not any(getattr(m, "name", None) == "lead" for m in getattr(self.env.unwrapped, "world", ())):
-            raise ValueError(f"{self.name} attacks the car ahead: run it in the lead_vehicle scenario "
-                             "(--target lead_vehicle)")
-        return super().reset(seed=seed, options=options)
 
     def _shift_depth(self, obs: dict, info: dict, bias: float) -> dict:
         depth = obs["depth"].copy()

@@ -16,7 +16,7 @@ import mujoco
 import numpy as np
 
 from racf.sim.world.lead import LeadCar
-from racf.sim.world.manager import TruthColumn, WorldManager
+from racf.sim.world.manager import QCAR2_BOX_M, TruthColumn, WorldManager, WorldTarget
 from racf.sim.world.traffic import TRAFFIC_COLOURS
 from racf.sim.world.traffic_manager import PARKED_Z_M, traffic_body, traffic_paint_geoms, traffic_xml
 
@@ -91,6 +91,10 @@ class LeadManager(WorldManager):
     def columns(self) -> tuple[TruthColumn, ...]:
         return tuple(TruthColumn(f"lead_{field}", unit, f"ground truth: the lead car's {meaning} (NaN: no lead)")
                      for field, unit, meaning in LEAD_COLUMNS)
+
+    def targets(self) -> tuple[WorldTarget, ...]:
+        return (WorldTarget(LEAD_PREFIX, "vehicle", traffic_body(0, LEAD_PREFIX),
+                            (f"{LEAD_PREFIX}_x", f"{LEAD_PREFIX}_y", f"{LEAD_PREFIX}_yaw"), QCAR2_BOX_M),)
 
     def info(self, substep: int) -> dict[str, Any]:
         return {f"lead_{field}": float(v) for (field, _, _), v in zip(LEAD_COLUMNS, self.state(substep))}

@@ -23,16 +23,29 @@ physics_dt_s, max_episode_s)`` ego car is placed (``value``: the reset option ``
 ``owner_of(root_body)``        when the car touches something: the name of what it hit, if this
                                manager's
 =============================  ================================================================
+
+A manager also declares the bodies it adds that the car may perceive (:meth:`WorldManager.targets`:
+a :class:`WorldTarget` each, with its kind, body, truth columns and size). The attacks on a kind
+of target (``AttackWrapper.acts_on``), the referee's truth for it and the viewers find it through
+that declaration, never through a manager's or an option's name; the preflight checks, before any
+simulator is built, that a scenario whose episodes an attack acts on declares a target it can act on.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any
 
 import mujoco
 
-__all__ = ["WorldManager", "TruthColumn"]
+__all__ = ["WorldManager", "TruthColumn", "WorldTarget", "TARGET_KINDS", "QCAR2_BOX_M", "world_targets"]
+
+#: The kinds of thing a declared target is: what an attack on one aims at.
+TARGET_KINDS = ("vehicle", "sign", "obstacle", "person")
+#: A QCar 2's body as its collision box: length, width, height, m (the other cars' bodies are the
+#: ego car's MJCF; every footprint, box and gap racf draws or measures reads it from here).
+QCAR2_BOX_M = (0.425, 0.192, 0.20)
 
 
 @dataclass(frozen=True)
@@ -49,6 +62,43 @@ class TruthColumn:
     name: str
     unit: str
     meaning: str
+
+
+@dataclass(frozen=True)
+class WorldTarget:
+    """A body a world manager adds that the car may perceive (and an attacker may aim at).
+
+    Attributes:
+        name: what it is called (in messages, and as the prefix of its truth columns).
+        kind: one of :data:`TARGET_KINDS`.
+        body: its MuJoCo body's name (the model's, once the env is built).
+        pose_columns: the manager's truth columns that hold its x, y (m) and yaw (rad) in the map frame
+            (NaN: not in the world this episode).
+        size_m: its box, length, width and height, m, centred over its pose (a QCar 2's:
+            :data:`QCAR2_BOX_M`).
+    """
+
+    name: str
+    kind: str
+    body: str
+    pose_columns: tuple[str, str, str]
+    size_m: tuple[float, float, float]
+
+    def __post_init__(self) -> None:
+        if self.kind not in TARGET_KINDS:
+            raise ValueError(f"target {self.name!r}: kind must be one of {TARGET_KINDS}, got {self.kind!r}")
+        if len(self.pose_columns) != 3 or len(self.size_m) != 3:
+            raise ValueError(f"target {self.name!r}: pose_columns names x, y, yaw and size_m is length, width, height")
+
+    def pose(self, truth: dict) -> tuple[float, float, float] | None:
+        """Its pose from a step's ground truth (``info``, a log row), None while it is not in the world."""
+        x, y, yaw = (float(truth.get(column, math.nan)) for column in self.pose_columns)
+        return None if not math.isfinite(x) else (x, y, yaw)
+
+
+def world_targets(managers, kind: str | None = None) -> tuple[WorldTarget, ...]:
+    """The targets ``managers`` declare, in their order (of ``kind`` only, when given)."""
+    return tuple(t for m in managers for t in m.targets() if kind is None or t.kind == kind)
 
 
 class WorldManager:
@@ -100,6 +150,11 @@ class WorldManager:
     def columns(self) -> tuple[TruthColumn, ...]:
         """The ground-truth columns this manager logs: :meth:`info` gives each a value at every step,
         and the referee writes them into the step log (the car never sees them)."""
+        return ()
+
+    def targets(self) -> tuple[WorldTarget, ...]:
+        """The bodies this manager adds that the car may perceive (known before the env is built: the
+        preflight reads them). Each one's pose columns are among :meth:`columns`."""
         return ()
 
     def info(self, substep: int) -> dict[str, Any]:

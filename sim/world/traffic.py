@@ -28,6 +28,7 @@ from functools import lru_cache
 import numpy as np
 
 from racf.sim.world.drives import targets_on_path
+from racf.sim.world.manager import QCAR2_BOX_M
 from racf.sim.world.road_graph import Path, qcar2_road_graph
 from racf.sim.world.stop_signs import StopSign, stop_signs
 
@@ -36,7 +37,7 @@ __all__ = ["TrafficCar", "ConflictPoint", "conflict_of", "cross_traffic", "TRAFF
 
 #: A QCar 2's footprint, length x width, m (its MJCF: bumper to bumper, wheel to wheel), centred
 #: on its body origin, which sits midway between the axles.
-CAR_FOOTPRINT_M = (0.425, 0.192)
+CAR_FOOTPRINT_M = QCAR2_BOX_M[:2]
 
 #: Two lane centres this close meet (a QCar 2 is 0.192 m wide: two side by side touch at 0.19 m).
 CONFLICT_RADIUS_M = 0.12

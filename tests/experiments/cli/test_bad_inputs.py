@@ -37,6 +37,8 @@ def test_a_mistake_exits_2_with_one_line(command, words, tmp_path, plugin_env):
     assert code == 2, (command, message, out[-300:])
     assert "Traceback" not in message
     assert len(message.splitlines()) == 1 and message.startswith("racf"), message
+    prefix = message.split(":", 1)[0] + ":"
+    assert prefix not in message[len(prefix):], message  # the command's prefix once
     assert words in message, (command, message)
     assert not (tmp_path / "out" / "parts").exists()  # refused before any episode
 

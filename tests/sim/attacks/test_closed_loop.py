@@ -39,10 +39,11 @@ def test_every_builtin_attack_is_tested_here():
 
 @pytest.mark.parametrize("name", [n for n in BUILTIN if n not in ON_LINK])
 def test_the_attack_acts_in_a_real_closed_loop_episode(name):
-    spec = TrialSpec(setting_name([name], "raw"), 1, 1.5, 0, run_up_m=1.5)
-    if ATTACKS[name].__module__ == "racf.sim.attacks.lead":  # an attack on the car ahead: in its scenario
+    if ATTACKS[name].acts_on == "vehicle":  # an attack on a car ahead: in a scenario that declares one
         spec = TrialSpec(setting_name([name], "raw"), 1, 1.0, 0, target="lead_vehicle", t_atk=1.0,
                          scenario_params={"brake_t": 1.0}, attack_params={name: {"start_s": 0.5}})
+    else:
+        spec = TrialSpec(setting_name([name], "raw"), 1, 1.5, 0, run_up_m=1.5)
     tap, changed, active = None, [], []
 
     def make_env(spec):

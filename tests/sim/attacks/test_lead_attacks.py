@@ -42,14 +42,23 @@ def test_the_frustum_spoof_moves_the_lead_s_returns_and_with_depth_its_depth():
     assert (both["depth"] != clean["depth"]).sum() > 500
 
 
-def test_an_attack_on_the_car_ahead_refuses_a_scenario_without_one():
-    env = default_env(TrialSpec("clean+lead_patch", 1, 1.0, 0, t_atk=2.0))
-    with pytest.raises(ValueError, match="lead_vehicle scenario"):
-        env.reset(seed=0, options={"sign": 1, "cruise_speed": 1.0})
-    # Other cars in the world are not the car ahead.
-    crossing = TrialSpec("clean+lead_patch", 1, 1.0, 0, t_atk=2.0, target="cross_traffic")
-    with pytest.raises(ValueError, match="lead_vehicle scenario"):
-        default_env(crossing).reset(seed=0, options=plan_episode(crossing).reset_options)
+def test_an_attack_on_the_car_ahead_refuses_a_scenario_without_one_before_any_simulator():
+    # The spec is refused: no env is built (the world's declared targets are read from its managers).
+    with pytest.raises(ValueError, match="acts on a vehicle that the scenario's world declares; scenario 'sign' declares none"):
+        TrialSpec("clean+lead_patch", 1, 1.0, 0, t_atk=2.0)
+    # Crossing cars are declared as no target of the car's: they are not a car ahead.
+    with pytest.raises(ValueError, match="scenario 'cross_traffic' declares none"):
+        TrialSpec("clean+lead_patch", 1, 1.0, 0, t_atk=2.0, target="cross_traffic")
+
+
+def test_the_attacks_find_their_car_through_the_world_s_declaration():
+    from racf.sim.attacks.lead import attacked_vehicle
+    from racf.sim.world.manager import QCAR2_BOX_M
+
+    spec = TrialSpec("clean+lead_patch", 1, 1.0, 0, t_atk=2.0, target="lead_vehicle")
+    target = attacked_vehicle(default_env(spec))
+    assert (target.kind, target.pose_columns, target.size_m) == ("vehicle", ("lead_x", "lead_y", "lead_yaw"), QCAR2_BOX_M)
+    assert attacked_vehicle(default_env(TrialSpec("clean", 1, 1.0, 0))) is None
 
 
 def test_the_lead_hidden_leaves_no_return_and_no_car_for_the_detector():
