@@ -106,9 +106,13 @@ _IDENTITY = ("trial_id", "setting", "estimator", "target", "sign", "speed", "see
 def trial_summary(row: dict, log: Path, result: Path) -> str:
     """One trial's result for a reader: what ran, then each measure it has (those it has not are
     left out), then where its log and its full row are."""
+    from racf.experiments.episode.criteria import verdict_line
+    from racf.plugins import SCENARIOS
+
+    criteria = SCENARIOS[row["target"]].criteria if row["target"] in SCENARIOS else ()
+    verdict = verdict_line(row, criteria) or "no criterion applied"
     head = (f"racf trial: {row['setting']} on {row['target']} {row['sign']} at {row['speed']:g} m/s, seed "
-            f"{row['seed']}: {'success' if row.get('success') else 'no success'}"
-            + (f" ({row['failure']})" if row.get("failure") else ""))
+            f"{row['seed']}: {verdict}")
     shown = {k: v for k, v in row.items() if k not in _IDENTITY and k not in ("success", "failure") and v is not None}
     width = max(map(len, shown), default=0)
     body = [f"  {k.ljust(width)}  {v:.3g}" if isinstance(v, float) else f"  {k.ljust(width)}  {v}"

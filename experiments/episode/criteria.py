@@ -32,7 +32,7 @@ from racf.experiments.episode.scoring import AT_REST_MPS, TargetOutcome, score_l
 if TYPE_CHECKING:  # the runner makes episodes and runs the criteria
     from racf.experiments.episode.runner import Episode
 
-__all__ = ["Criterion", "StopRule", "NoNeedlessStop", "NoContact", "TARGET_CRITERIA", "standing_outcomes", "NEEDLESS_STOP_PENALTY",
+__all__ = ["verdict_line", "Criterion", "StopRule", "NoNeedlessStop", "NoContact", "TARGET_CRITERIA", "standing_outcomes", "NEEDLESS_STOP_PENALTY",
            "STOP_RULE_PENALTY"]
 
 #: CARLA's leaderboard: running a stop sign.
@@ -55,6 +55,9 @@ class Criterion:
         optional: informative only: it costs no driving score when it fails.
         fields: measures of its own in the result row (``Field``), filled by :meth:`measures`
             where the rule applies, their defaults where it does not.
+        said: what a report says of an episode that kept the rule, and of one that broke it (the
+            trial's headline; empty: the criterion's name and its verdict).
+        headline: the names of its fields a trial's headline shows beside its verdict.
     """
 
     name: ClassVar[str] = "criterion"
@@ -63,6 +66,8 @@ class Criterion:
     terminates: ClassVar[bool] = False
     optional: ClassVar[bool] = False
     fields: ClassVar[tuple[Field, ...]] = ()
+    said: ClassVar[tuple[str, str]] = ("", "")
+    headline: ClassVar[tuple[str, ...]] = ()
 
     def applies(self, episode: "Episode") -> bool:
         """Whether the rule holds in this episode at all (where it does not, it neither passes nor fails)."""
@@ -106,6 +111,7 @@ class StopRule(Criterion):
     name = "stop_rule"
     checks = "the car came to rest 0-0.60 m before the line of every target that stands"
     penalty = STOP_RULE_PENALTY
+    said = ("success", "no success")
 
     def applies(self, episode: "Episode") -> bool:
         return bool(_standing_slots(episode.log))
@@ -120,6 +126,7 @@ class NoNeedlessStop(Criterion):
     name = "no_needless_stop"
     checks = "where no real target stands, the car did not brake to rest"
     penalty = NEEDLESS_STOP_PENALTY
+    said = ("drove on where nothing stood", "stopped where nothing stood")
 
     def applies(self, episode: "Episode") -> bool:
         log = episode.log
@@ -151,3 +158,26 @@ class NoContact(Criterion):
 
 #: The criteria of racf's target approaches (``Scenario.criteria``'s default).
 TARGET_CRITERIA: tuple[type[Criterion], ...] = (StopRule, NoNeedlessStop)
+
+
+def verdict_line(row: dict, criteria) -> str:
+    """A result row's headline, from its scenario's ``criteria``: what each one that applied says
+    (``Criterion.said``; the stop rule's failure in brackets), then the fields each names in its
+    ``headline``; '' where none applied. Every report of one episode says it the same way."""
+    words, measures = [], []
+    for criterion in criteria:
+        verdict = row.get(criterion.name)
+        if verdict is None:
+            continue
+        kept, broken = criterion.said
+        if not criterion.optional:
+            said = (kept or f"{criterion.name} kept") if verdict else (broken or f"{criterion.name} broken")
+            if not verdict and row.get("failure") and criterion.name == "stop_rule":
+                said += f" ({row['failure']})"
+            words.append(said)
+        for name in criterion.headline:
+            value = row.get(name)
+            if isinstance(value, (int, float)) and value == value:
+                unit = next((f.unit for f in criterion.fields if f.name == name), "")
+                measures.append(f"{name.removesuffix('_' + unit) if unit else name} {value:.3g}{' ' + unit if unit else ''}")
+    return ", ".join(words + measures)

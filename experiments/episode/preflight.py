@@ -73,6 +73,8 @@ def check_plan(spec: TrialSpec) -> None:
         raise
     except ValueError as err:
         raise UserError(f"episode {spec.trial_id.rsplit('_', 1)[0]} cannot be planned: {err}") from None
+    except Exception:  # a plug-in's bug, not a value: the episode reports it, naming the plug-in and its traceback
+        return
 
 
 def _key(*parts) -> str:

@@ -235,14 +235,15 @@ def car_columns(car, step, obs: dict, t: float, applied: np.ndarray) -> dict:
 
 def _result(spec: TrialSpec, plan: EpisodePlan, env: gym.Env, log: pd.DataFrame) -> TrialResult:
     """The row: the episode's identity and its scenario's parameters (``scenario_<name>``), then each
-    metric it scores (a field it leaves out takes its default). A metric that raises costs its own
+    metric that applies to its scenario (``Metric.applies_to``; a field it leaves out takes its default). A metric that raises costs its own
     fields (their defaults, logged in one line naming it), never the episode."""
     episode = Episode(spec, plan, log, env)
     row = {"trial_id": spec.trial_id, "setting": spec.setting, "estimator": spec.estimator, "target": spec.target,
            "sign": spec.sign, "speed": spec.speed, "seed": spec.seed, **scenario_columns(spec.scenario_params)}
     for name in spec.metric_names:
         metric = METRICS[name]()
-        row |= metric.defaults() | scored(metric, episode)
+        if metric.applies_to(spec.scenario):  # a measure the scenario's criteria do not ask for is no column
+            row |= metric.defaults() | scored(metric, episode)
     return TrialResult(row)
 
 

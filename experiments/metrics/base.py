@@ -36,6 +36,9 @@ class Metric:
         always: scored on every episode (else only where a spec or its scenario asks).
         order: where its columns stand in the result row (racf's own: 10-60; a plug-in: 100).
         higher_is_better: per summarised field, which way is better (the scorecard's comparisons).
+        needs_criterion: the criterion it measures (``Criterion.name``): it scores, and is summarised
+            over, only the episodes whose scenario judges that criterion (racf's stop-sign measures
+            need ``stop_rule``: a scenario judged otherwise carries none of their fields). None: every one.
     """
 
     name: ClassVar[str] = "metric"
@@ -46,6 +49,12 @@ class Metric:
     always: ClassVar[bool] = False
     order: ClassVar[int] = 100
     higher_is_better: ClassVar[dict[str, bool]] = {}
+    needs_criterion: ClassVar[str | None] = None
+
+    @classmethod
+    def applies_to(cls, scenario) -> bool:
+        """Whether it measures the episodes of ``scenario`` (a ``Scenario`` class or instance)."""
+        return cls.needs_criterion is None or any(c.name == cls.needs_criterion for c in scenario.criteria)
 
     def score(self, episode: Episode) -> dict[str, Any]:
         """The fields' values for one episode (a field left out takes its default)."""

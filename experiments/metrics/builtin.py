@@ -58,6 +58,9 @@ class AttackMeasures(Metric):
         if not attacked:
             return {}
         n = len(results)
+        if "success" not in results:  # no stop rule judged these episodes: no SCR before t*
+            return {"lost_frames_mean": float(results["lost_frames"].mean()) if n else None,
+                    "attacked_share": float(results["attack_start_s"].notna().mean()) if n else None}
         early = attack_before_t_star(results)
         k_early = int(early["success"].astype(bool).sum()) if len(early) else 0
         return {"n_attack_before_t_star": int(len(early)),
@@ -73,6 +76,7 @@ class Outcome(Metric):
     name = "outcome"
     meaning = "stop compliance: whether the car stopped in the band, where, and how late it braked"
     always, order = True, 20
+    needs_criterion = "stop_rule"
     higher_is_better = {"success": True}
     fields = (
         Field("success", None, "", "every target that stands served: at rest 0-0.60 m before its line (None: no "
@@ -126,6 +130,7 @@ class Jump(Metric):
     name = "jump"
     meaning = "the largest step change of the acted-on distance beyond the car's own motion"
     always, order = True, 30
+    needs_criterion = "stop_rule"
     fields = (Field("fused_jump_m", _NAN, "m", "the largest step change of d_fused beyond the car's motion"),)
 
     def score(self, episode: Episode) -> dict:
@@ -142,6 +147,7 @@ class StealthMeasures(Metric):
     name = "stealth"
     meaning = "the undetected error and the detection delay of the defence's flag"
     always, order = True, 40
+    needs_criterion = "stop_rule"
     higher_is_better = {"undetected_error_m": False, "detected": True}
     fields = (
         Field("undetected_error_m", _NAN, "m", "the largest |d_fused - d_true| before the defence's first flag"),
@@ -162,6 +168,7 @@ class Robustness(Metric):
     name = "robustness"
     meaning = "the stop rule's STL robustness (negative: the rule was broken)"
     always, order = True, 50
+    needs_criterion = "stop_rule"
     higher_is_better = {"robustness_m": True}
     fields = (Field("robustness_m", _NAN, "m", "the stop rule's STL robustness, lowest over the targets"),)
 

@@ -57,8 +57,14 @@ def summarize(results: pd.DataFrame, attack: bool | None = None) -> dict:
 
 
 def summarised_metrics(results: pd.DataFrame) -> list:
-    """The metrics every episode has and the others whose fields the rows hold, in the result row's order."""
-    names = [name for name in METRICS if METRICS[name].always or any(f.name in results for f in METRICS[name].fields)]
+    """The metrics every episode has and the others whose fields the rows hold, in the result row's order;
+    of those that measure one criterion (``Metric.needs_criterion``), only where a row's scenario judges it
+    (rows stored before a measure was dropped from a scenario's rows keep its columns: they are not read)."""
+    from racf.experiments.metrics.criteria import scenarios_of
+
+    scenarios = scenarios_of(results) if "target" in results and len(results) else []
+    names = [name for name in METRICS if (METRICS[name].always or any(f.name in results for f in METRICS[name].fields))
+             and (not scenarios or any(METRICS[name].applies_to(s) for s in scenarios))]
     return [METRICS[name]() for name in sorted(names, key=lambda name: (METRICS[name].order, name))]
 
 

@@ -42,6 +42,7 @@ class NoLeadCollision(NoContact):
     name = "no_lead_collision"
     checks = "the car never touched the car ahead"
     penalty = 0.60
+    said = ("followed without contact", "touched the car ahead")
 
     def guards(self, touched: str) -> bool:
         return touched == "lead"
@@ -54,6 +55,7 @@ class KeepsHeadway(Criterion):
     name = "keeps_headway"
     checks = f"the car never followed closer than {MIN_HEADWAY_S} s of headway while moving"
     optional = True
+    headline = ("min_gap_m", "min_ttc_s")
     fields = (
         Field("min_gap_m", unit="m", meaning="the smallest clear gap to the car ahead", summary="median"),
         Field("min_ttc_s", unit="s", meaning="the smallest time-to-collision with the car ahead (0: contact; "
