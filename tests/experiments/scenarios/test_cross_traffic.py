@@ -31,6 +31,9 @@ def test_a_missed_stop_is_a_crash_with_the_crossing_car(missed):
     assert not result.success and result.failure in ("never_confirmed", "confirmed_lost")
     assert result.conflict == "collision" and result.collision_with == "traffic0" and result.min_ttc_s == 0.0
     assert log["collision_with"].iloc[-1] == "traffic0"
+    # The scenario's own criterion judged it: the crash fails no_vehicle_collision and costs its penalty.
+    assert result.no_vehicle_collision is False and result.stop_rule is False
+    assert result.driving_score == pytest.approx(0.80 * 0.60)
 
 
 def test_the_same_seed_gives_the_same_log_with_traffic(missed):
