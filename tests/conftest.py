@@ -128,6 +128,18 @@ def pedestrian_installed(tmp_path, monkeypatch, pedestrian_site):
 
 
 @pytest.fixture(scope="session")
+def cut_in_site(tmp_path_factory) -> Path:
+    return _pip_install_example(tmp_path_factory, "racf-cut-in")
+
+
+@pytest.fixture
+def cut_in_installed(tmp_path, monkeypatch, cut_in_site):
+    """The example cut-in scenario installed for one test (and the worker processes it spawns)."""
+    yield _use_example(tmp_path / "cut-in-site", cut_in_site, "racf_cut_in", monkeypatch)
+    _forget_plugins()
+
+
+@pytest.fixture(scope="session")
 def time_to_line_site(tmp_path_factory) -> Path:
     return _pip_install_example(tmp_path_factory, "racf-time-to-line")
 

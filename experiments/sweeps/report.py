@@ -212,7 +212,31 @@ def write_report(frame: pd.DataFrame, out: Path, name: str = "sweep") -> dict[st
     paths = {}
     summary = summarize_settings(frame)
     atomic_write(out / "summary.json", json.dumps(summary, indent=1, allow_nan=False))
-    lines = [f"# Sweep `{name}`", "", f"{len(frame)} episodes. SCR with its 95 % Wilson interval; ASR = 1 - SCR "
+    stopped = {setting: r for setting, r in summary.items() if "scr" in r}  # where the stop rule was judged
+    lines = [f"# Sweep `{name}`", "", f"{len(frame)} episodes."]
+    if stopped:
+        lines += _stop_rule_lines(stopped)
+    lines += _criteria_lines(frame, summary)
+    lines += _plugin_metric_lines(frame)
+    for scenario in scenarios_of(frame):  # what each scenario the rows ran adds (its own tables and files)
+        more, files = scenario().report(frame, summary)
+        lines += more
+        for file, data in files.items():
+            atomic_write(out / file, json.dumps(data, indent=1, allow_nan=False))
+    if not frame.empty and "success" in frame:
+        lines += _by_attack_lines(frame)
+        lines += _stealth_lines(frame, out, paths)
+        lines += _recall_lines(frame, out)
+        paths["scr_vs_rho"] = _plot(frame, "rho_set", "patch coverage rho", out / "scr_vs_rho.png")
+        paths["scr_vs_t_atk"] = _plot(frame, "t_atk_set", "attack duration T_atk (s)", out / "scr_vs_t_atk.png")
+        lines += ["", "![SCR vs rho](scr_vs_rho.png) ![SCR vs T_atk](scr_vs_t_atk.png)"]
+    paths["summary"] = atomic_write(out / "summary.md", "\n".join(lines) + "\n")
+    return paths
+
+
+def _stop_rule_lines(summary: dict) -> list[str]:
+    """The stop rule's table: a row per setting whose episodes it judged."""
+    lines = [f"SCR with its 95 % Wilson interval; ASR = 1 - SCR "
              "under an attack; SCR, attack before t*: over the episodes whose attack began before t* (only "
              "those can test a defence), with their count; dt_brake over successful stops; largest jump: the "
              "largest step change of the distance the car acted on beyond its own motion, over all episodes; "
@@ -228,32 +252,23 @@ def write_report(frame: pd.DataFrame, out: Path, name: str = "sweep") -> dict[st
         lines.append(f"| {setting} | {r['n']} | {_scr_cells(r)} | {_fmt(r['asr'])} | {early} | "
                      f"{_fmt(r['dt_brake_mean'], 3)} ({r['n_latency']}) | {_fmt(r['max_fused_jump_m'], 3)} | "
                      f"{_robustness_cells(r)} |")
-    lines += _criteria_lines(frame, summary)
-    lines += _plugin_metric_lines(frame)
-    for scenario in scenarios_of(frame):  # what each scenario the rows ran adds (its own tables and files)
-        more, files = scenario().report(frame, summary)
-        lines += more
-        for file, data in files.items():
-            atomic_write(out / file, json.dumps(data, indent=1, allow_nan=False))
-    if not frame.empty:
-        frame = frame.assign(estimator=frame["estimator"].astype(str))
-        lines += ["", "By attack and estimator (columns):", ""]
-        estimators = sorted(frame["estimator"].unique())
-        lines += ["| attack | " + " | ".join(estimators) + " |", "|---|" + "---|" * len(estimators)]
-        for attack, rows in frame.groupby("attack", sort=True):
-            cells = []
-            for e in estimators:
-                g = rows[(rows["estimator"] == e) & rows["success"].notna()]  # where a sign stood
-                r = _rate(g["success"].astype(bool)) if len(g) else None
-                cells.append(f"{_fmt(r['scr'])} (N {r['n']})" if r else "—")
-            lines.append(f"| {attack} | " + " | ".join(cells) + " |")
-        lines += _stealth_lines(frame, out, paths)
-        lines += _recall_lines(frame, out)
-        paths["scr_vs_rho"] = _plot(frame, "rho_set", "patch coverage rho", out / "scr_vs_rho.png")
-        paths["scr_vs_t_atk"] = _plot(frame, "t_atk_set", "attack duration T_atk (s)", out / "scr_vs_t_atk.png")
-        lines += ["", "![SCR vs rho](scr_vs_rho.png) ![SCR vs T_atk](scr_vs_t_atk.png)"]
-    paths["summary"] = atomic_write(out / "summary.md", "\n".join(lines) + "\n")
-    return paths
+    return lines
+
+
+def _by_attack_lines(frame: pd.DataFrame) -> list[str]:
+    """SCR by attack (rows) and estimator (columns), where a sign stood."""
+    frame = frame.assign(estimator=frame["estimator"].astype(str))
+    lines = ["", "By attack and estimator (columns):", ""]
+    estimators = sorted(frame["estimator"].unique())
+    lines += ["| attack | " + " | ".join(estimators) + " |", "|---|" + "---|" * len(estimators)]
+    for attack, rows in frame.groupby("attack", sort=True):
+        cells = []
+        for e in estimators:
+            g = rows[(rows["estimator"] == e) & rows["success"].notna()]  # where a sign stood
+            r = _rate(g["success"].astype(bool)) if len(g) else None
+            cells.append(f"{_fmt(r['scr'])} (N {r['n']})" if r else "—")
+        lines.append(f"| {attack} | " + " | ".join(cells) + " |")
+    return lines
 
 
 def report_from_store(out: str | Path) -> dict[str, Path]:

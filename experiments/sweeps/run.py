@@ -103,4 +103,4 @@ def run_sweep(spec: SweepSpec, spec_text: str, out: str | Path, backend: str = "
     write_report(frame, Path(out), f"{spec.name} ({spec.sensor_profile} sensors, {spec.sign_geometry} signs, "
                                    f"{spec.detector} detector)")
     return {"n": len(episodes), "done": ran, "reused": len(episodes) - ran, "wall_s": time.perf_counter() - t0,
-            "scr": {k: v["scr"] for k, v in summarize_settings(frame).items()}}
+            "scr": {k: v["scr"] for k, v in summarize_settings(frame).items() if "scr" in v}}

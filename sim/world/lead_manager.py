@@ -16,9 +16,8 @@ import mujoco
 import numpy as np
 
 from racf.sim.world.lead import LeadCar
-from racf.sim.world.manager import QCAR2_BOX_M, TruthColumn, WorldManager, WorldTarget
-from racf.sim.world.traffic import TRAFFIC_COLOURS
-from racf.sim.world.traffic_manager import PARKED_Z_M, traffic_body, traffic_paint_geoms, traffic_xml
+from racf.sim.world.manager import TruthColumn, WorldManager, WorldTarget
+from racf.sim.world.qcar2_body import QCar2Body
 
 __all__ = ["LeadManager", "LEAD_PREFIX", "LEAD_COLUMNS"]
 
@@ -36,21 +35,15 @@ class LeadManager(WorldManager):
     option = "lead"
 
     def __init__(self) -> None:
-        self._mocap = -1
-        self._paint: list[int] = []
-        self._body = -1
+        self.car = QCar2Body(LEAD_PREFIX)
         self._lead: LeadCar | None = None
         self._table = np.full((1, 4), math.nan)
 
     def scene_xml(self) -> str:
-        from racf.sim.world.scene import car_xml
-
-        return traffic_xml(0, car_xml(), LEAD_PREFIX)
+        return self.car.xml()
 
     def bind(self, model: mujoco.MjModel) -> None:
-        self._body = model.body(traffic_body(0, LEAD_PREFIX)).id
-        self._mocap = int(model.body_mocapid[self._body])
-        self._paint = [model.geom(g).id for g in traffic_paint_geoms(0, LEAD_PREFIX)]
+        self.car.bind(model)
 
     def reset(self, model, data, value, physics_dt_s, max_episode_s) -> None:
         self._lead = None if value is None else LeadCar.from_options(value)
@@ -59,7 +52,7 @@ class LeadManager(WorldManager):
         else:
             steps = np.arange(int(round(max_episode_s / physics_dt_s)) + 2)
             self._table = self._lead.states(steps * physics_dt_s)
-            model.geom_rgba[self._paint] = TRAFFIC_COLOURS[self._lead.colour]
+            self.car.paint(model, self._lead.colour)
         self.before_physics(data, 0)
 
     @property
@@ -69,7 +62,7 @@ class LeadManager(WorldManager):
     @property
     def body(self) -> int:
         """The lead's body id in the model."""
-        return self._body
+        return self.car.body
 
     @property
     def moving(self) -> bool:
@@ -81,23 +74,20 @@ class LeadManager(WorldManager):
 
     def before_physics(self, data, substep) -> None:
         if self._lead is None:
-            data.mocap_pos[self._mocap] = (0.0, 0.0, PARKED_Z_M)
-            data.mocap_quat[self._mocap] = (1.0, 0.0, 0.0, 0.0)
+            self.car.park(data)
             return
         x, y, yaw, _ = self.state(substep)
-        data.mocap_pos[self._mocap] = (x, y, 0.0)
-        data.mocap_quat[self._mocap] = (math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2))
+        self.car.place(data, x, y, yaw)
 
     def columns(self) -> tuple[TruthColumn, ...]:
         return tuple(TruthColumn(f"lead_{field}", unit, f"ground truth: the lead car's {meaning} (NaN: no lead)")
                      for field, unit, meaning in LEAD_COLUMNS)
 
     def targets(self) -> tuple[WorldTarget, ...]:
-        return (WorldTarget(LEAD_PREFIX, "vehicle", traffic_body(0, LEAD_PREFIX),
-                            (f"{LEAD_PREFIX}_x", f"{LEAD_PREFIX}_y", f"{LEAD_PREFIX}_yaw"), QCAR2_BOX_M),)
+        return (self.car.target((f"{LEAD_PREFIX}_x", f"{LEAD_PREFIX}_y", f"{LEAD_PREFIX}_yaw")),)
 
     def info(self, substep: int) -> dict[str, Any]:
         return {f"lead_{field}": float(v) for (field, _, _), v in zip(LEAD_COLUMNS, self.state(substep))}
 
     def owner_of(self, root_body: int) -> str | None:
-        return LEAD_PREFIX if root_body == self._body else None
+        return LEAD_PREFIX if self.car.owns(root_body) else None

@@ -1,8 +1,8 @@
-"""The pedestrian crossing, an example package of one module and one entry point, used with no edit to
-racf: it is listed with its parameters and criteria, a trial runs it (hitting the person ends the
-episode and costs the pedestrian penalty; the episode runs on until the person has crossed), its
-columns are the referee's, a sweep splits its rows by its parameters, a falsification space and a
-scorecard take it."""
+"""The pedestrian crossing, an example package (a scenario and the car stage its mission engages) used
+with no edit to racf: it is listed with its parameters and criteria, a trial runs it (the car's own
+emergency brake stops it for the person it would hit; the episode runs on until the person has
+crossed), its columns are the referee's and its stage's the car's, a sweep splits its rows by its
+parameters, a falsification space and a scorecard take it."""
 
 from __future__ import annotations
 
@@ -19,7 +19,8 @@ def test_the_scenario_is_listed_with_its_parameters_and_criteria(pedestrian_inst
     code, out = run_cli(["list", "--json"])
     entry = json.loads(out)["scenario"]["pedestrian_crossing"]
     assert code == 0 and entry["origin"] == "racf-pedestrian"
-    assert set(entry["params"]) == {"ahead_m", "gap_s", "speed_mps"}
+    assert set(entry["params"]) == {"ahead_m", "gap_s", "speed_mps", "walks"}
+    assert json.loads(out)["car stage"]["upright_in_lane"]["origin"] == "racf-pedestrian"
     assert entry["criteria"]["no_pedestrian_collision"] == {"checks": "the car touched no person", "penalty": 0.5,
                                                              "terminates": True}
 
@@ -32,15 +33,18 @@ def _trial(tmp_path, gap_s: float) -> tuple[dict, pd.DataFrame]:
     return row, pd.read_parquet(row["log"])
 
 
-def test_the_car_that_meets_the_person_hits_them_and_the_episode_ends_there(pedestrian_installed, tmp_path):
-    """Timed to meet the car (gap 0): the car, which has no person detector and whose LiDAR scans over a
-    1/10-scale person, runs into them; the criterion ends the episode at the contact."""
+def test_the_car_that_meets_the_person_stops_for_them_with_its_own_emergency_brake(pedestrian_installed, tmp_path):
+    """Timed to meet the car (gap 0): its LiDAR scans over a 1/10-scale person, but the example's car stage
+    finds them upright in the lane in the depth and caps the speed: the car stops short and drives on once
+    they have crossed."""
     row, log = _trial(tmp_path, 0.0)
-    assert row["collision_with"] == "pedestrian" and row["no_pedestrian_collision"] is False
-    assert row["pedestrian_min_ttc_s"] == 0.0 and row["pedestrian_ttc"] is False
-    assert row["driving_score"] == pytest.approx(0.8 * 0.5)  # the stop rule broken too
-    assert log["collision_with"].iloc[-1] == "pedestrian" and not log["pedestrian_crossed"].iloc[-1]
-    assert row["scenario_gap_s"] == 0.0 and row["scenario_ahead_m"] == 1.0
+    assert row["collision_with"] is None and row["no_pedestrian_collision"] is True and row["success"]
+    assert row["driving_score"] == 1.0 and row["scenario_gap_s"] == 0.0 and row["scenario_ahead_m"] == 1.0
+    # The stage's columns are the car's, and its cap is what stopped the car before the crosswalk.
+    capped = log["aeb_cap"] < log["state_speed_mps"] + 0.05
+    assert capped.any() and log["aeb_nearest_m"].min() < 0.4
+    before = log["t"] < log.loc[capped, "t"].max()
+    assert log.loc[before, "speed"].min() < 0.25 and log["pedestrian_crossed"].iloc[-1]
 
 
 def test_a_late_person_crosses_behind_the_stopped_car_and_the_episode_waits_for_them(pedestrian_installed, tmp_path):
@@ -62,7 +66,11 @@ def test_its_columns_are_the_referees_and_never_the_cars(pedestrian_installed):
     world = SCENARIOS["pedestrian_crossing"]().world(spec, spec.scenario_params)
     columns = world_columns(world)
     assert [c.name for c in columns][:2] == ["pedestrian_x", "pedestrian_y"] and {c.side for c in columns} == {REFEREE}
-    assert "pedestrian" in plan_episode(spec).reset_options
+    plan = plan_episode(spec)
+    assert "pedestrian" in plan.reset_options and plan.mission.stages == ("upright_in_lane",)
+    # The plain approach: no person, the car's emergency brake still on.
+    plain = TrialSpec("clean", 2, 1.0, 0, target="pedestrian_crossing", scenario_params={"walks": False})
+    assert "pedestrian" not in plan_episode(plain).reset_options
 
 
 def test_a_falsification_space_takes_its_parameters(pedestrian_installed, tmp_path):
@@ -88,10 +96,9 @@ def test_a_sweep_splits_its_rows_by_its_parameters_and_a_scorecard_names_them(pe
                     'sign = [2]\n[scenario.pedestrian_crossing]\ngap_s = [0.0, 2.0]\n')
     code, _ = run_cli(["sweep", str(spec), "--out", str(tmp_path / "out"), "--workers", "1", "--json"])
     summary = json.loads((tmp_path / "out" / "summary.json").read_text())
-    assert code == 0 and set(summary) == {"clean@pedestrian_crossing[ahead_m=1.0, gap_s=0.0, speed_mps=0.3]",
-                                          "clean@pedestrian_crossing[ahead_m=1.0, gap_s=2.0, speed_mps=0.3]"}
-    hit = summary["clean@pedestrian_crossing[ahead_m=1.0, gap_s=0.0, speed_mps=0.3]"]
-    assert hit["n_no_pedestrian_collision"] == 1 and hit["no_pedestrian_collision_rate"] == 0.0
+    met = "clean@pedestrian_crossing[ahead_m=1.0, gap_s=0.0, speed_mps=0.3, walks=True]"
+    assert code == 0 and set(summary) == {met, "clean@pedestrian_crossing[ahead_m=1.0, gap_s=2.0, speed_mps=0.3, walks=True]"}
+    assert summary[met]["n_no_pedestrian_collision"] == 1 and summary[met]["no_pedestrian_collision_rate"] == 1.0
 
     tiny = Battery(name="tiny-walk", loop=(LoopRow("paper_clean", "clean", 1, 1, _paper("clean"), attacked=False),),
                    drives=(), offline_presets=("strong",), offline_draws=1, offline_draws_quick=1)
@@ -101,5 +108,5 @@ def test_a_sweep_splits_its_rows_by_its_parameters_and_a_scorecard_names_them(pe
                     "--scenario-param", "gap_s=2.0", "--quick", "--workers", "1", "--out", str(tmp_path / "cards"),
                     "--dataset", str(data), "--json"])[0]
     assert code == 0
-    assert (tmp_path / "cards" / "cards" / "tiny-walk@pedestrian_crossing_ahead_m=1.0_gap_s=2.0_speed_mps=0.3_-quick"
+    assert (tmp_path / "cards" / "cards" / "tiny-walk@pedestrian_crossing_ahead_m=1.0_gap_s=2.0_speed_mps=0.3_walks=True_-quick"
             / "raw.json").exists()

@@ -10,13 +10,17 @@ not braked (0: together). Everything the scenario is lives here:
   (``pedestrian_x``, ``pedestrian_y``, its velocity and whether it has crossed);
 - its criteria: hitting the person ends the episode and costs CARLA's pedestrian penalty (x 0.50);
   the smallest time-to-collision with the person is measured (informative, no penalty);
-- its end: the episode runs on until the person has crossed, not only until the car is past the line.
+- its end: the episode runs on until the person has crossed, not only until the car is past the line;
+- the car's side: its mission engages the example's own car stage, an automatic emergency brake for
+  something upright in the lane (:mod:`.emergency_brake`), so the car stops for the person.
 
-Nothing in racf names it: the entry point ``racf.scenarios: pedestrian_crossing`` registers it.
+Nothing in racf names it: the entry points ``racf.scenarios: pedestrian_crossing`` and
+``racf.car_stages: upright_in_lane`` register it.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -171,6 +175,7 @@ class PedestrianCrossing(Scenario):
         Param("gap_s", 0.0, -3.0, 3.0, unit="s",
               meaning="when the person reaches the lane's centre after the car's bumper would reach the crosswalk"),
         Param("speed_mps", 0.3, 0.1, 0.6, unit="m/s", meaning="the person's walking speed"),
+        Param("walks", True, meaning="a person crosses (false: the plain approach, with the car's emergency brake on)"),
     )
     criteria = (*Scenario.criteria, NoPedestrianCollision, PedestrianTimeToCollision)
 
@@ -187,7 +192,10 @@ class PedestrianCrossing(Scenario):
         t_car = arrival_s(mission.path, draft.start_s_m, mission.cruise_mps, s_cross - draft.calibration.bumper_x_m)
         start_s = t_car + values["gap_s"] - HALF_CROSSING_M / values["speed_mps"]
         walk = {"from": start.tolist(), "to": end.tolist(), "start_s": start_s, "speed_mps": values["speed_mps"]}
-        return self.replace(draft, reset_options={**draft.reset_options, "pedestrian": walk},
+        # The car's own emergency brake for something upright in the lane (this package's car stage).
+        mission = dataclasses.replace(mission, stages=(*mission.stages, "upright_in_lane"))
+        options = {**draft.reset_options, "pedestrian": walk} if values["walks"] else draft.reset_options
+        return self.replace(draft, reset_options=options, mission=mission,
                             extras={**draft.extras, "crosswalk_s": s_cross})
 
     def over(self, plan, rows: list[dict]) -> bool:
