@@ -5,7 +5,7 @@ A criterion names the rule it checks (``checks``), says whether the rule applies
 (:meth:`Criterion.passed`), with measures of its own (``fields``, :meth:`Criterion.measures`).
 Failing may end the episode (``terminates``: the runner asks :meth:`Criterion.fails_at` of each
 step's row) and costs the driving score the criterion's ``penalty``: the score is the product of
-the failed criteria's penalties (CARLA's leaderboard coefficients: hitting a pedestrian x 0.50,
+the failed criteria's penalties (CARLA's leaderboard coefficients: hitting a person x 0.50,
 a vehicle x 0.60, a static object x 0.65, running a stop sign x 0.80).
 
 A scenario lists its criteria (``Scenario.criteria``); racf's target approaches judge the stop
@@ -38,7 +38,7 @@ __all__ = ["verdict_line", "Criterion", "StopRule", "NoNeedlessStop", "NoContact
 #: CARLA's leaderboard: running a stop sign.
 STOP_RULE_PENALTY = 0.80
 #: The driving score's factor for a needless stop. CARLA's leaderboard names no such infraction;
-#: its nearest is failing to keep the traffic's minimum speed (x 0.70): a stop in a running lane
+#: its nearest is failing to keep the road's minimum speed (x 0.70): a stop in a running lane
 #: with nothing to stop for is the rear-end hazard and the delay a phantom attack aims at. It
 #: weighs more than running a real sign (x 0.80), as CARLA's minimum-speed penalty does.
 NEEDLESS_STOP_PENALTY = 0.70

@@ -54,7 +54,7 @@ class EpisodePlan:
         max_steps: the episode's step limit.
         start_s_m: where the ego car starts along the mission's path, m.
         extras: what the scenario planned beyond the route, by its own names, for its own metrics,
-            criteria and end (cross-traffic: its cars and their conflict point); the engine reads none.
+            criteria and end (other cars and where they meet the car's path, say); the engine reads none.
     """
 
     env_kwargs: dict

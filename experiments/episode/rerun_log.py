@@ -22,9 +22,9 @@ then replays the log and those frames into a recording on the ``sim_time`` timel
   (``wit_det0``/``wit_det1`` the detectors at the hypothesis, ``wit_depth`` the plate in the depth
   image, ``wit_lidar``, ``wit_blind``, ``wit_map``, ``wit_moving`` the depth caught moving by the
   static-world check) and its verdict ``stands``;
-- ``stages/NAME/*``: the distance series each car stage declares (``CarStage.series``: following's,
-  the car ahead from the camera as each witness sees it and the defence's) where its columns are
-  in the log, beside the truth to the lead's rear.
+- ``stages/NAME/*``: the distance series each car stage declares (``CarStage.series``: the car ahead
+  from the camera as each witness sees it and the defence's, for one) where its columns are in the
+  log, beside ``stages/truth/TARGET``: each declared target's true depth (``WorldTarget``).
 
 A default blueprint lays these out so the story reads at a glance.
 """
@@ -39,9 +39,10 @@ import numpy as np
 import pandas as pd
 
 from racf.experiments.episode.record import STEP_LOG
+from racf.sim.world.manager import QCAR2_BOX_M, world_targets
 
 __all__ = ["FrameRecorder", "write_rrd", "EXISTENCE_COLUMNS", "SERIES", "CONTROL", "STYLE", "stage_series", "CAR_HALF_SIZE_M",
-           "ACTOR_RGB", "actors", "lead_depth_true"]
+           "ACTOR_RGB", "actors", "target_depth_true"]
 
 #: The step-log columns of an existence defence's witnesses (``ExistenceWitnesses.columns``, ``stands``).
 EXISTENCE_COLUMNS = ("wit_", "seen_det", "map_depth_m", "stands")
@@ -61,28 +62,43 @@ STYLE: dict[str, tuple[tuple[int, int, int], str]] = {
     "flag": ((227, 119, 194), "flag (the defence's detector)"),
     "brake": ((140, 86, 75), "brake"),
     "attack_active": ((188, 189, 34), "attack active"),
-    "lead_d_true": ((110, 110, 110), "the car ahead's rear (ground truth)"),
+    "target_true": ((110, 110, 110), "a declared target's rear (ground truth)"),
 }
-#: A car's body (a QCar 2: its footprint, 0.425 x 0.192 m, 0.20 m tall), centred over the axles' midpoint, m.
-CAR_HALF_SIZE_M = (0.2125, 0.096, 0.10)
+#: A car's body (a QCar 2's box), centred over the axles' midpoint, m.
+CAR_HALF_SIZE_M = tuple(v / 2 for v in QCAR2_BOX_M)
 #: The world's other actors' colours on the map and in 3D, in the order of their names (the first four
 #: are the other cars' paint: red, blue, yellow, white).
 ACTOR_RGB = ((200, 20, 20), (25, 65, 190), (230, 190, 25), (235, 235, 235), (240, 130, 20), (120, 60, 160))
 _CAR_CENTRE_Z_M = 0.10
 
 
-def lead_depth_true(log: pd.DataFrame) -> np.ndarray:
-    """(n,) the car ahead's rear along the camera's optical axis, from the true poses, m (NaN: no lead)."""
+def target_depth_true(log: pd.DataFrame, target) -> np.ndarray:
+    """(n,) a declared target's rear (``WorldTarget``: its pose columns, half its length behind its
+    centre) along the camera's optical axis, from the true poses, m (NaN: not in the world)."""
     from racf.experiments.episode.plan import car_calibration
 
     cx, cy = car_calibration(320, 240).camera_xy_m
     c, s = np.cos(log["yaw"].to_numpy(float)), np.sin(log["yaw"].to_numpy(float))
     cam_x = log["x"].to_numpy(float) + c * cx - s * cy
     cam_y = log["y"].to_numpy(float) + s * cx + c * cy
-    lead_yaw = log["lead_yaw"].to_numpy(float)
-    rear_x = log["lead_x"].to_numpy(float) - np.cos(lead_yaw) * CAR_HALF_SIZE_M[0]
-    rear_y = log["lead_y"].to_numpy(float) - np.sin(lead_yaw) * CAR_HALF_SIZE_M[0]
+    x, y, yaw = (log[column].to_numpy(float) for column in target.pose_columns)
+    rear_x = x - np.cos(yaw) * target.size_m[0] / 2
+    rear_y = y - np.sin(yaw) * target.size_m[0] / 2
     return c * (rear_x - cam_x) + s * (rear_y - cam_y)
+
+
+def _target_truths(log: pd.DataFrame, targets) -> tuple[pd.DataFrame, dict]:
+    """The log with each declared target's true depth (``<name>_depth_true``), and their series."""
+    series = {}
+    for target in targets:
+        if not {*target.pose_columns, "x"} <= set(log.columns) or not np.isfinite(log[target.pose_columns[0]]
+                                                                                    .to_numpy(float)).any():
+            continue
+        column = f"{target.name}_depth_true"
+        log = log.assign(**{column: target_depth_true(log, target)})
+        series[f"stages/truth/{target.name}"] = (column, (STYLE["target_true"][0], f"the {target.name}'s rear "
+                                                                                   "(ground truth)"))
+    return log, series
 
 
 def stage_series(log: pd.DataFrame) -> dict[str, tuple[str, tuple]]:
@@ -193,13 +209,16 @@ def recorded_trial(spec, rrd: str | Path | None = None, title: str = "racf episo
     result, log = run_trial(spec, on_step=recorder, clean_pass=clean_pass)
     if recorder is not None:
         Path(rrd).parent.mkdir(parents=True, exist_ok=True)
-        write_rrd(rrd, log, recorder, title=title)
+        targets = world_targets(spec.scenario.world(spec, spec.scenario_params))
+        write_rrd(rrd, log, recorder, title=title, targets=targets)
     return result, log
 
 
 def write_rrd(path: str | Path, log: pd.DataFrame, recorder: FrameRecorder | None = None,
-              title: str = "racf episode") -> Path:
-    """Writes the episode (``log`` from ``run_trial``, frames from ``recorder``) to ``path``; returns it."""
+              title: str = "racf episode", targets=()) -> Path:
+    """Writes the episode (``log`` from ``run_trial``, frames from ``recorder``) to ``path``; returns it.
+    ``targets``: the world's declared targets (``WorldTarget``), whose true depth is drawn beside the
+    car's stages' series."""
     import rerun as rr
 
     from racf.controllers.lidar_target import LidarTargetConfig
@@ -246,9 +265,8 @@ def write_rrd(path: str | Path, log: pd.DataFrame, recorder: FrameRecorder | Non
     own = {f"{'existence' if c.startswith(EXISTENCE_COLUMNS) else 'estimator'}/{c}": c for c in log.columns
            # the estimator's diagnostics beyond the declared log; an existence defence's witnesses apart
            if c not in STEP_LOG and c not in shown and pd.api.types.is_numeric_dtype(log[c])}
-    if {"lead_x", "x"} <= set(log.columns) and np.isfinite(log["lead_x"].to_numpy(float)).any():
-        log = log.assign(lead_d_true=lead_depth_true(log))
-        staged["stages/following/lead_d_true"] = ("lead_d_true", STYLE["lead_d_true"])
+    log, truths = _target_truths(log, targets)
+    staged |= truths
     styles = {**{f"series/{k}": (v, STYLE.get(k)) for k, v in SERIES.items()},
               **{f"control/{k}": (v, STYLE.get(k)) for k, v in CONTROL.items()},
               **{name: (column, None) for name, column in own.items()}, **staged}

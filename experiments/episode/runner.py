@@ -67,7 +67,7 @@ class Episode:
     env: gym.Env
 
 
-#: The result row's first columns: which episode it is (the metrics' fields follow).
+#: The result row's first columns: which episode it is (the metrics' fields come after them).
 IDENTITY = ("trial_id", "setting", "estimator", "target", "sign", "speed", "seed")
 
 

@@ -11,7 +11,7 @@ Definitions (``docs/protocol.md``):
   controller under test is braking with the front bumper within 0.60 m of the line.
 
 Failures are named by where they come from: ``never_confirmed`` (no confirmed track before
-the line), ``confirmed_lost`` (a track was confirmed but lost, and no brake followed),
+the line), ``confirmed_lost`` (a track was confirmed but lost, and no brake came after),
 ``braked_late`` (braked, but came to rest past the line or ran it), ``braked_early``
 (came to rest more than 0.60 m before the line: phantom or early braking), ``timeout``.
 Stealth (``stealth``): the **undetected error** is the largest |d_fused - d_true| over the

@@ -37,6 +37,11 @@ from racf.plugins import METRICS, SCENARIOS
 __all__ = ["TrialSpec", "parse_setting", "setting_name", "EPISODE_CODE", "TARGETS", "DRIVE_S", "STRONG_RHO",
            "STRONG_T_ATK_S", "extra_attacks", "TABLE_SETTINGS", "plugin_sources"]
 
+#: The one scenario whose parameters specs held as fields of their own before scenarios were plug-ins:
+#: its name, and each old field's parameter and default.
+_LEGACY_SCENARIO = ("cross_traffic", {"traffic_cars": ("cars", 0), "traffic_gap_s": ("gap_s", 0.0),
+                                      "traffic_speed": ("speed", 1.0)})
+
 #: What a route is built around (``TrialSpec.sign`` is the index): the four stop signs or the
 #: two crates; or a ``drive`` (index 0), a random route drawn from the seed that meets >= 2 targets.
 #: A scenario (``TrialSpec.target``) names one of these kinds as its ``target``.
@@ -299,17 +304,17 @@ class TrialSpec:
     @classmethod
     def from_dict(cls, raw: dict) -> "TrialSpec":
         """A spec from its :meth:`to_dict` form, read back from JSON (lists back to the tuples and
-        configs it holds). Specs written before scenarios were plug-ins held cross-traffic as three
-        fields of their own; they read as the ``cross_traffic`` scenario."""
+        configs it holds). Specs written before scenarios were plug-ins held one scenario's parameters as
+        three fields of their own (``_LEGACY_SCENARIO``); they read as that scenario."""
         raw = dict(raw)
         raw["braking"] = BrakingConfig(**raw.get("braking", {}))
         for key in ("rho", "t_atk", "drive_s", "metrics"):
             if key in raw:
                 raw[key] = tuple(raw[key])
-        cars, gap_s, speed = (raw.pop(k, d) for k, d in (("traffic_cars", 0), ("traffic_gap_s", 0.0),
-                                                         ("traffic_speed", 1.0)))
-        if cars:
-            raw["target"], raw["scenario_params"] = "cross_traffic", {"cars": cars, "gap_s": gap_s, "speed": speed}
+        name, fields = _LEGACY_SCENARIO
+        values = {param: raw.pop(field, default) for field, (param, default) in fields.items()}
+        if values["cars"]:
+            raw["target"], raw["scenario_params"] = name, values
         return cls(**raw)
 
     @property

@@ -20,7 +20,7 @@ LOG_NAME = "failures.log"
 
 def episode_words(spec: TrialSpec) -> str:
     """``attack+odca sign1 v1.50 seed 3 (id ...)``: enough to find and rerun the episode (a scenario's
-    parameters follow its name: ``stale_map[case=removed, shift_m=1.0]1``)."""
+    parameters come after its name: ``stale_map[case=removed, shift_m=1.0]1``)."""
     return (f"{spec.setting} {spec.target}{params_words(spec.scenario_params)}{spec.sign} v{spec.speed:.2f} "
             f"seed {spec.seed} (id {spec.trial_id})")
 

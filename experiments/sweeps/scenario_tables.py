@@ -1,5 +1,5 @@
-"""A scenario's own table in a sweep spec (``Scenario.table``: cross-traffic's ``[traffic]``): its
-parameters, a value or a list of values each, whose ``control`` values (``cars = 0``) stand for the
+"""A scenario's own table in a sweep spec (``Scenario.table``, a table named after it): its
+parameters, a value or a list of values each, whose ``control`` values (no other car, say) stand for the
 plain approach of the scenario's target kind, so one spec runs each episode without and with it."""
 
 from __future__ import annotations

@@ -29,15 +29,10 @@ Example (``experiments/sweeps/specs/smoke.toml``, with every optional field adde
     [scenario.parked_car]            # optional: the parameters `target`'s scenario declares, each a
     ahead_m = [0.5, 1.5]             # list of values; grid: every combination; random: crossed with each draw
 
-A scenario may also take a table of its own name at the top (``Scenario.table``): cross-traffic's
-``[traffic]`` lists its parameters (a value or a list each), and its ``control`` values (``cars =
-0``) stand for the plain approach, so ``cars = [0, 1]`` runs each episode without and with one other
-car, on the same seed::
-
-    [traffic]
-    cars = [0, 1]
-    gap_s = 0.0
-    speed = 1.0
+A scenario may also take a table of its own name at the top (``Scenario.table``): it lists its
+parameters (a value or a list each), and its ``control`` values stand for the plain approach, so a
+list holding one (``cars = [0, 1]`` in a table of cars) runs each episode without and with it, on the
+same seed (the scenario kit's page has one).
 
 Attacks: any in ``racf.sim.attacks.ATTACKS`` (``patch_occlusion``, ``lidar_spoof``, ...) and
 ``+``-combinations of them; estimators: any in ``racf.experiments.car.estimators.ESTIMATORS``

@@ -12,7 +12,7 @@ same interval) and its largest value, the share of episodes whose attack the def
 (``episode.robustness``): its median with a bootstrap interval, 5th percentile and lowest value,
 and the share of episodes that broke the rule (robustness < 0, Wilson interval); each criterion of
 the rows' scenarios, a pass rate with its Wilson interval where its rule applies; a scenario's own
-metrics (cross-traffic's collision rate, conflict outcomes and smallest time-to-collision). A
+metrics (a collision rate, say, or the smallest time-to-collision). A
 plug-in metric's fields are summarised by their declared kind (a rate with its Wilson interval, a
 median with its bootstrap interval). Strict JSON: None, never NaN.
 

@@ -3,8 +3,10 @@
 import numpy as np
 import pytest
 
+from racf.sim.world.lead_manager import LeadManager
+
 from racf.experiments.episode import TrialSpec, run_trial
-from racf.experiments.episode.rerun_log import (CONTROL, SERIES, STYLE, FrameRecorder, _blueprint, _shown, lead_depth_true,
+from racf.experiments.episode.rerun_log import (CONTROL, SERIES, STYLE, FrameRecorder, _blueprint, _shown, target_depth_true,
                                                write_rrd)
 
 
@@ -73,7 +75,7 @@ def test_trials_record_every_trial_they_run(tmp_path):
 
 def test_every_series_has_its_own_colour_and_legend_and_gaps_where_undefined(recorded):
     _, log, _ = recorded
-    assert set(STYLE) == set(SERIES) | set(CONTROL) | {"lead_d_true"}
+    assert set(STYLE) == set(SERIES) | set(CONTROL) | {"target_true"}
     colours = [colour for colour, _ in STYLE.values()]
     assert len(set(colours)) == len(colours)
     shown = _shown(log, "d_true")
@@ -116,13 +118,15 @@ def test_the_car_ahead_and_its_witnesses_are_drawn(tmp_path):
     recorder = FrameRecorder(every=25)
     _, log = run_trial(TrialSpec("clean+odca", 1, 1.0, 0, target="lead_vehicle"), on_step=recorder, clean_pass=False)
     rows: dict[str, int] = {}
-    for chunk in _chunks(write_rrd(tmp_path / "lead.rrd", log, recorder)):
+    target = LeadManager().targets()[0]
+    for chunk in _chunks(write_rrd(tmp_path / "lead.rrd", log, recorder, targets=(target,))):
         rows[str(chunk.entity_path)] = rows.get(str(chunk.entity_path), 0) + chunk.num_rows
     assert rows["/world/actors/lead"] == len(recorder.frames) and "/map/actors/lead/path" in rows
     # The following stage's own series (``FollowingStage.series``), under its name, beside the truth.
-    assert {f"/stages/following/{k}" for k in ("lead_d_true", "lead_d_meas", "lead_lidar", "lead_d_size", "lead_d_fused")} <= set(rows)
+    assert {f"/stages/following/{k}" for k in ("lead_d_meas", "lead_lidar", "lead_d_size", "lead_d_fused")} <= set(rows)
+    assert "/stages/truth/lead" in rows  # the declared target's truth
     # The truth is the lead's rear from the camera: the LiDAR's track of it reads it within a few centimetres.
-    true, lidar = lead_depth_true(log), log["lead_lidar"].to_numpy(float)
+    true, lidar = target_depth_true(log, target), log["lead_lidar"].to_numpy(float)
     both = np.isfinite(lidar)
     assert both.sum() > 50 and np.median(np.abs(lidar[both] - true[both])) < 0.05
 
