@@ -58,6 +58,9 @@ class Criterion:
         said: what a report says of an episode that kept the rule, and of one that broke it (the
             trial's headline; empty: the criterion's name and its verdict).
         headline: the names of its fields a trial's headline shows beside its verdict.
+        card: the scorecard measure its verdict makes over a row's episodes: (the measure's name,
+            True: the share that kept the rule, higher is better; False: the share that broke it,
+            lower is better); None: its pass rate is in the summaries only.
     """
 
     name: ClassVar[str] = "criterion"
@@ -68,6 +71,7 @@ class Criterion:
     fields: ClassVar[tuple[Field, ...]] = ()
     said: ClassVar[tuple[str, str]] = ("", "")
     headline: ClassVar[tuple[str, ...]] = ()
+    card: ClassVar[tuple[str, bool] | None] = None
 
     def applies(self, episode: "Episode") -> bool:
         """Whether the rule holds in this episode at all (where it does not, it neither passes nor fails)."""

@@ -18,7 +18,7 @@ from racf.experiments.episode.criteria import Criterion
 from racf.experiments.metrics.base import Episode, Field, Metric, summarize_fields
 from racf.plugins import SCENARIOS
 
-__all__ = ["Criteria", "criteria_of_rows", "scenarios_of"]
+__all__ = ["Criteria", "criteria_of_rows", "scenarios_of", "card_measures"]
 
 _log = logging.getLogger(__name__)
 
@@ -76,3 +76,23 @@ def criteria_of_rows(results: pd.DataFrame) -> list[Criterion]:
         for cls in scenario.criteria:
             seen.setdefault(cls.name, cls())
     return list(seen.values())
+
+
+def card_measures(results: pd.DataFrame) -> list[dict]:
+    """The scorecard measures the rows' criteria declare (``Criterion.card``): each one's share of the
+    episodes where its rule applies that kept it (or broke it), with its Wilson interval and N."""
+    from racf.stats import wilson_interval
+
+    out = []
+    for criterion in criteria_of_rows(results):
+        if criterion.card is None or criterion.name not in results:
+            continue
+        measure, kept = criterion.card
+        verdicts = results[criterion.name].dropna().astype(bool)
+        n = int(len(verdicts))
+        if not n:
+            continue
+        k = int(verdicts.sum()) if kept else int((~verdicts).sum())
+        out.append({"measure": measure, "value": k / n, "ci": list(wilson_interval(k, n)), "n": n,
+                    "higher_is_better": kept})
+    return out

@@ -24,6 +24,7 @@ from pathlib import Path
 
 import pandas as pd
 
+from racf.experiments.scorecard.card_format import current_card
 from racf.experiments.pages.results_format import meta_lines, missing, page_head, rate
 from racf.stats import median_ci, wilson_interval
 
@@ -241,7 +242,7 @@ def _existence_lines(root: Path) -> list[str]:
             continue
         data = json.loads(path.read_text())
         metas.append((name, data["meta"]))
-        cards += [(label or c["defence"], c) for c in data["cards"]]
+        cards += [(label or c["defence"], current_card(c)) for c in data["cards"]]
     if not cards:
         return lines
     for name, meta in metas:
@@ -253,10 +254,12 @@ def _existence_lines(root: Path) -> list[str]:
         cells = []
         for key in keys:
             r = card["closed_loop"].get(key)
-            cells.append("—" if r is None else f"{rate(r['collision_free'], r['collision_free_ci'])}; "
-                                                f"{rate(r['needless_hard_brake'], r['needless_hard_brake_ci'])}")
+            measures = {m["measure"]: m for m in (r or {}).get("headline", [])}
+            cells.append("—" if r is None else "; ".join(rate(measures[name]["value"], measures[name]["ci"])
+                                                         for name in ("collision-free", "needless hard brake")))
         lines.append(f"| {label} | " + " | ".join(cells) + " |")
-    n = {card["closed_loop"][k]["n_following"] for _, card in cards for k in keys if k in card["closed_loop"]}
+    n = {m["n"] for _, card in cards for k in keys if k in card["closed_loop"]
+         for m in card["closed_loop"][k]["headline"]}
     lines += ["", f"N per cell: {', '.join(str(v) for v in sorted(n))} (15 seeds x the lead's four profiles). Each "
               "cell: collision-free; any needless hard brake.", "",
               "What it shows: with the check on, the vote no longer drives into the lead under the phantom and brakes "

@@ -26,6 +26,7 @@ from racf.experiments.scorecard.drives import driving_rows
 from racf.experiments.scorecard.link import link_services
 from racf.provenance import atomic_write, commit
 from racf.experiments.sweeps.store import ResultStore
+from racf.experiments.metrics.criteria import card_measures
 from racf.experiments.sweeps.summary import plugin_measures, stealth_summary, summarize
 
 __all__ = ["run_card", "card_version", "racf_commit"]
@@ -57,25 +58,13 @@ def _loop_summary(rows: pd.DataFrame, attacked: bool) -> dict:
             "n_traffic_attack_before_t_star", "collision_rate_attack_before_t_star",
             "collision_rate_attack_before_t_star_ci")
     summary = {k: s.get(k) for k in keep if k in s} | {"measures": plugin_measures(rows, attacked)}
+    declared = card_measures(rows)  # what the rows' criteria put on a card (collision-free, say)
+    if declared:
+        summary["headline"] = declared
     if "sign_stands" in rows and not rows["sign_stands"].fillna(True).astype(bool).any():
         # No sign stood (a removed sign, a phantom): stopping is the failure, measured as needless stops.
         summary |= {"scr": None, "scr_ci": [None, None], "n_needless": int(len(rows))}
-    if "no_lead_collision" in rows and rows["no_lead_collision"].notna().any():
-        summary |= {"scr": None, "scr_ci": [None, None]} | _following_summary(rows)
     return summary
-
-
-def _following_summary(rows: pd.DataFrame) -> dict:
-    """A following row's headline (no SCR: the car ahead stops on the sign's line, the car behind it):
-    the collision-free rate and the share of episodes with a needless hard brake, with Wilson intervals."""
-    from racf.stats import wilson_interval
-
-    rows = rows[rows["no_lead_collision"].notna()]
-    n = int(len(rows))
-    free = int(rows["no_lead_collision"].astype(bool).sum())
-    needless = int((rows["needless_hard_brakes"].fillna(0) > 0).sum()) if "needless_hard_brakes" in rows else 0
-    return {"n_following": n, "collision_free": free / n, "collision_free_ci": list(wilson_interval(free, n)),
-            "needless_hard_brake": needless / n, "needless_hard_brake_ci": list(wilson_interval(needless, n))}
 
 
 

@@ -1,11 +1,12 @@
 """A card's headline: the few numbers a reader looks for first, each a rate with its N and
 Wilson interval, pooled over the battery's rows of one kind.
 
-- ``worst``: the lowest rate over the attacked rows (SCR where a sign stands, the collision-free
-  rate where the car follows another), and which row it is;
+- ``worst``: the lowest rate over the attacked rows (SCR where the stop rule judged the row, else
+  the share its criteria declare for a card, ``Criterion.card``: collision-free, say), and which row it is;
 - ``attacked``: that rate pooled over every attacked row (successes over episodes);
 - ``clean``: the same over the rows with no attack;
-- ``needless``: needless stops (no sign stands) and needless hard brakes (the car ahead), pooled;
+- ``needless``: the rows' costs, pooled: needless stops (no sign stands) and any share a criterion
+  declares lower-is-better (needless hard brakes, say);
 - ``driving``: the drives' mean driving score; ``trainable``: the defence's trainable parameters.
 
 A measure the battery has no row for is None. The board (``racf.experiments.scorecard.board``) and
@@ -69,18 +70,20 @@ def row_rates(card: dict) -> list[tuple[str, str, str, Rate, bool, bool]]:
     where it counts them; rows in the battery's order."""
     from racf.experiments.scorecard.battery import BATTERIES
 
+    from racf.experiments.scorecard.card_format import current_card
+
+    card = current_card(card)
     battery = BATTERIES.get(card["battery"].removesuffix("-quick"))
     rows = {r.key: r for r in battery.rows()} if battery else {}
     order = list(rows)
     out = []
     for key, r in sorted(card["closed_loop"].items(), key=lambda kv: order.index(kv[0]) if kv[0] in order else 99):
         attacked = rows[key].attacked if key in rows else True
-        if r.get("n_following"):
-            out.append((key, r["title"], "collision-free", Rate.of(r["collision_free"], r["collision_free_ci"],
-                                                                   r["n_following"], key), True, attacked))
-            out.append((key, r["title"], "needless hard brake", Rate.of(
-                r["needless_hard_brake"], r["needless_hard_brake_ci"], r["n_following"], key), False, attacked))
-        elif r.get("scr") is not None:
+        declared = r.get("headline", [])  # the row's criteria's own measures (Criterion.card)
+        for m in declared:
+            out.append((key, r["title"], m["measure"], Rate.of(m["value"], m["ci"], m["n"], key), m["higher_is_better"],
+                        attacked))
+        if not declared and r.get("scr") is not None:
             out.append((key, r["title"], "SCR", Rate.of(r["scr"], r["scr_ci"], r["n"], key), True, attacked))
         for m in r.get("measures", []):
             if m["measure"].startswith("needless") and m["value"] is not None:
@@ -92,10 +95,11 @@ def row_rates(card: dict) -> list[tuple[str, str, str, Rate, bool, bool]]:
 def headline(card: dict) -> Headline:
     """The card's headline (see the module's docstring)."""
     rows = row_rates(card)
-    primary = [(rate, attacked) for _, _, measure, rate, _, attacked in rows
-               if measure in ("SCR", "collision-free")]
+    # A row's primary measure is one where higher is better (SCR, or its criteria's kept share); one where
+    # lower is better is a cost (needless stops, needless hard brakes).
+    primary = [(rate, attacked) for _, _, _, rate, higher, attacked in rows if higher]
     attacked = [rate for rate, hit in primary if hit]
-    needless = [rate for _, _, measure, rate, _, _ in rows if measure.startswith("needless")]
+    needless = [rate for _, _, _, rate, higher, _ in rows if not higher]
     drives = [r for r in card.get("drives", {}).values() if r.get("driving_score") is not None]
     driving = None
     if drives:

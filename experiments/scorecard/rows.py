@@ -10,28 +10,27 @@ def card_rows(card: dict) -> list[tuple[str, str, str, float | None, list | None
     """Every row of a card as (section, row, measure, value, interval, N, higher_is_better)."""
     from racf.experiments.scorecard.battery import BATTERIES
 
+    from racf.experiments.scorecard.card_format import current_card
+
+    card = current_card(card)
     rows = []
     battery = BATTERIES.get(card["battery"].removesuffix("-quick"))
     order = [r.key for r in battery.rows()] if battery else []
     for key, r in sorted(card["closed_loop"].items(), key=lambda kv: order.index(kv[0]) if kv[0] in order else 99):
-        if r.get("scr") is not None or not ("n_needless" in r or "n_following" in r):  # no SCR where no sign
-            rows.append(("closed loop", r["title"], "SCR", r["scr"], r["scr_ci"], r["n"], True))  # is the target
-        if r.get("n_following"):  # the car ahead: collisions and needless hard brakes
-            rows.append(("closed loop", r["title"], "collision-free", r["collision_free"], r["collision_free_ci"],
-                         r["n_following"], True))
-            rows.append(("closed loop", r["title"], "needless hard brake", r["needless_hard_brake"],
-                         r["needless_hard_brake_ci"], r["n_following"], False))
-        following = bool(r.get("n_following"))  # the stop rule's measures say nothing of following a car
-        if r.get("n_attack_before_t_star") and not following:
+        if "scr" in r and (r["scr"] is not None or "n_needless" not in r):  # the stop rule judged the row
+            rows.append(("closed loop", r["title"], "SCR", r["scr"], r["scr_ci"], r["n"], True))  # (no sign stood: none)
+        for m in r.get("headline", []):  # what the row's criteria declare (Criterion.card)
+            rows.append(("closed loop", r["title"], m["measure"], m["value"], m["ci"], m["n"], m["higher_is_better"]))
+        if r.get("n_attack_before_t_star"):
             rows.append(("closed loop", r["title"], "SCR, attack before t*", r["scr_attack_before_t_star"],
                          r["scr_attack_before_t_star_ci"], r["n_attack_before_t_star"], True))
         if r.get("undetected_error_median") is not None:
             rows.append(("closed loop", r["title"], "undetected error m, median", r["undetected_error_median"],
                          r["undetected_error_ci"], r["n"], False))
-        if r.get("robustness_median_m") is not None and not following:  # the stop rule's STL robustness
+        if r.get("robustness_median_m") is not None:  # the stop rule's STL robustness
             rows.append(("closed loop", r["title"], "STL robustness m, median", r["robustness_median_m"],
                          r["robustness_ci"], r["n"], True))
-        if r.get("n_traffic"):  # cross-traffic: what a missed stop cost
+        if r.get("n_traffic"):  # other cars crossing: what a missed stop cost
             rows.append(("closed loop", r["title"], "collision rate", r["collision_rate"], r["collision_rate_ci"],
                          r["n_traffic"], False))
             if r.get("n_traffic_attack_before_t_star"):

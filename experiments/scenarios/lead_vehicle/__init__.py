@@ -27,7 +27,7 @@ from racf.sim.world.lead import LEAD_PROFILES, LeadCar
 from racf.sim.world.lead_manager import LeadManager
 from racf.sim.world.traffic import CAR_FOOTPRINT_M, TRAFFIC_COLOURS
 
-__all__ = ["LeadVehicle", "NoLeadCollision", "KeepsHeadway", "lead_rest_s", "REST_BEHIND_S"]
+__all__ = ["LeadVehicle", "NoLeadCollision", "KeepsHeadway", "NoNeedlessHardBrake", "lead_rest_s", "REST_BEHIND_S"]
 
 #: The episode ends once the lead is at rest for good and the car has stood this long, s.
 REST_BEHIND_S = 1.0
@@ -43,6 +43,7 @@ class NoLeadCollision(NoContact):
     checks = "the car never touched the car ahead"
     penalty = 0.60
     said = ("followed without contact", "touched the car ahead")
+    card = ("collision-free", True)
 
     def guards(self, touched: str) -> bool:
         return touched == "lead"
@@ -76,6 +77,18 @@ class KeepsHeadway(Criterion):
         return {f.name: out[f.name] for f in self.fields}
 
 
+class NoNeedlessHardBrake(Criterion):
+    """Brake hard only when the real lead asks for it (informative: a phantom's cost, on the scorecard)."""
+
+    name = "no_needless_hard_brake"
+    checks = "the car began no hard brake while the real lead asked for none"
+    optional = True
+    card = ("needless hard brake", False)
+
+    def passed(self, episode) -> bool:
+        return score_following(episode.log).needless_hard_brakes == 0
+
+
 class LeadVehicle(Scenario):
     """A lead car in the ego car's lane, ``gap_m`` ahead of its bumper at the start, driving its profile."""
 
@@ -90,7 +103,7 @@ class LeadVehicle(Scenario):
         Param("brake_t", 3.0, 0.5, 10.0, unit="s", meaning="when the lead brakes, after the start"),
         Param("colour", "white", choices=tuple(TRAFFIC_COLOURS), meaning="the lead's paint"),
     )
-    criteria = (NoLeadCollision, KeepsHeadway)
+    criteria = (NoLeadCollision, KeepsHeadway, NoNeedlessHardBrake)
 
     def check(self, spec, values) -> None:
         if spec.estimator_endpoint is not None:

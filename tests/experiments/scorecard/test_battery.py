@@ -68,22 +68,38 @@ def test_racf_6_follows_the_car_ahead_through_its_profiles_paired_over_defences(
     assert six.offline_presets == () and six.drives == ()
 
 
-def test_a_following_row_is_rated_by_collisions_and_needless_hard_brakes_not_by_scr():
+def test_a_following_row_is_rated_by_what_its_criteria_declare_not_by_scr():
     import pandas as pd
 
-    from racf.experiments.scorecard.card import _following_summary
+    from racf.experiments.scorecard.card import _loop_summary
     from racf.experiments.scorecard.rows import card_rows
 
-    frame = pd.DataFrame({"no_lead_collision": [True, True, True, False, None], "needless_hard_brakes": [0, 2, 0, 1, 3]})
-    summary = {"scr": None, "scr_ci": [None, None], "n_attack_before_t_star": 3, "scr_attack_before_t_star": 0.0,
-               "scr_attack_before_t_star_ci": [0.0, 0.5], "robustness_median_m": 1.0, "robustness_ci": [0.5, 2.0]}
-    summary |= _following_summary(frame)
-    assert summary["n_following"] == 4  # an episode the criterion does not apply to is left out
-    assert summary["collision_free"] == 0.75 and summary["needless_hard_brake"] == 0.5
-    assert summary["collision_free_ci"][0] < 0.75 < summary["collision_free_ci"][1]
+    frame = pd.DataFrame({"target": "lead_vehicle", "setting": "clean+lead_patch+odca",
+                          "no_lead_collision": [True, True, True, False, None],
+                          "no_needless_hard_brake": [True, False, True, False, None], "lost_frames": 0,
+                          "attack_start_s": 2.0, "driving_score": 1.0, "collision": False})
+    summary = _loop_summary(frame, attacked=True)
+    declared = {m["measure"]: m for m in summary["headline"]}  # Criterion.card: NoLeadCollision, NoNeedlessHardBrake
+    assert declared["collision-free"]["n"] == 4  # an episode the criterion does not apply to is left out
+    assert declared["collision-free"]["value"] == 0.75 and declared["needless hard brake"]["value"] == 0.5
+    assert declared["collision-free"]["ci"][0] < 0.75 < declared["collision-free"]["ci"][1]
+    assert not {"scr", "asr", "failures", "robustness_median_m"} & set(summary)  # the stop rule's: they do not apply
     card = {"battery": "racf-6", "closed_loop": {"following_phantom": {"title": "t", "n": 4, **summary}}, "drives": {},
             "cost": {"parameters": {"from": "none", "trainable": 0}}}
     measures = {m: (v, n) for _, _, m, v, _, n, _ in card_rows(card)}
     assert not {"SCR", "SCR, attack before t*", "STL robustness m, median"} & set(measures)  # the stop rule's
     assert measures["collision-free"] == (0.75, 4)
     assert measures["needless hard brake"] == (0.5, 4)
+
+
+def test_a_card_written_before_the_criteria_declared_their_measures_reads_the_same():
+    from racf.experiments.scorecard.card_format import current_row
+
+    old = {"title": "t", "n": 60, "n_following": 60, "scr": None, "asr": 1.0, "failures": {"braked_early": 45},
+           "collision_free": 0.9, "collision_free_ci": [0.8, 0.95], "needless_hard_brake": 0.1,
+           "needless_hard_brake_ci": [0.05, 0.2]}
+    row = current_row(old)
+    assert row["headline"] == [{"measure": "collision-free", "value": 0.9, "ci": [0.8, 0.95], "n": 60, "higher_is_better": True},
+                               {"measure": "needless hard brake", "value": 0.1, "ci": [0.05, 0.2], "n": 60,
+                                "higher_is_better": False}]
+    assert not {"asr", "failures", "scr", "n_following"} & set(row) and current_row(row) == row
