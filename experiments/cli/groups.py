@@ -4,7 +4,7 @@ Each command is declared once, where its module registers it under its flat name
 (``bench-sim``, ``train``, ``detector-data``); a group gives it its short name beside its
 siblings, with the same flags and handler (argparse's ``parents``). The flat names stay as
 hidden aliases that still work, so scripts written for the flat command line run unchanged;
-``racf bench`` followed by the offline benchmark's flags is that benchmark, as before.
+``racf bench`` with the offline benchmark's flags after it is that benchmark, as before.
 """
 
 from __future__ import annotations

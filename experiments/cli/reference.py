@@ -50,7 +50,7 @@ def _cli_markdown(parser: argparse.ArgumentParser) -> str:
     aliases = [f"`racf {flat}` = `racf {group} {short}`" for group, (_, commands) in GROUPS.items()
                for short, flat in commands.items()]
     lines += ["## Old names", "", "The commands had flat names before they were grouped; those names still work "
-              "(scripts run unchanged) and `racf bench` followed by the offline benchmark's flags is that benchmark: "
+              "(scripts run unchanged) and `racf bench` with the offline benchmark's flags after it is that benchmark: "
               + "; ".join(aliases) + ".", ""]
     from racf.experiments.cli.mistakes import mistakes_markdown
 
@@ -91,7 +91,7 @@ def step_log_markdown() -> str:
     lines += ["", "## The result row", "",
               "`TrialResult`, strict JSON (null for a missing number): which episode it is ("
               + ", ".join(f"`{name}`" for name in IDENTITY) + "), then the fields of each metric the episode "
-              "scored (`racf.plugins.METRICS`; racf's own are listed here, a plug-in's follow them):", "",
+              "scored (`racf.plugins.METRICS`; racf's own are listed here, a plug-in's after them):", "",
               "| field | unit | metric | summarised as | meaning |", "|---|---|---|---|---|"]
     for name in sorted((n for n in METRICS if METRICS.plugin(n).builtin), key=lambda n: (METRICS[n].order, n)):
         lines += [f"| `{f.name}` | {f.unit or '-'} | `{name}` | {f.summary or '-'} | {f.meaning} |"

@@ -166,7 +166,7 @@ def _trials(args: argparse.Namespace) -> int:
         lat_text = f"{lat.mean():.3f} +- {lat.std(ddof=1) if len(lat) > 1 else 0:.3f}" if len(lat) else "-"
         failures = ", ".join(f"{k} {v}" for k, v in group["failure"].dropna().value_counts().items()) or "-"
         print(f"{sign_:>4} {speed_:>6.1f} {len(group):>3} {group['success'].mean():>5.2f} {lat_text:>26}  {failures}")
-    print(table_text({setting: summary}))
+    print(table_text({setting: summary}, results))
     if "service_fallback" in results and results["service_fallback"].astype(bool).any():
         fell = results[results["service_fallback"].astype(bool)]
         counts = ", ".join(f"{int(fell[c].sum())} {words}" for c, words in (
@@ -178,8 +178,10 @@ def _trials(args: argparse.Namespace) -> int:
     return 0
 
 
-def table_text(table: dict[str, dict]) -> str:
-    """SCR / ASR with Wilson intervals, trigger delay and dt_brake over successes, failures by cause."""
+def table_text(table: dict[str, dict], frame=None) -> str:
+    """SCR / ASR with Wilson intervals, trigger delay and dt_brake over successes, failures by cause;
+    then what each scenario of ``frame``'s rows adds (``Scenario.report``)."""
+    from racf.experiments.metrics.criteria import scenarios_of
     from racf.experiments.sweeps.batches import PAPER_TABLE
 
     def ms(mean, std):
@@ -196,17 +198,8 @@ def table_text(table: dict[str, dict]) -> str:
         lines.append(f"{name:<32}{r['n']:>4}{r['scr']:>6.2f} {fmt_ci(*r['scr_ci']):>13}{asr:>20}"
                      f"{ms(r['trigger_delay_mean'], r['trigger_delay_std']):>18}"
                      f"{ms(r['dt_brake_mean'], r['dt_brake_std']):>18}{r['n_latency']:>4}{early:>28}  {fails}")
-    crossed = {name: r for name, r in table.items() if r.get("n_traffic")}
-    if crossed:
-        lines.append(f"{'with cross-traffic':<32}{'N':>4}{'collision rate [95% Wilson]':>30}"
-                     f"{'attack before t* (N)':>32}  conflicts")
-        for name, r in crossed.items():
-            early = "-" if not r.get("n_traffic_attack_before_t_star") else (
-                f"{r['collision_rate_attack_before_t_star']:.2f} {fmt_ci(*r['collision_rate_attack_before_t_star_ci'])} "
-                f"({r['n_traffic_attack_before_t_star']})")
-            conflicts = ", ".join(f"{k} {v}" for k, v in r["conflicts"].items() if v) or "-"
-            lines.append(f"{name:<32}{r['n_traffic']:>4}{r['collision_rate']:>16.2f} "
-                         f"{fmt_ci(*r['collision_rate_ci']):>13}{early:>32}  {conflicts}")
+    for scenario in scenarios_of(frame) if frame is not None else ():  # each scenario's own table, as a sweep's report has it
+        lines += scenario().report(frame, table)[0]
     paper = "; ".join(f"{name} SCR {p['scr']:.2f}, dt {p['dt_brake_s']:.3f} s"
                       for name, p in PAPER_TABLE["rows"].items())
     lines.append("trigger delay = t(brake) - t*; dt_brake = t* to braking within 0.60 m of the line (the paper's "

@@ -154,7 +154,7 @@ def run_card(defence: str, battery: Battery, out: Path, *, quick: bool = False, 
             summary.update(_stealth(frame))
         if row in battery.drives:
             card["drives"][row.key] = {**summary, **driving_rows(frame, logs, PENALTIES)}
-        elif row.driving:  # a closed-loop row scored as drives too (cross-traffic: the vehicle-hit penalty)
+        elif row.driving:  # a closed-loop row scored as drives too (other cars: the vehicle-hit penalty)
             card["closed_loop"][row.key] = {**summary, **driving_rows(frame, logs, PENALTIES)}
             loop_logs += logs
         else:

@@ -1,7 +1,7 @@
 """Cards written by an older racf, read as the current form.
 
 Before a scenario's criteria declared their card measures (``Criterion.card``), a row whose episodes
-followed a car ahead held them under keys of their own (``n_following``, ``collision_free``,
+kept behind a car ahead held them under keys of their own (``n_following``, ``collision_free``,
 ``needless_hard_brake``) beside the stop rule's summaries, which did not apply to it (``asr``,
 ``failures``, ``dt_brake``, the STL robustness, the stealth measures). :func:`current_row` turns such a
 row into the current form: the same numbers as a ``headline`` list, and the measures that do not apply

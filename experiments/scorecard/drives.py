@@ -9,7 +9,7 @@ infraction: a stop sign run, or a crate hit. Stopping short (``braked_early``) c
 penalty: CARLA scores it through route completion, and so does this score when the car never
 goes on. A contact with another car (the log's ``collision_with``: ``traffic0``..) is a vehicle
 hit, on top of the stop sign it ran. The card gives the mean over the drives with a bootstrap
-interval; rows with cross-traffic get the same score.
+interval; closed-loop rows with other cars get the same score.
 """
 
 from __future__ import annotations
