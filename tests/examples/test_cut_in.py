@@ -38,5 +38,8 @@ def test_racf_s_attacks_on_a_car_ahead_act_on_it(cut_in_installed, tmp_path):
     target = attacked_vehicle(default_env(TrialSpec("clean+lead_hide", 1, 1.0, 0, target="cut_in")))
     assert (target.name, target.kind, target.body) == ("cutin", "vehicle", "cutin_0")
     row, log = _trial(tmp_path, "clean+lead_hide+raw")
-    hidden = log["attack_active"].astype(bool) & (log["t"] > 2.1)
-    assert hidden.any() and not log.loc[hidden, "lead_detected"].any()  # the car ahead gone from every sensor
+    hidden = log["attack_active"].astype(bool)
+    seen_before = log.loc[(log["t"] > 1.5) & ~hidden, "lead_detected"].mean()
+    # Gone from every sensor: the car loses it, and drives into it (as it does into the lead: racf-6's row).
+    assert hidden.any() and log.loc[hidden, "lead_detected"].mean() < 0.5 * seen_before
+    assert row["collision_with"] == "cutin" and row["no_cutin_contact"] is False
