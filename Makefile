@@ -61,7 +61,7 @@ check-slow: $(STAMP) browser
 check-speed: $(STAMP)
 	$(SINGLE_THREAD) $(if $(shell command -v taskset),taskset -c 0) $(VENV)/bin/racf bench guard --check
 
-# Mutation testing of the link's code (cosmic-ray; tests/mutation/cosmic-ray.toml lists the modules):
+# Mutation testing of the link's code and the car's parts (cosmic-ray; tests/mutation/cosmic-ray.toml lists the modules):
 # each mutant runs the tests that mirror its module. The session in outputs/mutation/ resumes where
 # it stopped; changed modules, tests or configuration start it afresh. Prints the score over the
 # non-equivalent mutants (goal 0.90) and every survivor not argued in tests/mutation/equivalent.toml.

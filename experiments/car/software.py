@@ -26,7 +26,7 @@ from racf.sim.world.drives import RouteTarget
 from racf.sim.world.road_graph import Path
 from racf.sim.world.route_plan import current_slot
 
-__all__ = ["CarCalibration", "Mission", "CarStep", "Car", "sign_depth_at_line", "route_follower", "map_bearing"]
+__all__ = ["CarCalibration", "Mission", "CarStep", "Car", "sign_depth_at_line", "route_follower", "map_bearing", "lowest_cap"]
 
 #: The tyres' grip bounds the body's acceleration (friction 0.75 x g): a faster change of the
 #: encoder's speed is the wheels spinning up or locking, not the car (m/s^2).
@@ -105,6 +105,12 @@ def sign_depth_at_line(calibration: CarCalibration, target: RouteTarget) -> floa
     car's build; a target the map does not list: by the rule of the road, ``UNMAPPED_SIGN_PAST_LINE_M``)."""
     camera_to_bumper = float(calibration.bumper_x_m - calibration.camera_xy_m[0])
     return camera_to_bumper + (target.target_s - target.stop_s if getattr(target, "mapped", True) else UNMAPPED_SIGN_PAST_LINE_M)
+
+
+def lowest_cap(braker_cap: float, said) -> float:
+    """The car's speed cap: the lowest of its braker's and every stage's (``StageLimit``): no stage can
+    raise what another limits."""
+    return min([braker_cap, *(limit.speed_cap_mps for limit in said)])
 
 
 def route_follower(path: Path, cruise_mps: float, start_s: float = 0.0) -> RouteFollower:
@@ -318,7 +324,7 @@ class Car:
                                dt, frame_new, scan_new, ages)
                 for stage in self.stages:
                     self._said[stage.name] = stage.step(view)
-                cap = min(cap, *(said.speed_cap_mps for said in self._said.values()))
+                cap = lowest_cap(cap, self._said.values())
             self._action = np.array(self.follower.act(x, y, yaw, speed, dt, cap), np.float32)
         self._step += 1
         track = self.perception.lidar.state.position  # camera-relative; + the camera's body position

@@ -1,4 +1,4 @@
-"""`make mutate`: cosmic-ray over the link's code, resumable, then its score.
+"""`make mutate`: cosmic-ray over the link's code and the car's parts, resumable, then its score.
 
 The session lives in outputs/mutation/: a run interrupted resumes where it stopped (`make mutate`
 again), and one whose modules, runner or configuration changed since starts afresh (its fingerprint
