@@ -48,7 +48,7 @@ def fingerprint(tests: bool = False) -> str:
     from run_tests import TESTS
 
     files = sorted({ROOT / t for tests in TESTS.values() for t in tests if (ROOT / t).exists()}
-                   | {ROOT / "tests" / "experiments" / "episode" / "fake_service.py"} if tests else
+                   | {ROOT / "tests" / "experiments" / "link" / "fake_service.py"} if tests else
                    {CONFIG, HERE / "run_tests.py", HERE / "forkserver.py", *(ROOT / m for m in _modules())})
     digest = hashlib.sha256()
     for path in files:
