@@ -132,7 +132,10 @@ def forkserver():
     """A warm process that forks each test run (tests/mutation/forkserver.py), for the runs inside."""
     import os
 
-    path = OUT / "forkserver.sock"
+    # A Unix socket's path holds at most 107 bytes: a session folder named after several modules is longer.
+    import tempfile
+
+    path = Path(tempfile.gettempdir()) / f"racf-mutate-{hashlib.sha256(str(OUT).encode()).hexdigest()[:12]}.sock"
     path.unlink(missing_ok=True)
     proc = subprocess.Popen([sys.executable, str(HERE / "forkserver.py"), str(path)], cwd=ROOT, stdout=subprocess.PIPE,
                             text=True)
