@@ -256,13 +256,13 @@ def registry_rows(registry: dict) -> list[tuple[str, str]]:
 
 
 def registry_markdown() -> str:
-    """The README's tables of attacks, estimators, detectors, scenarios and metrics, made from the registries."""
+    """The tables of attacks, estimators, detectors, scenarios, metrics and car stages, made from the registries."""
     from racf.controllers.detectors import DETECTORS
-    from racf.plugins import METRICS, SCENARIOS
+    from racf.plugins import CAR_STAGES, METRICS, SCENARIOS
 
     lines = []
     for title, registry in (("attack", ATTACKS), ("estimator", ESTIMATORS), ("detector", DETECTORS),
-                            ("scenario", SCENARIOS), ("metric", METRICS)):
+                            ("scenario", SCENARIOS), ("metric", METRICS), ("car stage", CAR_STAGES)):
         lines += [f"| {title} | what it does |", "|---|---|"]
         lines += [f"| `{name}` | {text} |" for name, text in registry_rows(registry)]
         lines.append("")
