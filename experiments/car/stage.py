@@ -103,7 +103,7 @@ class CarView:
     @property
     def scan(self) -> np.ndarray | None:
         """The LiDAR's scan on the step it arrives, else None (hand a tracker each scan once)."""
-        return self.obs["lidar"] if not self.scan_new else None
+        return self.obs["lidar"] if self.scan_new else None
 
 
 @dataclass(frozen=True)
