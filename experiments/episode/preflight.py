@@ -65,16 +65,21 @@ def check_specs(specs: list[TrialSpec]) -> None:
 def check_plan(spec: TrialSpec) -> None:
     """Plans ``spec``'s episode and checks what the plan declares (the mission's car stages, their
     columns, the world managers' columns) against the step log; UserError names what is wrong."""
+    where = f"episode {spec.trial_id.rsplit('_', 1)[0]} cannot be planned"
     try:
         plan = plan_episode(spec)
-        stages = [CAR_STAGES.plugin(name).obj for name in plan.mission.stages]
-        stage_columns(stages) + world_columns(plan.env_kwargs.get("world", ()))
     except (PluginError, UserError):
         raise
     except ValueError as err:
-        raise UserError(f"episode {spec.trial_id.rsplit('_', 1)[0]} cannot be planned: {err}") from None
+        raise UserError(f"{where}: {err}") from None
     except Exception:  # a plug-in's bug, not a value: the episode reports it, naming the plug-in and its traceback
         return
+    stages = [CAR_STAGES.plugin(name).obj for name in plan.mission.stages]
+    try:
+        stage_columns(stages)
+        world_columns(plan.env_kwargs.get("world", ()))
+    except ValueError as err:
+        raise UserError(f"{where}: {err}") from None
 
 
 def _key(*parts) -> str:

@@ -77,3 +77,19 @@ def test_the_car_takes_the_lowest_of_every_cap(caps, braker):
     from racf.experiments.car.software import lowest_cap
 
     assert lowest_cap(braker, [StageLimit(c) for c in caps]) == min([braker, *caps])
+
+
+def test_a_stage_is_handed_the_scan_only_on_the_step_it_arrives_and_what_it_is_handed_is_frozen():
+    import dataclasses
+
+    import numpy as np
+
+    from racf.experiments.car.stage import CarView, StageContext
+
+    scan = np.arange(360.0)
+    view = CarView({"lidar": scan}, np.zeros(3), None, 0.0, 1.0, 0.0, 0.0, 0.02, True, True)
+    assert view.scan is scan and dataclasses.replace(view, scan_new=False).scan is None
+    context = StageContext(None, (0.1, 0.0), 0.17, (0.0, 0.0), 0.12, make_defence=object)
+    for frozen in (view, context, StageLimit(1.0), StageColumn("a", "m", "b")):
+        with pytest.raises(dataclasses.FrozenInstanceError):
+            frozen.name = "changed"

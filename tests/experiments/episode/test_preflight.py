@@ -51,3 +51,78 @@ def test_a_stage_that_declares_one_column_twice_or_is_unknown_is_refused():
 
 def test_a_plug_ins_bug_in_its_plan_is_left_to_the_episode():
     check_plan(_scenario("buggy_scn", plan_error=KeyError("lane")))  # not a value the user gave: no UserError here
+
+
+def test_a_world_column_named_like_racf_s_is_refused_and_a_sound_batch_passes():
+    from racf.sim.world.manager import TruthColumn, WorldManager
+
+    class Clash(WorldManager):
+        def columns(self):
+            return (TruthColumn("speed", "m/s", "mine"),)
+
+    class Clashing(Scenario):
+        name = "clash_scn"
+
+        def world(self, spec, values):
+            return (Clash(),)
+
+    SCENARIOS.register(Clashing)
+    with pytest.raises(UserError, match="declares the column 'speed', which racf's step log already holds"):
+        check_plan(TrialSpec("clean", 2, 1.0, 0, target="clash_scn"))
+    check_specs([TrialSpec("clean+depth_bias+raw", 1, 1.0, seed) for seed in range(3)])
+
+
+class _Boom:
+    """An estimator whose constructor fails (a plug-in's)."""
+
+    name = "boom_test"
+    why: Exception = RuntimeError("no GPU here")
+
+    def __init__(self):
+        raise self.why
+
+    def reset(self): ...
+
+    def estimate(self, sample, speed_mps, dt, yaw_rate_radps=0.0): ...
+
+    def diagnostics(self): ...
+
+    def would_pass(self, **kwargs): ...
+
+
+def test_a_defence_or_an_attack_that_cannot_be_built_is_one_line_naming_it():
+    from racf.plugins import ESTIMATORS
+
+    ESTIMATORS.register(_Boom)
+    with pytest.raises(UserError, match=r"estimator 'boom_test' with options \{\} cannot be built: RuntimeError: no GPU"):
+        check_specs([TrialSpec("clean+boom_test", 1, 1.0, 0)])
+    _Boom.why = ValueError("tol_m must be a number")
+    with pytest.raises(UserError, match=r"tol_m must be a number$") as caught:  # a ValueError: its words, no type
+        check_specs([TrialSpec("clean+boom_test", 1, 1.0, 0)])
+    assert "ValueError" not in str(caught.value)
+    from racf.plugins import ATTACKS
+    from racf.sim.attacks.base import AttackWrapper
+    from racf.sim.attacks.schedule import AttackSchedule
+
+    class LateTest(AttackWrapper):
+        """Opens its window 200 s in: later than the schedule takes."""
+
+        name = "late_test"
+
+        def __init__(self, env, **schedule):
+            super().__init__(env, AttackSchedule(**{**schedule, "trigger": "at_time", "start_s": 200.0}))
+
+    ATTACKS.register(LateTest)
+    with pytest.raises(UserError, match=r"attack\(s\) late_test and schedule \(duration_s=.*cannot be built: start_s"):
+        check_specs([TrialSpec("clean+late_test", 1, 1.0, 0)])
+
+
+def test_a_served_defence_is_asked_once_before_any_episode():
+    import socket
+
+    with socket.socket() as held:  # bound, not listening: nothing answers there
+        held.bind(("127.0.0.1", 0))
+        spec = TrialSpec("clean", 1, 1.0, 0, estimator_endpoint=f"tcp://127.0.0.1:{held.getsockname()[1]}",
+                         estimator_timeout_ms=100.0)
+        with pytest.raises(UserError, match="nothing listens there"):
+            check_specs([spec])

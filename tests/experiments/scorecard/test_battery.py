@@ -103,3 +103,13 @@ def test_a_card_written_before_the_criteria_declared_their_measures_reads_the_sa
                                {"measure": "needless hard brake", "value": 0.1, "ci": [0.05, 0.2], "n": 60,
                                 "higher_is_better": False}]
     assert not {"asr", "failures", "scr", "n_following"} & set(row) and current_row(row) == row
+
+
+def test_rows_whose_criteria_declare_no_card_measure_put_none_on_the_card():
+    import pandas as pd
+
+    from racf.experiments.metrics.criteria import card_measures
+
+    signs = pd.DataFrame({"target": "sign", "stop_rule": [True, False], "no_needless_stop": [None, None]})
+    assert card_measures(signs) == []
+    assert card_measures(signs.assign(target="lead_vehicle")) == []  # its criteria's columns are not in the rows

@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 import pytest
 
 from racf.sim.world.lead_manager import LeadManager
@@ -37,3 +39,30 @@ def test_a_world_s_targets_of_a_kind_come_in_the_managers_order():
     assert [t.name for t in world_targets(world)] == ["walker", "lead"]
     assert [t.name for t in world_targets(world, "vehicle")] == ["lead"] and world_targets(world, "sign") == ()
     assert LeadManager().targets()[0].pose_columns == tuple(c.name for c in LeadManager().columns()[:3])
+
+
+def test_a_declared_target_cannot_be_changed():
+    import dataclasses
+
+    target = QCar2Body("van").target(("van_x", "van_y", "van_yaw"))
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        target.kind = "person"
+
+
+def test_a_qcar2_body_is_placed_where_it_is_told_and_parked_out_of_sight():
+    import mujoco
+
+    from racf.sim.world.scene import load_model
+
+    model = load_model(world_xml=QCar2Body("van").xml())
+    car = QCar2Body("van")
+    car.bind(model)
+    data = mujoco.MjData(model)
+    car.place(data, 1.5, -0.5, math.pi / 2)
+    mujoco.mj_forward(model, data)
+    assert np.allclose(data.xpos[car.body], (1.5, -0.5, 0.0), atol=1e-9)
+    assert np.allclose(data.xmat[car.body].reshape(3, 3)[:, 0], (0.0, 1.0, 0.0), atol=1e-9)  # heading +y
+    car.park(data)
+    mujoco.mj_forward(model, data)
+    assert data.xpos[car.body][2] < -1.0 and np.allclose(data.xmat[car.body].reshape(3, 3), np.eye(3))
+    assert car.owns(car.body) and not car.owns(0)
