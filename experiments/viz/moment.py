@@ -43,12 +43,16 @@ LEAD = Target("the car ahead", "lead_gap", "lead_d_meas", "lead_lidar", "lead_d_
               "the clear gap to the car ahead (the referee's)")
 
 
-def target_of(log: pd.DataFrame) -> tuple[Target, pd.DataFrame]:
-    """The car ahead where the episode follows one (its gap added to the log as ``lead_gap``), else the sign."""
-    if "lead_x" in log and np.isfinite(_col(log, "lead_x")).any() and np.isfinite(_col(log, "lead_d_fused")).any():
-        from racf.experiments.scenarios.lead_vehicle.following import gaps
-
-        return LEAD, log.assign(lead_gap=gaps(log))
+def target_of(log: pd.DataFrame, targets=()) -> tuple[Target, pd.DataFrame]:
+    """The car ahead where the episode follows one: the first vehicle its world declares
+    (``WorldTarget``) that was in the world while the following stage gave a distance, its clear gap
+    added to the log as ``lead_gap``; else the sign."""
+    if np.isfinite(_col(log, LEAD.fused)).any():
+        for declared in targets:
+            x, y = (_col(log, c) for c in declared.pose_columns[:2])
+            if declared.kind == "vehicle" and np.isfinite(x).any():
+                gap = np.hypot(x - _col(log, "x"), y - _col(log, "y")) - declared.size_m[0]
+                return LEAD, log.assign(lead_gap=gap)
     return SIGN, log
 
 
@@ -175,7 +179,9 @@ def moment_figure(spec, out: str | Path, log: pd.DataFrame | None = None, title:
 
     if log is None:
         _, log = run_trial(spec)
-    target, log = target_of(log)
+    from racf.sim.world.manager import world_targets
+
+    target, log = target_of(log, world_targets(spec.scenario.world(spec, spec.scenario_params)))
     moment = choose_moment(log, target)
     frame = _frame_at(spec, moment.step)
     row = frame["row"]

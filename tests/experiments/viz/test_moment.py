@@ -40,10 +40,18 @@ def test_an_episode_that_follows_a_car_is_drawn_at_the_car_ahead():
     following = log(attack_active=[0, 1, 1], d_meas=[np.nan] * 3, d_fused=[np.nan] * 3, x=[0.0] * 3, y=[0.0] * 3,
                     lead_x=[1.0, 1.1, 1.2], lead_y=[0.0] * 3, lead_d_meas=[0.7, 1.9, 2.0],
                     lead_d_fused=[0.7, 0.8, 0.9], brake=[0] * 3)
-    target, with_gap = target_of(following)
-    assert target is LEAD and with_gap["lead_gap"].iloc[0] == pytest.approx(1.0 - 0.425, abs=0.05)
+    from racf.sim.world.lead_manager import LeadManager
+    from racf.sim.world.qcar2_body import QCar2Body
+
+    declared = LeadManager().targets()
+    target, with_gap = target_of(following, declared)
+    assert target is LEAD and with_gap["lead_gap"].iloc[0] == pytest.approx(1.0 - 0.425, abs=1e-9)
     assert choose_moment(with_gap, target).step == 2
-    assert target_of(log(d_fused=[1.0], d_meas=[1.0]))[0] is SIGN
+    assert target_of(log(d_fused=[1.0], d_meas=[1.0]), declared)[0] is SIGN
+    # Found through the world's declaration, whatever its columns are called; none declared: the sign.
+    renamed = following.rename(columns={"lead_x": "van_x", "lead_y": "van_y"})
+    assert target_of(renamed, (QCar2Body("van").target(("van_x", "van_y", "van_yaw")),))[0] is LEAD
+    assert target_of(following)[0] is SIGN
 
 
 @pytest.mark.slow  # two episodes (about 5 s)
