@@ -25,6 +25,7 @@ from racf.experiments.scorecard.detection import detection_rows
 from racf.experiments.scorecard.drives import driving_rows
 from racf.experiments.scorecard.link import link_services
 from racf.provenance import atomic_write, commit
+from racf.sim.world.manager import world_targets
 from racf.experiments.sweeps.store import ResultStore
 from racf.experiments.metrics.criteria import card_measures
 from racf.experiments.sweeps.summary import plugin_measures, stealth_summary, summarize
@@ -152,10 +153,11 @@ def run_card(defence: str, battery: Battery, out: Path, *, quick: bool = False, 
         summary = {"title": row.title, "detector": specs[0].detector, **_loop_summary(frame, row.attacked)}
         if row.attacked:
             summary.update(_stealth(frame))
+        vehicles = {t.name for s in specs for t in world_targets(s.scenario.world(s, s.scenario_params), "vehicle")}
         if row in battery.drives:
-            card["drives"][row.key] = {**summary, **driving_rows(frame, logs, PENALTIES)}
+            card["drives"][row.key] = {**summary, **driving_rows(frame, logs, PENALTIES, vehicles)}
         elif row.driving:  # a closed-loop row scored as drives too (other cars: the vehicle-hit penalty)
-            card["closed_loop"][row.key] = {**summary, **driving_rows(frame, logs, PENALTIES)}
+            card["closed_loop"][row.key] = {**summary, **driving_rows(frame, logs, PENALTIES, vehicles)}
             loop_logs += logs
         else:
             card["closed_loop"][row.key] = summary

@@ -25,8 +25,10 @@ __all__ = ["drive_score", "driving_rows", "PASSED_THE_LINE"]
 PASSED_THE_LINE = ("braked_late", "confirmed_lost", "never_confirmed")
 
 
-def drive_score(log: pd.DataFrame, n_targets: int, penalties: dict[str, float]) -> dict:
-    """One drive's route completion, infractions and driving score."""
+def drive_score(log: pd.DataFrame, n_targets: int, penalties: dict[str, float], vehicles=()) -> dict:
+    """One drive's route completion, infractions and driving score. ``vehicles``: the names of the
+    vehicles its world declares (``WorldTarget``, named as a contact with one is): touching one is a
+    vehicle hit."""
     outcomes = score_log(log)
     targets = log.groupby("slot", sort=True)["target"].first().to_dict()
     infractions = {"ran_stop_sign": 0, "hit_static_object": 0, "hit_vehicle": 0}
@@ -34,7 +36,7 @@ def drive_score(log: pd.DataFrame, n_targets: int, penalties: dict[str, float]) 
         if outcome.failure in PASSED_THE_LINE:
             kind = "ran_stop_sign" if str(targets[outcome.slot]).startswith("sign") else "hit_static_object"
             infractions[kind] += 1
-    if "collision_with" in log and log["collision_with"].astype(str).str.startswith("traffic").any():
+    if "collision_with" in log and log["collision_with"].astype(str).isin(set(vehicles)).any():
         infractions["hit_vehicle"] += 1  # the env ends an episode at its first contact
     completion = len(outcomes) / n_targets if n_targets else 0.0
     penalty = float(np.prod([penalties[k] ** v for k, v in infractions.items()]))
@@ -50,9 +52,10 @@ def _bootstrap_mean(values: np.ndarray, resamples: int = 2000) -> list[float | N
     return [float(np.quantile(means, 0.025)), float(np.quantile(means, 0.975))]
 
 
-def driving_rows(results: pd.DataFrame, logs: list[pd.DataFrame], penalties: dict[str, float]) -> dict:
-    """The driving score over a batch of drives (``results`` rows and their logs, in order)."""
-    per = [drive_score(log, int(n), penalties) for log, n in zip(logs, results["n_targets"])]
+def driving_rows(results: pd.DataFrame, logs: list[pd.DataFrame], penalties: dict[str, float], vehicles=()) -> dict:
+    """The driving score over a batch of drives (``results`` rows and their logs, in order; ``vehicles``:
+    the names of the vehicles their worlds declare)."""
+    per = [drive_score(log, int(n), penalties, vehicles) for log, n in zip(logs, results["n_targets"])]
     scores = np.array([p["driving_score"] for p in per], float)
     completion = np.array([p["route_completion"] for p in per], float)
     infractions = {k: int(sum(p["infractions"][k] for p in per)) for k in ("ran_stop_sign", "hit_static_object",

@@ -14,7 +14,7 @@ from typing import Any
 import mujoco
 import numpy as np
 
-from racf.sim.world.manager import TruthColumn, WorldManager
+from racf.sim.world.manager import QCAR2_BOX_M, TruthColumn, WorldManager, WorldTarget
 from racf.sim.world.traffic import MAX_TRAFFIC_CARS, TRAFFIC_COLOURS, TrafficCar
 
 __all__ = ["TrafficManager", "traffic_option", "traffic_body", "traffic_paint_geoms", "traffic_xml",
@@ -129,6 +129,12 @@ class TrafficManager(WorldManager):
             values = states[k] if k < len(states) else (math.nan,) * 4
             out.update({f"traffic{k}_{field}": float(v) for (field, _, _), v in zip(_STATE, values)})
         return out
+
+    def targets(self) -> tuple[WorldTarget, ...]:
+        """Each crossing car, a vehicle the car may perceive (named as a contact with it is)."""
+        return tuple(WorldTarget(f"traffic{k}", "vehicle", traffic_body(k),
+                                 (f"traffic{k}_x", f"traffic{k}_y", f"traffic{k}_yaw"), QCAR2_BOX_M)
+                     for k in range(self.cars))
 
     def owner_of(self, root_body: int) -> str | None:
         return f"traffic{self._of_body[root_body]}" if root_body in self._of_body else None

@@ -46,9 +46,11 @@ def test_an_attack_on_the_car_ahead_refuses_a_scenario_without_one_before_any_si
     # The spec is refused: no env is built (the world's declared targets are read from its managers).
     with pytest.raises(ValueError, match="acts on a vehicle that the scenario's world declares; scenario 'sign' declares none"):
         TrialSpec("clean+lead_patch", 1, 1.0, 0, t_atk=2.0)
-    # Crossing cars are declared as no target of the car's: they are not a car ahead.
-    with pytest.raises(ValueError, match="scenario 'cross_traffic' declares none"):
-        TrialSpec("clean+lead_patch", 1, 1.0, 0, t_atk=2.0, target="cross_traffic")
+    # A world of crossing cars declares them as vehicles: the attack aims at the first of them.
+    crossing = TrialSpec("clean+lead_patch", 1, 1.0, 0, t_atk=2.0, target="cross_traffic")
+    from racf.sim.attacks.lead import attacked_vehicle
+
+    assert attacked_vehicle(default_env(crossing)).name == "traffic0"
 
 
 def test_the_attacks_find_their_car_through_the_world_s_declaration():
