@@ -92,3 +92,18 @@ def test_a_lead_unseen_too_long_is_lost_and_the_defence_starts_again():
     assert math.isnan(lost.d_fused) and lost.decision.speed_cap_mps == math.inf and s.estimator.resets == 1
     assert step(s).decision.speed_cap_mps == math.inf and s.estimator.resets == 1  # reset once, when lost
     assert s.perception.lost == 1  # and the existence check forgets this lead
+
+
+def test_a_car_closing_fast_on_a_standing_lead_brakes_in_an_emergency():
+    """The policy is given the closing speed (the car's less the lead's): a standing lead 0.7 m ahead of
+    the bumper, the car at 1 m/s, is 0.7 s away: under the 0.8 s threshold. With the speeds swapped the
+    time-to-collision would read infinite and only the headway cap would act."""
+    s = stage(PerceptionSample(None, 1.0, 0.9, 1.0, 0.0))
+    out = None
+    for k in range(40):  # the range shrinks at the car's speed: the lead stands
+        d = 1.5 - 0.02 * k
+        s.perception.sample = PerceptionSample(None, d, 0.9, d, 0.0)
+        out = step(s, speed=1.0)
+    assert out.lead_mps == pytest.approx(0.0, abs=0.1)
+    assert out.decision.emergency and out.decision.speed_cap_mps == 0.0
+    assert out.decision.ttc_s == pytest.approx(out.decision.gap_m / 1.0, rel=0.1)

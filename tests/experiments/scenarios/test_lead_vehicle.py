@@ -106,3 +106,22 @@ def test_the_patch_reading_the_lead_far_is_a_real_attack_on_raw_depth():
     row = result.to_dict()
     assert row["no_lead_collision"] is False and row["driving_score"] == pytest.approx(0.6)
     assert log["collision_with"].iloc[-1] == "lead"  # the contact ended the episode
+
+
+def test_the_episode_waits_for_the_lead_to_rest_for_good_then_for_the_car_to_stand_behind_it():
+    plan = plan_episode(spec(profile="stop_and_go"))
+    rest = plan.extras["lead_rest_s"]
+    dt = plan.control_dt_s
+
+    def rows(t_end: float, standing_s: float) -> list[dict]:
+        """The car driving, then standing for ``standing_s`` up to ``t_end``, short of the sign's line."""
+        n = int(round(t_end / dt))
+        stood = int(round(standing_s / dt))
+        return [{"t": k * dt, "speed": 0.0 if k >= n - stood else 0.5, "slot": 0, "phase": "approach",
+                 "dist_to_stop_line": 1.0} for k in range(n)]
+
+    scenario = LeadVehicle()
+    # Standing behind a lead that stopped only for a while (stop and go): not over, however long it stands.
+    assert rest > 3.0 and not scenario.over(plan, rows(rest - 0.5, 2.0))
+    # Past the lead's last rest: over once the car has stood a second, not before.
+    assert scenario.over(plan, rows(rest + 2.0, 1.1)) and not scenario.over(plan, rows(rest + 2.0, 0.5))

@@ -31,6 +31,21 @@ def test_the_patch_reads_the_lead_s_pixels_far_and_no_others():
     np.testing.assert_array_equal(obs["lidar"], clean["lidar"])
 
 
+def test_the_lead_s_beams_are_those_whose_return_is_the_lead_not_every_beam_its_bearing_spans():
+    env, _, info, clean = attacked("clean+lead_frustum", bias_m=0.8)
+    scan = np.asarray(clean["lidar"], np.float64)
+    beams = lead_beams(env, info, scan)
+    # The lead's returns lie at its rear, about 0.6 m of gap plus the LiDAR's place ahead of the bumper.
+    assert 0 < beams.sum() < 10 and np.all(scan[beams] < 1.0)
+    # A return from beyond the lead along the same bearings (a wall 2 m further) is not the lead's.
+    beyond = scan.copy()
+    beyond[beams] += 2.0
+    assert not lead_beams(env, info, beyond).any()
+    # Nor is a bearing without any return.
+    beyond[beams] = np.inf
+    assert not lead_beams(env, info, beyond).any()
+
+
 def test_the_frustum_spoof_moves_the_lead_s_returns_and_with_depth_its_depth():
     env, obs, info, clean = attacked("clean+lead_frustum", bias_m=0.8)
     beams = lead_beams(env, info, clean["lidar"])
