@@ -211,7 +211,17 @@ class Workers:
                 if alone and running:
                     break
                 spec = queue.popleft()
-                running[self._pool.submit(episode_task, spec, out, expected_id=spec.trial_id, **episode)] = spec
+                try:
+                    future = self._pool.submit(episode_task, spec, out, expected_id=spec.trial_id, **episode)
+                except BrokenProcessPool:  # a worker died since the last wait: the futures in flight will say so
+                    queue.appendleft(spec)  # never started: not a death of its own
+                    if not running:  # nothing in flight to report it: a new pool
+                        self._pool.shutdown(wait=False, cancel_futures=True)
+                        self._pool = None
+                    break
+                running[future] = spec
+            if not running:
+                continue
             done, _ = wait(running, return_when=FIRST_COMPLETED)
             lost = []
             for future in done:

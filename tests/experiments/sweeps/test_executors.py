@@ -49,3 +49,37 @@ def test_a_worker_whose_code_changed_refuses_to_store_under_another_id(tmp_path)
     with pytest.raises(CodeChangedError, match="changed on disk while the batch ran"):
         run_episode(spec, str(tmp_path), expected_id=spec.trial_id + "x")
     assert not any(tmp_path.rglob("*.json"))
+
+
+def test_a_pool_that_broke_between_two_waits_is_replaced_and_no_episode_is_lost(monkeypatch, tmp_path):
+    """A worker can die after one episode finished and before the next is handed out: the pool then
+    refuses the hand-out itself. The episode goes back to the queue (it never started) and a new pool
+    runs it; nothing is counted as a death."""
+    from concurrent.futures import Future
+    from concurrent.futures.process import BrokenProcessPool
+
+    import racf.experiments.sweeps.executors as executors
+
+    pools = []
+
+    class Pool:
+        def __init__(self, broken: bool):
+            self.broken, self.submitted = broken, []
+            pools.append(self)
+
+        def submit(self, fn, spec, out, **kw):
+            if self.broken:
+                raise BrokenProcessPool("a child process terminated abruptly")
+            self.submitted.append(spec.trial_id)
+            future = Future()
+            future.set_result({"row": {"trial_id": spec.trial_id}})
+            return future
+
+        def shutdown(self, wait=True, cancel_futures=False):
+            pass
+
+    monkeypatch.setattr(executors, "spawn_pool", lambda workers: Pool(broken=not pools))
+    specs = [TrialSpec("clean", 1, 1.0, seed) for seed in range(3)]
+    with executors.Workers("local", 2) as workers:
+        out = [r["row"]["trial_id"] for r in workers.run(specs, str(tmp_path))]
+    assert sorted(out) == sorted(s.trial_id for s in specs) and len(pools) == 2 and not pools[0].submitted
