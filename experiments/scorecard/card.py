@@ -153,7 +153,9 @@ def run_card(defence: str, battery: Battery, out: Path, *, quick: bool = False, 
         summary = {"title": row.title, "detector": specs[0].detector, **_loop_summary(frame, row.attacked)}
         if row.attacked:
             summary.update(_stealth(frame))
-        vehicles = {t.name for s in specs for t in world_targets(s.scenario.world(s, s.scenario_params), "vehicle")}
+        scored = row in battery.drives or row.driving  # only a drive's score reads the declared vehicles
+        vehicles = {t.name for s in specs for t in world_targets(s.scenario.world(s, s.scenario_params), "vehicle")
+                    } if scored else set()
         if row in battery.drives:
             card["drives"][row.key] = {**summary, **driving_rows(frame, logs, PENALTIES, vehicles)}
         elif row.driving:  # a closed-loop row scored as drives too (other cars: the vehicle-hit penalty)

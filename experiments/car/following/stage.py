@@ -122,7 +122,7 @@ class FollowingStage(CarStage):
         self.estimator = estimator if estimator is not None else context.make_defence()
         self.bumper_m = float(context.bumper_ahead_of_camera_m)
         self.camera_xy_m = context.camera_xy_m
-        self.config = config or FollowingConfig()
+        self.config = config if config is not None else FollowingConfig()
         self.follower = LeadFollower(self.config)
         self.speed = LeadSpeed(self.config)
         self.last = NO_LEAD
