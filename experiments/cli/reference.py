@@ -133,7 +133,7 @@ def map_markdown() -> str:
     lines = ["# The map's bodies", "",
              "Read from the model the env builds (`racf.sim.world.scene.load_model()`, default sign geometry). A "
              "world manager moves, turns or hides these bodies by name (`model.body(NAME)`; the names come from "
-             "`racf.sim.world.scene.sign_body(i)` and `obstacle_body(i)`), and the referee's truth follows them "
+             "`racf.sim.world.scene.sign_body(i)` and `obstacle_body(i)`), and the referee's truth moves with them "
              "(`racf.sim.env.truth`). Map frame: x east, y north, z up, metres; yaw counter-clockwise from +x.", "",
              "Frames: a stop sign's body stands at the foot of its pole, its x axis the plate's face normal (the "
              "direction the face looks), z up; the plate's centre is at (0, 0, "
