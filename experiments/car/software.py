@@ -75,6 +75,9 @@ class Mission:
     start_hint_m: float | None = None
     #: The car stages engaged (``racf.experiments.car.stage``), by name, in the order they run.
     stages: tuple[str, ...] = ()
+    #: The hardest a target of the mission may brake, m/s^2, as the scenario states it (the
+    #: supervisor's a_max, a rule of the road like RSS's; None: none stated).
+    target_decel_mps2: float | None = None
 
 
 @dataclass(frozen=True)

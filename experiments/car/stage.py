@@ -59,6 +59,8 @@ class StageContext:
         make_defence: a fresh instance of the episode's defence (a ``DistanceEstimator``), configured
             with the car's build: a stage that defends a distance gets its own.
         detector: the name of the episode's stop-sign detector.
+        target_decel_mps2: the hardest a target of the mission brakes, as its scenario states it, m/s^2
+            (None: none stated; the supervisor's a_max).
     """
 
     camera: CameraModel
@@ -68,6 +70,7 @@ class StageContext:
     bumper_ahead_of_camera_m: float
     make_defence: Callable[[], Any]
     detector: str = "classical"
+    target_decel_mps2: float | None = None
 
 
 @dataclass(frozen=True)

@@ -46,6 +46,9 @@ def episode_flags(p: argparse.ArgumentParser) -> None:
                    help="a setting of one of the attacks (repeatable; values are TOML), e.g. "
                         "depth_bias.bias_m=1.5, or its schedule: depth_bias.trigger=at_time depth_bias.start_s=2.0 "
                         "starts it 2 s into the episode (the attack page lists each attack's settings and ranges)")
+    p.add_argument("--supervisor", action="store_true",
+                   help="run the supervisor (runtime assurance with a stated guarantee: docs/concepts/guarantee.md) "
+                        "over the defence, where the scenario follows a car (lead_vehicle)")
     estimator_option_flag(p)
     service_flags(p)
     plugin_flag(p)
@@ -167,7 +170,8 @@ def episode_params(args: argparse.Namespace, command: str, table: bool = False) 
                   "t_atk": pair(command, "--t-atk", args.t_atk, STRONG_T_ATK_S),
                   "delay_ms": args.delay_ms, "control_hz": args.control_hz, "stable_steps": args.stable_steps,
                   "sensor_profile": args.sensor_profile, "sign_geometry": args.sign_geometry,
-                  "detector": args.detector or "classical", "estimator_options": options}
+                  "detector": args.detector or "classical", "estimator_options": options,
+                  "supervisor": bool(getattr(args, "supervisor", False))}
         target = getattr(args, "target", "sign")
         situation = plain_values(command, "--scenario-param", args.scenario_param)
         target, situation = aliased_scenario(args, command, target, situation)

@@ -20,7 +20,7 @@ Example:
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import lru_cache
 
 import numpy as np
@@ -109,7 +109,22 @@ def plan_episode(spec: TrialSpec, **env_kwargs) -> EpisodePlan:
     dt = 1.0 / config.control_hz
     draft = EpisodePlan(kwargs, options, mission, calibration, dt, config.localisation,
                         int(round(config.max_episode_s / dt)), start_s_m=route.start_s)
-    return spec.scenario.plan(spec, spec.scenario_params, draft)
+    return supervised(spec, spec.scenario.plan(spec, spec.scenario_params, draft))
+
+
+def supervised(spec: TrialSpec, plan: EpisodePlan) -> EpisodePlan:
+    """The plan with the supervisor in place of the stage it supervises, when the spec asks for it."""
+    if not spec.supervisor:
+        return plan
+    from racf.plugins import CAR_STAGES
+
+    watched = CAR_STAGES["supervisor"].supervises
+    stages = plan.mission.stages
+    if watched not in stages:
+        raise ValueError(f"supervisor: it runs over the {watched!r} stage, which scenario {spec.target!r} does not "
+                         f"engage; allowed: supervisor with a scenario that follows a car (lead_vehicle, or a plug-in's)")
+    mission = replace(plan.mission, stages=tuple("supervisor" if s == watched else s for s in stages))
+    return replace(plan, mission=mission)
 
 
 def longest_run_up(target: str, index: int, sign_geometry: str = "plate") -> float:

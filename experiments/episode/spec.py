@@ -150,6 +150,8 @@ class TrialSpec:
         estimator_keys: with an endpoint, the key folder of ``racf serve keys`` whose car pair and
             service key make the link CurveZMQ (None: a plain link). The id records that the link was
             authenticated, not where the keys lie.
+        supervisor: run the supervisor (runtime assurance, ``racf.experiments.car.supervisor``) over the
+            defence, in place of the stage it supervises (the following stage); False: the defence alone.
         estimator_car: with keys, the car whose pair (``cars/NAME.key_secret``) the car uses (None:
             the only one the folder holds). Not in the id: which car's key, not what ran.
     """
@@ -178,6 +180,7 @@ class TrialSpec:
     estimator_timeout_ms: float = DEFAULT_TIMEOUT_MS
     estimator_keys: str | None = None
     estimator_car: str | None = None
+    supervisor: bool = False
 
     def __post_init__(self) -> None:
         attacks, estimator = parse_setting(self.setting)
@@ -247,6 +250,8 @@ class TrialSpec:
                              f"with keys {self.estimator_keys!r}")
         if not (isinstance(self.estimator_timeout_ms, (int, float)) and 1.0 <= self.estimator_timeout_ms <= 10_000.0):
             raise ValueError(f"estimator_timeout_ms must be in [1, 10000] ms, got {self.estimator_timeout_ms!r}")
+        if not isinstance(self.supervisor, bool):
+            raise ValueError(f"supervisor must be true or false, got {self.supervisor!r}")
         if self.control_hz is not None and not 1.0 <= self.control_hz <= 50.0:
             raise ValueError(f"control_hz must be in [1, 50] Hz (the env steps at 50 Hz) or None, "
                              f"got {self.control_hz!r}")
@@ -299,6 +304,8 @@ class TrialSpec:
             del out["estimator_keys"]
         if self.estimator_car is None:
             del out["estimator_car"]
+        if not self.supervisor:  # the ids of unsupervised episodes stay as they were
+            del out["supervisor"]
         return out
 
     @classmethod
@@ -334,7 +341,12 @@ class TrialSpec:
         if extra:  # racf's own parts add nothing: the ids of built-in episodes stay as they were
             payload["plugins"] = extra
         digest = hashlib.sha256(json.dumps(payload, sort_keys=True, default=str).encode()).hexdigest()[:12]
-        return f"{self.setting}_{self.target}{self.sign}_v{self.speed:.2f}_seed{self.seed}_{digest}"
+        return f"{self.label}_{self.target}{self.sign}_v{self.speed:.2f}_seed{self.seed}_{digest}"
+
+    @property
+    def label(self) -> str:
+        """The setting as reports name it: with ``+supervisor`` when the supervisor runs over the defence."""
+        return f"{self.setting}+supervisor" if self.supervisor else self.setting
 
 
 #: What "the code" of an episode is: the source that runs it and the assets (map, shipped

@@ -137,7 +137,10 @@ class LeadVehicle(Scenario):
         options = {**draft.reset_options, "lead": lead.to_options()}
         max_s = draft.max_steps * draft.control_dt_s
         # The car is told it drives in traffic: its following stage is engaged.
-        return self.replace(draft, reset_options=options, mission=dataclasses.replace(mission, stages=(*mission.stages, "following")),
+        # The car is told the lead may brake as hard as this scenario's decel allows (its a_max).
+        stated = next(p.high for p in self.params if p.name == "decel")
+        mission = dataclasses.replace(mission, stages=(*mission.stages, "following"), target_decel_mps2=stated)
+        return self.replace(draft, reset_options=options, mission=mission,
                             extras={**draft.extras, "lead": lead, "lead_rest_s": lead_rest_s(lead, max_s)})
 
     def over(self, plan, rows: list[dict]) -> bool:

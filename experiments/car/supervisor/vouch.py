@@ -1,0 +1,132 @@
+"""Which range reading the supervisor vouches for: one whose track has no break.
+
+Each frame the range witnesses (the depth in the lead's box, the LiDAR's track) give one reading,
+the nearer of the two: a witness moved away is outvoted by one that is not. Readings form a chain
+while each lies where the last one, moved on by the relative motion, puts it (within ``gate_m``) and
+no gap longer than ``gap_s`` parts them. A chain is judged once, when it is born:
+
+- born where the carried target can be (:class:`~.track.CarriedTarget`'s bounds), or with nothing
+  carried on a lane the car has not yet watched: it is the target, and its readings are vouched;
+- born farther than the target can have gone: a jump no car makes (a frustum or depth spoof moves
+  the witnesses at once). Refused, with every reading it carries on to;
+- born nearer than the target can be, or first seen inside the distance a vehicle must have been
+  seen from on a lane the car has watched: it appeared from nowhere (a phantom), implausible until
+  both range witnesses agree on it for ``confirm_frames`` frames (a real car that cut in). Until
+  then the car may ease off, not brake hard.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from racf.experiments.car.supervisor.track import CarriedTarget
+
+__all__ = ["ChainConfig", "Verdict", "ReadingChain", "agree_m"]
+
+
+@dataclass(frozen=True)
+class ChainConfig:
+    """The chain's settings.
+
+    Attributes:
+        gate_m: a reading this far from the chain's prediction starts a new chain, m.
+        gap_s: readings further apart than this start a new chain, s.
+        watch_s: the car has watched its lane ahead after this long, s (before, any first sight is plausible).
+        seen_from_m: on a watched lane a vehicle is first seen no nearer than this, m (the detector
+            finds a QCar 2 from 2.5 m; one first seen nearer came from nowhere in view).
+        confirm_frames: frames both range witnesses must agree on an implausible chain before it is vouched.
+    """
+
+    gate_m: float = 0.25
+    gap_s: float = 0.5
+    watch_s: float = 1.0
+    seen_from_m: float = 1.5
+    confirm_frames: int = 3
+
+    def __post_init__(self) -> None:
+        for name in ("gate_m", "gap_s", "watch_s", "seen_from_m"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0.0 < value <= 10.0:
+                raise ValueError(f"{name} must be in (0, 10], got {value!r}")
+        if isinstance(self.confirm_frames, bool) or not isinstance(self.confirm_frames, int) or self.confirm_frames < 1:
+            raise ValueError(f"confirm_frames must be an int >= 1, got {self.confirm_frames!r}")
+
+
+def agree_m(distance_m: float) -> float:
+    """How far two readings of one car may lie apart, m: the depth reads the box's middle, the LiDAR
+    the rear's nearest face (0.1 m apart at 1 m; the following stage's own agreement, widened)."""
+    return max(0.15, 0.15 * distance_m)
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """What the chain made of one frame.
+
+    Attributes:
+        reading_m: this frame's range reading, m (NaN: none).
+        vouched: the reading is vouched (its chain was born plausible, or was confirmed).
+        implausible: the reading's chain is implausible and nearer than the target can be (ease off).
+        refused: the reading's chain jumped away (ignored).
+    """
+
+    reading_m: float
+    vouched: bool
+    implausible: bool = False
+    refused: bool = False
+
+
+NOTHING = Verdict(math.nan, False)
+
+
+class ReadingChain:
+    """The chain of range readings and its verdict (see the module docstring)."""
+
+    def __init__(self, config: ChainConfig | None = None) -> None:
+        self.config = config or ChainConfig()
+        self.reset()
+
+    def reset(self) -> None:
+        self.last_m = math.nan
+        self.since_s = 0.0
+        self.watched_s = 0.0
+        self.state = "none"  # "vouched", "implausible", "refused"
+        self.confirmed = 0
+
+    def step(self, depth_m: float, lidar_m: float, closing_mps: float, dt: float, carried: CarriedTarget) -> Verdict:
+        """One control step: the depth's and the LiDAR's readings (NaN: none), the closing speed the
+        car estimates (its speed less the lead's), the carried target."""
+        c = self.config
+        self.watched_s += dt
+        self.since_s += dt
+        if math.isfinite(self.last_m):
+            self.last_m -= closing_mps * dt
+        readings = [r for r in (depth_m, lidar_m) if math.isfinite(r) and r > 0]
+        if not readings:
+            if self.since_s > c.gap_s:
+                self.last_m, self.state = math.nan, "none"
+            return NOTHING
+        reading = min(readings)
+        both = len(readings) == 2 and abs(readings[0] - readings[1]) <= agree_m(reading)
+        continuous = (math.isfinite(self.last_m) and self.since_s <= c.gap_s
+                      and abs(reading - self.last_m) <= c.gate_m)
+        if not continuous:
+            self.state, self.confirmed = self._born(reading, carried), 0
+        self.last_m, self.since_s = reading, 0.0
+        if self.state == "implausible":
+            self.confirmed = self.confirmed + 1 if both else 0
+            if self.confirmed >= c.confirm_frames:
+                self.state = "vouched"
+        if self.state == "vouched":
+            return Verdict(reading, True)
+        return Verdict(reading, False, implausible=self.state == "implausible", refused=self.state == "refused")
+
+    def _born(self, reading: float, carried: CarriedTarget) -> str:
+        c, tolerance = self.config, agree_m(reading)
+        if carried.held:
+            if carried.holds(reading, tolerance):
+                return "vouched"
+            return "refused" if reading > carried.far_m else "implausible"
+        if self.watched_s >= c.watch_s and reading < c.seen_from_m:
+            return "implausible"
+        return "vouched"
