@@ -77,7 +77,7 @@ _DEFAULTS = {"attack": ["patch_occlusion"], "estimator": ["raw"], "rho": [0.95],
              "sign": [0, 1, 2, 3]}
 _TOP_KEYS = {"name", "mode", "repeats", "n", "seed", "space", "params", "estimators", "log_steps", "sensor_profile",
              "sign_geometry", "detector", "target", "scenario", "metrics", "estimator_endpoint",
-             "estimator_timeout_ms", "estimator_keys", "estimator_car"}
+             "estimator_timeout_ms", "estimator_keys", "estimator_car", "supervisor"}
 
 
 #: The example specs shipped with the project.
@@ -108,8 +108,14 @@ class SweepSpec:
     estimator_timeout_ms: float = DEFAULT_TIMEOUT_MS
     estimator_keys: str | None = None
     estimator_car: str | None = None
+    #: Each defence alone (False) and/or under the supervisor (True), paired on the same seeds.
+    supervisor: tuple = (False,)
 
     def __post_init__(self) -> None:
+        if (isinstance(self.supervisor, (str, bytes)) or not self.supervisor
+                or not all(isinstance(v, bool) for v in self.supervisor)):
+            raise ValueError(f"supervisor must be a non-empty list of true/false, got {self.supervisor!r}")
+        object.__setattr__(self, "supervisor", tuple(dict.fromkeys(self.supervisor)))
         if self.detector not in DETECTORS:
             raise ValueError(f"detector must be one of {tuple(DETECTORS)}, got {self.detector!r}")
         if self.sensor_profile not in SENSOR_PROFILES:
@@ -237,7 +243,8 @@ class SweepSpec:
                          | self.tables
                          | ({"target": self.target} if self.target != "sign" else {})
                          | ({"scenario": self.scenario} if self.scenario else {})
-                         | ({"metrics": self.metrics} if self.metrics else {}), sort_keys=True)
+                         | ({"metrics": self.metrics} if self.metrics else {})
+                         | ({"supervisor": list(self.supervisor)} if self.supervisor != (False,) else {}), sort_keys=True)
         return hashlib.sha256(raw.encode()).hexdigest()[:12]
 
     def episodes(self) -> list[TrialSpec]:
@@ -252,7 +259,9 @@ class SweepSpec:
                     for params in self._param_combos(cell[0]):
                         for target, situation in self._situations():
                             for estimator in s["estimator"]:
-                                out.append(_trial(cell, estimator, seed, self, params, target, situation))
+                                for supervised in self.supervisor:
+                                    out.append(_trial(cell, estimator, seed, self, params, target, situation,
+                                                      supervised))
         else:
             rng = np.random.default_rng(self.seed)
             for i in range(self.n):
@@ -264,7 +273,8 @@ class SweepSpec:
                 params = combos[rng.integers(len(combos))] if len(combos) > 1 else combos[0]
                 for target, situation in self._situations():
                     for estimator in s["estimator"]:
-                        out.append(_trial(cell, estimator, seed, self, params, target, situation))
+                        for supervised in self.supervisor:
+                            out.append(_trial(cell, estimator, seed, self, params, target, situation, supervised))
         return out
 
     def _episode_seed(self, cell: tuple, repeat: int) -> int:
@@ -285,7 +295,7 @@ def _attacks(value) -> tuple[str, ...]:
 
 
 def _trial(cell: tuple, estimator: str, seed: int, sweep: SweepSpec, params: dict | None = None,
-           target: str | None = None, situation: dict | None = None) -> TrialSpec:
+           target: str | None = None, situation: dict | None = None, supervisor: bool = False) -> TrialSpec:
     attack, rho, t_atk, speed, sign = cell
     return TrialSpec(setting_name(_attacks(attack), estimator), int(sign), float(speed), seed,
                      rho=(float(rho), float(rho)), t_atk=(float(t_atk), float(t_atk)),
@@ -294,7 +304,7 @@ def _trial(cell: tuple, estimator: str, seed: int, sweep: SweepSpec, params: dic
                      estimator_options=sweep.estimators.get(estimator, {}), metrics=tuple(sweep.metrics),
                      estimator_endpoint=sweep.estimator_endpoint, estimator_timeout_ms=sweep.estimator_timeout_ms,
                      estimator_keys=sweep.estimator_keys, estimator_car=sweep.estimator_car,
-                     target=target or sweep.target, scenario_params=situation or {})
+                     target=target or sweep.target, scenario_params=situation or {}, supervisor=supervisor)
 
 
 def spec_path(path: str | Path) -> Path:

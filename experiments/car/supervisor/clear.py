@@ -1,4 +1,9 @@
-"""Whether the LiDAR sees the lane clear where a carried target could be.
+"""What the LiDAR sees on the lane: the first thing on it, and whether it is clear where a carried
+target could be.
+
+:func:`lane_return` is a range witness that needs no detector: the nearest lane point at which a
+beam returns from (within ``AT_POINT_M`` of) that point. The vehicle detector finds a QCar 2 out to
+about 1.1 m; the LiDAR sees it on the lane much farther.
 
 A target tracked in the car's lane is dropped only when a range witness sees through where it could
 stand: every beam at each lane point from the carried target's near end to its far end (and a car's
@@ -12,12 +17,40 @@ import math
 
 import numpy as np
 
-__all__ = ["lane_clear", "CAR_LENGTH_M", "CAR_HALF_WIDTH_M"]
+__all__ = ["lane_clear", "lane_return", "CAR_LENGTH_M", "CAR_HALF_WIDTH_M"]
 
 #: A QCar 2's length and half width, m (``racf.sim.world.manager.QCAR2_BOX_M``, as the car's software knows it).
 CAR_LENGTH_M, CAR_HALF_WIDTH_M = 0.425, 0.096
 #: A return must lie this much beyond a lane point to show it clear, m.
 _BEYOND_M = 0.05
+#: A return this near a lane point (before it) is something standing on the lane there, m.
+AT_POINT_M = 0.1
+
+
+def _beams(scan: np.ndarray, lane: np.ndarray, lidar_in_camera: tuple[float, float]):
+    """Each lane point's range from the LiDAR and the returns of the beams a car there would fill."""
+    x, w = lane[:, 0] - lidar_in_camera[0], lane[:, 1] - lidar_in_camera[1]
+    ranges, bearings = np.hypot(x, w), np.arctan2(w, x)
+    step = 2 * math.pi / scan.size
+    for r, bearing in zip(ranges, bearings):
+        half = math.atan2(CAR_HALF_WIDTH_M, r)
+        idx = np.arange(math.floor((bearing - half) / step), math.ceil((bearing + half) / step) + 1) % scan.size
+        yield r, scan[idx]
+
+
+def lane_return(scan: np.ndarray, lane: np.ndarray, lidar_in_camera: tuple[float, float]) -> float:
+    """The camera distance of the nearest lane point something stands on, as the LiDAR sees it, m
+    (NaN: nothing on the lane in view). ``lane``: (N, 2) points as (z ahead, y left) from the camera,
+    in order along the lane."""
+    scan = np.asarray(scan, np.float64)
+    if scan.size == 0 or len(lane) == 0:
+        return math.nan
+    ahead = lane[lane[:, 0] > 0.05]
+    for z, (r, beams) in zip(ahead[:, 0], _beams(scan, ahead, lidar_in_camera)):
+        hit = np.isfinite(beams) & (beams > 0) & (beams >= r - AT_POINT_M) & (beams <= r + _BEYOND_M)
+        if hit.any():
+            return float(z)
+    return math.nan
 
 
 def lane_clear(scan: np.ndarray, lane: np.ndarray, near_m: float, far_m: float,
@@ -33,13 +66,7 @@ def lane_clear(scan: np.ndarray, lane: np.ndarray, near_m: float, far_m: float,
     where = (z >= near_m) & (z <= far_m + CAR_LENGTH_M)
     if not where.any() or z.max() < far_m + CAR_LENGTH_M:
         return False  # the lane in view ends before the target's farthest place: nothing to see through
-    x, w = z[where] - lidar_in_camera[0], y[where] - lidar_in_camera[1]
-    ranges, bearings = np.hypot(x, w), np.arctan2(w, x)
-    step = 2 * math.pi / scan.size
-    for r, bearing in zip(ranges, bearings):
-        half = math.atan2(CAR_HALF_WIDTH_M, r)
-        idx = np.arange(math.floor((bearing - half) / step), math.ceil((bearing + half) / step) + 1) % scan.size
-        beams = scan[idx]
+    for r, beams in _beams(scan, lane[where], lidar_in_camera):
         if not (np.all(np.isfinite(beams)) and np.all(beams > r + _BEYOND_M)):
             return False
     return True

@@ -25,13 +25,15 @@ from racf.experiments.car.following.stage import COLUMNS as FOLLOWING_COLUMNS
 from racf.experiments.car.following.stage import LANE_AHEAD_M, FollowingStage
 from racf.controllers.lead_perception import lane_in_camera
 from racf.experiments.car.stage import CarStage, CarView, StageColumn, StageContext, StageLimit
-from racf.experiments.car.supervisor.clear import lane_clear
+from racf.experiments.car.supervisor.clear import lane_clear, lane_return
 from racf.experiments.car.supervisor.envelope import Envelope, safe_speed
 from racf.experiments.car.supervisor.track import CarriedTarget
 from racf.experiments.car.supervisor.vouch import ChainConfig, ReadingChain, agree_m
 
 __all__ = ["SupervisorStage", "SUPERVISOR_COLUMNS", "EASE_MPS2"]
 
+#: The LiDAR's lane return is carried between its 10 Hz scans for this long, s.
+SCAN_HOLD_S = 0.15
 #: How hard the car eases off for a reading it cannot vouch for, m/s^2 (under the 3 m/s^2 of a hard brake).
 EASE_MPS2 = 1.5
 
@@ -42,7 +44,9 @@ SUPERVISOR_COLUMNS = (
     StageColumn("sup_implausible", "bool", "supervisor: a reading nearer than the target can be (appeared from "
                                            "nowhere): the car eases off"),
     StageColumn("sup_refused", "bool", "supervisor: a reading farther than the target can have gone (a jump): ignored"),
-    StageColumn("sup_reading", "m", "supervisor: this step's range reading, the nearer of depth and LiDAR (NaN: none)"),
+    StageColumn("sup_on_lane", "m", "supervisor: the LiDAR's first return on the lane, camera distance (NaN: none)"),
+    StageColumn("sup_reading", "m", "supervisor: this step's range reading, the nearest of the depth, the LiDAR's "
+                                    "track and its lane return (NaN: none)"),
     StageColumn("sup_near", "m", "supervisor: the nearest the carried target can be, camera distance (NaN: none)"),
     StageColumn("sup_cap", "m/s", "supervisor: its speed cap (inf: none)"),
     StageColumn("sup_stop", "bool", "supervisor: the car was faster than the worst-case gap allows: told to stop"),
@@ -78,6 +82,7 @@ class SupervisorStage(CarStage):
         self._lidar_in_camera = (context.lidar_xy_m[0] - context.camera_xy_m[0],
                                  context.lidar_xy_m[1] - context.camera_xy_m[1])
         self._ease = math.inf
+        self._on_lane, self._on_lane_age = math.nan, math.inf
 
     def idle(self) -> StageLimit:
         base = self.advanced.idle()
@@ -89,6 +94,7 @@ class SupervisorStage(CarStage):
         self.carried.reset()
         self.chain.reset()
         self._ease = math.inf
+        self._on_lane, self._on_lane_age = math.nan, math.inf
 
     def step(self, view: CarView) -> StageLimit:
         said = self.advanced.step(view)
@@ -96,14 +102,22 @@ class SupervisorStage(CarStage):
         speed, dt, env = view.speed_mps, view.dt, self.envelope
         self.carried.predict(speed, dt)
         known = self.advanced.speed.frames >= self.advanced.config.confirm_frames
-        verdict = self.chain.step(lead.sample.d_meas, lead.sample.lidar_m, speed - lead.lead_mps, dt, self.carried)
+        closing = speed - lead.lead_mps
+        lane = self._lane(view) if view.scan is not None else None
+        if lane is not None:
+            self._on_lane, self._on_lane_age = lane_return(view.scan, lane, self._lidar_in_camera), 0.0
+        else:  # between scans, moved on by the relative motion until the next
+            self._on_lane, self._on_lane_age = self._on_lane - closing * dt, self._on_lane_age + dt
+        on_lane = self._on_lane if self._on_lane_age <= SCAN_HOLD_S else math.nan
+        verdict = self.chain.step((lead.sample.d_meas, lead.sample.lidar_m, on_lane), closing, dt, self.carried)
         if verdict.vouched:
             self.carried.vouch(verdict.reading_m, lead.lead_mps, known)
-        elif self.carried.held and view.scan is not None and self._lane_clear(view):
+        elif self.carried.held and lane is not None and lane_clear(view.scan, lane, self.carried.near_m,
+                                                                    self.carried.far_m, self._lidar_in_camera):
             self.carried.reset()
         defence = (verdict.vouched and math.isfinite(lead.d_fused)
                    and abs(lead.d_fused - verdict.reading_m) <= agree_m(verdict.reading_m))
-        cap, stop = self._cap(said.speed_cap_mps if defence else None, speed)
+        cap, stop = self._cap(said.speed_cap_mps if defence else None, speed, verdict.vouched)
         if verdict.implausible:
             self._ease = max(min(self._ease, speed) - EASE_MPS2 * dt, 0.0)
             cap = min(cap, self._ease)
@@ -111,13 +125,14 @@ class SupervisorStage(CarStage):
             self._ease = math.inf
         values = {**said.values, "sup_defence": defence, "sup_vouched": verdict.vouched,
                   "sup_carried": self.carried.held, "sup_implausible": verdict.implausible,
-                  "sup_refused": verdict.refused, "sup_reading": verdict.reading_m,
+                  "sup_refused": verdict.refused, "sup_on_lane": on_lane, "sup_reading": verdict.reading_m,
                   "sup_near": self.carried.near_m, "sup_cap": cap, "sup_stop": stop}
         return StageLimit(cap, values, lead)
 
-    def _cap(self, defence_cap: float | None, speed: float) -> tuple[float, bool]:
+    def _cap(self, defence_cap: float | None, speed: float, fresh: bool) -> tuple[float, bool]:
         """The speed cap and whether the stop rule fired: ``defence_cap`` when the defence drives
-        (None: the safe controller), never above what the worst-case gap allows."""
+        (None: the safe controller; ``fresh``: on a reading vouched this step), never above what the
+        worst-case gap allows."""
         if not self.carried.held:
             return (math.inf if defence_cap is None else defence_cap), False
         env, follow = self.envelope, self.advanced.config
@@ -127,11 +142,13 @@ class SupervisorStage(CarStage):
             return 0.0, True
         if defence_cap is not None:
             return defence_cap, False
-        headway = max(0.0, (gap - follow.standstill_gap_m) / follow.time_headway_s)
+        # The headway policy on the reading itself when it is fresh (delta is the stop rule's margin).
+        policy_gap = gap + (env.delta_m if fresh else 0.0)
+        headway = max(0.0, (policy_gap - follow.standstill_gap_m) / follow.time_headway_s)
         return max(min(headway, safe_speed(gap, slow, env, env.comfort_brake_mps2)), 0.0), False
 
-    def _lane_clear(self, view: CarView) -> bool:
+    def _lane(self, view: CarView):
+        """The lane ahead in the camera's frame, from the map and the car's own pose."""
         path = view.path
         ahead = (path.arclength >= view.progress_m) & (path.arclength <= view.progress_m + LANE_AHEAD_M)
-        lane = lane_in_camera(path.points[ahead], view.pose, self.advanced.camera_xy_m)
-        return lane_clear(view.scan, lane, self.carried.near_m, self.carried.far_m, self._lidar_in_camera)
+        return lane_in_camera(path.points[ahead], view.pose, self.advanced.camera_xy_m)

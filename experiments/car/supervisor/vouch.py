@@ -1,7 +1,8 @@
 """Which range reading the supervisor vouches for: one whose track has no break.
 
-Each frame the range witnesses (the depth in the lead's box, the LiDAR's track) give one reading,
-the nearer of the two: a witness moved away is outvoted by one that is not. Readings form a chain
+Each step the range witnesses (the depth in the lead's box, the LiDAR's track of it, the LiDAR's
+first return on the lane) give one reading, the nearest: a witness moved away is outvoted by one
+that is not. Readings form a chain
 while each lies where the last one, moved on by the relative motion, puts it (within ``gate_m``) and
 no gap longer than ``gap_s`` parts them. A chain is judged once, when it is born:
 
@@ -11,7 +12,7 @@ no gap longer than ``gap_s`` parts them. A chain is judged once, when it is born
   the witnesses at once). Refused, with every reading it carries on to;
 - born nearer than the target can be, or first seen inside the distance a vehicle must have been
   seen from on a lane the car has watched: it appeared from nowhere (a phantom), implausible until
-  both range witnesses agree on it for ``confirm_frames`` frames (a real car that cut in). Until
+  two range witnesses agree on it for ``confirm_frames`` frames (a real car that cut in). Until
   then the car may ease off, not brake hard.
 """
 
@@ -93,21 +94,22 @@ class ReadingChain:
         self.state = "none"  # "vouched", "implausible", "refused"
         self.confirmed = 0
 
-    def step(self, depth_m: float, lidar_m: float, closing_mps: float, dt: float, carried: CarriedTarget) -> Verdict:
-        """One control step: the depth's and the LiDAR's readings (NaN: none), the closing speed the
-        car estimates (its speed less the lead's), the carried target."""
+    def step(self, readings: tuple[float, ...], closing_mps: float, dt: float, carried: CarriedTarget) -> Verdict:
+        """One control step: the range witnesses' readings (the depth in the lead's box, the LiDAR's
+        track, the LiDAR's first return on the lane; NaN: none), the closing speed the car estimates
+        (its speed less the lead's), the carried target."""
         c = self.config
         self.watched_s += dt
         self.since_s += dt
         if math.isfinite(self.last_m):
             self.last_m -= closing_mps * dt
-        readings = [r for r in (depth_m, lidar_m) if math.isfinite(r) and r > 0]
+        readings = sorted(r for r in readings if math.isfinite(r) and r > 0)
         if not readings:
             if self.since_s > c.gap_s:
                 self.last_m, self.state = math.nan, "none"
             return NOTHING
         reading = min(readings)
-        both = len(readings) == 2 and abs(readings[0] - readings[1]) <= agree_m(reading)
+        both = len(readings) >= 2 and readings[1] - readings[0] <= agree_m(reading)
         continuous = (math.isfinite(self.last_m) and self.since_s <= c.gap_s
                       and abs(reading - self.last_m) <= c.gate_m)
         if not continuous:
