@@ -350,7 +350,8 @@ def parse_spec(text: str, source: str = "spec", default_name: str = "sweep") -> 
                          scenario=raw.get("scenario", {}), metrics=raw.get("metrics", []),
                          estimator_endpoint=raw.get("estimator_endpoint"),
                          estimator_timeout_ms=raw.get("estimator_timeout_ms", DEFAULT_TIMEOUT_MS),
-                         estimator_keys=raw.get("estimator_keys"), estimator_car=raw.get("estimator_car"))
+                         estimator_keys=raw.get("estimator_keys"), estimator_car=raw.get("estimator_car"),
+                         supervisor=raw.get("supervisor", (False,)))
         episodes = spec.episodes()
     except ValueError as err:
         raise ValueError(f"{source}: {err}") from None
