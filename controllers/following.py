@@ -36,6 +36,8 @@ class FollowingConfig:
         gate_m: an agreeing range this far off the track's prediction starts the track again
             (the car ahead was out of sight, or another car took its place).
         max_lead_mps: the fastest lead the estimate allows, m/s (the QCar 2's top speed).
+        speed_std_mps: how far a confirmed estimate may be off, m/s (one std; before it is
+            confirmed the lead may be anywhere from standing to ``max_lead_mps``).
     """
 
     time_headway_s: float = 1.0
@@ -47,11 +49,12 @@ class FollowingConfig:
     confirm_frames: int = 6
     gate_m: float = 0.25
     max_lead_mps: float = 3.0
+    speed_std_mps: float = 0.1
 
     def __post_init__(self) -> None:
         for name, lo, hi in (("time_headway_s", 0.1, 5.0), ("standstill_gap_m", 0.0, 2.0), ("ttc_brake_s", 0.0, 5.0),
                              ("agree_m", 0.0, 2.0), ("alpha", 0.0, 1.0), ("beta", 0.0, 1.0), ("gate_m", 0.0, 5.0),
-                             ("max_lead_mps", 0.0, 10.0)):
+                             ("max_lead_mps", 0.0, 10.0), ("speed_std_mps", 0.0, 5.0)):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, (int, float)) or not lo <= value <= hi:
                 raise ValueError(f"{name} must be in [{lo}, {hi}], got {value!r}")
@@ -76,6 +79,13 @@ class LeadSpeed:
     def lead_mps(self) -> float:
         """The estimate used: 0 until ``confirm_frames`` agreeing frames, never negative."""
         return 0.0 if self.frames < self.config.confirm_frames else min(max(self._lead, 0.0), self.config.max_lead_mps)
+
+    @property
+    def std_mps(self) -> float:
+        """How uncertain :attr:`lead_mps` is, m/s: the confirmed estimate's std, or half the range of
+        speeds a lead may have before it is confirmed."""
+        c = self.config
+        return c.speed_std_mps if self.frames >= c.confirm_frames else 0.5 * c.max_lead_mps
 
     def update(self, depth_m: float, lidar_m: float, size_m: float, ego_mps: float, dt: float,
                new_frame: bool) -> float:

@@ -144,12 +144,15 @@ class KinematicBranch:
             return False
         return abs(distance - self.base_z) > tau_m + self.config.n_sigma * self.base_std + age_m
 
-    def predict(self, speed: float, yaw_rate: float, dt: float) -> float:
-        """Moves the target by the car's motion over ``dt``; returns the change of d_kin (NaN when lost)."""
+    def predict(self, speed: float, yaw_rate: float, dt: float, target_speed_std_mps: float = 0.0) -> float:
+        """Moves the target by the car's motion over ``dt``; returns the change of d_kin (NaN when lost).
+        ``target_speed_std_mps``: how uncertain the target's own speed is (0: a standing target, a
+        sign's); the baseline's spread grows with it, for it moves the target by what ``speed`` omits."""
         c = self.config
         if math.isfinite(self.base_z):
             self.base_z, self.base_y = advance(self.base_z, self.base_y, speed, yaw_rate, dt, c.camera_lever_m)
             self.base_std += (c.drift_travel_std or 0.0) * abs(speed) * dt + c.time_std_mps * dt
+            self.base_std += target_speed_std_mps * dt
             if self.base_std > c.max_std_m or self.base_z <= 0.0:
                 self._lose_baseline()
         if not self.alive:

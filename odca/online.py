@@ -235,6 +235,18 @@ class ODCA:
         self._last_size = (math.nan, math.nan)
         self._lidar_confirmed = True
 
+    #: For a target that moves (``follow_moving_target``): how uncertain its speed is, m/s (None: a standing one).
+    moving_std_mps: float | None = None
+
+    def follow_moving_target(self, speed_std_mps: float | None) -> None:
+        """Tells the gate its target moves (a car ahead; ``speed`` is then the closing speed) and how
+        uncertain that target's own speed is, m/s (None: a standing target again). The drift
+        baseline's spread grows with that uncertainty, and a box bigger than a car at its tracked
+        place is taken for a picture, no veto of the depth (:meth:`Witnesses.step`). Kept over resets."""
+        if speed_std_mps is not None and not (math.isfinite(speed_std_mps) and speed_std_mps >= 0):
+            raise ValueError(f"speed_std_mps must be a finite number >= 0 m/s or None, got {speed_std_mps!r}")
+        self.moving_std_mps = None if speed_std_mps is None else float(speed_std_mps)
+
     def step(self, *, depth: float, confidence: float, lidar: float = math.nan, speed: float = 0.0,
              yaw_rate: float = 0.0, bearing: float = math.nan, dt: float | None = None,
              lidar_confirmed: bool = True, size: float = math.nan, size_std: float = math.nan) -> FusedSample:
@@ -275,7 +287,8 @@ class ODCA:
         self._last_lidar = l_al
         self._last_size = (s, s_std)
         self._lidar_confirmed = bool(lidar_confirmed)
-        verdict = self._witnesses.step(d, c, l_al, v, w, b, mu, dt, self._lidar_confirmed, s, s_std)
+        verdict = self._witnesses.step(d, c, l_al, v, w, b, mu, dt, self._lidar_confirmed, s, s_std,
+                                       moving_std=self.moving_std_mps)
         cols = self._finish(*(np.array([x], float) for x in (d, c, l_al, v, mu, sigma, *verdict)),
                             prev=self._prev)
         self._prev = float(cols[0][0])

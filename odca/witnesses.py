@@ -57,19 +57,26 @@ class Witnesses:
         return (self.config.kinematics.enabled and branch.alive and branch.lidar_only) or (
             l == l and not lidar_confirmed)
 
-    def step(self, d, c, l, v, yaw_rate, bearing, mu, dt, lidar_confirmed=True, size=math.nan, size_std=math.nan):
+    def step(self, d, c, l, v, yaw_rate, bearing, mu, dt, lidar_confirmed=True, size=math.nan, size_std=math.nan,
+             moving_std=None):
         """Returns (source, base, lidar_trusted, d_kin, kin_std, motion) for one sanitised step.
         ``lidar_confirmed``: whether a depth ever agreed with the LiDAR's track (perception's word).
-        ``size``, ``size_std``: the size witness and its std (NaN: none)."""
+        ``size``, ``size_std``: the size witness and its std (NaN: none).
+        ``moving_std``: for a target that moves (a car ahead; ``v`` is then the closing speed), how
+        uncertain its own speed is, m/s (None: a standing target, a sign)."""
         cfg = self.config
         branch = self.branch
         on = cfg.kinematics.enabled
-        motion = branch.predict(v, yaw_rate, dt) if on else math.nan
+        motion = branch.predict(v, yaw_rate, dt, moving_std or 0.0) if on else math.nan
         if not motion == motion:
             motion = -v * dt  # no branch: a straight approach's change
         k, k_std = branch.distance, branch.std
         lidar_only = on and branch.alive and branch.lidar_only
         size_tol = cfg.gate.size_tolerance(size_std)
+        if moving_std is not None and size == size and k == k and size + size_tol < k - branch.tolerance(cfg.gate.tau_m):
+            # A car's box can only shrink by occlusion, but a box bigger than the car at its tracked place
+            # is a picture of one (a phantom): no veto of the range witnesses farther than it.
+            size = math.nan
         source, base, lidar_trusted = vote(d, c, l, k, branch.tolerance(cfg.gate.tau_m) if k == k else math.nan, mu,
                                            cfg.gate, cfg.kinematics.witness,
                                            lidar_unconfirmed=self.lidar_unconfirmed(l, lidar_confirmed, branch),

@@ -109,6 +109,10 @@ class ODCAEstimator:
         self._size = (sample.d_size, sample.size_std)
         return self.last.d_fused
 
+    def follow_moving_target(self, speed_std_mps: float | None) -> None:
+        """The gate's target moves, its speed this uncertain, m/s (``ODCA.follow_moving_target``)."""
+        self.model.follow_moving_target(speed_std_mps)
+
     def use_calibration(self, calibration) -> None:
         """Sets the kinematic branch's lever (camera ahead of the rear axle) from the car's build;
         a checkpoint keeps the lever of the car it was trained for."""

@@ -164,6 +164,9 @@ class FollowingStage(CarStage):
             d = math.nan
         else:
             self._lost = False
+            moving = getattr(self.estimator, "follow_moving_target", None)
+            if callable(moving):  # its target moves: how well the car knows the lead's speed
+                moving(self.speed.std_mps)
             d = float(self.estimator.estimate(sample, closing, dt, yaw_rate_radps=view.yaw_rate_radps))
         lead = self.speed.update(sample.d_meas, sample.lidar_m, sample.d_size, speed, dt, view.frame_new)
         decision = self.follower.step(d - self.bumper_m, speed - lead)

@@ -65,10 +65,14 @@ class ScrambledInfo(gym.Wrapper):
                                   TrialSpec("clean+lead_patch+odca", 1, 1.0, 1, target="lead_vehicle",
                                             scenario_params={"brake_t": 1.0},
                                             attack_params={"lead_patch": {"start_s": 0.5}}),
+                                  # The same under the supervisor (its chain, its carried target, its lane return).
+                                  TrialSpec("clean+lead_patch+odca", 1, 1.0, 1, target="lead_vehicle",
+                                            scenario_params={"brake_t": 1.0}, supervisor=True,
+                                            attack_params={"lead_patch": {"start_s": 0.5}}),
                                   # The lead's whole default profile: the long episode, in the slow run.
                                   pytest.param(TrialSpec("clean+lead_patch+odca", 1, 1.0, 1, target="lead_vehicle"),
                                                marks=pytest.mark.slow)],
-                         ids=["empty", "traffic", "existence", "lead", "lead-long"])
+                         ids=["empty", "traffic", "existence", "lead", "lead-supervised", "lead-long"])
 def test_the_car_does_the_same_with_info_scrambled(spec):
     result, log = run_trial(spec, clean_pass=False)
     _, blind = run_trial(spec, make_env=lambda s: ScrambledInfo(default_env(s)), clean_pass=False)

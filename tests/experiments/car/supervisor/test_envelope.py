@@ -1,0 +1,49 @@
+"""The envelope's arithmetic: RSS's safe gap and the speed it allows are each other's inverse, and
+behave as a gap should (more speed, more gap; a faster lead, less)."""
+
+import math
+
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from racf.experiments.car.supervisor.envelope import Envelope, safe_gap, safe_speed
+
+ENV = Envelope()
+speeds = st.floats(0.0, 3.0)
+
+
+@given(speeds, speeds)
+def test_the_speed_a_safe_gap_allows_is_the_speed_it_was_made_for(v, lead):
+    assert safe_speed(safe_gap(v, lead, ENV), lead, ENV) == pytest.approx(v, abs=1e-9)
+
+
+@given(speeds, speeds, st.floats(0.0, 1.0))
+def test_more_speed_needs_more_gap_and_a_faster_lead_less(v, lead, more):
+    assert safe_gap(v + more, lead, ENV) >= safe_gap(v, lead, ENV)
+    assert safe_gap(v, lead + more, ENV) <= safe_gap(v, lead, ENV)
+
+
+def test_the_gap_is_rss_by_hand():
+    # 1 m/s, a standing lead: 0.1 s at 1 m/s, 0.1 s of 7.36 m/s^2, then 1.736 m/s braked at 4 m/s^2, + 0.05 m.
+    expected = 0.1 + 0.5 * 7.36 * 0.01 + 1.736 ** 2 / 8 + 0.05
+    assert safe_gap(1.0, 0.0, ENV) == pytest.approx(expected)
+    # A lead at 0.6 m/s braking at 6 m/s^2 goes 0.03 m further.
+    assert safe_gap(1.0, 0.6, ENV) == pytest.approx(expected - 0.03)
+    # Planned at a comfortable 1.5 m/s^2 the car needs more.
+    assert safe_gap(1.0, 0.0, ENV, ENV.comfort_brake_mps2) > expected
+
+
+def test_no_speed_is_safe_in_no_gap():
+    assert safe_speed(0.0, 0.0, ENV) < 0.0 and safe_speed(-1.0, 0.0, ENV) == -math.inf
+    assert safe_speed(math.inf, 0.0, ENV) == math.inf
+
+
+@pytest.mark.parametrize("field, value, words", [("delta_m", -0.1, "delta_m must be"),
+                                                 ("car_brake_mps2", 0.0, "car_brake_mps2 must be > 0"),
+                                                 ("comfort_brake_mps2", 5.0, "must not exceed"),
+                                                 ("reaction_s", math.nan, "reaction_s must be"),
+                                                 ("margin_m", True, "margin_m must be")])
+def test_a_bad_envelope_is_refused_by_name(field, value, words):
+    with pytest.raises(ValueError, match=words):
+        Envelope(**{field: value})
