@@ -78,6 +78,8 @@ class Mission:
     #: The hardest a target of the mission may brake, m/s^2, as the scenario states it (the
     #: supervisor's a_max, a rule of the road like RSS's; None: none stated).
     target_decel_mps2: float | None = None
+    #: The hardest a target of the mission may pull away, m/s^2, as the scenario states it (None: none stated).
+    target_accel_mps2: float | None = None
 
 
 @dataclass(frozen=True)

@@ -61,6 +61,7 @@ class StageContext:
         detector: the name of the episode's stop-sign detector.
         target_decel_mps2: the hardest a target of the mission brakes, as its scenario states it, m/s^2
             (None: none stated; the supervisor's a_max).
+        target_accel_mps2: the hardest it pulls away, as its scenario states it, m/s^2 (None: none stated).
     """
 
     camera: CameraModel
@@ -71,6 +72,7 @@ class StageContext:
     make_defence: Callable[[], Any]
     detector: str = "classical"
     target_decel_mps2: float | None = None
+    target_accel_mps2: float | None = None
 
 
 @dataclass(frozen=True)

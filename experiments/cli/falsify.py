@@ -33,8 +33,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     f.add_argument("--sensor-profile", choices=("qcar2", "ideal"), default="qcar2", help="the car's sensors")
     f.add_argument("--objective", choices=OBJECTIVES, default="rule",
                    help="what the samplers minimise: rule, the stop rule's robustness (default); rule-undetected, "
-                        "that minus the attack's undetected error (a slope towards attacks the defence misses). "
-                        "A violation is always the rule's robustness below zero")
+                        "that minus the attack's undetected error (a slope towards attacks the defence misses); gap, "
+                        "the smallest clear gap to the car ahead (lead_vehicle; below zero: contact). A violation is "
+                        "the rule's robustness below zero (gap: a contact)")
     f.add_argument("--stop-at-violation", action="store_true",
                    help="end each search at its first violation (faster; the lowest robustness is then not the "
                         "budget's)")

@@ -351,7 +351,8 @@ class TrialSpec:
 
 #: What "the code" of an episode is: the source that runs it and the assets (map, shipped
 #: checkpoints). Summaries, tables and the CLI are left out: changing them changes no episode.
-EPISODE_CODE = ("racf.sim", "racf.controllers", "racf.odca", "racf.experiments.episode", "racf.experiments.scenarios",
+EPISODE_CODE = ("racf.sim", "racf.controllers", "racf.odca", "racf.experiments.episode", "racf.experiments.car",
+                "racf.experiments.link", "racf.experiments.scenarios",
                 "racf.experiments.metrics", "racf.assets")
 
 

@@ -123,7 +123,7 @@ def car_stages(spec: TrialSpec, plan: EpisodePlan) -> tuple:
 
     context = StageContext(calib.camera, calib.camera_xy_m, calib.camera_height_m, calib.lidar_xy_m,
                            calib.bumper_x_m - calib.camera_xy_m[0], make_defence, spec.detector,
-                           plan.mission.target_decel_mps2)
+                           plan.mission.target_decel_mps2, plan.mission.target_accel_mps2)
     return tuple(CAR_STAGES[name](context) for name in plan.mission.stages)
 
 

@@ -9,7 +9,8 @@ so the same command gives the same searches on any machine, with any number of w
 A trial's episode seed is ``search seed * 100000 + trial number``: what the evaluation is, so
 every sampler meets the same noise at the same step of its budget. The objective is the
 episode's robustness (``episode.robustness``; negative: the stop rule was broken), or with
-``objective="rule-undetected"`` that minus the attack's undetected error (``OBJECTIVES``).
+``objective="rule-undetected"`` that minus the attack's undetected error, or with ``objective="gap"``
+the smallest clear gap to the car ahead (negative: contact; the supervisor's guarantee) (``OBJECTIVES``).
 
 A study's file is named by what made its values: the space, the defence and attacks, the
 sampler and seed, the batch, racf's episode code and the plug-ins' sources. Other code makes a
@@ -38,7 +39,12 @@ SAMPLERS = ("tpe", "cmaes", "random")
 #: the attack's undetected error (the referee's largest |acted-on - true distance| before the
 #: defence flagged it): a slope towards attacks the defence does not see, where the rule's
 #: robustness alone is flat. Either way a violation is the rule's robustness below zero.
-OBJECTIVES = ("rule", "rule-undetected")
+OBJECTIVES = ("rule", "rule-undetected", "gap")
+#: With ``objective="gap"``, a contact scores this far below a zero gap, m (the boxes touch at a gap of about 0).
+CONTACT_M = 0.01
+#: The objectives whose own value is the violation's measure (below zero: violated); the others are
+#: judged by the stop rule's robustness.
+VIOLATED_BY_VALUE = ("rule", "gap")
 #: Random trials before the guided samplers model the space.
 STARTUP_TRIALS = 10
 
@@ -92,6 +98,9 @@ class SearchConfig:
 
 def objective_value(row, objective: str) -> float:
     """What the search minimises for one episode's result row (NaN: not a point of the search)."""
+    if objective == "gap":  # the clear gap to the car ahead: below zero once they touch
+        gap = _finite(row.get("min_gap_m"))
+        return min(gap, 0.0) - CONTACT_M if row.get("no_lead_collision") is False else gap
     value = _finite(row.get("robustness_m"))
     if objective == "rule-undetected":
         value -= _finite(row.get("undetected_error_m"), 0.0)
@@ -133,7 +142,7 @@ class _Search:
 
         done = sorted(self.study.get_trials(deepcopy=False, states=(TrialState.COMPLETE,)),
                       key=lambda t: t.number)[: self.cfg.budget]
-        if self.cfg.objective == "rule":
+        if self.cfg.objective in VIOLATED_BY_VALUE:
             return [(t.number, dict(t.params), float(t.value)) for t in done]
         missing = [t for t in done if t.number not in self._robustness]
         if missing:  # a resumed search: the rule's robustness is in the episodes' rows
@@ -176,7 +185,7 @@ class _Search:
         from optuna.trial import TrialState
 
         value = objective_value(row, self.cfg.objective)
-        self._robustness[number] = _finite(row.get("robustness_m"))
+        self._robustness[number] = value if self.cfg.objective in VIOLATED_BY_VALUE else _finite(row.get("robustness_m"))
         if math.isfinite(value):
             self.study.tell(number, value)
         else:  # no robustness (no stop line): not a point of the search

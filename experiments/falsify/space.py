@@ -38,7 +38,7 @@ __all__ = ["SearchSpace", "Dimension", "DEFAULT_SPACE", "SCENARIO_FIELDS", "load
 #: The shipped space.
 DEFAULT_SPACE = Path(__file__).with_name("spaces") / "default.toml"
 #: Scenario fields a space may search (``TrialSpec`` fields).
-SCENARIO_FIELDS = ("sign", "speed", "run_up_m", "stable_steps")
+SCENARIO_FIELDS = ("sign", "speed", "run_up_m", "stable_steps", "supervisor", "t_atk")
 #: The patch's parameters that are the episode's own fields.
 _PATCH_FIELDS = ("rho", "t_atk")
 

@@ -14,6 +14,9 @@ sensors as the literature poses it, from the attacker's ground truth of where th
 - ``lead_hide``: the lead hidden from camera and LiDAR together, what MSF-ADV's object achieves
   (Cao et al., S&P 2021): its pixels painted over from their surroundings, no depth return
   there and no LiDAR return from it;
+- ``lead_range_error``: an error within a bound on every range witness of the lead together (its
+  depth and its LiDAR returns moved by ``bias_m + amp_m sin(2 pi t / period_s + phase_rad)``): what the
+  supervisor's guarantee assumes a vouched distance may be off by (its falsification's error injection);
 - ``lead_phantom``: a phantom car ahead (Nassi et al., CCS 2020: a car's picture projected or
   shown where none stands): the camera sees a QCar 2's rear ``distance_m`` ahead in the lane,
   while the depth and the LiDAR see what is really there (a picture has no depth).
@@ -37,8 +40,8 @@ from racf.sim.attacks.image_scale import scale_region
 from racf.sim.attacks.schedule import AttackSchedule, as_range
 from racf.sim.world.manager import WorldTarget, world_targets
 
-__all__ = ["LeadPatch", "LeadRamp", "LeadFrustum", "LeadHide", "LeadPhantom", "lead_pixels", "lead_beams",
-           "attacked_vehicle"]
+__all__ = ["LeadPatch", "LeadRamp", "LeadFrustum", "LeadHide", "LeadPhantom", "LeadRangeError", "lead_pixels",
+           "lead_beams", "attacked_vehicle"]
 _MJ_TO_OPTICAL = np.diag([1.0, -1.0, -1.0])
 #: Where a lead attack starts by default, s into the episode (the scenario's lead brakes at 3 s).
 DEFAULT_START_S = 2.0
@@ -289,3 +292,36 @@ class LeadPhantom(_LeadAttack):
         out[shown] = picture[shown]
         obs["rgb"] = out
         return obs
+
+
+class LeadRangeError(_LeadAttack):
+    """Every range witness of the lead off by the same bounded error: its depth pixels and its LiDAR
+    returns moved by ``bias_m + amp_m sin(2 pi t / period_s + phase_rad)`` (t from the attack's start;
+    positive: farther). Its bound, ``|bias_m| + amp_m``, is the error the supervisor's guarantee
+    assumes of a vouched distance (``Envelope.delta_m``): the falsification of that guarantee draws it
+    within and beyond (``racf falsify --space guarantee.toml``)."""
+
+    name = "lead_range_error"
+
+    def __init__(self, env: gym.Env, bias_m: float = 0.05, amp_m: float = 0.05, period_s: float = 2.0,
+                 phase_rad: float = 0.0, **schedule: Any) -> None:
+        gym.utils.RecordConstructorArgs.__init__(self, bias_m=bias_m, amp_m=amp_m, period_s=period_s,
+                                                 phase_rad=phase_rad, **schedule)
+        for name, value, lo, hi in (("bias_m", bias_m, -2.0, 2.0), ("amp_m", amp_m, 0.0, 2.0),
+                                    ("period_s", period_s, 0.05, 60.0), ("phase_rad", phase_rad, -7.0, 7.0)):
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not lo <= value <= hi:
+                raise ValueError(f"{name} must be a number in [{lo}, {hi}], got {value!r}")
+        self.bias_m, self.amp_m, self.period_s, self.phase_rad = float(bias_m), float(amp_m), float(period_s), float(phase_rad)
+        super().__init__(env, **schedule)
+
+    def error(self, info: dict) -> float:
+        """The error now, m."""
+        t = float(info["time"]) - self.schedule.windows[-1][0]
+        return self.bias_m + self.amp_m * math.sin(2 * math.pi * t / self.period_s + self.phase_rad)
+
+    def _attack(self, obs: dict, info: dict) -> dict:
+        error = self.error(info)
+        scan = np.asarray(obs["lidar"]).copy()
+        scan[lead_beams(self, info, scan)] += error
+        obs["lidar"] = scan.astype(obs["lidar"].dtype)
+        return self._shift_depth(obs, info, error)

@@ -73,9 +73,9 @@ class SupervisorStage(CarStage):
                  envelope: Envelope | None = None, chain: ChainConfig | None = None) -> None:
         super().__init__(context)
         self.advanced = advanced if advanced is not None else FollowingStage(context)
-        decel = getattr(context, "target_decel_mps2", None)
-        self.envelope = envelope if envelope is not None else (
-            Envelope(target_decel_mps2=decel) if decel else Envelope())
+        stated = {name: getattr(context, name, None) for name in ("target_decel_mps2", "target_accel_mps2")}
+        self.envelope = envelope if envelope is not None else Envelope(
+            **{name: value for name, value in stated.items() if value})
         self.carried = CarriedTarget(self.envelope)
         self.chain = ReadingChain(chain)
         self.bumper_m = float(context.bumper_ahead_of_camera_m)
@@ -109,7 +109,8 @@ class SupervisorStage(CarStage):
         else:  # between scans, moved on by the relative motion until the next
             self._on_lane, self._on_lane_age = self._on_lane - closing * dt, self._on_lane_age + dt
         on_lane = self._on_lane if self._on_lane_age <= SCAN_HOLD_S else math.nan
-        verdict = self.chain.step((lead.sample.d_meas, lead.sample.lidar_m, on_lane), closing, dt, self.carried)
+        verdict = self.chain.step((lead.sample.d_meas, lead.sample.lidar_m, on_lane), closing, dt, self.carried,
+                                  lead.sample.d_size)
         if verdict.vouched:
             self.carried.vouch(verdict.reading_m, lead.lead_mps, known)
         elif self.carried.held and lane is not None and lane_clear(view.scan, lane, self.carried.near_m,

@@ -5,8 +5,11 @@ A vouch sets the interval to the vouched distance +- delta and the lead's speed 
 would (it cannot be nearer) and its far end as the target pulling away at its hardest (it cannot
 be farther), both less the car's own travel (the encoder's, with its error). The near end is the
 worst case the safe controller drives on; the far end says how far a witness may read and still be
-the same target (the continuity check). The interval is never dropped by time: a target tracked in
-the lane stays there until the lane is seen clear (:mod:`.clear`).
+the same target (the continuity check); the reach is the far end of a target that kept its vouched
+speed (no faster): where one that was last seen before a jump can be looked for. A vouch narrows
+the far end (never widens it: a chain of readings cannot walk the bounds away). The interval is
+never dropped by time: a target tracked in the lane stays there until the lane is seen clear
+(:mod:`.clear`).
 """
 
 from __future__ import annotations
@@ -27,9 +30,9 @@ class CarriedTarget:
         self.reset()
 
     def reset(self) -> None:
-        self.near_m = self.far_m = math.nan
+        self.near_m = self.far_m = self.reach_m = math.nan
         self.slow_mps = 0.0
-        self.fast_mps = 0.0
+        self.fast_mps = self._vouched_fast = 0.0
         self.unvouched_s = 0.0
 
     @property
@@ -41,12 +44,18 @@ class CarriedTarget:
         """A vouched distance (m) and the lead's estimated speed (m/s; ``lead_known``: the estimate is
         confirmed, else the lead may be anywhere from standing to its top speed)."""
         e = self.env
-        self.near_m, self.far_m = distance_m - e.delta_m, distance_m + e.delta_m
+        held = self.held
+        far = distance_m + e.delta_m
+        self.near_m = distance_m - e.delta_m
+        self.far_m = min(self.far_m, far) if self.held and distance_m <= self.far_m else far
+        self.reach_m = min(self.reach_m, far) if self.held and distance_m <= self.reach_m else far
         if lead_known:
             self.slow_mps = max(lead_mps - e.lead_speed_error_mps, 0.0)
             self.fast_mps = min(lead_mps + e.lead_speed_error_mps, e.target_max_mps)
-        else:
+        elif not held:  # a first sight of unknown speed: anywhere from standing to the top speed
             self.slow_mps, self.fast_mps = 0.0, e.target_max_mps
+        # else: a speed the car has lost (a jump restarts its estimate) keeps the bounds carried so far
+        self._vouched_fast = self.fast_mps
         self.unvouched_s = 0.0
 
     def predict(self, ego_mps: float, dt: float) -> None:
@@ -64,6 +73,7 @@ class CarriedTarget:
         fast = min(self.fast_mps + e.target_accel_mps2 * dt, e.target_max_mps)
         self.near_m += near_travel - travel * (1.0 + e.odometry_error)
         self.far_m += fast * dt - travel * (1.0 - e.odometry_error)
+        self.reach_m += self._vouched_fast * dt - travel * (1.0 - e.odometry_error)
         self.slow_mps, self.fast_mps = slow, fast
 
     def holds(self, distance_m: float, tolerance_m: float) -> bool:

@@ -7,9 +7,17 @@ while each lies where the last one, moved on by the relative motion, puts it (wi
 no gap longer than ``gap_s`` parts them. A chain is judged once, when it is born:
 
 - born where the carried target can be (:class:`~.track.CarriedTarget`'s bounds), or with nothing
-  carried on a lane the car has not yet watched: it is the target, and its readings are vouched;
+  carried on a lane the car has not yet watched: it is the target, and its readings are vouched
+  while they stay within the bounds (a vouched reading beyond the far end by more than
+  ``noise_m`` breaks the chain: motion no car makes);
 - born farther than the target can have gone: a jump no car makes (a frustum or depth spoof moves
-  the witnesses at once). Refused, with every reading it carries on to;
+  the witnesses at once). Refused, with every reading it carries on to; and until a reading within
+  the carried target's reach (where it would be, had it kept its vouched speed) is vouched again,
+  a chain born beyond that reach is refused too: a gap in the readings does not launder a jump;
+- born farther than the camera's box allows (the size witness: a car's box can only shrink, so a
+  range beyond what its height implies is no car's): refused as a jump. Only a new chain is
+  checked against the box: a chain that goes on is the track, and a box that grows under it is a
+  picture (a phantom), not the car;
 - born nearer than the target can be, or first seen inside the distance a vehicle must have been
   seen from on a lane the car has watched: it appeared from nowhere (a phantom), implausible until
   two range witnesses agree on it for ``confirm_frames`` frames (a real car that cut in). Until
@@ -23,7 +31,7 @@ from dataclasses import dataclass
 
 from racf.experiments.car.supervisor.track import CarriedTarget
 
-__all__ = ["ChainConfig", "Verdict", "ReadingChain", "agree_m"]
+__all__ = ["ChainConfig", "Verdict", "ReadingChain", "agree_m", "size_slack_m"]
 
 
 @dataclass(frozen=True)
@@ -44,14 +52,21 @@ class ChainConfig:
     watch_s: float = 1.0
     seen_from_m: float = 1.5
     confirm_frames: int = 3
+    noise_m: float = 0.05
 
     def __post_init__(self) -> None:
-        for name in ("gate_m", "gap_s", "watch_s", "seen_from_m"):
+        for name in ("gate_m", "gap_s", "watch_s", "seen_from_m", "noise_m"):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0.0 < value <= 10.0:
                 raise ValueError(f"{name} must be in (0, 10], got {value!r}")
         if isinstance(self.confirm_frames, bool) or not isinstance(self.confirm_frames, int) or self.confirm_frames < 1:
             raise ValueError(f"confirm_frames must be an int >= 1, got {self.confirm_frames!r}")
+
+
+def size_slack_m(size_m: float) -> float:
+    """How far beyond the size witness a range may read and still be the box's car, m: the depth reads
+    the box's middle 0.1 m past its rear, and the box's height is good to about a tenth."""
+    return max(0.2, 0.2 * size_m)
 
 
 def agree_m(distance_m: float) -> float:
@@ -93,11 +108,14 @@ class ReadingChain:
         self.watched_s = 0.0
         self.state = "none"  # "vouched", "implausible", "refused"
         self.confirmed = 0
+        self.jumped = False  # a chain jumped away from the carried target, and it has not been seen since
 
-    def step(self, readings: tuple[float, ...], closing_mps: float, dt: float, carried: CarriedTarget) -> Verdict:
+    def step(self, readings: tuple[float, ...], closing_mps: float, dt: float, carried: CarriedTarget,
+             size_m: float = math.nan) -> Verdict:
         """One control step: the range witnesses' readings (the depth in the lead's box, the LiDAR's
         track, the LiDAR's first return on the lane; NaN: none), the closing speed the car estimates
-        (its speed less the lead's), the carried target."""
+        (its speed less the lead's), the carried target, and the size witness (the distance the lead's
+        box implies; NaN: none)."""
         c = self.config
         self.watched_s += dt
         self.since_s += dt
@@ -113,22 +131,34 @@ class ReadingChain:
         continuous = (math.isfinite(self.last_m) and self.since_s <= c.gap_s
                       and abs(reading - self.last_m) <= c.gate_m)
         if not continuous:
-            self.state, self.confirmed = self._born(reading, carried), 0
+            self.state, self.confirmed = self._born(reading, carried, size_m), 0
+        elif self.state == "vouched" and carried.held and reading > carried.far_m + c.noise_m:
+            self.state, self.jumped = "refused", True  # walked away faster than the target can go
         self.last_m, self.since_s = reading, 0.0
         if self.state == "implausible":
             self.confirmed = self.confirmed + 1 if both else 0
             if self.confirmed >= c.confirm_frames:
                 self.state = "vouched"
         if self.state == "vouched":
+            if carried.held and reading <= carried.reach_m + agree_m(reading):
+                self.jumped = False
             return Verdict(reading, True)
         return Verdict(reading, False, implausible=self.state == "implausible", refused=self.state == "refused")
 
-    def _born(self, reading: float, carried: CarriedTarget) -> str:
+    def _born(self, reading: float, carried: CarriedTarget, size_m: float = math.nan) -> str:
         c, tolerance = self.config, agree_m(reading)
+        if math.isfinite(size_m) and reading > size_m + size_slack_m(size_m):
+            self.jumped = carried.held
+            return "refused"
         if carried.held:
+            if self.jumped and reading > carried.reach_m + tolerance:
+                return "refused"
             if carried.holds(reading, tolerance):
                 return "vouched"
-            return "refused" if reading > carried.far_m else "implausible"
+            if reading > carried.far_m:
+                self.jumped = True
+                return "refused"
+            return "implausible"
         if self.watched_s >= c.watch_s and reading < c.seen_from_m:
             return "implausible"
         return "vouched"

@@ -23,12 +23,14 @@ from racf.experiments.episode.criteria import Criterion, NoContact
 from racf.experiments.episode.fields import Field
 from racf.experiments.scenarios.base import Param, Scenario
 from racf.experiments.scenarios.lead_vehicle.following import MIN_HEADWAY_S, NEEDLESS_TTC_S, score_following
-from racf.sim.world.lead import LEAD_PROFILES, LeadCar
+from racf.sim.world.lead import LAUNCH_MPS2, LEAD_PROFILES, LeadCar
 from racf.sim.world.lead_manager import LeadManager
 from racf.sim.world.traffic import CAR_FOOTPRINT_M, TRAFFIC_COLOURS
 
 __all__ = ["LeadVehicle", "NoLeadCollision", "KeepsHeadway", "NoNeedlessHardBrake", "lead_rest_s", "REST_BEHIND_S"]
 
+#: The hardest the scenario says a lead pulls away, m/s^2 (twice its stop-and-go launch).
+STATED_ACCEL_MPS2 = 2.0 * LAUNCH_MPS2
 #: The episode ends once the lead is at rest for good and the car has stood this long, s.
 REST_BEHIND_S = 1.0
 #: The episode's time limit, s (the longest profile: a stop-and-go lead that then stops at the line).
@@ -137,9 +139,11 @@ class LeadVehicle(Scenario):
         options = {**draft.reset_options, "lead": lead.to_options()}
         max_s = draft.max_steps * draft.control_dt_s
         # The car is told it drives in traffic: its following stage is engaged.
-        # The car is told the lead may brake as hard as this scenario's decel allows (its a_max).
+        # The car is told the lead may brake as hard as this scenario's decel allows (its a_max), and pulls
+        # away no harder than twice its launch (the rules of this road, as RSS states its own).
         stated = next(p.high for p in self.params if p.name == "decel")
-        mission = dataclasses.replace(mission, stages=(*mission.stages, "following"), target_decel_mps2=stated)
+        mission = dataclasses.replace(mission, stages=(*mission.stages, "following"), target_decel_mps2=stated,
+                                      target_accel_mps2=STATED_ACCEL_MPS2)
         return self.replace(draft, reset_options=options, mission=mission,
                             extras={**draft.extras, "lead": lead, "lead_rest_s": lead_rest_s(lead, max_s)})
 
