@@ -66,6 +66,8 @@ MISTAKES: list[tuple[str, str]] = [
     ("trial --plugin {worlds.py} --target far_start", "options['run_up_m'] for sign 2 must be in [0.3,"),
     ("trial --plugin {worlds.py} --target clashing_stage", "car stage 'loud' declares the column 'brake'"),
     ("trial --plugin {worlds.py} --target unknown_stage", "unknown car stage 'cruise_control'"),
+    ("trial --supervisor --estimator odca", "supervisor: it runs over the 'following' stage, which scenario 'sign' "
+                                            "does not engage"),
     # specs
     ("sweep {tmp}/nowhere.toml", "no sweep spec"),
     ("sweep {bad.toml}", "not valid TOML"),

@@ -279,15 +279,16 @@ _RACF_5 = Battery(
 LEAD_PROFILES = ("cruise", "slow_down", "hard_brake", "stop_and_go")
 
 
-def _following(attack: str, params: dict | None = None) -> Callable[[str, int], list[TrialSpec]]:
+def _following(attack: str, params: dict | None = None, supervisor: bool = False
+               ) -> Callable[[str, int], list[TrialSpec]]:
     """Following episodes (the ``lead_vehicle`` scenario on sign 1's approach at 1 m/s, the lead braking
     at 3 s), paired over defences: ``n // 4`` seeds at each of the lead's profiles, the attack from 2 s
-    for 6 s (the sweeps ``following*.toml``'s grid)."""
+    for 6 s (the sweeps ``following*.toml``'s grid); ``supervisor``: the defence under the supervisor."""
     def make(defence: str, n: int) -> list[TrialSpec]:
         space = {"attack": [attack], "estimator": [defence], "rho": [0.95], "t_atk": [6.0], "speed": [1.0], "sign": [1]}
         spec = SweepSpec(f"following-{attack}", mode="grid", repeats=max(1, n // len(LEAD_PROFILES)), seed=0,
                          space=space, params=params or {}, log_steps=True, detector=_CAR, target="lead_vehicle",
-                         scenario={"lead_vehicle": {"profile": list(LEAD_PROFILES)}})
+                         scenario={"lead_vehicle": {"profile": list(LEAD_PROFILES)}}, supervisor=(supervisor,))
         return spec.episodes()
     return make
 
@@ -353,7 +354,42 @@ _RACF_LINK = Battery(
     offline_presets=(),
 )
 
+#: The following rows of ``racf-7``: (key, title, attack, its parameters).
+_RACF_7_FOLLOWING = (
+    ("following_clean", "following the car ahead, clean", "none", None),
+    ("following_patch", "the lead's depth read 1 m far (patch on its rear)", "lead_patch", None),
+    ("following_frustum_depth", "the frustum spoof with the depth moved too (the range sensors agree)",
+     "lead_frustum", {"lead_frustum": {"depth": [True]}}),
+    ("following_adaptive", "the adaptive spoof: depth, LiDAR and picture drawn away at 0.5 m/s to 2 m (outside the "
+                           "supervisor's assumptions)", "lead_frustum",
+     {"lead_frustum": {"depth": [True], "scale_box": [True], "rate_mps": [0.5], "bias_m": [2.0]}}),
+    ("following_hide", "the lead hidden from camera and LiDAR", "lead_hide", None),
+    ("following_phantom", "a phantom car 0.5 m ahead, camera only (needless hard brakes)", "lead_phantom", None),
+)
+
+#: ``racf-7``: the supervisor (issue 69). Each of racf-6's following rows that its guarantee speaks to,
+#: and the adaptive spoof that lies outside it, with the defence alone and under the supervisor
+#: (``*_supervised``: the same seeds), and the stop sign's two sustained attacks (a temporary sign
+#: under the 0.6 sticker, the strong patch for the whole approach): the supervisor supervises the
+#: following stage only, so those rows rate the defence alone (``racf-5``/``racf-4``'s episodes).
+_RACF_7 = Battery(
+    name="racf-7",
+    loop=(
+        *(LoopRow(key, title, 60, 4, _following(attack, params), attacked=attack != "none")
+          for key, title, attack, params in _RACF_7_FOLLOWING),
+        *(LoopRow(f"{key}_supervised", f"{title}, under the supervisor", 60, 4,
+                  _following(attack, params, supervisor=True), attacked=attack != "none")
+          for key, title, attack, params in _RACF_7_FOLLOWING),
+        LoopRow("temporary_sticker", "a temporary sign, the 0.6 sticker up from the start", 60, 4,
+                _stale("temporary", "physical_patch", {"physical_patch": _STICKER_06})),
+        LoopRow("patch_whole_approach", "the strong patch for the whole approach (rho 1, 10 s)", 60, 4,
+                _sweep("patch_whole_approach", "patch_occlusion", mode="grid", t_atk=[10.0], rho=[1.0])),
+    ),
+    drives=(),
+    offline_presets=(),
+)
+
 #: Every released battery, by name.
 BATTERIES = {"racf-1": _RACF_1, "racf-2": _RACF_2, "racf-3": _RACF_3, "racf-4": _RACF_4, "racf-5": _RACF_5,
-             "racf-link": _RACF_LINK, "racf-6": _RACF_6}
+             "racf-link": _RACF_LINK, "racf-6": _RACF_6, "racf-7": _RACF_7}
 DEFAULT_BATTERY = "racf-4"

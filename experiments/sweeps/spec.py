@@ -112,7 +112,7 @@ class SweepSpec:
     supervisor: tuple = (False,)
 
     def __post_init__(self) -> None:
-        if (isinstance(self.supervisor, (str, bytes)) or not self.supervisor
+        if (not isinstance(self.supervisor, (list, tuple)) or not self.supervisor
                 or not all(isinstance(v, bool) for v in self.supervisor)):
             raise ValueError(f"supervisor must be a non-empty list of true/false, got {self.supervisor!r}")
         object.__setattr__(self, "supervisor", tuple(dict.fromkeys(self.supervisor)))

@@ -69,6 +69,10 @@ class KeepsHeadway(Criterion):
         Field("needless_hard_brakes", 0, "", f"hard brakes begun while the real lead asked for none (time-to-"
                                              f"collision over {NEEDLESS_TTC_S} s, headway at least {MIN_HEADWAY_S} s)",
               summary="median"),
+        Field("mean_time_gap_s", unit="s", meaning="the headway to the car ahead averaged over the steps the car "
+                                                   "moves (NaN: it never moved behind it)", summary="median"),
+        Field("finish_s", unit="s", meaning="when the episode ended: the lead at rest for good and the car stood "
+                                            "behind it (or a contact, or the time limit)", summary="median"),
     )
 
     def passed(self, episode) -> bool:

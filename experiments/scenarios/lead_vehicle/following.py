@@ -17,6 +17,10 @@ speed, the lead's ``lead_*`` columns, what the car touched) and nothing else.
 - **needless hard brakes**: those that begin while the real lead asks for none: its time-to-collision
   over ``NEEDLESS_TTC_S`` (or they do not close) and the headway at least ``MIN_HEADWAY_S`` (what a
   phantom car ahead costs; the catch-up to a lead first seen close, or its own hard brake, are not).
+- **mean time gap**: the headway averaged over the steps the car moves (what a defence's caution
+  costs in following distance);
+- **time to finish**: when the episode ended, s (the scenario ends it once the lead is at rest for
+  good and the car has stood behind it: a car that hangs back finishes later).
 """
 
 from __future__ import annotations
@@ -54,6 +58,8 @@ class FollowingOutcome:
     headway_violation_s: float
     hard_brakes: int
     needless_hard_brakes: int = 0
+    mean_time_gap_s: float = math.nan
+    finish_s: float = math.nan
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -83,8 +89,11 @@ def score_following(log: pd.DataFrame) -> FollowingOutcome:
     min_ttc = 0.0 if hits.size else (float(ttc.min()) if np.isfinite(ttc).any() else math.nan)
     t = log["t"].to_numpy(float)[:max(end, 1)]
     dt = np.diff(t, prepend=t[0])
+    moving = np.isfinite(headway) & np.isfinite(gap)
+    mean_gap = float(headway[moving].mean()) if moving.any() else math.nan
     return FollowingOutcome(bool(hits.size), float(np.nanmin(gap)), min_ttc,
-                            float(dt[headway < MIN_HEADWAY_S].sum()), hard_brakes(log), needless_hard_brakes(log))
+                            float(dt[headway < MIN_HEADWAY_S].sum()), hard_brakes(log), needless_hard_brakes(log),
+                            mean_gap, float(log["t"].iloc[-1]))
 
 
 def _brake_starts(log: pd.DataFrame) -> np.ndarray:

@@ -71,3 +71,27 @@ def test_bad_flags_are_rejected_before_any_episode_runs(argv, message, monkeypat
 def test_rho_outside_the_unit_interval_is_a_usage_error(capsys):
     assert main(["trial", "--attack", "patch_occlusion", "--rho", "1.5"]) == 2
     assert "rho must be in [0, 1]" in capsys.readouterr().err
+
+
+def test_the_supervisor_names_its_episodes_and_leaves_the_others_ids_as_they_were():
+    alone = TrialSpec("clean+lead_patch+odca", 1, 1.0, 3, target="lead_vehicle")
+    supervised = dataclasses.replace(alone, supervisor=True)
+    # Off, the field is not in the spec's form: every unsupervised id is what it was before it existed.
+    assert "supervisor" not in alone.to_dict() and supervised.to_dict()["supervisor"] is True
+    assert TrialSpec.from_dict(supervised.to_dict()) == supervised
+    assert supervised.trial_id.startswith("clean+lead_patch+odca+supervisor_lead_vehicle1_")
+    assert supervised.label == "clean+lead_patch+odca+supervisor" and alone.label == alone.setting
+    assert supervised.trial_id.split("_")[-1] != alone.trial_id.split("_")[-1]
+    with pytest.raises(ValueError, match="supervisor must be true or false"):
+        TrialSpec("clean+odca", 1, 1.0, 3, supervisor="yes")
+
+
+def test_the_supervisor_takes_the_following_stages_place_and_refuses_a_scenario_without_one():
+    from racf.experiments.episode.plan import plan_episode
+
+    spec = TrialSpec("clean+odca", 1, 1.0, 3, target="lead_vehicle")
+    assert plan_episode(spec).mission.stages == ("following",)
+    supervised = plan_episode(dataclasses.replace(spec, supervisor=True)).mission
+    assert supervised.stages == ("supervisor",) and supervised.target_decel_mps2 == 6.0
+    with pytest.raises(ValueError, match="which scenario 'sign' does not engage"):
+        plan_episode(TrialSpec("clean+odca", 1, 1.0, 3, supervisor=True))

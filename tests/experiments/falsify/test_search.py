@@ -118,3 +118,30 @@ def test_the_undetected_objective_steers_the_samplers_but_a_violation_is_still_t
     with pytest.raises(ValueError, match="objective must be one of"):
         SearchConfig(_space(), objective="fastest")
 
+
+
+def test_the_gap_objective_is_the_clear_gap_and_below_zero_on_contact():
+    from racf.experiments.falsify.search import CONTACT_M, objective_value
+
+    assert objective_value({"min_gap_m": 0.31, "no_lead_collision": True}, "gap") == 0.31
+    assert objective_value({"min_gap_m": 0.02, "no_lead_collision": False}, "gap") == -CONTACT_M
+    assert objective_value({"min_gap_m": -0.01, "no_lead_collision": False}, "gap") == -0.01 - CONTACT_M
+    # The rule's objective reads the stop rule's robustness, not the gap.
+    assert objective_value({"robustness_m": 0.2, "min_gap_m": 0.5}, "rule") == 0.2
+
+
+def test_the_guarantee_spaces_search_the_supervisor_within_and_beyond_delta():
+    from pathlib import Path
+
+    import racf.experiments.falsify as falsify
+
+    folder = Path(falsify.__file__).parent / "spaces"
+    inside = load_space("odca", ("lead_range_error",), folder / "guarantee.toml")
+    outside = load_space("odca", ("lead_range_error",), folder / "guarantee-outside.toml")
+    for space, delta in ((inside, 0.1), (outside, 0.2)):
+        dims = {d.name: d for d in space.dimensions}
+        bias, amp = dims["attack.lead_range_error.bias_m"], dims["attack.lead_range_error.amp_m"]
+        assert max(abs(bias.low), abs(bias.high)) + amp.high == pytest.approx(delta)
+        assert dims["scenario.lead_vehicle.decel"].high == 6.0 and dims["scenario.lead_vehicle.gap_m"].low >= 0.66
+        spec = space.extremes()[0]
+        assert spec.supervisor and spec.target == "lead_vehicle" and spec.t_atk == (30.0, 30.0)

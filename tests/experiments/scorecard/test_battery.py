@@ -1,5 +1,7 @@
 """The released batteries: each keeps its episodes, and each names the car's detector in its rows."""
 
+import dataclasses
+
 from racf.experiments.scorecard.battery import BATTERIES, DEFAULT_BATTERY
 
 
@@ -113,3 +115,22 @@ def test_rows_whose_criteria_declare_no_card_measure_put_none_on_the_card():
     signs = pd.DataFrame({"target": "sign", "stop_rule": [True, False], "no_needless_stop": [None, None]})
     assert card_measures(signs) == []
     assert card_measures(signs.assign(target="lead_vehicle")) == []  # its criteria's columns are not in the rows
+
+
+def test_racf_7_pairs_each_following_row_alone_and_under_the_supervisor_on_the_same_episodes():
+    seven, six = BATTERIES["racf-7"], BATTERIES["racf-6"]
+    following = ["following_clean", "following_patch", "following_frustum_depth", "following_adaptive",
+                 "following_hide", "following_phantom"]
+    assert [r.key for r in seven.rows()] == following + [f"{k}_supervised" for k in following] + \
+        ["temporary_sticker", "patch_whole_approach"]
+    for key in following:
+        alone = next(r for r in seven.loop if r.key == key).specs("odca", quick=True)
+        supervised = next(r for r in seven.loop if r.key == f"{key}_supervised").specs("odca", quick=True)
+        assert not any(s.supervisor for s in alone) and all(s.supervisor for s in supervised)
+        assert [dataclasses.replace(s, supervisor=False) for s in supervised] == alone
+        assert all("+supervisor_" in s.trial_id for s in supervised)
+        if key in {r.key for r in six.loop}:  # racf-6's episodes, alone, are racf-7's: ids included
+            same = next(r for r in six.loop if r.key == key).specs("odca", quick=True)
+            assert [s.trial_id for s in same] == [s.trial_id for s in alone]
+    adaptive = next(r for r in seven.loop if r.key == "following_adaptive").specs("odca")[0]
+    assert adaptive.attack_params["lead_frustum"] == {"depth": True, "scale_box": True, "rate_mps": 0.5, "bias_m": 2.0}

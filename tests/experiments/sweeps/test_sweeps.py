@@ -115,6 +115,8 @@ def test_report_redraws_from_the_store_without_running(uninterrupted, capsys, tm
     (TINY.replace('["raw"]', '["kalman"]'), "estimator"),
     (TINY.replace('mode = "grid"', 'mode = "random"'), "n \\(the number of random draws\\)"),
     ("budget = 3\n" + TINY, "unknown field"),
+    ("supervisor = true\n" + TINY, "supervisor must be a non-empty list of true/false"),
+    ("supervisor = [1]\n" + TINY, "supervisor must be a non-empty list of true/false"),
     ('sensor_profile = "real"\n' + TINY, r"sensor_profile must be one of \('qcar2', 'ideal'\)"),
     ('sign_geometry = "post"\n' + TINY, r"sign_geometry must be one of \('plate', 'pole'\)"),
     (TINY + "\n[traffic]\ncars = [0, 9]\n", r"scenario 'cross_traffic' parameter 'cars' must be an int in \[1, 4\] cars, got 9"),

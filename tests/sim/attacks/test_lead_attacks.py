@@ -142,3 +142,28 @@ def test_the_adaptive_frustum_moves_every_witness_the_picture_too_and_grows_at_i
 def test_the_frustum_spoof_refuses_a_bad_option_in_one_line(params, message):
     with pytest.raises(ValueError, match=message):
         attacked("clean+lead_frustum", **params)
+
+
+def test_the_range_error_moves_every_range_witness_of_the_lead_by_the_same_bounded_error():
+    env, obs, info, clean = attacked("clean+lead_range_error", bias_m=0.03, amp_m=0.05, period_s=2.0, phase_rad=0.5)
+    start = env.schedule.windows[-1][0]
+    error = env.error(info)
+    assert error == pytest.approx(0.03 + 0.05 * np.sin(2 * np.pi * (float(info["time"]) - start) / 2.0 + 0.5))
+    assert abs(error) <= 0.08 and error != 0.0
+    beams = lead_beams(env, info, clean["lidar"])
+    where = lead_pixels(env, info, clean["depth"][..., 0])
+    assert beams.any() and where.sum() > 500
+    np.testing.assert_allclose(obs["lidar"][beams] - clean["lidar"][beams], error, atol=1e-4)
+    np.testing.assert_allclose(obs["depth"][..., 0][where] - clean["depth"][..., 0][where], error, atol=1e-4)
+    np.testing.assert_array_equal(obs["lidar"][~beams], clean["lidar"][~beams])
+    np.testing.assert_array_equal(obs["rgb"], clean["rgb"])
+
+
+@pytest.mark.parametrize("params, message", [({"amp_m": -0.1}, "amp_m must be a number in"),
+                                             ({"period_s": 0.0}, "period_s must be a number in"),
+                                             ({"bias_m": True}, "bias_m must be a number in")])
+def test_the_range_error_refuses_a_bad_option_in_one_line(params, message):
+    from racf.sim.attacks.lead import LeadRangeError
+
+    with pytest.raises(ValueError, match=message):
+        LeadRangeError(object(), **params)
