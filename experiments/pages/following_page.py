@@ -68,8 +68,9 @@ def _rows(folder: Path) -> pd.DataFrame:
     # The frustum spoof that moves the depth too is its own row, and the one that moves the picture too.
     frame["attack"] = attack + frame["trial_id"].map(
         lambda i: _frustum_kind(specs[i].attack_params.get("lead_frustum", {})) if i in specs else "")
-    # A defence run with options is its own row: ``vote (inner=ekf)``.
+    # A defence run with options is its own row: ``vote (inner=ekf)``; one under the supervisor too.
     frame["estimator"] = [_label(e, specs[i].estimator_options if i in specs else {})
+                          + (" + supervisor" if i in specs and specs[i].supervisor else "")
                           for e, i in zip(frame["estimator"], frame["trial_id"])]
     return frame
 
@@ -88,6 +89,13 @@ def _share(flags) -> dict:
     return {"k": k, "n": n, "rate": (k / n if n else None), "ci": [lo, hi]}
 
 
+def _median(group: pd.DataFrame, column: str) -> dict:
+    """A column's median with its bootstrap interval (over the episodes that have it)."""
+    values = group[column].to_numpy(float)
+    median, ci = median_ci(values[~pd.isna(values)])
+    return {"median": median, "ci": ci, "n": int((~pd.isna(values)).sum())}
+
+
 def summarise(folders: list[Path]) -> dict:
     """The following table's data from the sweeps' folders."""
     frame = pd.concat([_rows(Path(f)) for f in folders], ignore_index=True)
@@ -103,6 +111,7 @@ def summarise(folders: list[Path]) -> dict:
             "hard_brakes_median": float(group["hard_brakes"].median()),
             **({"needless_hard_brake": _share((group["needless_hard_brakes"] > 0).tolist())}
                if "needless_hard_brakes" in group else {}),
+            **{f"{name}_median": _median(group, name) for name in ("mean_time_gap_s", "finish_s") if name in group},
             "by_profile": {p: _share(g["no_lead_collision"].tolist())
                            for p, g in group.groupby("scenario_profile", sort=True)}}
     return {"rows": out}

@@ -22,6 +22,8 @@ def test_its_plan_puts_the_lead_its_gap_ahead_and_tells_the_car_to_follow():
     plan = plan_episode(spec(gap_m=0.8, profile="hard_brake", speed=0.6, decel=3.0, brake_t=3.0))
     lead = plan.extras["lead"]
     assert plan.mission.stages == ("following",) and plan.reset_options["lead"] == lead.to_options()
+    # The rules of its road, stated to the car: the hardest the lead brakes and pulls away.
+    assert (plan.mission.target_decel_mps2, plan.mission.target_accel_mps2) == (6.0, 2.0)
     assert lead.start_s - plan.start_s_m == pytest.approx(0.8 + CAR_FOOTPRINT_M[0])
     assert lead.stop_s == pytest.approx(plan.mission.targets[-1].stop_s - plan.calibration.bumper_x_m)
     assert plan.extras["lead_rest_s"] == pytest.approx(3.0 + 0.6 / 3.0, abs=0.03)
@@ -57,6 +59,13 @@ def test_the_scorer_reads_gap_time_to_collision_and_headway():
     assert creeping.headway_violation_s == 0.0
     apart = score_following(log_of([1.0, 1.1], [0.5, 0.5], [1.0, 1.0]))
     assert math.isnan(apart.min_ttc_s) and apart.headway_violation_s == 0.0 and MIN_HEADWAY_S == 0.5
+
+
+def test_the_scorer_averages_the_time_gap_while_moving_and_says_when_the_episode_ended():
+    out = score_following(log_of([1.0, 0.8, 0.6, 0.6], [1.0, 0.5, 0.05, 0.0], [0.0] * 4))
+    # Moving at 1 and 0.5 m/s: gaps 1.0 and 0.8 are 1.0 and 1.6 s of headway; the rest stands.
+    assert out.mean_time_gap_s == pytest.approx(1.3) and out.finish_s == pytest.approx(0.06)
+    assert math.isnan(score_following(log_of([1.0, 1.0], [0.0, 0.0], [0.0, 0.0])).mean_time_gap_s)
 
 
 def test_a_hard_brake_is_counted_once_per_run_of_braking():

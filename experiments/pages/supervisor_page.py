@@ -1,0 +1,138 @@
+"""The supervisor's results page (``docs/results/supervisor.md``): each following row with a defence
+alone and under the supervisor, what the issue asked of it, and the falsification of its guarantee.
+
+Its data: the ``following-supervisor`` stored result (``following_page.summarise`` over the sweep
+``following-supervisor.toml``, the defence alone and supervised on the same seeds), and the
+``falsify-guarantee`` and ``falsify-guarantee-outside`` stored reports of ``racf falsify`` over the
+guarantee's assumptions and beyond them (``experiments/falsify/spaces/guarantee*.toml``).
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from racf.experiments.pages.following_page import ATTACK_LABELS
+from racf.experiments.pages.results_format import meta_lines, missing, page_head, rate
+
+__all__ = ["supervisor_markdown", "SUPERVISOR_COMMAND", "GUARANTEE_RESULTS", "INSIDE", "checks"]
+
+SUPERVISOR_COMMAND = ("racf sweep following-supervisor.toml; python -m racf.experiments.pages.following_page "
+                      "outputs/sweeps/following-supervisor")
+#: The falsifications of the guarantee: (stored result, what it searched, the command).
+GUARANTEE_RESULTS = (
+    ("falsify-guarantee", "inside the assumptions: every range witness off by at most delta = 0.1 m",
+     "racf falsify --defence odca --attack lead_range_error --objective gap --space guarantee.toml "
+     "--sampler random tpe --seeds 5 --budget 40"),
+    ("falsify-guarantee-outside", "outside them: delta doubled (0.2 m)",
+     "racf falsify --defence odca --attack lead_range_error --objective gap --space guarantee-outside.toml "
+     "--sampler random tpe --seeds 3 --budget 40 --stop-at-violation"),
+)
+#: Whether an attack lies inside the guarantee's assumptions (``docs/concepts/guarantee.md``).
+INSIDE = {"clean": "—", "clean+lead_patch": "yes", "clean+lead_frustum[depth]": "in part (see the concept page)",
+          "clean+lead_frustum[adaptive]": "no", "clean+lead_hide": "yes", "clean+lead_phantom": "yes"}
+_ORDER = tuple(INSIDE)
+
+
+def _pair(rows: dict) -> list[tuple[str, str, dict, dict]]:
+    """(attack, defence, alone, supervised) for each attack and defence run both ways."""
+    out = []
+    for key, row in rows.items():
+        if row["estimator"].endswith(" + supervisor"):
+            continue
+        other = rows.get(f"{row['attack']}|{row['estimator']} + supervisor")
+        if other is not None:
+            out.append((row["attack"], row["estimator"], row, other))
+    return sorted(out, key=lambda p: (_ORDER.index(p[0]) if p[0] in _ORDER else len(_ORDER), p[0], p[1]))
+
+
+def _median(row: dict, name: str) -> str:
+    value = row.get(f"{name}_median")
+    return "—" if value is None or value["median"] is None else rate(value["median"], value["ci"], 2)
+
+
+def checks(rows: dict) -> list[str]:
+    """What issue 69 asked of the supervisor over ODCA, each with what was measured."""
+    pairs = {(a, d): (alone, sup) for a, d, alone, sup in _pair(rows)}
+    lines = []
+    for attack, inside in INSIDE.items():
+        pair = pairs.get((attack, "odca"))
+        if pair is None or inside == "no":
+            continue
+        cf = pair[1]["collision_free"]
+        verdict = "met" if cf["rate"] is not None and cf["rate"] >= 0.95 else "**not met**"
+        lines.append(f"- {ATTACK_LABELS.get(attack, attack)}: collision-free {rate(cf['rate'], cf['ci'])} "
+                     f"(N {cf['n']}; asked >= 0.95): {verdict}.")
+    for attack in ("clean", "clean+lead_phantom"):
+        pair = pairs.get((attack, "odca"))
+        if pair is None or "needless_hard_brake" not in pair[1]:
+            continue
+        nb = pair[1]["needless_hard_brake"]
+        verdict = "met" if nb["rate"] is not None and nb["rate"] <= 0.05 else "**not met**"
+        lines.append(f"- {ATTACK_LABELS.get(attack, attack)}: needless hard brakes in {rate(nb['rate'], nb['ci'])} "
+                     f"of episodes (asked <= 0.05): {verdict}.")
+    clean = pairs.get(("clean", "odca"))
+    for name, words in (("mean_time_gap_s", "mean time gap"), ("finish_s", "time to finish")):
+        if clean is None or f"{name}_median" not in clean[0]:
+            continue
+        alone, sup = clean[0][f"{name}_median"]["median"], clean[1][f"{name}_median"]["median"]
+        change = sup / alone - 1.0
+        verdict = "met" if abs(change) <= 0.10 else "**not met**"
+        lines.append(f"- clean following's {words}: {sup:.2f} s under the supervisor, {alone:.2f} s alone "
+                     f"(medians), {change:+.0%} (asked within 10 %): {verdict}.")
+    return lines
+
+
+def _table(rows: dict) -> list[str]:
+    lines = ["| attack | inside the assumptions | defence | N | collision-free [95 % CI] | needless hard brake "
+             "[95 % CI] | mean time gap s, median [95 % CI] | time to finish s, median [95 % CI] |",
+             "|---|---|---|---|---|---|---|---|"]
+    for attack, defence, alone, sup in _pair(rows):
+        for label, row in ((defence, alone), (f"{defence} + supervisor", sup)):
+            cf, nb = row["collision_free"], row.get("needless_hard_brake")
+            lines.append(f"| {ATTACK_LABELS.get(attack, attack)} | {INSIDE.get(attack, '?')} | {label} | {row['n']} | "
+                         f"{rate(cf['rate'], cf['ci'])} | {rate(nb['rate'], nb['ci']) if nb else '—'} | "
+                         f"{_median(row, 'mean_time_gap_s')} | {_median(row, 'finish_s')} |")
+    return lines + [""]
+
+
+def _falsification(root: Path) -> list[str]:
+    lines = ["## The guarantee, falsified", "",
+             "`racf falsify --objective gap` searches for a contact with the car ahead (the smallest clear gap; "
+             "below zero: contact) over the guarantee's assumptions, then beyond them "
+             "([the dimensions and bounds](../concepts/guarantee.md#checking-it-falsification)).", ""]
+    for name, what, command in GUARANTEE_RESULTS:
+        path = root / f"{name}.json"
+        lines += [f"**{what}**", ""]
+        if not path.exists():
+            lines += missing(name, command)
+            continue
+        data = json.loads(path.read_text())
+        samplers = data["samplers"]
+        contacts = sum(s["falsified"] for s in samplers.values())
+        searches = sum(s["n_seeds"] for s in samplers.values())
+        lowest = min((s["lowest_robustness_m"] for s in samplers.values() if s["lowest_robustness_m"] is not None),
+                     default=None)
+        lines += meta_lines(data["meta"])
+        lines += [f"{data['episodes_evaluated']} episodes in {searches} searches ({', '.join(sorted(samplers))}): "
+                  f"{contacts} of the searches found a contact; the smallest gap any episode left: "
+                  f"{'—' if lowest is None else f'{lowest:+.3f} m'}.", ""]
+    return lines
+
+
+def supervisor_markdown(root: Path) -> str:
+    root = Path(root)
+    lines = page_head(
+        "The supervisor",
+        "Runtime assurance over the following stage (issue 69; [what it does and what it guarantees]"
+        "(../concepts/guarantee.md)): each following row of `racf-7` with ODCA alone and under the supervisor, "
+        "on the same episodes (the `lead_vehicle` scenario on sign 1's approach, the lead in each of its four "
+        "profiles, the attacks from 2 s for 6 s).")
+    path = root / "following-supervisor.json"
+    if not path.exists():
+        lines += missing("following-supervisor", SUPERVISOR_COMMAND)
+    else:
+        data = json.loads(path.read_text())
+        lines += meta_lines(data["meta"]) + _table(data["rows"])
+        lines += ["What issue 69 asked of the supervisor over ODCA, measured:", "", *checks(data["rows"]), ""]
+    return "\n".join(lines + _falsification(root) + [""])

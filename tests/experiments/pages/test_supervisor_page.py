@@ -1,0 +1,57 @@
+"""The supervisor's page: each attack with the defence alone and supervised, what issue 69 asked of
+it (met or not, from the numbers), and the falsification of its guarantee."""
+
+import json
+
+from racf.experiments.pages.supervisor_page import checks, supervisor_markdown
+
+META = {"command": "racf sweep following-supervisor.toml", "commit": "abc", "racf": "0.1.0", "machine": "m",
+        "measured": "2026-11-28"}
+
+
+def _share(k, n):
+    return {"k": k, "n": n, "rate": k / n, "ci": [max(k / n - 0.1, 0.0), min(k / n + 0.1, 1.0)]}
+
+
+def _row(attack, estimator, free, needless, gap=1.0, finish=9.0):
+    return {"attack": attack, "estimator": estimator, "n": 60, "collision_free": _share(free, 60),
+            "needless_hard_brake": _share(needless, 60),
+            "mean_time_gap_s_median": {"median": gap, "ci": [gap - 0.1, gap + 0.1], "n": 60},
+            "finish_s_median": {"median": finish, "ci": [finish - 1, finish + 1], "n": 60}}
+
+
+def _rows():
+    rows = [_row("clean", "odca", 60, 7), _row("clean", "odca + supervisor", 60, 2, gap=1.05, finish=10.5),
+            _row("clean+lead_hide", "odca", 11, 0), _row("clean+lead_hide", "odca + supervisor", 58, 0),
+            _row("clean+lead_phantom", "odca", 51, 35), _row("clean+lead_phantom", "odca + supervisor", 60, 1),
+            _row("clean+lead_frustum[adaptive]", "odca", 6, 0), _row("clean+lead_frustum[adaptive]",
+                                                                     "odca + supervisor", 10, 0)]
+    return {f"{r['attack']}|{r['estimator']}": r for r in rows}
+
+
+def test_what_was_asked_is_judged_from_the_numbers():
+    lines = checks(_rows())
+    text = "\n".join(lines)
+    assert "the lead hidden from camera and LiDAR: collision-free 0.97" in text and "(N 60; asked >= 0.95): met" in text
+    # The adaptive spoof lies outside the assumptions: nothing is asked of it.
+    assert "adaptive" not in text
+    assert "needless hard brakes in 0.03" in text and "needless hard brakes in 0.02" in text
+    assert "mean time gap: 1.05 s under the supervisor, 1.00 s alone (medians), +5% (asked within 10 %): met" in text
+    assert "time to finish: 10.50 s under the supervisor, 9.00 s alone (medians), +17% (asked within 10 %): **not met**" in text
+
+
+def test_the_page_pairs_each_defence_with_itself_supervised_and_says_what_is_missing(tmp_path):
+    assert "Not stored yet (`following-supervisor`)" in supervisor_markdown(tmp_path)
+    assert "Not stored yet (`falsify-guarantee`)" in supervisor_markdown(tmp_path)
+    (tmp_path / "following-supervisor.json").write_text(json.dumps({"meta": META, "rows": _rows()}))
+    page = supervisor_markdown(tmp_path)
+    assert "| the lead hidden from camera and LiDAR | yes | odca | 60 | 0.18 [" in page
+    assert "| the lead hidden from camera and LiDAR | yes | odca + supervisor | 60 | 0.97 [" in page
+    assert page.index("| none |") < page.index("the lead hidden") < page.index("a phantom car")
+    report = {"meta": META, "episodes_evaluated": 400,
+              "samplers": {"random": {"n_seeds": 5, "falsified": 0, "lowest_robustness_m": 0.08},
+                           "tpe": {"n_seeds": 5, "falsified": 0, "lowest_robustness_m": 0.05}}}
+    (tmp_path / "falsify-guarantee.json").write_text(json.dumps(report))
+    page = supervisor_markdown(tmp_path)
+    assert "400 episodes in 10 searches (random, tpe): 0 of the searches found a contact; the smallest gap any " \
+           "episode left: +0.050 m." in page
