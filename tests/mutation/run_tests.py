@@ -14,6 +14,7 @@ SERVICE = "tests/experiments/service"
 LINK = "tests/experiments/link"
 EPISODE = "tests/experiments/episode"
 CAR = "tests/experiments/car"
+SUP = "tests/experiments/car/supervisor"
 #: How each mutant's tests run: to the first failure, the same hypothesis examples for every mutant.
 PYTEST_ARGS = ["-x", "-q", "-p", "no:cacheprovider", "-p", "no:xdist", "-m", "not slow", "--hypothesis-profile=mutation"]
 #: The tests that must kill a mutant of each module (every one must exist: a moved test file is an error,
@@ -41,6 +42,13 @@ TESTS = {
                                         "tests/experiments/metrics/test_criteria.py"],
     "experiments/scorecard/card_format.py": ["tests/experiments/scorecard/test_battery.py",
                                              "tests/experiments/scorecard/test_headline.py"],
+    # The supervisor (issue 69).
+    "experiments/car/supervisor/envelope.py": [f"{SUP}/test_envelope.py", f"{SUP}/test_supervisor_stage.py"],
+    "experiments/car/supervisor/track.py": [f"{SUP}/test_track.py", f"{SUP}/test_vouch.py",
+                                            f"{SUP}/test_supervisor_stage.py"],
+    "experiments/car/supervisor/vouch.py": [f"{SUP}/test_vouch.py", f"{SUP}/test_supervisor_stage.py"],
+    "experiments/car/supervisor/clear.py": [f"{SUP}/test_lane_witness.py"],
+    "experiments/car/supervisor/stage.py": [f"{SUP}/test_supervisor_stage.py"],
 }
 #: The link's modules (the default run of `make mutate`); the others run with MODULES="...".
 def mutated() -> list[str]:
