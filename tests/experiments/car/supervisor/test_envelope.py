@@ -47,3 +47,23 @@ def test_no_speed_is_safe_in_no_gap():
 def test_a_bad_envelope_is_refused_by_name(field, value, words):
     with pytest.raises(ValueError, match=words):
         Envelope(**{field: value})
+
+
+def test_the_envelope_is_the_one_the_guarantee_page_states():
+    import dataclasses
+
+    stated = {"delta_m": 0.10, "lead_speed_error_mps": 0.25, "target_decel_mps2": 6.0, "target_accel_mps2": 7.36,
+              "target_max_mps": 3.0, "car_brake_mps2": 4.0, "car_accel_mps2": 7.36, "reaction_s": 0.1,
+              "margin_m": 0.05, "odometry_error": 0.02, "comfort_brake_mps2": 1.5}
+    assert dataclasses.asdict(ENV) == stated
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        ENV.delta_m = 0.2
+    # Small brakes are brakes; comfort may be all the car has.
+    assert Envelope(car_brake_mps2=0.5, comfort_brake_mps2=0.5).car_brake_mps2 == 0.5
+
+
+def test_a_lead_reversing_counts_as_standing_and_a_gap_too_small_for_any_speed_says_brake():
+    assert safe_gap(1.0, -1.0, ENV) == safe_gap(1.0, 0.0, ENV)
+    assert safe_speed(0.5, -1.0, ENV) == safe_speed(0.5, 0.0, ENV)
+    # Gaps that leave no room: no speed is safe (never NaN).
+    assert safe_speed(-0.5, 0.0, ENV) == -math.inf and safe_speed(0.01, 0.0, ENV) < 0

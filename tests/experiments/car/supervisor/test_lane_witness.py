@@ -47,3 +47,65 @@ def test_the_lane_is_clear_only_when_seen_through_where_the_target_could_be():
     # The lane in view ends before where the target could be: nothing to see through.
     assert not lane_clear(_scan(9.0), LANE, 1.0, 3.8, LIDAR)
     assert not lane_clear(_scan(9.0), LANE, math.nan, 1.5, LIDAR)
+
+
+def _beams_at(scan: np.ndarray, lidar: tuple[float, float], z: float, y: float, r: float | None = None) -> np.ndarray:
+    """A car's rear at (z ahead, y left) of the camera, seen from a LiDAR at ``lidar``: its beams return ``r``."""
+    x, w = z - lidar[0], y - lidar[1]
+    rng, bearing = math.hypot(x, w), math.atan2(w, x)
+    half = math.atan2(0.096, rng)
+    beams = np.arange(N) * 2 * math.pi / N
+    on = np.abs((beams - bearing + math.pi) % (2 * math.pi) - math.pi) <= half
+    out = scan.copy()
+    out[on] = rng if r is None else r
+    return out
+
+
+def test_the_lidar_is_placed_where_it_is_on_the_car():
+    # A LiDAR 0.2 m left of the camera sees the car ahead of the camera to its right, not straight ahead.
+    side = (-0.1, 0.2)
+    scan = _beams_at(_scan(9.0), side, 1.5, 0.0)
+    assert -0.05 <= lane_return(scan, LANE, side) - 1.5 <= 0.0
+    assert math.isnan(lane_return(scan, LANE, (-0.1, 0.0)))
+    assert not lane_clear(scan, LANE, 1.2, 1.8, side) and lane_clear(_scan(9.0), LANE, 1.2, 1.8, side)
+
+
+def test_a_car_on_a_lane_that_bends_is_found_at_its_bearing():
+    bend = np.column_stack([np.arange(0.0, 4.0, 0.02), 0.15 * np.arange(0.0, 4.0, 0.02) ** 2])
+    z = 1.2
+    scan = _beams_at(_scan(9.0), LIDAR, z, 0.15 * z ** 2)
+    assert -0.05 <= lane_return(scan, bend, LIDAR) - z <= 0.0
+
+
+def test_what_stands_off_the_lane_or_behind_the_camera_is_no_reading():
+    # The lane begins 1 m ahead; something 0.7 m away along it is no car on it.
+    ahead = LANE[LANE[:, 0] >= 1.0]
+    assert math.isnan(lane_return(_beams_at(_scan(9.0), LIDAR, 0.7, 0.0), ahead, LIDAR))
+    # The lane behind the camera (a car following ours) is not the lane ahead.
+    behind = np.column_stack([np.arange(-1.0, 4.0, 0.02), np.zeros(250)])
+    scan = _scan(9.0)
+    scan[N // 2 - 3: N // 2 + 4] = 0.5  # a return 0.5 m behind the LiDAR
+    assert math.isnan(lane_return(scan, behind, LIDAR))
+    # A beam reading 0 is no return.
+    assert math.isnan(lane_return(np.zeros(N), LANE, LIDAR))
+
+
+def test_nothing_to_read_is_no_reading_and_never_a_clear_lane():
+    assert math.isnan(lane_return(np.empty(0), LANE, LIDAR)) and math.isnan(lane_return(_scan(), LANE[:0], LIDAR))
+    assert math.isnan(lane_return(_scan(), LANE[:1], LIDAR))
+    assert not lane_clear(np.empty(0), LANE, 1.0, 1.5, LIDAR) and not lane_clear(_scan(9.0), LANE[:0], 1.0, 1.5, LIDAR)
+    one = np.array([[1.2, 0.0]])
+    assert not lane_clear(_scan(9.0), one, 1.0, 1.5, LIDAR)  # the lane in view ends too soon
+
+
+def test_clear_means_every_return_from_beyond_the_point_and_the_car_s_length_too():
+    # A return just behind where the target's rear could be (0.02 m past the lane point): not seen through.
+    assert not lane_clear(_beams_at(_scan(9.0), LIDAR, 1.5, 0.0, r=1.5 + 0.1 + 0.02), LANE, 1.0, 1.5, LIDAR)
+    # The target may stand a car's length beyond its far end: the lane must be seen clear out to 3.425 m,
+    # which a lane to 4 m allows; a far end at 3.3 m would need 3.725 m... within 4 m still.
+    assert lane_clear(_scan(9.0), LANE, 2.5, 3.5, LIDAR)
+    assert not lane_clear(_scan(9.0), LANE, 2.5, 3.6, LIDAR)
+    # A wall 0.3 rad off the lane is no car on it.
+    wall = _scan(9.0)
+    wall[round(0.3 / (2 * math.pi / N))] = 0.8
+    assert lane_clear(wall, LANE, 1.0, 1.5, LIDAR)

@@ -106,5 +106,86 @@ def test_an_implausible_reading_eases_the_car_off_no_harder_than_ease():
 def test_nothing_seen_nothing_limited():
     stage, advanced = _stage()
     said = _say(stage, advanced, 1.0, NAN, NAN, NAN, math.inf)
-    assert said.speed_cap_mps == math.inf and not said.values["sup_carried"]
+    assert said.speed_cap_mps == math.inf and not said.values["sup_carried"] and not said.values["sup_stop"]
     assert set(said.values) >= {c.name for c in SupervisorStage.columns if c.name.startswith("sup_")}
+
+
+def _scan_view(speed: float, scan, scan_new: bool = True) -> CarView:
+    from types import SimpleNamespace
+
+    s = np.arange(0.0, 6.0, 0.02)
+    # A straight lane along x from the car at the origin; the camera 0.2 m ahead of the body origin.
+    path = SimpleNamespace(points=np.column_stack([s, np.zeros_like(s)]), arclength=s)
+    return CarView({"lidar": scan}, np.zeros(3), path, 0.0, speed, 0.0, 0.0, DT, True, scan_new)
+
+
+def _car_scan(rear_from_camera: float) -> np.ndarray:
+    """The LiDAR (0.1 m behind the camera, StageContext's) sees a car's rear this far ahead of the camera."""
+    n = 720
+    r = rear_from_camera + 0.1
+    beams = np.arange(n) * 2 * math.pi / n
+    scan = np.full(n, 9.0)
+    scan[np.abs((beams + math.pi) % (2 * math.pi) - math.pi) <= math.atan2(0.096, r)] = r
+    return scan
+
+
+def test_the_lidar_s_lane_return_is_a_reading_carried_between_scans_by_the_closing_speed():
+    stage, advanced = _stage()
+    said = stage.step(_scan_view(0.5, _car_scan(1.2)))
+    assert said.values["sup_vouched"] and -0.05 <= said.values["sup_on_lane"] - 1.2 <= 0.0
+    first = said.values["sup_on_lane"]
+    # No new scan: carried on by 0.5 m/s of closing (the lead's speed unknown: taken as 0) for 0.02 s.
+    said = stage.step(_scan_view(0.5, _car_scan(1.2), scan_new=False))
+    assert said.values["sup_on_lane"] == pytest.approx(first - 0.5 * DT)
+    for _ in range(6):  # 0.14 s after the scan: still carried; after 0.15 s: too old
+        said = stage.step(_scan_view(0.5, _car_scan(1.2), scan_new=False))
+    assert math.isfinite(said.values["sup_on_lane"])
+    said = stage.step(_scan_view(0.5, _car_scan(1.2), scan_new=False))
+    assert math.isnan(said.values["sup_on_lane"])
+
+
+def test_its_lidar_is_where_the_build_puts_it():
+    # The LiDAR 0.25 m left of the camera: the car ahead of the camera lies to its right.
+    context = StageContext(None, (0.2, 0.0), 0.17, (0.1, 0.25), BUMPER, lambda: None, target_decel_mps2=6.0)
+    stage = SupervisorStage(context, advanced=Advanced())
+    stage.reset()
+    n, r = 720, math.hypot(1.3, 0.25)
+    beams = np.arange(n) * 2 * math.pi / n
+    bearing = math.atan2(-0.25, 1.3)
+    scan = np.full(n, 9.0)
+    scan[np.abs((beams - bearing + math.pi) % (2 * math.pi) - math.pi) <= math.atan2(0.096, r)] = r
+    said = stage.step(_scan_view(0.0, scan))
+    assert -0.05 <= said.values["sup_on_lane"] - 1.2 <= 0.0
+
+
+def test_before_its_first_step_it_says_nothing_and_limits_nothing():
+    stage, _ = _stage()
+    idle = stage.idle()
+    assert idle.speed_cap_mps == math.inf and idle.values["sup_cap"] == math.inf
+    assert all(idle.values[c.name] is False for c in SupervisorStage.columns
+               if c.name.startswith("sup_") and c.unit == "bool")
+    assert math.isnan(idle.values["sup_near"]) and math.isnan(idle.values["sup_reading"])
+
+
+def test_a_lead_speed_confirmed_this_frame_bounds_the_carried_target():
+    stage, advanced = _stage()
+    advanced.speed.frames = advanced.config.confirm_frames  # just confirmed
+    advanced.speed._lead = 0.8
+    stage.advanced.step = lambda view: StageLimit(1.0, {}, LeadStep(PerceptionSample(None, 1.0, 0.0, 1.0, NAN), 1.0,
+                                                                   0.8, FollowDecision(1.0, 0.9, NAN, False)))
+    stage.step(_view(0.5))
+    assert stage.carried.slow_mps == pytest.approx(0.55) and stage.carried.fast_mps == pytest.approx(1.05)
+
+
+def test_the_safe_controller_follows_the_headway_policy_where_it_is_the_lower():
+    stage, advanced = _stage()
+    _say(stage, advanced, 0.3, 1.0, 1.0, 1.0, 1.0)
+    # The defence off the reading: the safe controller. A fresh reading 1.0 m: 0.9 m of gap;
+    # the headway policy allows (0.9 - 0.25) / 1 s = 0.65 m/s, the comfortable stop a little more.
+    said = _say(stage, advanced, 0.3, 1.0, 1.0, 0.4, 0.0)
+    comfort = safe_speed(0.8, 0.0, stage.envelope, stage.envelope.comfort_brake_mps2)
+    assert comfort > 0.65 and said.speed_cap_mps == pytest.approx(0.65)
+    # Nothing vouched for a while, the carried worst case has the car stop behind it, never a negative cap.
+    for _ in range(200):
+        said = _say(stage, advanced, 0.0, NAN, NAN, NAN, math.inf)
+    assert said.speed_cap_mps >= 0.0 and not said.values["sup_stop"]

@@ -52,3 +52,61 @@ def test_nothing_carried_holds_nothing():
     carried = CarriedTarget(ENV)
     carried.predict(1.0, 0.1)
     assert not carried.held and not carried.holds(1.0, 10.0)
+
+
+def test_one_step_of_the_bounds_by_hand():
+    carried = CarriedTarget(ENV)
+    carried.vouch(1.0, 0.6, lead_known=True)  # speed bounds 0.35 .. 0.85 m/s
+    carried.predict(0.5, 0.1)
+    # Braking at 6 m/s^2 from 0.35 m/s it stops within the step: 0.35^2 / 12 m; the car went 0.05 m (+2 %).
+    assert math.isclose(carried.near_m, 0.9 + 0.35 ** 2 / 12 - 0.05 * 1.02)
+    # The far end pulls away from 0.85 m/s at 7.36 m/s^2 (1.586 m/s after the step); the car went 0.05 m (-2 %).
+    assert math.isclose(carried.far_m, 1.1 + 1.586 * 0.1 - 0.05 * 0.98)
+    # The reach keeps the vouched 0.85 m/s.
+    assert math.isclose(carried.reach_m, 1.1 + 0.85 * 0.1 - 0.05 * 0.98)
+    assert (carried.slow_mps, carried.unvouched_s) == (0.0, 0.1) and math.isclose(carried.fast_mps, 1.586)
+    moving = CarriedTarget(ENV)
+    moving.vouch(1.0, 2.0, lead_known=True)  # 1.75 m/s at least: still moving after the step
+    moving.predict(0.0, 0.1)
+    assert math.isclose(moving.near_m, 0.9 + 1.75 * 0.1 - 0.5 * 6.0 * 0.01)
+
+
+def test_a_vouch_narrows_the_far_end_and_the_reach_but_a_reading_beyond_them_starts_afresh():
+    carried = CarriedTarget(ENV)
+    carried.vouch(1.0, 0.0, lead_known=False)
+    carried.predict(0.0, 0.5)  # the far end has grown well past 1.2 m
+    carried.vouch(1.05, 0.0, lead_known=False)
+    assert math.isclose(carried.far_m, 1.15) and math.isclose(carried.reach_m, 1.15)
+    far, reach = carried.far_m, carried.reach_m
+    carried.vouch(far, 0.0, lead_known=False)  # at the far end itself: still narrowed (it is no farther)
+    assert carried.far_m == far and carried.reach_m == reach
+    carried.vouch(3.0, 0.0, lead_known=False)  # beyond them: the bounds start from it
+    assert math.isclose(carried.far_m, 3.1) and math.isclose(carried.reach_m, 3.1)
+    # A speed the car has lost keeps the bounds carried so far; a first sight of unknown speed does not.
+    assert carried.fast_mps > 0.0 and carried.slow_mps == 0.0
+    fresh = CarriedTarget(ENV)
+    fresh.vouch(1.0, 0.0, lead_known=False)
+    assert (fresh.slow_mps, fresh.fast_mps) == (0.0, ENV.target_max_mps)
+
+
+def test_a_reset_forgets_everything_and_a_car_rolling_back_counts_as_standing():
+    carried = CarriedTarget(ENV)
+    carried.vouch(1.0, 0.6, lead_known=True)
+    carried.predict(1.0, 0.1)
+    carried.reset()
+    assert not carried.held and (carried.slow_mps, carried.fast_mps, carried.unvouched_s) == (0.0, 0.0, 0.0)
+    back, still = CarriedTarget(ENV), CarriedTarget(ENV)
+    for c, ego in ((back, -1.0), (still, 0.0)):
+        c.vouch(1.0, 0.0, lead_known=True)
+        c.predict(ego, 0.1)
+    assert (back.near_m, back.far_m, back.reach_m) == (still.near_m, still.far_m, still.reach_m)
+    # Each vouch starts the unvouched clock again.
+    back.vouch(1.0, 0.0, lead_known=True)
+    assert back.unvouched_s == 0.0
+
+
+def test_the_bounds_are_inclusive():
+    carried = CarriedTarget(ENV)
+    carried.vouch(1.0, 0.0, lead_known=True)
+    assert carried.holds(0.9 - 0.05, 0.05) and carried.holds(1.1 + 0.05, 0.05)
+    assert not carried.holds(0.84, 0.05) and not carried.holds(1.16, 0.05)
