@@ -82,10 +82,12 @@ class LeadSpeed:
 
     @property
     def std_mps(self) -> float:
-        """How uncertain :attr:`lead_mps` is, m/s: the confirmed estimate's std, or half the range of
-        speeds a lead may have before it is confirmed."""
+        """How uncertain :attr:`lead_mps` is, m/s: the confirmed estimate's std, twice it before the
+        estimate is confirmed. Not the whole range of speeds a lead may have: the gate's baseline is
+        re-anchored on every agreeing frame, so what it must absorb is the estimate's drift between
+        anchors; spread by the whole range, it is lost within a quarter second and catches nothing."""
         c = self.config
-        return c.speed_std_mps if self.frames >= c.confirm_frames else 0.5 * c.max_lead_mps
+        return c.speed_std_mps if self.frames >= c.confirm_frames else 2.0 * c.speed_std_mps
 
     def update(self, depth_m: float, lidar_m: float, size_m: float, ego_mps: float, dt: float,
                new_frame: bool) -> float:

@@ -241,8 +241,7 @@ class ODCA:
     def follow_moving_target(self, speed_std_mps: float | None) -> None:
         """Tells the gate its target moves (a car ahead; ``speed`` is then the closing speed) and how
         uncertain that target's own speed is, m/s (None: a standing target again). The drift
-        baseline's spread grows with that uncertainty, and a box bigger than a car at its tracked
-        place is taken for a picture, no veto of the depth (:meth:`Witnesses.step`). Kept over resets."""
+        baseline's spread grows with that uncertainty (:meth:`Witnesses.step`). Kept over resets."""
         if speed_std_mps is not None and not (math.isfinite(speed_std_mps) and speed_std_mps >= 0):
             raise ValueError(f"speed_std_mps must be a finite number >= 0 m/s or None, got {speed_std_mps!r}")
         self.moving_std_mps = None if speed_std_mps is None else float(speed_std_mps)
