@@ -20,7 +20,7 @@ from racf.errors import Interrupted
 from racf.experiments.falsify.cases import distinct, save_case
 from racf.experiments.falsify.pool import EpisodePool
 from racf.experiments.falsify.report import plot_convergence, summarize_searches, violations_by_value
-from racf.experiments.falsify.search import SearchConfig, episode_seed, run_searches
+from racf.experiments.falsify.search import SearchConfig, episode_seed, objective_value, run_searches
 from racf.experiments.episode.preflight import check_specs
 from racf.experiments.falsify.space import load_space
 from racf.provenance import atomic_write
@@ -58,7 +58,8 @@ def falsify(defence: str, attacks: tuple[str, ...], out: str | Path, budget: int
               "episodes_evaluated": sum(len(v) for v in values.values())}
     plot_convergence(values, budget, out / "convergence.png", f"{space.setting}: {len(seeds)} seeds per sampler")
     report["convergence_png"] = "convergence.png"
-    report["cases"] = _record_cases(space, violations, store, out / "cases", backend, workers, address) if cases else []
+    report["cases"] = (_record_cases(space, violations, store, out / "cases", backend, workers, address, objective)
+                       if cases else [])
     report["violations_by_value"] = violations_by_value(
         trials, {d.name: list(d.choices) for d in space.dimensions if d.choices is not None})
     report["worst"] = _worst(space, trials)
@@ -87,12 +88,14 @@ def _worst(space, trials: dict) -> dict | None:
 
 
 def _record_cases(space, violations: list, store: ResultStore, folder: Path, backend: str, workers: int,
-                  address: str | None) -> list[dict]:
+                  address: str | None, objective: str = "rule") -> list[dict]:
     """The distinct violations, each run again with a rerun recording into ``folder`` and saved as a case."""
     if not violations:
         return []
     specs = [space.trial_spec(params, episode_seed(seed, number)) for _, seed, number, params, _ in violations]
-    failures = store.rows([spec.trial_id for spec in specs])["failure"].tolist()
+    found = store.rows([spec.trial_id for spec in specs])
+    # A scenario with no stop rule (the car ahead) names no failure: its violation is its objective's.
+    failures = found["failure"].tolist() if "failure" in found else [objective] * len(specs)
     rows = [{"setting": spec.setting, "sign": spec.sign, "robustness_m": value, "spec": spec, "failure": failure,
              "found_by": {"sampler": sampler, "seed": seed, "trial": number}}
             for spec, failure, (sampler, seed, number, _, value) in zip(specs, failures, violations)]
@@ -102,7 +105,7 @@ def _record_cases(space, violations: list, store: ResultStore, folder: Path, bac
         replayed = pool.run([r["spec"] for r in keep])
     saved = []
     for row, (_, result) in zip(keep, replayed.iterrows()):
-        value = float(result["robustness_m"])
+        value = objective_value(result.to_dict(), objective)
         path = save_case(folder, row["spec"], result.to_dict(), row["found_by"])
         saved.append({"case": path.name, "recording": f"{row['spec'].trial_id}.rrd", "robustness_m": value,
                       "failure": result.get("failure"), "sign": row["sign"],
