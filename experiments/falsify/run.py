@@ -106,9 +106,11 @@ def _record_cases(space, violations: list, store: ResultStore, folder: Path, bac
     saved = []
     for row, (_, result) in zip(keep, replayed.iterrows()):
         value = objective_value(result.to_dict(), objective)
-        path = save_case(folder, row["spec"], result.to_dict(), row["found_by"])
+        failure = result.get("failure", row["failure"])
+        path = save_case(folder, row["spec"], {**result.to_dict(), "robustness_m": value, "failure": failure},
+                         row["found_by"])
         saved.append({"case": path.name, "recording": f"{row['spec'].trial_id}.rrd", "robustness_m": value,
-                      "failure": result.get("failure"), "sign": row["sign"],
+                      "failure": failure, "sign": row["sign"],
                       "replayed_identical": bool(value == row["robustness_m"])})
     return saved
 
