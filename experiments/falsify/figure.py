@@ -55,7 +55,13 @@ def worst_case_figure(spec: TrialSpec, path: str | Path, title: str = "") -> Pat
     speed.set_ylabel("speed (m/s, grey)", fontsize=8)
     trace.set(xlabel="time (s)", ylabel="m")
     trace.legend(fontsize=7, loc="upper right")
-    trace.set_title(f"robustness {result.robustness_m:+.3f} m, {result.failure or 'stopped'}", fontsize=9)
+    rule = getattr(result, "robustness_m", None)
+    if rule is not None:
+        trace.set_title(f"robustness {rule:+.3f} m, {result.failure or 'stopped'}", fontsize=9)
+    else:  # a scenario with no stop rule: the car ahead's smallest gap
+        touched = getattr(result, "no_lead_collision", True) is False
+        trace.set_title(f"smallest gap to the car ahead {getattr(result, 'min_gap_m', float('nan')):+.3f} m"
+                        f"{', contact' if touched else ''}", fontsize=9)
     if title:
         fig.suptitle(title, fontsize=10)
     path = Path(path)
