@@ -15,14 +15,14 @@ Per step t:
    anchors the kinematic branch (later sizes refine a branch that rests on it alone);
 4. a trusted measurement re-anchors the kinematic branch: the LiDAR, or a depth the LiDAR
    confirms (a depth that passed on the branch's word alone does not, else a depth ramped
-   inside the branch's tolerance would drag the branch along; issue 23). A depth within
-   tau of the LiDAR may still carry a bias up to tau, so against an honest LiDAR a ramp
-   is held within about 2 tau (anchoring on the LiDAR instead would hold it to tau, but
-   would outvote the clean depth-LiDAR residual's tail: 99.1 % of clean depth unchanged,
-   not 99.9 %). A
-   measurement off the branch's odometry-only baseline (``KinematicBranch.drifted``; a depth
-   repeated from a held camera frame is compared as of its frame) is
-   outvoted instead, depth and LiDAR together: the step rests on the baseline. A LiDAR
+   inside the branch's tolerance would drag the branch along; issue 23). A depth within tau of
+   the LiDAR may still carry a bias up to tau, so against an honest LiDAR a ramp is held within
+   about 2 tau (anchoring on the LiDAR instead would hold it to tau, but would outvote the clean
+   depth-LiDAR residual's tail: 99.1 % of clean depth unchanged, not 99.9 %). A measurement off
+   the branch's odometry-only baseline (``KinematicBranch.drifted``; a depth repeated from a held
+   camera frame is compared as of its frame; a moving target's baseline spreads with its speed's
+   uncertainty, ``follow_moving_target``) is outvoted instead, depth and LiDAR together: the step
+   rests on the baseline. A LiDAR
    track that no depth ever confirmed (``lidar_confirmed=False``: perception started it while
    the depth was missing) counts as one witness, and so does a branch anchored on it alone:
    a confident depth that disagrees with them passes;
@@ -235,13 +235,10 @@ class ODCA:
         self._last_size = (math.nan, math.nan)
         self._lidar_confirmed = True
 
-    #: For a target that moves (``follow_moving_target``): how uncertain its speed is, m/s (None: a standing one).
-    moving_std_mps: float | None = None
+    moving_std_mps: float | None = None  # a moving target's speed uncertainty, m/s (None: a standing one)
 
     def follow_moving_target(self, speed_std_mps: float | None) -> None:
-        """Tells the gate its target moves (a car ahead; ``speed`` is then the closing speed) and how
-        uncertain that target's own speed is, m/s (None: a standing target again). The drift
-        baseline's spread grows with that uncertainty (:meth:`Witnesses.step`). Kept over resets."""
+        """Its target moves (``speed``: the closing speed), its speed this uncertain, m/s (None: it stands)."""
         if speed_std_mps is not None and not (math.isfinite(speed_std_mps) and speed_std_mps >= 0):
             raise ValueError(f"speed_std_mps must be a finite number >= 0 m/s or None, got {speed_std_mps!r}")
         self.moving_std_mps = None if speed_std_mps is None else float(speed_std_mps)
@@ -256,14 +253,12 @@ class ODCA:
             speed: the car's speed, m/s. yaw_rate: its yaw rate, rad/s (left positive).
             bearing: the detection's bearing, rad (left positive; NaN: none).
             dt: time since the last step (default the config's).
-            lidar_confirmed: whether a depth ever agreed with the LiDAR's track (perception
-                knows: ``LidarTargetTracker.depth_confirmed``). A track started while the
-                depth was missing may sit on the background behind a sign the scan plane
-                misses: it counts as one witness, and a confident depth that disagrees with
-                it passes. Offline series have no such column: their LiDAR counts as confirmed.
-            size: the size witness d_size, m (``PerceptionSample.d_size``; NaN: none). It vetoes
-                any witness farther than it, and bases the repair when nothing else can
-                (:mod:`racf.odca.gate`).
+            lidar_confirmed: whether a depth ever agreed with the LiDAR's track (perception knows:
+                ``LidarTargetTracker.depth_confirmed``). A track started while the depth was missing may
+                sit on the background behind a sign the scan plane misses: it counts as one witness, and
+                a confident depth that disagrees with it passes (offline series: confirmed).
+            size: the size witness d_size, m (``PerceptionSample.d_size``; NaN: none). It vetoes any
+                witness farther than it, and bases the repair when nothing else can (:mod:`racf.odca.gate`).
             size_std: its std, m.
         """
         for name, value in (("depth", depth), ("confidence", confidence), ("lidar", lidar), ("speed", speed),
@@ -286,10 +281,8 @@ class ODCA:
         self._last_lidar = l_al
         self._last_size = (s, s_std)
         self._lidar_confirmed = bool(lidar_confirmed)
-        verdict = self._witnesses.step(d, c, l_al, v, w, b, mu, dt, self._lidar_confirmed, s, s_std,
-                                       moving_std=self.moving_std_mps)
-        cols = self._finish(*(np.array([x], float) for x in (d, c, l_al, v, mu, sigma, *verdict)),
-                            prev=self._prev)
+        verdict = self._witnesses.step(d, c, l_al, v, w, b, mu, dt, self._lidar_confirmed, s, s_std, self.moving_std_mps)
+        cols = self._finish(*(np.array([x], float) for x in (d, c, l_al, v, mu, sigma, *verdict)), prev=self._prev)
         self._prev = float(cols[0][0])
         self._context[:-1] = self._context[1:]  # slide the window in place (np.roll allocates twice)
         self._context[-1] = d

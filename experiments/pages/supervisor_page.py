@@ -22,11 +22,12 @@ SUPERVISOR_COMMAND = ("racf sweep following-supervisor.toml; python -m racf.expe
 #: The falsifications of the guarantee: (stored result, what it searched, the command).
 GUARANTEE_RESULTS = (
     ("falsify-guarantee", "inside the assumptions: every range witness off by at most delta = 0.1 m",
-     "racf falsify --defence odca --attack lead_range_error --objective gap --space guarantee.toml "
-     "--sampler random tpe --seeds 5 --budget 40"),
+     "racf falsify --defence odca --attack lead_range_error --objective gap --space "
+     "experiments/falsify/spaces/guarantee.toml --sampler random tpe --seeds 3 --budget 40 --json"),
     ("falsify-guarantee-outside", "outside them: delta doubled (0.2 m)",
-     "racf falsify --defence odca --attack lead_range_error --objective gap --space guarantee-outside.toml "
-     "--sampler random tpe --seeds 3 --budget 40 --stop-at-violation"),
+     "racf falsify --defence odca --attack lead_range_error --objective gap --space "
+     "experiments/falsify/spaces/guarantee-outside.toml --sampler random --seeds 2 --budget 20 --stop-at-violation "
+     "--json"),
 )
 #: Whether an attack lies inside the guarantee's assumptions (``docs/concepts/guarantee.md``).
 INSIDE = {"clean": "—", "clean+lead_patch": "yes", "clean+lead_frustum[depth]": "in part (see the concept page)",

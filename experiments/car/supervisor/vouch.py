@@ -14,6 +14,8 @@ no gap longer than ``gap_s`` parts them. A chain is judged once, when it is born
   the witnesses at once). Refused, with every reading it carries on to; and until a reading within
   the carried target's reach (where it would be, had it kept its vouched speed) is vouched again,
   a chain born beyond that reach is refused too: a gap in the readings does not launder a jump;
+- born beyond the reach, even with no jump before it: refused. Hiding a car from the LiDAR lets it
+  see the lane behind the car, and that is no reading of the car;
 - born farther than the camera's box allows (the size witness: a car's box can only shrink, so a
   range beyond what its height implies is no car's): refused as a jump. Only a new chain is
   checked against the box: a chain that goes on is the track, and a box that grows under it is a
@@ -151,7 +153,10 @@ class ReadingChain:
             self.jumped = carried.held
             return "refused"
         if carried.held:
-            if self.jumped and reading > carried.reach_m + tolerance:
+            if reading > carried.reach_m + tolerance and reading <= carried.far_m + tolerance:
+                # Farther than the target would be had it kept its vouched speed: a jump's readings after a
+                # gap, or what the LiDAR sees behind a car hidden from it. Not the target, until it is seen
+                # within its reach again.
                 return "refused"
             if carried.holds(reading, tolerance):
                 return "vouched"

@@ -88,7 +88,8 @@ def test_the_car_does_the_same_with_info_scrambled(spec):
     assert n > 50 and (n == len(log) or spec.target == "lead_vehicle")
     pd.testing.assert_frame_equal(blind[CAR_COLUMNS + witnesses + staged].iloc[:n], log[CAR_COLUMNS + witnesses + staged].iloc[:n])
     # The scrambler did reach the runner: the referee's ground truth differs.
-    assert not np.allclose(blind["d_true"].iloc[:n].fillna(-1), log["d_true"].iloc[:n].fillna(-1))
+    if log["d_true"].notna().any():  # (a following episode may end before its sign comes into view)
+        assert not np.allclose(blind["d_true"].iloc[:n].fillna(-1), log["d_true"].iloc[:n].fillna(-1))
     assert not np.allclose(blind["x"].iloc[:n], log["x"].iloc[:n])
     if spec.target == "cross_traffic":
         assert not np.allclose(blind["traffic1_x"], log["traffic1_x"])

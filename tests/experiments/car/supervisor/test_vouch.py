@@ -144,11 +144,17 @@ def test_a_jump_is_remembered_across_a_gap_until_the_target_is_seen_within_its_r
         chain.step((NAN, NAN, NAN), 0.0, DT, carried)
     # Seen again within its reach: vouched, and the jump forgotten.
     assert chain.step((1.0, NAN, NAN), 0.0, DT, carried).vouched and not chain.jumped
-    carried.vouch(1.0, 0.0, lead_known=True)
+    carried.vouch(1.0, 0.6, lead_known=True)
     for _ in range(30):
         chain.step((NAN, NAN, NAN), 0.0, DT, carried)
         carried.predict(0.0, DT)
-    assert chain.step((carried.far_m - 0.01, NAN, NAN), 0.0, DT, carried).vouched
+    # Within the reach (the target kept its speed): vouched; beyond it, within the far end: refused.
+    assert chain.step((carried.reach_m - 0.01, NAN, NAN), 0.0, DT, carried).vouched
+    for _ in range(30):
+        chain.step((NAN, NAN, NAN), 0.0, DT, carried)
+        carried.predict(0.0, DT)
+    assert carried.far_m > carried.reach_m + 0.5
+    assert chain.step((carried.reach_m + 0.4, NAN, NAN), 0.0, DT, carried).refused
 
 
 def test_a_reset_forgets_a_jump():
@@ -158,7 +164,7 @@ def test_a_reset_forgets_a_jump():
     chain.reset()
     for _ in range(30):
         carried.predict(0.0, DT)
-    assert not chain.jumped and chain.step((1.6, NAN, NAN), 0.0, DT, carried).vouched
+    assert not chain.jumped and chain.step((carried.reach_m, NAN, NAN), 0.0, DT, carried).vouched
 
 
 def test_a_new_chain_farther_than_the_box_allows_is_refused_a_going_one_is_not():
