@@ -31,7 +31,7 @@ GUARANTEE_RESULTS = (
 )
 #: Whether an attack lies inside the guarantee's assumptions (``docs/concepts/guarantee.md``).
 INSIDE = {"clean": "—", "clean+lead_patch": "yes", "clean+lead_frustum[depth]": "in part (see the concept page)",
-          "clean+lead_frustum[adaptive]": "no", "clean+lead_hide": "yes", "clean+lead_phantom": "yes"}
+          "clean+lead_frustum[adaptive]": "no", "clean+lead_hide": "not as built (see the concept page)", "clean+lead_phantom": "yes"}
 _ORDER = tuple(INSIDE)
 
 
@@ -58,7 +58,7 @@ def checks(rows: dict) -> list[str]:
     lines = []
     for attack, inside in INSIDE.items():
         pair = pairs.get((attack, "odca"))
-        if pair is None or inside == "no":
+        if pair is None or inside == "no":  # asked of every attack the issue put inside, as built or not
             continue
         cf = pair[1]["collision_free"]
         verdict = "met" if cf["rate"] is not None and cf["rate"] >= 0.95 else "**not met**"

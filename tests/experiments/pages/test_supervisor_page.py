@@ -45,8 +45,8 @@ def test_the_page_pairs_each_defence_with_itself_supervised_and_says_what_is_mis
     assert "Not stored yet (`falsify-guarantee`)" in supervisor_markdown(tmp_path)
     (tmp_path / "following-supervisor.json").write_text(json.dumps({"meta": META, "rows": _rows()}))
     page = supervisor_markdown(tmp_path)
-    assert "| the lead hidden from camera and LiDAR | yes | odca | 60 | 0.18 [" in page
-    assert "| the lead hidden from camera and LiDAR | yes | odca + supervisor | 60 | 0.97 [" in page
+    assert "| the lead hidden from camera and LiDAR | not as built (see the concept page) | odca | 60 | 0.18 [" in page
+    assert "| the lead hidden from camera and LiDAR | not as built (see the concept page) | odca + supervisor | 60 | 0.97 [" in page
     assert page.index("| none |") < page.index("the lead hidden") < page.index("a phantom car")
     report = {"meta": META, "episodes_evaluated": 400,
               "samplers": {"random": {"n_seeds": 5, "falsified": 0, "lowest_robustness_m": 0.08},
