@@ -67,7 +67,7 @@ class Witnesses:
         cfg = self.config
         branch = self.branch
         on = cfg.kinematics.enabled
-        motion = branch.predict(v, yaw_rate, dt, moving_std or 0.0) if on else math.nan
+        motion = branch.predict(v, yaw_rate, dt, 0.0 if moving_std is None else moving_std) if on else math.nan
         if not motion == motion:
             motion = -v * dt  # no branch: a straight approach's change
         k, k_std = branch.distance, branch.std

@@ -122,7 +122,7 @@ def supervised(spec: TrialSpec, plan: EpisodePlan) -> EpisodePlan:
     stages = plan.mission.stages
     if watched not in stages:
         raise ValueError(f"supervisor: it runs over the {watched!r} stage, which scenario {spec.target!r} does not "
-                         f"engage; allowed: supervisor with a scenario that follows a car (lead_vehicle, or a plug-in's)")
+                         f"engage; allowed: supervisor with a scenario whose plan engages {watched!r}")
     mission = replace(plan.mission, stages=tuple("supervisor" if s == watched else s for s in stages))
     return replace(plan, mission=mission)
 

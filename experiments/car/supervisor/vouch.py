@@ -101,7 +101,7 @@ class ReadingChain:
     """The chain of range readings and its verdict (see the module docstring)."""
 
     def __init__(self, config: ChainConfig | None = None) -> None:
-        self.config = config or ChainConfig()
+        self.config = config if config is not None else ChainConfig()
         self.reset()
 
     def reset(self) -> None:
