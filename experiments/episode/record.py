@@ -116,6 +116,10 @@ STEP_COLUMNS: tuple[Column, ...] = (
     _c(REFEREE, "attack", "", "the attacks active this step, '+'-joined"),
     _c(REFEREE, "collision_with", "", "ground truth: what the car touched (a world manager's name for its body, "
                                       "else the geom's name; '' nothing)"),
+    _c(REFEREE, "radio_sent", "", "the radio: messages the world's vehicles sent this step"),
+    _c(REFEREE, "radio_delivered", "", "the radio: messages that arrived at the car this step, before any attack"),
+    _c(REFEREE, "radio_injected", "", "the radio: messages an attacker put on the air this step, forged or "
+                                      "replayed (an insider's lie is the sender's own message)"),
 )
 #: The columns by name.
 STEP_LOG: dict[str, Column] = {c.name: c for c in STEP_COLUMNS}

@@ -78,6 +78,8 @@ class Referee:
             "dist_to_stop_line": info["dist_to_stop_line"], "lateral_error": info["lateral_error"],
             "attack_active": bool(info.get("attack_active", False)), "attack": "+".join(info.get("attack", ())),
             "collision_with": info.get("collision_with") or "",
+            "radio_sent": int(info.get("radio_sent", 0)), "radio_delivered": int(info.get("radio_delivered", 0)),
+            "radio_injected": int(info.get("radio_injected", 0)),
             **{name: info[name] for name in self.world_columns},
         }
 

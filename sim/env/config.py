@@ -6,6 +6,7 @@ import dataclasses
 from dataclasses import dataclass, field
 from typing import Any
 
+from racf.sim.radio.channel import RadioConfig
 from racf.sim.sensors.a2m12 import A2M12Config
 from racf.sim.sensors.camera import CameraConfig
 from racf.sim.sensors.lidar import LidarConfig
@@ -61,6 +62,8 @@ class EnvConfig:
         world: a scenario's world managers (``racf.sim.world.manager.WorldManager``): bodies added to
             the map and driven at each reset and physics step; each may read one more reset option
             and log its own ground-truth columns.
+        radio: the vehicle-to-vehicle radio's rate, latency, loss and range (``racf.sim.radio``): what
+            a world manager's vehicles broadcast reaches the car through it.
     """
 
     sensor_profile: str = "qcar2"
@@ -83,6 +86,7 @@ class EnvConfig:
     render_width: int = 640
     render_height: int = 480
     world: tuple = ()
+    radio: RadioConfig = field(default_factory=RadioConfig)
 
     def __post_init__(self) -> None:
         if not isinstance(self.sensor_profile, str) or self.sensor_profile not in SENSOR_PROFILES:

@@ -1,13 +1,11 @@
 """``RACF/QCar2-v3``: the QCar 2 on the indoor map, approaching a stop sign.
 
-Plumbing only: step order, seeding, spaces, sensor scheduling and the reward and
-termination hooks. The world, the car and the sensors are built by their own modules.
-
-Step order: validate action -> write controls -> ``substeps`` physics steps, after each of
-which the swept LiDAR casts the samples whose time has come and the camera takes a frame
-if one falls due -> read the other sensors that are due (each holds its last reading and
-its timestamp between readings) -> ground truth -> reward and flags. What each version of the
-env changed: ``docs/concepts/environment.md``.
+Plumbing only (step order, seeding, spaces, sensor scheduling, reward and termination); the
+world, the car and the sensors are built by their own modules. Step order: validate action ->
+write controls -> ``substeps`` physics steps, after each of which the swept LiDAR casts the
+samples whose time has come and the camera takes a frame if one falls due -> read the other
+sensors that are due (each holds its last reading and its timestamp) -> the radio -> ground
+truth -> reward and flags. Each version's changes: ``docs/concepts/environment.md``.
 """
 
 from __future__ import annotations
@@ -21,6 +19,7 @@ import numpy as np
 from racf.sim._gl import ensure_gl_backend
 from racf.sim.env.config import RESET_OPTIONS, EnvConfig
 from racf.sim.world.manager import WorldManager
+from racf.sim.radio.channel import Radio, empty_rows
 from racf.sim.env.chase_view import ChaseView
 from racf.sim.env.contacts import Contacts
 from racf.sim.env.spaces import env_spaces
@@ -56,15 +55,15 @@ class QCar2Env(gym.Env):
     Observation (``Dict``): ``rgb`` (H, W, 3) uint8; ``depth`` (H, W, 1) float32 m, 0 = no
     return (both the last frame, taken at ``camera_hz``: 30 Hz on the ``qcar2`` profile);
     ``lidar`` (360,) float32 m, inf = no return, bin i at i deg counter-clockwise from the
-    car's forward (the last complete revolution: on ``qcar2`` swept over 0.1 s and delivered
-    through Quanser's driver, see ``racf.sim.sensors.a2m12``); ``lidar_beam_times`` (360,)
-    float64, when each bin was measured, s; ``gps`` (3,) float32, the localiser's
-    fix (x, y m, yaw rad, map frame): with ``localisation="qcar2"`` (the default) one per
-    LiDAR scan, with Quanser's drift and noise (``racf.sim.sensors.localiser``), with
-    ``localisation="true"`` the true pose at every step; ``state`` (4,) float32, the
-    encoder's speed, the steering servo's angle and the IMU's yaw rate and acceleration (see
-    ``racf.sim.sensors.STATE_FIELDS``); ``timestamps`` (5,) float64, the time (s) each held
-    reading was taken, in the order of ``TIMESTAMP_FIELDS``. Action (``Box``): [speed
+    car's forward (the last complete revolution, on ``qcar2`` swept over 0.1 s through Quanser's
+    driver: ``racf.sim.sensors.a2m12``); ``lidar_beam_times`` (360,) float64, when each bin was
+    measured, s; ``gps`` (3,) float32, the localiser's fix (x, y m, yaw rad, map frame), one per
+    scan with Quanser's drift and noise (``localisation="qcar2"``) or the true pose every step
+    (``"true"``); ``state`` (4,) float32, the encoder's speed, the steering servo's angle and the
+    IMU's yaw rate and acceleration (``racf.sim.sensors.STATE_FIELDS``); ``timestamps`` (5,)
+    float64, when each held reading was taken (``TIMESTAMP_FIELDS``' order); ``radio`` (800,)
+    uint8, the signed messages (100 bytes each) the world's vehicles broadcast that arrived this step (zeros: none),
+    and ``radio_times`` (8,), when each arrived (``racf.sim.radio``). Action (``Box``): [speed
     command m/s, steering rad].
 
     ``reset(options=...)`` sets up one of two kinds of episode:
@@ -72,28 +71,22 @@ class QCar2Env(gym.Env):
     - an approach: ``sign`` (0..3) or ``obstacle`` (0..1, a crate on a lane with a virtual
       stop line before it), ``cruise_speed`` (m/s; the car starts moving at it) and
       ``run_up_m`` (distance from the front bumper to the stop line at the start);
-    - a drive (``racf.sim.world.drives``): ``route`` (road-graph nodes), ``start_s_m`` (start
-      along the route's path), ``lateral_offset_m``, ``heading_error_rad``, ``crate`` (a
-      crate index to place on the route, which ends the drive, or None) and
-      ``cruise_speed``. Its targets are the stop signs whose stop lines the route crosses
-      in their direction (and the crate); the next becomes current once the bumper is
-      ``route_plan.PASS_LINE_M`` past the current one's stop line (``info["target_slot"]``).
+    - a drive (``racf.sim.world.drives``): ``route`` (road-graph nodes), ``start_s_m``,
+      ``lateral_offset_m``, ``heading_error_rad``, ``crate`` (a crate index on the route, which
+      ends the drive, or None) and ``cruise_speed``. Its targets are the stop signs whose lines the
+      route crosses in their direction (and the crate); the next becomes current once the bumper
+      is ``route_plan.PASS_LINE_M`` past the current one's line (``info["target_slot"]``).
 
-    Ground truth is in ``info`` (the ``sign_*`` keys describe the current target, sign or
-    crate; ``target_kind`` says which), read from the world after every manager acted (the
-    target's body pose, not the map's record: ``racf.sim.env.ground_truth``): ``d_true``
-    (target depth along the camera axis, m), ``d_true_euclid``, ``sign_bearing``,
-    ``sign_mask``, ``sign_in_view``, ``target_stands`` (its body stands on the floor: False for a
-    sign taken away), ``pose``, ``speed``, ``route_s``, ``lateral_error``,
-    ``dist_to_stop_line`` (front bumper to the stop line along the route, m; negative once past
-    it), ``collision``, ``collision_with`` (what the car first touched: a world manager's name for
-    its body, else a geom's name; None), ``off_road``, and what each world manager reports.
-
-    World managers (the setting ``world``: ``racf.sim.world.manager``) add bodies, read a reset
-    option each and log their own ground truth; the env knows none of them. ``info["lidar_time"]`` repeats the LiDAR's timestamp (the LiDAR scans at ``lidar_hz``,
-    10 Hz by default, like the A2M12). ``sign_mask`` and ``sign_in_view`` describe the
-    held camera frame, ``d_true`` and ``sign_bearing`` the car's pose now. The car's side
-    reads the observation only.
+    Ground truth is in ``info`` (the ``sign_*`` keys describe the current target, sign or crate;
+    ``target_kind`` says which), read from the world after every manager acted
+    (``racf.sim.env.ground_truth``): ``d_true`` (target depth along the camera axis, m),
+    ``d_true_euclid``, ``sign_bearing``, ``sign_mask``, ``sign_in_view``, ``target_stands``,
+    ``pose``, ``speed``, ``route_s``, ``lateral_error``, ``dist_to_stop_line`` (front bumper to the
+    stop line along the route, m), ``collision``, ``collision_with`` (what the car first touched),
+    ``off_road``, ``radio_sent`` and ``radio_delivered`` (messages this step), and what each world
+    manager reports (``racf.sim.world.manager``: the env knows none of them). ``sign_mask`` and
+    ``sign_in_view`` describe the held camera frame, ``d_true`` and ``sign_bearing`` the car's pose
+    now. The car's side reads the observation only.
 
     Reward per step: metres of route progress, minus 0.1 x lateral error (m), minus 10
     on leaving the road or colliding (both end the episode).
@@ -153,6 +146,7 @@ class QCar2Env(gym.Env):
         self._slot = 0
         self._stamps, self._beam_times = np.zeros(len(TIMESTAMP_FIELDS)), np.zeros(self.lidar.shape)
         self._obs: dict[str, np.ndarray] = {}
+        self.radio, self._radio_rows = Radio(self.config.radio), empty_rows()
         # Physics steps and camera frames since the reset; the noise generators (drawn at each reset).
         self._step = self._substep = self._frames = 0
         self._route_s = 0.0
@@ -175,6 +169,8 @@ class QCar2Env(gym.Env):
         # odometry's, both derived from the env's seeded generator.
         self._sensor_rng = np.random.default_rng(self.np_random.integers(2**63))
         self._nav_rng = np.random.default_rng(self.np_random.integers(2**63))
+        # The radio's draws: a child of the navigation seed, so that adding it moved no other draw.
+        self.radio.reset(np.random.default_rng(self._nav_rng.bit_generator.seed_seq.spawn(1)[0]))
         self._path, self._targets, self._slot = path, targets, 0
         self._cruise_speed = float(speed)
         for i, (body, home) in enumerate(self._crates):
@@ -196,6 +192,7 @@ class QCar2Env(gym.Env):
         for sensor in self.sensors:
             sensor.reset(self._rng_of(sensor))
         self._read_sensors(force=True)
+        self._listen()
         return self._observation(), self._info(collision=False, off_road=False)
 
     def step(self, action):
@@ -209,6 +206,7 @@ class QCar2Env(gym.Env):
         self._advance_physics()
         self._step += 1
         self._read_sensors(force=False)
+        self._listen()
         self._update_route_progress()
         collision = self._collided()
         off_road = abs(self._lateral) > self.config.off_road_m
@@ -257,13 +255,11 @@ class QCar2Env(gym.Env):
             self._viewer.close()
             self._viewer = None
 
-    # -- hooks ----------------------------------------------------------------------------
     def _reward(self, progress_m: float, collision: bool, off_road: bool) -> float:
         return float(progress_m - 0.1 * abs(self._lateral) - 10.0 * (collision or off_road))
 
     def _collided(self) -> bool:
-        """Whether the car touches anything (``racf.sim.env.contacts``); the first thing it touched is
-        kept for ``info["collision_with"]``."""
+        """Whether the car touches anything; the first thing it touched is kept for ``collision_with``."""
         hit = self.contacts.touching(self.data)
         if hit is not None:
             self._collision_with = self._collision_with or hit
@@ -324,9 +320,16 @@ class QCar2Env(gym.Env):
                 if sensor is self.lidar:
                     self._beam_times = np.full(self.lidar.shape, now)
 
+    def _listen(self) -> None:
+        """The radio's step: what the world's vehicles broadcast now is sent; what arrived is the car's."""
+        said = tuple(b for manager in self.world for b in manager.broadcasts(self._substep))
+        self._radio_rows = self.radio.tick(self._step / self.config.control_hz, said,
+                                           tuple(self.data.qpos[self.car.root_qpos:self.car.root_qpos + 2]))
+
     def _observation(self) -> dict[str, np.ndarray]:
+        rows, times = self._radio_rows
         return {**{k: v.copy() for k, v in self._obs.items()}, "lidar_beam_times": self._beam_times.copy(),
-                "timestamps": self._stamps.copy()}
+                "timestamps": self._stamps.copy(), "radio": rows.copy(), "radio_times": times.copy()}
 
     def _update_route_progress(self) -> None:
         x, y = self.data.qpos[self.car.root_qpos : self.car.root_qpos + 2]
@@ -361,6 +364,7 @@ class QCar2Env(gym.Env):
             "collision_with": self._collision_with,
             "off_road": off_road,
             "time": self._step / self.config.control_hz,
+            "radio_sent": self.radio.sent, "radio_delivered": self.radio.delivered,
             **{key: value for manager in self.world for key, value in manager.info(self._substep).items()},
         }
 
@@ -385,16 +389,12 @@ class QCar2Env(gym.Env):
         return self._path
 
     def frame_sign_masks(self) -> list[np.ndarray]:
-        """Every stop sign's visible face in the held camera frame, (H, W) bool each (ground truth).
-
-        For evaluation, like ``info``: the masks belong to the frame the observation's ``rgb``
-        shows, which is older than the step when the camera runs slower than the loop.
-        """
+        """Every stop sign's visible face in the held camera frame, (H, W) bool each (ground truth, for
+        evaluation like ``info``: the frame the observation's ``rgb`` shows, older than the step when
+        the camera runs slower than the loop)."""
         return self.truth.sign_masks(stop_signs(self.config.sign))
 
     def sensor_observation(self) -> dict[str, np.ndarray]:
-        """The current sensor readings as the env returned them, before any wrapper changed them.
-
-        For evaluation (e.g. the protocol's d_clean under an attack), like ``info``.
-        """
+        """The current sensor readings as the env returned them, before any wrapper changed them (for
+        evaluation, e.g. the protocol's d_clean under an attack, like ``info``)."""
         return self._observation()

@@ -22,6 +22,8 @@ physics_dt_s, max_episode_s)`` ego car is placed (``value``: the reset option ``
 ``info(k)``                    after each step: ground truth for ``info`` (the columns' values)
 ``owner_of(root_body)``        when the car touches something: the name of what it hit, if this
                                manager's
+``broadcasts(k)``              after each control step: what its vehicles broadcast of themselves now
+                               (``racf.sim.radio``; the env's radio sends it at the radio's rate)
 =============================  ================================================================
 
 A manager also declares the bodies it adds that the car may perceive (:meth:`WorldManager.targets`:
@@ -164,3 +166,8 @@ class WorldManager:
     def owner_of(self, root_body: int) -> str | None:
         """The name of what a contact with ``root_body`` hit, when it is this manager's (else None)."""
         return None
+
+    def broadcasts(self, substep: int) -> tuple:
+        """What this manager's vehicles broadcast of themselves at physics step ``substep``
+        (``racf.sim.radio.Broadcast`` each; none: they broadcast nothing)."""
+        return ()

@@ -10,6 +10,13 @@ estimator's kinematics, ODCA's branch and the EKF's prediction, then follow a ta
 at a constant speed; and turns the defended gap into a speed cap (:class:`LeadFollower`). It
 declares its step-log columns (``lead_*``) and the distance series a viewer draws. Like the rest of
 the car, it reads the view and the map, never ``info``.
+
+When the car ahead broadcasts (``racf.sim.radio``), its checked messages
+(:class:`~racf.experiments.car.broadcast.BroadcastReceiver`) are a witness the sensor attacker does not
+reach. The lead's speed is the broadcast's while it agrees with the car's confirmed track (the
+defence's kinematics then know it to ``BROADCAST_STD_MPS``), else the slower of the two; the distance
+the car follows is the defence's while the broadcast agrees with it, else the nearer of the two, and
+the log says which (``lead_bc_nearer``). A lead that broadcasts nothing is followed as before.
 """
 
 from __future__ import annotations
@@ -18,14 +25,17 @@ import math
 from dataclasses import dataclass
 from functools import lru_cache
 
+import numpy as np
+
 from racf.controllers import LidarTargetConfig, LidarTargetTracker
 from racf.controllers.following import FollowDecision, FollowingConfig, LeadFollower, LeadSpeed
 from racf.controllers.lead_existence import NO_EVIDENCE, LeadEvidence, LeadExistenceCheck
 from racf.controllers.lead_perception import LeadPerception, lane_in_camera
 from racf.controllers.perception import PerceptionSample
+from racf.experiments.car.broadcast import AGREE_M, SPEED_AGREE_MPS, BroadcastReceiver, BroadcastWitness
 from racf.experiments.car.stage import CarStage, CarView, StageColumn, StageContext, StageLimit
 
-__all__ = ["FollowingStage", "LeadStep", "LANE_AHEAD_M", "NO_LEAD", "COLUMNS"]
+__all__ = ["FollowingStage", "LeadStep", "LANE_AHEAD_M", "NO_LEAD", "COLUMNS", "BROADCAST_STD_MPS"]
 
 #: How far along the lane ahead the car looks for a car, m.
 LANE_AHEAD_M = 4.0
@@ -34,6 +44,9 @@ LANE_AHEAD_M = 4.0
 #: back for nothing. The defence and the speed estimate start again, and the policy lets the car
 #: drive on, as a production adaptive cruise does, s.
 LOST_AFTER_S = 0.5
+#: How well the car knows the lead's speed while its broadcast and the track agree, m/s (the
+#: broadcast's own error, a few centimetres a second, and the latency's).
+BROADCAST_STD_MPS = 0.05
 
 
 @dataclass(frozen=True)
@@ -44,6 +57,14 @@ class LeadStep:
     d_fused: float
     lead_mps: float
     decision: FollowDecision
+    d_follow: float | None = None  # what the policy followed, where not d_fused (the broadcast's, nearer)
+    broadcast: BroadcastWitness | None = None
+    speed_known: bool = False  # the lead's speed is confirmed (by the track, or the broadcast agreeing with it)
+
+    @property
+    def followed_m(self) -> float:
+        """The camera distance the policy acted on: the defence's, or the broadcast's where it was nearer."""
+        return self.d_fused if self.d_follow is None else self.d_follow
 
 
 NO_LEAD = LeadStep(PerceptionSample(None, math.nan, 0.0, math.nan, math.nan), math.nan, math.nan,
@@ -67,16 +88,27 @@ COLUMNS = (
                                      "(NaN: none)"),
     StageColumn("lead_picture", "bool", "following: the lead's box is taken for a picture of a car (its size no "
                                         "witness)"),
+    StageColumn("lead_d_bc", "m", "following: the lead's camera distance as its broadcast tells it (NaN: none fresh)"),
+    StageColumn("lead_v_bc", "m/s", "following: the lead's speed as its broadcast tells it (NaN: none fresh)"),
+    StageColumn("lead_bc_nearer", "bool", "following: the broadcast disagreed with the defence and was nearer: the "
+                                          "car followed it"),
+    StageColumn("lead_bc_accepted", "", "following: broadcast messages accepted so far this episode"),
+    StageColumn("lead_bc_refused", "", "following: broadcast messages refused so far (forged, replayed or stale)"),
 )
 
 
-def _columns(step: LeadStep) -> dict:
-    sample, decision = step.sample, step.decision
+def _columns(step: LeadStep, radio: BroadcastReceiver | None = None) -> dict:
+    sample, decision, said = step.sample, step.decision, step.broadcast
     evidence = sample.witnesses if isinstance(sample.witnesses, LeadEvidence) else NO_EVIDENCE
     return {"lead_detected": sample.detected, "lead_d_meas": sample.d_meas, "lead_lidar": sample.lidar_m,
             "lead_d_size": sample.d_size, "lead_d_fused": step.d_fused, "lead_v_est": step.lead_mps,
             "lead_gap_est": decision.gap_m, "lead_cap": decision.speed_cap_mps, "lead_emergency": decision.emergency,
-            **evidence.columns()}
+            **evidence.columns(),
+            "lead_d_bc": math.nan if said is None else said.distance_m,
+            "lead_v_bc": math.nan if said is None else said.speed_mps,
+            "lead_bc_nearer": said is not None and not step.followed_m == step.d_fused,
+            "lead_bc_accepted": 0 if radio is None else radio.accepted,
+            "lead_bc_refused": 0 if radio is None else sum(radio.refused.values())}
 
 
 @lru_cache(maxsize=1)
@@ -126,6 +158,7 @@ class FollowingStage(CarStage):
         self.follower = LeadFollower(self.config)
         self.speed = LeadSpeed(self.config)
         self.last = NO_LEAD
+        self.radio = BroadcastReceiver()
         self._unseen_s = 0.0
         self._lost = False
 
@@ -136,6 +169,7 @@ class FollowingStage(CarStage):
         self.perception.reset()
         self.estimator.reset()
         self.speed.reset()
+        self.radio.reset()
         self.last = NO_LEAD
         self._unseen_s = 0.0
         self._lost = False
@@ -148,7 +182,12 @@ class FollowingStage(CarStage):
             ahead = (path.arclength >= view.progress_m) & (path.arclength <= view.progress_m + LANE_AHEAD_M)
             lane = lane_in_camera(path.points[ahead], view.pose, self.camera_xy_m)
         speed, dt = view.speed_mps, view.dt
-        closing = speed - self.speed.lead_mps
+        stamps = view.obs.get("timestamps")  # the newest reading's time: the car's clock now
+        now = float(np.max(stamps)) if stamps is not None else math.nan
+        self.radio.hear(view.obs, now)
+        said = self.radio.witness(now, view.pose, self.camera_xy_m, view.path, view.progress_m)
+        lead_mps, known = self._lead_speed(said)
+        closing = speed - lead_mps
         # The tracker carries the lead's point by the relative motion, as the defence does.
         sample = self.perception.process(view.obs["rgb"], view.obs["depth"][..., 0], view.scan, lane=lane,
                                          speed=closing, yaw_rate=view.yaw_rate_radps, lateral_speed=view.lateral_mps,
@@ -166,9 +205,30 @@ class FollowingStage(CarStage):
             self._lost = False
             moving = getattr(self.estimator, "follow_moving_target", None)
             if callable(moving):  # its target moves: how well the car knows the lead's speed
-                moving(self.speed.std_mps)
+                moving(BROADCAST_STD_MPS if known and said is not None else self.speed.std_mps)
             d = float(self.estimator.estimate(sample, closing, dt, yaw_rate_radps=view.yaw_rate_radps))
-        lead = self.speed.update(sample.d_meas, sample.lidar_m, sample.d_size, speed, dt, view.frame_new)
-        decision = self.follower.step(d - self.bumper_m, speed - lead)
-        self.last = LeadStep(sample, d, lead, decision)
-        return StageLimit(decision.speed_cap_mps, _columns(self.last), self.last)
+        self.speed.update(sample.d_meas, sample.lidar_m, sample.d_size, speed, dt, view.frame_new)
+        lead, known = self._lead_speed(said)
+        follow = d if said is None else _cautious(d, said.distance_m)
+        decision = self.follower.step(follow - self.bumper_m, speed - lead)
+        self.last = LeadStep(sample, d, lead, decision, follow, said, known)
+        return StageLimit(decision.speed_cap_mps, _columns(self.last, self.radio), self.last)
+
+    def _lead_speed(self, said: BroadcastWitness | None) -> tuple[float, bool]:
+        """The lead's speed and whether it is confirmed: the broadcast's while it agrees with the confirmed
+        track, else the slower of the two (an unconfirmed track counts as a standing lead)."""
+        confirmed = self.speed.frames >= self.config.confirm_frames
+        track = self.speed.lead_mps
+        if said is None:
+            return track, confirmed
+        if confirmed and abs(track - said.speed_mps) <= SPEED_AGREE_MPS:
+            return said.speed_mps, True
+        return min(track, said.speed_mps), confirmed
+
+
+def _cautious(defended_m: float, broadcast_m: float) -> float:
+    """The distance to follow: the defence's while the broadcast agrees with it, else the nearer (the
+    broadcast's alone where the defence has none)."""
+    if not math.isfinite(defended_m):
+        return broadcast_m
+    return defended_m if abs(defended_m - broadcast_m) <= AGREE_M else min(defended_m, broadcast_m)

@@ -13,6 +13,12 @@ episode's defence: ODCA, the EKF, a user's) as its advanced controller, and each
    (:func:`~.envelope.safe_speed`): the rule the guarantee rests on. An implausible reading nearer
    than the target can be eases the car off at ``EASE_MPS2``, never more.
 
+With a broadcast from the car ahead (the following stage's checked witness), a vouched reading that
+disagrees with it is vouched at the nearer of the two, and where the sensors vouch for nothing the
+broadcast is vouched for alone, unless it puts the target farther than the carried target can have
+gone: a signed message may lie (an insider), so it can make the car more cautious than its sensors,
+never bolder than the carried bounds allow.
+
 It reads the view and the map only, like the rest of the car. Its columns are the following stage's
 and its own (``sup_*``).
 """
@@ -21,6 +27,7 @@ from __future__ import annotations
 
 import math
 
+from racf.experiments.car.broadcast import AGREE_M
 from racf.experiments.car.following.stage import COLUMNS as FOLLOWING_COLUMNS
 from racf.experiments.car.following.stage import LANE_AHEAD_M, FollowingStage
 from racf.controllers.lead_perception import lane_in_camera
@@ -50,6 +57,8 @@ SUPERVISOR_COLUMNS = (
     StageColumn("sup_near", "m", "supervisor: the nearest the carried target can be, camera distance (NaN: none)"),
     StageColumn("sup_cap", "m/s", "supervisor: its speed cap (inf: none)"),
     StageColumn("sup_stop", "bool", "supervisor: the car was faster than the worst-case gap allows: told to stop"),
+    StageColumn("sup_broadcast", "bool", "supervisor: the lead's broadcast set the vouched distance (nearer than "
+                                         "the sensors', or theirs missing)"),
 )
 
 
@@ -101,7 +110,7 @@ class SupervisorStage(CarStage):
         lead = said.detail
         speed, dt, env = view.speed_mps, view.dt, self.envelope
         self.carried.predict(speed, dt)
-        known = self.advanced.speed.frames >= self.advanced.config.confirm_frames
+        known = lead.speed_known
         closing = speed - lead.lead_mps
         lane = self._lane(view) if view.scan is not None else None
         if lane is not None:
@@ -111,14 +120,15 @@ class SupervisorStage(CarStage):
         on_lane = self._on_lane if self._on_lane_age <= SCAN_HOLD_S else math.nan
         verdict = self.chain.step((lead.sample.d_meas, lead.sample.lidar_m, on_lane), closing, dt, self.carried,
                                   lead.sample.d_size)
-        if verdict.vouched:
-            self.carried.vouch(verdict.reading_m, lead.lead_mps, known)
+        vouched, by_broadcast = self._vouch(verdict, lead)
+        if math.isfinite(vouched):
+            self.carried.vouch(vouched, lead.lead_mps, known)
         elif self.carried.held and lane is not None and lane_clear(view.scan, lane, self.carried.near_m,
                                                                     self.carried.far_m, self._lidar_in_camera):
             self.carried.reset()
-        defence = (verdict.vouched and math.isfinite(lead.d_fused)
-                   and abs(lead.d_fused - verdict.reading_m) <= agree_m(verdict.reading_m))
-        cap, stop = self._cap(said.speed_cap_mps if defence else None, speed, verdict.vouched)
+        fresh = math.isfinite(vouched)
+        defence = fresh and math.isfinite(lead.followed_m) and abs(lead.followed_m - vouched) <= agree_m(vouched)
+        cap, stop = self._cap(said.speed_cap_mps if defence else None, speed, fresh)
         if verdict.implausible:
             self._ease = max(min(self._ease, speed) - EASE_MPS2 * dt, 0.0)
             cap = min(cap, self._ease)
@@ -127,8 +137,26 @@ class SupervisorStage(CarStage):
         values = {**said.values, "sup_defence": defence, "sup_vouched": verdict.vouched,
                   "sup_carried": self.carried.held, "sup_implausible": verdict.implausible,
                   "sup_refused": verdict.refused, "sup_on_lane": on_lane, "sup_reading": verdict.reading_m,
-                  "sup_near": self.carried.near_m, "sup_cap": cap, "sup_stop": stop}
+                  "sup_near": self.carried.near_m, "sup_cap": cap, "sup_stop": stop, "sup_broadcast": by_broadcast}
         return StageLimit(cap, values, lead)
+
+    def _vouch(self, verdict, lead) -> tuple[float, bool]:
+        """The distance vouched for this step (NaN: none) and whether the broadcast set it: the sensors'
+        reading while the broadcast agrees (or there is none), the nearer of the two where they disagree,
+        the broadcast's alone where the sensors vouch for nothing and it is no farther than the carried
+        target can have gone."""
+        said = lead.broadcast
+        if said is None:
+            return (verdict.reading_m if verdict.vouched else math.nan), False
+        told = said.distance_m
+        if verdict.vouched:
+            reading = verdict.reading_m
+            if abs(reading - told) <= AGREE_M or reading < told:
+                return reading, False
+            return told, True
+        if self.carried.held and told > self.carried.far_m + AGREE_M:
+            return math.nan, False
+        return told, True
 
     def _cap(self, defence_cap: float | None, speed: float, fresh: bool) -> tuple[float, bool]:
         """The speed cap and whether the stop rule fired: ``defence_cap`` when the defence drives

@@ -27,7 +27,8 @@ from racf.sim.world.lead import LAUNCH_MPS2, LEAD_PROFILES, LeadCar
 from racf.sim.world.lead_manager import LeadManager
 from racf.sim.world.traffic import CAR_FOOTPRINT_M, TRAFFIC_COLOURS
 
-__all__ = ["LeadVehicle", "NoLeadCollision", "KeepsHeadway", "NoNeedlessHardBrake", "lead_rest_s", "REST_BEHIND_S"]
+__all__ = ["LeadVehicle", "NoLeadCollision", "KeepsHeadway", "NoNeedlessHardBrake", "RefusesForeignMessages",
+           "lead_rest_s", "REST_BEHIND_S"]
 
 #: The hardest the scenario says a lead pulls away, m/s^2 (twice its stop-and-go launch).
 STATED_ACCEL_MPS2 = 2.0 * LAUNCH_MPS2
@@ -95,6 +96,34 @@ class NoNeedlessHardBrake(Criterion):
         return score_following(episode.log).needless_hard_brakes == 0
 
 
+class RefusesForeignMessages(Criterion):
+    """Every message an attacker put on the air (forged, replayed) is refused by the car's receiver
+    (informative: it applies where an attacker sent any; ``racf.experiments.car.broadcast``)."""
+
+    name = "refuses_foreign_messages"
+    checks = "the car refused every forged or replayed broadcast message"
+    optional = True
+    card = ("foreign messages refused", True)
+    fields = (
+        Field("bc_injected", 0, "", "broadcast messages an attacker put on the air (forged or replayed)",
+              summary="median"),
+        Field("bc_refused", 0, "", "broadcast messages the car's receiver refused (forged, replayed or stale)",
+              summary="median"),
+    )
+
+    def applies(self, episode) -> bool:
+        return "radio_injected" in episode.log and bool(episode.log["radio_injected"].sum() > 0)
+
+    def passed(self, episode) -> bool:
+        measured = self.measures(episode)
+        return measured["bc_refused"] >= measured["bc_injected"]
+
+    def measures(self, episode) -> dict[str, Any]:
+        log = episode.log
+        refused = int(log["lead_bc_refused"].max()) if "lead_bc_refused" in log else 0
+        return {"bc_injected": int(log["radio_injected"].sum()), "bc_refused": refused}
+
+
 class LeadVehicle(Scenario):
     """A lead car in the ego car's lane, ``gap_m`` ahead of its bumper at the start, driving its profile."""
 
@@ -108,8 +137,10 @@ class LeadVehicle(Scenario):
         Param("decel", 3.0, 0.5, 6.0, unit="m/s^2", meaning="how hard the lead brakes (slow_down, hard_brake, stop_and_go)"),
         Param("brake_t", 3.0, 0.5, 10.0, unit="s", meaning="when the lead brakes, after the start"),
         Param("colour", "white", choices=tuple(TRAFFIC_COLOURS), meaning="the lead's paint"),
+        Param("broadcast", "off", choices=("off", "on"), meaning="the lead broadcasts its own state, signed, over "
+                                                              "the radio (racf.sim.radio)"),
     )
-    criteria = (NoLeadCollision, KeepsHeadway, NoNeedlessHardBrake)
+    criteria = (NoLeadCollision, KeepsHeadway, NoNeedlessHardBrake, RefusesForeignMessages)
 
     def check(self, spec, values) -> None:
         if spec.estimator_endpoint is not None:
@@ -140,7 +171,7 @@ class LeadVehicle(Scenario):
                              f"sign {spec.sign}'s line; allowed: gap_m < {stop - draft.start_s_m - CAR_FOOTPRINT_M[0]:.2f} m")
         lead = LeadCar(route, start, values["speed"], stop, values["profile"], values["decel"], values["brake_t"],
                        values["colour"])
-        options = {**draft.reset_options, "lead": lead.to_options()}
+        options = {**draft.reset_options, "lead": {**lead.to_options(), "broadcast": values["broadcast"] == "on"}}
         max_s = draft.max_steps * draft.control_dt_s
         # The car is told it drives in traffic: its following stage is engaged.
         # The car is told the lead may brake as hard as this scenario's decel allows (its a_max), and pulls

@@ -21,7 +21,9 @@ def spec(**params) -> TrialSpec:
 def test_its_plan_puts_the_lead_its_gap_ahead_and_tells_the_car_to_follow():
     plan = plan_episode(spec(gap_m=0.8, profile="hard_brake", speed=0.6, decel=3.0, brake_t=3.0))
     lead = plan.extras["lead"]
-    assert plan.mission.stages == ("following",) and plan.reset_options["lead"] == lead.to_options()
+    assert plan.mission.stages == ("following",)
+    assert plan.reset_options["lead"] == {**lead.to_options(), "broadcast": False}
+    assert plan_episode(spec(broadcast="on")).reset_options["lead"]["broadcast"] is True
     # The rules of its road, stated to the car: the hardest the lead brakes and pulls away.
     assert (plan.mission.target_decel_mps2, plan.mission.target_accel_mps2) == (6.0, 2.0)
     assert lead.start_s - plan.start_s_m == pytest.approx(0.8 + CAR_FOOTPRINT_M[0])

@@ -41,7 +41,7 @@ def test_every_builtin_attack_is_tested_here():
 def test_the_attack_acts_in_a_real_closed_loop_episode(name):
     if ATTACKS[name].acts_on == "vehicle":  # an attack on a car ahead: in a scenario that declares one
         spec = TrialSpec(setting_name([name], "raw"), 1, 1.0, 0, target="lead_vehicle", t_atk=1.0,
-                         scenario_params={"brake_t": 1.0}, attack_params={name: {"start_s": 0.5}})
+                         scenario_params={"brake_t": 1.0, "broadcast": "on"}, attack_params={name: {"start_s": 0.5}})
     else:
         spec = TrialSpec(setting_name([name], "raw"), 1, 1.5, 0, run_up_m=1.5)
     tap, changed, active = None, [], []
@@ -53,7 +53,7 @@ def test_the_attack_acts_in_a_real_closed_loop_episode(name):
 
     def on_step(env, obs, info, row):
         active.append(bool(info["attack_active"]))
-        changed.append(any(not np.array_equal(obs[k], tap.last[k], equal_nan=True) for k in ("rgb", "depth", "lidar")))
+        changed.append(any(not np.array_equal(obs[k], tap.last[k], equal_nan=True) for k in ("rgb", "depth", "lidar", "radio")))
 
     result, log = run_trial(spec, make_env=make_env, on_step=on_step, clean_pass=False)
     assert any(active) and np.isfinite(result.attack_start_s), "its window never opened"

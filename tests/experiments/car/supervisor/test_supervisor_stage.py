@@ -169,10 +169,10 @@ def test_before_its_first_step_it_says_nothing_and_limits_nothing():
 
 def test_a_lead_speed_confirmed_this_frame_bounds_the_carried_target():
     stage, advanced = _stage()
-    advanced.speed.frames = advanced.config.confirm_frames  # just confirmed
-    advanced.speed._lead = 0.8
+    # The following stage says the lead's speed is confirmed this frame (its track, or the broadcast).
     stage.advanced.step = lambda view: StageLimit(1.0, {}, LeadStep(PerceptionSample(None, 1.0, 0.0, 1.0, NAN), 1.0,
-                                                                   0.8, FollowDecision(1.0, 0.9, NAN, False)))
+                                                                   0.8, FollowDecision(1.0, 0.9, NAN, False),
+                                                                   speed_known=True))
     stage.step(_view(0.5))
     assert stage.carried.slow_mps == pytest.approx(0.55) and stage.carried.fast_mps == pytest.approx(1.05)
 
