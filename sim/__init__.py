@@ -1,6 +1,6 @@
 """racf simulator: the Quanser QCar 2 and its indoor map in MuJoCo, as a Gymnasium env.
 
-Importing ``sim`` registers ``RACF/QCar2-v3`` (so ``gym.make("racf.sim:RACF/QCar2-v3")`` works in
+Importing ``sim`` registers ``RACF/QCar2-v4`` (so ``gym.make("racf.sim:RACF/QCar2-v4")`` works in
 a fresh process) and selects headless EGL rendering unless ``MUJOCO_GL`` is already set.
 """
 

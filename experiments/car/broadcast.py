@@ -125,8 +125,10 @@ def _ahead(message: V2VMessage, age_s: float, pose: np.ndarray, camera_xy_m: tup
            progress_m: float) -> BroadcastWitness | None:
     """Where the sender's rear is now (moved on ``age_s`` by its own speed and acceleration), from the camera."""
     s = message.state
-    speed = max(s.speed_mps + s.accel_mps2 * age_s, 0.0)
-    travel = (s.speed_mps + speed) / 2.0 * age_s
+    v, a = max(s.speed_mps, 0.0), s.accel_mps2
+    speed = max(v + a * age_s, 0.0)
+    # Braking to a stop within the age, it goes v^2 / 2|a| and stays; else v t + a t^2 / 2.
+    travel = v * v / (-2.0 * a) if speed == 0.0 and a < 0.0 else v * age_s + 0.5 * a * age_s ** 2
     rear = QCAR2_BOX_M[0] / 2.0
     x = s.x_m + (travel - rear) * math.cos(s.yaw_rad)
     y = s.y_m + (travel - rear) * math.sin(s.yaw_rad)

@@ -304,8 +304,12 @@ def service_flags(p: argparse.ArgumentParser) -> None:
     """``--estimator-endpoint`` (run the defence in a ``racf serve`` process) and its timeout."""
     p.add_argument("--estimator-endpoint", default=None, metavar="tcp://HOST:PORT",
                    help="run the defence in the `racf serve` process listening there: its measured round trip "
-                        "delays the car, and a step it does not answer in time falls back to the car's own depth "
-                        "distance (logged); default: in the car's own process")
+                        "delays the car, and a step it does not answer in time falls back to the car's onboard "
+                        "defence (--estimator-fallback; logged); default: in the car's own process")
+    p.add_argument("--estimator-fallback", default=None, metavar="NAME",
+                   help="with --estimator-endpoint: the onboard defence the car runs beside the served one and "
+                        "drives on where the service gives no answer: an estimator's name, or raw (its own depth, "
+                        "unrepaired); default: odca, from its ONNX export")
     p.add_argument("--estimator-timeout-ms", type=float, default=None, metavar="MS",
                    help=f"with --estimator-endpoint: how long the car waits for an answer, ms (default "
                         f"{DEFAULT_TIMEOUT_MS:g})")
@@ -321,6 +325,7 @@ def service_params(args: argparse.Namespace, command: str) -> dict:
     """The spec fields the service flags give (none without an endpoint)."""
     if args.estimator_endpoint is None:
         for flag, value in (("--estimator-timeout-ms", args.estimator_timeout_ms),
+                            ("--estimator-fallback", args.estimator_fallback),
                             ("--service-keys", args.service_keys), ("--service-car", args.service_car)):
             if value is not None:
                 flag_error(command, f"{flag} applies with --estimator-endpoint")
@@ -331,4 +336,6 @@ def service_params(args: argparse.Namespace, command: str) -> dict:
            "estimator_car": args.service_car}
     if args.estimator_timeout_ms is not None:
         out["estimator_timeout_ms"] = args.estimator_timeout_ms
+    if args.estimator_fallback is not None:
+        out["estimator_fallback"] = args.estimator_fallback
     return out

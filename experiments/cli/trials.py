@@ -92,8 +92,8 @@ def _trial(args: argparse.Namespace) -> int:
         print(trial_summary(row, log_path, args.out / f"{spec.trial_id}.json"))
     if row.get("service_fallback"):  # said where it is read, not only in a field
         print(f"racf trial: the defence service gave no answer the car could act on, on "
-              f"{row['service_fallback_steps']} of {row['service_fallback_steps'] + row['service_steps']} steps; the car drove on its own depth "
-              f"distance there ({row['service_invalid']} answers refused by the protocol's check, "
+              f"{row['service_fallback_steps']} of {row['service_fallback_steps'] + row['service_steps']} steps; the car drove on "
+              f"{_fallback_words(row)} there ({row['service_invalid']} answers refused by the protocol's check, "
               f"{row['service_restarts']} defence restarts, {row['service_new_sessions']} new sessions)",
               file=sys.stderr)
     return 0
@@ -173,7 +173,8 @@ def _trials(args: argparse.Namespace) -> int:
             ("service_invalid", "answers refused by the protocol's check"), ("service_restarts", "defence restarts"),
             ("service_new_sessions", "new sessions")) if c in fell)
         print(f"the defence service gave no answer the car could act on in {len(fell)} of {len(results)} episodes "
-              f"({int(fell['service_fallback_steps'].sum())} steps; {counts}): the car drove on its own depth there")
+              f"({int(fell['service_fallback_steps'].sum())} steps, {int(fell['service_onboard_steps'].sum())} of them on "
+              f"its onboard defence; {counts}): the car drove on its fallback there")
     print(f"results: {out / 'results.parquet'}; per-step logs: {out / 'trials'}")
     return 0
 
@@ -291,3 +292,11 @@ def _list(args: argparse.Namespace) -> int:
         for kind, name, why in broken:
             print(f"  {kind} {name}: {why}")
     return 0
+
+
+def _fallback_words(row: dict) -> str:
+    """What drove the car where the service did not: its onboard defence, its own depth, or both."""
+    onboard, steps = row.get("service_onboard_steps", 0), row["service_fallback_steps"]
+    if onboard == steps:
+        return "its onboard defence"
+    return "its own depth distance" if not onboard else f"its onboard defence ({onboard} steps) and its own depth"

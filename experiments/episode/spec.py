@@ -146,7 +146,11 @@ class TrialSpec:
             (``tcp://HOST:PORT``) instead of in the car's (None: in the car's). The measured round
             trip delays the car; the id records that a service ran it, not where it listened.
         estimator_timeout_ms: with an endpoint, how long the car waits for an answer before it
-            falls back to its own depth distance for the step, ms.
+            falls back to its onboard defence for the step, ms.
+        estimator_fallback: with an endpoint, the car's onboard defence, run every step beside the
+            served one and driving where the service gives no answer the car may act on: an estimator's
+            name (``odca``, the default: ODCA from its ONNX export, as the car runs it), or ``raw``, the
+            car's own depth distance unrepaired (before issue 70, the only fallback).
         estimator_keys: with an endpoint, the key folder of ``racf serve keys`` whose car pair and
             service key make the link CurveZMQ (None: a plain link). The id records that the link was
             authenticated, not where the keys lie.
@@ -181,6 +185,7 @@ class TrialSpec:
     estimator_keys: str | None = None
     estimator_car: str | None = None
     supervisor: bool = False
+    estimator_fallback: str = "odca"
 
     def __post_init__(self) -> None:
         attacks, estimator = parse_setting(self.setting)
@@ -245,6 +250,9 @@ class TrialSpec:
                                                 or not isinstance(self.estimator_keys, str)):
             raise ValueError(f"estimator_keys is a key folder for the link to an estimator_endpoint, got "
                              f"{self.estimator_keys!r} with endpoint {self.estimator_endpoint!r}")
+        if not (isinstance(self.estimator_fallback, str) and self.estimator_fallback in ("raw", *ESTIMATORS)):
+            raise ValueError(f"estimator_fallback must be 'raw' (the car's own depth, unrepaired) or an estimator "
+                             f"{tuple(ESTIMATORS)}, got {self.estimator_fallback!r}")
         if self.estimator_car is not None and (self.estimator_keys is None or not isinstance(self.estimator_car, str)):
             raise ValueError(f"estimator_car names a car of the key folder estimator_keys, got {self.estimator_car!r} "
                              f"with keys {self.estimator_keys!r}")
@@ -299,7 +307,7 @@ class TrialSpec:
         id, of an in-process episode stay as they were)."""
         out = asdict(self)
         if self.estimator_endpoint is None:
-            del out["estimator_endpoint"], out["estimator_timeout_ms"]
+            del out["estimator_endpoint"], out["estimator_timeout_ms"], out["estimator_fallback"]
         if self.estimator_keys is None:
             del out["estimator_keys"]
         if self.estimator_car is None:

@@ -98,13 +98,23 @@ def build_car(spec: TrialSpec, plan: EpisodePlan, estimator=None, env: gym.Env |
         from racf.experiments.link.remote import RemoteEstimator
 
         estimator = RemoteEstimator(link_endpoint(env, spec), spec.estimator, spec.estimator_options,
-                                    spec.estimator_timeout_ms, keys=car_keys(spec))
+                                    spec.estimator_timeout_ms, keys=car_keys(spec), onboard=onboard_defence(spec))
     estimator = estimator if estimator is not None else make_estimator(spec.estimator, spec.estimator_options)
     configure = getattr(estimator, "use_calibration", None)
     if callable(configure):
         configure(calib)
     return Car(calib, plan.mission, perceptions, estimator, spec.braking, plan.control_dt_s, every, plan.localisation,
                existence_stage(estimator, calib, spec.detector), car_stages(spec, plan))
+
+
+def onboard_defence(spec: TrialSpec):
+    """The defence the car runs itself beside a served one (None: ``raw``, its own depth distance): ODCA from
+    its ONNX export, as the car runs it, or the named estimator with its defaults."""
+    if spec.estimator_fallback == "raw":
+        return None
+    if spec.estimator_fallback == "odca":
+        return make_estimator("odca", {"runtime": "onnx"})
+    return make_estimator(spec.estimator_fallback, {})
 
 
 def car_stages(spec: TrialSpec, plan: EpisodePlan) -> tuple:

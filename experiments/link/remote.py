@@ -18,8 +18,10 @@ the episode:
   delays the action by each whole control period it overran (an answer within the period is
   in time for that step's action, as on the paper's 20 Hz loop).
 - **No answer, or one the check refuses** (out of range, of the wrong kind, an error, an
-  answer to another request, a refused or late re-hello). The car falls back to its own
-  perception's depth distance (``d_meas``, no repair) for that step (``service_fallback``),
+  answer to another request, a refused or late re-hello). The car falls back to its onboard
+  defence (``onboard``: ODCA from its ONNX export by default, run every step beside the served one
+  so that its state is the episode's; without one, its own depth distance, ``d_meas``, unrepaired)
+  for that step (``service_fallback``; ``service_onboard`` where the onboard defence drove),
   counts a refused answer (``service_invalid``), logs the first of each kind once, and asks
   again after ``retry_s`` of its own time in a new session (``service_new_sessions``), its
   defence started afresh. A defence the service had to rebuild is no answer either
@@ -86,11 +88,15 @@ class RemoteEstimator:
             the service may build and warm the defence first).
         keys: the car's CURVE keys and the service key it pins (``racf.experiments.link.curve``);
             None: a plain link.
+        onboard: the car's own defence (a ``DistanceEstimator``), fed every step and used where the
+            service gives no answer; None: the car's depth distance, unrepaired.
     """
 
     def __init__(self, endpoint: str, name: str, options: dict | None = None, timeout_ms: float = DEFAULT_TIMEOUT_MS,
-                 retry_s: float = DEFAULT_RETRY_S, connect_s: float = 60.0, keys: CarKeys | None = None) -> None:
+                 retry_s: float = DEFAULT_RETRY_S, connect_s: float = 60.0, keys: CarKeys | None = None,
+                 onboard=None) -> None:
         self.endpoint, self.name, self.options = endpoint, name, dict(options or {})
+        self.onboard = onboard
         self.timeout_ms, self.retry_s, self.keys = float(timeout_ms), float(retry_s), keys
         self._socket = self._monitor = self._ctx = None
         self._clock = 0.0
@@ -147,26 +153,39 @@ class RemoteEstimator:
     # -- the DistanceEstimator protocol --------------------------------------------------
     def use_calibration(self, calibration) -> None:
         self._calibration = dataclasses.asdict(calibration)
+        configure = getattr(self.onboard, "use_calibration", None)
+        if callable(configure):
+            configure(calibration)
         self._call({"op": "calibrate", "calibration": self._calibration})
 
     def reset(self) -> None:
         self._stands = None
         self._said.clear()
+        if self.onboard is not None:
+            self.onboard.reset()
         self._call({"op": "reset"})
 
     def estimate(self, sample: PerceptionSample, speed_mps: float, dt: float, yaw_rate_radps: float = 0.0) -> float:
         self._clock += dt
+        # The onboard defence sees every step, so that where it must drive its state is the episode's.
+        own = math.nan if self.onboard is None else float(self.onboard.estimate(sample, speed_mps, dt, yaw_rate_radps))
         reply = self._call({"op": "estimate", "sample": encode_sample(sample), "speed": float(speed_mps), "dt": float(dt),
                             "yaw_rate": float(yaw_rate_radps)})
         status = {"service_restarts": float(self.restarts), "service_new_sessions": float(self.new_sessions),
                   "service_invalid": float(self.invalid), "service_refusals": float(self.refusals)}
         if reply is None:  # no answer the car may act on
-            self._last = {"service_fallback": 1.0, "service_rtt_ms": math.nan, **status}
-            self._stands = None
-            return float(sample.d_meas)  # the car's own depth distance, unrepaired
+            if self.onboard is None:
+                self._last = {"service_fallback": 1.0, "service_onboard": 0.0, "service_rtt_ms": math.nan, **status}
+                self._stands = None
+                return float(sample.d_meas)  # the car's own depth distance, unrepaired
+            stands = getattr(self.onboard, "stands", None)
+            self._stands = stands() if callable(stands) else None
+            self._last = {**self.onboard.diagnostics(), "service_fallback": 1.0, "service_onboard": 1.0,
+                          "service_rtt_ms": math.nan, **status}
+            return own
         self._rtts.append(self.latency_s * 1000.0)
-        self._last = {**reply["diagnostics"], "service_fallback": 0.0, "service_rtt_ms": self.latency_s * 1000.0,
-                      **status}
+        self._last = {**reply["diagnostics"], "service_fallback": 0.0, "service_onboard": 0.0,
+                      "service_rtt_ms": self.latency_s * 1000.0, **status}
         self._stands = reply["stands"]
         return math.nan if reply["distance"] is None else reply["distance"]
 
@@ -242,8 +261,9 @@ class RemoteEstimator:
         """Logs the first failure of each kind in an episode, in one line."""
         if kind not in self._said:
             self._said.add(kind)
-            LOG.warning("the defence service at %s: %s; the car falls back to its own depth distance", self.endpoint,
-                        why)
+            LOG.warning("the defence service at %s: %s; the car falls back to %s", self.endpoint, why,
+                        "its own depth distance" if self.onboard is None else
+                        f"its onboard defence ({getattr(self.onboard, 'name', type(self.onboard).__name__)})")
 
     def _rtt_words(self) -> str:
         if not self._rtts:

@@ -1,6 +1,7 @@
 """How the defence service answered an episode (the ``service`` metric, scored where the spec runs
 its estimator through ``racf serve``): the round trips the car measured, the steps they made it
-late, and the steps it fell back to its own depth distance."""
+late, and the steps it fell back on its onboard defence (or, with ``estimator_fallback`` raw, its own depth
+distance): which steps ran where."""
 
 from __future__ import annotations
 
@@ -26,7 +27,9 @@ class ServiceMeasures(Metric):
         Field("service_rtt_p99_ms", math.nan, "ms", "99th percentile of the round trips", summary="median"),
         Field("service_late_steps", 0, "steps", "actions delayed a control period or more by a slow answer"),
         Field("service_fallback_steps", 0, "steps", "steps with no answer the car may act on (none in time, one "
-                                                    "the protocol's check refused): the car's own depth distance"),
+                                                    "the protocol's check refused): the car's fallback drove"),
+        Field("service_onboard_steps", 0, "steps", "of those, steps the car's onboard defence drove (the rest: its "
+                                                   "own depth distance, unrepaired)"),
         Field("service_fallback", False, "", "the car fell back at least once", summary="rate"),
         Field("service_invalid", 0, "", "answers the protocol's check refused (out of range, of the wrong kind, an "
                                         "error, an answer to another request)"),
@@ -51,6 +54,8 @@ class ServiceMeasures(Metric):
                 "service_rtt_p99_ms": float(np.percentile(answered, 99)) if answered.size else math.nan,
                 "service_late_steps": int((answered >= dt * 1000.0).sum()),
                 "service_fallback_steps": fallback, "service_fallback": fallback > 0,
+                "service_onboard_steps": int((log.loc[control, "service_onboard"] == 1.0).sum())
+                if "service_onboard" in log else 0,
                 **{name: _last_count(log, name) for name in ("service_invalid", "service_restarts",
                                                              "service_new_sessions", "service_refusals")}}
 

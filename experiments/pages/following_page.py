@@ -96,15 +96,21 @@ def _median(group: pd.DataFrame, column: str) -> dict:
     return {"median": median, "ci": ci, "n": int((~pd.isna(values)).sum())}
 
 
-def summarise(folders: list[Path]) -> dict:
-    """The following table's data from the sweeps' folders."""
+def summarise(folders: list[Path], by: tuple[str, ...] = ()) -> dict:
+    """The following table's data from the sweeps' folders: a row per attack and defence, and per value of
+    each result column in ``by`` (``scenario_broadcast``: the lead broadcasting or not), its key those
+    values joined by ``|``."""
     frame = pd.concat([_rows(Path(f)) for f in folders], ignore_index=True)
+    missing_columns = [c for c in by if c not in frame]
+    if missing_columns:
+        raise ValueError(f"the episodes have no column(s) {missing_columns} to group by")
     out = {}
-    for (attack, estimator), group in frame.groupby(["attack", "estimator"], sort=True):
+    for keys, group in frame.groupby(["attack", "estimator", *by], sort=True):
+        attack, estimator, *values = keys
         ttc = group["min_ttc_s"].to_numpy(float)
         median, ci = median_ci(ttc[~pd.isna(ttc)])
-        out[f"{attack}|{estimator}"] = {
-            "attack": attack, "estimator": estimator, "n": len(group),
+        out["|".join([attack, estimator, *map(str, values)])] = {
+            "attack": attack, "estimator": estimator, **dict(zip(by, map(str, values))), "n": len(group),
             "collision_free": _share(group["no_lead_collision"].tolist()),
             "min_ttc_median_s": median, "min_ttc_ci": ci,
             "headway_violated": _share((group["headway_violation_s"] > 0).tolist()),
@@ -112,9 +118,18 @@ def summarise(folders: list[Path]) -> dict:
             **({"needless_hard_brake": _share((group["needless_hard_brakes"] > 0).tolist())}
                if "needless_hard_brakes" in group else {}),
             **{f"{name}_median": _median(group, name) for name in ("mean_time_gap_s", "finish_s") if name in group},
+            **(_foreign(group) if "bc_injected" in group and group["bc_injected"].sum() > 0 else {}),
             "by_profile": {p: _share(g["no_lead_collision"].tolist())
                            for p, g in group.groupby("scenario_profile", sort=True)}}
     return {"rows": out}
+
+
+def _foreign(group: pd.DataFrame) -> dict:
+    """The forged and replayed broadcast messages: how many an attacker sent, how many the car refused,
+    and the share of episodes where it refused them all."""
+    sent = group["bc_injected"].to_numpy(int)
+    return {"bc_injected": int(sent.sum()), "bc_refused": int(group["bc_refused"].sum()),
+            "foreign_refused": _share((group["bc_refused"] >= group["bc_injected"])[sent > 0].tolist())}
 
 
 def following_markdown(root: Path) -> str:
@@ -296,9 +311,11 @@ def main(argv: list[str] | None = None) -> int:
                                      description="The following table's data from sweep folders, as JSON.")
     parser.add_argument("folders", nargs="+", type=Path, help="sweep output folders (following, following-frustum)")
     parser.add_argument("--out", type=Path, default=None, help="write the JSON here (default: print it)")
+    parser.add_argument("--by", nargs="*", default=[], metavar="COLUMN",
+                        help="also a row per value of these result columns (e.g. scenario_broadcast)")
     args = parser.parse_args(argv)
     try:
-        data = summarise(args.folders)
+        data = summarise(args.folders, tuple(args.by))
     except (OSError, ValueError) as err:
         print(f"following_page: {err}", file=sys.stderr)
         return 2

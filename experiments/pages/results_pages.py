@@ -21,6 +21,7 @@ from racf.experiments.pages.existence_page import existence_markdown
 from racf.experiments.pages.leaderboard_page import leaderboard_markdown
 from racf.experiments.pages.following_page import following_markdown
 from racf.experiments.pages.supervisor_page import supervisor_markdown
+from racf.experiments.pages.broadcast_page import broadcast_markdown
 from racf.experiments.pages.traffic_page import crossed_key, traffic_markdown
 from racf.experiments.pages.detector_page import detector_markdown
 from racf.experiments.pages.speed_page import speed_markdown
@@ -311,4 +312,5 @@ RESULT_PAGES["results/falsification.md"] = falsification_markdown
 RESULT_PAGES["results/traffic.md"] = traffic_markdown
 RESULT_PAGES["results/following.md"] = following_markdown
 RESULT_PAGES["results/supervisor.md"] = supervisor_markdown
+RESULT_PAGES["results/broadcast.md"] = broadcast_markdown
 RESULT_PAGES["results/existence.md"] = existence_markdown

@@ -6,6 +6,9 @@ defence is rated on. A battery never changes once released: a change is a new na
 profiles, clean and under each attack on the car ahead, by the collision-free rate and needless
 hard brakes.
 
+``racf-link-2`` is ``racf-link`` with the car's onboard fallback (issue 70): its own ODCA, not raw
+depth, where the service gives no answer.
+
 ``racf-link`` rates a defence served offboard, as the paper ran it, with its link attacked: delayed,
 lost, spoofed, on a plain and on a CurveZMQ link (issue 58).
 
@@ -35,147 +38,44 @@ detector (then the classical one).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import replace
 from typing import Callable
 
 from racf.experiments.episode import TrialSpec
 from racf.experiments.episode.spec import setting_name
+from racf.experiments.scorecard.battery_types import (CAR_DETECTOR, PENALTIES, Battery, LoopRow, drives_row,
+                                                     paper_row, sweep_row)
 from racf.experiments.sweeps.batches import batch_specs
 from racf.experiments.sweeps.spec import SweepSpec
 
 __all__ = ["LoopRow", "Battery", "BATTERIES", "DEFAULT_BATTERY", "PENALTIES", "OFFBOARD", "PAPER_LOOP_HZ"]
 
-#: The driving score's penalties (CARLA's leaderboard coefficients): one factor per infraction.
-PENALTIES = {"ran_stop_sign": 0.80, "hit_static_object": 0.65, "hit_vehicle": 0.60}
-
-
-@dataclass(frozen=True)
-class LoopRow:
-    """One closed-loop row: ``make(defence, n)`` gives its episodes."""
-
-    key: str
-    title: str
-    n: int
-    n_quick: int
-    make: Callable[[str, int], list[TrialSpec]] = field(compare=False, repr=False)
-    attacked: bool = True
-    driving: bool = False  # also a driving score (route completion x penalties), as the drives rows have
-    #: The link its defence is served over (``"plain"`` or ``"curve"``): the card starts that
-    #: ``racf serve`` itself (``racf.experiments.scorecard.link``); None: as the command says.
-    link: str | None = None
-
-    def specs(self, defence: str, quick: bool = False) -> list[TrialSpec]:
-        return self.make(defence, self.n_quick if quick else self.n)
-
-
-#: The car's detector in every battery so far: the classical one, the default when each was
-#: released. Pinned here, so that no row follows a later default silently.
-_CAR = "classical"
-
-
-def _paper(setting: str) -> Callable[[str, int], list[TrialSpec]]:
-    def make(defence: str, n: int) -> list[TrialSpec]:
-        return batch_specs(setting + ("" if defence == "raw" else f"+{defence}"), n, detector=_CAR)
-    return make
-
-
-def _sweep(name: str, attack: str, *, mode: str = "random", detector: str = _CAR, params: dict | None = None,
-           t_atk: list | None = None, rho: list | None = None, speed: list | None = None, tables: dict | None = None
-           ) -> Callable[[str, int], list[TrialSpec]]:
-    """Episodes of a sweep over the four signs, the same seeds for every defence (paired): ``n``
-    random draws, or (grid) ``n // 4`` repeats at each sign and each of the attack's settings (``tables``:
-    a scenario's own sweep tables, ``SweepSpec.tables``)."""
-    def make(defence: str, n: int) -> list[TrialSpec]:
-        space = {"attack": [attack], "estimator": [defence], "sign": [0, 1, 2, 3]}
-        if mode == "random":
-            space |= {"rho": rho or [0.9, 1.0], "t_atk": t_atk or [0.5, 3.0], "speed": speed or [1.0, 2.0]}
-            spec = SweepSpec(name, mode="random", n=n, seed=0, space=space, params=params or {}, log_steps=True,
-                             detector=detector, tables=tables or {})
-        else:
-            space |= {"rho": rho or [1.0], "t_atk": t_atk or [3.0], "speed": speed or [1.5]}
-            spec = SweepSpec(name, mode="grid", repeats=max(1, n // 4), seed=0, space=space, params=params or {},
-                             log_steps=True, detector=detector, tables=tables or {})
-        return spec.episodes()
-    return make
-
-
-def _drives(attack: bool) -> Callable[[str, int], list[TrialSpec]]:
-    def make(defence: str, n: int) -> list[TrialSpec]:
-        setting = ("attack" if attack else "clean") + ("" if defence == "raw" else f"+{defence}")
-        return [TrialSpec(setting, 0, 1.5, seed, target="drive", detector=_CAR) for seed in range(n)]
-    return make
-
-
-@dataclass(frozen=True)
-class Battery:
-    """A named battery: its closed-loop rows, its drives and its offline settings."""
-
-    name: str
-    loop: tuple[LoopRow, ...]
-    drives: tuple[LoopRow, ...]
-    detector: str = _CAR  # the car's detector in its rows (a row's title names any other)
-    offline_presets: tuple[str, ...] = ("weak", "mid", "strong")
-    offline_split: str = "by_series"
-    offline_draws: int = 5
-    offline_draws_quick: int = 1
-
-    def rows(self) -> tuple[LoopRow, ...]:
-        return self.loop + self.drives
-
-    def quick(self) -> "Battery":
-        return replace(self, name=f"{self.name}-quick")
-
-    def in_scenario(self, scenario: str, params: dict | None = None) -> "Battery":
-        """The battery with every plain stop-sign approach of its closed-loop rows run in ``scenario``
-        instead (``racf.plugins.SCENARIOS``, a scenario whose target is a stop sign), named
-        ``NAME@SCENARIO[param=value, ...]`` (so that cards of one scenario with other parameters never
-        share a name or a file); cross-traffic rows and the drives stay as they are. ValueError names a
-        scenario that does not approach a stop sign, or a parameter it refuses."""
-        from racf.experiments.scenarios.base import params_label
-        from racf.plugins import SCENARIOS
-
-        if scenario not in SCENARIOS or SCENARIOS[scenario].target != "sign":
-            raise ValueError(f"a battery runs in a scenario that approaches a stop sign; choose from "
-                             f"{[n for n in SCENARIOS if SCENARIOS[n].target == 'sign']}, got {scenario!r}")
-        values = SCENARIOS[scenario].values(params or {})
-
-        def situated(make: Callable[[str, int], list[TrialSpec]]) -> Callable[[str, int], list[TrialSpec]]:
-            def remade(defence: str, n: int) -> list[TrialSpec]:
-                return [replace(s, target=scenario, scenario_params=values) if s.target == "sign" else s
-                        for s in make(defence, n)]
-            return remade
-
-        loop = tuple(replace(row, make=situated(row.make)) for row in self.loop)
-        label = params_label(values)
-        return replace(self, name=f"{self.name}@{scenario}" + (f"[{label}]" if label else ""), loop=loop)
-
-
 _RACF_1 = Battery(
     name="racf-1",
     loop=(
-        LoopRow("paper_clean", "the paper's table: clean", 30, 4, _paper("clean"), attacked=False),
-        LoopRow("paper_attack", "the paper's table: the strong patch", 30, 4, _paper("attack")),
-        LoopRow("strong_random", "random strong patch draws", 60, 4, _sweep("strong", "patch_occlusion")),
+        LoopRow("paper_clean", "the paper's table: clean", 30, 4, paper_row("clean"), attacked=False),
+        LoopRow("paper_attack", "the paper's table: the strong patch", 30, 4, paper_row("attack")),
+        LoopRow("strong_random", "random strong patch draws", 60, 4, sweep_row("strong", "patch_occlusion")),
         LoopRow("patch_spoof", "random strong patch + LiDAR spoof", 60, 4,
-                _sweep("spoof", "patch_occlusion+lidar_spoof")),
+                sweep_row("spoof", "patch_occlusion+lidar_spoof")),
         LoopRow("stealth_ramp", "stealth_ramp, r 3 m/s over 3 s (white box)", 24, 4,
-                _sweep("adaptive", "stealth_ramp", mode="grid", params={"stealth_ramp": {"rate_mps": [3.0]}})),
+                sweep_row("adaptive", "stealth_ramp", mode="grid", params={"stealth_ramp": {"rate_mps": [3.0]}})),
         LoopRow("ramp_rates", "stealth_ramp at r 0.1, 0.3 and 1 m/s over 3 s (for the undetected error against r)",
-                8, 4, _sweep("adaptive", "stealth_ramp", mode="grid",
+                8, 4, sweep_row("adaptive", "stealth_ramp", mode="grid",
                              params={"stealth_ramp": {"rate_mps": [0.1, 0.3, 1.0]}})),
         LoopRow("frustum_spoof", "frustum_spoof, r 3 m/s over 3 s (white box)", 24, 4,
-                _sweep("adaptive", "frustum_spoof", mode="grid", params={"frustum_spoof": {"rate_mps": [3.0]}})),
+                sweep_row("adaptive", "frustum_spoof", mode="grid", params={"frustum_spoof": {"rate_mps": [3.0]}})),
         LoopRow("dropout_timed", "dropout_timed, blackout after 1 empty scan (black box)", 24, 4,
-                _sweep("adaptive", "dropout_timed", mode="grid",
+                sweep_row("adaptive", "dropout_timed", mode="grid",
                        params={"dropout_timed": {"scans": [1], "effect": ["blackout"]}})),
         LoopRow("delay", "delay, the depth frozen for 3 s (black box)", 24, 4,
-                _sweep("adaptive", "delay", mode="grid", params={"delay": {"sensor": ["depth"], "frames": [50]}})),
+                sweep_row("adaptive", "delay", mode="grid", params={"delay": {"sensor": ["depth"], "frames": [50]}})),
         LoopRow("sticker", "the printed sticker against the learned detector", 30, 4,
-                _sweep("sticker", "physical_patch", detector="learned")),
+                sweep_row("sticker", "physical_patch", detector="learned")),
     ),
     drives=(
-        LoopRow("drives_clean", "seeded drives, clean", 6, 1, _drives(False), attacked=False),
-        LoopRow("drives_attack", "seeded drives, the strong patch at the first target", 6, 1, _drives(True)),
+        LoopRow("drives_clean", "seeded drives, clean", 6, 1, drives_row(False), attacked=False),
+        LoopRow("drives_attack", "seeded drives, the strong patch at the first target", 6, 1, drives_row(True)),
     ),
 )
 
@@ -185,11 +85,11 @@ _RACF_2 = replace(
     loop=_RACF_1.loop + (
         LoopRow("frustum_scaled", "frustum_spoof that also draws the sign smaller, r 3 m/s over 3 s (white box: "
                                   "every witness moved)", 24, 4,
-                _sweep("adaptive", "frustum_spoof", mode="grid",
+                sweep_row("adaptive", "frustum_spoof", mode="grid",
                        params={"frustum_spoof": {"rate_mps": [3.0], "scale_box": [True]}})),
         LoopRow("sticker_default", "the sticker optimised over the approaches (0.6 of the plate), up from the "
                                    "start, against the default detector", 30, 4,
-                _sweep("sticker", "physical_patch", params={"physical_patch": {
+                sweep_row("sticker", "physical_patch", params={"physical_patch": {
                     "texture": ["learned-approach"], "size": [0.6], "from_start": [True]}})),
     ),
 )
@@ -197,12 +97,12 @@ _RACF_2 = replace(
 _RACF_3 = replace(_RACF_2, name="racf-3", loop=_RACF_2.loop + (
     LoopRow("sticker_placed", "a smaller sticker placed where it breaks the sign's outline (0.4 of the plate, at its "
                               "top edge), up from the start, against the default detector", 30, 4,
-            _sweep("sticker", "physical_patch", params={"physical_patch": {
+            sweep_row("sticker", "physical_patch", params={"physical_patch": {
                 "texture": ["learned-approach"], "size": [0.4], "position": ["top"], "from_start": [True]}})),))
 
 _RACF_4 = replace(_RACF_3, name="racf-4", loop=_RACF_3.loop + (
     LoopRow("traffic_strong", "random strong patch draws with cross-traffic timed to the conflict point", 60, 4,
-            _sweep("strong", "patch_occlusion", tables={"traffic": {"cars": [1], "gap_s": 0.0, "speed": 1.0}}), driving=True),))
+            sweep_row("strong", "patch_occlusion", tables={"traffic": {"cars": [1], "gap_s": 0.0, "speed": 1.0}}), driving=True),))
 
 _STICKER_06 = {"texture": "learned-approach", "size": 0.6, "from_start": True}
 _STICKER_04_TOP = {"texture": "learned-approach", "size": 0.4, "position": "top", "from_start": True}
@@ -227,7 +127,7 @@ def _stale(case: str, attack: str = "clean", params: dict | None = None, *, stab
             setting = setting_name(() if attack == "clean" else tuple(attack.split("+")), defence)
             extra = {"t_atk": t_atk} if t_atk is not None else {}
             specs.append(TrialSpec(setting, i % 4, speed, i, target="stale_map", scenario_params=values,
-                                   detector=_CAR, attack_params=params or {}, stable_steps=stable_steps, **extra))
+                                   detector=CAR_DETECTOR, attack_params=params or {}, stable_steps=stable_steps, **extra))
         return specs
     return make
 
@@ -279,16 +179,18 @@ _RACF_5 = Battery(
 LEAD_PROFILES = ("cruise", "slow_down", "hard_brake", "stop_and_go")
 
 
-def _following(attack: str, params: dict | None = None, supervisor: bool = False
+def _following(attack: str, params: dict | None = None, supervisor: bool = False, broadcast: bool = False
                ) -> Callable[[str, int], list[TrialSpec]]:
     """Following episodes (the ``lead_vehicle`` scenario on sign 1's approach at 1 m/s, the lead braking
     at 3 s), paired over defences: ``n // 4`` seeds at each of the lead's profiles, the attack from 2 s
-    for 6 s (the sweeps ``following*.toml``'s grid); ``supervisor``: the defence under the supervisor."""
+    for 6 s (the sweeps ``following*.toml``'s grid); ``supervisor``: the defence under the supervisor;
+    ``broadcast``: the lead broadcasts its own state (``racf.sim.radio``)."""
     def make(defence: str, n: int) -> list[TrialSpec]:
         space = {"attack": [attack], "estimator": [defence], "rho": [0.95], "t_atk": [6.0], "speed": [1.0], "sign": [1]}
+        situation = {"profile": list(LEAD_PROFILES), **({"broadcast": ["on"]} if broadcast else {})}
         spec = SweepSpec(f"following-{attack}", mode="grid", repeats=max(1, n // len(LEAD_PROFILES)), seed=0,
-                         space=space, params=params or {}, log_steps=True, detector=_CAR, target="lead_vehicle",
-                         scenario={"lead_vehicle": {"profile": list(LEAD_PROFILES)}}, supervisor=(supervisor,))
+                         space=space, params=params or {}, log_steps=True, detector=CAR_DETECTOR, target="lead_vehicle",
+                         scenario={"lead_vehicle": situation}, supervisor=(supervisor,))
         return spec.episodes()
     return make
 
@@ -325,10 +227,13 @@ _LINK_DELAY = {"link_delay": {"delay_ms": 60.0, "jitter_ms": 20.0}}
 _LINK_SPOOF = {"link_spoof": {"distance_m": 5.0}}
 
 
-def _offboard(setting: str, params: dict | None = None) -> Callable[[str, int], list[TrialSpec]]:
+def _offboard(setting: str, params: dict | None = None, fallback: str = "raw") -> Callable[[str, int], list[TrialSpec]]:
+    """Offboard episodes; ``fallback``: what drives where the service gives no answer (``raw``, the car's own
+    depth: racf-link's; ``odca``: its onboard ODCA, racf-link-2's)."""
     def make(defence: str, n: int) -> list[TrialSpec]:
-        return batch_specs(setting + ("" if defence == "raw" else f"+{defence}"), n, detector=_CAR,
-                           control_hz=PAPER_LOOP_HZ, estimator_endpoint=OFFBOARD, attack_params=params or {})
+        return batch_specs(setting + ("" if defence == "raw" else f"+{defence}"), n, detector=CAR_DETECTOR,
+                           control_hz=PAPER_LOOP_HZ, estimator_endpoint=OFFBOARD, attack_params=params or {},
+                           estimator_fallback=fallback)
     return make
 
 
@@ -336,23 +241,30 @@ def _offboard(setting: str, params: dict | None = None) -> Callable[[str, int], 
 #: The paper's loop clean and under the strong patch, then the patch with the link's answers
 #: delayed (60 +- 20 ms, past the 50 ms period), lost, or spoofed (the sign 5 m away) on a plain
 #: link, and spoofed on a CurveZMQ link. Each attack on the link keeps the protocol's window.
-_RACF_LINK = Battery(
-    name="racf-link",
-    loop=(
-        LoopRow("offboard_clean", "the paper's offboard loop (20 Hz, served), clean", 30, 4, _offboard("clean"),
-                attacked=False, link="plain"),
-        LoopRow("offboard_patch", "offboard, the strong patch", 30, 4, _offboard("attack"), link="plain"),
-        LoopRow("link_delay", "offboard, the patch, the answers delayed 60 +- 20 ms", 30, 4,
-                _offboard("attack+link_delay", _LINK_DELAY), link="plain"),
-        LoopRow("link_drop", "offboard, the patch, the answers lost", 30, 4, _offboard("attack+link_drop"), link="plain"),
-        LoopRow("link_spoof_plain", "offboard, the patch, a man in the middle answering 5 m, plain link", 30, 4,
-                _offboard("attack+link_spoof", _LINK_SPOOF), link="plain"),
-        LoopRow("link_spoof_curve", "offboard, the patch, a man in the middle answering 5 m, CurveZMQ link", 30, 4,
-                _offboard("attack+link_spoof", _LINK_SPOOF), link="curve"),
-    ),
-    drives=(),
-    offline_presets=(),
+#: racf-link's rows: (key, title, setting, the attacks' parameters, the link).
+_LINK_ROWS = (
+    ("offboard_clean", "the paper's offboard loop (20 Hz, served), clean", "clean", None, "plain"),
+    ("offboard_patch", "offboard, the strong patch", "attack", None, "plain"),
+    ("link_delay", "offboard, the patch, the answers delayed 60 +- 20 ms", "attack+link_delay", _LINK_DELAY, "plain"),
+    ("link_drop", "offboard, the patch, the answers lost", "attack+link_drop", None, "plain"),
+    ("link_spoof_plain", "offboard, the patch, a man in the middle answering 5 m, plain link", "attack+link_spoof",
+     _LINK_SPOOF, "plain"),
+    ("link_spoof_curve", "offboard, the patch, a man in the middle answering 5 m, CurveZMQ link", "attack+link_spoof",
+     _LINK_SPOOF, "curve"),
 )
+
+
+def _link_battery(name: str, fallback: str) -> Battery:
+    return Battery(name=name, loop=tuple(
+        LoopRow(key, title, 30, 4, _offboard(setting, params, fallback), attacked=setting != "clean", link=link)
+        for key, title, setting, params, link in _LINK_ROWS), drives=(), offline_presets=())
+
+
+_RACF_LINK = _link_battery("racf-link", fallback="raw")
+#: ``racf-link-2``: racf-link's rows with the car's onboard fallback (issue 70): where the service gives no
+#: answer the car may act on (lost, late, refused by the protocol or by CurveZMQ), its own ODCA, run every
+#: step from the ONNX export beside the served one, drives; racf-link's fell back to raw depth.
+_RACF_LINK_2 = _link_battery("racf-link-2", fallback="odca")
 
 #: The following rows of ``racf-7``: (key, title, attack, its parameters).
 _RACF_7_FOLLOWING = (
@@ -366,12 +278,31 @@ _RACF_7_FOLLOWING = (
     ("following_hide", "the lead hidden from camera and LiDAR", "lead_hide", None),
     ("following_phantom", "a phantom car 0.5 m ahead, camera only (needless hard brakes)", "lead_phantom", None),
 )
+_ADAPTIVE = _RACF_7_FOLLOWING[3][3]["lead_frustum"]
+#: The broadcast rows of ``racf-7`` (issue 70), under the supervisor, the lead broadcasting: (key, title,
+#: attack, its parameters). The lead's lie tells the adaptive spoof's story (away at 0.5 m/s to 2 m).
+_LIE = {"bias_m": [2.0], "rate_mps": [0.5], "faster_mps": [0.5]}
+_RACF_7_BROADCAST = (
+    ("broadcast_clean", "following clean, the lead broadcasting", "none", None),
+    ("broadcast_adaptive", "the adaptive spoof, the lead's broadcast honest", "lead_frustum", {"lead_frustum": _ADAPTIVE}),
+    ("broadcast_jammed", "the adaptive spoof, the broadcast jammed", "lead_frustum+radio_jam",
+     {"lead_frustum": _ADAPTIVE}),
+    ("broadcast_replayed", "the adaptive spoof, old messages replayed", "lead_frustum+radio_replay",
+     {"lead_frustum": _ADAPTIVE}),
+    ("broadcast_forged", "the adaptive spoof, messages forged without the fleet's key", "lead_frustum+radio_forge",
+     {"lead_frustum": _ADAPTIVE}),
+    ("broadcast_lie", "the lead lies over the radio (its own key), the sensors honest", "radio_lie", {"radio_lie": _LIE}),
+    ("broadcast_lie_spoofed", "the lead lies and the adaptive spoof tells the same story (outside the guarantee)",
+     "lead_frustum+radio_lie", {"lead_frustum": _ADAPTIVE, "radio_lie": _LIE}),
+)
 
 #: ``racf-7``: the supervisor (issue 69). Each of racf-6's following rows that its guarantee speaks to,
 #: and the adaptive spoof that lies outside it, with the defence alone and under the supervisor
 #: (``*_supervised``: the same seeds), and the stop sign's two sustained attacks (a temporary sign
 #: under the 0.6 sticker, the strong patch for the whole approach): the supervisor supervises the
-#: following stage only, so those rows rate the defence alone (``racf-5``/``racf-4``'s episodes).
+#: following stage only, so those rows rate the defence alone (``racf-5``/``racf-4``'s episodes). Issue 70
+#: added, before any card was made, the rows with the lead broadcasting (``broadcast_*_supervised``): clean,
+#: and the adaptive spoof with the broadcast honest, jammed, replayed, forged and lied by the lead.
 _RACF_7 = Battery(
     name="racf-7",
     loop=(
@@ -380,10 +311,13 @@ _RACF_7 = Battery(
         *(LoopRow(f"{key}_supervised", f"{title}, under the supervisor", 60, 4,
                   _following(attack, params, supervisor=True), attacked=attack != "none")
           for key, title, attack, params in _RACF_7_FOLLOWING),
+        *(LoopRow(f"{key}_supervised", f"{title}, under the supervisor", 60, 4,
+                  _following(attack, params, supervisor=True, broadcast=True), attacked=attack != "none")
+          for key, title, attack, params in _RACF_7_BROADCAST),
         LoopRow("temporary_sticker", "a temporary sign, the 0.6 sticker up from the start", 60, 4,
                 _stale("temporary", "physical_patch", {"physical_patch": _STICKER_06})),
         LoopRow("patch_whole_approach", "the strong patch for the whole approach (rho 1, 10 s)", 60, 4,
-                _sweep("patch_whole_approach", "patch_occlusion", mode="grid", t_atk=[10.0], rho=[1.0])),
+                sweep_row("patch_whole_approach", "patch_occlusion", mode="grid", t_atk=[10.0], rho=[1.0])),
     ),
     drives=(),
     offline_presets=(),
@@ -391,5 +325,5 @@ _RACF_7 = Battery(
 
 #: Every released battery, by name.
 BATTERIES = {"racf-1": _RACF_1, "racf-2": _RACF_2, "racf-3": _RACF_3, "racf-4": _RACF_4, "racf-5": _RACF_5,
-             "racf-link": _RACF_LINK, "racf-6": _RACF_6, "racf-7": _RACF_7}
+             "racf-link": _RACF_LINK, "racf-6": _RACF_6, "racf-7": _RACF_7, "racf-link-2": _RACF_LINK_2}
 DEFAULT_BATTERY = "racf-4"

@@ -77,7 +77,7 @@ _DEFAULTS = {"attack": ["patch_occlusion"], "estimator": ["raw"], "rho": [0.95],
              "sign": [0, 1, 2, 3]}
 _TOP_KEYS = {"name", "mode", "repeats", "n", "seed", "space", "params", "estimators", "log_steps", "sensor_profile",
              "sign_geometry", "detector", "target", "scenario", "metrics", "estimator_endpoint",
-             "estimator_timeout_ms", "estimator_keys", "estimator_car", "supervisor"}
+             "estimator_timeout_ms", "estimator_keys", "estimator_car", "supervisor", "estimator_fallback"}
 
 
 #: The example specs shipped with the project.
@@ -108,6 +108,7 @@ class SweepSpec:
     estimator_timeout_ms: float = DEFAULT_TIMEOUT_MS
     estimator_keys: str | None = None
     estimator_car: str | None = None
+    estimator_fallback: str = "odca"
     #: Each defence alone (False) and/or under the supervisor (True), paired on the same seeds.
     supervisor: tuple = (False,)
 
@@ -303,7 +304,7 @@ def _trial(cell: tuple, estimator: str, seed: int, sweep: SweepSpec, params: dic
                      attack_params=params or {}, detector=sweep.detector,
                      estimator_options=sweep.estimators.get(estimator, {}), metrics=tuple(sweep.metrics),
                      estimator_endpoint=sweep.estimator_endpoint, estimator_timeout_ms=sweep.estimator_timeout_ms,
-                     estimator_keys=sweep.estimator_keys, estimator_car=sweep.estimator_car,
+                     estimator_keys=sweep.estimator_keys, estimator_car=sweep.estimator_car, estimator_fallback=sweep.estimator_fallback,
                      target=target or sweep.target, scenario_params=situation or {}, supervisor=supervisor)
 
 
@@ -351,6 +352,7 @@ def parse_spec(text: str, source: str = "spec", default_name: str = "sweep") -> 
                          estimator_endpoint=raw.get("estimator_endpoint"),
                          estimator_timeout_ms=raw.get("estimator_timeout_ms", DEFAULT_TIMEOUT_MS),
                          estimator_keys=raw.get("estimator_keys"), estimator_car=raw.get("estimator_car"),
+                         estimator_fallback=raw.get("estimator_fallback", "odca"),
                          supervisor=raw.get("supervisor", (False,)))
         episodes = spec.episodes()
     except ValueError as err:

@@ -72,7 +72,7 @@ class PatchOcclusion(AttackWrapper):
     Example:
         >>> import gymnasium as gym, sim
         >>> from sim.attacks import PatchOcclusion
-        >>> env = PatchOcclusion(gym.make("RACF/QCar2-v3", camera_width=160, camera_height=120), rho=1.0, duration_s=1.0)
+        >>> env = PatchOcclusion(gym.make("RACF/QCar2-v4", camera_width=160, camera_height=120), rho=1.0, duration_s=1.0)
         >>> obs, info = env.reset(seed=0, options={"sign": 2})
         >>> info["attack_active"]
         False

@@ -34,7 +34,7 @@ RESET_OPTIONS = ("sign", "obstacle", "cruise_speed", "run_up_m", "route", "start
 
 @dataclass(frozen=True)
 class EnvConfig:
-    """Settings of ``RACF/QCar2-v3``.
+    """Settings of ``RACF/QCar2-v4``.
 
     Attributes:
         sensor_profile: one of ``SENSOR_PROFILES`` (``qcar2``, the default, or ``ideal``);

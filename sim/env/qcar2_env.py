@@ -1,4 +1,4 @@
-"""``RACF/QCar2-v3``: the QCar 2 on the indoor map, approaching a stop sign.
+"""``RACF/QCar2-v4``: the QCar 2 on the indoor map, approaching a stop sign.
 
 Plumbing only (step order, seeding, spaces, sensor scheduling, reward and termination); the
 world, the car and the sensors are built by their own modules. Step order: validate action ->

@@ -82,7 +82,7 @@ def test_a_sweep_runs_it(parked_car_installed, tmp_path):
 @pytest.mark.slow  # a sweep or a card end to end: CI's slow stage runs it
 def test_a_scorecard_runs_a_battery_in_it(parked_car_installed, tmp_path, monkeypatch, capsys):
     from racf.experiments.scorecard import battery as battery_module
-    from racf.experiments.scorecard.battery import Battery, LoopRow, _paper
+    from racf.experiments.scorecard.battery_types import Battery, LoopRow, paper_row as _paper
     from tests.conftest import write_bench_dataset
 
     tiny = Battery(name="tiny-van", loop=(LoopRow("paper_clean", "clean", 1, 1, _paper("clean"), attacked=False),),

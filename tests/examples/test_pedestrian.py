@@ -88,7 +88,7 @@ def test_a_falsification_space_takes_its_parameters(pedestrian_installed, tmp_pa
 def test_a_sweep_splits_its_rows_by_its_parameters_and_a_scorecard_names_them(pedestrian_installed, tmp_path,
                                                                               monkeypatch, capsys):
     from racf.experiments.scorecard import battery as battery_module
-    from racf.experiments.scorecard.battery import Battery, LoopRow, _paper
+    from racf.experiments.scorecard.battery_types import Battery, LoopRow, paper_row as _paper
     from tests.conftest import write_bench_dataset
 
     spec = tmp_path / "walk.toml"

@@ -43,7 +43,7 @@ def test_a_sweep_scores_summarises_and_reports_it(time_to_line_installed, tmp_pa
 @pytest.mark.slow  # a sweep or a card end to end: CI's slow stage runs it
 def test_a_scorecard_row_shows_it(time_to_line_installed, tmp_path, monkeypatch, capsys):
     from racf.experiments.scorecard import battery as battery_module
-    from racf.experiments.scorecard.battery import Battery, LoopRow, _paper
+    from racf.experiments.scorecard.battery_types import Battery, LoopRow, paper_row as _paper
     from racf.experiments.scorecard.rows import card_rows
     from tests.conftest import write_bench_dataset
 

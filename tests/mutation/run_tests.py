@@ -49,6 +49,13 @@ TESTS = {
     "experiments/car/supervisor/vouch.py": [f"{SUP}/test_vouch.py", f"{SUP}/test_supervisor_stage.py"],
     "experiments/car/supervisor/clear.py": [f"{SUP}/test_lane_witness.py"],
     "experiments/car/supervisor/stage.py": [f"{SUP}/test_supervisor_stage.py"],
+    # The car ahead's broadcast, its attacks and the onboard fallback (issue 70).
+    "sim/radio/message.py": ["tests/sim/radio/test_message.py", "tests/sim/radio/test_channel.py"],
+    "sim/radio/keys.py": ["tests/sim/radio/test_message.py"],
+    "sim/radio/channel.py": ["tests/sim/radio/test_channel.py"],
+    "experiments/car/broadcast.py": [f"{CAR}/test_broadcast.py", "tests/sim/attacks/test_radio_attacks.py",
+                                     f"{CAR}/test_following_stage.py"],
+    "sim/attacks/broadcast.py": ["tests/sim/attacks/test_radio_attacks.py"],
 }
 #: The link's modules (the default run of `make mutate`); the others run with MODULES="...".
 def mutated() -> list[str]:

@@ -1,4 +1,4 @@
-"""Gymnasium API of ``RACF/QCar2-v3``: checker, registration, vectorisation, seeding, bad input."""
+"""Gymnasium API of ``RACF/QCar2-v4``: checker, registration, vectorisation, seeding, bad input."""
 
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env
 
-from racf import sim  # noqa: F401  (registers RACF/QCar2-v3)
+from racf import sim  # noqa: F401  (registers RACF/QCar2-v4)
 import racf.sim.world.map_facts  # noqa: F401
 from racf.sim.env.config import EnvConfig
 
@@ -23,7 +23,7 @@ SMALL = {"camera_width": 160, "camera_height": 120}
 
 @pytest.fixture(scope="module")
 def env():
-    e = gym.make("RACF/QCar2-v3", **SMALL)
+    e = gym.make("RACF/QCar2-v4", **SMALL)
     yield e
     e.close()
 
@@ -45,7 +45,7 @@ def test_observation_matches_space_after_reset_and_step(env):
 def test_make_with_module_prefix_in_fresh_process():
     code = (
         "import gymnasium as gym\n"
-        "env = gym.make('racf.sim:RACF/QCar2-v3', camera_width=160, camera_height=120)\n"
+        "env = gym.make('racf.sim:RACF/QCar2-v4', camera_width=160, camera_height=120)\n"
         "obs, info = env.reset(seed=0)\n"
         "print('SHAPES', {k: tuple(v.shape) for k, v in sorted(obs.items())})\n"
         "env.close()\n"
@@ -65,7 +65,7 @@ def test_make_with_module_prefix_in_fresh_process():
 
 
 def test_make_vec_async_spawn():
-    venv = gym.make_vec("RACF/QCar2-v3", num_envs=2, vectorization_mode="async",
+    venv = gym.make_vec("RACF/QCar2-v4", num_envs=2, vectorization_mode="async",
                         vector_kwargs={"context": "spawn"}, **SMALL)
     try:
         obs, infos = venv.reset(seed=0)
@@ -84,7 +84,7 @@ def test_make_vec_async_spawn():
 # -- determinism ------------------------------------------------------------------------
 
 def _rollout(seed: int, n_steps: int = 10) -> list[dict[str, np.ndarray]]:
-    e = gym.make("RACF/QCar2-v3", **SMALL)
+    e = gym.make("RACF/QCar2-v4", **SMALL)
     try:
         obs, _ = e.reset(seed=seed, options={"sign": 3, "cruise_speed": 1.0, "run_up_m": 1.5})
         out = [obs]
@@ -136,7 +136,7 @@ def test_unknown_reset_option_is_named(env):
 ])
 def test_unknown_constructor_kwarg_is_named(kwargs, name):
     with pytest.raises(ValueError, match=name):
-        gym.make("RACF/QCar2-v3", **kwargs)
+        gym.make("RACF/QCar2-v4", **kwargs)
 
 
 @pytest.mark.parametrize("kwargs, name", [
@@ -156,7 +156,7 @@ def test_out_of_range_config_value_is_named(kwargs, name):
     with pytest.raises(ValueError, match=name):
         EnvConfig.from_kwargs(**kwargs)
     with pytest.raises(ValueError, match=name):
-        gym.make("RACF/QCar2-v3", **kwargs)
+        gym.make("RACF/QCar2-v4", **kwargs)
 
 
 def test_nan_action_rejected(env):
@@ -206,7 +206,7 @@ def test_numpy_scalar_reset_options_accepted(env):
 @pytest.mark.parametrize("kwargs, name", [({"camera_width": 160.5}, "width"), ({"lidar_n_beams": 90.5}, "n_beams")])
 def test_non_integer_sizes_raise_value_error(kwargs, name):
     with pytest.raises(ValueError, match=name):
-        e = gym.make("RACF/QCar2-v3", **kwargs)
+        e = gym.make("RACF/QCar2-v4", **kwargs)
         e.reset(seed=0)
 
 
@@ -220,7 +220,7 @@ def test_bad_render_mode_rejected():
 # -- render -----------------------------------------------------------------------------
 
 def test_render_rgb_array():
-    e = gym.make("RACF/QCar2-v3", render_mode="rgb_array", **SMALL)
+    e = gym.make("RACF/QCar2-v4", render_mode="rgb_array", **SMALL)
     try:
         e.reset(seed=0, options={"sign": 2, "cruise_speed": 1.0})
         e.step(np.array([1.0, 0.0], np.float32))
@@ -258,7 +258,7 @@ def test_driving_into_the_wall_terminates_with_collision(env):
 
 
 def test_time_limit_truncates():
-    e = gym.make("RACF/QCar2-v3", max_episode_s=0.2, **SMALL)
+    e = gym.make("RACF/QCar2-v4", max_episode_s=0.2, **SMALL)
     try:
         e.reset(seed=0, options={"sign": 3, "cruise_speed": 0.0, "run_up_m": 1.0})
         flags = [e.step(np.zeros(2, np.float32))[2:4] for _ in range(10)]

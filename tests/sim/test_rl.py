@@ -29,12 +29,12 @@ def test_sb3_check_env_has_nothing_to_say_and_ppo_learns_a_few_steps():
     env.close()
 
 
-def test_plain_env_depth_is_an_image_shaped_float_and_older_versions_point_to_v3():
+def test_plain_env_depth_is_an_image_shaped_float_and_older_versions_point_to_v4():
     env = gym.make(sim.ENV_ID, **SMALL)
     assert env.observation_space["depth"].shape == (120, 160, 1)
     env.close()
-    for old in ("RACF/QCar2-v0", "RACF/QCar2-v1", "RACF/QCar2-v2"):
-        with pytest.raises(gym.error.Error, match="RACF/QCar2-v3"):
+    for old in ("RACF/QCar2-v0", "RACF/QCar2-v1", "RACF/QCar2-v2", "RACF/QCar2-v3"):
+        with pytest.raises(gym.error.Error, match="RACF/QCar2-v4"):
             gym.make(old)
 
 

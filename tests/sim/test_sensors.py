@@ -9,7 +9,7 @@ import mujoco
 import numpy as np
 import pytest
 
-from racf import sim  # noqa: F401  (registers RACF/QCar2-v3)
+from racf import sim  # noqa: F401  (registers RACF/QCar2-v4)
 from racf.sim.sensors import CameraConfig, Lidar2D, LidarConfig, RGBDCameraRig
 from racf.sim.vehicle import QCar2
 from racf.sim.world import map_facts
@@ -165,7 +165,7 @@ def test_lidar_sees_stop_sign(world, index, noise_free):
 
 @pytest.fixture(scope="module")
 def cam_env():
-    e = gym.make("RACF/QCar2-v3", **SMALL)
+    e = gym.make("RACF/QCar2-v4", **SMALL)
     yield e
     e.close()
 
@@ -339,7 +339,7 @@ def test_intrinsics_scale_with_resolution():
 # -- Sensor rates -----------------------------------------------------------------------
 
 def test_sensor_rates_hold_readings():
-    e = gym.make("RACF/QCar2-v3", lidar_hz=10, camera_hz=25, **SMALL)
+    e = gym.make("RACF/QCar2-v4", lidar_hz=10, camera_hz=25, **SMALL)
     try:
         obs0, _ = e.reset(seed=0, options={"sign": 3, "cruise_speed": 1.0, "run_up_m": 2.0})
         seq = [obs0]

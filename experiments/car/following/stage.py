@@ -16,7 +16,12 @@ When the car ahead broadcasts (``racf.sim.radio``), its checked messages
 reach. The lead's speed is the broadcast's while it agrees with the car's confirmed track (the
 defence's kinematics then know it to ``BROADCAST_STD_MPS``), else the slower of the two; the distance
 the car follows is the defence's while the broadcast agrees with it, else the nearer of the two, and
-the log says which (``lead_bc_nearer``). A lead that broadcasts nothing is followed as before.
+the log says which (``lead_bc_nearer``). The broadcast earns the car's trust by agreeing with the
+defence's distance for ``TRUST_STEPS`` steps running, and loses it at the first disagreement
+(``lead_bc_trusted``): the supervisor lets a trusted broadcast alone stand for the lead where the sensors
+have none, and an untrusted one only where it is the more cautious. A defence of its own that asks for it (a ``hear_broadcast(witness)``
+method) is handed the checked witness each step, or None. A lead that broadcasts nothing is followed as
+before.
 """
 
 from __future__ import annotations
@@ -35,7 +40,7 @@ from racf.controllers.perception import PerceptionSample
 from racf.experiments.car.broadcast import AGREE_M, SPEED_AGREE_MPS, BroadcastReceiver, BroadcastWitness
 from racf.experiments.car.stage import CarStage, CarView, StageColumn, StageContext, StageLimit
 
-__all__ = ["FollowingStage", "LeadStep", "LANE_AHEAD_M", "NO_LEAD", "COLUMNS", "BROADCAST_STD_MPS"]
+__all__ = ["FollowingStage", "LeadStep", "LANE_AHEAD_M", "NO_LEAD", "COLUMNS", "BROADCAST_STD_MPS", "TRUST_STEPS"]
 
 #: How far along the lane ahead the car looks for a car, m.
 LANE_AHEAD_M = 4.0
@@ -47,6 +52,9 @@ LOST_AFTER_S = 0.5
 #: How well the car knows the lead's speed while its broadcast and the track agree, m/s (the
 #: broadcast's own error, a few centimetres a second, and the latency's).
 BROADCAST_STD_MPS = 0.05
+#: The broadcast is trusted once it has agreed with the defence's distance this many steps running (0.5 s
+#: at 50 Hz): a lead that lies while the sensors see it loses that trust at once, and earns it back only so.
+TRUST_STEPS = 25
 
 
 @dataclass(frozen=True)
@@ -60,6 +68,7 @@ class LeadStep:
     d_follow: float | None = None  # what the policy followed, where not d_fused (the broadcast's, nearer)
     broadcast: BroadcastWitness | None = None
     speed_known: bool = False  # the lead's speed is confirmed (by the track, or the broadcast agreeing with it)
+    broadcast_trusted: bool = False  # the broadcast agreed with the defence TRUST_STEPS steps running, since
 
     @property
     def followed_m(self) -> float:
@@ -92,6 +101,8 @@ COLUMNS = (
     StageColumn("lead_v_bc", "m/s", "following: the lead's speed as its broadcast tells it (NaN: none fresh)"),
     StageColumn("lead_bc_nearer", "bool", "following: the broadcast disagreed with the defence and was nearer: the "
                                           "car followed it"),
+    StageColumn("lead_bc_trusted", "bool", "following: the broadcast has agreed with the defence's distance long "
+                                           "enough, and not disagreed since"),
     StageColumn("lead_bc_accepted", "", "following: broadcast messages accepted so far this episode"),
     StageColumn("lead_bc_refused", "", "following: broadcast messages refused so far (forged, replayed or stale)"),
 )
@@ -107,6 +118,7 @@ def _columns(step: LeadStep, radio: BroadcastReceiver | None = None) -> dict:
             "lead_d_bc": math.nan if said is None else said.distance_m,
             "lead_v_bc": math.nan if said is None else said.speed_mps,
             "lead_bc_nearer": said is not None and not step.followed_m == step.d_fused,
+            "lead_bc_trusted": step.broadcast_trusted,
             "lead_bc_accepted": 0 if radio is None else radio.accepted,
             "lead_bc_refused": 0 if radio is None else sum(radio.refused.values())}
 
@@ -159,6 +171,7 @@ class FollowingStage(CarStage):
         self.speed = LeadSpeed(self.config)
         self.last = NO_LEAD
         self.radio = BroadcastReceiver()
+        self._agreed = 0
         self._unseen_s = 0.0
         self._lost = False
 
@@ -170,6 +183,7 @@ class FollowingStage(CarStage):
         self.estimator.reset()
         self.speed.reset()
         self.radio.reset()
+        self._agreed = 0
         self.last = NO_LEAD
         self._unseen_s = 0.0
         self._lost = False
@@ -206,12 +220,17 @@ class FollowingStage(CarStage):
             moving = getattr(self.estimator, "follow_moving_target", None)
             if callable(moving):  # its target moves: how well the car knows the lead's speed
                 moving(BROADCAST_STD_MPS if known and said is not None else self.speed.std_mps)
+            hear = getattr(self.estimator, "hear_broadcast", None)
+            if callable(hear):  # a defence that asks for the lead's broadcast gets the checked witness (or None)
+                hear(said)
             d = float(self.estimator.estimate(sample, closing, dt, yaw_rate_radps=view.yaw_rate_radps))
         self.speed.update(sample.d_meas, sample.lidar_m, sample.d_size, speed, dt, view.frame_new)
         lead, known = self._lead_speed(said)
         follow = d if said is None else _cautious(d, said.distance_m)
+        if said is not None and math.isfinite(d):  # a step on which the two can be compared
+            self._agreed = self._agreed + 1 if abs(d - said.distance_m) <= AGREE_M else 0
         decision = self.follower.step(follow - self.bumper_m, speed - lead)
-        self.last = LeadStep(sample, d, lead, decision, follow, said, known)
+        self.last = LeadStep(sample, d, lead, decision, follow, said, known, self._agreed >= TRUST_STEPS)
         return StageLimit(decision.speed_cap_mps, _columns(self.last, self.radio), self.last)
 
     def _lead_speed(self, said: BroadcastWitness | None) -> tuple[float, bool]:

@@ -14,10 +14,12 @@ episode's defence: ODCA, the EKF, a user's) as its advanced controller, and each
    than the target can be eases the car off at ``EASE_MPS2``, never more.
 
 With a broadcast from the car ahead (the following stage's checked witness), a vouched reading that
-disagrees with it is vouched at the nearer of the two, and where the sensors vouch for nothing the
-broadcast is vouched for alone, unless it puts the target farther than the carried target can have
-gone: a signed message may lie (an insider), so it can make the car more cautious than its sensors,
-never bolder than the carried bounds allow.
+disagrees with it is vouched at the nearer of the two. Where the sensors vouch for nothing, a broadcast
+the following stage trusts (it has agreed with the sensors' distance, and not disagreed since) is
+vouched for alone, unless it puts the target farther than the carried target can have gone; an
+untrusted one only where it is nearer than the carried worst case. A signed message may lie (an
+insider): one that lies while the sensors see the lead loses the car's trust at once, so it can make
+the car more cautious than its sensors, never bolder.
 
 It reads the view and the map only, like the rest of the car. Its columns are the following stage's
 and its own (``sup_*``).
@@ -142,9 +144,9 @@ class SupervisorStage(CarStage):
 
     def _vouch(self, verdict, lead) -> tuple[float, bool]:
         """The distance vouched for this step (NaN: none) and whether the broadcast set it: the sensors'
-        reading while the broadcast agrees (or there is none), the nearer of the two where they disagree,
-        the broadcast's alone where the sensors vouch for nothing and it is no farther than the carried
-        target can have gone."""
+        reading while the broadcast agrees (or there is none), the nearer of the two where they disagree;
+        where the sensors vouch for nothing, a trusted broadcast no farther than the carried target can have
+        gone, or an untrusted one nearer than its worst case."""
         said = lead.broadcast
         if said is None:
             return (verdict.reading_m if verdict.vouched else math.nan), False
@@ -154,7 +156,9 @@ class SupervisorStage(CarStage):
             if abs(reading - told) <= AGREE_M or reading < told:
                 return reading, False
             return told, True
-        if self.carried.held and told > self.carried.far_m + AGREE_M:
+        if not self.carried.held:
+            return told, True
+        if told > (self.carried.far_m + AGREE_M if lead.broadcast_trusted else self.carried.near_m):
             return math.nan, False
         return told, True
 

@@ -107,3 +107,84 @@ def test_a_car_closing_fast_on_a_standing_lead_brakes_in_an_emergency():
     assert out.lead_mps == pytest.approx(0.0, abs=0.1)
     assert out.decision.emergency and out.decision.speed_cap_mps == 0.0
     assert out.decision.ttc_s == pytest.approx(out.decision.gap_m / 1.0, rel=0.1)
+
+
+# -- the car ahead's broadcast -----------------------------------------------------------------------------
+from racf.experiments.car.broadcast import AGREE_M  # noqa: E402
+from racf.experiments.car.following.stage import TRUST_STEPS  # noqa: E402
+from racf.sim.radio import RADIO_SLOTS, SIGNED_BYTES, Broadcast, V2VMessage, fleet_key, sign  # noqa: E402
+from racf.sim.world.manager import QCAR2_BOX_M  # noqa: E402
+from racf.sim.world.road_graph import Path  # noqa: E402
+
+LANE = Path(np.column_stack([np.linspace(0, 10, 101), np.zeros(101)]), np.zeros(101), np.zeros(101))
+
+
+def _radio_view(k: int, rear_m: float, lead_mps: float, speed: float = 1.0) -> CarView:
+    """Step ``k``'s view with a message from the lead whose rear is ``rear_m`` ahead of the camera now."""
+    now = 0.02 * k
+    x = CONTEXT.camera_xy_m[0] + rear_m + QCAR2_BOX_M[0] / 2
+    raw = sign(V2VMessage(k + 1, now, Broadcast(1, x, 0.0, 0.0, lead_mps, 0.0, False)), fleet_key(1))
+    rows = np.zeros(RADIO_SLOTS * SIGNED_BYTES, np.uint8)
+    rows[:SIGNED_BYTES] = np.frombuffer(raw, np.uint8)
+    obs = {**OBS, "radio": rows, "radio_times": np.full(RADIO_SLOTS, now), "timestamps": np.full(5, now)}
+    return CarView(obs, np.zeros(3), LANE, 0.0, speed, 0.0, 0.0, 0.02, True, False, None)
+
+
+@pytest.mark.parametrize("defended,told,followed,nearer", [
+    (2.5, 1.0, 1.0, True),  # the sensors spoofed away: the broadcast is nearer, and followed
+    (1.0 + AGREE_M / 2, 1.0, 1.0 + AGREE_M / 2, False),  # they agree: the defence's own distance
+    (1.0, 2.5, 1.0, False),  # the broadcast farther (a liar): the sensors are nearer, and followed
+    (math.nan, 1.2, 1.2, True),  # the sensors have none: the broadcast alone
+])
+def test_the_car_follows_the_more_cautious_of_its_defence_and_the_broadcast_and_says_which(
+        defended, told, followed, nearer):
+    s = stage(PerceptionSample(None, defended, 0.9, defended, 0.0))
+    said = s.step(_radio_view(0, told, 0.5))
+    lead = said.detail
+    # (the chord from the camera, 3.2 cm left of the car's axis, to the lead's rear: within a millimetre)
+    assert lead.followed_m == pytest.approx(followed, abs=1e-3) and said.values["lead_bc_nearer"] is nearer
+    assert lead.decision.gap_m == pytest.approx(followed - 0.12, abs=1e-3)
+    assert math.isnan(lead.d_fused) if math.isnan(defended) else lead.d_fused == defended
+    assert said.values["lead_d_bc"] == pytest.approx(told, abs=1e-3) and said.values["lead_bc_accepted"] == 1
+
+
+def test_the_leads_speed_is_the_broadcasts_while_it_agrees_with_the_track_else_the_slower():
+    def run(told_mps):
+        s = stage(PerceptionSample(None, 1.0, 0.9, 1.0, 0.0), FollowingConfig())
+        told = []
+        for k in range(60):  # the range stays put at 1 m/s: the track confirms a lead at 1 m/s
+            told.append(s.step(_radio_view(k, 1.0, told_mps)).detail)
+        return s, told[-1]
+
+    s, out = run(1.1)
+    assert out.lead_mps == pytest.approx(1.1) and out.speed_known  # agreeing: the broadcast's, the finer
+    assert s.estimator.speeds[-1] == pytest.approx(1.0 - 1.1)  # the defence is given the closing speed it makes
+    s, out = run(2.0)  # a lead that says it is faster than the car's track sees: the slower, the track's
+    assert out.lead_mps == pytest.approx(1.0, abs=0.05) and out.lead_mps < 2.0
+    s, out = run(0.2)  # one that says it is slower: the slower, the broadcast's
+    assert out.lead_mps == pytest.approx(0.2)
+
+
+def test_a_defence_that_asks_for_the_broadcast_is_handed_the_checked_witness_each_step():
+    class Listens(Asked):
+        heard = []
+
+        def hear_broadcast(self, witness):
+            self.heard.append(witness)
+
+    s = FollowingStage(CONTEXT, Seen(PerceptionSample(None, 1.0, 0.9, 1.0, 0.0)), estimator=Listens(),
+                       config=FollowingConfig(confirm_frames=0))
+    s.step(_radio_view(0, 1.0, 0.5))
+    s.step(CarView(OBS, np.zeros(3), LANE, 0.0, 1.0, 0.0, 0.0, 0.02, True, False, None))  # no radio: None
+    assert s.estimator.heard[0].distance_m == pytest.approx(1.0, abs=1e-3) and s.estimator.heard[1] is None
+
+
+def test_the_broadcast_earns_trust_by_agreeing_and_loses_it_at_the_first_disagreement():
+    s = stage(PerceptionSample(None, 1.0, 0.9, 1.0, 0.0))
+    trusted = [s.step(_radio_view(k, 1.0, 0.5)).values["lead_bc_trusted"] for k in range(TRUST_STEPS)]
+    assert trusted == [False] * (TRUST_STEPS - 1) + [True]
+    s.perception.sample = PerceptionSample(None, math.nan, 0.0, math.nan, math.nan)  # the sensors blind: no verdict
+    assert s.step(_radio_view(TRUST_STEPS, 1.5, 0.5)).values["lead_bc_trusted"]
+    s.perception.sample = PerceptionSample(None, 1.0, 0.9, 1.0, 0.0)
+    assert not s.step(_radio_view(TRUST_STEPS + 1, 1.5, 0.5)).values["lead_bc_trusted"]  # the lead lied: lost
+    assert not s.step(_radio_view(TRUST_STEPS + 2, 1.0, 0.5)).values["lead_bc_trusted"]  # and not back at once

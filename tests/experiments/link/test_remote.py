@@ -173,8 +173,55 @@ def _outcome(result) -> dict:
 
 def _lying_episode(lie: str):
     with FakeService(lie, honest=30) as fake:
-        result, log = run_trial(replace(SPEC, estimator_endpoint=fake.endpoint, estimator_timeout_ms=5000.0))
+        result, log = run_trial(replace(SPEC, estimator_endpoint=fake.endpoint, estimator_timeout_ms=5000.0,
+                                        estimator_fallback="raw"))
         return result, log, fake.lies
+
+
+class _Onboard:
+    """An onboard defence that says its depth plus 1 m and counts what it was shown."""
+
+    name = "plus_one"
+
+    def __init__(self) -> None:
+        self.seen, self.resets = [], 0
+
+    def reset(self) -> None:
+        self.resets += 1
+
+    def estimate(self, sample, speed_mps, dt, yaw_rate_radps=0.0) -> float:
+        self.seen.append(sample.d_meas)
+        return sample.d_meas + 1.0
+
+    def diagnostics(self) -> dict:
+        return {"w": 0.25}
+
+
+def test_where_the_service_gives_no_answer_the_onboard_defence_drives_having_seen_every_step(caplog):
+    onboard = _Onboard()
+    with FakeService("nan", honest=30) as fake, caplog.at_level(logging.WARNING, logger="racf.link"):
+        car = RemoteEstimator(fake.endpoint, "raw", timeout_ms=5000.0, retry_s=0.1, onboard=onboard)
+        distances, diagnostics = _drive(car, 80)
+        car.close()
+    own = [_sample(k).d_meas for k in range(80)]
+    fell = np.array([d["service_fallback"] for d in diagnostics]) == 1.0
+    assert not fell[:30].any() and fell[30:].all()
+    # The service's answers where it gave them (the fake answers d_meas), the onboard defence's elsewhere.
+    assert np.allclose(np.array(distances)[~fell], np.array(own)[~fell])
+    assert np.allclose(np.array(distances)[fell], np.array(own)[fell] + 1.0)
+    assert [d["service_onboard"] for d in diagnostics] == [float(f) for f in fell]
+    assert all(d["w"] == 0.25 for d, f in zip(diagnostics, fell) if f)  # the onboard defence's own diagnostics
+    assert onboard.seen == own and onboard.resets == 1  # every step, served or not: its state is the episode's
+    assert "falls back to its onboard defence (plus_one)" in caplog.text
+
+
+def test_the_fallback_is_the_onboard_odca_by_default_and_checked():
+    assert replace(SPEC, estimator_endpoint="tcp://127.0.0.1:9").estimator_fallback == "odca"
+    assert "estimator_fallback" not in SPEC.to_dict()  # in the car's process there is no fallback
+    with pytest.raises(ValueError, match="estimator_fallback must be 'raw'"):
+        replace(SPEC, estimator_endpoint="tcp://127.0.0.1:9", estimator_fallback="telepathy")
+    ids = {replace(SPEC, estimator_endpoint="tcp://127.0.0.1:9", estimator_fallback=f).trial_id for f in ("raw", "odca")}
+    assert len(ids) == 2  # what drove where the service did not is part of what ran
 
 
 @pytest.fixture(scope="module")

@@ -121,8 +121,10 @@ def test_racf_7_pairs_each_following_row_alone_and_under_the_supervisor_on_the_s
     seven, six = BATTERIES["racf-7"], BATTERIES["racf-6"]
     following = ["following_clean", "following_patch", "following_frustum_depth", "following_adaptive",
                  "following_hide", "following_phantom"]
+    broadcast = ["broadcast_clean", "broadcast_adaptive", "broadcast_jammed", "broadcast_replayed", "broadcast_forged",
+                 "broadcast_lie", "broadcast_lie_spoofed"]
     assert [r.key for r in seven.rows()] == following + [f"{k}_supervised" for k in following] + \
-        ["temporary_sticker", "patch_whole_approach"]
+        [f"{k}_supervised" for k in broadcast] + ["temporary_sticker", "patch_whole_approach"]
     for key in following:
         alone = next(r for r in seven.loop if r.key == key).specs("odca", quick=True)
         supervised = next(r for r in seven.loop if r.key == f"{key}_supervised").specs("odca", quick=True)
@@ -132,5 +134,27 @@ def test_racf_7_pairs_each_following_row_alone_and_under_the_supervisor_on_the_s
         if key in {r.key for r in six.loop}:  # racf-6's episodes, alone, are racf-7's: ids included
             same = next(r for r in six.loop if r.key == key).specs("odca", quick=True)
             assert [s.trial_id for s in same] == [s.trial_id for s in alone]
+    # The broadcast rows: the supervised rows' episodes with the lead broadcasting (the same seeds).
+    def row(key):
+        return next(r for r in seven.loop if r.key == key).specs("odca", quick=True)
+
+    for key, silent in (("broadcast_clean", "following_clean"), ("broadcast_adaptive", "following_adaptive")):
+        told = row(f"{key}_supervised")
+        assert all(s.scenario_params["broadcast"] == "on" and s.supervisor for s in told)
+        assert [dataclasses.replace(s, scenario_params={**s.scenario_params, "broadcast": "off"}) for s in told] == \
+            row(f"{silent}_supervised")
+    lie = row("broadcast_lie_spoofed_supervised")[0]
+    assert lie.setting == "clean+lead_frustum+radio_lie+odca"
+    assert lie.attack_params["radio_lie"] == {"bias_m": 2.0, "rate_mps": 0.5, "faster_mps": 0.5}
     adaptive = next(r for r in seven.loop if r.key == "following_adaptive").specs("odca")[0]
     assert adaptive.attack_params["lead_frustum"] == {"depth": True, "scale_box": True, "rate_mps": 0.5, "bias_m": 2.0}
+
+
+def test_racf_link_2_is_racf_link_with_the_onboard_fallback():
+    old, new = BATTERIES["racf-link"], BATTERIES["racf-link-2"]
+    assert [(r.key, r.title, r.n, r.link, r.attacked) for r in old.loop] == \
+        [(r.key, r.title, r.n, r.link, r.attacked) for r in new.loop]
+    for a, b in zip(old.loop, new.loop):
+        before, after = a.specs("odca", quick=True), b.specs("odca", quick=True)
+        assert all(s.estimator_fallback == "raw" for s in before) and all(s.estimator_fallback == "odca" for s in after)
+        assert [dataclasses.replace(s, estimator_fallback="raw") for s in after] == before

@@ -9,7 +9,7 @@ import pytest
 from racf.experiments.cli import main
 from racf.experiments.data.dataset import load_dataset
 from racf.experiments.scorecard import battery as battery_module
-from racf.experiments.scorecard.battery import Battery, LoopRow, _paper, _sweep
+from racf.experiments.scorecard.battery_types import Battery, LoopRow, paper_row as _paper, sweep_row as _sweep
 from racf.experiments.scorecard.card import run_card
 from racf.experiments.scorecard.report import compare_markdown, strict_json, write_scorecard
 from tests.conftest import write_bench_dataset

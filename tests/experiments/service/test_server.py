@@ -40,15 +40,21 @@ def test_an_episode_through_the_service_is_the_episode_in_process(service):
             {k: v for k, v in expected.to_dict().items() if k != "trial_id"}
 
 
-def test_a_service_that_dies_mid_episode_is_survived_and_logged(service):
+@pytest.mark.parametrize("fallback", ["raw", "odca"])
+def test_a_service_that_dies_mid_episode_is_survived_and_logged(service, fallback):
     endpoint = service("odca", max_requests=60)  # hello, calibrate, reset, then 57 answers
-    result, log = run_trial(replace(SPEC, estimator_endpoint=endpoint, estimator_timeout_ms=20.0))
+    result, log = run_trial(replace(SPEC, estimator_endpoint=endpoint, estimator_timeout_ms=20.0,
+                                    estimator_fallback=fallback))
     fell_back = log["service_fallback"].to_numpy() == 1.0
     first = int(np.argmax(fell_back))
     assert fell_back.any() and fell_back[first:].all() and not fell_back[:first].any()
-    # Where it fell back the car drove on its own depth distance.
-    assert np.array_equal(log["d_fused"][fell_back].to_numpy(), log["d_meas"][fell_back].to_numpy(), equal_nan=True)
     assert result.service_fallback and result.service_fallback_steps == int(fell_back.sum())
+    own = np.array_equal(log["d_fused"][fell_back].to_numpy(), log["d_meas"][fell_back].to_numpy(), equal_nan=True)
+    onboard = log["service_onboard"].to_numpy() == 1.0
+    if fallback == "raw":  # where it fell back the car drove on its own depth distance
+        assert own and not onboard.any() and result.service_onboard_steps == 0
+    else:  # on its onboard ODCA, which holds the distance where the depth has none
+        assert not own and (onboard == fell_back).all() and result.service_onboard_steps == int(fell_back.sum())
 
 
 def test_each_car_gets_its_own_defence(service):

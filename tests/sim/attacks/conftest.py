@@ -1,6 +1,6 @@
 """Shared by the attack wrapper tests: a stub of the racf env, a driver, and the real env where geometry matters.
 
-The stub stands in for ``RACF/QCar2-v3`` wherever the wrapper, not the simulator, is under
+The stub stands in for ``RACF/QCar2-v4`` wherever the wrapper, not the simulator, is under
 test: it has the env's Dict observation space, returns readings that are plain functions
 of the distance to the sign and the step, and puts in ``info`` the ground truth the
 attacks read. It isolates the wrapper and needs no MuJoCo.
@@ -69,7 +69,7 @@ class StubData:
 
 
 class StubEnv(gym.Env):
-    """A stand-in for ``RACF/QCar2-v3`` with its observation space (at 64 x 48 px).
+    """A stand-in for ``RACF/QCar2-v4`` with its observation space (at 64 x 48 px).
 
     The car moves at the commanded speed (``action[0]``, m/s, clipped to [0, 2]; no dynamics)
     towards a stop line ``run_up_m`` ahead (reset option, default 1.5 m); the sign stands

@@ -189,3 +189,62 @@ def test_the_safe_controller_follows_the_headway_policy_where_it_is_the_lower():
     for _ in range(200):
         said = _say(stage, advanced, 0.0, NAN, NAN, NAN, math.inf)
     assert said.speed_cap_mps >= 0.0 and not said.values["sup_stop"]
+
+
+# -- the car ahead's broadcast --------------------------------------------------------------------------
+from racf.experiments.car.broadcast import BroadcastWitness  # noqa: E402
+
+
+def _told(stage, advanced, depth, lidar, told_m, fused=None, speed=0.3, cap=1.0, follow=None, trusted=False):
+    """A step on which the following stage passes on a broadcast witness at ``told_m`` (and followed
+    ``follow``: by default the more cautious, as the following stage does)."""
+    fused = depth if fused is None else fused
+    sample = PerceptionSample(None, depth, 0.0, lidar, NAN)
+    witness = BroadcastWitness(told_m, 0.0, 0.05)
+    if follow is None:
+        follow = fused if not math.isfinite(fused) or abs(fused - told_m) <= 0.2 else min(fused, told_m)
+    step = LeadStep(sample, fused, 0.0, FollowDecision(cap, follow - BUMPER, NAN, False), follow, witness, True,
+                    trusted)
+    stage.advanced.step = lambda view: StageLimit(cap, {"lead_cap": cap}, step)
+    return stage.step(_view(speed))
+
+
+def test_a_reading_farther_than_the_broadcast_is_vouched_at_the_broadcast_and_said():
+    stage, advanced = _stage()
+    said = _told(stage, advanced, 2.0, 2.0, 1.0)  # the sensors spoofed away together; the lead says 1 m
+    assert said.values["sup_broadcast"] and stage.carried.near_m == pytest.approx(1.0 - stage.envelope.delta_m)
+    assert said.values["sup_defence"]  # the following stage followed the broadcast too: its cap drives
+    stage, advanced = _stage()
+    said = _told(stage, advanced, 2.0, 2.0, 1.0, follow=2.0)  # a following stage that ignored it
+    assert said.values["sup_broadcast"] and not said.values["sup_defence"]  # not what was vouched: the safe one
+
+
+def test_where_they_agree_or_the_sensors_are_nearer_the_sensors_reading_is_vouched():
+    for depth, told in ((1.0, 1.1), (1.0, 2.0)):
+        stage, advanced = _stage()
+        said = _told(stage, advanced, depth, depth, told)
+        assert not said.values["sup_broadcast"] and stage.carried.near_m == pytest.approx(depth - 0.1)
+        assert said.values["sup_defence"]
+
+
+def test_a_trusted_broadcast_alone_is_vouched_unless_it_puts_the_target_beyond_where_it_can_have_gone():
+    stage, advanced = _stage()
+    said = _told(stage, advanced, NAN, NAN, 1.2, trusted=True)  # the sensors see nothing (the lead hidden)
+    assert said.values["sup_broadcast"] and stage.carried.near_m == pytest.approx(1.1)
+    told = stage.carried.far_m  # as far as the bounds allow: vouched
+    said = _told(stage, advanced, NAN, NAN, told, trusted=True)
+    assert said.values["sup_broadcast"] and stage.carried.near_m == pytest.approx(told - 0.1)
+    far, near = stage.carried.far_m, stage.carried.near_m
+    said = _told(stage, advanced, NAN, NAN, far + 1.0, trusted=True)  # a lie past the carried bounds: nothing
+    assert not said.values["sup_broadcast"] and stage.carried.far_m <= far + 0.1
+    assert stage.carried.near_m < near  # carried on at the worst case
+
+
+def test_an_untrusted_broadcast_alone_only_ever_makes_the_car_more_cautious():
+    stage, advanced = _stage()
+    _told(stage, advanced, 1.2, 1.2, 1.2)  # vouched by the sensors: near 1.1, far 1.3
+    near = stage.carried.near_m
+    said = _told(stage, advanced, NAN, NAN, near + 0.15)  # farther than the worst case, within the bounds
+    assert not said.values["sup_broadcast"] and stage.carried.near_m < near  # ignored: carried at the worst
+    said = _told(stage, advanced, NAN, NAN, 0.8)  # nearer than the worst case: taken
+    assert said.values["sup_broadcast"] and stage.carried.near_m == pytest.approx(0.7)

@@ -1,0 +1,82 @@
+"""The car's radio receiver trusts nothing it is sent: forged, replayed and stale messages are refused
+and counted; a fresh trusted one tells where the car ahead is on the lane, moved on to now."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from nacl.signing import SigningKey
+
+from racf.experiments.car.broadcast import MAX_AGE_S, BroadcastReceiver
+from racf.sim.radio import RADIO_SLOTS, SIGNED_BYTES, Broadcast, V2VMessage, fleet_key, sign
+from racf.sim.world.manager import QCAR2_BOX_M
+from racf.sim.world.road_graph import Path
+
+#: A straight lane along x; the car at the origin facing along it, its camera 0.1 m ahead of its origin.
+LANE = Path(np.column_stack([np.linspace(0, 10, 101), np.zeros(101)]), np.zeros(101), np.zeros(101))
+POSE = np.array([0.0, 0.0, 0.0])
+CAMERA = (0.1, 0.0)
+REAR = QCAR2_BOX_M[0] / 2
+
+
+def _obs(*raws: bytes, at: float = 0.0) -> dict:
+    rows, times = np.zeros(RADIO_SLOTS * SIGNED_BYTES, np.uint8), np.zeros(RADIO_SLOTS)
+    for i, raw in enumerate(raws):
+        rows[i * SIGNED_BYTES:(i + 1) * SIGNED_BYTES] = np.frombuffer(raw, np.uint8)
+        times[i] = at
+    return {"radio": rows, "radio_times": times}
+
+
+def _lead(seq: int, t: float, x: float = 2.0, y: float = 0.0, speed: float = 0.5, accel: float = 0.0,
+          key: SigningKey | None = None) -> bytes:
+    return sign(V2VMessage(seq, t, Broadcast(1, x, y, 0.0, speed, accel, False)), key or fleet_key(1))
+
+
+def test_a_fresh_trusted_message_is_accepted_and_tells_the_leads_rear_moved_on_to_now():
+    car = BroadcastReceiver()
+    assert len(car.hear(_obs(_lead(1, 1.0)), now_s=1.02)) == 1 and car.accepted == 1
+    said = car.witness(1.1, POSE, CAMERA, LANE, progress_m=0.0)
+    # 0.1 s old at 0.5 m/s: 5 cm on; the rear is half a car behind its origin; the camera 0.1 m ahead of the car's.
+    assert said.distance_m == pytest.approx(2.0 + 0.05 - REAR - 0.1) and said.speed_mps == 0.5
+    assert said.age_s == pytest.approx(0.1)
+    braking = BroadcastReceiver()
+    braking.hear(_obs(_lead(1, 1.0, speed=0.5, accel=-5.0)), now_s=1.0)
+    # It brakes to a stop in 0.1 s: it goes 2.5 cm, not the 5 cm a constant speed would.
+    assert braking.witness(1.2, POSE, CAMERA, LANE, 0.0).distance_m == pytest.approx(2.0 + 0.025 - REAR - 0.1)
+
+
+def test_forged_replayed_and_stale_messages_are_refused_and_counted_each_by_why():
+    car = BroadcastReceiver()
+    car.hear(_obs(_lead(5, 1.0)), now_s=1.0)
+    heard = car.hear(_obs(_lead(6, 1.1, key=SigningKey(bytes(32))),  # forged: a key outside the fleet
+                          _lead(5, 1.0),  # replayed: the same message again
+                          _lead(3, 0.8),  # replayed: an older one
+                          _lead(7, 1.1 - MAX_AGE_S - 0.01),  # stale: held back past the oldest allowed
+                          _lead(8, 1.2)),  # from the future
+                     now_s=1.1)
+    assert heard == [] and car.refused == {"forged": 1, "replayed": 2, "stale": 2} and car.accepted == 1
+    assert car.last[1].seq == 5  # nothing refused moved the sender's number on
+    assert len(car.hear(_obs(_lead(9, 1.1)), now_s=1.1)) == 1
+
+
+def test_no_witness_from_an_old_message_or_a_car_off_the_lane_or_behind():
+    car = BroadcastReceiver()
+    car.hear(_obs(_lead(1, 1.0)), now_s=1.0)
+    assert car.witness(1.0 + MAX_AGE_S + 0.01, POSE, CAMERA, LANE, 0.0) is None
+    for x, y in ((2.0, 0.5), (-1.0, 0.0)):  # beside the lane; behind the car
+        other = BroadcastReceiver()
+        other.hear(_obs(_lead(1, 1.0, x=x, y=y)), now_s=1.0)
+        assert other.witness(1.0, POSE, CAMERA, LANE, 0.0) is None
+    assert BroadcastReceiver().hear({}, 0.0) == []  # an env without a radio: nothing heard
+
+
+def test_in_a_bend_the_witness_is_the_chord_to_the_leads_rear():
+    bend = np.linspace(0, math.pi / 2, 200)
+    arc = Path(np.column_stack([np.sin(bend), 1 - np.cos(bend)]), bend, np.ones(200))
+    car = BroadcastReceiver()
+    # The lead a quarter-turn on, facing up the y axis; its rear half a car below its origin.
+    car.hear(_obs(sign(V2VMessage(1, 0.0, Broadcast(1, 1.0, 1.0, math.pi / 2, 0.0, 0.0, False)), fleet_key(1))), 0.0)
+    said = car.witness(0.0, POSE, (0.0, 0.0), arc, progress_m=0.0)
+    assert said.distance_m == pytest.approx(math.hypot(1.0, 1.0 - REAR))

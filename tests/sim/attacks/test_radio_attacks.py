@@ -1,0 +1,110 @@
+"""The attacks on the car ahead's broadcast, each against the car's receiver: forged and replayed messages
+are refused, delayed ones go stale, jammed ones never come, and an insider's lie is accepted as what it is:
+the lead's own signed word."""
+
+from __future__ import annotations
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium import spaces
+
+from racf.experiments.car.broadcast import BroadcastReceiver
+from racf.sim.attacks import ATTACKS
+from racf.sim.radio import RADIO_SLOTS, SIGNED_BYTES, Broadcast, V2VMessage, fleet_key, sign
+from racf.sim.world.manager import WorldTarget
+
+DT = 0.02
+LEAD = WorldTarget("lead", "vehicle", "lead_0", ("lead_x", "lead_y", "lead_yaw"), (0.425, 0.192, 0.2))
+
+
+class _Lead:
+    def targets(self):
+        return (LEAD,)
+
+
+class RadioEnv(gym.Env):
+    """The env's observation, empty but for the radio: the lead 2 m ahead at 0.5 m/s says so at 10 Hz,
+    each message arriving 20 ms after it is sent."""
+
+    world = (_Lead(),)
+
+    def __init__(self) -> None:
+        self.observation_space = spaces.Dict({
+            "rgb": spaces.Box(0, 255, (4, 4, 3), np.uint8), "depth": spaces.Box(0, np.inf, (4, 4, 1), np.float32),
+            "lidar": spaces.Box(0, np.inf, (360,), np.float32),
+            "radio": spaces.Box(0, 255, (RADIO_SLOTS * SIGNED_BYTES,), np.uint8),
+            "radio_times": spaces.Box(0, np.inf, (RADIO_SLOTS,), np.float64)})
+        self.action_space = spaces.Box(-1, 1, (2,), np.float32)
+
+    def _obs(self):
+        rows, times = np.zeros(RADIO_SLOTS * SIGNED_BYTES, np.uint8), np.zeros(RADIO_SLOTS)
+        if self.k % 5 == 1:  # sent at the step before, 20 ms ago
+            sent = (self.k - 1) * DT
+            lead = Broadcast(1, 2.0 + 0.5 * sent, 0.0, 0.0, 0.5, 0.0, False)
+            rows[:SIGNED_BYTES] = np.frombuffer(sign(V2VMessage(self.k // 5 + 1, sent, lead), fleet_key(1)), np.uint8)
+            times[0] = self.k * DT
+        return {"rgb": np.zeros((4, 4, 3), np.uint8), "depth": np.ones((4, 4, 1), np.float32),
+                "lidar": np.ones(360, np.float32), "radio": rows, "radio_times": times}
+
+    def _info(self):
+        return {"time": self.k * DT, "lead_x": 2.0, "lead_y": 0.0, "lead_yaw": 0.0, "sign_in_view": False,
+                "sign_mask": np.zeros((4, 4), bool),
+                "d_true": np.nan, "dist_to_stop_line": 5.0}
+
+    def reset(self, *, seed=None, options=None):
+        super().reset(seed=seed)
+        self.k = 0
+        return self._obs(), self._info()
+
+    def step(self, action):
+        self.k += 1
+        return self._obs(), 0.0, False, False, self._info()
+
+
+def _drive(name: str, params: dict, seconds: float = 4.0):
+    """The receiver over ``seconds`` of the attacked radio (the attack from 1 s to 3 s)."""
+    env = ATTACKS[name](RadioEnv(), start_s=1.0, duration_s=2.0, **params)
+    obs, info = env.reset(seed=0)
+    car, injected, speeds = BroadcastReceiver(), 0, []
+    for _ in range(int(round(seconds / DT))):
+        obs, _, _, _, info = env.step(np.zeros(2))
+        injected += info.get("radio_injected", 0)
+        speeds += [(info["time"], m.state.speed_mps, m.state.x_m) for m in car.hear(obs, info["time"])]
+    return car, injected, speeds
+
+
+def test_the_honest_radio_is_accepted_whole():
+    car, injected, _ = _drive("radio_jam", {}, seconds=0.9)  # before the window opens
+    assert injected == 0 and car.accepted == 9 and sum(car.refused.values()) == 0
+
+
+@pytest.mark.parametrize("name,params,why", [("radio_forge", {}, "forged"), ("radio_replay", {"age_s": 0.5}, "replayed")])
+def test_every_forged_or_replayed_message_is_refused_and_the_leads_own_still_heard(name, params, why):
+    car, injected, heard = _drive(name, params)
+    assert injected >= 15 and car.refused[why] == injected and car.refused[why] == sum(car.refused.values())
+    assert car.accepted == 40  # every genuine message, attack or not
+    assert all(speed == 0.5 for _, speed, _ in heard)
+
+
+def test_a_jammed_radio_is_silent_in_its_window_and_a_delayed_one_stale():
+    car, _, heard = _drive("radio_jam", {})
+    assert car.accepted == 20 and not any(1.0 <= t < 3.0 for t, _, _ in heard)
+    car, injected, heard = _drive("radio_delay", {"delay_s": 0.5})
+    assert injected == 0 and car.refused["stale"] >= 15 and not any(1.05 <= t < 3.0 for t, _, _ in heard)
+
+
+def test_an_insiders_lie_is_accepted_it_is_the_leads_own_signed_word():
+    car, injected, heard = _drive("radio_lie", {"faster_mps": 0.5, "bias_m": 1.0, "rate_mps": 0.5})
+    assert injected == 0 and car.accepted == 40 and sum(car.refused.values()) == 0
+    lied = [(t, v, x) for t, v, x in heard if 1.0 <= t < 3.0]
+    assert lied and all(v == 1.0 for _, v, _ in lied)
+    # Farther by the move grown at 0.5 m/s since 1 s, up to 1 m.
+    assert all(x == pytest.approx(2.0 + 0.5 * (t - DT) + min(0.5 * (t - 1.0), 1.0), abs=0.02) for t, _, x in lied)
+
+
+@pytest.mark.parametrize("name,params", [("radio_delay", {"delay_s": 0.0}), ("radio_replay", {"age_s": 31.0}),
+                                         ("radio_forge", {"ahead_m": 11.0}), ("radio_lie", {"rate_mps": -1.0})])
+def test_a_bad_parameter_names_itself(name, params):
+    with pytest.raises(ValueError, match=next(iter(params))):
+        ATTACKS[name].check_params(params)

@@ -1,0 +1,58 @@
+"""A broadcast's bytes: what a sender signs is what the car reads, and any other bytes are refused."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from nacl.signing import SigningKey
+
+from racf.sim.radio import FLEET, SIGNED_BYTES, Broadcast, V2VMessage, fleet_key, open_signed, sign, trust_store
+from racf.sim.radio.message import MESSAGE_BYTES, parse
+
+_finite = st.floats(-1e3, 1e3, allow_nan=False, width=32)
+_messages = st.builds(lambda sender, seq, t, x, y, yaw, v, a, brake: V2VMessage(seq, t, Broadcast(sender, x, y, yaw, v, a, brake)),
+                      st.sampled_from(FLEET), st.integers(0, 2**32 - 1), st.floats(0, 1e4, allow_nan=False),
+                      _finite, _finite, _finite, _finite, _finite, st.booleans())
+
+
+@settings(max_examples=60, deadline=None)
+@given(_messages)
+def test_a_signed_message_reads_back_as_sent(message):
+    raw = sign(message, fleet_key(message.state.sender))
+    assert len(raw) == SIGNED_BYTES == MESSAGE_BYTES + 64
+    opened = open_signed(raw, trust_store())
+    assert opened.refused == "" and opened.message == message
+
+
+@settings(max_examples=60, deadline=None)
+@given(_messages, st.integers(0, SIGNED_BYTES - 1), st.integers(1, 255))
+def test_any_byte_changed_on_the_air_is_refused(message, where, flip):
+    raw = bytearray(sign(message, fleet_key(message.state.sender)))
+    raw[where] ^= flip
+    assert open_signed(bytes(raw), trust_store()).message is None
+
+
+def test_a_key_outside_the_fleet_or_a_sender_the_car_does_not_trust_is_refused_and_says_which():
+    message = V2VMessage(1, 0.5, Broadcast(1, 1.0, 2.0, 0.0, 0.6, 0.0, False))
+    assert open_signed(sign(message, SigningKey(bytes(range(32)))), trust_store()).refused == "bad signature"
+    assert open_signed(sign(message, fleet_key(1)), trust_store((2, 3))).refused == "unknown sender"
+    assert open_signed(b"\x01" * 10, trust_store()).refused == "malformed"
+    assert open_signed(sign(message, fleet_key(2)), trust_store()).refused == "bad signature"  # another's key
+
+
+def test_a_message_of_another_version_or_not_finite_does_not_parse():
+    good = V2VMessage(1, 0.5, Broadcast(1, 1.0, 2.0, 0.0, 0.6, 0.0, True)).to_bytes()
+    assert parse(good).state.braking is True
+    assert parse(b"\x02" + good[1:]) is None
+    assert parse(V2VMessage(1, math.nan, Broadcast(1, 1.0, 2.0, 0.0, 0.6, 0.0, False)).to_bytes()) is None
+    assert parse(good[:-1]) is None
+
+
+def test_the_fleets_keys_are_the_same_everywhere_and_each_its_own():
+    assert fleet_key(1).encode() == fleet_key(1).encode() != fleet_key(2).encode()
+    assert len({fleet_key(s).verify_key.encode() for s in FLEET}) == len(FLEET)
+    with pytest.raises(ValueError, match="not in the fleet"):
+        fleet_key(99)
