@@ -61,9 +61,12 @@ def _table(rows: list[dict], by_broadcast: bool) -> list[str]:
              "|---|---|" + ("---|" if by_broadcast else "") + "---|---|---|---|---|"]
     for r in rows:
         cf, nb, refused = r["collision_free"], r.get("needless_hard_brake"), r.get("foreign_refused")
+        label = LABELS[r["attack"]]
+        if r.get("scenario_broadcast") == "off":  # the lead silent: no broadcast to be honest or not
+            label = label.replace("the broadcast honest", "the lead silent")
         said = (f"{rate(refused['rate'], refused['ci'])} ({r['bc_refused']} of {r['bc_injected']} messages)"
                 if refused else "—")
-        lines.append(f"| {LABELS[r['attack']]} | {r['estimator']} |" + (f" {r['scenario_broadcast']} |" if by_broadcast
+        lines.append(f"| {label} | {r['estimator']} |" + (f" {r['scenario_broadcast']} |" if by_broadcast
                                                                            else "")
                      + f" {r['n']} | {rate(cf['rate'], cf['ci'])} | {rate(nb['rate'], nb['ci']) if nb else '—'} | "
                        f"{_median(r, 'mean_time_gap_s')} | {said} |")
@@ -104,10 +107,12 @@ def checks(broadcast: dict | None, off: dict | None, silent: dict | None = None)
     if off is not None:
         pairs = {(r["estimator"], r.get("scenario_broadcast")): r for r in off["rows"].values() if r["attack"] == "clean"}
         on, silent = pairs.get((_SUPERVISED, "on")), pairs.get((_SUPERVISED, "off"))
-        if on is not None and "needless_hard_brake" in on:
-            nb = on["needless_hard_brake"]
-            lines.append(f"- Clean following with the broadcast: needless hard brakes in {rate(nb['rate'], nb['ci'])} of "
-                         f"episodes (asked <= 0.05): {'met' if nb['rate'] <= 0.05 else '**not met**'}.")
+        for who, row in (("the supervisor over ODCA", on), ("ODCA alone", pairs.get(("odca", "on")))):
+            if row is not None and "needless_hard_brake" in row:
+                nb = row["needless_hard_brake"]
+                lines.append(f"- Clean following with the broadcast, {who}: needless hard brakes in "
+                             f"{rate(nb['rate'], nb['ci'])} of episodes (asked <= 0.05): "
+                             f"{'met' if nb['rate'] <= 0.05 else '**not met**'}.")
         for label, other in (("the supervisor without it", silent), ("ODCA alone without it", pairs.get(("odca", "off")))):
             if on is None or other is None:
                 continue

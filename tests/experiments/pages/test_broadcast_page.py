@@ -37,7 +37,8 @@ BROADCAST = _data(_row("clean", 60, 1), _row("clean+lead_frustum[adaptive]", 58)
                   _row("clean+radio_lie", 59), _row("clean+lead_frustum+radio_lie[adaptive]", 10))
 SILENT = _data(_row("clean+lead_frustum[adaptive]", 33, broadcast="off"))
 OFF = _data(_row("clean", 60, 1, 2.2, broadcast="on"), _row("clean", 60, 0, 3.0, broadcast="off"),
-            _row("clean", 60, 0, 2.1, estimator="odca", broadcast="off"))
+            _row("clean", 60, 0, 2.1, estimator="odca", broadcast="off"),
+            _row("clean", 60, 4, 2.1, estimator="odca", broadcast="on"))
 
 
 def test_what_was_asked_is_judged_from_the_numbers():
@@ -48,9 +49,16 @@ def test_what_was_asked_is_judged_from_the_numbers():
     assert "refused in 60 of 60 episodes (900 of 900 messages; asked 100 %): met" in text
     assert "refused in 59 of 60 episodes (499 of 500 messages; asked 100 %): **not met**" in text
     assert "The lying lead alone: collision-free 0.98" in text and "asked: no collision): **not met**" in text
-    assert "needless hard brakes in 0.02" in text and "(asked <= 0.05): met" in text
+    assert "with the broadcast, the supervisor over ODCA: needless hard brakes in 0.02" in text
+    assert "(asked <= 0.05): met" in text
     assert "2.20 s, against 3.00 s for the supervisor without it (medians), -27% (asked within 10 %): **not met**" in text
     assert "2.20 s, against 2.10 s for ODCA alone without it (medians), +5% (asked within 10 %): met" in text
+
+
+def test_odca_alone_with_the_broadcast_is_judged_too_and_a_silent_lead_is_named_so(tmp_path):
+    assert "with the broadcast, ODCA alone: needless hard brakes in 0.07" in "\n".join(checks(BROADCAST, OFF, SILENT))
+    (tmp_path / "following-broadcast-silent.json").write_text(json.dumps(SILENT))
+    assert "| adaptive spoof; the lead silent | odca + supervisor | off | 60 | 0.55" in broadcast_markdown(tmp_path)
 
 
 def test_a_jammed_row_far_from_todays_number_is_said():
