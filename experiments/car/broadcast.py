@@ -137,6 +137,7 @@ def _ahead(message: V2VMessage, age_s: float, pose: np.ndarray, camera_xy_m: tup
     cx, cy = px + c * camera_xy_m[0] - n * camera_xy_m[1], py + n * camera_xy_m[0] + c * camera_xy_m[1]
     along, aside = path.project(np.array([x, y]), s_hint=progress_m + AHEAD_MAX_M / 2, window_m=AHEAD_MAX_M / 2)
     ahead = (x - cx) * c + (y - cy) * n
-    if along <= progress_m or ahead <= 0.0 or abs(aside) > LANE_HALF_M:
+    # (the search ends AHEAD_MAX_M on: a sender beyond it projects onto the window's end, and is none)
+    if not progress_m < along < progress_m + AHEAD_MAX_M or ahead <= 0.0 or abs(aside) > LANE_HALF_M:
         return None
     return BroadcastWitness(math.hypot(x - cx, y - cy), speed, age_s)

@@ -80,3 +80,55 @@ def test_in_a_bend_the_witness_is_the_chord_to_the_leads_rear():
     car.hear(_obs(sign(V2VMessage(1, 0.0, Broadcast(1, 1.0, 1.0, math.pi / 2, 0.0, 0.0, False)), fleet_key(1))), 0.0)
     said = car.witness(0.0, POSE, (0.0, 0.0), arc, progress_m=0.0)
     assert said.distance_m == pytest.approx(math.hypot(1.0, 1.0 - REAR))
+
+
+def test_the_checks_bounds_hold_at_their_edges():
+    car = BroadcastReceiver(max_age_s=0.25)  # (times a float holds exactly)
+    assert len(car.hear(_obs(_lead(1, 1.0)), now_s=1.25)) == 1  # exactly as old as allowed
+    assert len(car.hear(_obs(_lead(2, 1.28125)), now_s=1.25)) == 1  # a little ahead: the clocks' slack
+    assert car.refused["stale"] == 0
+    assert car.witness(1.28125, POSE, CAMERA, LANE, 0.0).age_s == 0.0  # a message of now
+    assert car.witness(1.53125, POSE, CAMERA, LANE, 0.0).age_s == 0.25  # the oldest allowed
+    assert BroadcastReceiver().hear({"radio": _obs(_lead(1, 0.0))["radio"]}, 0.0) == []  # no arrival times
+
+
+def test_the_nearest_of_several_cars_ahead_is_the_witness():
+    for order in ((2.0, 3.0), (3.0, 2.0)):
+        car = BroadcastReceiver()
+        for sender, x in zip((1, 2), order):
+            car.hear(_obs(sign(V2VMessage(1, 1.0, Broadcast(sender, x, 0.0, 0.0, 0.0, 0.0, False)), fleet_key(sender))),
+                     now_s=1.0)
+        assert car.witness(1.0, POSE, CAMERA, LANE, 0.0).distance_m == pytest.approx(2.0 - REAR - 0.1)
+
+
+def test_a_standing_or_speeding_lead_is_moved_on_as_it_goes():
+    standing, speeding = BroadcastReceiver(), BroadcastReceiver()
+    standing.hear(_obs(_lead(1, 1.0, speed=0.0, accel=0.0)), now_s=1.0)
+    assert standing.witness(1.2, POSE, CAMERA, LANE, 0.0).distance_m == pytest.approx(2.0 - REAR - 0.1)
+    speeding.hear(_obs(_lead(1, 1.0, speed=0.5, accel=2.0)), now_s=1.0)
+    said = speeding.witness(1.2, POSE, CAMERA, LANE, 0.0)
+    assert said.distance_m == pytest.approx(2.0 + 0.5 * 0.2 + 0.5 * 2.0 * 0.2 ** 2 - REAR - 0.1)
+    assert said.speed_mps == pytest.approx(0.9)
+
+
+def test_a_lead_the_car_has_passed_on_its_lane_or_that_lies_behind_its_camera_is_no_witness():
+    car = BroadcastReceiver()
+    car.hear(_obs(_lead(1, 1.0, x=2.0)), now_s=1.0)
+    assert car.witness(1.0, POSE, CAMERA, LANE, progress_m=3.0) is None  # the lane's 2 m lies behind the car
+    assert car.witness(1.0, np.array([0.0, 0.0, math.pi]), CAMERA, LANE, progress_m=0.0) is None  # behind the camera
+
+
+def test_the_witness_is_found_in_any_frame_as_far_as_the_lane_ahead_reaches_and_within_half_a_lane():
+    # The lane along +y, the car facing it, its camera 0.1 m ahead and 0.05 m left of its origin.
+    up = Path(np.column_stack([np.zeros(101), np.linspace(0, 10, 101)]), np.full(101, math.pi / 2), np.zeros(101))
+    pose, camera = np.array([0.0, 0.0, math.pi / 2]), (0.1, 0.05)
+
+    def told(x, y):
+        car = BroadcastReceiver()
+        car.hear(_obs(sign(V2VMessage(1, 0.0, Broadcast(1, x, y, math.pi / 2, 0.0, 0.0, False)), fleet_key(1))), 0.0)
+        return car.witness(0.0, pose, camera, up, progress_m=0.0)
+
+    assert told(0.0, 2.0).distance_m == pytest.approx(math.hypot(0.0 - (-0.05), 2.0 - REAR - 0.1))
+    assert told(0.0, 5.5) is not None and told(0.0, 7.5) is None  # the lane ahead is 6 m long
+    assert told(0.25, 2.0) is not None and told(-0.25, 2.0) is not None  # within half a lane, either side
+    assert told(0.35, 2.0) is None and told(-0.35, 2.0) is None

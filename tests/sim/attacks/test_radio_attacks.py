@@ -108,3 +108,51 @@ def test_an_insiders_lie_is_accepted_it_is_the_leads_own_signed_word():
 def test_a_bad_parameter_names_itself(name, params):
     with pytest.raises(ValueError, match=next(iter(params))):
         ATTACKS[name].check_params(params)
+
+
+def test_forged_messages_say_what_the_attacker_chose_come_only_with_the_leads_and_are_numbered_past_it():
+    from racf.sim.radio.message import parse
+
+    env = ATTACKS["radio_forge"](RadioEnv(), start_s=1.0, duration_s=2.0, ahead_m=2.0, faster_mps=1.0)
+    env.reset(seed=0)
+    forged = []
+    for _ in range(200):
+        obs, _, _, _, info = env.step(np.zeros(2))
+        rows = np.asarray(obs["radio"]).reshape(-1, SIGNED_BYTES)
+        said = [parse(r.tobytes()) for r in rows if r.any()]
+        if info["radio_injected"]:
+            assert len(said) == 2  # the forgery beside the lead's own message, never alone
+            forged.append((said[0], said[1]))
+    assert len(forged) == 20
+    for fake, real in forged:
+        assert fake.seq == real.seq + 1 and fake.state.x_m == pytest.approx(real.state.x_m + 2.0)
+        assert fake.state.speed_mps == pytest.approx(1.5) and not fake.state.braking
+
+
+def test_a_replay_puts_on_the_air_only_what_fits_and_counts_it():
+    env = ATTACKS["radio_replay"](RadioEnv(), start_s=1.0, duration_s=2.0, age_s=0.5)
+    env.reset(seed=0)
+    counted = sent = 0
+    for _ in range(200):
+        obs, _, _, _, info = env.step(np.zeros(2))
+        counted += info["radio_injected"]
+        sent += int(np.count_nonzero(np.asarray(obs["radio_times"]) > 0))
+    assert counted == 20 and sent == 40 + 20  # the lead's forty, and each of twenty sent again once
+
+
+def test_an_insiders_whole_lie_at_once_and_a_speed_never_below_zero():
+    car, _, heard = _drive("radio_lie", {"faster_mps": -5.0, "bias_m": 1.0})
+    lied = [(t, v, x) for t, v, x in heard if 1.0 <= t < 3.0]
+    assert all(v == 0.0 for _, v, _ in lied)
+    assert all(x == pytest.approx(2.0 + 0.5 * (t - DT) + 1.0, abs=0.02) for t, _, x in lied)
+
+
+@pytest.mark.parametrize("name,param,edge,beyond", [
+    ("radio_delay", "delay_s", 10.0, 10.01), ("radio_replay", "age_s", 30.0, 30.01),
+    ("radio_forge", "ahead_m", -10.0, -10.01), ("radio_forge", "faster_mps", 10.0, 10.01),
+    ("radio_lie", "faster_mps", 5.0, 5.01), ("radio_lie", "bias_m", -10.0, -10.01), ("radio_lie", "rate_mps", 10.0, 10.01)])
+def test_each_parameter_takes_its_edge_and_refuses_past_it_or_a_flag(name, param, edge, beyond):
+    ATTACKS[name].check_params({param: edge})
+    for bad in (beyond, True):
+        with pytest.raises(ValueError, match=param):
+            ATTACKS[name].check_params({param: bad})

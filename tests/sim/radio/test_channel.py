@@ -57,3 +57,30 @@ def test_the_same_seed_gives_the_same_bytes():
 def test_a_bad_setting_names_itself(field, value):
     with pytest.raises(ValueError, match=f"radio {field} must be"):
         RadioConfig(**{field: value})
+
+
+def test_more_than_the_car_can_take_in_a_step_is_cut_and_counted():
+    radio = Radio(RadioConfig(loss=0.0, latency_s=0.05, jitter_s=0.0))
+    radio.reset(np.random.default_rng(0))
+    many = tuple(Broadcast(s, 2.0, 0.0, 0.0, 0.5, 0.0, False) for s in range(1, 9)) * 2  # 16 at once
+    assert radio.tick(0.0, many, (0.0, 0.0))[1].tolist() == [0.0] * RADIO_SLOTS and radio.sent == 16
+    rows, times = radio.tick(0.06, (), (0.0, 0.0))
+    assert radio.delivered == RADIO_SLOTS and np.all(times == pytest.approx(0.05)) and radio.sent == 0
+    assert radio.tick(0.08, (), (0.0, 0.0))[0].any() == False  # noqa: E712  (the rest were lost, not held)
+
+
+def test_it_sends_on_its_own_clock_not_every_step():
+    radio = Radio(RadioConfig(hz=5.0, loss=0.0))
+    radio.reset(np.random.default_rng(0))
+    sent = []
+    for k in range(50):
+        radio.tick(k * 0.02, (LEAD,), (0.0, 0.0))
+        sent.append(radio.sent)
+    assert sum(sent) == 5 and [k for k, s in enumerate(sent) if s] == [0, 10, 20, 30, 40]
+
+
+@pytest.mark.parametrize("field,edge", [("hz", 0.5), ("hz", 50.0), ("loss", 0.0), ("loss", 1.0), ("range_m", 1000.0),
+                                        ("latency_s", 1.0), ("jitter_s", 0.0), ("position_std_m", 1.0),
+                                        ("speed_std_mps", 1.0)])
+def test_each_setting_takes_its_edges(field, edge):
+    assert getattr(RadioConfig(**{field: edge}), field) == edge

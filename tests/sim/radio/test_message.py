@@ -56,3 +56,12 @@ def test_the_fleets_keys_are_the_same_everywhere_and_each_its_own():
     assert len({fleet_key(s).verify_key.encode() for s in FLEET}) == len(FLEET)
     with pytest.raises(ValueError, match="not in the fleet"):
         fleet_key(99)
+
+
+def test_a_brake_flag_other_than_0_or_1_and_a_message_of_the_wrong_length_are_refused():
+    good = V2VMessage(1, 0.5, Broadcast(1, 1.0, 2.0, 0.0, 0.6, 0.0, False))
+    raw = sign(good, fleet_key(1))
+    assert parse(good.to_bytes()[:-1] + bytes([2])) is None
+    assert open_signed(raw + b"\0", trust_store()).refused == "malformed"
+    assert open_signed(raw[:-1], trust_store()).refused == "malformed"
+    assert 1 in FLEET and 8 in FLEET and 0 not in FLEET and 9 not in FLEET
