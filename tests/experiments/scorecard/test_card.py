@@ -94,7 +94,7 @@ import sys
 from racf.experiments.cli import main
 from racf.experiments.scorecard import battery as b
 
-b.BATTERIES["small"] = b.Battery(name="small", loop=(b.LoopRow("paper_clean", "clean", 12, 12, b._paper("clean"),
+b.BATTERIES["small"] = b.Battery(name="small", loop=(b.LoopRow("paper_clean", "clean", 12, 12, b.paper_row("clean"),
                                                                attacked=False),),
                                  drives=(), offline_presets=("strong",), offline_draws=1, offline_draws_quick=1)
 if __name__ == "__main__":  # the pool's spawned workers import this file again
