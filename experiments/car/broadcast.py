@@ -86,7 +86,7 @@ class BroadcastReceiver:
         if rows is None or times is None:
             return []
         out = []
-        for row, _ in zip(np.asarray(rows, np.uint8).reshape(-1, SIGNED_BYTES), np.asarray(times, float)):
+        for row in np.asarray(rows, np.uint8).reshape(-1, SIGNED_BYTES):
             if not row.any():
                 continue  # an empty slot
             opened = open_signed(row.tobytes(), self.trusted)
@@ -132,7 +132,7 @@ def _ahead(message: V2VMessage, age_s: float, pose: np.ndarray, camera_xy_m: tup
     rear = QCAR2_BOX_M[0] / 2.0
     x = s.x_m + (travel - rear) * math.cos(s.yaw_rad)
     y = s.y_m + (travel - rear) * math.sin(s.yaw_rad)
-    px, py, yaw = (float(v) for v in pose[:3])
+    px, py, yaw = (float(p) for p in pose[:3])
     c, n = math.cos(yaw), math.sin(yaw)
     cx, cy = px + c * camera_xy_m[0] - n * camera_xy_m[1], py + n * camera_xy_m[0] + c * camera_xy_m[1]
     along, aside = path.project(np.array([x, y]), s_hint=progress_m + AHEAD_MAX_M / 2, window_m=AHEAD_MAX_M / 2)

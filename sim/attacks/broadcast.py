@@ -34,6 +34,13 @@ from racf.sim.radio.message import parse
 __all__ = ["RadioJam", "RadioDelay", "RadioReplay", "RadioForge", "RadioLie"]
 
 
+def _check(name: str, value: Any, lo: float, hi: float, low_open: bool = False) -> None:
+    """ValueError naming ``name`` unless ``value`` is a number in [lo, hi] (``low_open``: (lo, hi])."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not (
+            (lo < value if low_open else lo <= value) and value <= hi):
+        raise ValueError(f"{name} must be in {'(' if low_open else '['}{lo:g}, {hi:g}], got {value!r}")
+
+
 def _rows(obs: dict) -> list[tuple[float, bytes]]:
     """The step's received messages: (arrival time, bytes), empty slots left out."""
     rows = np.asarray(obs["radio"], np.uint8).reshape(-1, SIGNED_BYTES)
@@ -96,8 +103,7 @@ class RadioDelay(_RadioAttack):
 
     def __init__(self, env: gym.Env, delay_s: float = 0.5, **schedule: Any) -> None:
         gym.utils.RecordConstructorArgs.__init__(self, delay_s=delay_s, **schedule)
-        if isinstance(delay_s, bool) or not isinstance(delay_s, (int, float)) or not 0.0 < delay_s <= 10.0:
-            raise ValueError(f"delay_s must be in (0, 10] s, got {delay_s!r}")
+        _check("delay_s", delay_s, 0.0, 10.0, low_open=True)
         self.delay_s = float(delay_s)
         self._held: list[tuple[float, bytes]] = []
         super().__init__(env, **schedule)
@@ -122,8 +128,7 @@ class RadioReplay(_RadioAttack):
 
     def __init__(self, env: gym.Env, age_s: float = 1.0, **schedule: Any) -> None:
         gym.utils.RecordConstructorArgs.__init__(self, age_s=age_s, **schedule)
-        if isinstance(age_s, bool) or not isinstance(age_s, (int, float)) or not 0.0 < age_s <= 30.0:
-            raise ValueError(f"age_s must be in (0, 30] s, got {age_s!r}")
+        _check("age_s", age_s, 0.0, 30.0, low_open=True)
         self.age_s = float(age_s)
         self._tape: list[tuple[float, bytes]] = []
         super().__init__(env, **schedule)
@@ -150,9 +155,8 @@ class RadioForge(_RadioAttack):
 
     def __init__(self, env: gym.Env, ahead_m: float = 2.0, faster_mps: float = 1.0, **schedule: Any) -> None:
         gym.utils.RecordConstructorArgs.__init__(self, ahead_m=ahead_m, faster_mps=faster_mps, **schedule)
-        for name, value in (("ahead_m", ahead_m), ("faster_mps", faster_mps)):
-            if isinstance(value, bool) or not isinstance(value, (int, float)) or not -10.0 <= value <= 10.0:
-                raise ValueError(f"{name} must be in [-10, 10], got {value!r}")
+        _check("ahead_m", ahead_m, -10.0, 10.0)
+        _check("faster_mps", faster_mps, -10.0, 10.0)
         self.ahead_m, self.faster_mps = float(ahead_m), float(faster_mps)
         self._last: V2VMessage | None = None
         self._key = SigningKey(bytes(32))
@@ -189,10 +193,9 @@ class RadioLie(_RadioAttack):
                  **schedule: Any) -> None:
         gym.utils.RecordConstructorArgs.__init__(self, faster_mps=faster_mps, bias_m=bias_m, rate_mps=rate_mps,
                                                  **schedule)
-        for name, value, lo, hi in (("faster_mps", faster_mps, -5.0, 5.0), ("bias_m", bias_m, -10.0, 10.0),
-                                    ("rate_mps", rate_mps, 0.0, 10.0)):
-            if isinstance(value, bool) or not isinstance(value, (int, float)) or not lo <= value <= hi:
-                raise ValueError(f"{name} must be in [{lo}, {hi}], got {value!r}")
+        _check("faster_mps", faster_mps, -5.0, 5.0)
+        _check("bias_m", bias_m, -10.0, 10.0)
+        _check("rate_mps", rate_mps, 0.0, 10.0)
         self.faster_mps, self.bias_m, self.rate_mps = float(faster_mps), float(bias_m), float(rate_mps)
         super().__init__(env, **schedule)
 
