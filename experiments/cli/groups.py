@@ -29,8 +29,9 @@ GROUPS: dict[str, tuple[str, dict[str, str]]] = {
                  "train the vehicle segmenter",
                  {"data": "detector-data", "train": "train-detector", "optimise-patch": "optimise-patch",
                   "train-vehicle": "train-vehicle-detector"}),
-    "board": ("the leaderboard: check a card, submit it to be set beside racf's own",
-              {"check": "board-check", "submit": "board-submit"}),
+    "board": ("the leaderboard: check a card, verify it by running its episodes again, submit it to be set beside "
+              "racf's own",
+              {"check": "board-check", "verify": "board-verify", "submit": "board-submit"}),
     "bag": ("ROS 2 bags on Quanser's QCar 2 topics: export an episode, replay the car's software on a recording, "
             "show what a bag holds",
             {"export": "export-bag", "replay": "replay-bag", "info": "bag-info"}),

@@ -24,13 +24,14 @@ from racf.experiments.scorecard.battery import PENALTIES, Battery
 from racf.experiments.scorecard.detection import detection_rows
 from racf.experiments.scorecard.drives import driving_rows
 from racf.experiments.scorecard.link import link_services
+from racf.experiments.scorecard.proof import card_episodes
 from racf.provenance import atomic_write, commit
 from racf.sim.world.manager import world_targets
 from racf.experiments.sweeps.store import ResultStore
 from racf.experiments.metrics.criteria import card_measures
 from racf.experiments.sweeps.summary import plugin_measures, stealth_summary, summarize
 
-__all__ = ["run_card", "card_version", "racf_commit"]
+__all__ = ["run_card", "row_summary", "card_version", "racf_commit"]
 
 
 def racf_commit() -> str:
@@ -95,6 +96,13 @@ def _dataset_hash(ds) -> str:
     return frame_hash(ds.clean("test"))
 
 
+def row_summary(frame: pd.DataFrame, attacked: bool) -> dict:
+    """What a row's result rows say on its card (the driving score aside, which reads the step logs):
+    ``racf board verify`` sums a card's carried episodes up again with it."""
+    summary = _loop_summary(frame, attacked)
+    return summary | _stealth(frame) if attacked else summary
+
+
 def _stealth(frame: pd.DataFrame) -> dict:
     """The row's undetected error (``scoring.stealth``), and per attack rate where the row varies it."""
     keep = ("undetected_error_median", "undetected_error_ci", "detected_share", "detected_share_ci")
@@ -124,7 +132,7 @@ def run_card(defence: str, battery: Battery, out: Path, *, quick: bool = False, 
     out = Path(out)
     card: dict = {"battery": battery.name + ("-quick" if quick else ""), "quick": quick, "defence": defence,
                   "version": card_version(defence), "commit": racf_commit(), "options": dict(options or {}),
-                  "sensor_profile": "qcar2", "closed_loop": {}, "drives": {}}
+                  "sensor_profile": "qcar2", "closed_loop": {}, "drives": {}, "episodes": {}}
     timing: dict = {}
     links = {row.link for row in battery.rows() if row.link}
     with link_services(defence, options, links, out) if links else nullcontext({}) as served:
@@ -150,9 +158,8 @@ def run_card(defence: str, battery: Battery, out: Path, *, quick: bool = False, 
     for row, specs in plan:
         ids = [s.trial_id for s in specs]
         frame, logs = store.rows(ids), _logs(store, ids)
-        summary = {"title": row.title, "detector": specs[0].detector, **_loop_summary(frame, row.attacked)}
-        if row.attacked:
-            summary.update(_stealth(frame))
+        summary = {"title": row.title, "detector": specs[0].detector, **row_summary(frame, row.attacked)}
+        card["episodes"][row.key] = card_episodes(frame, logs)
         scored = row in battery.drives or row.driving  # only a drive's score reads the declared vehicles
         vehicles = {t.name for s in specs for t in world_targets(s.scenario.world(s, s.scenario_params), "vehicle")
                     } if scored else set()

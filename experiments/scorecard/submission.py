@@ -7,10 +7,11 @@ A submission is one JSON file, ``docs/results/submissions/<battery>-<defence>.js
 - ``code``: where the defence's code is (a package on PyPI, a repository at a commit, or a file in
   racf's own tree);
 - ``command``: the command that measured it, so that anyone can measure it again;
-- ``submitted``: the date.
+- ``submitted``: the date;
+- ``verified``: how ``racf board verify`` checked it (the sample of episodes re-run per row, its seed).
 
-``racf board check CARD.json`` says whether a card may go on the board; ``racf board submit``
-writes the submission after that check, and the board's page (``make docs``) sets every submitted
+``racf board check CARD.json`` says whether a card may go on the board; ``racf board verify``
+measures it again; ``racf board submit`` writes the submission after both, and the board's page (``make docs``) sets every submitted
 card beside racf's own.
 """
 
@@ -92,6 +93,8 @@ class Submission:
     code: str
     command: str
     submitted: str
+    #: How ``racf board verify`` checked it: the sample per row, its seed, the episodes re-run.
+    verified: dict | None = None
 
     @property
     def file_name(self) -> str:
@@ -99,10 +102,11 @@ class Submission:
 
     def to_json(self) -> str:
         return json.dumps({"card": self.card, "code": self.code, "command": self.command,
-                           "submitted": self.submitted}, indent=1, allow_nan=False, sort_keys=True) + "\n"
+                           "submitted": self.submitted, "verified": self.verified}, indent=1, allow_nan=False, sort_keys=True) + "\n"
 
     @classmethod
-    def make(cls, card: dict, code: str, command: str, taken: set[str] = frozenset()) -> "Submission":
+    def make(cls, card: dict, code: str, command: str, taken: set[str] = frozenset(),
+             verified: dict | None = None) -> "Submission":
         """A submission of ``card``; UserError naming every problem (``card_problems``, an empty code or
         command, a name that a built-in defence already has on the board)."""
         problems = card_problems(card)
@@ -115,7 +119,7 @@ class Submission:
                             "another name")
         if problems:
             raise UserError(f"the card of {card.get('defence')!r} cannot go on the board: " + "; ".join(problems))
-        return cls(card, code.strip(), command.strip(), _dt.date.today().isoformat())
+        return cls(card, code.strip(), command.strip(), _dt.date.today().isoformat(), verified)
 
 
 def load_submissions(folder: str | Path) -> list[Submission]:
@@ -123,5 +127,5 @@ def load_submissions(folder: str | Path) -> list[Submission]:
     out = []
     for path in sorted(Path(folder).glob("*.json")):
         data = json.loads(path.read_text())
-        out.append(Submission(data["card"], data["code"], data["command"], data["submitted"]))
+        out.append(Submission(data["card"], data["code"], data["command"], data["submitted"], data.get("verified")))
     return out

@@ -55,7 +55,17 @@ def test_a_name_the_board_has_is_refused():
         Submission.make(full_card("odca"), "racf", "racf scorecard --defence odca", taken={"odca"})
 
 
-def test_a_submitted_card_appears_on_the_regenerated_board_beside_racf_s_own(tmp_path, capsys):
+@pytest.fixture
+def verified(monkeypatch):
+    """`board submit` verifies first (tests/experiments/scorecard/test_verify.py runs that for real): here
+    every card verifies, by a sample of 5 with the seed 7."""
+    from racf.experiments.scorecard import verify
+    from racf.experiments.scorecard.verify import RowVerdict
+
+    monkeypatch.setattr(verify, "verify_card", lambda card, **kw: ([RowVerdict("r", 30, 5, 1.0)], 7))
+
+
+def test_a_submitted_card_appears_on_the_regenerated_board_beside_racf_s_own(tmp_path, capsys, verified):
     from racf.experiments.pages.leaderboard_page import card_pages, leaderboard_markdown
     from racf.experiments.pages.results_format import StoredResults
 
@@ -68,6 +78,8 @@ def test_a_submitted_card_appears_on_the_regenerated_board_beside_racf_s_own(tmp
     code = main(["board", "submit", str(tmp_path / "mine.json"), "--code", "racf-mine==1.0",
                  "--command", "racf scorecard --defence mine --battery racf-link --json", "--into", str(into)])
     assert code == 0 and (into / "racf-link-mine.json").exists()
+    assert json.loads((into / "racf-link-mine.json").read_text())["verified"] == {
+        "sample": 5, "seed": 7, "rows": 1, "episodes_rerun": 5}
     page = leaderboard_markdown(StoredResults(data))
     assert "<code>raw</code>" in page and "<code>mine</code></a> <small>submitted</small>" in page
     pages = card_pages(data)
@@ -107,6 +119,28 @@ def test_a_battery_s_cards_from_two_stored_results_share_one_board_each_with_its
     assert "`bbb2222`" in card_pages(tmp_path)["cards/racf-link-vote.md"]()
 
 
+def test_submit_writes_nowhere_unless_told_where(tmp_path, monkeypatch, capsys, verified):
+    (tmp_path / "mine.json").write_text(json.dumps(full_card("mine")))
+    monkeypatch.chdir(tmp_path)
+    assert main(["board", "submit", "mine.json", "--code", "x", "--command", "racf scorecard --defence mine"]) == 2
+    assert "--into" in capsys.readouterr().err and sorted(p.name for p in tmp_path.rglob("*")) == ["mine.json"]
+
+
+def test_submit_writes_nothing_for_a_card_verify_refuses(tmp_path, monkeypatch, capsys):
+    from racf.experiments.scorecard import verify
+    from racf.experiments.scorecard.verify import RowVerdict
+
+    def refuse(card, progress, **kw):
+        progress(RowVerdict("r", 30, 5, 1.0, ("scr is 0.99",)))
+        return [RowVerdict("r", 30, 5, 1.0, ("scr is 0.99",))], 7
+
+    monkeypatch.setattr(verify, "verify_card", refuse)
+    (tmp_path / "mine.json").write_text(json.dumps(full_card("mine")))
+    assert main(["board", "submit", str(tmp_path / "mine.json"), "--code", "x", "--command", "racf scorecard --defence "
+                 "mine", "--into", str(tmp_path / "subs")]) == 2
+    assert "row r (N 30): REFUSED: scr is 0.99" in capsys.readouterr().out and not (tmp_path / "subs").exists()
+
+
 def test_submit_refuses_a_name_from_any_stored_result_of_the_battery(tmp_path, monkeypatch, capsys):
     data = tmp_path / "docs" / "results" / "data"
     data.mkdir(parents=True)
@@ -114,5 +148,6 @@ def test_submit_refuses_a_name_from_any_stored_result_of_the_battery(tmp_path, m
     (data / "scorecard-racf-link-more.json").write_text(json.dumps({"meta": meta, "cards": [full_card("vote")]}))
     (tmp_path / "vote.json").write_text(json.dumps(full_card("vote")))
     monkeypatch.chdir(tmp_path)
-    assert main(["board", "submit", "vote.json", "--code", "x", "--command", "racf scorecard --defence vote"]) == 2
+    assert main(["board", "submit", "vote.json", "--code", "x", "--command", "racf scorecard --defence vote",
+                 "--into", "subs"]) == 2
     assert "already has a defence named 'vote'" in capsys.readouterr().err
