@@ -1,24 +1,21 @@
 """Perception and control that see observations only (no simulator imports)."""
 
-from racf.controllers.braking import BrakeDecision, BrakingConfig, Phase, StopSignBraker
-from racf.controllers.detector import Detection, DetectorConfig, StopSignDetector
-from racf.controllers.distance import CameraModel, DepthDistance
-from racf.controllers.lidar_segmentation import scan_points, segment_scan
-from racf.controllers.lidar_target import LidarTargetConfig, LidarTargetState, LidarTargetTracker
-from racf.controllers.ekf import DistanceEKF, EKFConfig
-from racf.controllers.localisation import PoseFilter, PoseFilterConfig, wrap_angle
-from racf.controllers.estimators import DistanceEstimator, EKFEstimator, RawDepthEstimator
-from racf.controllers.obstacle_detector import ObstacleDetector, ObstacleDetectorConfig
-from racf.controllers.lane_follower import RouteFollower, StanleyConfig, StanleyController
-from racf.controllers.perception import Perception, PerceptionSample
-from racf.controllers.size_distance import SizeDistance
-from racf.controllers.speed import SpeedPI, SpeedPIConfig, SpeedProfile
+import lazy_loader
 
-__all__ = [
-    "BrakeDecision", "BrakingConfig", "CameraModel", "DepthDistance", "Detection", "DetectorConfig",
-    "DistanceEKF", "DistanceEstimator", "EKFConfig", "EKFEstimator", "LidarTargetConfig", "LidarTargetState",
-    "LidarTargetTracker", "ObstacleDetector", "ObstacleDetectorConfig", "Perception", "PerceptionSample",
-    "Phase", "PoseFilter", "PoseFilterConfig", "RawDepthEstimator", "RouteFollower", "scan_points",
-    "segment_scan", "SizeDistance", "SpeedPI", "SpeedPIConfig", "SpeedProfile", "StanleyConfig", "StanleyController",
-    "StopSignBraker", "StopSignDetector", "wrap_angle",
-]
+# Each name is imported on first use (SPEC 1): importing the package costs nothing, so the
+# command line's help never waits for torch or scikit-learn.
+__getattr__, __dir__, __all__ = lazy_loader.attach(__name__, submod_attrs={
+    "braking": ["BrakeDecision", "BrakingConfig", "Phase", "StopSignBraker"],
+    "detector": ["Detection", "DetectorConfig", "StopSignDetector"],
+    "distance": ["CameraModel", "DepthDistance"],
+    "lidar_segmentation": ["scan_points", "segment_scan"],
+    "lidar_target": ["LidarTargetConfig", "LidarTargetState", "LidarTargetTracker"],
+    "ekf": ["DistanceEKF", "EKFConfig"],
+    "localisation": ["PoseFilter", "PoseFilterConfig", "wrap_angle"],
+    "estimators": ["DistanceEstimator", "EKFEstimator", "RawDepthEstimator"],
+    "obstacle_detector": ["ObstacleDetector", "ObstacleDetectorConfig"],
+    "lane_follower": ["RouteFollower", "StanleyConfig", "StanleyController"],
+    "perception": ["Perception", "PerceptionSample"],
+    "size_distance": ["SizeDistance"],
+    "speed": ["SpeedPI", "SpeedPIConfig", "SpeedProfile"],
+})

@@ -118,6 +118,14 @@ class Registry(Mapping[str, Any]):
     def __repr__(self) -> str:
         return f"Registry({self.group!r}: {list(self)})"
 
+    def names(self) -> tuple[str, ...]:
+        """The names in the registry's order, importing no part not loaded yet (the entry points'
+        names; plug-in files are loaded: only they know theirs). For flags' choices and help."""
+        if self._plugins is not None or plugin_files():
+            return tuple(self._all())
+        found = sorted(entry_points(group=self.group), key=lambda ep: (not _is_own(ep), ep.name))
+        return tuple(dict.fromkeys(ep.name for ep in found))
+
     # --- lookups -----------------------------------------------------------------------------
     @property
     def broken(self) -> dict[str, str]:

@@ -5,12 +5,14 @@ Knows nothing of the simulator: it sees distance series and the car's odometry, 
 paper's offline benchmark does.
 """
 
-from racf.odca.align import Alignment, fit_alignment
-from racf.odca.gate import SOURCES, GateConfig, vote
-from racf.odca.kinematics import KinematicBranch, KinematicsConfig
-from racf.odca.online import ODCA, FusedSample, ODCAConfig
-from racf.odca.prior import CheckpointError, Chronos2Prior, LastValuePrior, TemporalPrior
+import lazy_loader
 
-__all__ = ["ODCA", "ODCAConfig", "FusedSample", "Alignment", "fit_alignment", "GateConfig", "vote", "SOURCES",
-           "KinematicsConfig", "KinematicBranch", "TemporalPrior", "Chronos2Prior", "LastValuePrior",
-           "CheckpointError"]
+# Each name is imported on first use (SPEC 1): importing the package costs nothing, so the
+# command line's help never waits for torch or scikit-learn.
+__getattr__, __dir__, __all__ = lazy_loader.attach(__name__, submod_attrs={
+    "align": ["Alignment", "fit_alignment"],
+    "gate": ["SOURCES", "GateConfig", "vote"],
+    "kinematics": ["KinematicBranch", "KinematicsConfig"],
+    "online": ["ODCA", "FusedSample", "ODCAConfig"],
+    "prior": ["CheckpointError", "Chronos2Prior", "LastValuePrior", "TemporalPrior"],
+})

@@ -5,7 +5,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from sklearn.linear_model import HuberRegressor
 
 __all__ = ["Alignment", "fit_alignment"]
 
@@ -42,5 +41,7 @@ def fit_alignment(depth: np.ndarray, lidar: np.ndarray, confidence: np.ndarray |
         ok &= np.nan_to_num(c) >= min_confidence
     if ok.sum() < min_samples:
         raise ValueError(f"need >= {min_samples} paired high-confidence samples to fit the alignment, got {int(ok.sum())}")
+    from sklearn.linear_model import HuberRegressor  # here: scikit-learn takes a second to import
+
     model = HuberRegressor(epsilon=1.35, alpha=0.0).fit(l[ok, None], d[ok])
     return Alignment(float(model.coef_[0]), float(model.intercept_))

@@ -17,30 +17,47 @@ from pathlib import Path
 from typing import Iterator
 
 from racf.errors import EpisodeFailed, Interrupted, UserError
-from racf.experiments.cli import (bags, bench, board, data, detector, falsify, odca, onboard, scorecard, serve, stress, sweep,
-                                  trials, view)
+from racf.experiments.cli.commands import COMMANDS, MODULES
 from racf.experiments.cli.common import Parser, fail, load_plugins_from_argv
-from racf.experiments.cli.groups import add_groups, canonical_argv
+from racf.experiments.cli.groups import GROUPS, add_groups, canonical_argv
 
-__all__ = ["main", "build_parser", "GROUPS"]
-
-#: The command groups, in the order ``racf --help`` lists their commands.
-GROUPS = (view, trials, sweep, scorecard, board, falsify, data, odca, onboard, detector, bench, bags, serve, stress)
+__all__ = ["main", "build_parser"]
 
 #: Exit codes: a user's mistake, episodes that failed, an interrupt (128 + SIGINT, as shells use).
 EXIT_USAGE, EXIT_FAILED, EXIT_INTERRUPTED = 2, 1, 130
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(argv: list[str] | None = None) -> argparse.ArgumentParser:
+    """The command line's parser. With ``argv``, only the module of the command it runs is imported
+    and declares its commands in full; every other command is its name and help from the index
+    (``commands.COMMANDS``), enough for ``racf --help`` and for argparse to name the choices."""
+    from importlib import import_module
+
     import racf
 
     p = Parser(prog="racf", description="RACF testbed: QCar 2 simulation, attacks and ODCA.")
     p.add_argument("--version", action="version", version=f"racf {racf.__version__}")
     sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND", parser_class=Parser)
-    for group in GROUPS:
-        group.register(sub)
+    wanted = set(MODULES) if argv is None else _module_of(argv)
+    for name in MODULES:
+        if name in wanted:
+            import_module(f"racf.experiments.cli.{name}").register(sub)
+        else:
+            for flat, (module, text) in COMMANDS.items():
+                if module == name:
+                    sub.add_parser(flat, help=text)  # never parsed: its module declares its flags when it runs
     add_groups(sub)
     return p
+
+
+def _module_of(argv: list[str]) -> set[str]:
+    """The module that declares the command ``argv`` runs (none for ``racf --help``, a group's help or
+    a name that is no command: their lines need only the index)."""
+    words = [a for a in argv if not a.startswith("-")][:2]
+    if not words:
+        return set()
+    flat = GROUPS[words[0]][1].get(words[1] if len(words) > 1 else "") if words[0] in GROUPS else words[0]
+    return {COMMANDS[flat][0]} if flat in COMMANDS else set()
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -52,7 +69,7 @@ def main(argv: list[str] | None = None) -> int:
         with _sigterm_as_interrupt():
             load_plugins_from_argv(argv)  # plug-ins first: the parser's choices and help list them
             try:
-                args, extra = build_parser().parse_known_args(argv)
+                args, extra = build_parser(argv).parse_known_args(argv)
             except SystemExit as done:  # --help, --version, or argparse's one line for a bad flag
                 return int(done.code or 0)
             if extra:

@@ -8,13 +8,14 @@ import json
 import statistics
 from pathlib import Path
 
-from racf.controllers.detectors import DETECTORS
 from racf.experiments.cli.common import count, fail, fmt_ci, output_dir, plugin_flag, sensor_flags
 
 __all__ = ["register"]
 
 
 def register(sub: argparse._SubParsersAction) -> None:
+    from racf.plugins import DETECTORS
+
     b = sub.add_parser("bench-sim", help="simulator steps per second and real-time factor at 50 Hz")
     b.add_argument("--steps", type=int, default=250, help="control steps per setting (default 250)")
     b.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
@@ -91,7 +92,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
     bd = sub.add_parser("bench-detector", help="stop-sign detectors side by side: recall and false-positive frames "
                                                "on held-out views and approach drives, time per frame on one core")
-    bd.add_argument("--detector", choices=("both", *DETECTORS), default="both",
+    bd.add_argument("--detector", choices=("both", *DETECTORS.names()), default="both",
                     help="which detector(s) to measure (default both, side by side)")
     bd.add_argument("--seed", type=int, default=0, help="seed of the approach drives (default 0)")
     bd.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
@@ -318,6 +319,7 @@ def _bench_traffic_views(args: argparse.Namespace) -> int:
 def _bench_detector(args: argparse.Namespace) -> int:
     from racf.experiments.bench.detector import BUDGET_MS, FRAME_PERIOD_MS, bench_detector
     from racf.experiments.detector.dataset import DEFAULT_DATA_DIR, load_split, make_dataset
+    from racf.plugins import DETECTORS
 
     names = tuple(DETECTORS) if args.detector == "both" else (args.detector,)
     heldout = load_split(make_dataset(root=DEFAULT_DATA_DIR, progress=not args.json), "heldout")

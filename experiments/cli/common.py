@@ -9,9 +9,6 @@ from pathlib import Path
 from typing import NoReturn
 
 from racf.errors import UserError
-from racf.experiments.car.estimators import ESTIMATORS
-from racf.experiments.link.wire import DEFAULT_TIMEOUT_MS
-from racf.sim.attacks import ATTACKS
 
 __all__ = ["UsageError", "Parser", "output_dir", "unwritable", "sign", "positive", "speed", "share",
            "duration", "count", "pair", "fail", "flag_error", "fmt_ci", "DEFAULT_WORKERS", "backend_flags", "sensor_flags", "attack_help", "estimator_help", "keyed_values",
@@ -136,13 +133,17 @@ def fmt_ci(lo: float, hi: float, digits: int = 2) -> str:
 
 
 def attack_help() -> str:
-    """The registered attacks, for a flag's help."""
-    return ", ".join(ATTACKS)
+    """The registered attacks, for a flag's help (their names: nothing is imported)."""
+    from racf.plugins import ATTACKS
+
+    return ", ".join(ATTACKS.names())
 
 
 def estimator_help() -> str:
-    """The registered estimators, for a flag's help."""
-    return ", ".join(ESTIMATORS)
+    """The registered estimators, for a flag's help (their names: nothing is imported)."""
+    from racf.plugins import ESTIMATORS
+
+    return ", ".join(ESTIMATORS.names())
 
 
 def plugin_flag(p: argparse.ArgumentParser) -> None:
@@ -257,8 +258,7 @@ def registry_rows(registry: dict) -> list[tuple[str, str]]:
 
 def registry_markdown() -> str:
     """The tables of attacks, estimators, detectors, scenarios, metrics and car stages, made from the registries."""
-    from racf.controllers.detectors import DETECTORS
-    from racf.plugins import CAR_STAGES, METRICS, SCENARIOS
+    from racf.plugins import ATTACKS, CAR_STAGES, DETECTORS, ESTIMATORS, METRICS, SCENARIOS
 
     lines = []
     for title, registry in (("attack", ATTACKS), ("estimator", ESTIMATORS), ("detector", DETECTORS),
@@ -280,24 +280,28 @@ def backend_flags(p: argparse.ArgumentParser, workers_help: str = "parallel proc
     p.add_argument("--workers", type=count, default=DEFAULT_WORKERS, help=workers_help)
 
 
+#: The sensor profiles and sign builds by name, for the flags' choices: the simulator that defines
+#: them (``sim.env.config.SENSOR_PROFILES``, ``sim.world.stop_signs.SIGN_GEOMETRIES``) takes a second
+#: to import, and ``--help`` must not wait for it (a test holds the names equal).
+SENSOR_PROFILE_NAMES = ("qcar2", "ideal")
+SIGN_GEOMETRY_NAMES = ("plate", "pole")
+
+
 def sensor_flags(p, default: str | None = "qcar2", geometry_default: str | None = "plate") -> None:
     """``--sensor-profile`` (the car's sensors) and ``--sign-geometry`` (the stop signs' build)."""
-    from racf.sim.env.config import SENSOR_PROFILES
-    from racf.sim.world.stop_signs import SIGN_GEOMETRIES
-
-    p.add_argument("--sensor-profile", choices=tuple(SENSOR_PROFILES), default=default,
+    p.add_argument("--sensor-profile", choices=SENSOR_PROFILE_NAMES, default=default,
                    help="the car's sensors: qcar2, as the QCar 2 delivers them (the A2M12 swept over its "
                         "revolution through Quanser's driver, the camera at 30 Hz, the car's own localisation; "
                         "default), or ideal (a one-instant 360-beam LiDAR, 50 Hz camera, the true pose: an ablation)")
-    p.add_argument("--sign-geometry", choices=tuple(SIGN_GEOMETRIES), default=geometry_default,
+    p.add_argument("--sign-geometry", choices=SIGN_GEOMETRY_NAMES, default=geometry_default,
                    help="the stop signs' build: plate, the LiDAR's scan plane meets the plate (default), or pole, "
                         "it meets only the 6 mm pole")
 
 
 def _detector_names() -> tuple[str, ...]:
-    from racf.controllers.detectors import DETECTORS
+    from racf.plugins import DETECTORS
 
-    return tuple(DETECTORS)
+    return DETECTORS.names()
 
 
 def service_flags(p: argparse.ArgumentParser) -> None:
@@ -310,6 +314,8 @@ def service_flags(p: argparse.ArgumentParser) -> None:
                    help="with --estimator-endpoint: the onboard defence the car runs beside the served one and "
                         "drives on where the service gives no answer: an estimator's name, or raw (its own depth, "
                         "unrepaired); default: odca, from its ONNX export")
+    from racf.experiments.link.wire import DEFAULT_TIMEOUT_MS
+
     p.add_argument("--estimator-timeout-ms", type=float, default=None, metavar="MS",
                    help=f"with --estimator-endpoint: how long the car waits for an answer, ms (default "
                         f"{DEFAULT_TIMEOUT_MS:g})")

@@ -99,8 +99,8 @@ def trial_flags(p: argparse.ArgumentParser) -> None:
     p.add_argument("--sign", type=sign, default=None,
                    help="stop sign 0-3, or crate 0-1 with --target obstacle (default 2, or 0 where the scenario "
                         "has fewer: a drive, a crate)")
-    p.add_argument("--target", choices=tuple(SCENARIOS), default="sign", metavar="SCENARIO",
-                   help=f"the scenario: {', '.join(SCENARIOS)} (default sign: approach a stop sign; obstacle: a "
+    p.add_argument("--target", choices=SCENARIOS.names(), default="sign", metavar="SCENARIO",
+                   help=f"the scenario: {', '.join(SCENARIOS.names())} (default sign: approach a stop sign; obstacle: a "
                         "crate; drive: a random 20-60 s drive, --sign 0; `racf list scenarios` says what each is)")
     p.add_argument("--speed", type=speed, default=1.0, help="cruise speed m/s, 0.1-3.0 (default 1.0)")
     p.add_argument("--seed", type=int, default=0)

@@ -16,7 +16,7 @@ from typing import Callable
 
 from racf.experiments.scorecard.headline import HEADLINE_COLUMNS, Rate, headline, row_rates
 
-__all__ = ["board_html", "card_page_name", "heat_colour", "BOARD_JS"]
+__all__ = ["board_html", "card_page_name", "heat_colour", "column_heads", "best_rows", "BOARD_JS"]
 
 
 def card_page_name(battery: str, defence: str) -> str:
@@ -46,13 +46,62 @@ def _rate_cell(rate: Rate | None, higher_is_better: bool, what: str, note: str =
             f'<b>{rate.value:.2f}</b><br><small>{_interval(rate)}{n}</small>{extra}</td>')
 
 
+#: How a measure reads in a column's head.
+_MEASURE_WORDS = {"SCR": "stop compliance", "needless stop": "needless stops"}
+
+
+def column_heads(cards: list[dict]) -> dict[str, str]:
+    """What each headline column holds on this battery, for its head: the measures its rows give
+    (stop compliance, collision-free, ...) and which way is better."""
+    kinds: dict[str, list[str]] = {"worst": [], "attacked": [], "clean": [], "needless": []}
+    for card in cards:
+        for _, _, measure, _, higher, attacked in row_rates(card):
+            where = ("worst", "attacked") if higher and attacked else ("clean",) if higher else ("needless",)
+            for key in where:
+                word = _MEASURE_WORDS.get(measure, measure)
+                if word not in kinds[key]:
+                    kinds[key].append(word)
+    heads = {key: ", ".join(words) for key, words in kinds.items() if words}
+    heads["driving"] = "mean over the rows the criteria judge, by N"
+    heads["trainable"] = "the defence's own, frozen ones aside"
+    return heads
+
+
+def best_rows(heads: list, columns) -> dict[str, str]:
+    """Per column, the defence with the best value (the higher or lower, as the column reads; a tie goes
+    to the tighter side of the interval, then to the larger N): one mark a column that two or more
+    defences fill."""
+    best = {}
+    for key, _, hib in columns:
+        def rank(h):
+            v = h.get(key)
+            if key == "trainable":
+                return (-v if not hib else v,) if v is not None else None
+            if v is None:
+                return None
+            edge = (v.ci[0] if hib else -v.ci[1]) if v.ci else 0.0
+            return ((v.value if hib else -v.value), edge, v.n)
+        ranked = [(rank(h), h.defence) for h in heads if rank(h) is not None]
+        if len(ranked) > 1:  # a lone value is no one's best
+            best[key] = max(ranked)[1]
+    return best
+
+
+def _head(label: str, what: str | None, hib: bool) -> str:
+    arrow = "higher is better &uarr;" if hib else "lower is better &darr;"
+    sub = f"{html.escape(what)}; {arrow}" if what else arrow
+    return f'<th title="click to sort">{html.escape(label)}<br><small class="racf-measure">{sub}</small></th>'
+
+
 def _headline_table(cards: list[dict], battery: str, href) -> list[str]:
     heads = [headline(c) for c in cards]
     submitted = {c["defence"]: bool(c.get("submitted")) for c in cards}
     columns = [(key, label, hib) for key, label, hib in HEADLINE_COLUMNS
                if any(h.get(key) is not None for h in heads)]
+    what = column_heads(cards)
+    best = best_rows(heads, columns)
     out = ['<table class="racf-board racf-sortable">', "<thead><tr><th>defence</th>"
-           + "".join(f'<th title="click to sort">{html.escape(label)}</th>' for _, label, _ in columns) + "</tr></thead>",
+           + "".join(_head(label, what.get(key), hib) for key, label, hib in columns) + "</tr></thead>",
            "<tbody>"]
     for h in sorted(heads, key=lambda h: -(h.worst.value if h.worst else -1)):
         name = html.escape(h.defence)
@@ -67,6 +116,9 @@ def _headline_table(cards: list[dict], battery: str, href) -> list[str]:
                 cells.append(_rate_cell(value, hib, f"{label} ({value.row})", note=str(value.row)))
             else:
                 cells.append(_rate_cell(value, hib, label))
+            if best.get(key) == h.defence:
+                cells[-1] = cells[-1].replace("<td ", '<td class="racf-best" ', 1).replace(
+                    "</td>", ' <span class="racf-star" title="best in this column">&#9733;</span></td>', 1)
         out.append("<tr>" + "".join(cells) + "</tr>")
     return out + ["</tbody></table>"]
 
@@ -117,9 +169,28 @@ def board_html(cards: list[dict], battery: str,
                href: Callable[[str, str], str | None] | None = card_page_name_for_site) -> str:
     """A battery's board: the sortable headline table, then the heatmap (one HTML block each).
     ``href(battery, defence)`` gives the link of a defence's card (None: no links)."""
+    from racf.experiments.scorecard.board_notes import coincidence_note, commit_note
+
+    notes = [note for note in (_driving_note(cards), commit_note(cards),
+                               coincidence_note(cards, battery, _cells)) if note]
     return "\n".join(["<div class=\"racf-board-wrap\" markdown=\"0\">", *_headline_table(cards, battery, href),
-                      "</div>", "", "<div class=\"racf-heatmap-wrap\" markdown=\"0\">",
-                      *_heatmap(cards, battery, href), "</div>"])
+                      "</div>", "", *[f"{note}\n" for note in notes],
+                      "<div class=\"racf-heatmap-wrap\" markdown=\"0\">", *_heatmap(cards, battery, href), "</div>"])
+
+
+def _cells(card: dict) -> tuple:
+    """Every number the board shows of a card (its headline and its rows), to find two that coincide."""
+    h = headline(card)
+    return (tuple(None if h.get(k) is None else getattr(h.get(k), "value", h.get(k)) for k, _, _ in HEADLINE_COLUMNS),
+            tuple((key, measure, round(rate.value, 9), rate.n) for key, _, measure, rate, _, _ in row_rates(card)))
+
+
+def _driving_note(cards: list[dict]) -> str:
+    """Why a battery's board has no driving score, where it has none."""
+    if any(headline(c).driving is not None for c in cards):
+        return ""
+    return ("**No driving score** on this battery: its cards were made before a card carried one for every row "
+            "its criteria judge (a card made now has it: `racf scorecard` again).")
 
 
 #: The board's sorting script (the site loads it as ``javascripts/board.js``; a scorecard's page inlines it).

@@ -22,7 +22,7 @@ import pandas as pd
 from racf.experiments.episode import TrialSpec
 from racf.experiments.scorecard.battery import PENALTIES, Battery
 from racf.experiments.scorecard.detection import detection_rows
-from racf.experiments.scorecard.drives import driving_rows
+from racf.experiments.scorecard.drives import bootstrap_mean, driving_rows
 from racf.experiments.scorecard.link import link_services
 from racf.experiments.scorecard.proof import card_episodes
 from racf.provenance import atomic_write, commit
@@ -60,6 +60,9 @@ def _loop_summary(rows: pd.DataFrame, attacked: bool) -> dict:
             "n_traffic_attack_before_t_star", "collision_rate_attack_before_t_star",
             "collision_rate_attack_before_t_star_ci")
     summary = {k: s.get(k) for k in keep if k in s} | {"measures": plugin_measures(rows, attacked)}
+    if "driving_score" in rows and rows["driving_score"].notna().any():  # the criteria's penalties, per episode
+        scores = rows["driving_score"].dropna().to_numpy(float)
+        summary |= {"driving_score": float(scores.mean()), "driving_score_ci": bootstrap_mean(scores)}
     declared = card_measures(rows)  # what the rows' criteria put on a card (collision-free, say)
     if declared:
         summary["headline"] = declared

@@ -19,7 +19,7 @@ import pandas as pd
 
 from racf.experiments.episode.scoring import score_log
 
-__all__ = ["drive_score", "driving_rows", "PASSED_THE_LINE"]
+__all__ = ["drive_score", "driving_rows", "bootstrap_mean", "PASSED_THE_LINE"]
 
 #: The failures that leave the car past its line.
 PASSED_THE_LINE = ("braked_late", "confirmed_lost", "never_confirmed")
@@ -44,7 +44,7 @@ def drive_score(log: pd.DataFrame, n_targets: int, penalties: dict[str, float], 
             "driving_score": completion * penalty}
 
 
-def _bootstrap_mean(values: np.ndarray, resamples: int = 2000) -> list[float | None]:
+def bootstrap_mean(values: np.ndarray, resamples: int = 2000) -> list[float | None]:
     if not values.size:
         return [None, None]
     rng = np.random.default_rng(0)
@@ -61,5 +61,5 @@ def driving_rows(results: pd.DataFrame, logs: list[pd.DataFrame], penalties: dic
     infractions = {k: int(sum(p["infractions"][k] for p in per)) for k in ("ran_stop_sign", "hit_static_object",
                                                                            "hit_vehicle")}
     return {"n": len(per), "driving_score": float(scores.mean()) if per else None,
-            "driving_score_ci": _bootstrap_mean(scores), "route_completion": float(completion.mean()) if per else None,
+            "driving_score_ci": bootstrap_mean(scores), "route_completion": float(completion.mean()) if per else None,
             "infractions": infractions, "targets": int(results["n_targets"].sum()) if per else 0}

@@ -7,7 +7,8 @@ Wilson interval, pooled over the battery's rows of one kind.
 - ``clean``: the same over the rows with no attack;
 - ``needless``: the rows' costs, pooled: needless stops (no sign stands) and any share a criterion
   declares lower-is-better (needless hard brakes, say);
-- ``driving``: the drives' mean driving score; ``trainable``: the defence's trainable parameters.
+- ``driving``: the mean driving score (the criteria's penalties, CARLA's way) over every row that has
+  one, drives included, each row weighted by its N; ``trainable``: the defence's trainable parameters.
 
 A measure the battery has no row for is None. The board (``racf.experiments.scorecard.board``) and
 the card page (``racf.experiments.scorecard.card_page``) read it.
@@ -24,7 +25,7 @@ __all__ = ["Rate", "Headline", "headline", "row_rates", "HEADLINE_COLUMNS"]
 #: (key, label, higher is better) of the headline's columns, in the order a reader wants them.
 HEADLINE_COLUMNS = (("worst", "worst attacked row", True), ("attacked", "attacked rows, pooled", True),
                     ("clean", "clean rows, pooled", True), ("needless", "needless stops or hard brakes", False),
-                    ("driving", "driving score (drives)", True), ("trainable", "trainable parameters", False))
+                    ("driving", "driving score", True), ("trainable", "trainable parameters", False))
 
 
 @dataclass(frozen=True)
@@ -100,11 +101,12 @@ def headline(card: dict) -> Headline:
     primary = [(rate, attacked) for _, _, _, rate, higher, attacked in rows if higher]
     attacked = [rate for rate, hit in primary if hit]
     needless = [rate for _, _, _, rate, higher, _ in rows if not higher]
-    drives = [r for r in card.get("drives", {}).values() if r.get("driving_score") is not None]
+    scored = [r for r in (*card.get("closed_loop", {}).values(), *card.get("drives", {}).values())
+              if r.get("driving_score") is not None]
     driving = None
-    if drives:
-        n = sum(r["n"] for r in drives)
-        mean = sum(r["driving_score"] * r["n"] for r in drives) / n
+    if scored:  # every row whose episodes the criteria judged, each weighted by its N
+        n = sum(r["n"] for r in scored)
+        mean = sum(r["driving_score"] * r["n"] for r in scored) / n
         driving = Rate(mean, None, n)
     return Headline(card["defence"], card["battery"], min(attacked, key=lambda r: r.value, default=None),
                     Rate.pooled(attacked), Rate.pooled([rate for rate, hit in primary if not hit]),

@@ -24,10 +24,12 @@ from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
 from contextlib import contextmanager, nullcontext
 from pathlib import Path
-from typing import Callable, Iterator
+from typing import TYPE_CHECKING, Callable, Iterator
 
 from racf.errors import EpisodeFailed, UserError
-from racf.experiments.episode import TrialSpec
+
+if TYPE_CHECKING:  # the spec's module imports the simulator: a command's --help must not wait for it
+    from racf.experiments.episode import TrialSpec
 
 __all__ = ["BACKENDS", "SINGLE_THREAD_ENV", "CodeChangedError", "Workers", "check_backend", "single_thread",
            "spawn_pool", "run_episode", "episode_task", "local_executor", "ray_executor", "ray_session",

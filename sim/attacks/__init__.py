@@ -18,23 +18,25 @@ a user's register the same way (or come from a ``--plugin`` file). Attacks take 
 order (racf's own by name, then plug-ins by name) in a setting's name.
 """
 
-from racf.sim.attacks.base import AttackWrapper
-from racf.sim.attacks.confidence_degradation import ConfidenceDegradation
-from racf.sim.attacks.depth_bias import DepthBias
-from racf.sim.attacks.depth_blackout import DepthBlackout
-from racf.sim.attacks.frustum_spoof import FrustumSpoof
-from racf.sim.attacks.lidar_dropout import LidarDropout
-from racf.sim.attacks.lidar_spoof import LidarSpoof
-from racf.sim.attacks.link import LinkDelay, LinkDrop, LinkSpoof
-from racf.sim.attacks.patch_occlusion import PatchOcclusion, paste_occluder, patch_rows
-from racf.sim.attacks.physical_patch import PhysicalPatch
-from racf.sim.attacks.schedule import AttackSchedule
-from racf.sim.attacks.stale import StaleData
-from racf.sim.attacks.stealth_ramp import StealthRamp
-from racf.sim.attacks.timed_dropout import TimedDropout
+import lazy_loader
 
+# Each name is imported on first use (SPEC 1): a command's --help never waits for the simulator.
+__getattr__, __dir__, __all__ = lazy_loader.attach(__name__, submod_attrs={
+    "base": ["AttackWrapper"],
+    "confidence_degradation": ["ConfidenceDegradation"],
+    "depth_bias": ["DepthBias"],
+    "depth_blackout": ["DepthBlackout"],
+    "frustum_spoof": ["FrustumSpoof"],
+    "lidar_dropout": ["LidarDropout"],
+    "lidar_spoof": ["LidarSpoof"],
+    "link": ["LinkDelay", "LinkDrop", "LinkSpoof"],
+    "patch_occlusion": ["PatchOcclusion", "paste_occluder", "patch_rows"],
+    "physical_patch": ["PhysicalPatch"],
+    "schedule": ["AttackSchedule"],
+    "stale": ["StaleData"],
+    "stealth_ramp": ["StealthRamp"],
+    "timed_dropout": ["TimedDropout"],
+})
 from racf.plugins import ATTACKS  # noqa: E402  (every attack wrapper by name, plug-ins included)
 
-__all__ = ["ATTACKS", "AttackSchedule", "AttackWrapper", "ConfidenceDegradation", "DepthBias", "DepthBlackout",
-           "FrustumSpoof", "LidarDropout", "LidarSpoof", "LinkDelay", "LinkDrop", "LinkSpoof", "PatchOcclusion", "PhysicalPatch", "StaleData", "StealthRamp", "TimedDropout",
-           "paste_occluder", "patch_rows"]
+__all__ += ["ATTACKS"]

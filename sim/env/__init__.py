@@ -1,6 +1,9 @@
 """The Gymnasium env of the QCar 2 on the indoor map."""
 
-from racf.sim.env.config import EnvConfig
-from racf.sim.env.qcar2_env import QCar2Env
+import lazy_loader
 
-__all__ = ["EnvConfig", "QCar2Env"]
+# Each name is imported on first use (SPEC 1): a command's --help never waits for the simulator.
+__getattr__, __dir__, __all__ = lazy_loader.attach(__name__, submod_attrs={
+    "config": ["EnvConfig"],
+    "qcar2_env": ["QCar2Env"],
+})

@@ -127,6 +127,27 @@ def test_the_leaderboard_sorts_and_its_boards_fit_1280_px(site, browser):
     assert problems == []
 
 
+def test_each_board_names_its_measures_marks_one_best_per_column_and_has_a_driving_score_or_says_why(site, browser):
+    page, problems = open_page(browser, (site / "results" / "leaderboard.html").as_uri())
+    boards = page.locator("table.racf-board")
+    assert boards.count() >= 6
+    for b in range(boards.count()):
+        board = boards.nth(b)
+        heads = board.locator("thead th")
+        names = heads.all_inner_texts()
+        for i in range(1, heads.count()):  # every head but the defence's names its measure and its direction
+            assert heads.nth(i).locator("small.racf-measure").count() == 1, names[i]
+            assert "is better" in heads.nth(i).inner_text(), names[i]
+            column = board.locator(f"tbody tr td:nth-child({i + 1})")
+            valued = [v for v in (column.nth(r).get_attribute("data-sort") for r in range(column.count())) if v]
+            best = board.locator(f"tbody tr td:nth-child({i + 1}).racf-best")
+            assert best.count() == (1 if len(valued) > 1 else 0), names[i]
+        heading = board.locator("xpath=preceding::h2[1]").inner_text()
+        said_why = board.locator("xpath=following::p[1]").inner_text().startswith("No driving score")
+        assert any(n.startswith("driving score") for n in names) != said_why, heading
+    assert problems == []
+
+
 def test_a_card_shows_its_headline_in_the_first_screen(site, browser):
     page, problems = open_page(browser, (site / "results" / "cards" / "racf-5-vote.html").as_uri())
     top = page.locator("table.racf-headline").bounding_box()

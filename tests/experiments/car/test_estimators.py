@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from racf.controllers import PerceptionSample
-from racf.experiments.episode import ESTIMATORS, make_estimator
+from racf.experiments.car.estimators import ESTIMATORS, make_estimator
 
 
 def _samples(depths, lidar_offset=0.0):
