@@ -23,6 +23,7 @@ from racf.errors import UserError
 from racf.experiments.bags import messages as m
 from racf.experiments.bags.frames import ReplayFrames
 from racf.experiments.bags.mapping import Mapping
+from racf.experiments.bags.mount import LidarMountCheck
 from racf.experiments.bags.recording import Recording
 from racf.experiments.bags.topics import SCAN_DELIVERED, SCAN_TIMES, SIGN_MASK, TRUTH_PREFIX
 from racf.experiments.episode.plan import car_calibration, plan_episode
@@ -34,6 +35,7 @@ from racf.sim.attacks import ATTACKS
 from racf.sim.sensors.camera import CameraIntrinsics
 from racf.sim.sensors import TIMESTAMP_FIELDS
 from racf.sim.sensors.a2m12 import driver_scan
+from racf.sim.sensors.calibration import car_build
 from racf.sim.sensors.state import OdometryConfig
 
 __all__ = ["BagEnv", "Replay", "replay_bag", "check_attacks", "offline_scores"]
@@ -87,6 +89,7 @@ class BagEnv(gym.Env):
         self._obs: dict = {"timestamps": np.zeros(len(TIMESTAMP_FIELDS))}
         self._truth: dict = {}
         self._mask = np.zeros((self.height, self.width), bool)
+        self.frame_size: tuple[int, int] | None = None  # the recorded frames' (width, height), once one is seen
         self._k = -1
         # The car starts once every required stream has spoken (a bag racf wrote: at its first step).
         while not {"rgb", "depth", "lidar", "gps", "state"} <= set(self._obs):
@@ -141,6 +144,7 @@ class BagEnv(gym.Env):
         self.truth_columns |= {t[len(TRUTH_PREFIX):] for t in msgs if t.startswith(TRUTH_PREFIX) and t != SIGN_MASK}
 
     def _camera(self, image: np.ndarray, interpolation: int) -> np.ndarray:
+        self.frame_size = self.frame_size or (image.shape[1], image.shape[0])
         crop = self.mapping.camera_crop
         if crop is not None:
             x0, y0, x1, y1 = crop
@@ -212,6 +216,9 @@ class Replay:
     #: What the replayed data has seen, as a setting: the recording's own attacks, those the replay
     #: added, and the defence that ran (``spec.setting`` names only what the replay applies).
     setting: str = ""
+    #: What looks wrong with the recording's mapping, a line each (a LiDAR mount that seldom agrees
+    #: with the depth: ``racf.experiments.bags.mount``).
+    warnings: tuple[str, ...] = ()
 
 
 def replay_bag(path: str | Path, mapping: Mapping | None = None, defence: str | None = None,
@@ -249,9 +256,15 @@ def replay_bag(path: str | Path, mapping: Mapping | None = None, defence: str | 
         env = wrap_attacks(env, spec)
     bag = env.unwrapped
     obs, info = env.reset(seed=spec.seed)
+    plan = _declared_build(plan, recording.mapping, bag.frame_size, size)
     car = build_car(spec, plan, None)
     grant_white_box(env, car.estimator)
-    frames = ReplayFrames(plan.calibration, CameraIntrinsics.d435_colour(*size)) if record else None
+    k = plan.calibration.camera
+    frames = ReplayFrames(plan.calibration, CameraIntrinsics(size[0], size[1], k.fx, k.fy or k.fx, k.cx,
+                                                             k.cy if k.cy is not None else (size[1] - 1) / 2.0)
+                          ) if record else None
+    build = car_build(*size)
+    mount = LidarMountCheck(plan.calibration, build.lidar_height_m - build.camera_height_m)
     actions = ActionLine(int(round(spec.delay_ms / 1000.0 / plan.control_dt_s)))
     rows: list[dict] = []
     referee = columns_of(REFEREE)
@@ -265,7 +278,7 @@ def replay_bag(path: str | Path, mapping: Mapping | None = None, defence: str | 
         truth["collision_with"] = ""
         rows.append(step_row({**car_columns(car, step, obs, info["time"], applied), **truth},
                              car.estimator.diagnostics()))
-        for hook in (frames, on_step):
+        for hook in (frames, mount, on_step):
             if hook is not None:
                 hook(env, obs, info, rows[-1])
         if bag.exhausted:
@@ -279,7 +292,30 @@ def replay_bag(path: str | Path, mapping: Mapping | None = None, defence: str | 
     log = log.drop(columns=list(absent))
     log.attrs["absent_ground_truth"] = list(absent)
     seen = setting_name(tuple(dict.fromkeys(recording_attacks + tuple(attacks))), estimator)
-    return Replay(log, spec, absent, tuple(attacks), offline_scores(log), frames, seen)
+    return Replay(log, spec, absent, tuple(attacks), offline_scores(log), frames, seen,
+                  tuple(filter(None, [mount.warning(recording.mapping)])))
+
+
+def _declared_build(plan, mapping: Mapping, frame_size: tuple[int, int] | None, size: tuple[int, int]):
+    """The plan with the car's build as the recording declares it: the camera's intrinsics (cropped and
+    resized with the frames) and the LiDAR's position; what it does not declare stays racf's model."""
+    from dataclasses import replace
+
+    from racf.controllers.distance import CameraModel
+
+    calibration = plan.calibration
+    declared = mapping.car_intrinsics(*frame_size, size) if frame_size else None
+    if declared is not None:
+        fx, fy, cx, cy = declared
+        if not (0.0 <= cx <= size[0] and 0.0 <= cy <= size[1]):
+            raise UserError(f"mapping {mapping.source}: [camera] the principal point lands at ({cx:.1f}, {cy:.1f}) "
+                            f"in the car's {size[0]}x{size[1]} frames, outside them: check intrinsics against the "
+                            f"recorded {frame_size[0]}x{frame_size[1]} frames and the crop")
+        calibration = replace(calibration, camera=CameraModel(width=size[0], fx=fx, cx=cx, fy=fy, cy=cy))
+    if mapping.lidar_position_m is not None:
+        calibration = replace(calibration, lidar_xy_m=mapping.lidar_position_m)
+    return replace(plan, calibration=calibration)
+
 
 
 def _height(plan) -> int:

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 import time
 from pathlib import Path
 
@@ -106,7 +107,10 @@ def _replay(args: argparse.Namespace) -> int:
                "wall_s": round(wall, 2), "wall_per_recorded_s": round(wall / max(simulated, 1e-9), 3),
                "ground_truth": not {"d_true", "x"} <= set(replay.absent),
                "absent_columns": list(replay.absent), "offline": replay.scores,
-               "brake_steps": int(replay.log["brake"].sum()), "detected_steps": int(replay.log["detected"].sum())}
+               "brake_steps": int(replay.log["brake"].sum()), "detected_steps": int(replay.log["detected"].sum()),
+               "warnings": list(replay.warnings)}
+    for warning in replay.warnings:  # on stderr, a line each: the JSON on stdout stays one object
+        print(f"racf replay-bag: warning: {warning}", file=sys.stderr)
     atomic_write(args.out / f"{name}.json", json.dumps(summary, indent=2, allow_nan=False))
     if replay.frames is not None:
         from racf.experiments.episode.rerun_log import write_rrd

@@ -88,9 +88,11 @@ def test_bag_info_counts_topics_and_rates(exported):
 
 
 def _rewrite(src: Path, dst: Path, rename: dict[str, str], width: int, height: int, drop: str | None = None,
-             pad: int = 0) -> None:
+             pad: int = 0, warp=None) -> None:
     """``src`` as another recording would have it: topics renamed, the images resized (then framed by
-    ``pad`` pixels of another colour on every side), no racf metadata."""
+    ``pad`` pixels of another colour on every side), or drawn by another camera (``warp(image,
+    interpolation)``), no racf metadata."""
+    resize = warp or (lambda image, how: cv2.resize(image, (width, height), interpolation=how))
     from rosbags.rosbag2 import Reader, StoragePlugin, Writer
 
     from racf.experiments.bags import messages as m
@@ -104,10 +106,10 @@ def _rewrite(src: Path, dst: Path, rename: dict[str, str], width: int, height: i
             msg = store.deserialize_cdr(raw, conn.msgtype)
             framed = {"constant_values": 200} if pad else {}
             if conn.topic == "/camera/color_image":
-                image = cv2.resize(m.rgb_from(msg), (width, height), interpolation=cv2.INTER_NEAREST)
+                image = resize(m.rgb_from(msg), cv2.INTER_NEAREST if warp is None else cv2.INTER_LINEAR)
                 msg = m.image_msg(np.pad(image, ((pad, pad), (pad, pad), (0, 0)), **framed), m.stamp_of(msg))
             elif conn.topic == "/camera/depth_image":
-                image = cv2.resize(m.depth_from(msg), (width, height), interpolation=cv2.INTER_NEAREST)
+                image = resize(m.depth_from(msg), cv2.INTER_NEAREST)
                 msg = m.depth_msg(np.pad(image, pad, constant_values=7.0), m.stamp_of(msg))
             topic = rename.get(conn.topic, conn.topic)
             if topic not in conns:
@@ -149,6 +151,66 @@ def test_a_padded_foreign_frame_is_cropped_back_to_the_episode(exported, tmp_pat
     mapping.write_text(mapping.read_text().replace("[16, 16, 1296, 736]", "[16, 16, 1400, 736]"))
     with pytest.raises(UserError, match=r"crop \[16, 16, 1400, 736\] reaches beyond the recording's 1312x752 frames"):
         replay_bag(foreign, Mapping.load(mapping))
+
+
+#: A true 16:9 camera at 1280 x 720 with the D435's 16:9 field of view (69.4 degrees), square pixels.
+TRUE_16_9 = (924.0, 924.0, 639.5, 359.5)
+_MAPPED = ('[topics]\nrgb = "/qcar2/rgbd/color"\ndepth = "/qcar2/rgbd/depth"\nscan = "/qcar2/lidar"\n'
+           'imu = "/qcar2/imu"\njoint = "/qcar2/joint"\nfix = "/qcar2/pose"\n\n[camera]\ncrop = [160, 0, 1120, 720]\n'
+           'size = [320, 240]\n{camera}\n[lidar]\n{lidar}\n[mission]\nsetting = "clean+odca"\nsign = 1\nspeed = 1.0\n')
+
+
+def _seen_by(k, width: int, height: int):
+    """The simulated frames as a camera of intrinsics ``k`` at the same place would have drawn them:
+    a pinhole camera's change of intrinsics is the homography K_new K_old^-1."""
+    from racf.sim.sensors.camera import CameraIntrinsics
+
+    old = CameraIntrinsics.d435_colour(320, 240)
+    matrix = lambda fx, fy, cx, cy: np.array([[fx, 0, cx], [0, fy, cy], [0, 0, 1.0]])
+    h = matrix(*k) @ np.linalg.inv(matrix(old.fx, old.fy, old.cx, old.cy))
+    return lambda image, how: cv2.warpPerspective(image, h, (width, height), flags=how)
+
+
+@pytest.fixture(scope="module")
+def defended(tmp_path_factory):
+    """A clean approach with ODCA (which checks the depth against the size witness), exported, and the
+    same drawn by a 1280 x 720 16:9 camera (``TRUE_16_9``) on other topics."""
+    exported = export_episode(TrialSpec("clean+odca", 1, 1.0, 3), tmp_path_factory.mktemp("bags") / "clean")
+    foreign = tmp_path_factory.mktemp("bags") / "hd"
+    _rewrite(exported.path, foreign, RENAMED, 1280, 720, warp=_seen_by(TRUE_16_9, 1280, 720))
+    return exported, foreign
+
+
+def _first_brake(log) -> float:
+    braked = log.loc[log["brake"].astype(bool), "t"]
+    return float(braked.iloc[0]) if len(braked) else math.inf
+
+
+def _rmse(log, truth) -> float:
+    return float(np.sqrt(np.nanmean((log["d_fused"].to_numpy() - truth["d_true"].to_numpy()) ** 2)))
+
+
+def test_a_16_9_camera_declared_by_its_intrinsics_brakes_where_the_simulator_does(defended, tmp_path):
+    exported, foreign = defended
+    mapping = lambda camera: Mapping.from_dict(__import__("tomllib").loads(_MAPPED.format(camera=camera, lidar="")))
+    declared = replay_bag(foreign, mapping(f"intrinsics = {list(TRUE_16_9)}"))
+    native = replay_bag(exported.path)
+    assert abs(_first_brake(declared.log) - _first_brake(exported.log)) <= 0.04
+    assert abs(_rmse(declared.log, exported.log) - native.scores["rmse_m"]) <= 0.01
+    # The field of view says as much here (square pixels, centred), and saying nothing is what the issue met:
+    by_fov = replay_bag(foreign, mapping("hfov_deg = 69.42"))
+    assert abs(_first_brake(by_fov.log) - _first_brake(exported.log)) <= 0.04
+    undeclared = replay_bag(foreign, mapping(""))  # racf's D435 assumed: the sign is never confirmed
+    assert _first_brake(undeclared.log) - _first_brake(exported.log) > 0.1 and declared.warnings == ()
+
+
+def test_a_lidar_mount_turned_90_degrees_is_one_line_naming_what_to_check(defended):
+    exported, foreign = defended
+    text = _MAPPED.format(camera=f"intrinsics = {list(TRUE_16_9)}", lidar="yaw_deg = 90")
+    replay = replay_bag(foreign, Mapping.from_dict(__import__("tomllib").loads(text)))
+    assert len(replay.warnings) == 1 and "\n" not in replay.warnings[0]
+    assert "the LiDAR's returns agree with the depth image on" in replay.warnings[0]
+    assert "[lidar] yaw_deg (now 90" in replay.warnings[0] and replay_bag(exported.path).warnings == ()
 
 
 @pytest.mark.parametrize("damage", ["random bytes", "cut in half", "a chunk scrambled"])
