@@ -98,6 +98,13 @@ def register(sub: argparse._SubParsersAction) -> None:
     bd.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
     bd.set_defaults(handler=_bench_detector)
 
+    bo = sub.add_parser("bench-poses", help="stop-sign detectors' recall over the poses real signs stand in: turned "
+                                            "about the pole and leaned back, at the approach distances")
+    bo.add_argument("--detector", choices=("both", *DETECTORS.names()), default="both",
+                    help="which detector(s) to measure (default both, side by side)")
+    bo.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
+    bo.set_defaults(handler=_bench_poses)
+
     br = sub.add_parser("bench-radio", help="what checking the car ahead's signed broadcast costs: Ed25519 "
                                            "verification per message on one core (p50, p99) against the 20 ms period")
     br.add_argument("--messages", type=int, default=5000, help="messages timed, one at a time (default 5000)")
@@ -314,6 +321,38 @@ def _bench_traffic_views(args: argparse.Namespace) -> int:
             print(f"{r['case']:<12}{r['estimator']:<10}{name:<9}{x['scr']:>8.2f} {fmt_ci(*x['scr_ci']):>13}"
                   f"{x['collisions']:>11}{x['recall']:>8.3f}{x['depth_off_share']:>11.3f}{x['lidar_off_share']:>11.3f}")
     return 0
+
+
+def _bench_poses(args: argparse.Namespace) -> int:
+    import json
+
+    from tqdm import tqdm
+
+    from racf.controllers.detectors import make_detector
+    from racf.experiments.detector.pose_grid import DISTANCES_M, GRID, LEANS_DEG, TURNS_DEG, pose_recall, pose_views
+    from racf.plugins import DETECTORS
+
+    names = tuple(DETECTORS) if args.detector == "both" else (args.detector,)
+    total = 4 * len(DISTANCES_M) * len(TURNS_DEG) * len(LEANS_DEG)
+    views = tqdm(pose_views(), total=total, desc="pose grid", unit="view", disable=args.json)
+    result = pose_recall({name: make_detector(name) for name in names}, views)
+    if args.json:
+        print(json.dumps(result, indent=1, allow_nan=False))
+        return 0
+    print(f"recall over the pose grid ({GRID}); each cell: recall [95 % CI] (N resolvable views)")
+    for name in names:
+        print(f"\n{name}: overall {_recall(result[name]['overall'])}")
+        print(f"{'lean / turn':<12}" + "".join(f"{t:>25g}" for t in TURNS_DEG))
+        for lean in LEANS_DEG:
+            cells = [result[name]["by_pose"].get(f"{turn:g},{lean:g}") for turn in TURNS_DEG]
+            print(f"{lean:<12g}" + "".join(f"{_recall(c):>25}" for c in cells))
+    return 0
+
+
+def _recall(rate: dict | None) -> str:
+    if not rate or rate["recall"] is None:
+        return "-"
+    return f"{rate['recall']:.2f} {fmt_ci(*rate['ci'])} ({rate['n']})"
 
 
 def _bench_detector(args: argparse.Namespace) -> int:

@@ -77,6 +77,8 @@ COMMANDS: dict[str, tuple[str, str | None]] = {
                               "alternation on one core: ms a step of each and their ratio"),
     "bench-detector": ("bench", "stop-sign detectors side by side: recall and false-positive frames "
                                 "on held-out views and approach drives, time per frame on one core"),
+    "bench-poses": ("bench", "stop-sign detectors' recall over the poses real signs stand in: turned "
+                             "about the pole and leaned back, at the approach distances"),
     "bench-radio": ("bench", "what checking the car ahead's signed broadcast costs: Ed25519 "
                              "verification per message on one core (p50, p99) against the 20 ms "
                              "period"),

@@ -19,7 +19,7 @@ __all__ = ["GROUPS", "add_groups", "canonical_argv"]
 GROUPS: dict[str, tuple[str, dict[str, str]]] = {
     "bench": ("benchmarks: the offline repair benchmark and the speed and detector tests",
               {"offline": "bench-offline", "sim": "bench-sim", "loop": "bench-loop", "detector": "bench-detector",
-               "radio": "bench-radio",
+               "radio": "bench-radio", "poses": "bench-poses",
                "traffic": "bench-traffic", "patch": "bench-patch", "odca-latency": "odca-latency", "odca-onboard": "bench-odca-onboard",
                "service": "bench-service", "service-stress": "bench-service-stress", "bags": "bench-bags", "guard": "bench-guard",
                "paired": "bench-paired"}),

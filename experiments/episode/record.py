@@ -102,6 +102,8 @@ STEP_COLUMNS: tuple[Column, ...] = (
     _c(REFEREE, "d_true", "m", "ground truth: the target's depth along the camera axis"),
     _c(REFEREE, "d_clean", "m", "the car's perception on the unattacked readings (the protocol's pseudo ground "
                                 "truth; NaN under attack without the clean pass)"),
+    _c(REFEREE, "clean_detected", "bool", "the car's detector finds the target on the unattacked frame (its box "
+                                          "on the target's pixels): a frame an attack can be blamed for losing"),
     _c(REFEREE, "sign_in_view", "bool", "ground truth: some of the target is visible (never where no sign stands)"),
     _c(REFEREE, "sign_stands", "bool", "ground truth: a real target stands there (False: a removed sign, a phantom)"),
     _c(REFEREE, "ideal_brake", "bool", "the reference braker (fed d_true) brakes: its first step is t*"),

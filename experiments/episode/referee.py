@@ -5,7 +5,8 @@ feeds nothing back. Per step it runs:
 - the reference braker that defines t*: the same braking controller fed d_true while the
   target is in view, on every step, without delay;
 - the ``d_clean`` pass: the protocol's pseudo ground truth, the car's detector and depth
-  pipeline on the env's own readings before any attack;
+  pipeline on the env's own readings before any attack, and whether that detector finds the
+  target there at all (``clean_detected``: a frame the detector misses clean is no attack's loss);
 - the ground-truth log columns (pose, speed, distance to the line, d_true, visibility, what
   the car touched), then every column the world's managers declare, copied from ``info`` by name
   (the referee knows none of them).
@@ -49,6 +50,7 @@ class Referee:
         self._slot = -1
         self._ideal: StopSignBraker | None = None
         self._d_clean = math.nan
+        self._clean_detected = False
 
     def _begin(self, target: RouteTarget) -> None:
         self._ideal = StopSignBraker(self.braking, sign_depth_at_line(self.calibration, target))
@@ -65,7 +67,7 @@ class Referee:
             self._slot = car.slot
             self._begin(target)
         if car.control and car.frame_new:  # d_clean is of the frame, like the car's d_meas
-            self._d_clean = self._clean_distance(env, obs, car, perception)
+            self._d_clean, self._clean_detected = self._clean_pass(env, obs, car, perception, info)
         # Where no target stands in the world (the map's sign was removed; a phantom may look like one),
         # there is nothing to brake for.
         stands = bool(info["target_stands"])
@@ -73,7 +75,8 @@ class Referee:
         ideal = self._ideal.step(in_view, float(info["d_true"]) if in_view else math.nan, float(info["speed"]), self.dt)
         x, y, yaw = (float(v) for v in info["pose"])
         return {
-            "d_true": info["d_true"], "d_clean": self._d_clean, "sign_in_view": in_view, "sign_stands": stands,
+            "d_true": info["d_true"], "d_clean": self._d_clean, "clean_detected": self._clean_detected and in_view,
+            "sign_in_view": in_view, "sign_stands": stands,
             "ideal_brake": ideal.brake, "x": x, "y": y, "yaw": yaw, "speed": info["speed"],
             "dist_to_stop_line": info["dist_to_stop_line"], "lateral_error": info["lateral_error"],
             "attack_active": bool(info.get("attack_active", False)), "attack": "+".join(info.get("attack", ())),
@@ -83,12 +86,27 @@ class Referee:
             **{name: info[name] for name in self.world_columns},
         }
 
-    def _clean_distance(self, env: gym.Env, obs: dict, car: CarStep, perception: Perception) -> float:
+    def _clean_pass(self, env: gym.Env, obs: dict, car: CarStep, perception: Perception, info: dict
+                    ) -> tuple[float, bool]:
+        """``d_clean`` (NaN under attack without the clean pass) and whether the car's detector finds the
+        target on the unattacked frame (run under attack whatever ``clean_pass`` says: ``lost_frames``
+        counts only the frames it finds)."""
         if not self.attacked:
-            return car.sample.d_meas
-        if not self.clean_pass:
-            return math.nan
+            return car.sample.d_meas, _on_target(perception.last_raw_detection, info)
         clean = env.unwrapped.sensor_observation()
         unchanged = np.array_equal(clean["rgb"], obs["rgb"])
         detection = perception.last_raw_detection if unchanged else perception.detector.detect(clean["rgb"])
-        return perception.depth.estimate(clean["depth"][..., 0], detection)[0]
+        distance = perception.depth.estimate(clean["depth"][..., 0], detection)[0] if self.clean_pass else math.nan
+        return distance, _on_target(detection, info)
+
+
+def _on_target(detection, info: dict) -> bool:
+    """Whether a detection's box holds some of the target's pixels (the referee's mask), so that a red
+    car or a picture found instead of the sign is no detection of it."""
+    if detection is None:
+        return False
+    mask = info.get("sign_mask")
+    if mask is None:
+        return True
+    x0, y0, x1, y1 = detection.box
+    return bool(np.asarray(mask)[y0:y1, x0:x1].any())

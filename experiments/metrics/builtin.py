@@ -42,7 +42,9 @@ class AttackMeasures(Metric):
         Field("rho", _NAN, "", "the patch's coverage share (NaN: no patch)"),
         Field("t_atk_s", _NAN, "s", "the first attack window's length"),
         Field("attack_start_s", _NAN, "s", "when the first attack window began (NaN: no attack began)"),
-        Field("lost_frames", 0, "frames", "steps the sign was in view and attacked but not detected"),
+        Field("lost_frames", 0, "frames", "steps the sign was in view and attacked but not detected, of those the "
+                                          "car's detector finds on the unattacked frame (a sign it cannot see "
+                                          "clean is not the attack's loss)"),
     )
 
     def score(self, episode: Episode) -> dict:
@@ -52,7 +54,7 @@ class AttackMeasures(Metric):
         return {"rho": patch.rho if patch is not None else _NAN,
                 "t_atk_s": windows[0][1] - windows[0][0] if windows else _NAN,
                 "attack_start_s": windows[0][0] if windows else _NAN,
-                "lost_frames": int((log["attack_active"] & log["sign_in_view"] & ~log["detected"]).sum())}
+                "lost_frames": int((log["attack_active"] & log["clean_detected"] & ~log["detected"]).sum())}
 
     def summarize(self, results: pd.DataFrame, attacked: bool) -> dict:
         if not attacked:

@@ -41,6 +41,7 @@ def detector_markdown(d: _Data) -> str:
         lines += _default_verdict(data["detectors"]) + _heldout_breakdown(data["detectors"])
     else:
         lines += _missing("bench-detector", "racf bench detector --json")
+    lines += _pose_grid(d)
     lines += ["## The sticker in the scene, per view", ""]
     if "bench-patch" in d:
         data = d["bench-patch"]
@@ -187,3 +188,34 @@ def _sticker_rows(data: dict) -> list[str]:
                  for c in (recall.get(row["params"], {}).get(b, {"n": 0}) for b in bands)]
         lines.append(f"| {texture} | {row['n']} | {_rate(row['scr'], row['scr_ci'])} | " + " | ".join(cells) + " |")
     return lines + [""]
+
+
+def _pose_grid(d: _Data) -> list[str]:
+    """The detectors' recall over the pose grid (``racf bench poses``): a table per detector, a row per lean
+    and a column per turn, each cell pooled over the approach distances and the four signs."""
+    lines = ["## The detectors over the poses real signs stand in", ""]
+    if "bench-poses" not in d:
+        return lines + _missing("bench-poses", "racf bench poses --json")
+    data = d["bench-poses"]
+    names = [k for k, v in data.items() if isinstance(v, dict) and "by_pose" in v]
+    turns = sorted({float(k.split(",")[0]) for n in names for k in data[n]["by_pose"]})
+    leans = sorted({float(k.split(",")[1]) for n in names for k in data[n]["by_pose"]})
+    lines += _meta(data["meta"]) + [
+        f"Real signs stand turned on their poles and leaned back. Recall over the grid ({data['grid']}; "
+        f"{data['n_views']} views, of which those with the sign resolvable count: N per cell), each cell pooled over "
+        "the distances and the signs; the camera on the lane's centre line, the room's light as built.", ""]
+    for name in names:
+        overall = data[name]["overall"]
+        lines += [f"**{name}**: {_rate(overall['recall'], overall['ci'], 2)} over all {overall['n']} resolvable views.", "",
+                  "| lean \\ turn | " + " | ".join(f"{t:g} deg" for t in turns) + " |",
+                  "|---|" + "---|" * len(turns)]
+        for lean in leans:
+            cells = [data[name]["by_pose"].get(f"{t:g},{lean:g}") for t in turns]
+            lines.append(f"| {lean:g} deg | " + " | ".join(
+                "-" if c is None or c["recall"] is None else f"{_rate(c['recall'], c['ci'], 2)} ({c['n']})"
+                for c in cells) + " |")
+        lines.append("")
+    worst = {n: min((c["recall"], k) for k, c in data[n]["by_pose"].items() if c["recall"] is not None) for n in names}
+    lines += ["Where each falls shortest: " + "; ".join(f"`{n}` {r:.2f} at turn {k.split(',')[0]} deg, lean "
+                                                     f"{k.split(',')[1]} deg" for n, (r, k) in worst.items()) + ".", ""]
+    return lines

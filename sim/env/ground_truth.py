@@ -147,13 +147,15 @@ def sign_view(sign: StopSign, cam_pos: np.ndarray, cam_mat: np.ndarray,
     return _result(centre, mask)
 
 
-def face_area_px(sign: StopSign, cam_pos: np.ndarray, cam_mat: np.ndarray, intrinsics: CameraIntrinsics) -> float:
+def face_area_px(sign: StopSign, cam_pos: np.ndarray, cam_mat: np.ndarray, intrinsics: CameraIntrinsics,
+                 motion: Motion | None = None) -> float:
     """Area in pixels of the sign's whole face projected on the image plane, as if nothing hid it
     and the image had no edges (0 when the camera sees its back or a corner is behind it); the
-    share of it that ``sign_view``'s mask holds is how much of the sign a frame shows."""
+    share of it that ``sign_view``'s mask holds is how much of the sign a frame shows. ``motion``:
+    how the sign's body stands off its map pose (None: where the map says)."""
     world_to_opt = _MJ_TO_OPTICAL @ cam_mat.T
-    corners = (world_to_opt @ (_octagon_world(sign) - cam_pos).T).T
-    facing = float(np.dot(cam_pos - sign.centre, [math.cos(sign.face_yaw), math.sin(sign.face_yaw), 0.0])) > 0
+    corners = (world_to_opt @ (_moved(motion, _octagon_world(sign)) - cam_pos).T).T
+    facing = float(np.dot(cam_pos - target_centre(sign, motion), _face_normal(sign, motion))) > 0
     if not facing or (corners[:, 2] <= 0.05).any():
         return 0.0
     u, v = intrinsics.project(corners).T

@@ -87,7 +87,8 @@ def test_strong_patch_attack_hides_the_sign_and_the_car_runs_the_line():
     assert result.rho == 1.0 and result.t_atk_s == pytest.approx(3.0)
     attacked = log[log["attack_active"]]
     assert len(attacked) > 10 and (attacked["attack"] == "patch_occlusion").all()
-    assert result.lost_frames == int((attacked["sign_in_view"] & ~attacked["detected"]).sum()) > 10
+    assert result.lost_frames == int((attacked["clean_detected"] & ~attacked["detected"]).sum()) > 10
+    assert (attacked["clean_detected"] <= attacked["sign_in_view"]).all()  # the referee's detector sees only a sign in view
     # d_clean comes from the unattacked readings: finite where the attacked pipeline has nothing.
     hidden = attacked[attacked["sign_in_view"] & ~attacked["detected"]]
     assert hidden["d_meas"].isna().all() and hidden["d_clean"].notna().mean() > 0.8
@@ -95,6 +96,29 @@ def test_strong_patch_attack_hides_the_sign_and_the_car_runs_the_line():
     first = attacked.index[0]
     assert log.loc[first - 5:first, "sign_in_view"].all() and log.loc[first - 1, "confirmed"]
     assert log.loc[first, "dist_to_stop_line"] <= 1.0 * log.loc[first, "speed"] + 0.05
+
+
+class _Blind:
+    """A detector that sees nothing: no frame it misses is an attack's doing."""
+
+    name = "blind_to_signs"
+
+    def detect(self, rgb):
+        return None
+
+
+def test_lost_frames_count_only_frames_the_clean_detector_would_have_seen():
+    from racf.plugins import DETECTORS
+
+    DETECTORS.register(_Blind)
+    try:
+        result, log = run_trial(TrialSpec("attack", 0, 1.0, 0, detector="blind_to_signs",
+                                          attack_params={"patch_occlusion": {"trigger": "at_time", "start_s": 1.0}}))
+    finally:
+        DETECTORS._all().pop(_Blind.name)
+    attacked = log[log["attack_active"]]
+    assert int((attacked["sign_in_view"] & ~attacked["detected"]).sum()) > 10  # what lost_frames counted before
+    assert not attacked["clean_detected"].any() and result.lost_frames == 0
 
 
 def test_clean_obstacle_trial_stops_before_the_crate():
