@@ -14,13 +14,15 @@ from __future__ import annotations
 
 import itertools
 import math
+import textwrap
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
-__all__ = ["Moment", "Target", "SIGN", "LEAD", "target_of", "choose_moment", "moment_figure"]
+__all__ = ["Moment", "Target", "SIGN", "LEAD", "target_of", "choose_moment", "moment_figure", "episode_outcome",
+           "gaps_caption"]
 
 #: How long after an attack starts its effect is shown where no defence answers, s.
 _SETTLE_S = 0.33
@@ -38,20 +40,29 @@ class Target:
     truth_label: str
 
 
-SIGN = Target("the sign", "d_true", "d_meas", "lidar", "d_fused", "d_true, the sign in view (the referee's)")
+SIGN = Target("the sign", "d_true", "d_meas", "lidar", "d_fused",
+              "the camera's depth to the sign, in view (the referee's d_true)")
 LEAD = Target("the car ahead", "lead_gap", "lead_d_meas", "lead_lidar", "lead_d_fused",
-              "the clear gap to the car ahead (the referee's)")
+              "the camera to the car ahead's rear, along its axis (the referee's)")
 
 
 def target_of(log: pd.DataFrame, targets=()) -> tuple[Target, pd.DataFrame]:
     """The car ahead where the episode follows one: the first vehicle its world declares
-    (``WorldTarget``) that was in the world while the following stage gave a distance, its clear gap
-    added to the log as ``lead_gap``; else the sign."""
+    (``WorldTarget``) that was in the world while the following stage gave a distance, with the
+    truth added to the log as ``lead_gap``: from the car's camera to the lead's rear along the
+    camera's axis, the reference its depth and its defence measure from (the picture draws every
+    distance from one reference); else the sign (``d_true``: the camera's depth to it already)."""
     if np.isfinite(_col(log, LEAD.fused)).any():
+        from racf.sim.sensors.calibration import car_build
+
+        cx, cy = car_build(320, 240).camera_xy_m
         for declared in targets:
             x, y = (_col(log, c) for c in declared.pose_columns[:2])
             if declared.kind == "vehicle" and np.isfinite(x).any():
-                gap = np.hypot(x - _col(log, "x"), y - _col(log, "y")) - declared.size_m[0]
+                yaw = _col(log, "yaw")
+                c, s = np.cos(yaw), np.sin(yaw)
+                cam_x, cam_y = _col(log, "x") + c * cx - s * cy, _col(log, "y") + s * cx + c * cy
+                gap = (x - cam_x) * c + (y - cam_y) * s - declared.size_m[0] / 2
                 return LEAD, log.assign(lead_gap=gap)
     return SIGN, log
 
@@ -167,6 +178,58 @@ def _m(value) -> str:
     return "-" if value is None or not math.isfinite(float(value)) else f"{float(value):.2f} m"
 
 
+def _acted_label(spec) -> str:
+    """What the car acted on: the defence's distance, or the raw depth where no defence ran."""
+    from racf.experiments.episode import parse_setting
+
+    return "the raw depth acted on (no defence)" if parse_setting(spec.setting)[1] == "raw" else "the defence's distance"
+
+
+def episode_outcome(log: pd.DataFrame, target: Target = SIGN) -> tuple[float, str] | None:
+    """When and how the episode ended for the car: its first contact, else (following a car) its
+    closest approach without one, else where it came to rest after braking (before or past the
+    line), else None."""
+    t = log["t"].to_numpy(float)
+    if "collision_with" in log:
+        hit = np.flatnonzero(log["collision_with"].fillna("").astype(str).to_numpy() != "")
+        if hit.size:
+            return float(t[hit[0]]), f"collision with {log['collision_with'].iloc[hit[0]]}"
+    if target is LEAD and np.isfinite(_col(log, target.truth)).any():
+        closest = int(np.nanargmin(_col(log, target.truth)))
+        return float(t[closest]), f"no contact: closest {_m(log[target.truth].iloc[closest])} from the camera"
+    brake = np.flatnonzero(_flag(log, "brake"))
+    speed = _col(log, "speed")
+    if brake.size:
+        rest = np.flatnonzero((np.arange(len(log)) >= brake[0]) & (np.abs(speed) < 0.02))
+        if rest.size:
+            line = _col(log, "dist_to_stop_line")[rest[0]]
+            where = "" if target is not SIGN or not math.isfinite(line) else (
+                f", {line:.2f} m before the line" if line >= 0 else f", {-line:.2f} m past the line")
+            return float(t[rest[0]]), f"the car at rest{where}"
+    passed = np.flatnonzero(_col(log, "dist_to_stop_line") < 0) if target is SIGN else np.array([], int)
+    if passed.size:
+        return float(t[passed[0]]), "the car passes the line without stopping"
+    return None
+
+
+def gaps_caption(log: pd.DataFrame, target: Target, in_view: np.ndarray, names: dict[str, str]) -> str:
+    """Where a line breaks while the target is in view, and why: its source gave no distance then."""
+    dt = float(np.median(np.diff(log["t"].to_numpy(float)))) if len(log) > 1 else 0.0
+    why = {target.meas: "no detection held the target", target.lidar: "no LiDAR cluster was tracked on it",
+           target.fused: "it had no confirmed target: before the track is confirmed, or while it is lost"}
+    parts = []
+    for column, label in names.items():
+        values = _col(log, column)
+        if not np.isfinite(values).any():
+            continue
+        first, last = np.flatnonzero(np.isfinite(values))[[0, -1]]
+        holes = in_view & ~np.isfinite(values) & (np.arange(len(log)) > first) & (np.arange(len(log)) < last)
+        if holes.any():
+            parts.append(f"{label} has none for {holes.sum() * dt:.2f} s while {target.noun} is in view "
+                         f"({why[column]})")
+    return ("Gaps: " + "; ".join(parts) + ".") if parts else ""
+
+
 def moment_figure(spec, out: str | Path, log: pd.DataFrame | None = None, title: str | None = None) -> Path:
     """Writes the picture of ``spec``'s moment to ``out`` (PNG); returns its path. ``log`` is the
     episode's step log if it is at hand (else the episode is run for it first)."""
@@ -187,10 +250,13 @@ def moment_figure(spec, out: str | Path, log: pd.DataFrame | None = None, title:
     row = frame["row"]
     rows, cols = _crop(frame, frame["rgb"].shape[:2])
     origin = (rows.start, cols.start)
-    fig = plt.figure(figsize=(13, 8.4), layout="constrained")
-    grid = fig.add_gridspec(2, 3, height_ratios=[1.0, 0.95])
+    fig = plt.figure(figsize=(15, 8.6), layout="constrained")
+    # The legend has a column of its own beside the distances: it never lies on the data.
+    grid = fig.add_gridspec(2, 4, height_ratios=[1.0, 0.95], width_ratios=[1.0, 1.0, 1.0, 0.62])
     clean, seen, dep = (fig.add_subplot(grid[0, i]) for i in range(3))
-    ser = fig.add_subplot(grid[1, :])
+    ser = fig.add_subplot(grid[1, :3])
+    key = fig.add_subplot(grid[1, 3])
+    key.axis("off")
     clean.imshow(frame["clean"][rows, cols])
     clean.set_title("what stands there (no attack)", fontsize=10)
     seen.imshow(frame["rgb"][rows, cols])
@@ -198,7 +264,7 @@ def moment_figure(spec, out: str | Path, log: pd.DataFrame | None = None, title:
     depth = np.where(frame["depth"] > 0, frame["depth"], np.nan)[rows, cols]
     finite = depth[np.isfinite(depth)]
     shown = dep.imshow(depth, cmap="viridis", vmin=0.0, vmax=float(np.percentile(finite, 95)) if finite.size else 3.0)
-    dep.set_title("what its depth camera reads (m; blank: no return)", fontsize=10)
+    dep.set_title("its depth camera (m; blank: no return)", fontsize=10)
     fig.colorbar(shown, ax=dep, fraction=0.046, pad=0.02)
     if frame["changed"].any():
         r, c = np.nonzero(frame["changed"])
@@ -211,10 +277,12 @@ def moment_figure(spec, out: str | Path, log: pd.DataFrame | None = None, title:
         ax.set_xticks([]), ax.set_yticks([])
     t = log["t"].to_numpy(float)
     in_view = _flag(log, "sign_in_view") if target is SIGN and "sign_in_view" in log else np.ones(len(log), bool)
-    for name, style, label in ((target.truth, dict(color="black", lw=2), target.truth_label),
-                               (target.meas, dict(color="grey", ls="none", marker=".", ms=4), "the depth in the box"),
-                               (target.lidar, dict(color="#9467bd", lw=1, alpha=0.8), "the LiDAR's track"),
-                               (target.fused, dict(color="#1f77b4", lw=2), "the defence's distance")):
+    acted = _acted_label(spec)
+    lines = ((target.truth, dict(color="black", lw=2), target.truth_label),
+             (target.meas, dict(color="grey", ls="none", marker=".", ms=4), "the depth in the box"),
+             (target.lidar, dict(color="#9467bd", lw=1, alpha=0.8), "the LiDAR's track"),
+             (target.fused, dict(color="#1f77b4", lw=2), acted))
+    for name, style, label in lines:
         values = _col(log, name)
         values = np.where(in_view, values, np.nan) if name == target.truth else values
         if np.isfinite(values).any():
@@ -227,12 +295,18 @@ def moment_figure(spec, out: str | Path, log: pd.DataFrame | None = None, title:
     if brake.size:
         ser.axvline(t[brake[0]], color="#d62728", lw=1.2, label="brake command")
     ser.axvline(moment.t, color="#ff7f0e", lw=2.5, ls="--", label=f"the moment above ({moment.t:.2f} s)")
-    ser.set(xlabel="t (s)", ylabel=f"distance to {target.noun} (m)")
+    outcome = episode_outcome(log, target)
+    if outcome is not None:
+        ser.axvline(outcome[0], color="black", lw=2, ls=":", label=f"{outcome[1]} ({outcome[0]:.2f} s)")
+    caption = gaps_caption(log, target, in_view, {target.meas: "the depth", target.lidar: "the LiDAR's track",
+                                                  target.fused: acted})
+    xlabel = "t (s)" + ("\n\n" + "\n".join(textwrap.wrap(caption, 150)) if caption else "")
+    ser.set(xlabel=xlabel, ylabel=f"distance from the camera to {target.noun} (m)")
     ser.grid(alpha=0.3)
-    ser.legend(fontsize=8, loc="upper right", ncols=2)
+    key.legend(*ser.get_legend_handles_labels(), fontsize=8, loc="upper left", frameon=False)
     truth = log[target.truth].iloc[moment.step] if target.truth in log else math.nan
-    numbers = (f"t = {moment.t:.2f} s, {moment.why}: {target.noun} {_m(truth)} away, the depth reads "
-               f"{_m(row.get(target.meas))}, the defence says {_m(row.get(target.fused))}")
+    numbers = (f"t = {moment.t:.2f} s, {moment.why}: {target.noun} {_m(truth)} from the camera, the depth reads "
+               f"{_m(row.get(target.meas))}, {acted} {_m(row.get(target.fused))}")
     where = f"{spec.target} {spec.sign}" if spec.target != "sign" else f"sign {spec.sign}"
     fig.suptitle((title or f"{spec.setting} at {where}, {spec.speed:g} m/s, seed {spec.seed}") + "\n" + numbers,
                  fontsize=11)
