@@ -6,6 +6,7 @@ the development install's tree of links (pyproject's package-dir: ``racf`` = ``c
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 from mkdocs.plugins import event_priority
@@ -19,3 +20,13 @@ def on_config(config, **kwargs):
     write_pages(Path(config["docs_dir"]))
     write_readme(root / "README.md")
     return config
+
+
+#: A link of the boards' HTML to a card's page: Markdown, so that it works on GitHub too.
+_CARD_LINK = re.compile(r'href="(cards/[^"#]+)\.md"')
+
+
+def on_page_content(html, page, config, files):
+    """The boards' links to card pages, written as ``.md`` (GitHub follows them), point at the built
+    ``.html`` pages: mkdocs rewrites Markdown's links, not those inside raw HTML."""
+    return _CARD_LINK.sub(r'href="\1.html"', html)

@@ -314,7 +314,7 @@ def service_flags(p: argparse.ArgumentParser) -> None:
                    help="with --estimator-endpoint: the onboard defence the car runs beside the served one and "
                         "drives on where the service gives no answer: an estimator's name, or raw (its own depth, "
                         "unrepaired); default: odca, from its ONNX export")
-    from racf.experiments.link.wire import DEFAULT_TIMEOUT_MS
+    from racf.experiments.link.timing import DEFAULT_TIMEOUT_MS
 
     p.add_argument("--estimator-timeout-ms", type=float, default=None, metavar="MS",
                    help=f"with --estimator-endpoint: how long the car waits for an answer, ms (default "

@@ -112,10 +112,12 @@ def battery_markdown() -> str:
                   "", "| row | what | N | quick N | attacked |", "|---|---|---|---|---|"]
         lines += [f"| `{r.key}` | {r.title} | {r.n} | {r.n_quick} | {'yes' if r.attacked else 'no'} |"
                   for r in battery.rows()]
-        lines += ["", f"Offline: presets {', '.join(battery.offline_presets)} on the `{battery.offline_split}` test "
-                      f"drives, {battery.offline_draws} corruption draws ({battery.offline_draws_quick} quick); the "
-                      "strong RMSE also as a ratio to Chronos-only's. Detection: from every closed-loop row's step "
-                      "logs. Cost: trainable parameters and the per-step time. Driving-score penalties: "
+        offline = (f"Offline: presets {', '.join(battery.offline_presets)} on the `{battery.offline_split}` test "
+                   f"drives, {battery.offline_draws} corruption draws ({battery.offline_draws_quick} quick); the strong "
+                   "RMSE also as a ratio to Chronos-only's." if battery.offline_presets else
+                   "Offline: none (the battery rates the closed loop only).")
+        lines += ["", f"{offline} Detection: from every closed-loop row's step logs. Cost: trainable parameters and "
+                      "the per-step time. Driving score: every row the criteria judge, and the drives. Penalties: "
                       + ", ".join(f"{k.replace('_', ' ')} x {v}" for k, v in PENALTIES.items()) + ".", ""]
     return "\n".join(lines)
 

@@ -29,7 +29,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     what.add_argument("--attack", metavar="NAME", help="rate an attack against every registered defence")
     what.add_argument("--compare", nargs=2, metavar=("A", "B"),
                       help="two stored cards side by side (a defence's name in --out, or a card's JSON file)")
-    sc.add_argument("--battery", default=None, help="the battery (default: the newest, racf-4)")
+    from racf.experiments.scorecard.battery_names import BATTERY_NAMES, DEFAULT_BATTERY
+
+    sc.add_argument("--battery", default=None, choices=BATTERY_NAMES, metavar="NAME",
+                    help=f"the battery: {', '.join(BATTERY_NAMES)} (default {DEFAULT_BATTERY}, the stop-sign battery the "
+                         "leaderboard's paper rows follow; `docs/reference/battery.md` lists each one's rows)")
     sc.add_argument("--target", default=None, metavar="SCENARIO",
                     help="run the battery's stop-sign approaches in this scenario (racf list shows them; its cards "
                          "are named BATTERY@SCENARIO[PARAMETERS])")

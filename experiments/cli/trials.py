@@ -115,9 +115,26 @@ def trial_summary(row: dict, log: Path, result: Path) -> str:
             f"{row['seed']}: {verdict}")
     shown = {k: v for k, v in row.items() if k not in _IDENTITY and k not in ("success", "failure") and v is not None}
     width = max(map(len, shown), default=0)
-    body = [f"  {k.ljust(width)}  {v:.3g}" if isinstance(v, float) else f"  {k.ljust(width)}  {v}"
-            for k, v in shown.items()]
-    return "\n".join([head, *body, f"log: {log}; row: {result} (--json prints it)"])
+    meanings = _field_meanings() | {c.name: f"the criterion: {c.checks}" for c in criteria}
+    values = {k: f"{v:.3g}" if isinstance(v, float) else str(v) for k, v in shown.items()}
+    room = max(map(len, values.values()), default=0)
+    body = [f"  {k.ljust(width)}  {values[k].ljust(room)}  {meanings.get(k, '')}".rstrip() for k in shown]
+    return "\n".join([head, *body, f"log: {log}; row: {result} (--json prints it); every field: {GLOSSARY}"])
+
+
+#: Where every field of the result row is explained.
+GLOSSARY = "docs/reference/step-log.md#the-result-row"
+
+
+def _field_meanings() -> dict[str, str]:
+    """Each registered metric's fields, by name: unit and meaning, as the glossary gives them."""
+    from racf.plugins import METRICS
+
+    out = {}
+    for name in METRICS:
+        for f in METRICS[name].fields:
+            out.setdefault(f.name, f"({f.unit}) {f.meaning}" if f.unit else f.meaning)
+    return out
 
 
 def _trials(args: argparse.Namespace) -> int:

@@ -33,14 +33,7 @@ PROTOCOL = 2
 DISTANCE_RANGE_M = (0.0, 50.0)
 #: Request ids are counters below this (msgpack's int64).
 MAX_REQUEST_ID = 2 ** 63 - 1
-#: How long a car waits for an answer before it falls back, and how much of its own time then
-#: passes before it asks again. Set from the measured round trip with a margin: 8 cars at 50 Hz
-#: on 2 cores (``racf bench service-stress --cars 8 --seconds 120 --timeout-ms 2000``) had a
-#: p99 of 9.2 ms, a p99.9 of 31 ms and a longest of 49 ms, and the p99 beside a sweep was about
-#: 46 ms; 150 ms is three times the longest, so a loaded machine's tail is waited for. A car that
-#: got no answer asks again 0.2 s later (10 steps), not 1 s (50 steps of its own depth).
-DEFAULT_TIMEOUT_MS = 150.0
-DEFAULT_RETRY_S = 0.2
+from racf.experiments.link.timing import DEFAULT_RETRY_S, DEFAULT_TIMEOUT_MS  # noqa: E402,F401  (their home)
 #: The largest message either end reads. A step's sample is about 10 kB (a 320x240 mask,
 #: bit-packed); a calibration less: 1 MiB leaves room for larger cameras and nothing more.
 MAX_MESSAGE_BYTES = 1 << 20

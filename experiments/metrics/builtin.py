@@ -87,7 +87,8 @@ class Outcome(Metric):
         Field("stop_distance_m", _NAN, "m", "front bumper to the first target's line at rest"),
         Field("t_star_s", _NAN, "s", "t*: when the reference controller first brakes"),
         Field("t_brake_s", _NAN, "s", "when the car first braked"),
-        Field("trigger_delay_s", _NAN, "s", "t(brake) - t*"),
+        Field("trigger_delay_s", _NAN, "s", "t(brake) - t*, t* the reference braker's first brake (negative: the car "
+                                            "braked before it would have, which is early, not wrong)"),
         Field("dt_brake_s", _NAN, "s", "the paper's latency: t* to braking within 0.60 m of the line"),
         Field("failure", None, "", f"where a failed first target went wrong: one of {', '.join(FAILURES)}"),
         Field("duration_s", _NAN, "s", "the episode's length"),
@@ -152,9 +153,11 @@ class StealthMeasures(Metric):
     needs_criterion = "stop_rule"
     higher_is_better = {"undetected_error_m": False, "detected": True}
     fields = (
-        Field("undetected_error_m", _NAN, "m", "the largest |d_fused - d_true| before the defence's first flag"),
+        Field("undetected_error_m", _NAN, "m", "the largest |d_fused - d_true| before the defence's first flag (over "
+                                               "the whole attack where it never flagged)"),
         Field("detection_delay_s", _NAN, "s", "the attack's start to the defence's first flag"),
-        Field("detected", False, "", "the defence flagged the attack"),
+        Field("detected", False, "", "the defence flagged the attack (False: it never flagged it, whatever the car "
+                                     "did: an attack can fail unflagged)"),
     )
 
     def score(self, episode: Episode) -> dict:
@@ -172,7 +175,8 @@ class Robustness(Metric):
     always, order = True, 50
     needs_criterion = "stop_rule"
     higher_is_better = {"robustness_m": True}
-    fields = (Field("robustness_m", _NAN, "m", "the stop rule's STL robustness, lowest over the targets"),)
+    fields = (Field("robustness_m", _NAN, "m", "the stop rule's STL robustness, lowest over the targets: how far the "
+                                           "car stayed from breaking the rule (negative: it broke it, by that much)"),)
 
     def score(self, episode: Episode) -> dict:
         if not StopRule().applies(episode):  # no stop rule where no target stands

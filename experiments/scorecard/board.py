@@ -2,7 +2,8 @@
 per battery, one line per defence with its headline (sortable by any column: ``assets/board.js``),
 then a heatmap of the battery's rows against the defences, each cell coloured by its rate with its
 interval beneath, a row's N beside its title and everything on hover. A defence's name leads to its
-card page (``href``; on the site ``cards/<battery>-<defence>.html``).
+card page (``href``: ``cards/<battery>-<defence>.md``, which GitHub follows; the site's build turns
+these links of the board's HTML into its ``.html`` pages, as mkdocs does for Markdown's: docs/hooks.py).
 
 The colour says how good a value is (green good, red bad), whichever way its measure points; the
 numbers stay in the cell, so the colour is never the only carrier (and the heatmap reads in grey).
@@ -159,14 +160,8 @@ def _name(defence: str, battery: str, href) -> str:
     return code if link is None else f'<a href="{html.escape(link, quote=True)}">{code}</a>'
 
 
-def card_page_name_for_site(battery: str, defence: str) -> str:
-    """A card's page as the results site links it from ``results/leaderboard.html``: the built page
-    (mkdocs rewrites the links of Markdown, not those of the HTML the board is written in)."""
-    return card_page_name(battery, defence).removesuffix(".md") + ".html"
-
-
 def board_html(cards: list[dict], battery: str,
-               href: Callable[[str, str], str | None] | None = card_page_name_for_site) -> str:
+               href: Callable[[str, str], str | None] | None = card_page_name) -> str:
     """A battery's board: the sortable headline table, then the heatmap (one HTML block each).
     ``href(battery, defence)`` gives the link of a defence's card (None: no links)."""
     from racf.experiments.scorecard.board_notes import coincidence_note, commit_note

@@ -27,12 +27,12 @@ def test_the_index_is_what_the_modules_declare():
 
 
 @pytest.mark.parametrize("argv", [["--version"], ["--help"], ["bench", "--help"], ["board", "verify", "--help"],
-                                  ["odca", "train", "--help"], ["bench", "sim", "--help"]])
+                                  ["odca", "train", "--help"], ["bench", "sim", "--help"], ["scorecard", "--help"]])
 def test_the_version_the_list_of_commands_and_light_commands_import_no_simulator(argv):
     assert not _imported(argv) & (HEAVY | SIMULATOR)
 
 
-@pytest.mark.parametrize("argv", [["trial", "--help"], ["scorecard", "--help"], ["bag", "replay", "--help"]])
+@pytest.mark.parametrize("argv", [["trial", "--help"], ["sweep", "--help"], ["bag", "replay", "--help"]])
 def test_an_episode_command_s_help_imports_neither_torch_nor_scikit_learn(argv):
     assert not _imported(argv) & HEAVY
 
@@ -43,6 +43,13 @@ def test_the_flags_choices_name_what_the_simulator_defines():
     from racf.sim.world.stop_signs import SIGN_GEOMETRIES
 
     assert SENSOR_PROFILE_NAMES == tuple(SENSOR_PROFILES) and SIGN_GEOMETRY_NAMES == tuple(SIGN_GEOMETRIES)
+
+
+def test_the_battery_names_the_help_offers_are_the_batteries():
+    from racf.experiments.scorecard.battery import BATTERIES
+    from racf.experiments.scorecard.battery_names import BATTERY_NAMES, DEFAULT_BATTERY
+
+    assert BATTERY_NAMES == tuple(BATTERIES) and DEFAULT_BATTERY in BATTERIES
 
 
 def test_a_registry_names_its_parts_as_it_lists_them():

@@ -73,3 +73,21 @@ def test_an_episode_goes_to_sign_2_unless_its_scenario_has_no_third_target(argv,
     for command in ("trial", "export-bag"):
         args = build_parser().parse_args([command, *(["/tmp/racf-unused-bag"] if command == "export-bag" else []), *argv])
         assert trial_spec(args, command).sign == index
+
+
+def test_a_trial_s_printed_fields_say_what_they_mean_and_where_the_glossary_is(tmp_path):
+    from racf.experiments.cli.trials import GLOSSARY, trial_summary
+
+    row = {"trial_id": "x", "setting": "attack", "estimator": "raw", "target": "sign", "sign": 1, "speed": 1.0,
+           "seed": 0, "success": False, "failure": "confirmed_lost", "detected": False, "trigger_delay_s": -0.12,
+           "robustness_m": -1.1, "undetected_error_m": 0.4, "lost_frames": 21, "stop_rule": False}
+    text = trial_summary(row, tmp_path / "log.parquet", tmp_path / "row.json")
+    lines = {line.split()[0]: line for line in text.splitlines()[1:-1]}
+    assert "never flagged it" in lines["detected"] and "early, not wrong" in lines["trigger_delay_s"]
+    assert "negative: it broke it" in lines["robustness_m"] and "first flag" in lines["undetected_error_m"]
+    assert "unattacked frame" in lines["lost_frames"] and "the criterion: the car came to rest" in lines["stop_rule"]
+    assert text.splitlines()[-1].endswith(f"every field: {GLOSSARY}")
+    from pathlib import Path
+
+    page, anchor = GLOSSARY.split("#")
+    assert f"## {anchor.replace('-', ' ').capitalize()}" in Path(page).read_text()

@@ -21,7 +21,7 @@ def test_the_best_worst_row_comes_first_and_names_lead_to_cards():
     page = board_html(CARDS, "racf-5")
     board, heat = page.split("racf-heatmap-wrap")
     assert board.index("<code>vote</code>") < board.index("<code>raw</code>")
-    assert 'href="cards/racf-5-vote.html"' in board and 'href="cards/racf-5-raw.html"' in heat
+    assert 'href="cards/racf-5-vote.md"' in board and 'href="cards/racf-5-raw.md"' in heat  # GitHub's; the site's build: .html
     assert 'data-sort="0.250000"' in board and "[0.15, 0.35] N 60" in board
     # Every defence and row in the heatmap, with its N and interval on hover.
     assert heat.count("<tr>") == 3 and "<td rowspan=\"1\">60</td>" in heat and 'title="vote, SCR: 0.980 [0.880, 1.000], N 60"' in heat
