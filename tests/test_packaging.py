@@ -110,3 +110,18 @@ def test_no_module_of_racfs_packages_is_over_400_lines():
     long = {str(p.relative_to(ROOT)): n for folder in set(TOPS.values()) for p in (ROOT / folder).rglob("*.py")
             if (n := len(p.read_text().splitlines())) > 400}
     assert long == {}
+
+
+def test_each_lazy_package_names_the_same_imports_for_editors_as_its_stub():
+    """A package that loads its names on first use (lazy_loader, from its ``__init__.pyi``) lists the same
+    imports under TYPE_CHECKING in its ``__init__.py``, for editors that read no stub."""
+    import ast
+
+    stubs = sorted(ROOT.glob("*/__init__.pyi")) + sorted(ROOT.glob("*/*/__init__.pyi"))
+    assert len(stubs) >= 6
+    for stub in stubs:
+        def imports(tree):
+            return sorted((node.module, tuple(a.name for a in node.names)) for node in ast.walk(tree)
+                          if isinstance(node, ast.ImportFrom) and node.level == 1)
+        init = stub.with_suffix(".py")
+        assert imports(ast.parse(stub.read_text())) == imports(ast.parse(init.read_text())), init

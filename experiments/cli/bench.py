@@ -350,9 +350,7 @@ def _bench_poses(args: argparse.Namespace) -> int:
 
 
 def _recall(rate: dict | None) -> str:
-    if not rate or rate["recall"] is None:
-        return "-"
-    return f"{rate['recall']:.2f} {fmt_ci(*rate['ci'])} ({rate['n']})"
+    return "-" if not rate or rate["recall"] is None else f"{rate['recall']:.2f} {fmt_ci(*rate['ci'])} ({rate['n']})"
 
 
 def _bench_detector(args: argparse.Namespace) -> int:

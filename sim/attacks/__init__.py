@@ -18,25 +18,27 @@ a user's register the same way (or come from a ``--plugin`` file). Attacks take 
 order (racf's own by name, then plug-ins by name) in a setting's name.
 """
 
+from typing import TYPE_CHECKING
+
 import lazy_loader
 
-# Each name is imported on first use (SPEC 1): a command's --help never waits for the simulator.
-__getattr__, __dir__, __all__ = lazy_loader.attach(__name__, submod_attrs={
-    "base": ["AttackWrapper"],
-    "confidence_degradation": ["ConfidenceDegradation"],
-    "depth_bias": ["DepthBias"],
-    "depth_blackout": ["DepthBlackout"],
-    "frustum_spoof": ["FrustumSpoof"],
-    "lidar_dropout": ["LidarDropout"],
-    "lidar_spoof": ["LidarSpoof"],
-    "link": ["LinkDelay", "LinkDrop", "LinkSpoof"],
-    "patch_occlusion": ["PatchOcclusion", "paste_occluder", "patch_rows"],
-    "physical_patch": ["PhysicalPatch"],
-    "schedule": ["AttackSchedule"],
-    "stale": ["StaleData"],
-    "stealth_ramp": ["StealthRamp"],
-    "timed_dropout": ["TimedDropout"],
-})
-from racf.plugins import ATTACKS  # noqa: E402  (every attack wrapper by name, plug-ins included)
+# Each name is imported on first use (SPEC 1), as __init__.pyi lists them: importing the package costs
+# nothing, so the command line's help never waits for torch, scikit-learn or the simulator.
+__getattr__, __dir__, __all__ = lazy_loader.attach_stub(__name__, __file__)
 
-__all__ += ["ATTACKS"]
+if TYPE_CHECKING:  # the same names for editors that read no stub (jedi); a test holds the two lists equal
+    from .base import AttackWrapper
+    from .confidence_degradation import ConfidenceDegradation
+    from .depth_bias import DepthBias
+    from .depth_blackout import DepthBlackout
+    from .frustum_spoof import FrustumSpoof
+    from .lidar_dropout import LidarDropout
+    from .lidar_spoof import LidarSpoof
+    from .link import LinkDelay, LinkDrop, LinkSpoof
+    from .patch_occlusion import PatchOcclusion, paste_occluder, patch_rows
+    from .physical_patch import PhysicalPatch
+    from .registry import ATTACKS
+    from .schedule import AttackSchedule
+    from .stale import StaleData
+    from .stealth_ramp import StealthRamp
+    from .timed_dropout import TimedDropout

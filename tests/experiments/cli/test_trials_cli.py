@@ -56,7 +56,7 @@ def test_cli_trial_prints_a_summary_a_reader_can_scan(tmp_path, capsys):
     assert main(["trial", "--sign", "2", "--speed", "1.0", "--seed", "0", "--out", str(tmp_path)]) == 0
     lines = capsys.readouterr().out.splitlines()
     assert lines[0] == "racf trial: clean on sign 2 at 1 m/s, seed 0: success"
-    measures = dict(line.split(None, 1) for line in lines[1:-1])
+    measures = {line.split()[0]: line.split()[1] for line in lines[1:-1]}  # the name, its value, what it means
     assert measures["stopped"] == "True" and float(measures["stop_distance_m"]) < 0.5
     assert "t_star_s" in measures and not any(v == "None" for v in measures.values())  # unmeasured: left out
     row = json.loads(Path(lines[-1].split("row: ")[1].split(" (")[0]).read_text())

@@ -131,9 +131,10 @@ def test_racf_7_pairs_each_following_row_alone_and_under_the_supervisor_on_the_s
         assert not any(s.supervisor for s in alone) and all(s.supervisor for s in supervised)
         assert [dataclasses.replace(s, supervisor=False) for s in supervised] == alone
         assert all("+supervisor_" in s.trial_id for s in supervised)
-        if key in {r.key for r in six.loop}:  # racf-6's episodes, alone, are racf-7's: ids included
-            same = next(r for r in six.loop if r.key == key).specs("odca", quick=True)
-            assert [s.trial_id for s in same] == [s.trial_id for s in alone]
+        if key in {r.key for r in six.loop}:  # racf-6's episodes, alone, are racf-7's at full N: ids included
+            same = next(r for r in six.loop if r.key == key).specs("odca")
+            assert [s.trial_id for s in same] == [s.trial_id for s in next(r for r in seven.loop if r.key == key)
+                                                                   .specs("odca")]
     # The broadcast rows: the supervised rows' episodes with the lead broadcasting (the same seeds).
     def row(key):
         return next(r for r in seven.loop if r.key == key).specs("odca", quick=True)
