@@ -7,6 +7,7 @@ from __future__ import annotations
 import json
 
 import pandas as pd
+import pytest
 
 from tests.conftest import run_cli
 
@@ -20,6 +21,7 @@ def _trial(tmp_path, setting: str) -> tuple[dict, pd.DataFrame]:
     return row, pd.read_parquet(row["log"])
 
 
+@pytest.mark.slow  # a long episode (10 s or more): CI's slow stage runs it
 def test_the_car_follows_the_car_that_cut_in_without_touching_it(cut_in_installed, tmp_path):
     row, log = _trial(tmp_path, "clean+odca")
     assert row["no_cutin_contact"] is True and row["collision_with"] is None

@@ -33,6 +33,7 @@ def _trial(tmp_path, gap_s: float) -> tuple[dict, pd.DataFrame]:
     return row, pd.read_parquet(row["log"])
 
 
+@pytest.mark.slow  # a long episode (10 s or more): CI's slow stage runs it
 def test_the_car_that_meets_the_person_stops_for_them_with_its_own_emergency_brake(pedestrian_installed, tmp_path):
     """Timed to meet the car (gap 0): its LiDAR scans over a 1/10-scale person, but the example's car stage
     finds them upright in the lane in the depth and caps the speed: the car stops short and drives on once
@@ -47,6 +48,7 @@ def test_the_car_that_meets_the_person_stops_for_them_with_its_own_emergency_bra
     assert log.loc[before, "speed"].min() < 0.25 and log["pedestrian_crossed"].iloc[-1]
 
 
+@pytest.mark.slow  # a long episode (10 s or more): CI's slow stage runs it
 def test_a_late_person_crosses_behind_the_stopped_car_and_the_episode_waits_for_them(pedestrian_installed, tmp_path):
     row, log = _trial(tmp_path, 2.0)
     assert row["success"] and row["no_pedestrian_collision"] is True and row["driving_score"] == 1.0

@@ -56,6 +56,11 @@ TESTS = {
     "experiments/car/broadcast.py": [f"{CAR}/test_broadcast.py", "tests/sim/attacks/test_radio_attacks.py",
                                      f"{CAR}/test_following_stage.py"],
     "sim/attacks/broadcast.py": ["tests/sim/attacks/test_radio_attacks.py"],
+    # Results a user can check (issue 71): a card's episodes and its verification, a recording's mapping.
+    "experiments/scorecard/verify.py": ["tests/experiments/scorecard/test_verify.py",
+                                        "tests/experiments/scorecard/test_submission.py"],
+    "experiments/scorecard/proof.py": ["tests/experiments/scorecard/test_verify.py"],
+    "experiments/bags/mapping.py": ["tests/experiments/bags/test_mapping.py"],
 }
 #: The link's modules (the default run of `make mutate`); the others run with MODULES="...".
 def mutated() -> list[str]:

@@ -190,6 +190,7 @@ def _rmse(log, truth) -> float:
     return float(np.sqrt(np.nanmean((log["d_fused"].to_numpy() - truth["d_true"].to_numpy()) ** 2)))
 
 
+@pytest.mark.slow  # a 1280 x 720 bag drawn and replayed four times (11 s): CI's slow stage runs it
 def test_a_16_9_camera_declared_by_its_intrinsics_brakes_where_the_simulator_does(defended, tmp_path):
     exported, foreign = defended
     mapping = lambda camera: Mapping.from_dict(__import__("tomllib").loads(_MAPPED.format(camera=camera, lidar="")))

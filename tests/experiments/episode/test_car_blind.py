@@ -65,10 +65,12 @@ class ScrambledInfo(gym.Wrapper):
                                   TrialSpec("clean+lead_patch+odca", 1, 1.0, 1, target="lead_vehicle",
                                             scenario_params={"brake_t": 1.0},
                                             attack_params={"lead_patch": {"start_s": 0.5}}),
-                                  # The same under the supervisor (its chain, its carried target, its lane return).
-                                  TrialSpec("clean+lead_patch+odca", 1, 1.0, 1, target="lead_vehicle",
-                                            scenario_params={"brake_t": 1.0}, supervisor=True,
-                                            attack_params={"lead_patch": {"start_s": 0.5}}),
+                                  # The same under the supervisor (its chain, its carried target, its lane return):
+                                  # 18 s, in the slow run.
+                                  pytest.param(TrialSpec("clean+lead_patch+odca", 1, 1.0, 1, target="lead_vehicle",
+                                                         scenario_params={"brake_t": 1.0}, supervisor=True,
+                                                         attack_params={"lead_patch": {"start_s": 0.5}}),
+                                               marks=pytest.mark.slow),
                                   # The lead's whole default profile: the long episode, in the slow run.
                                   pytest.param(TrialSpec("clean+lead_patch+odca", 1, 1.0, 1, target="lead_vehicle"),
                                                marks=pytest.mark.slow)],
