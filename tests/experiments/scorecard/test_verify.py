@@ -125,3 +125,20 @@ def test_summary_differences_compare_within_rounding_and_name_nested_keys():
         "h.collision_free is 0.9, its episodes give 0.8"]
     assert summary_differences({}, {"n": 2}) == ["n is missing"]
     assert summary_differences({"ci": [0.1, None]}, {"ci": [0.1, 0.2]}) == ["ci is [0.1, null], its episodes give [0.1, 0.2]"]
+
+
+def test_the_shipped_submission_s_numbers_are_what_its_episodes_give():
+    """The lidar_cusum card on the board carries its 720 episodes, and every number on it is theirs (re-running
+    a sample to the bit needs the code it names: `racf board verify` on that commit)."""
+    from pathlib import Path
+
+    from racf.experiments.scorecard.battery import BATTERIES
+    from racf.experiments.scorecard.card import row_summary
+    from racf.experiments.scorecard.submission import load_card
+
+    card = load_card(Path(__file__).resolve().parents[3] / "docs/results/submissions/racf-5-lidar_cusum.json")
+    rows = BATTERIES["racf-5"].rows()
+    assert sum(len(card["episodes"][r.key]["values"]) for r in rows) == 720
+    for row in rows:
+        frame = episode_frame(card["episodes"][row.key])
+        assert summary_differences(card["closed_loop"][row.key], row_summary(frame, row.attacked)) == [], row.key
