@@ -59,3 +59,21 @@ def test_an_undetected_error_has_no_best_other():
     page = card_fragment(with_error("vote", 0.3), [with_error("odca", 0.1)])
     row = next(r for r in page.split("<tr>") if "undetected error" in r).split("</tr>")[0]
     assert row.endswith('<td class="num">-</td>')
+
+
+def test_the_best_other_is_on_the_better_side_whichever_way_a_measure_points_and_on_the_same_battery_only():
+    """Two of the board's bugs a hand mutation run let through (issue 71): "best other" taken as the higher
+    even where lower is better, and a card of another battery taken as a peer."""
+    def costly(defence, needless, battery="racf-5"):
+        c = card(defence, 0.5)
+        c["battery"] = battery
+        c["closed_loop"]["removed"] = {"title": "a sign that is gone", "scr": None, "scr_ci": [None, None], "n": 60,
+                                       "measures": [{"measure": "needless stop", "value": needless,
+                                                     "ci": [0.0, needless], "n": 60, "higher_is_better": False}]}
+        return c
+
+    page = card_fragment(costly("vote", 0.3), [costly("odca", 0.1), costly("ekf", 0.6), costly("far", 0.0, "racf-4")])
+    headline = page.split("</table>")[0]
+    row = next(r for r in headline.split("<tr>") if "needless" in r)
+    assert "<code>odca</code>" in row and "<code>ekf</code>" not in row  # lower is better: odca's 0.10
+    assert "<code>far</code>" not in page  # another battery's card is no peer

@@ -28,6 +28,7 @@ def test_a_full_card_on_a_committed_tree_may_go_on_the_board():
     (lambda c: c.update(quick=True), "quick card"),
     (lambda c: c["closed_loop"].pop("link_drop"), "row 'link_drop' is missing"),
     (lambda c: c["closed_loop"]["link_drop"].update(n=4), "row 'link_drop' has N 4, the battery's is 30"),
+    (lambda c: c["closed_loop"]["link_drop"].update(n=31), "row 'link_drop' has N 31, the battery's is 30"),
     (lambda c: c.update(commit="abc1234+changes"), "uncommitted changes"),
     (lambda c: c.pop("commit"), "names no commit"),
     (lambda c: c.update(version="racf 0.1.0"), "names no code digest"),
@@ -82,6 +83,7 @@ def test_a_submitted_card_appears_on_the_regenerated_board_beside_racf_s_own(tmp
         "sample": 5, "seed": 7, "rows": 1, "episodes_rerun": 5}
     page = leaderboard_markdown(StoredResults(data))
     assert "<code>raw</code>" in page and "<code>mine</code></a> <small>submitted</small>" in page
+    assert "<code>raw</code></a> <small>submitted</small>" not in page  # racf's own card is not marked
     pages = card_pages(data)
     assert "`racf-mine==1.0`" in pages["cards/racf-link-mine.md"]() and "cards/racf-link-raw.md" in pages
     # A quick card is refused in one line, and nothing is written.

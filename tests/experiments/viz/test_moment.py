@@ -56,6 +56,9 @@ def test_an_episode_that_follows_a_car_is_drawn_at_the_car_ahead():
     renamed = following.rename(columns={"lead_x": "van_x", "lead_y": "van_y"})
     assert target_of(renamed, (QCar2Body("van").target(("van_x", "van_y", "van_yaw")),))[0] is LEAD
     assert target_of(following)[0] is SIGN
+    # A car in the world that the car's side never gave a distance to is not what the episode is about.
+    undefended = following.assign(lead_d_fused=[np.nan] * 3)
+    assert target_of(undefended, declared)[0] is SIGN
 
 
 def test_the_outcome_is_the_first_contact_else_where_the_car_came_to_rest():
