@@ -7,7 +7,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from racf.experiments.cli.common import backend_flags, fail, plugin_flag
+from racf.experiments.cli.common import at_least, backend_flags, fail, plugin_flag
 
 __all__ = ["register"]
 
@@ -50,7 +50,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _verify_flags(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--sample", type=_at_least_zero, default=5, metavar="K",
+    p.add_argument("--sample", type=at_least(0), default=5, metavar="K",
                    help="episodes run again per row (default 5: 30 s for racf-5's 12 rows on 2 cores, a following "
                         "row's episodes about 4 s each; 0 checks the numbers against the carried episodes only)")
     p.add_argument("--seed", type=int, default=None, help="the sample's seed (default: a fresh one, printed)")
@@ -72,16 +72,6 @@ def _check(args: argparse.Namespace) -> int:
         fail("board check", f"{len(bad)} of {len(args.cards)} card(s) may not go on the board (each line above "
                             "says why)")
     return 0
-
-
-def _at_least_zero(value: str) -> int:
-    try:
-        n = int(value)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"must be a whole number >= 0, got {value!r}") from None
-    if n < 0:
-        raise argparse.ArgumentTypeError(f"must be >= 0, got {n}")
-    return n
 
 
 def _verify(args: argparse.Namespace) -> int:

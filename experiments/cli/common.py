@@ -51,14 +51,21 @@ share = _within("rho", 0.0, 1.0)
 duration = _within("t-atk", 0.0, 60.0, " s")
 
 
-def count(value: str) -> int:
-    try:
-        n = int(value)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"must be a positive integer, got {value!r}") from None
-    if n < 1:
-        raise argparse.ArgumentTypeError(f"must be >= 1, got {n}")
-    return n
+def at_least(minimum: int):
+    """A flag's type: a whole number of at least ``minimum`` (argparse's one line names a bad one)."""
+    def whole(value: str) -> int:
+        try:
+            n = int(value)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"must be a whole number >= {minimum}, got {value!r}") from None
+        if n < minimum:
+            raise argparse.ArgumentTypeError(f"must be >= {minimum}, got {n}")
+        return n
+    return whole
+
+
+#: A count of things: a whole number >= 1.
+count = at_least(1)
 
 
 def pair(command: str, name: str, values: list[float] | None, default: tuple[float, float]) -> tuple[float, float]:
