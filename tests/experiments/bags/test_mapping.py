@@ -61,3 +61,34 @@ def test_what_is_declared_is_read():
     assert m.camera_intrinsics == (924.0, 924.5, 639.5, 359.5) and m.lidar_position_m == (0.1, -0.02)
     assert math.isclose(Mapping.from_dict({"camera": {"hfov_deg": 69}}).camera_hfov_deg, 69.0)
     assert np.isfinite(m.car_intrinsics(1280, 720, (320, 240))).all()
+
+
+@pytest.mark.parametrize("raw, allowed", [
+    ({"topics": {"rgb": "camera"}}, False), ({"topics": {"rgb": "/camera"}}, True),
+    ({"camera": {"crop": [10, 0, 10, 720]}}, False), ({"camera": {"crop": [0, 10, 1280, 10]}}, False),
+    ({"camera": {"crop": [-1, 0, 1280, 720]}}, False), ({"camera": {"crop": [0, 0, 1280, 720]}}, True),
+    ({"camera": {"crop": [0, 0, 1280.0, 720]}}, False), ({"camera": {"crop": [0, 0, 1280]}}, False),
+    ({"camera": {"size": [15, 240]}}, False), ({"camera": {"size": [16, 16]}}, True),
+    ({"camera": {"size": [4096, 4096]}}, True), ({"camera": {"size": [4097, 240]}}, False),
+    ({"camera": {"size": [320]}}, False),
+    ({"camera": {"intrinsics": [900, 0, 640, 360]}}, False), ({"camera": {"intrinsics": [1, 1, 0, 0]}}, True),
+    ({"camera": {"hfov_deg": 1}}, True), ({"camera": {"hfov_deg": 179}}, True), ({"camera": {"hfov_deg": 0.5}}, False),
+    ({"lidar": {"position_m": [1.0, -1.0]}}, True), ({"lidar": {"position_m": [0.0, 1.01]}}, False),
+    ({"lidar": {"quantum_m": 0.0}}, True), ({"lidar": {"quantum_m": 0.1}}, True), ({"lidar": {"quantum_m": 0.11}}, False),
+    ({"lidar": {"quantum_m": -0.001}}, False),
+    ({"lidar": {"read_per_rev": 1}}, True), ({"lidar": {"read_per_rev": 100_000}}, True),
+    ({"lidar": {"read_per_rev": 0}}, False), ({"lidar": {"read_per_rev": 100_001}}, False),
+    ({"lidar": {"read_per_rev": True}}, False), ({"lidar": {"yaw_deg": 90.5}}, False),
+])
+def test_each_value_s_edges_are_where_its_line_says(raw, allowed):
+    if allowed:
+        Mapping.from_dict(raw, "edge.toml")
+    else:
+        with pytest.raises(UserError, match="^mapping edge.toml: "):
+            Mapping.from_dict(raw, "edge.toml")
+
+
+def test_the_defaults_are_a_bag_racf_wrote():
+    m = Mapping.from_dict({})
+    assert (m.read_per_rev, m.lidar_yaw_deg, m.camera_crop, m.camera_intrinsics, m.lidar_position_m) == \
+        (384, 180.0, None, None, None)
