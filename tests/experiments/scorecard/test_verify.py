@@ -142,3 +142,39 @@ def test_the_shipped_submission_s_numbers_are_what_its_episodes_give():
     for row in rows:
         frame = episode_frame(card["episodes"][row.key])
         assert summary_differences(card["closed_loop"][row.key], row_summary(frame, row.attacked)) == [], row.key
+
+
+def test_differences_reach_into_lists_and_tables_and_a_nan_or_a_flag_is_never_a_number():
+    assert summary_differences({"m": [{"v": 1.0}]}, {"m": [{"v": 1.0}]}) == []
+    assert summary_differences({"m": [{"v": 1.0}]}, {"m": [{"v": 2.0}]}) == ['m is [{"v": 1.0}], its episodes give [{"v": 2.0}]']
+    assert summary_differences({"m": {"a": 1}}, {"m": {"a": 1, "b": 2}}) == ["m.b is missing"]
+    assert summary_differences({"h": 0.5}, {"h": {"a": 1}}) == ['h is 0.5, its episodes give {"a": 1}']
+    assert summary_differences({"x": [1, 2]}, {"x": [1, 2, 3]}) != [] and summary_differences({"x": {"a": 1}}, {"x": [1]}) != []
+    assert summary_differences({"x": [{"a": 1}]}, {"x": [{"b": 1}]}) != []
+    assert summary_differences({"x": float("nan")}, {"x": float("nan")}) == ["x is nan, its episodes give nan"]
+    assert summary_differences({"x": None}, {"x": float("nan")}) == ["x is null, its episodes give nan"]
+    assert summary_differences({"x": True}, {"x": 1}) == ["x is true, its episodes give 1"]
+
+
+def test_a_negative_sample_is_refused_and_a_missing_row_is_named(card, two):
+    with pytest.raises(UserError, match="--sample must be >= 0, got -1"):
+        verify_card(card, sample=-1, workers=1)
+    short = copy.deepcopy(card)
+    short["closed_loop"].pop("clean")
+    verdicts, _ = verify_card(short, sample=0, workers=1)
+    assert (verdicts[0].key, verdicts[0].n, verdicts[0].rerun, verdicts[0].seconds, verdicts[0].problems) == \
+        ("clean", 0, 0, 0.0, ("the row is missing from the card",))
+    tampered = copy.deepcopy(card)
+    tampered["closed_loop"]["clean"]["n"] = 3
+    bad = verify_card(tampered, sample=1, workers=1)[0][0]
+    assert (bad.n, bad.rerun, bad.seconds, bad.ok) == (2, 0, 0.0, False)
+
+
+def test_a_row_served_over_a_link_is_checked_by_its_numbers_and_not_run(card, monkeypatch):
+    import dataclasses
+
+    served = dataclasses.replace(TWO, loop=(dataclasses.replace(TWO.loop[0], link="plain"), TWO.loop[1]))
+    monkeypatch.setitem(battery_module.BATTERIES, "two", served)
+    verdict = verify_card(card, sample=2, workers=1)[0][0]
+    assert (verdict.ok, verdict.n, verdict.rerun, verdict.seconds) == (True, 2, 0, 0.0)
+    assert verdict.note.startswith("served over a link: its records are checked, its episodes not re-run")
