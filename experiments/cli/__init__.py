@@ -50,6 +50,19 @@ def build_parser(argv: list[str] | None = None) -> argparse.ArgumentParser:
     return p
 
 
+def _parse(argv: list[str]):
+    """The command line parsed; where a flag is left over, parsed again with the scenarios' older flag
+    names declared (``episode_flags.ALIASES``: they load every scenario, which nothing else here needs)."""
+    from racf.experiments.cli.episode_flags import ALIASES
+
+    ALIASES["declared"] = False
+    args, extra = build_parser(argv).parse_known_args(argv)
+    if any(e.startswith("--") for e in extra):
+        ALIASES["declared"] = True
+        args, extra = build_parser(argv).parse_known_args(argv)
+    return args, extra
+
+
 def _module_of(argv: list[str]) -> set[str]:
     """The module that declares the command ``argv`` runs (none for ``racf --help``, a group's help or
     a name that is no command: their lines need only the index)."""
@@ -69,7 +82,7 @@ def main(argv: list[str] | None = None) -> int:
         with _sigterm_as_interrupt():
             load_plugins_from_argv(argv)  # plug-ins first: the parser's choices and help list them
             try:
-                args, extra = build_parser(argv).parse_known_args(argv)
+                args, extra = _parse(argv)
             except SystemExit as done:  # --help, --version, or argparse's one line for a bad flag
                 return int(done.code or 0)
             if extra:

@@ -55,9 +55,18 @@ def episode_flags(p: argparse.ArgumentParser) -> None:
     sensor_flags(p)
 
 
+#: Whether the parser declares the scenarios' older flag names. Declaring them loads every scenario
+#: (a second): the command line asks for them only when a flag is left unparsed without them
+#: (``racf.experiments.cli.main``), so that ``--help`` and every other command line stay quick.
+ALIASES = {"declared": False}
+
+
 def scenario_alias_flags(p: argparse.ArgumentParser) -> None:
     """A flag for every scenario parameter an older name stands for (``Scenario.aliases``):
-    ``--traffic-cars N`` is ``--target cross_traffic --scenario-param cars=N``."""
+    ``--traffic-cars N`` is ``--target cross_traffic --scenario-param cars=N``; declared only where
+    ``ALIASES`` says (see there)."""
+    if not ALIASES["declared"]:
+        return
     from racf.plugins import SCENARIOS
 
     for name in SCENARIOS:
@@ -74,6 +83,8 @@ def aliased_scenario(args: argparse.Namespace, command: str, target: str, situat
     """The scenario and its parameters once the alias flags (:func:`scenario_alias_flags`) are read:
     any of a scenario's alias flags runs that scenario (a sign approach's variant: ``--target sign``
     or the scenario itself), with the flags' values under ``--scenario-param``'s."""
+    if not ALIASES["declared"]:  # no older name was on the command line
+        return target, situation
     from racf.plugins import SCENARIOS
 
     for name in SCENARIOS:

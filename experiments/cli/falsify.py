@@ -15,7 +15,7 @@ __all__ = ["register"]
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    from racf.experiments.falsify.search import OBJECTIVES, SAMPLERS
+    from racf.experiments.falsify.choices import OBJECTIVES, SAMPLERS
 
     f = sub.add_parser("falsify", help="search the attack and scenario space for a defence's worst case "
                                        "(Optuna TPE, CMA-ES, random) on the stop rule's STL robustness")

@@ -14,8 +14,9 @@ __all__ = ["register"]
 
 
 def _shipped_specs() -> list[str]:
-    from racf.experiments.sweeps.spec import SPECS_DIR
-    return sorted(p.name for p in SPECS_DIR.glob("*.toml"))
+    import racf.experiments.sweeps  # the folder of specs, found without the spec module (the episode code)
+
+    return sorted(p.name for p in (Path(racf.experiments.sweeps.__file__).parent / "specs").glob("*.toml"))
 
 
 def register(sub: argparse._SubParsersAction) -> None:

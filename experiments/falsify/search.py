@@ -33,13 +33,7 @@ from racf.provenance import code_version
 __all__ = ["SAMPLERS", "OBJECTIVES", "SearchConfig", "make_sampler", "run_searches", "episode_seed", "study_key",
            "objective_value"]
 
-#: The samplers: Optuna's TPE and CMA-ES (guided) and random search (the baseline).
-SAMPLERS = ("tpe", "cmaes", "random")
-#: What a search minimises: ``rule``, the stop rule's robustness; ``rule-undetected``, that minus
-#: the attack's undetected error (the referee's largest |acted-on - true distance| before the
-#: defence flagged it): a slope towards attacks the defence does not see, where the rule's
-#: robustness alone is flat. Either way a violation is the rule's robustness below zero.
-OBJECTIVES = ("rule", "rule-undetected", "gap")
+from racf.experiments.falsify.choices import OBJECTIVES, SAMPLERS  # noqa: E402,F401  (their home)
 #: With ``objective="gap"``, a contact scores this far below a zero gap, m (the boxes touch at a gap of about 0).
 CONTACT_M = 0.01
 #: The objectives whose own value is the violation's measure (below zero: violated); the others are
