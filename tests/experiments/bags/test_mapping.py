@@ -92,3 +92,9 @@ def test_the_defaults_are_a_bag_racf_wrote():
     m = Mapping.from_dict({})
     assert (m.read_per_rev, m.lidar_yaw_deg, m.camera_crop, m.camera_intrinsics, m.lidar_position_m) == \
         (384, 180.0, None, None, None)
+
+
+def test_a_field_of_view_other_than_a_right_angle_and_no_file_at_all():
+    fx, fy, cx, cy = Mapping(camera_hfov_deg=60.0).car_intrinsics(1280, 720, (1280, 720))
+    assert fx == fy == pytest.approx(640.0 / math.tan(math.radians(30.0))) and (cx, cy) == (639.5, 359.5)
+    assert Mapping.load(None) == Mapping()
