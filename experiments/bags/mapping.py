@@ -163,7 +163,7 @@ class Mapping:
             cx, cy = (frame_w - 1) / 2.0, (frame_h - 1) / 2.0
         else:
             return None
-        x0, y0, x1, y1 = self.camera_crop or (0, 0, frame_w, frame_h)
+        x0, y0, x1, y1 = self.camera_crop if self.camera_crop is not None else (0, 0, frame_w, frame_h)
         sx, sy = (x1 - x0) / size[0], (y1 - y0) / size[1]
         return fx / sx, fy / sy, (cx - x0 + 0.5) / sx - 0.5, (cy - y0 + 0.5) / sy - 0.5
 

@@ -144,7 +144,8 @@ class BagEnv(gym.Env):
         self.truth_columns |= {t[len(TRUTH_PREFIX):] for t in msgs if t.startswith(TRUTH_PREFIX) and t != SIGN_MASK}
 
     def _camera(self, image: np.ndarray, interpolation: int) -> np.ndarray:
-        self.frame_size = self.frame_size or (image.shape[1], image.shape[0])
+        if self.frame_size is None:
+            self.frame_size = (image.shape[1], image.shape[0])
         crop = self.mapping.camera_crop
         if crop is not None:
             x0, y0, x1, y1 = crop

@@ -113,7 +113,7 @@ def trial_flags(p: argparse.ArgumentParser) -> None:
     p.add_argument("--target", choices=SCENARIOS.names(), default="sign", metavar="SCENARIO",
                    help=f"the scenario: {', '.join(SCENARIOS.names())} (default sign: approach a stop sign; obstacle: a "
                         "crate; drive: a random 20-60 s drive, --sign 0; `racf list scenarios` says what each is; "
-                        "older flag names of a scenario's parameters, such as --traffic-cars, still work)")
+                        "older flag names a scenario declares for its parameters still work)")
     p.add_argument("--speed", type=speed, default=1.0, help="cruise speed m/s, 0.1-3.0 (default 1.0)")
     p.add_argument("--seed", type=int, default=0)
 

@@ -118,7 +118,7 @@ def _check_code(card: dict) -> None:
 
 def _row_specs(row, card: dict) -> list:
     specs = row.specs(card["defence"], bool(card.get("quick")))
-    options = card.get("options") or {}
+    options = card.get("options") if card.get("options") is not None else {}
     return [replace(s, estimator_options=options) for s in specs] if options else specs
 
 

@@ -118,7 +118,15 @@ def _run_page(page: Path, tmp_path: Path, slow: bool, monkeypatch) -> None:
         _prints(expected, done.stdout, f"{page.name}: shell block")
 
 
-@pytest.mark.parametrize("page", [p for p in PAGES if any(_runnable(p, False).values())],
+#: The pages whose blocks take longest (3-7 s each): in the slow run, so that the default run keeps under two
+#: minutes on 2 cores; the README's and the plug-in guide's run in both.
+_LONG_PAGES = {"docs/tutorials/attack.md", "docs/tutorials/falsify.md", "docs/tutorials/detector.md",
+               "docs/tutorials/defence.md", "docs/tutorials/sweeps.md", "docs/tutorials/submit-a-card.md",
+               "docs/concepts/traffic.md"}
+
+
+@pytest.mark.parametrize("page", [pytest.param(p, marks=pytest.mark.slow) if str(p.relative_to(ROOT)) in _LONG_PAGES
+                                  else p for p in PAGES if any(_runnable(p, False).values())],
                          ids=lambda p: str(p.relative_to(ROOT)))
 def test_the_pages_code_runs(page, tmp_path, monkeypatch, plugin_env):
     _run_page(page, tmp_path, slow=False, monkeypatch=monkeypatch)

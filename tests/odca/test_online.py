@@ -214,6 +214,7 @@ def _series(n, seed):
                          "slot": (np.arange(n) >= n - 15).astype(int)})
 
 
+@pytest.mark.slow  # 2.5-6 s: the default run keeps under two minutes on 2 cores
 def test_batched_run_matches_step_exactly_with_the_shipped_prior():
     m = ODCA.load()
     a, b = _series(90, 0), _series(70, 1)

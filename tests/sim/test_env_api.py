@@ -64,6 +64,7 @@ def test_make_with_module_prefix_in_fresh_process():
     assert "'gps': (3,)" in line and "'timestamps': (5,)" in line
 
 
+@pytest.mark.slow  # 2.5-6 s: the default run keeps under two minutes on 2 cores
 def test_make_vec_async_spawn():
     venv = gym.make_vec("RACF/QCar2-v4", num_envs=2, vectorization_mode="async",
                         vector_kwargs={"context": "spawn"}, **SMALL)

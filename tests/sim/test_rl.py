@@ -12,6 +12,7 @@ from racf.sim.env.rl import DepthAsImage, rl_env
 SMALL = {"camera_width": 160, "camera_height": 120}
 
 
+@pytest.mark.slow  # 2.5-6 s: the default run keeps under two minutes on 2 cores
 def test_sb3_check_env_has_nothing_to_say_and_ppo_learns_a_few_steps():
     from stable_baselines3 import PPO
     from stable_baselines3.common.env_checker import check_env

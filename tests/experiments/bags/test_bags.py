@@ -137,6 +137,7 @@ def test_another_recording_replays_through_a_mapping_file(exported, tmp_path):
     assert replay.scores["rmse_m"] is None  # no reference: no offline error
 
 
+@pytest.mark.slow  # 2.5-6 s: the default run keeps under two minutes on 2 cores
 def test_a_padded_foreign_frame_is_cropped_back_to_the_episode(exported, tmp_path):
     """The foreign camera's frame holds a 16-pixel border the car must not see: ``crop`` keeps the
     1280 x 720 inside, and what the car gets is the episode's (a crop ignored would see the border)."""

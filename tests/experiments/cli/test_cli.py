@@ -72,6 +72,7 @@ def test_train_without_a_dataset_is_a_clear_error(tmp_path, capsys):
     assert "racf collect" in capsys.readouterr().err
 
 
+@pytest.mark.slow  # 2.5-6 s: the default run keeps under two minutes on 2 cores
 def test_a_reader_that_stops_reading_is_no_error():
     """`racf bag info BAG | head` once ended with "racf bag info: Broken pipe": a closed pipe ends the
     command quietly, whichever command it is (the reader here closes it before racf writes)."""

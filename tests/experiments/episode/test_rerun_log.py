@@ -65,6 +65,7 @@ def test_bad_input_is_refused(tmp_path):
         write_rrd(tmp_path / "x.rrd", pd.DataFrame())
 
 
+@pytest.mark.slow  # 2.5-6 s: the default run keeps under two minutes on 2 cores
 def test_trials_record_every_trial_they_run(tmp_path):
     from racf.experiments.sweeps.batches import batch_specs, run_batch
 
@@ -114,6 +115,7 @@ def test_other_cars_appear_in_the_world_and_on_the_map(tmp_path):
     assert "/map/actors/conflict" in rows and "/world/actors/traffic2" not in rows
 
 
+@pytest.mark.slow  # 2.5-6 s: the default run keeps under two minutes on 2 cores
 def test_the_car_ahead_and_its_witnesses_are_drawn(tmp_path):
     recorder = FrameRecorder(every=25)
     _, log = run_trial(TrialSpec("clean+odca", 1, 1.0, 0, target="lead_vehicle"), on_step=recorder, clean_pass=False)

@@ -57,6 +57,7 @@ def test_same_seed_same_log(sign0_trial):
     pd.testing.assert_frame_equal(again_log, log)
 
 
+@pytest.mark.slow  # 2.5-6 s: the default run keeps under two minutes on 2 cores
 def test_the_shared_env_gives_the_log_of_a_fresh_one(sign0_trial):
     import gymnasium as gym
 

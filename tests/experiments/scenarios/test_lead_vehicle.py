@@ -104,6 +104,7 @@ def test_a_lead_that_never_stops_rests_at_the_horizon():
     assert LeadVehicle().run_up(spec()) == pytest.approx(7.0)
 
 
+@pytest.mark.slow  # 2.5-6 s: the default run keeps under two minutes on 2 cores
 def test_the_car_follows_a_hard_braking_lead_without_touching_it():
     result, log = run_trial(spec(profile="hard_brake"), clean_pass=False)
     row = result.to_dict()

@@ -221,6 +221,7 @@ def test_a_scenario_plugins_fault_in_its_plan_or_its_world_names_the_plugin(tmp_
         assert "bad_plan[lanes=2]" in line
 
 
+@pytest.mark.slow  # 2.5-6 s: the default run keeps under two minutes on 2 cores
 def test_a_batch_whose_service_dies_keeps_what_finished_and_says_how_to_resume(tmp_path):
     """The service answers the preflight and about one episode, then no more: the episode it died in
     drives on on its own depth, the next one cannot open a session, and the batch stops in one line

@@ -134,6 +134,7 @@ def test_bad_specs_are_refused_before_any_work(tmp_path, capsys, text, message):
     assert not (tmp_path / "out").exists()
 
 
+@pytest.mark.slow  # 2.5-6 s: the default run keeps under two minutes on 2 cores
 def test_flags_make_the_same_sweep_as_the_spec(uninterrupted, tmp_path, capsys):
     _, summary, rows = uninterrupted
     flags = ["--repeats", "2", "--seed", "3", "--attack", "patch_occlusion", "none", "--estimator", "raw", "--rho", "1",
