@@ -31,7 +31,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                       help="two stored cards side by side (a defence's name in --out, or a card's JSON file)")
     from racf.experiments.scorecard.battery_names import BATTERY_NAMES, DEFAULT_BATTERY
 
-    sc.add_argument("--battery", default=None, choices=BATTERY_NAMES, metavar="NAME",
+    # No argparse choices: a plug-in's or a test's battery registered at run time is one too (checked when it runs).
+    sc.add_argument("--battery", default=None, metavar="NAME",
                     help=f"the battery: {', '.join(BATTERY_NAMES)} (default {DEFAULT_BATTERY}, the stop-sign battery the "
                          "leaderboard's paper rows follow; `docs/reference/battery.md` lists each one's rows)")
     sc.add_argument("--target", default=None, metavar="SCENARIO",

@@ -63,7 +63,7 @@ def test_compare_marks_rows_whose_intervals_do_not_overlap():
 
 @pytest.mark.parametrize("argv,message", [
     (["--defence", "nope"], "unknown defence(s) ['nope']"),
-    (["--defence", "raw", "--battery", "racf-0"], "--battery: invalid choice: 'racf-0' (choose from 'racf-1'"),
+    (["--defence", "raw", "--battery", "racf-0"], "unknown battery 'racf-0'; released: racf-1"),
     (["--compare", "raw", "odca"], "no card"),
     (["--attack", "nope"], "unknown attack 'nope'"),
 ])
