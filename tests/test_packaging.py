@@ -66,6 +66,7 @@ def test_no_module_imports_the_old_top_level_names():
     assert offenders == []
 
 
+@pytest.mark.slow  # 4-5 s: the default run keeps under two minutes on 2 cores
 def test_assets_are_found_through_the_package_not_the_checkout():
     assert asset_path("qcar2_map", "qcar2.xml").is_file()
     assert (asset_path("checkpoints", "odca-head") / "odca.json").is_file()

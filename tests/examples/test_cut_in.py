@@ -32,6 +32,7 @@ def test_the_car_follows_the_car_that_cut_in_without_touching_it(cut_in_installe
     assert log.loc[merged, "lead_detected"].mean() > 0.5 and (log["lead_cap"] < log["speed_cap"]).any()
 
 
+@pytest.mark.slow  # 4-5 s: the default run keeps under two minutes on 2 cores
 def test_racf_s_attacks_on_a_car_ahead_act_on_it(cut_in_installed, tmp_path):
     from racf.experiments.episode import TrialSpec
     from racf.experiments.episode.stack import default_env

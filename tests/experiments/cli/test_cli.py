@@ -55,6 +55,7 @@ def test_view_rejects_what_is_not_a_recording(tmp_path, capsys):
     assert ".rrd" in capsys.readouterr().err
 
 
+@pytest.mark.slow  # 4-5 s: the default run keeps under two minutes on 2 cores
 def test_odca_commands_are_listed_and_latency_prints_json(capsys):
     out = subprocess.run([sys.executable, "-m", "racf.experiments.cli", "odca", "--help"], cwd=ROOT,
                          capture_output=True, text=True, check=True).stdout
