@@ -19,7 +19,7 @@ import numpy as np
 
 from racf.controllers import (BrakeDecision, BrakingConfig, CameraModel, Perception, PerceptionSample, PoseFilter,
                          RouteFollower, StopSignBraker)
-from racf.experiments.car.stage import CarView
+from racf.experiments.car.stage import CarView, TargetTrack
 from racf.sim.sensors import TIMESTAMP_FIELDS
 from racf.sim.sensors.localiser import LOCALISATIONS
 from racf.sim.world.drives import RouteTarget
@@ -112,10 +112,13 @@ def sign_depth_at_line(calibration: CarCalibration, target: RouteTarget) -> floa
     return camera_to_bumper + (target.target_s - target.stop_s if getattr(target, "mapped", True) else UNMAPPED_SIGN_PAST_LINE_M)
 
 
-def lowest_cap(braker_cap: float, said) -> float:
+def lowest_cap(braker_cap: float, said, stages=()) -> float:
     """The car's speed cap: the lowest of its braker's and every stage's (``StageLimit``): no stage can
-    raise what another limits."""
-    return min([braker_cap, *(limit.speed_cap_mps for limit in said)])
+    raise what another limits, but for a supervising stage that stands in for the stage whose track it
+    supervises (``stands_in``: its cap replaces that stage's, and it answers for never being bolder)."""
+    replaced = {s.supervises for s in stages if getattr(s, "stands_in", False)}
+    kinds = [getattr(s, "publishes", None) for s in stages] or [None] * len(said)
+    return min([braker_cap, *(limit.speed_cap_mps for limit, kind in zip(said, kinds) if kind not in replaced)])
 
 
 def route_follower(path: Path, cruise_mps: float, start_s: float = 0.0) -> RouteFollower:
@@ -272,6 +275,17 @@ class Car:
         said = verdict() if callable(verdict) else None
         return self._sample.detected if said is None else bool(said)
 
+    def _track(self, bearing: float | None) -> TargetTrack:
+        """What the car's own loop believes of its target this step (the supervision contract): the
+        defended distance and the braker's cap, the perception's witnesses and the map's place for it."""
+        sample, target = self._sample, self.target
+        mapped = bearing is not None and math.isfinite(bearing)
+        map_m = camera_offset(self.calibration, target, self._pose)[0] if mapped else math.nan
+        return TargetTrack(target.kind, self._d_fused, self._decision.speed_cap_mps, depth_m=sample.d_meas,
+                           lidar_m=sample.lidar_m, size_m=sample.d_size, map_m=map_m,
+                           stop_at_m=sign_depth_at_line(self.calibration, target), detected=bool(sample.detected),
+                           index=self.slot)
+
     def step(self, obs: dict) -> CarStep:
         """One 50 Hz step of the car's software on one observation; returns its action and why."""
         first = self._step == 0
@@ -325,11 +339,15 @@ class Car:
             self._decision = self.braker.step(self._stands(), self._d_fused, speed, dt, expected_in_view=in_fov)
             cap = self._decision.speed_cap_mps
             if self.stages:
+                # The tracks published this step: the car's own target's first, then each stage's as it runs.
+                tracks = {self.target.kind: self._track(bearing)}
                 view = CarView(obs, self._pose, self.mission.path, self.follower.progress_m, speed, yaw_rate, lateral,
-                               dt, frame_new, scan_new, ages)
+                               dt, frame_new, scan_new, ages, tracks)
                 for stage in self.stages:
-                    self._said[stage.name] = stage.step(view)
-                cap = lowest_cap(cap, self._said.values())
+                    said = self._said[stage.name] = stage.step(view)
+                    if said.track is not None:
+                        tracks[said.track.kind] = said.track
+                cap = lowest_cap(cap, [self._said[stage.name] for stage in self.stages], self.stages)
             self._action = np.array(self.follower.act(x, y, yaw, speed, dt, cap), np.float32)
         self._step += 1
         track = self.perception.lidar.state.position  # camera-relative; + the camera's body position

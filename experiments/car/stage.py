@@ -15,6 +15,14 @@ reads the view and the map only, never ``info``.
 Register one under the entry-point group ``racf.car_stages`` (racf's own: ``following``), or in a
 ``--plugin`` file; a scenario's :meth:`~racf.experiments.scenarios.Scenario.plan` engages it by
 putting its name in ``Mission.stages``.
+
+**Supervision is a contract.** A stage that defends a distance to a target publishes what it
+believes of it each step as a typed :class:`TargetTrack` (``StageLimit.track``; the class says the
+kind in :attr:`CarStage.publishes`), and the car's own loop publishes its sign's in
+:attr:`CarView.tracks`. A supervising stage (:mod:`racf.experiments.car.supervisor`) declares the
+kind it supervises and reads only that track, never a neighbour's internals; the car's assembly
+(:mod:`racf.experiments.car.assembly`) puts one above every published track when the settings ask
+for it, and a stage that publishes none cannot be supervised.
 """
 
 from __future__ import annotations
@@ -28,7 +36,7 @@ import numpy as np
 from racf.controllers import CameraModel
 from racf.sim.world.road_graph import Path
 
-__all__ = ["CarStage", "CarView", "StageColumn", "StageContext", "StageLimit", "NO_LIMIT"]
+__all__ = ["CarStage", "CarView", "StageColumn", "StageContext", "StageLimit", "TargetTrack", "NO_LIMIT"]
 
 
 @dataclass(frozen=True)
@@ -76,6 +84,57 @@ class StageContext:
 
 
 @dataclass(frozen=True)
+class TargetTrack:
+    """What a stage believes of its target on one step: all a supervising stage reads of it.
+
+    Distances are the camera's, along its optical axis, to the target's near face (a car's rear, a
+    sign's face), m; NaN: none this step.
+
+    Attributes:
+        kind: the target's kind (``racf.sim.world.manager.TARGET_KINDS``: sign, obstacle, vehicle, person).
+        distance_m: the stage's defended distance (what its own cap acts on).
+        cap_mps: the stage's own speed cap, m/s (inf: none).
+        moving: the target can move (a vehicle); a static one's world speed is 0.
+        speed_mps: the target's speed along the lane as the stage estimates it, m/s (0: static).
+        speed_known: the stage's speed estimate is confirmed (its own witnesses, not a default).
+        depth_m: the depth camera's distance (NaN: none).
+        lidar_m: the LiDAR track's distance (NaN: none).
+        size_m: the size witness's distance, from the box and the target's known size (NaN: none).
+        map_m: where the map and the car's own pose put it (NaN: the map does not list it).
+        stop_at_m: where the car's front must stand short of the target's face, m (a sign: its stop
+            line from the map; 0: the face itself, the margin the envelope keeps).
+        broadcast_m: where the target's own checked broadcast puts it (NaN: none).
+        broadcast_mps: its speed as the broadcast tells it, m/s (NaN: none).
+        broadcast_trusted: the broadcast has agreed with the stage's distance long enough, and not
+            disagreed since.
+        detected: the stage's detector found the target on this frame.
+        index: which of its targets the publisher means (a new index: another target).
+    """
+
+    kind: str
+    distance_m: float
+    cap_mps: float
+    moving: bool = False
+    speed_mps: float = 0.0
+    speed_known: bool = True
+    depth_m: float = math.nan
+    lidar_m: float = math.nan
+    size_m: float = math.nan
+    map_m: float = math.nan
+    stop_at_m: float = 0.0
+    broadcast_m: float = math.nan
+    broadcast_mps: float = math.nan
+    broadcast_trusted: bool = False
+    detected: bool = False
+    index: int = 0
+
+    @property
+    def ranges(self) -> tuple[float, float]:
+        """The range witnesses that measure the target itself: the depth and the LiDAR's track."""
+        return self.depth_m, self.lidar_m
+
+
+@dataclass(frozen=True)
 class CarView:
     """What every stage sees on one control step: the observation and the car's own estimates.
 
@@ -91,6 +150,7 @@ class CarView:
         frame_new: a new camera frame arrived this step.
         scan_new: a new LiDAR scan arrived this step.
         beam_age_s: each LiDAR beam's age on a new scan, s (None: no new scan).
+        tracks: the tracks the car's own loop publishes this step, by kind (its stop sign's).
     """
 
     obs: dict
@@ -104,6 +164,7 @@ class CarView:
     frame_new: bool
     scan_new: bool
     beam_age_s: np.ndarray | None = None
+    tracks: dict = field(default_factory=dict)
 
     @property
     def scan(self) -> np.ndarray | None:
@@ -119,11 +180,13 @@ class StageLimit:
         speed_cap_mps: its limit on the car's speed, m/s (inf: none; 0: stop).
         values: its step-log columns' values, one per declared column.
         detail: anything else it wants kept for viewers (not logged).
+        track: what it believes of its target (:class:`TargetTrack`; None: it publishes none).
     """
 
     speed_cap_mps: float
     values: dict = field(default_factory=dict)
     detail: Any = None
+    track: TargetTrack | None = None
 
 
 #: A stage that limits nothing and logs nothing.
@@ -146,6 +209,9 @@ class CarStage:
     columns: ClassVar[tuple[StageColumn, ...]] = ()
     #: The columns a viewer draws as this stage's distance series: column -> ((r, g, b), legend).
     series: ClassVar[dict[str, tuple[tuple[int, int, int], str]]] = {}
+    #: The kind of target whose :class:`TargetTrack` it publishes in ``StageLimit.track`` (None: none,
+    #: and it cannot be supervised).
+    publishes: ClassVar[str | None] = None
 
     def __init__(self, context: StageContext) -> None:
         self.context = context

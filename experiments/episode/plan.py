@@ -109,22 +109,14 @@ def plan_episode(spec: TrialSpec, **env_kwargs) -> EpisodePlan:
     dt = 1.0 / config.control_hz
     draft = EpisodePlan(kwargs, options, mission, calibration, dt, config.localisation,
                         int(round(config.max_episode_s / dt)), start_s_m=route.start_s)
-    return supervised(spec, spec.scenario.plan(spec, spec.scenario_params, draft))
+    plan = spec.scenario.plan(spec, spec.scenario_params, draft)
+    if spec.supervisor:  # a stage that cannot be supervised is said before the simulator starts
+        from racf.experiments.car.assembly import supervisor_classes
+        from racf.plugins import CAR_STAGES
 
-
-def supervised(spec: TrialSpec, plan: EpisodePlan) -> EpisodePlan:
-    """The plan with the supervisor in place of the stage it supervises, when the spec asks for it."""
-    if not spec.supervisor:
-        return plan
-    from racf.plugins import CAR_STAGES
-
-    watched = CAR_STAGES["supervisor"].supervises
-    stages = plan.mission.stages
-    if watched not in stages:
-        raise ValueError(f"supervisor: it runs over the {watched!r} stage, which scenario {spec.target!r} does not "
-                         f"engage; allowed: supervisor with a scenario whose plan engages {watched!r}")
-    mission = replace(plan.mission, stages=tuple("supervisor" if s == watched else s for s in stages))
-    return replace(plan, mission=mission)
+        supervisor_classes([CAR_STAGES[name] for name in plan.mission.stages],
+                           tuple(target.kind for target in plan.mission.targets))
+    return plan
 
 
 def longest_run_up(target: str, index: int, sign_geometry: str = "plate") -> float:

@@ -15,7 +15,7 @@ from racf.experiments.car.estimators import make_estimator
 from racf.experiments.car.existence import ExistenceStage
 from racf.experiments.episode.plan import DRIVE_MAX_EPISODE_S, EpisodePlan, env_settings
 from racf.experiments.episode.spec import TrialSpec
-from racf.plugins import CAR_STAGES
+from racf.experiments.car.assembly import car_stages as assembled_stages
 from racf.sim.attacks import ATTACKS
 from racf.sim.world.stop_signs import SIGN_FACE_ACROSS_FLATS_M, SIGN_RED_FACE_ACROSS_FLATS_M
 
@@ -118,9 +118,10 @@ def onboard_defence(spec: TrialSpec):
 
 
 def car_stages(spec: TrialSpec, plan: EpisodePlan) -> tuple:
-    """The stages the plan's mission engages (``racf.car_stages`` parts, by name), each built on the
-    car's build with its own instance of the spec's defence."""
-    if not plan.mission.stages:
+    """The car's stages (:func:`racf.experiments.car.assembly.car_stages`): those the plan's mission
+    engages, each built on the car's build with its own instance of the spec's defence, and the
+    supervision the spec asks for."""
+    if not plan.mission.stages and not spec.supervisor:
         return ()
     calib = plan.calibration
 
@@ -134,7 +135,8 @@ def car_stages(spec: TrialSpec, plan: EpisodePlan) -> tuple:
     context = StageContext(calib.camera, calib.camera_xy_m, calib.camera_height_m, calib.lidar_xy_m,
                            calib.bumper_x_m - calib.camera_xy_m[0], make_defence, spec.detector,
                            plan.mission.target_decel_mps2, plan.mission.target_accel_mps2)
-    return tuple(CAR_STAGES[name](context) for name in plan.mission.stages)
+    kinds = tuple(dict.fromkeys(target.kind for target in plan.mission.targets))
+    return assembled_stages(plan.mission.stages, context, spec.supervisor, kinds)
 
 
 def car_keys(spec: TrialSpec):

@@ -38,9 +38,9 @@ from racf.controllers.lead_existence import NO_EVIDENCE, LeadEvidence, LeadExist
 from racf.controllers.lead_perception import LeadPerception, lane_in_camera
 from racf.controllers.perception import PerceptionSample
 from racf.experiments.car.broadcast import AGREE_M, SPEED_AGREE_MPS, BroadcastReceiver, BroadcastWitness
-from racf.experiments.car.stage import CarStage, CarView, StageColumn, StageContext, StageLimit
+from racf.experiments.car.stage import CarStage, CarView, StageColumn, StageContext, StageLimit, TargetTrack
 
-__all__ = ["FollowingStage", "LeadStep", "LANE_AHEAD_M", "NO_LEAD", "COLUMNS", "BROADCAST_STD_MPS", "TRUST_STEPS"]
+__all__ = ["FollowingStage", "LeadStep", "track_of", "LANE_AHEAD_M", "NO_LEAD", "COLUMNS", "BROADCAST_STD_MPS", "TRUST_STEPS"]
 
 #: How far along the lane ahead the car looks for a car, m.
 LANE_AHEAD_M = 4.0
@@ -152,6 +152,7 @@ class FollowingStage(CarStage):
 
     name = "following"
     columns = COLUMNS
+    publishes = "vehicle"
     series = {
         "lead_d_meas": ((255, 152, 150), "its depth (depth camera)"),
         "lead_lidar": ((158, 218, 229), "its LiDAR track"),
@@ -231,7 +232,7 @@ class FollowingStage(CarStage):
             self._agreed = self._agreed + 1 if abs(d - said.distance_m) <= AGREE_M else 0
         decision = self.follower.step(follow - self.bumper_m, speed - lead)
         self.last = LeadStep(sample, d, lead, decision, follow, said, known, self._agreed >= TRUST_STEPS)
-        return StageLimit(decision.speed_cap_mps, _columns(self.last, self.radio), self.last)
+        return StageLimit(decision.speed_cap_mps, _columns(self.last, self.radio), self.last, track_of(self.last))
 
     def _lead_speed(self, said: BroadcastWitness | None) -> tuple[float, bool]:
         """The lead's speed and whether it is confirmed: the broadcast's while it agrees with the confirmed
@@ -243,6 +244,18 @@ class FollowingStage(CarStage):
         if confirmed and abs(track - said.speed_mps) <= SPEED_AGREE_MPS:
             return said.speed_mps, True
         return min(track, said.speed_mps), confirmed
+
+
+def track_of(step: LeadStep) -> TargetTrack:
+    """What the stage publishes of the car ahead (the supervision contract): the distance its cap acts
+    on, its speed estimate, the witnesses behind them and the lead's own broadcast."""
+    sample, said = step.sample, step.broadcast
+    return TargetTrack("vehicle", step.followed_m, step.decision.speed_cap_mps, moving=True,
+                       speed_mps=step.lead_mps, speed_known=step.speed_known, depth_m=sample.d_meas,
+                       lidar_m=sample.lidar_m, size_m=sample.d_size,
+                       broadcast_m=math.nan if said is None else said.distance_m,
+                       broadcast_mps=math.nan if said is None else said.speed_mps,
+                       broadcast_trusted=step.broadcast_trusted, detected=bool(sample.detected))
 
 
 def _cautious(defended_m: float, broadcast_m: float) -> float:

@@ -13,7 +13,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, fields
 
-__all__ = ["Envelope", "safe_gap", "safe_speed"]
+__all__ = ["Envelope", "safe_gap", "safe_speed", "stopping_m"]
 
 
 @dataclass(frozen=True)
@@ -86,3 +86,9 @@ def safe_speed(gap_m: float, lead_mps: float, env: Envelope, brake_mps2: float |
         return -math.inf
     u = b * (-rho + math.sqrt(rho ** 2 + 2.0 * room / b))
     return u - a * rho
+
+
+def stopping_m(speed_mps: float, env: Envelope) -> float:
+    """How far the car may travel from ``speed_mps`` before it stands, told to stop now, m (RSS's
+    reach: the reaction time at its hardest acceleration, then braking at b)."""
+    return safe_gap(speed_mps, 0.0, env) - env.margin_m

@@ -6,7 +6,10 @@ would (it cannot be nearer) and its far end as the target pulling away at its ha
 be farther), both less the car's own travel (the encoder's, with its error). The near end is the
 worst case the safe controller drives on; the far end says how far a witness may read and still be
 the same target (the continuity check); the reach is the far end of a target that kept its vouched
-speed (no faster): where one that was last seen before a jump can be looked for. A vouch narrows
+speed (no faster): where a target the car lost for a moment may be re-acquired, and only while its
+speed is measured (``speed_measured``: the car's own range rate and odometry, or the following
+stage's confirmed estimate; an unmeasured one is taken as anywhere from standing to the top
+speed, and its reach is the vouch module's to bound). A vouch narrows
 the far end (never widens it: a chain of readings cannot walk the bounds away). The interval is
 never dropped by time: a target tracked in the lane stays there until the lane is seen clear
 (:mod:`.clear`).
@@ -34,6 +37,7 @@ class CarriedTarget:
         self.slow_mps = 0.0
         self.fast_mps = self._vouched_fast = 0.0
         self.unvouched_s = 0.0
+        self.speed_measured = False
 
     @property
     def held(self) -> bool:
@@ -42,7 +46,7 @@ class CarriedTarget:
 
     def vouch(self, distance_m: float, lead_mps: float, lead_known: bool) -> None:
         """A vouched distance (m) and the lead's estimated speed (m/s; ``lead_known``: the estimate is
-        confirmed, else the lead may be anywhere from standing to its top speed)."""
+        measured, else the lead may be anywhere from standing to its top speed)."""
         e = self.env
         held = self.held
         far = distance_m + e.delta_m
@@ -55,6 +59,7 @@ class CarriedTarget:
         elif not held:  # a first sight of unknown speed: anywhere from standing to the top speed
             self.slow_mps, self.fast_mps = 0.0, e.target_max_mps
         # else: a speed the car has lost (a jump restarts its estimate) keeps the bounds carried so far
+        self.speed_measured = lead_known or (held and self.speed_measured)
         self._vouched_fast = self.fast_mps
         self.unvouched_s = 0.0
 

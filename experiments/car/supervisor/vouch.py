@@ -1,29 +1,33 @@
-"""Which range reading the supervisor vouches for: one whose track has no break.
+"""Which range reading the supervisor vouches for: one whose track has no break, judged again each step.
 
-Each step the range witnesses (the depth in the lead's box, the LiDAR's track of it, the LiDAR's
+Each step the range witnesses (the depth in the target's box, the LiDAR's track of it, the LiDAR's
 first return on the lane) give one reading, the nearest: a witness moved away is outvoted by one
-that is not. Readings form a chain
-while each lies where the last one, moved on by the relative motion, puts it (within ``gate_m``) and
-no gap longer than ``gap_s`` parts them. A chain is judged once, when it is born:
+that is not. Readings form a chain while each lies where the last one, moved on by the relative
+motion, puts it (within ``gate_m``) and no gap longer than ``gap_s`` parts them.
 
-- born where the carried target can be (:class:`~.track.CarriedTarget`'s bounds), or with nothing
-  carried on a lane the car has not yet watched: it is the target, and its readings are vouched
-  while they stay within the bounds (a vouched reading beyond the far end by more than
-  ``noise_m`` breaks the chain: motion no car makes);
-- born farther than the target can have gone: a jump no car makes (a frustum or depth spoof moves
-  the witnesses at once). Refused, with every reading it carries on to; and until a reading within
-  the carried target's reach (where it would be, had it kept its vouched speed) is vouched again,
-  a chain born beyond that reach is refused too: a gap in the readings does not launder a jump;
-- born beyond the reach, even with no jump before it: refused. Hiding a car from the LiDAR lets it
-  see the lane behind the car, and that is no reading of the car;
-- born farther than the camera's box allows (the size witness: a car's box can only shrink, so a
-  range beyond what its height implies is no car's): refused as a jump. Only a new chain is
-  checked against the box: a chain that goes on is the track, and a box that grows under it is a
-  picture (a phantom), not the car;
-- born nearer than the target can be, or first seen inside the distance a vehicle must have been
-  seen from on a lane the car has watched: it appeared from nowhere (a phantom), implausible until
+A chain is judged when it is born, and a chain not vouched is judged again on every later reading
+(a refusal is not for life: the carried bounds and the witnesses change):
+
+- with nothing carried, on a lane the car has not yet watched: it is the target, vouched;
+- on a watched lane, first seen nearer than ``seen_from_m`` (a vehicle is seen from farther), or
+  nearer than the carried target can be: it appeared from nowhere (a phantom), implausible until
   two range witnesses agree on it for ``confirm_frames`` frames (a real car that cut in). Until
-  then the car may ease off, not brake hard.
+  then the car may ease off, not brake hard;
+- within the carried bounds and no farther than the carried worst case plus delta: vouched (a
+  reading that near is on the safe side whatever it is);
+- farther than that, a *re-acquisition*: vouched only within the target's reach (where it would be
+  had it kept the speed the car measured of it, :class:`~.track.CarriedTarget`) and only while the
+  car lost it for at most ``reacquire_s``. Past that, or with the speed unmeasured beyond the worst
+  case plus the car's own stopping distance, only a chain the size witness confirms is vouched.
+  Hiding a car lets the LiDAR see the lane behind it, and a frustum spoof after a pause puts both
+  range witnesses on a distance the target can have reached: neither is a reading of the car;
+- farther than the carried target can have gone: a jump no car makes, refused.
+
+A vouched chain whose reading walks past the far end (by more than ``noise_m``) broke: refused.
+
+The size witness bounds every vouch: the camera's box can only shrink with distance, so a reading
+beyond the distance its height implies (plus :func:`size_slack_m`) is vouched at that bound, the
+nearer of the two (nearer is on the safe side).
 """
 
 from __future__ import annotations
@@ -47,6 +51,8 @@ class ChainConfig:
         seen_from_m: on a watched lane a vehicle is first seen no nearer than this, m (the detector
             finds a QCar 2 from 2.5 m; one first seen nearer came from nowhere in view).
         confirm_frames: frames both range witnesses must agree on an implausible chain before it is vouched.
+        noise_m: how far past the far end a going chain may read before it counts as broken, m.
+        reacquire_s: how long after its last vouch a target may be re-acquired within its reach, s.
     """
 
     gate_m: float = 0.25
@@ -55,9 +61,10 @@ class ChainConfig:
     seen_from_m: float = 1.5
     confirm_frames: int = 3
     noise_m: float = 0.05
+    reacquire_s: float = 0.5
 
     def __post_init__(self) -> None:
-        for name in ("gate_m", "gap_s", "watch_s", "seen_from_m", "noise_m"):
+        for name in ("gate_m", "gap_s", "watch_s", "seen_from_m", "noise_m", "reacquire_s"):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0.0 < value <= 10.0:
                 raise ValueError(f"{name} must be in (0, 10], got {value!r}")
@@ -66,8 +73,8 @@ class ChainConfig:
 
 
 def size_slack_m(size_m: float) -> float:
-    """How far beyond the size witness a range may read and still be the box's car, m: the depth reads
-    the box's middle 0.1 m past its rear, and the box's height is good to about a tenth."""
+    """How far beyond the size witness a range may read and still be the box's target, m: the depth
+    reads the box's middle 0.1 m past its rear, and the box's height is good to about a tenth."""
     return max(0.2, 0.2 * size_m)
 
 
@@ -82,16 +89,19 @@ class Verdict:
     """What the chain made of one frame.
 
     Attributes:
-        reading_m: this frame's range reading, m (NaN: none).
-        vouched: the reading is vouched (its chain was born plausible, or was confirmed).
-        implausible: the reading's chain is implausible and nearer than the target can be (ease off).
-        refused: the reading's chain jumped away (ignored).
+        reading_m: this frame's range reading, m (NaN: none): the nearest witness, bounded by the size
+            witness where it gives one.
+        vouched: the reading is vouched.
+        implausible: the reading's chain is implausible: nearer than the target can be (ease off).
+        refused: the reading's chain is refused: farther than the target can be, or than its reach.
+        sized: the size witness bounded the reading (it read farther than the box allows).
     """
 
     reading_m: float
     vouched: bool
     implausible: bool = False
     refused: bool = False
+    sized: bool = False
 
 
 NOTHING = Verdict(math.nan, False)
@@ -110,14 +120,14 @@ class ReadingChain:
         self.watched_s = 0.0
         self.state = "none"  # "vouched", "implausible", "refused"
         self.confirmed = 0
-        self.jumped = False  # a chain jumped away from the carried target, and it has not been seen since
+        self.born = False  # the last reading started a new chain
 
     def step(self, readings: tuple[float, ...], closing_mps: float, dt: float, carried: CarriedTarget,
-             size_m: float = math.nan) -> Verdict:
-        """One control step: the range witnesses' readings (the depth in the lead's box, the LiDAR's
-        track, the LiDAR's first return on the lane; NaN: none), the closing speed the car estimates
-        (its speed less the lead's), the carried target, and the size witness (the distance the lead's
-        box implies; NaN: none)."""
+             size_m: float = math.nan, stopping_m: float = 0.0) -> Verdict:
+        """One control step: the range witnesses' readings (NaN: none), the closing speed the car
+        estimates (its speed less the lead's), the carried target, the size witness (the distance the
+        target's box implies; NaN: none) and the car's own stopping distance, m (the reach of a target
+        whose speed the car has not measured)."""
         c = self.config
         self.watched_s += dt
         self.since_s += dt
@@ -130,40 +140,49 @@ class ReadingChain:
             return NOTHING
         reading = min(readings)
         both = len(readings) >= 2 and readings[1] - readings[0] <= agree_m(reading)
+        bound = size_m + size_slack_m(size_m) if math.isfinite(size_m) and size_m > 0 else math.inf
+        sized = reading > bound
         continuous = (math.isfinite(self.last_m) and self.since_s <= c.gap_s
                       and abs(reading - self.last_m) <= c.gate_m)
-        if not continuous:
-            self.state, self.confirmed = self._born(reading, carried, size_m), 0
-        elif self.state == "vouched" and carried.held and reading > carried.far_m + c.noise_m:
-            self.state, self.jumped = "refused", True  # walked away faster than the target can go
+        self.born = not continuous
+        if self.born:
+            self.confirmed = 0
+        if self.born or self.state != "vouched":
+            self.state = self._judge(reading, carried, sized, stopping_m, keep=self.state if continuous else "none")
+        elif carried.held and reading > carried.far_m + c.noise_m:
+            self.state = "refused"  # walked away faster than the target can go
         self.last_m, self.since_s = reading, 0.0
         if self.state == "implausible":
             self.confirmed = self.confirmed + 1 if both else 0
             if self.confirmed >= c.confirm_frames:
                 self.state = "vouched"
+        said = min(reading, bound)
         if self.state == "vouched":
-            if carried.held and reading <= carried.reach_m + agree_m(reading):
-                self.jumped = False
-            return Verdict(reading, True)
-        return Verdict(reading, False, implausible=self.state == "implausible", refused=self.state == "refused")
+            return Verdict(said, True, sized=sized)
+        return Verdict(said, False, implausible=self.state == "implausible", refused=self.state == "refused",
+                       sized=sized)
 
-    def _born(self, reading: float, carried: CarriedTarget, size_m: float = math.nan) -> str:
+    def _judge(self, reading: float, carried: CarriedTarget, sized: bool, stopping_m: float, keep: str) -> str:
+        """A chain's verdict on this reading (``keep``: its verdict so far, "none" for a new chain)."""
         c, tolerance = self.config, agree_m(reading)
-        if math.isfinite(size_m) and reading > size_m + size_slack_m(size_m):
-            self.jumped = carried.held
-            return "refused"
-        if carried.held:
-            if reading > carried.reach_m + tolerance and reading <= carried.far_m + tolerance:
-                # Farther than the target would be had it kept its vouched speed: a jump's readings after a
-                # gap, or what the LiDAR sees behind a car hidden from it. Not the target, until it is seen
-                # within its reach again.
-                return "refused"
-            if carried.holds(reading, tolerance):
-                return "vouched"
-            if reading > carried.far_m:
-                self.jumped = True
-                return "refused"
-            return "implausible"
-        if self.watched_s >= c.watch_s and reading < c.seen_from_m:
-            return "implausible"
-        return "vouched"
+        if not carried.held:
+            if keep == "implausible" or (keep == "none" and self.watched_s >= c.watch_s and reading < c.seen_from_m):
+                return "implausible"
+            return "vouched"
+        if reading < carried.near_m - tolerance:
+            return "implausible"  # nearer than the target can be: appeared from nowhere
+        if reading > carried.far_m + tolerance:
+            return "refused"  # farther than the target can have gone: a jump
+        if reading <= carried.near_m + carried.env.delta_m:
+            return "vouched"  # no farther than the worst case allows: on the safe side whatever it is
+        if sized:
+            return "vouched"  # the box confirms a target there, and bounds the vouch
+        return "vouched" if reading <= self._reach(carried, stopping_m) + tolerance else "refused"
+
+    def _reach(self, carried: CarriedTarget, stopping_m: float) -> float:
+        """How far a target lost for a while may be re-acquired without the box to confirm it, m."""
+        if carried.unvouched_s > self.config.reacquire_s:
+            return -math.inf
+        if not carried.speed_measured:
+            return carried.near_m + stopping_m
+        return carried.reach_m

@@ -1,0 +1,152 @@
+"""The supervisor of a static target (a stop sign, a person, a crate): its place vouched by the car's
+own witnesses, carried until the car has stood before it, and a stop rule that holds the car short of
+its line.
+
+It reads one published track of a static kind (``TargetTrack``: the car's own sign loop publishes its
+stop sign's, a plug-in stage its person's) and nothing else of its publisher. The target never moves,
+so between vouches only the car's travel moves it: its near end falls by the travel at the bound on
+the car's true speed (:class:`~.speed.SpeedBound`), with the encoder's error.
+
+- **Vouched** when two of its witnesses agree on it (the depth, the LiDAR's track of its post, the
+  size witness, where the map and the car's pose put it) for ``confirm_frames`` frames, at the nearest
+  of those that agree; or by a range reading that lies where the carried target is. A served or
+  defended distance is never a witness: it is what the supervisor checks (a served lie outvoted).
+  A target the map does not list and no detection came before stays unvouched until two range
+  witnesses confirm it.
+- **The stop rule.** While a target is carried, a car faster than stopping ``margin_m`` short of its
+  line allows (:func:`~.envelope.safe_speed` on the worst-case room, the target standing) is told to
+  stop (cap 0). It never raises what the car's braker or another stage says: it only adds a limit.
+- **Done** once the car has stood before the line (the stop the sign asks for), or the car's loop
+  publishes its next target.
+
+Its columns are prefixed with the kind it supervises (``sup_sign_*``).
+"""
+
+from __future__ import annotations
+
+import math
+from functools import lru_cache
+
+from racf.experiments.car.stage import CarStage, CarView, StageColumn, StageContext, StageLimit, TargetTrack
+from racf.experiments.car.supervisor.envelope import Envelope, safe_speed
+from racf.experiments.car.supervisor.speed import SpeedBound
+from racf.experiments.car.supervisor.vouch import agree_m
+
+__all__ = ["StaticSupervisor", "static_supervisor", "STOOD_MPS"]
+
+#: The car stood before the line once the bound on its speed fell under this, m/s.
+STOOD_MPS = 0.02
+#: Frames two witnesses must agree on a target before it is first vouched.
+CONFIRM_FRAMES = 3
+
+
+def _columns(kind: str) -> tuple[StageColumn, ...]:
+    p = f"sup_{kind}_"
+    return (StageColumn(f"{p}vouched", "bool", f"supervisor of the {kind}: its place is vouched this step"),
+            StageColumn(f"{p}carried", "bool", f"supervisor of the {kind}: a {kind} is carried (vouched, not yet "
+                                               "stood before)"),
+            StageColumn(f"{p}near", "m", f"supervisor of the {kind}: the nearest it can be, camera distance (NaN: "
+                                         "none)"),
+            StageColumn(f"{p}outvoted", "bool", f"supervisor of the {kind}: the defended distance lay farther than "
+                                                "the vouched place allows: the car's own witnesses outvoted it"),
+            StageColumn(f"{p}stop", "bool", f"supervisor of the {kind}: the car was faster than stopping before its "
+                                            "line allows: told to stop"),
+            StageColumn(f"{p}cap", "m/s", f"supervisor of the {kind}: its speed cap (inf: none)"))
+
+
+class StaticSupervisor(CarStage):
+    """Runtime assurance over a published static target's track (see the module docstring).
+
+    Args:
+        context: the car's build.
+        envelope: the guarantee's assumptions (the target's a_max is moot: it stands).
+    """
+
+    name = "static_supervisor"
+    supervises = "sign"
+    stands_in = False
+
+    def __init__(self, context: StageContext, envelope: Envelope | None = None) -> None:
+        super().__init__(context)
+        self.envelope = envelope if envelope is not None else Envelope()
+        self.speed_bound = SpeedBound(self.envelope.odometry_error)
+        self._prefix = f"sup_{self.supervises}_"
+        self.reset()
+
+    def reset(self) -> None:
+        self.near_m = self.far_m = math.nan
+        self.index = None
+        self.done = False
+        self.agreed = 0
+        self.seen = False
+        self.speed_bound.reset()
+
+    @property
+    def held(self) -> bool:
+        return math.isfinite(self.near_m)
+
+    def step(self, view: CarView) -> StageLimit:
+        track: TargetTrack | None = view.tracks.get(self.supervises)
+        bound = self.speed_bound.step(view.speed_mps, view.dt)
+        if track is None:
+            return self._said(math.inf, False, False, False)
+        if track.index != self.index:  # the car's next target: what was carried is behind it
+            self.near_m = self.far_m = math.nan
+            self.index, self.done, self.agreed, self.seen = track.index, False, 0, False
+        e = self.envelope
+        if self.held:  # a standing target comes nearer by the car's travel only
+            self.near_m -= bound * view.dt  # the far end stays: an upper bound, for continuity only
+        vouched = self._vouch(track)
+        if math.isfinite(vouched):
+            self.near_m = vouched - e.delta_m if not self.held else max(self.near_m, vouched - e.delta_m)
+            self.far_m = min(self.far_m, vouched + e.delta_m) if math.isfinite(self.far_m) else vouched + e.delta_m
+        self.seen = self.seen or bool(track.detected)
+        if not self.held or self.done:
+            return self._said(math.inf, math.isfinite(vouched), False, False)
+        room = self.near_m - track.stop_at_m
+        if bound < STOOD_MPS and room > -e.margin_m:
+            self.done = True  # the car stood before the line: the stop the target asks for is made
+            return self._said(math.inf, math.isfinite(vouched), False, False)
+        outvoted = math.isfinite(track.distance_m) and track.distance_m > self.far_m + agree_m(self.far_m)
+        outvoted = outvoted or (not math.isfinite(track.distance_m) and math.isfinite(vouched))
+        stop = bound > safe_speed(room, 0.0, e)
+        return self._said(0.0 if stop else math.inf, math.isfinite(vouched), outvoted, stop)
+
+    def _vouch(self, track: TargetTrack) -> float:
+        """This step's vouched distance to the target (NaN: none)."""
+        ranges = [r for r in track.ranges if math.isfinite(r) and r > 0]
+        if self.held:  # a range reading where the carried target is: the same target
+            near = [r for r in ranges if self.near_m - agree_m(r) <= r <= self.far_m + agree_m(r)]
+            if near:
+                return min(near)
+        witnesses = sorted(r for r in (*track.ranges, track.size_m, track.map_m) if math.isfinite(r) and r > 0)
+        agreeing = [(a, b) for a, b in zip(witnesses, witnesses[1:]) if b - a <= agree_m(a)]
+        # The map alone with the size (no range witness) or an unlisted target first seen: two range witnesses.
+        unlisted = not math.isfinite(track.map_m) and not self.seen
+        if unlisted:
+            agreeing = [(a, b) for a, b in agreeing if a in ranges and b in ranges]
+        else:
+            agreeing = [(a, b) for a, b in agreeing if a in ranges or b in ranges]
+        self.agreed = self.agreed + 1 if agreeing else 0
+        if self.agreed < CONFIRM_FRAMES and not self.held:
+            return math.nan
+        return min(a for a, _ in agreeing) if agreeing else math.nan
+
+    def _said(self, cap: float, vouched: bool, outvoted: bool, stop: bool) -> StageLimit:
+        p = self._prefix
+        return StageLimit(cap, {f"{p}vouched": vouched, f"{p}carried": self.held and not self.done,
+                                f"{p}near": self.near_m if self.held and not self.done else math.nan,
+                                f"{p}outvoted": outvoted, f"{p}stop": stop, f"{p}cap": cap})
+
+    def idle(self) -> StageLimit:
+        return self._said(math.inf, False, False, False)
+
+
+@lru_cache(maxsize=None)
+def static_supervisor(kind: str) -> type[StaticSupervisor]:
+    """The static supervisor of ``kind``'s track, with its own columns (``sup_KIND_*``)."""
+    return type(f"StaticSupervisor_{kind}", (StaticSupervisor,),
+                {"supervises": kind, "name": f"supervisor_{kind}", "columns": _columns(kind), "__module__": __name__})
+
+
+StaticSupervisor.columns = _columns("sign")
