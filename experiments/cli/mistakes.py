@@ -66,8 +66,8 @@ MISTAKES: list[tuple[str, str]] = [
     ("trial --plugin {worlds.py} --target far_start", "options['run_up_m'] for sign 2 must be in [0.3,"),
     ("trial --plugin {worlds.py} --target clashing_stage", "car stage 'loud' declares the column 'brake'"),
     ("trial --plugin {worlds.py} --target unknown_stage", "unknown car stage 'cruise_control'"),
-    ("trial --supervisor --estimator odca", "supervisor: it runs over the 'following' stage, which scenario 'sign' "
-                                            "does not engage"),
+    ("trial --plugin {worlds.py} --target unsupervisable --supervisor", "supervisor: car stage 'quiet' publishes no "
+                                                                        "typed track"),
     # specs
     ("sweep {tmp}/nowhere.toml", "no sweep spec"),
     ("sweep {bad.toml}", "not valid TOML"),
@@ -230,6 +230,18 @@ class ClashingStage(_Staged):
 class UnknownStage(_Staged):
     name = "unknown_stage"
     stage = "cruise_control"
+
+
+class Quiet(CarStage):
+    name = "quiet"
+
+    def step(self, view):
+        raise AssertionError("never built")
+
+
+class Unsupervisable(_Staged):
+    name = "unsupervisable"
+    stage = "quiet"
 '''
 
 _INCOMPLETE = '''

@@ -26,6 +26,13 @@ the episode:
   again after ``retry_s`` of its own time in a new session (``service_new_sessions``), its
   defence started afresh. A defence the service had to rebuild is no answer either
   (``service_restarts``: the service's own count, as its log names it).
+- **An answer the car's own witnesses outvote.** A served answer is one more reading. Where the car
+  runs an onboard defence (else its own depth distance), a served distance farther than the onboard
+  one by more than ``OUTVOTE_M`` (or "no target" where the onboard defence has one) is outvoted: the
+  nearer, the car's own, drives; a served "nothing stands" where the car's own witnesses say a target
+  does is outvoted too (``service_outvoted``: steps the served answer was set aside). A lie the
+  protocol's check cannot see (a distance in range, the ids kept) costs the car nothing it would not
+  have without the service.
 - **A peer that is not the service.** On a CurveZMQ link (``keys``) the car talks only to the
   service whose key it pins; a man in the middle fails the handshake or the box, the car falls
   back and counts it (``service_refusals``), and logs the first in one line.
@@ -42,12 +49,13 @@ import numpy as np
 
 from racf.controllers import PerceptionSample
 from racf.errors import UserError
+from racf.experiments.link.outvote import OUTVOTE_M, outvote
 from racf.experiments.link.curve import CarKeys, Handshake, handshake_failure, refusal
 from racf.experiments.link.wire import (DEFAULT_RETRY_S, DEFAULT_TIMEOUT_MS, MAX_MESSAGE_BYTES, PROTOCOL,
                                            InvalidAnswer, WireError, check_answer, decode_sample, encode_sample,
                                            pack, unpack)
 
-__all__ = ["RemoteEstimator", "NoAnswer", "encode_sample", "decode_sample", "pack", "unpack", "PROTOCOL",
+__all__ = ["RemoteEstimator", "NoAnswer", "outvote", "OUTVOTE_M", "encode_sample", "decode_sample", "pack", "unpack", "PROTOCOL",
            "DEFAULT_TIMEOUT_MS", "DEFAULT_RETRY_S"]
 
 LOG = logging.getLogger("racf.link")
@@ -113,6 +121,7 @@ class RemoteEstimator:
         self.new_sessions = 0  # sessions the car opened again after a failure
         self.invalid = 0  # answers the protocol's check refused
         self.refusals = 0  # answers lost to a failed handshake (a peer that is not the pinned service)
+        self.outvoted = 0  # served answers the car's own witnesses outvoted
         self.connect_s = float(connect_s)
         ping_ms = None
         try:  # a live service answers a ping at once; the hello may wait while it builds the defence
@@ -184,10 +193,22 @@ class RemoteEstimator:
                           "service_rtt_ms": math.nan, **status}
             return own
         self._rtts.append(self.latency_s * 1000.0)
+        served = math.nan if reply["distance"] is None else float(reply["distance"])
+        own = own if self.onboard is not None else float(sample.d_meas)
+        distance, stands, outvoted = outvote(served, reply["stands"], own, self._own_stands(sample))
+        self.outvoted += outvoted
         self._last = {**reply["diagnostics"], "service_fallback": 0.0, "service_onboard": 0.0,
-                      "service_rtt_ms": self.latency_s * 1000.0, **status}
-        self._stands = reply["stands"]
-        return math.nan if reply["distance"] is None else reply["distance"]
+                      "service_rtt_ms": self.latency_s * 1000.0, **status,
+                      "service_outvoted": float(self.outvoted)}
+        self._stands = stands
+        return distance
+
+    def _own_stands(self, sample: PerceptionSample) -> bool | None:
+        """Whether the car's own witnesses say a target stands: the onboard defence's verdict where it
+        gives one, else the detector's."""
+        verdict = getattr(self.onboard, "stands", None)
+        said = verdict() if callable(verdict) else None
+        return bool(sample.detected) if said is None else bool(said)
 
     def diagnostics(self) -> dict[str, float]:
         return dict(self._last)

@@ -36,6 +36,8 @@ class ServiceMeasures(Metric):
         Field("service_restarts", 0, "", "defence restarts: times the service rebuilt the car's defence after it "
                                          "raised"),
         Field("service_new_sessions", 0, "", "new sessions: times the car opened its session again after a failure"),
+        Field("service_outvoted", 0, "", "served answers the car's own witnesses outvoted (a distance farther than "
+                                         "its onboard defence's, or nothing standing where they see a target)"),
         Field("service_refusals", 0, "", "answers lost to a failed authentication: a peer that is not the service "
                                          "the car pins (a man in the middle on a CurveZMQ link)"),
     )
@@ -57,7 +59,8 @@ class ServiceMeasures(Metric):
                 "service_onboard_steps": int((log.loc[control, "service_onboard"] == 1.0).sum())
                 if "service_onboard" in log else 0,
                 **{name: _last_count(log, name) for name in ("service_invalid", "service_restarts",
-                                                             "service_new_sessions", "service_refusals")}}
+                                                             "service_new_sessions", "service_refusals",
+                                                             "service_outvoted")}}
 
 
 def _last_count(log, column: str) -> int:

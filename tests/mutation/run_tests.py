@@ -43,12 +43,12 @@ TESTS = {
     "experiments/scorecard/card_format.py": ["tests/experiments/scorecard/test_battery.py",
                                              "tests/experiments/scorecard/test_headline.py"],
     # The supervisor (issue 69).
-    "experiments/car/supervisor/envelope.py": [f"{SUP}/test_envelope.py", f"{SUP}/test_supervisor_stage.py"],
+    "experiments/car/supervisor/envelope.py": [f"{SUP}/test_envelope.py", f"{SUP}/test_vehicle_supervisor.py"],
     "experiments/car/supervisor/track.py": [f"{SUP}/test_track.py", f"{SUP}/test_vouch.py",
-                                            f"{SUP}/test_supervisor_stage.py"],
-    "experiments/car/supervisor/vouch.py": [f"{SUP}/test_vouch.py", f"{SUP}/test_supervisor_stage.py"],
+                                            f"{SUP}/test_vehicle_supervisor.py"],
+    "experiments/car/supervisor/vouch.py": [f"{SUP}/test_vouch.py", f"{SUP}/test_vehicle_supervisor.py"],
     "experiments/car/supervisor/clear.py": [f"{SUP}/test_lane_witness.py"],
-    "experiments/car/supervisor/stage.py": [f"{SUP}/test_supervisor_stage.py"],
+    "experiments/car/supervisor/vehicle.py": [f"{SUP}/test_vehicle_supervisor.py"],
     # The car ahead's broadcast, its attacks and the onboard fallback (issue 70).
     "sim/radio/message.py": ["tests/sim/radio/test_message.py", "tests/sim/radio/test_channel.py"],
     "sim/radio/keys.py": ["tests/sim/radio/test_message.py"],

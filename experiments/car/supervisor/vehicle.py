@@ -15,10 +15,10 @@ stage, and its cap stands in for the stage's. Each control step it:
    - nothing carried: the defence's cap; eased off (never a hard brake) only where the LiDAR sees the
      lane clear where the defence puts its target;
    - the defence's distance agrees with the vouched reading: the defence's cap;
-   - a reading vouched this step that the defence's distance does not agree with: the safe controller's
-     cap (the headway policy and a comfortable stop on the worst-case gap) or the defence's, the lower,
-     the defence's eased off where no LiDAR witness confirms what it brakes for (a phantom);
-   - carried, nothing vouched this step: the lower of the safe controller's and the defence's.
+   - otherwise, a target carried: the lower of the safe controller's cap (the headway policy and a
+     comfortable stop on the worst-case gap) and the defence's; the defence's eased off (never a hard
+     brake) where it brakes for what no LiDAR witness confirms against positive evidence: a reading
+     vouched this step, or one nearer than the carried target can be (a phantom).
 
    Whatever drives, a car faster than the worst-case gap allows is told to stop (cap 0,
    :func:`~.envelope.safe_speed`): the rule the guarantee rests on.
@@ -162,9 +162,9 @@ class VehicleSupervisor(CarStage):
                        and lane_clear(view.scan, lane, track.distance_m - env.delta_m, track.distance_m + env.delta_m,
                                       self._lidar_in_camera))
         cap, stop, eased = self._cap(track.cap_mps, speed, dt, bound, fresh, agrees,
-                                     evidence=(fresh and not confirmed) or clear_there)
+                                     evidence=((fresh or verdict.implausible) and not confirmed) or clear_there)
         if verdict.implausible:
-            cap = min(cap, self._eased(speed, dt))
+            cap = min(cap, self._ease if eased else self._eased(speed, dt))
         elif not eased:
             self._ease = math.inf
         values = {"sup_defence": agrees, "sup_safe": self.carried.held and not agrees, "sup_vouched": verdict.vouched,
@@ -231,9 +231,8 @@ class VehicleSupervisor(CarStage):
         policy_gap = gap + (env.delta_m if fresh else 0.0)
         headway = max(0.0, (policy_gap - self.policy.standstill_gap_m) / self.policy.time_headway_s)
         safe = max(min(headway, safe_speed(gap, slow, env, env.comfort_brake_mps2)), 0.0)
-        if not fresh:
-            return min(safe, defence_cap), False, False
-        return min(safe, softened), False, eased and safe > defence_cap
+        cap = min(safe, softened)
+        return cap, False, eased and cap > defence_cap
 
     def _lane(self, view: CarView):
         """The lane ahead in the camera's frame, from the map and the car's own pose."""

@@ -86,12 +86,21 @@ def test_the_supervisor_names_its_episodes_and_leaves_the_others_ids_as_they_wer
         TrialSpec("clean+odca", 1, 1.0, 3, supervisor="yes")
 
 
-def test_the_supervisor_takes_the_following_stages_place_and_refuses_a_scenario_without_one():
+def test_the_supervisor_is_assembled_by_the_car_above_every_published_track_and_the_engine_swaps_nothing():
+    from racf.experiments.car.supervisor.static import StaticSupervisor
+    from racf.experiments.car.supervisor.vehicle import VehicleSupervisor
     from racf.experiments.episode.plan import plan_episode
+    from racf.experiments.episode.stack import car_stages
 
     spec = TrialSpec("clean+odca", 1, 1.0, 3, target="lead_vehicle")
     assert plan_episode(spec).mission.stages == ("following",)
-    supervised = plan_episode(dataclasses.replace(spec, supervisor=True)).mission
-    assert supervised.stages == ("supervisor",) and supervised.target_decel_mps2 == 6.0
-    with pytest.raises(ValueError, match="which scenario 'sign' does not engage"):
-        plan_episode(TrialSpec("clean+odca", 1, 1.0, 3, supervisor=True))
+    supervised = dataclasses.replace(spec, supervisor=True)
+    plan = plan_episode(supervised)
+    assert plan.mission.stages == ("following",) and plan.mission.target_decel_mps2 == 6.0
+    names = [type(stage).__name__ for stage in car_stages(supervised, plan)]
+    assert names[0] == "FollowingStage" and {"VehicleSupervisor", "StaticSupervisor_sign"} <= set(names)
+    # The stop sign alone: its supervisor is the static one, over the car's own loop.
+    sign = TrialSpec("clean+odca", 1, 1.0, 3, supervisor=True)
+    stages = car_stages(sign, plan_episode(sign))
+    assert len(stages) == 1 and isinstance(stages[0], StaticSupervisor) and stages[0].supervises == "sign"
+    assert not any(isinstance(stage, VehicleSupervisor) for stage in stages)

@@ -11,7 +11,7 @@ import zmq
 
 from racf.experiments.link.wire import PROTOCOL, decode_sample, pack, unpack
 
-__all__ = ["FakeService", "LIES"]
+__all__ = ["FakeService", "LIES", "IN_RANGE_LIES"]
 
 #: What a lying service can answer an estimate with, by name: a function of the request id and the
 #: honest answer to the map it sends.
@@ -30,6 +30,16 @@ LIES = {
     "diagnostics list": lambda rid, honest: {**honest, "diagnostics": [1, 2]},
     "not a map": None,  # the bytes of a msgpack list
 }
+
+#: Lies the protocol's check cannot see: a distance in range, the ids kept (issue 78). The car's own
+#: witnesses must outvote them.
+IN_RANGE_LIES = {
+    "always 4 m": lambda rid, honest: {**honest, "distance": 4.0, "stands": False},
+    "3 m farther": lambda rid, honest: {**honest, "distance": None if honest["distance"] is None
+                                        else honest["distance"] + 3.0, "stands": False},
+    "nothing stands": lambda rid, honest: {**honest, "distance": None, "stands": False},
+}
+LIES.update(IN_RANGE_LIES)
 
 
 class FakeService:

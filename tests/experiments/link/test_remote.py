@@ -19,7 +19,7 @@ from racf.errors import UserError
 from racf.experiments.episode import TrialSpec, run_trial
 from racf.experiments.link.remote import RemoteEstimator
 from racf.experiments.link.wire import DISTANCE_RANGE_M, PROTOCOL, InvalidAnswer, check_answer
-from tests.experiments.link.fake_service import LIES, FakeService
+from tests.experiments.link.fake_service import IN_RANGE_LIES, LIES, FakeService
 
 
 def _sample(k: int) -> PerceptionSample:
@@ -36,7 +36,7 @@ def _drive(car: RemoteEstimator, steps: int) -> tuple[list[float], list[dict]]:
     return out, diagnostics
 
 
-@pytest.mark.parametrize("lie", LIES)
+@pytest.mark.parametrize("lie", [name for name in LIES if name not in IN_RANGE_LIES])
 def test_every_lie_is_a_counted_fallback_on_the_cars_own_depth(lie, caplog):
     with FakeService(lie, honest=30) as fake, caplog.at_level(logging.WARNING, logger="racf.link"):
         car = RemoteEstimator(fake.endpoint, "raw", timeout_ms=5000.0, retry_s=0.1)
@@ -329,3 +329,45 @@ def test_a_step_that_waited_out_its_timeout_is_as_late_as_its_wait():
         car.estimate(_sample(2), 1.0, 0.02)  # a new hello, never answered: it waited its timeout
         assert car.diagnostics()["service_fallback"] == 1.0 and 0.09 <= car.latency_s < 1.0
         car.close()
+
+
+# -- a served answer is one more reading (issue 78) --------------------------------------------------
+from racf.experiments.link.remote import OUTVOTE_M, outvote  # noqa: E402
+
+NAN = math.nan
+
+
+@pytest.mark.parametrize("served, served_stands, own, own_stands, expected", [
+    (1.0, True, 1.0, True, (1.0, True, False)),            # they agree: the service's
+    (1.0 + OUTVOTE_M, None, 1.0, None, (1.15, None, False)),  # farther by the tolerance: still the service's
+    (1.2, None, 1.0, None, (1.0, None, True)),             # farther by more: the car's own, outvoted
+    (0.5, None, 1.0, None, (0.5, None, False)),            # nearer: on the safe side, the service's
+    (NAN, None, 1.0, None, (1.0, None, True)),             # "no target" where the car sees one: outvoted
+    (4.0, False, NAN, True, (4.0, True, True)),            # nothing stands, the car's own witnesses see it stand
+    (4.0, False, NAN, False, (4.0, False, False)),         # nothing stands, nor do the car's witnesses say so
+])
+def test_a_served_answer_farther_than_the_cars_own_is_outvoted_by_hand(served, served_stands, own, own_stands,
+                                                                     expected):
+    got = outvote(served, served_stands, own, own_stands)
+    assert got[1:] == expected[1:] and (got[0] == pytest.approx(expected[0]) or math.isnan(expected[0]))
+
+
+def _served_lie_at_the_sign(lie: str):
+    with FakeService(lie, honest=30) as fake:
+        result, log = run_trial(replace(SPEC, estimator_endpoint=fake.endpoint, estimator_timeout_ms=5000.0,
+                                        estimator_fallback="raw"))
+        return result, log, fake.lies
+
+
+def test_a_served_lie_in_range_is_outvoted_and_the_car_stops_at_the_sign():
+    result, log, lies = _served_lie_at_the_sign("always 4 m")
+    row = result.to_dict()
+    assert lies > 30 and row["service_invalid"] == 0 and row["service_fallback_steps"] == 0
+    assert row["service_outvoted"] > 0 and result.success, row
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("lie", ["3 m farther", "nothing stands"])
+def test_every_served_lie_in_range_leaves_the_car_stopping(lie):
+    result, _, lies = _served_lie_at_the_sign(lie)
+    assert lies > 30 and result.to_dict()["service_outvoted"] > 0 and result.success

@@ -88,8 +88,12 @@ def test_a_link_attack_acts_on_the_answers_in_its_window_only(name, service):
     assert active.any() and np.isfinite(result.attack_start_s), "its window never opened"
     acted = {"link_delay": log["service_rtt_ms"].to_numpy() >= 120.0,
              "link_drop": log["service_fallback"].to_numpy() == 1.0,
-             "link_spoof": log["d_fused"].to_numpy() == 7.5}[name]
+             # The spoofed answer arrives: it drives, or the car's own witnesses outvote it (issue 78).
+             "link_spoof": (log["d_fused"].to_numpy() == 7.5)
+             | (np.diff(log["service_outvoted"].to_numpy(float), prepend=0.0) > 0)}[name]
     assert acted[active].all(), "an answer in its window passed untouched"
     # After a lost answer the car asks again only after retry_s: its fallback outlasts the window.
     outside = control & ~active & (np.cumsum(active) == 0 if name == "link_drop" else True)
+    if name == "link_spoof":  # outside, the honest answer may be outvoted too (raw depth's "no target")
+        acted = log["d_fused"].to_numpy() == 7.5
     assert not acted[outside].any(), "it acted outside its window"

@@ -125,60 +125,68 @@ def test_a_vouched_chain_that_walks_past_the_far_end_is_refused():
     walked = ReadingChain(ChainConfig(noise_m=0.05))
     walked.step((1.0, NAN, NAN), 0.0, DT, carried)
     carried.vouch(1.0, 0.0, lead_known=True)
-    verdict = walked.step((carried.far_m + 0.06, NAN, NAN), 0.0, DT, carried)
-    assert verdict.refused and walked.jumped
+    assert walked.step((carried.far_m + 0.06, NAN, NAN), 0.0, DT, carried).refused
 
 
-def test_a_jump_is_remembered_across_a_gap_until_the_target_is_seen_within_its_reach():
-    chain, carried = ReadingChain(), _carried(1.0)
+def test_a_refusal_is_judged_again_and_lifted_where_the_reading_comes_back_within_reach():
+    chain, carried = ReadingChain(), _carried(1.0)  # near 0.9, far 1.1, the lead standing, measured
     chain.step((1.0, NAN, NAN), 0.0, DT, carried)
-    chain.step((2.5, NAN, NAN), 0.0, DT, carried)  # a jump no car makes
-    assert chain.jumped
-    for _ in range(30):  # 0.6 s with no reading: the far end grows past 1.6 m, the reach does not
+    assert chain.step((1.45, NAN, NAN), 0.0, DT, carried).refused  # a jump no car makes
+    # The same chain reads on, now where the target is: no longer refused, vouched.
+    assert chain.step((1.3, NAN, NAN), 0.0, DT, carried).refused
+    assert chain.step((1.1, NAN, NAN), 0.0, DT, carried).vouched
+
+
+def test_a_target_lost_longer_than_reacquire_s_is_taken_back_only_near_its_worst_case():
+    config = ChainConfig(reacquire_s=0.5)
+    chain, carried = ReadingChain(config), _carried(1.0)
+    chain.step((1.0, NAN, NAN), 0.0, DT, carried)
+    carried.vouch(1.0, 0.6, lead_known=True)  # measured at 0.6 m/s: its reach grows at 0.85 m/s
+    for _ in range(20):  # 0.4 s unseen: within reacquire_s
         chain.step((NAN, NAN, NAN), 0.0, DT, carried)
         carried.predict(0.0, DT)
-    assert carried.far_m > 1.6 > carried.reach_m + agree_m(1.6)
-    # Born within the far end but beyond the reach: refused (the gap does not launder the jump).
-    assert chain.step((1.6, NAN, NAN), 0.0, DT, carried).refused
-    for _ in range(30):
-        chain.step((NAN, NAN, NAN), 0.0, DT, carried)
-    # Seen again within its reach: vouched, and the jump forgotten.
-    assert chain.step((1.0, NAN, NAN), 0.0, DT, carried).vouched and not chain.jumped
+    # Reach by hand: 1.1 + 0.85 x 0.4 = 1.44 m; the far end grew faster.
+    assert carried.reach_m == pytest.approx(1.44) and carried.far_m > 1.7
+    assert chain.step((1.4, NAN, NAN), 0.0, DT, carried).vouched
+    lost = ReadingChain(config)
+    carried = _carried(1.0)
     carried.vouch(1.0, 0.6, lead_known=True)
-    for _ in range(30):
+    for _ in range(30):  # 0.6 s unseen: past reacquire_s
+        lost.step((NAN, NAN, NAN), 0.0, DT, carried)
+        carried.predict(0.0, DT)
+    # The near end (a lead braking at 6 m/s^2 from 0.35 m/s) stands at 0.9 + 0.35^2 / 12 = 0.910 m.
+    assert carried.near_m == pytest.approx(0.9 + 0.35 ** 2 / 12.0)
+    assert lost.step((1.3, NAN, NAN), 0.0, DT, carried).refused  # the lane behind a hidden car, say
+    assert lost.step((1.3, NAN, NAN), 0.0, DT, carried).refused  # and judged again: still refused
+    assert ReadingChain(config).step((1.0, NAN, NAN), 0.0, DT, carried).vouched  # within near + delta: safe side
+    # The box confirms a car there: vouched, at the box's bound where the range reads beyond it.
+    sized = ReadingChain(config).step((1.6, NAN, NAN), 0.0, DT, carried, size_m=1.2)
+    assert sized.vouched and sized.sized and sized.reading_m == pytest.approx(1.2 + 0.24)
+
+
+def test_an_unmeasured_speed_reacquires_no_farther_than_the_near_end_and_the_cars_stopping_distance():
+    chain, carried = ReadingChain(), CarriedTarget(Envelope())
+    carried.vouch(1.0, 0.0, lead_known=False)
+    for _ in range(5):
         chain.step((NAN, NAN, NAN), 0.0, DT, carried)
         carried.predict(0.0, DT)
-    # Within the reach (the target kept its speed): vouched; beyond it, within the far end: refused.
-    assert chain.step((carried.reach_m - 0.01, NAN, NAN), 0.0, DT, carried).vouched
-    for _ in range(30):
-        chain.step((NAN, NAN, NAN), 0.0, DT, carried)
-        carried.predict(0.0, DT)
-    assert carried.far_m > carried.reach_m + 0.5
-    assert chain.step((carried.reach_m + 0.4, NAN, NAN), 0.0, DT, carried).refused
+    # Near end 0.9 (a standing lead cannot come nearer with the car at rest); stopping distance 0.2 m.
+    assert chain.step((0.9 + 0.2 + agree_m(1.25) - 0.01, NAN, NAN), 0.0, DT, carried, stopping_m=0.2).vouched
+    assert ReadingChain().step((0.9 + 0.2 + agree_m(1.3) + 0.02, NAN, NAN), 0.0, DT, carried,
+                               stopping_m=0.2).refused
 
 
-def test_a_reset_forgets_a_jump():
-    chain, carried = ReadingChain(), _carried(1.0)
-    chain.step((1.0, NAN, NAN), 0.0, DT, carried)
-    chain.step((2.5, NAN, NAN), 0.0, DT, carried)
-    chain.reset()
-    for _ in range(30):
-        carried.predict(0.0, DT)
-    assert not chain.jumped and chain.step((carried.reach_m, NAN, NAN), 0.0, DT, carried).vouched
-
-
-def test_a_new_chain_farther_than_the_box_allows_is_refused_a_going_one_is_not():
+def test_a_reading_farther_than_the_box_allows_is_vouched_at_the_box_s_bound():
     carried = _carried(1.0)
     assert ReadingChain().step((1.0, NAN, NAN), 0.0, DT, carried, size_m=0.95).vouched
-    # Born 0.35 m beyond a box that says 0.8 m (its slack: 0.2 m): no car's range.
-    refused = ReadingChain().step((1.15, NAN, NAN), 0.0, DT, carried, size_m=0.8)
-    assert refused.refused
-    # With no box, the same reading is the carried target's.
-    assert ReadingChain().step((1.15, NAN, NAN), 0.0, DT, carried).vouched
-    # A going chain under a box that grew (a phantom's picture): not consulted.
-    going = ReadingChain()
-    going.step((1.0, NAN, NAN), 0.0, DT, carried)
-    assert going.step((1.0, NAN, NAN), 0.0, DT, carried, size_m=0.5).vouched
+    # 1.15 m read, a box that says 0.8 m (its slack: 0.2 m): vouched at 1.0 m, the nearer.
+    bounded = ReadingChain().step((1.15, NAN, NAN), 0.0, DT, carried, size_m=0.8)
+    assert bounded.vouched and bounded.sized and bounded.reading_m == pytest.approx(1.0)
+    # With no box, the reading itself.
+    assert ReadingChain().step((1.15, NAN, NAN), 0.0, DT, carried).reading_m == 1.15
+    # Nothing carried, first sight: the falsifier's case (1.139 m read, the box 0.919 m): vouched at 1.119 m.
+    first = ReadingChain().step((1.139, NAN, NAN), 0.0, DT, CarriedTarget(Envelope()), size_m=0.919)
+    assert first.vouched and first.reading_m == pytest.approx(1.119)
 
 
 def test_the_slack_and_agreement_by_hand():
@@ -193,7 +201,7 @@ def test_the_default_chain_is_the_one_documented():
     import dataclasses
 
     assert dataclasses.asdict(ChainConfig()) == {"gate_m": 0.25, "gap_s": 0.5, "watch_s": 1.0, "seen_from_m": 1.5,
-                                                 "confirm_frames": 3, "noise_m": 0.05}
+                                                 "confirm_frames": 3, "noise_m": 0.05, "reacquire_s": 0.5}
     with pytest.raises(dataclasses.FrozenInstanceError):
         ChainConfig().gate_m = 1.0
     assert ChainConfig(gap_s=10.0).gap_s == 10.0

@@ -1,18 +1,16 @@
-"""The supervisor's choice: the defence's cap while its distance is vouched; the safe controller's on
-the worst case otherwise; a stop once the car is faster than that worst case allows; easing off,
-never a hard brake, for what appears from nowhere."""
+"""The supervisor of the car ahead: the defence's cap while its distance is vouched; the safe
+controller's on the worst case otherwise, never bolder than the defence without positive evidence; a
+stop once the car is faster than that worst case allows; easing off, never a hard brake, for what
+appears from nowhere or what no LiDAR witness confirms. It reads only the published track."""
 
 import math
 
 import numpy as np
 import pytest
 
-from racf.controllers.following import FollowDecision, FollowingConfig, LeadSpeed
-from racf.controllers.perception import PerceptionSample
-from racf.experiments.car.following.stage import LeadStep
-from racf.experiments.car.stage import CarView, StageContext, StageLimit
+from racf.experiments.car.stage import CarView, StageContext, TargetTrack
 from racf.experiments.car.supervisor.envelope import safe_speed
-from racf.experiments.car.supervisor.stage import EASE_MPS2, SupervisorStage
+from racf.experiments.car.supervisor.vehicle import EASE_MPS2, VehicleSupervisor
 
 NAN = math.nan
 DT = 0.02
@@ -20,43 +18,33 @@ BUMPER = 0.1
 
 
 class Advanced:
-    """A following stage that says what it is told to: its witnesses, its distance and its cap."""
-
-    camera_xy_m = (0.2, 0.0)
+    """What the following stage publishes, as told: its witnesses, its distance and its cap."""
 
     def __init__(self) -> None:
-        self.config = FollowingConfig()
-        self.speed = LeadSpeed(self.config)
         self.next = (NAN, NAN, NAN, math.inf)
+        self.extra: dict = {}
 
-    def idle(self):
-        return StageLimit(math.inf, {}, None)
-
-    def reset(self):
-        pass
-
-    def step(self, view):
+    def track(self) -> TargetTrack:
         depth, lidar, fused, cap = self.next
-        sample = PerceptionSample(None, depth, 0.0, lidar, NAN)
-        step = LeadStep(sample, fused, 0.0, FollowDecision(cap, fused - BUMPER, NAN, cap == 0.0))
-        return StageLimit(cap, {"lead_cap": cap}, step)
+        return TargetTrack("vehicle", fused, cap, moving=True, speed_mps=0.0, speed_known=False, depth_m=depth,
+                           lidar_m=lidar, **self.extra)
 
 
-def _stage() -> tuple[SupervisorStage, Advanced]:
+def _stage() -> tuple[VehicleSupervisor, Advanced]:
     context = StageContext(None, (0.2, 0.0), 0.17, (0.1, 0.0), BUMPER, lambda: None, target_decel_mps2=6.0)
-    advanced = Advanced()
-    stage = SupervisorStage(context, advanced=advanced)
+    stage = VehicleSupervisor(context)
     stage.reset()
-    return stage, advanced
+    return stage, Advanced()
 
 
-def _view(speed: float) -> CarView:
-    return CarView({}, np.zeros(3), None, 0.0, speed, 0.0, 0.0, DT, True, False)
+def _view(speed: float, track: TargetTrack | None = None) -> CarView:
+    return CarView({}, np.zeros(3), None, 0.0, speed, 0.0, 0.0, DT, True, False,
+                   tracks={} if track is None else {"vehicle": track})
 
 
 def _say(stage, advanced, speed, depth, lidar, fused, cap):
     advanced.next = (depth, lidar, fused, cap)
-    return stage.step(_view(speed))
+    return stage.step(_view(speed, advanced.track()))
 
 
 def test_a_vouched_defence_drives_with_its_own_cap():
@@ -65,16 +53,31 @@ def test_a_vouched_defence_drives_with_its_own_cap():
     assert said.values["sup_defence"] and said.speed_cap_mps == 0.7 and not said.values["sup_stop"]
 
 
-def test_a_defence_off_the_vouched_reading_is_set_aside_for_the_safe_controller():
+def test_a_phantom_the_lidar_does_not_confirm_eases_the_car_off_never_a_hard_brake():
     stage, advanced = _stage()
     _say(stage, advanced, 0.5, 1.5, 1.45, 1.45, 0.7)
     # A phantom: the defence follows a picture at 0.5 m and stops the car; the range witnesses see the lead.
     said = _say(stage, advanced, 0.5, 1.5, 1.44, 0.5, 0.0)
-    assert not said.values["sup_defence"] and said.values["sup_vouched"]
-    gap = 1.44 - BUMPER  # a fresh reading: the policy on the reading itself
-    assert said.speed_cap_mps == pytest.approx(min((gap - 0.25) / 1.0, safe_speed(gap - 0.1, 0.0, stage.envelope,
-                                                                                    stage.envelope.comfort_brake_mps2)))
-    assert said.speed_cap_mps > 0.5
+    assert not said.values["sup_defence"] and said.values["sup_vouched"] and said.values["sup_eased"]
+    # By hand: down from 0.5 m/s at 1.5 m/s^2 for one 0.02 s step.
+    assert said.speed_cap_mps == pytest.approx(0.47)
+    caps = [_say(stage, advanced, 0.5, 1.5, 1.44, 0.5, 0.0).speed_cap_mps for _ in range(3)]
+    assert caps == pytest.approx([0.44, 0.41, 0.38])
+
+
+def test_a_brake_the_lidar_confirms_is_never_eased():
+    stage, advanced = _stage()
+    _say(stage, advanced, 0.5, 1.5, 1.45, 1.45, 0.7)
+    # The defence brakes for something at 0.6 m that the LiDAR's track sees too: its brake stands.
+    said = _say(stage, advanced, 0.5, 1.5, 0.6, 0.6, 0.0)
+    assert said.speed_cap_mps == 0.0 and not said.values["sup_eased"]
+
+
+def test_holding_nothing_the_defence_s_cap_drives_whatever_it_is():
+    stage, advanced = _stage()
+    for _ in range(20):  # no range witness at all; the defence brakes to a stop on what it alone sees
+        said = _say(stage, advanced, 1.0, NAN, NAN, 0.3, 0.0)
+    assert not said.values["sup_carried"] and said.speed_cap_mps == 0.0 and not said.values["sup_eased"]
 
 
 def test_a_car_faster_than_the_worst_case_gap_allows_is_told_to_stop_whatever_the_defence_says():
@@ -107,7 +110,7 @@ def test_nothing_seen_nothing_limited():
     stage, advanced = _stage()
     said = _say(stage, advanced, 1.0, NAN, NAN, NAN, math.inf)
     assert said.speed_cap_mps == math.inf and not said.values["sup_carried"] and not said.values["sup_stop"]
-    assert set(said.values) >= {c.name for c in SupervisorStage.columns if c.name.startswith("sup_")}
+    assert set(said.values) >= {c.name for c in VehicleSupervisor.columns if c.name.startswith("sup_")}
 
 
 def _scan_view(speed: float, scan, scan_new: bool = True) -> CarView:
@@ -116,7 +119,9 @@ def _scan_view(speed: float, scan, scan_new: bool = True) -> CarView:
     s = np.arange(0.0, 6.0, 0.02)
     # A straight lane along x from the car at the origin; the camera 0.2 m ahead of the body origin.
     path = SimpleNamespace(points=np.column_stack([s, np.zeros_like(s)]), arclength=s)
-    return CarView({"lidar": scan}, np.zeros(3), path, 0.0, speed, 0.0, 0.0, DT, True, scan_new)
+    nothing = TargetTrack("vehicle", NAN, math.inf, moving=True, speed_known=False)  # no detection, no track
+    return CarView({"lidar": scan}, np.zeros(3), path, 0.0, speed, 0.0, 0.0, DT, True, scan_new,
+                   tracks={"vehicle": nothing})
 
 
 def _car_scan(rear_from_camera: float) -> np.ndarray:
@@ -147,7 +152,7 @@ def test_the_lidar_s_lane_return_is_a_reading_carried_between_scans_by_the_closi
 def test_its_lidar_is_where_the_build_puts_it():
     # The LiDAR 0.25 m left of the camera: the car ahead of the camera lies to its right.
     context = StageContext(None, (0.2, 0.0), 0.17, (0.1, 0.25), BUMPER, lambda: None, target_decel_mps2=6.0)
-    stage = SupervisorStage(context, advanced=Advanced())
+    stage = VehicleSupervisor(context)
     stage.reset()
     n, r = 720, math.hypot(1.3, 0.25)
     beams = np.arange(n) * 2 * math.pi / n
@@ -162,7 +167,7 @@ def test_before_its_first_step_it_says_nothing_and_limits_nothing():
     stage, _ = _stage()
     idle = stage.idle()
     assert idle.speed_cap_mps == math.inf and idle.values["sup_cap"] == math.inf
-    assert all(idle.values[c.name] is False for c in SupervisorStage.columns
+    assert all(idle.values[c.name] is False for c in VehicleSupervisor.columns
                if c.name.startswith("sup_") and c.unit == "bool")
     assert math.isnan(idle.values["sup_near"]) and math.isnan(idle.values["sup_reading"])
 
@@ -170,10 +175,10 @@ def test_before_its_first_step_it_says_nothing_and_limits_nothing():
 def test_a_lead_speed_confirmed_this_frame_bounds_the_carried_target():
     stage, advanced = _stage()
     # The following stage says the lead's speed is confirmed this frame (its track, or the broadcast).
-    stage.advanced.step = lambda view: StageLimit(1.0, {}, LeadStep(PerceptionSample(None, 1.0, 0.0, 1.0, NAN), 1.0,
-                                                                   0.8, FollowDecision(1.0, 0.9, NAN, False),
-                                                                   speed_known=True))
-    stage.step(_view(0.5))
+    advanced.extra = {"speed_mps": 0.8}
+    advanced.next = (1.0, 1.0, 1.0, 1.0)
+    stage.step(_view(0.5, TargetTrack("vehicle", 1.0, 1.0, moving=True, speed_mps=0.8, speed_known=True,
+                                      depth_m=1.0, lidar_m=1.0)))
     assert stage.carried.slow_mps == pytest.approx(0.55) and stage.carried.fast_mps == pytest.approx(1.05)
 
 
@@ -182,7 +187,7 @@ def test_the_safe_controller_follows_the_headway_policy_where_it_is_the_lower():
     _say(stage, advanced, 0.3, 1.0, 1.0, 1.0, 1.0)
     # The defence off the reading: the safe controller. A fresh reading 1.0 m: 0.9 m of gap;
     # the headway policy allows (0.9 - 0.25) / 1 s = 0.65 m/s, the comfortable stop a little more.
-    said = _say(stage, advanced, 0.3, 1.0, 1.0, 0.4, 0.0)
+    said = _say(stage, advanced, 0.3, 1.0, 1.0, 1.6, 2.0)  # the defence over-reads: it would go faster
     comfort = safe_speed(0.8, 0.0, stage.envelope, stage.envelope.comfort_brake_mps2)
     assert comfort > 0.65 and said.speed_cap_mps == pytest.approx(0.65)
     # Nothing vouched for a while, the carried worst case has the car stop behind it, never a negative cap.
@@ -192,21 +197,17 @@ def test_the_safe_controller_follows_the_headway_policy_where_it_is_the_lower():
 
 
 # -- the car ahead's broadcast --------------------------------------------------------------------------
-from racf.experiments.car.broadcast import BroadcastWitness  # noqa: E402
 
 
 def _told(stage, advanced, depth, lidar, told_m, fused=None, speed=0.3, cap=1.0, follow=None, trusted=False):
     """A step on which the following stage passes on a broadcast witness at ``told_m`` (and followed
     ``follow``: by default the more cautious, as the following stage does)."""
     fused = depth if fused is None else fused
-    sample = PerceptionSample(None, depth, 0.0, lidar, NAN)
-    witness = BroadcastWitness(told_m, 0.0, 0.05)
     if follow is None:
         follow = fused if not math.isfinite(fused) or abs(fused - told_m) <= 0.2 else min(fused, told_m)
-    step = LeadStep(sample, fused, 0.0, FollowDecision(cap, follow - BUMPER, NAN, False), follow, witness, True,
-                    trusted)
-    stage.advanced.step = lambda view: StageLimit(cap, {"lead_cap": cap}, step)
-    return stage.step(_view(speed))
+    track = TargetTrack("vehicle", follow, cap, moving=True, speed_mps=0.0, speed_known=True, depth_m=depth,
+                        lidar_m=lidar, broadcast_m=told_m, broadcast_mps=0.0, broadcast_trusted=trusted)
+    return stage.step(_view(speed, track))
 
 
 def test_a_reading_farther_than_the_broadcast_is_vouched_at_the_broadcast_and_said():
