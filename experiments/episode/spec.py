@@ -273,7 +273,8 @@ class TrialSpec:
     def metric_names(self) -> tuple[str, ...]:
         """The metrics this episode scores, in the result row's order: every ``always`` one, the
         spec's and its scenario's."""
-        asked = {*self.metrics, *self.scenario.metrics, *(("service",) if self.estimator_endpoint else ())}
+        asked = {*self.metrics, *self.scenario.metrics, *(("service",) if self.estimator_endpoint else ()),
+                 *(("supervisor",) if self.supervisor else ())}
         chosen = [name for name in METRICS if METRICS[name].always or name in asked]
         return tuple(sorted(chosen, key=lambda name: (METRICS[name].order, name)))
 

@@ -46,8 +46,9 @@ __all__ = ["WorldManager", "TruthColumn", "WorldTarget", "TARGET_KINDS", "QCAR2_
 #: The kinds of thing a declared target is: what an attack on one aims at.
 TARGET_KINDS = ("vehicle", "sign", "obstacle", "person")
 #: A QCar 2's body as its collision box: length, width, height, m (the other cars' bodies are the
-#: ego car's MJCF; every footprint, box and gap racf draws or measures reads it from here).
-QCAR2_BOX_M = (0.425, 0.192, 0.20)
+#: ego car's MJCF; every footprint, box and gap racf draws or measures reads it from one place,
+#: :data:`racf.vehicle.QCAR2_BOX_M`, which the car's software shares).
+from racf.vehicle import QCAR2_BOX_M  # noqa: E402
 
 
 @dataclass(frozen=True)

@@ -17,10 +17,12 @@ import math
 
 import numpy as np
 
+from racf.vehicle import QCAR2_BOX_M
+
 __all__ = ["lane_clear", "lane_return", "CAR_LENGTH_M", "CAR_HALF_WIDTH_M"]
 
-#: A QCar 2's length and half width, m (``racf.sim.world.manager.QCAR2_BOX_M``, as the car's software knows it).
-CAR_LENGTH_M, CAR_HALF_WIDTH_M = 0.425, 0.096
+#: A QCar 2's length and half width, m (its box, :data:`racf.vehicle.QCAR2_BOX_M`).
+CAR_LENGTH_M, CAR_HALF_WIDTH_M = QCAR2_BOX_M[0], QCAR2_BOX_M[1] / 2
 #: A return must lie this much beyond a lane point to show it clear, m.
 _BEYOND_M = 0.05
 #: A return this near a lane point (before it) is something standing on the lane there, m.

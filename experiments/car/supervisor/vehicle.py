@@ -44,6 +44,7 @@ from racf.experiments.car.supervisor.envelope import Envelope, safe_speed, stopp
 from racf.experiments.car.supervisor.speed import RangeRate, SpeedBound
 from racf.experiments.car.supervisor.track import CarriedTarget
 from racf.experiments.car.supervisor.vouch import ChainConfig, ReadingChain, agree_m
+from racf.vehicle import clear_gap_m
 
 __all__ = ["VehicleSupervisor", "SUPERVISOR_COLUMNS", "EASE_MPS2", "envelope_of"]
 
@@ -161,7 +162,7 @@ class VehicleSupervisor(CarStage):
         clear_there = (not self.carried.held and lane is not None and math.isfinite(track.distance_m)
                        and lane_clear(view.scan, lane, track.distance_m - env.delta_m, track.distance_m + env.delta_m,
                                       self._lidar_in_camera))
-        cap, stop, eased = self._cap(track.cap_mps, speed, dt, bound, fresh, agrees,
+        cap, stop, eased = self._cap(track.cap_mps, speed, dt, bound, fresh, agrees, math.isfinite(track.distance_m),
                                      evidence=((fresh or verdict.implausible) and not confirmed) or clear_there)
         if verdict.implausible:
             cap = min(cap, self._ease if eased else self._eased(speed, dt))
@@ -211,7 +212,7 @@ class VehicleSupervisor(CarStage):
         return self._ease
 
     def _cap(self, defence_cap: float, speed: float, dt: float, speed_bound: float, fresh: bool, agrees: bool,
-             evidence: bool) -> tuple[float, bool, bool]:
+             defended: bool, evidence: bool) -> tuple[float, bool, bool]:
         """The speed cap, whether the stop rule fired, and whether the defence's brake was eased off (see
         the module docstring). ``evidence``: positive evidence against what the defence brakes for."""
         softened = defence_cap
@@ -221,16 +222,18 @@ class VehicleSupervisor(CarStage):
         if not self.carried.held:
             return softened, False, eased
         env = self.envelope
-        gap = self.carried.near_m - self.bumper_m
+        gap = clear_gap_m(self.carried.near_m, self.bumper_m)  # the referee's definition, on the worst case
         slow = self.carried.slow_mps
         if speed_bound > safe_speed(gap, slow, env):
             return 0.0, True, False
         if agrees:
             return defence_cap, False, False
-        # The headway policy on the reading itself when it is fresh (delta is the stop rule's margin).
-        policy_gap = gap + (env.delta_m if fresh else 0.0)
-        headway = max(0.0, (policy_gap - self.policy.standstill_gap_m) / self.policy.time_headway_s)
-        safe = max(min(headway, safe_speed(gap, slow, env, env.comfort_brake_mps2)), 0.0)
+        safe = max(safe_speed(gap, slow, env, env.comfort_brake_mps2), 0.0)
+        if defended:  # the defence follows a distance the reading disagrees with: the headway policy on the reading
+            policy_gap = gap + (env.delta_m if fresh else 0.0)  # on the reading itself when fresh
+            safe = min(safe, max(0.0, (policy_gap - self.policy.standstill_gap_m) / self.policy.time_headway_s))
+        # else the defence has let go of the target (out of its view): it sets no headway, and neither does
+        # the supervisor; the comfortable stop on the worst case bounds the car.
         cap = min(safe, softened)
         return cap, False, eased and cap > defence_cap
 

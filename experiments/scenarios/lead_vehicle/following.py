@@ -3,10 +3,10 @@
 Pure, like cross-traffic's scorer: it reads the referee's columns (the ego car's true pose and
 speed, the lead's ``lead_*`` columns, what the car touched) and nothing else.
 
-- **gap**: the clear distance between the ego car's front and the lead's rear, m: the distance
-  between the two body origins less one car length (both are QCar 2s, origins midway along them).
-  In the map's curves (radius >= 0.9 m) the chord this measures is within 2 % of the lane's arc
-  at the gaps that matter (under 1 m).
+- **gap**: the clear gap to the lead, m, as the supervisor measures it (one definition,
+  :func:`racf.vehicle.clear_gap_m`): the camera's distance to the lead's rear face along its optical
+  axis, less the front bumper's lead on the camera (the car's build). On a straight it is the
+  distance from the ego car's front to the lead's rear.
 - **time-to-collision** (TTC): the gap over the closing speed (the ego car's speed less the
   lead's), while they close; the episode's smallest, before any contact (0 at contact with the
   lead; NaN: they never closed).
@@ -15,8 +15,10 @@ speed, the lead's ``lead_*`` columns, what the car touched) and nothing else.
 - **hard brakes**: the ego car's decelerations past ``HARD_BRAKE_MPS2``, counted once per episode
   of braking;
 - **needless hard brakes**: those that begin while the real lead asks for none: its time-to-collision
-  over ``NEEDLESS_TTC_S`` (or they do not close) and the headway at least ``MIN_HEADWAY_S`` (what a
-  phantom car ahead costs; the catch-up to a lead first seen close, or its own hard brake, are not).
+  over ``NEEDLESS_TTC_S`` (or they do not close), the headway at least ``MIN_HEADWAY_S``, and the lead
+  itself not braking hard within the last ``ANSWER_S`` (what a phantom car ahead costs; the catch-up to
+  a lead first seen close, or the answer to a lead's own hard brake, are not: at its start the two
+  still close slowly, so time-to-collision alone would call it needless).
 - **mean time gap**: the headway averaged over the steps the car moves (what a defence's caution
   costs in following distance);
 - **time to finish**: when the episode ended, s (the scenario ends it once the lead is at rest for
@@ -27,13 +29,15 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass
+from functools import lru_cache
 
 import numpy as np
 import pandas as pd
 
-from racf.sim.world.traffic import CAR_FOOTPRINT_M
+from racf.vehicle import camera_distance_to_rear, clear_gap_m
 
-__all__ = ["FollowingOutcome", "score_following", "MIN_HEADWAY_S", "HARD_BRAKE_MPS2", "MOVING_MPS", "NEEDLESS_TTC_S"]
+__all__ = ["FollowingOutcome", "score_following", "MIN_HEADWAY_S", "HARD_BRAKE_MPS2", "MOVING_MPS", "NEEDLESS_TTC_S",
+           "ANSWER_S"]
 
 #: Under this headway the car follows too close, s (half the following controller's 1 s policy:
 #: the two-second rule's half, scaled in time, not in size).
@@ -46,6 +50,9 @@ MOVING_MPS = 0.1
 #: a forward-collision warning sounds (about 2.5 s), nothing real asks for braking at 0.3 g. The
 #: catch-up to a lead first seen out of a bend (2 s at 0.4 m/s of closing) is not needless.
 NEEDLESS_TTC_S = 3.0
+#: A hard brake that begins within this of the lead's own hard brake answers it, s (a driver's
+#: reaction, 1 s, with the car's own lag).
+ANSWER_S = 1.0
 
 
 @dataclass(frozen=True)
@@ -65,11 +72,22 @@ class FollowingOutcome:
         return asdict(self)
 
 
+@lru_cache(maxsize=1)
+def _build() -> tuple[tuple[float, float], float]:
+    """The camera's place on the body and the bumper's lead on it (the car's build, read from its model)."""
+    from racf.sim.sensors.calibration import car_build
+
+    build = car_build(320, 240)  # the mounts do not depend on the resolution
+    return build.camera_xy_m, build.bumper_x_m - build.camera_xy_m[0]
+
+
 def gaps(log: pd.DataFrame) -> np.ndarray:
     """(n,) the clear gap to the lead at each step, m (NaN: no lead)."""
-    dx = log["lead_x"].to_numpy(float) - log["x"].to_numpy(float)
-    dy = log["lead_y"].to_numpy(float) - log["y"].to_numpy(float)
-    return np.hypot(dx, dy) - CAR_FOOTPRINT_M[0]
+    camera_xy, bumper = _build()
+    col = {name: log[name].to_numpy(float) for name in ("x", "y", "yaw", "lead_x", "lead_y", "lead_yaw")}
+    ahead = camera_distance_to_rear(col["x"], col["y"], col["yaw"], col["lead_x"], col["lead_y"], col["lead_yaw"],
+                                    camera_xy)
+    return clear_gap_m(ahead, bumper)
 
 
 def score_following(log: pd.DataFrame) -> FollowingOutcome:
@@ -96,16 +114,30 @@ def score_following(log: pd.DataFrame) -> FollowingOutcome:
                             mean_gap, float(log["t"].iloc[-1]))
 
 
+def _hard(t: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """(n - lag,) whether the speed ``v`` falls faster than ``HARD_BRAKE_MPS2`` over the 0.1 s after each step."""
+    # Over 0.1 s, not a step: the wheels' contact makes the per-step speed jitter.
+    lag = max(1, int(round(0.1 / max(float(np.median(np.diff(t))), 1e-3))))
+    with np.errstate(invalid="ignore"):
+        return (v[:-lag] - v[lag:]) / (t[lag:] - t[:-lag]) > HARD_BRAKE_MPS2
+
+
 def _brake_starts(log: pd.DataFrame) -> np.ndarray:
     """The steps where a run of decelerations past ``HARD_BRAKE_MPS2`` begins."""
     t, v = log["t"].to_numpy(float), log["speed"].to_numpy(float)
     if len(t) < 3:
         return np.empty(0, int)
-    # Over 0.1 s, not a step: the wheels' contact makes the per-step speed jitter.
-    lag = max(1, int(round(0.1 / max(float(np.median(np.diff(t))), 1e-3))))
-    decel = (v[:-lag] - v[lag:]) / (t[lag:] - t[:-lag])
-    hard = decel > HARD_BRAKE_MPS2
+    hard = _hard(t, v)
     return np.flatnonzero(hard & ~np.concatenate([[False], hard[:-1]]))
+
+
+def _lead_braked_before(log: pd.DataFrame, starts: np.ndarray) -> np.ndarray:
+    """Whether the lead itself braked hard within ``ANSWER_S`` before (or at) each of ``starts``."""
+    t, lead = log["t"].to_numpy(float), log["lead_speed"].to_numpy(float)
+    hard = np.concatenate([_hard(t, lead), np.zeros(len(t) - len(_hard(t, lead)), bool)]) if len(t) >= 3 \
+        else np.zeros(len(t), bool)
+    when = t[hard]
+    return np.array([bool(np.any((when <= t[k]) & (when >= t[k] - ANSWER_S))) for k in starts], bool)
 
 
 def hard_brakes(log: pd.DataFrame) -> int:
@@ -115,7 +147,8 @@ def hard_brakes(log: pd.DataFrame) -> int:
 
 def needless_hard_brakes(log: pd.DataFrame) -> int:
     """How many hard brakes began while the real lead asked for none: no lead at all, or its
-    time-to-collision over ``NEEDLESS_TTC_S`` (or not closing) and the headway at least ``MIN_HEADWAY_S``."""
+    time-to-collision over ``NEEDLESS_TTC_S`` (or not closing), the headway at least ``MIN_HEADWAY_S``
+    and no hard brake of the lead's within ``ANSWER_S`` before."""
     starts = _brake_starts(log)
     if not len(starts):
         return 0
@@ -127,4 +160,5 @@ def needless_hard_brakes(log: pd.DataFrame) -> int:
     with np.errstate(divide="ignore", invalid="ignore"):
         ttc = np.where(closing > 1e-3, gap / closing, np.inf)
         headway = np.where(ego > MOVING_MPS, gap / ego, np.inf)
-    return int(np.count_nonzero((ttc > NEEDLESS_TTC_S) & (headway >= MIN_HEADWAY_S)))
+    answered = _lead_braked_before(log, starts)
+    return int(np.count_nonzero((ttc > NEEDLESS_TTC_S) & (headway >= MIN_HEADWAY_S) & ~answered))

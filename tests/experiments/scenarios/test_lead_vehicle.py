@@ -44,8 +44,8 @@ def test_it_refuses_what_it_cannot_run_saying_what_is_allowed():
 def log_of(gap, ego, lead, touched=None, dt=0.02) -> pd.DataFrame:
     n = len(gap)
     x = np.zeros(n)
-    return pd.DataFrame({"t": np.arange(n) * dt, "x": x, "y": x, "lead_x": np.asarray(gap) + CAR_FOOTPRINT_M[0],
-                         "lead_y": x, "speed": ego, "lead_speed": lead,
+    return pd.DataFrame({"t": np.arange(n) * dt, "x": x, "y": x, "yaw": x, "lead_x": np.asarray(gap) + CAR_FOOTPRINT_M[0],
+                         "lead_y": x, "lead_yaw": x, "speed": ego, "lead_speed": lead,
                          "collision_with": touched or [""] * n})
 
 
@@ -93,9 +93,29 @@ def test_a_hard_brake_is_needless_only_when_the_real_lead_asked_for_none():
     assert needless_hard_brakes(braking(1.5, 0.0)) == 0 and NEEDLESS_TTC_S == 3.0
     # 0.4 m behind at 1 m/s: under the minimum headway, the brake was asked for.
     assert needless_hard_brakes(braking(0.4, 1.0)) == 0
+    # The lead at the car's speed 1.5 m ahead brakes hard itself 0.5 s before: the car's hard brake answers it.
+    lead = np.where(t < 0.5, 1.0, np.maximum(1.0 - 6.0 * (t - 0.5), 0.0))
+    answering = log_of([1.5] * n, v, lead)
+    answering["t"] = t
+    assert needless_hard_brakes(answering) == 0
+    # The same lead braking 1.5 s before the car's brake (past ANSWER_S): the car's brake answers nothing.
+    late = np.where(t < 1.0, 1.0, 1.0)  # the lead never braked
+    assert needless_hard_brakes(log_of([1.5] * n, v, late).assign(t=t)) == 1
     # No lead at all: every hard brake is needless.
     no_lead = braking(1.5, 1.0).assign(lead_x=np.nan)
     assert needless_hard_brakes(no_lead) == 1 and hard_brakes(no_lead) == 1
+
+
+def test_the_gap_is_the_supervisor_s_clear_gap_in_a_bend_too():
+    from racf.sim.sensors.calibration import car_build
+
+    build = car_build(320, 240)
+    # The lead 1 m ahead of the ego's origin, turned 30 degrees: its rear centre lies 0.2125 m behind its
+    # origin along its own heading; the camera 0.095 m ahead of the ego's origin (0.032 m left).
+    frame = log_of([0.0], [0.0], [0.0]).assign(lead_x=1.0, lead_yaw=math.radians(30))
+    rear_x = 1.0 - 0.2125 * math.cos(math.radians(30))
+    expected = (rear_x - build.camera_xy_m[0]) - (build.bumper_x_m - build.camera_xy_m[0])
+    assert score_following(frame).min_gap_m == pytest.approx(expected)
 
 
 def test_a_lead_that_never_stops_rests_at_the_horizon():

@@ -39,7 +39,7 @@ def test_no_speed_is_safe_in_no_gap():
     assert safe_speed(math.inf, 0.0, ENV) == math.inf
 
 
-@pytest.mark.parametrize("field, value, words", [("delta_m", -0.1, "delta_m must be"),
+@pytest.mark.parametrize("field, value, words", [("witness_error_m", -0.1, "witness_error_m must be"),
                                                  ("car_brake_mps2", 0.0, "car_brake_mps2 must be > 0"),
                                                  ("comfort_brake_mps2", 5.0, "must not exceed"),
                                                  ("reaction_s", math.nan, "reaction_s must be"),
@@ -52,12 +52,12 @@ def test_a_bad_envelope_is_refused_by_name(field, value, words):
 def test_the_envelope_is_the_one_the_guarantee_page_states():
     import dataclasses
 
-    stated = {"delta_m": 0.10, "lead_speed_error_mps": 0.25, "target_decel_mps2": 6.0, "target_accel_mps2": 7.36,
+    stated = {"witness_error_m": 0.12, "attack_error_m": 0.05, "lead_speed_error_mps": 0.25, "target_decel_mps2": 6.0, "target_accel_mps2": 7.36,
               "target_max_mps": 3.0, "car_brake_mps2": 4.0, "car_accel_mps2": 7.36, "reaction_s": 0.1,
               "margin_m": 0.05, "odometry_error": 0.02, "comfort_brake_mps2": 1.5}
-    assert dataclasses.asdict(ENV) == stated
+    assert dataclasses.asdict(ENV) == stated and ENV.delta_m == pytest.approx(0.17)  # each error once, summed
     with pytest.raises(dataclasses.FrozenInstanceError):
-        ENV.delta_m = 0.2
+        ENV.witness_error_m = 0.2
     # Small brakes are brakes; comfort may be all the car has.
     assert Envelope(car_brake_mps2=0.5, comfort_brake_mps2=0.5).car_brake_mps2 == 0.5
 
