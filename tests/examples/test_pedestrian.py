@@ -25,9 +25,10 @@ def test_the_scenario_is_listed_with_its_parameters_and_criteria(pedestrian_inst
                                                              "terminates": True}
 
 
-def _trial(tmp_path, gap_s: float) -> tuple[dict, pd.DataFrame]:
+def _trial(tmp_path, gap_s: float, *extra: str) -> tuple[dict, pd.DataFrame]:
     code, out = run_cli(["trial", "--target", "pedestrian_crossing", "--sign", "2", "--speed", "1.0",
-                         "--scenario-param", f"gap_s={gap_s}", "--out", str(tmp_path / f"gap{gap_s}"), "--json"])
+                         "--scenario-param", f"gap_s={gap_s}", "--out", str(tmp_path / f"gap{gap_s}"), "--json",
+                         *extra])
     assert code == 0
     row = json.loads(out)
     return row, pd.read_parquet(row["log"])
@@ -46,6 +47,16 @@ def test_the_car_that_meets_the_person_stops_for_them_with_its_own_emergency_bra
     assert capped.any() and log["aeb_nearest_m"].min() < 0.4
     before = log["t"] < log.loc[capped, "t"].max()
     assert log.loc[before, "speed"].min() < 0.25 and log["pedestrian_crossed"].iloc[-1]
+
+
+@pytest.mark.slow  # a long episode (10 s or more): CI's slow stage runs it
+def test_under_the_supervisor_its_stage_is_supervised_through_the_track_it_publishes(pedestrian_installed, tmp_path):
+    """The stage publishes a person's track; the supervisor reads it (one witness: never vouched, so it adds
+    no limit) and the stop sign's, and the car still stops for the person."""
+    row, log = _trial(tmp_path, 0.0, "--supervisor")
+    assert row["collision_with"] is None and row["success"] and row["supervisor"] is True
+    assert {"sup_person_vouched", "sup_sign_vouched"} <= set(log.columns)
+    assert not log["sup_person_vouched"].any() and log["sup_person_cap"].eq(float("inf")).all()
 
 
 @pytest.mark.slow  # a long episode (10 s or more): CI's slow stage runs it

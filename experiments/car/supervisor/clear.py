@@ -41,17 +41,19 @@ def _beams(scan: np.ndarray, lane: np.ndarray, lidar_in_camera: tuple[float, flo
 
 
 def lane_return(scan: np.ndarray, lane: np.ndarray, lidar_in_camera: tuple[float, float]) -> float:
-    """The camera distance of the nearest lane point something stands on, as the LiDAR sees it, m
-    (NaN: nothing on the lane in view). ``lane``: (N, 2) points as (z ahead, y left) from the camera,
+    """The camera's distance to the nearest lane point something stands on, as the LiDAR sees it, m
+    (NaN: nothing on the lane in view): the straight-line distance, which in a bend is the clear gap's
+    (:mod:`racf.vehicle`: the camera's distance to the rear less the bumper's lead), where the point's
+    part along the camera's axis would put a car going round the bend ever nearer. ``lane``: (N, 2) points as (z ahead, y left) from the camera,
     in order along the lane."""
     scan = np.asarray(scan, np.float64)
     if scan.size == 0 or len(lane) == 0:
         return math.nan
     ahead = lane[lane[:, 0] > 0.05]
-    for z, (r, beams) in zip(ahead[:, 0], _beams(scan, ahead, lidar_in_camera)):
+    for point, (r, beams) in zip(ahead, _beams(scan, ahead, lidar_in_camera)):
         hit = np.isfinite(beams) & (beams > 0) & (beams >= r - AT_POINT_M) & (beams <= r + _BEYOND_M)
         if hit.any():
-            return float(z)
+            return float(np.hypot(point[0], point[1]))
     return math.nan
 
 

@@ -23,7 +23,11 @@ A chain is judged when it is born, and a chain not vouched is judged again on ev
   range witnesses on a distance the target can have reached: neither is a reading of the car;
 - farther than the carried target can have gone: a jump no car makes, refused.
 
-A vouched chain whose reading walks past the far end (by more than ``noise_m``) broke: refused.
+A vouched chain whose reading walks past the far end (by more than ``noise_m``) broke: refused. A step
+up because the nearest witness fell silent is no walk: the witnesses read a car at different places
+(the depth its box's middle, the LiDAR's track its rear face, the lane return the straight-line
+distance, in a bend up to 0.3 m apart), and the one that now gives the reading was read last step
+where it reads now (within ``gate_m``).
 
 The size witness bounds every vouch: the camera's box can only shrink with distance, so a reading
 beyond the distance its height implies (plus :func:`size_slack_m`) is vouched at that bound, the
@@ -51,7 +55,9 @@ class ChainConfig:
         seen_from_m: on a watched lane a vehicle is first seen no nearer than this, m (the detector
             finds a QCar 2 from 2.5 m; one first seen nearer came from nowhere in view).
         confirm_frames: frames both range witnesses must agree on an implausible chain before it is vouched.
-        noise_m: how far past the far end a going chain may read before it counts as broken, m.
+        noise_m: how far past the far end a going chain may read before it counts as broken, m (its
+            reading is the nearest of witnesses that differ by about as much: the depth's axial
+            distance, the lane return's straight-line one, in a bend).
         reacquire_s: how long after its last vouch a target may be re-acquired within its reach, s.
     """
 
@@ -60,7 +66,7 @@ class ChainConfig:
     watch_s: float = 1.0
     seen_from_m: float = 1.5
     confirm_frames: int = 3
-    noise_m: float = 0.05
+    noise_m: float = 0.15
     reacquire_s: float = 0.5
 
     def __post_init__(self) -> None:
@@ -121,6 +127,8 @@ class ReadingChain:
         self.state = "none"  # "vouched", "implausible", "refused"
         self.confirmed = 0
         self.born = False  # the last reading started a new chain
+        self._each: list[float] = []  # each witness's last reading, moved on by the relative motion
+        self._giver = -1  # which witness gave the last reading
 
     def step(self, readings: tuple[float, ...], closing_mps: float, dt: float, carried: CarriedTarget,
              size_m: float = math.nan, stopping_m: float = 0.0) -> Verdict:
@@ -133,23 +141,31 @@ class ReadingChain:
         self.since_s += dt
         if math.isfinite(self.last_m):
             self.last_m -= closing_mps * dt
-        readings = sorted(r for r in readings if math.isfinite(r) and r > 0)
+        each = [r if math.isfinite(r) and r > 0 else math.nan for r in readings]
+        before = [r - closing_mps * dt for r in self._each] if len(self._each) == len(each) else [math.nan] * len(each)
+        self._each = each
+        readings = sorted(r for r in each if math.isfinite(r))
         if not readings:
             if self.since_s > c.gap_s:
                 self.last_m, self.state = math.nan, "none"
+            self._giver = -1
             return NOTHING
         reading = min(readings)
+        giver = each.index(reading)
+        handed_on = (giver != self._giver and math.isfinite(before[giver])
+                     and abs(reading - before[giver]) <= c.gate_m)  # another witness, read there last step
+        self._giver = giver
         both = len(readings) >= 2 and readings[1] - readings[0] <= agree_m(reading)
         bound = size_m + size_slack_m(size_m) if math.isfinite(size_m) and size_m > 0 else math.inf
         sized = reading > bound
         continuous = (math.isfinite(self.last_m) and self.since_s <= c.gap_s
-                      and abs(reading - self.last_m) <= c.gate_m)
+                      and (abs(reading - self.last_m) <= c.gate_m or handed_on))
         self.born = not continuous
         if self.born:
             self.confirmed = 0
         if self.born or self.state != "vouched":
             self.state = self._judge(reading, carried, sized, stopping_m, keep=self.state if continuous else "none")
-        elif carried.held and reading > carried.far_m + c.noise_m:
+        elif carried.held and reading > carried.far_m + c.noise_m and not handed_on:
             self.state = "refused"  # walked away faster than the target can go
         self.last_m, self.since_s = reading, 0.0
         if self.state == "implausible":

@@ -3,10 +3,9 @@
 Pure, like cross-traffic's scorer: it reads the referee's columns (the ego car's true pose and
 speed, the lead's ``lead_*`` columns, what the car touched) and nothing else.
 
-- **gap**: the clear gap to the lead, m, as the supervisor measures it (one definition,
-  :func:`racf.vehicle.clear_gap_m`): the camera's distance to the lead's rear face along its optical
-  axis, less the front bumper's lead on the camera (the car's build). On a straight it is the
-  distance from the ego car's front to the lead's rear.
+- **gap**: the clear gap to the lead, m, as the supervisor defines it (one definition,
+  :mod:`racf.vehicle`): from the centre of the ego car's front bumper (the car's build) to the centre
+  of the lead's rear face. The supervisor keeps its part along the camera's axis, never more.
 - **time-to-collision** (TTC): the gap over the closing speed (the ego car's speed less the
   lead's), while they close; the episode's smallest, before any contact (0 at contact with the
   lead; NaN: they never closed).
@@ -34,7 +33,7 @@ from functools import lru_cache
 import numpy as np
 import pandas as pd
 
-from racf.vehicle import camera_distance_to_rear, clear_gap_m
+from racf.vehicle import clear_gap_of_poses
 
 __all__ = ["FollowingOutcome", "score_following", "MIN_HEADWAY_S", "HARD_BRAKE_MPS2", "MOVING_MPS", "NEEDLESS_TTC_S",
            "ANSWER_S"]
@@ -73,21 +72,18 @@ class FollowingOutcome:
 
 
 @lru_cache(maxsize=1)
-def _build() -> tuple[tuple[float, float], float]:
-    """The camera's place on the body and the bumper's lead on it (the car's build, read from its model)."""
+def _bumper_x_m() -> float:
+    """The front bumper's place ahead of the body origin (the car's build, read from its model)."""
     from racf.sim.sensors.calibration import car_build
 
-    build = car_build(320, 240)  # the mounts do not depend on the resolution
-    return build.camera_xy_m, build.bumper_x_m - build.camera_xy_m[0]
+    return car_build(320, 240).bumper_x_m  # the mounts do not depend on the resolution
 
 
 def gaps(log: pd.DataFrame) -> np.ndarray:
     """(n,) the clear gap to the lead at each step, m (NaN: no lead)."""
-    camera_xy, bumper = _build()
     col = {name: log[name].to_numpy(float) for name in ("x", "y", "yaw", "lead_x", "lead_y", "lead_yaw")}
-    ahead = camera_distance_to_rear(col["x"], col["y"], col["yaw"], col["lead_x"], col["lead_y"], col["lead_yaw"],
-                                    camera_xy)
-    return clear_gap_m(ahead, bumper)
+    return clear_gap_of_poses(col["x"], col["y"], col["yaw"], col["lead_x"], col["lead_y"], col["lead_yaw"],
+                              _bumper_x_m())
 
 
 def score_following(log: pd.DataFrame) -> FollowingOutcome:

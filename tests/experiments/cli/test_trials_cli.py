@@ -91,3 +91,14 @@ def test_a_trial_s_printed_fields_say_what_they_mean_and_where_the_glossary_is(t
 
     page, anchor = GLOSSARY.split("#")
     assert f"## {anchor.replace('-', ' ').capitalize()}" in Path(page).read_text()
+
+
+def test_a_supervised_trial_s_first_line_names_the_supervisor(tmp_path):
+    from racf.experiments.cli.trials import trial_summary
+
+    row = {"trial_id": "x", "setting": "clean+odca", "estimator": "odca", "target": "sign", "sign": 1, "speed": 1.0,
+           "seed": 0, "success": True, "failure": None, "supervisor": True, "sup_stop_steps": 3}
+    first = trial_summary(row, tmp_path / "log.parquet", tmp_path / "row.json").splitlines()[0]
+    assert first.startswith("racf trial: clean+odca+supervisor on sign 1")
+    alone = trial_summary({**row, "supervisor": False}, tmp_path / "l", tmp_path / "r").splitlines()[0]
+    assert alone.startswith("racf trial: clean+odca on sign 1")

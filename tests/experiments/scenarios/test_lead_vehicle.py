@@ -111,10 +111,11 @@ def test_the_gap_is_the_supervisor_s_clear_gap_in_a_bend_too():
 
     build = car_build(320, 240)
     # The lead 1 m ahead of the ego's origin, turned 30 degrees: its rear centre lies 0.2125 m behind its
-    # origin along its own heading; the camera 0.095 m ahead of the ego's origin (0.032 m left).
+    # origin along its own heading; the ego's bumper 0.2125 m ahead of its origin.
+    assert build.bumper_x_m == pytest.approx(0.2125)
     frame = log_of([0.0], [0.0], [0.0]).assign(lead_x=1.0, lead_yaw=math.radians(30))
-    rear_x = 1.0 - 0.2125 * math.cos(math.radians(30))
-    expected = (rear_x - build.camera_xy_m[0]) - (build.bumper_x_m - build.camera_xy_m[0])
+    rear_x, rear_y = 1.0 - 0.2125 * math.cos(math.radians(30)), -0.2125 * math.sin(math.radians(30))
+    expected = math.hypot(rear_x - 0.2125, rear_y)
     assert score_following(frame).min_gap_m == pytest.approx(expected)
 
 

@@ -8,6 +8,11 @@ car's own pose estimate; ``MIN_HEIGHT_M`` to ``MAX_HEIGHT_M`` above the floor; n
 ``LOOK_AHEAD_M``) and, when enough of them make a thing, caps the car's
 speed to what stops it ``STOP_SHORT_M`` before the nearest: sqrt(2 a d). A 1/10-scale person is
 0.18 m tall, under the LiDAR's scan plane: the depth camera is the witness that sees them.
+
+It publishes what it believes as a typed track (``publishes = "person"``, ``StageLimit.track``), so
+``--supervisor`` supervises it as it does the stop sign: the supervisor reads the track, never the
+stage. With one witness (the depth) there is nothing to vouch a person by, and the supervisor says so
+(``sup_person_vouched`` stays false): it adds no limit of its own.
 """
 
 from __future__ import annotations
@@ -16,7 +21,7 @@ import math
 
 import numpy as np
 
-from racf.experiments.car.stage import CarStage, CarView, StageColumn, StageLimit
+from racf.experiments.car.stage import CarStage, CarView, StageColumn, StageLimit, TargetTrack
 
 __all__ = ["UprightInLane"]
 
@@ -40,6 +45,7 @@ class UprightInLane(CarStage):
                                                  "from the camera (NaN: none)"),
                StageColumn("aeb_cap", "m/s", "emergency brake: its speed cap (inf: none)"))
     series = {"aeb_nearest_m": ((255, 120, 0), "upright in the lane (depth)")}
+    publishes = "person"
 
     def reset(self) -> None:
         self._nearest = math.nan
@@ -49,7 +55,10 @@ class UprightInLane(CarStage):
             self._nearest = self.nearest(view.obs["depth"][..., 0], self.lane_ahead(view))
         gap = self._nearest - self.context.bumper_ahead_of_camera_m - STOP_SHORT_M
         cap = math.inf if not math.isfinite(gap) else math.sqrt(2.0 * BRAKE_MPS2 * max(gap, 0.0))
-        return StageLimit(cap, {"aeb_nearest_m": self._nearest, "aeb_cap": cap})
+        track = TargetTrack("person", self._nearest, cap, depth_m=self._nearest,
+                            stop_at_m=self.context.bumper_ahead_of_camera_m + STOP_SHORT_M,
+                            detected=math.isfinite(self._nearest))
+        return StageLimit(cap, {"aeb_nearest_m": self._nearest, "aeb_cap": cap}, track=track)
 
     def lane_ahead(self, view: CarView) -> np.ndarray:
         """(N, 2) the lane's centre line ahead in the camera's frame (forward, left), m, from the map's

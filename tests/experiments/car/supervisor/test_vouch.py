@@ -203,7 +203,7 @@ def test_the_default_chain_is_the_one_documented():
     import dataclasses
 
     assert dataclasses.asdict(ChainConfig()) == {"gate_m": 0.25, "gap_s": 0.5, "watch_s": 1.0, "seen_from_m": 1.5,
-                                                 "confirm_frames": 3, "noise_m": 0.05, "reacquire_s": 0.5}
+                                                 "confirm_frames": 3, "noise_m": 0.15, "reacquire_s": 0.5}
     with pytest.raises(dataclasses.FrozenInstanceError):
         ChainConfig().gate_m = 1.0
     assert ChainConfig(gap_s=10.0).gap_s == 10.0

@@ -1,0 +1,28 @@
+"""One clear gap for the referee and the supervisor (racf.vehicle): the supervisor's part along its
+camera's axis is never more than the referee's gap from the poses."""
+
+import math
+
+from hypothesis import given
+from hypothesis import strategies as st
+
+from racf.vehicle import QCAR2_BOX_M, clear_gap_m, clear_gap_of_poses
+
+BUMPER_X, CAMERA_X = 0.2125, 0.095
+
+
+def test_behind_on_a_straight_it_is_the_bumper_to_rear_distance():
+    # The lead's origin 1.0 m ahead of the ego's: 1.0 - 0.2125 - 0.2125 between bumper and rear.
+    assert clear_gap_of_poses(0.0, 0.0, 0.0, 1.0, 0.0, 0.0, BUMPER_X) == 1.0 - 0.425
+    assert QCAR2_BOX_M[0] == 0.425
+    # The camera reads 1.0 - 0.2125 - 0.095 = 0.6925 m to the rear; less the bumper's lead of 0.1175 m.
+    assert math.isclose(clear_gap_m(0.6925, BUMPER_X - CAMERA_X), 0.575)
+
+
+@given(st.floats(-3, 3), st.floats(-3, 3), st.floats(-math.pi, math.pi), st.floats(-math.pi, math.pi))
+def test_the_gap_along_the_camera_axis_is_never_more_than_the_referee_s(lead_x, lead_y, ego_yaw, lead_yaw):
+    gap = clear_gap_of_poses(0.0, 0.0, ego_yaw, lead_x, lead_y, lead_yaw, BUMPER_X)
+    rear_x, rear_y = lead_x - 0.2125 * math.cos(lead_yaw), lead_y - 0.2125 * math.sin(lead_yaw)
+    camera_x, camera_y = CAMERA_X * math.cos(ego_yaw), CAMERA_X * math.sin(ego_yaw)
+    axial = (rear_x - camera_x) * math.cos(ego_yaw) + (rear_y - camera_y) * math.sin(ego_yaw)
+    assert clear_gap_m(axial, BUMPER_X - CAMERA_X) <= gap + 1e-9
