@@ -103,6 +103,8 @@ class TargetTrack:
         map_m: where the map and the car's own pose put it (NaN: the map does not list it).
         stop_at_m: where the car's front must stand short of the target's face, m (a sign: its stop
             line from the map; 0: the face itself, the margin the envelope keeps).
+        line_m: the car's own distance along its route from its front bumper to the target's stop line,
+            from its pose estimate and the map, m (NaN: the map does not list the target).
         broadcast_m: where the target's own checked broadcast puts it (NaN: none).
         broadcast_mps: its speed as the broadcast tells it, m/s (NaN: none).
         broadcast_trusted: the broadcast has agreed with the stage's distance long enough, and not
@@ -122,6 +124,7 @@ class TargetTrack:
     size_m: float = math.nan
     map_m: float = math.nan
     stop_at_m: float = 0.0
+    line_m: float = math.nan
     broadcast_m: float = math.nan
     broadcast_mps: float = math.nan
     broadcast_trusted: bool = False

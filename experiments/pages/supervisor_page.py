@@ -19,19 +19,24 @@ __all__ = ["supervisor_markdown", "SUPERVISOR_COMMAND", "GUARANTEE_RESULTS", "IN
 
 SUPERVISOR_COMMAND = ("racf sweep following-supervisor.toml; python -m racf.experiments.pages.following_page "
                       "outputs/sweeps/following-supervisor")
-#: The falsifications of the guarantee: (stored result, what it searched, the command).
+#: The falsifications of the guarantee: (stored result, what it searched, inside the assumptions?, the command).
 GUARANTEE_RESULTS = (
-    ("falsify-guarantee", "inside the assumptions: every range witness off by at most delta = 0.1 m",
+    ("falsify-guarantee", "the car ahead, inside the assumptions: every range witness moved by at most the "
+     "attacker's 0.05 m (delta 0.17 m = 0.12 m of the witnesses' own + 0.05 m), the lead's whole parameter "
+     "space (profile, gap, speed, deceleration up to a_max, brake time, the error's start)", True,
      "racf falsify --defence odca --attack lead_range_error --objective gap --space "
-     "experiments/falsify/spaces/guarantee.toml --sampler random tpe --seeds 3 --budget 40 --json"),
-    ("falsify-guarantee-outside", "outside them: delta doubled (0.2 m)",
+     "experiments/falsify/spaces/guarantee.toml --sampler random tpe --seeds 3 --budget 120 --json"),
+    ("falsify-guarantee-sign", "the stop sign, inside the assumptions: the patch hides the sign from the camera "
+     "and the depth, on each sign, at any speed, run-up, coverage and duration", True,
+     "racf falsify --defence odca --attack patch_occlusion --objective rule --space "
+     "experiments/falsify/spaces/guarantee-sign.toml --sampler random tpe --seeds 2 --budget 80 --json"),
+    ("falsify-guarantee-outside", "the car ahead, outside them: delta doubled (the attacker's share 0.2 m)", False,
      "racf falsify --defence odca --attack lead_range_error --objective gap --space "
-     "experiments/falsify/spaces/guarantee-outside.toml --sampler random --seeds 2 --budget 20 --stop-at-violation "
-     "--json"),
+     "experiments/falsify/spaces/guarantee-outside.toml --sampler random --seeds 1 --budget 120 --json"),
 )
 #: Whether an attack lies inside the guarantee's assumptions (``docs/concepts/guarantee.md``).
-INSIDE = {"clean": "—", "clean+lead_patch": "yes", "clean+lead_frustum[depth]": "in part (see the concept page)",
-          "clean+lead_frustum[adaptive]": "no", "clean+lead_hide": "not as built (see the concept page)", "clean+lead_phantom": "yes"}
+INSIDE = {"clean": "—", "clean+lead_patch": "yes", "clean+lead_frustum[depth]": "yes",
+          "clean+lead_frustum[adaptive]": "no", "clean+lead_hide": "yes", "clean+lead_phantom": "yes"}
 _ORDER = tuple(INSIDE)
 
 
@@ -53,7 +58,7 @@ def _median(row: dict, name: str) -> str:
 
 
 def checks(rows: dict) -> list[str]:
-    """What issue 69 asked of the supervisor over ODCA, each with what was measured."""
+    """What issues 69 and 78 asked of the supervisor over ODCA, each with what was measured."""
     pairs = {(a, d): (alone, sup) for a, d, alone, sup in _pair(rows)}
     lines = []
     for attack, inside in INSIDE.items():
@@ -78,9 +83,9 @@ def checks(rows: dict) -> list[str]:
             continue
         alone, sup = clean[0][f"{name}_median"]["median"], clean[1][f"{name}_median"]["median"]
         change = sup / alone - 1.0
-        verdict = "met" if abs(change) <= 0.10 else "**not met**"
+        verdict = "met" if abs(change) <= 0.25 else "**not met**"
         lines.append(f"- clean following's {words}: {sup:.2f} s under the supervisor, {alone:.2f} s alone "
-                     f"(medians), {change:+.0%} (asked within 10 %): {verdict}.")
+                     f"(medians), {change:+.0%} (asked within 25 %): {verdict}.")
     return lines
 
 
@@ -99,10 +104,14 @@ def _table(rows: dict) -> list[str]:
 
 def _falsification(root: Path) -> list[str]:
     lines = ["## The guarantee, falsified", "",
-             "`racf falsify --objective gap` searches for a contact with the car ahead (the smallest clear gap; "
-             "below zero: contact) over the guarantee's assumptions, then beyond them "
-             "([the dimensions and bounds](../concepts/guarantee.md#checking-it-falsification)).", ""]
-    for name, what, command in GUARANTEE_RESULTS:
+             "`racf falsify` searches for a contact with the car ahead (`--objective gap`: the smallest clear gap; "
+             "below zero, contact) and for a run of the stop sign's line (`--objective rule`: the stop rule's "
+             "robustness; below zero, run) over the guarantee's assumptions, then beyond them "
+             "([the dimensions and bounds](../concepts/guarantee.md#checking-it-falsification)). The episodes inside "
+             "the assumptions are the ones the theorem covers; the random sampler's draw the whole parameter space "
+             "(not only the shipped sweeps' profiles), a row of their own.", ""]
+    inside = violated = 0
+    for name, what, covered, command in GUARANTEE_RESULTS:
         path = root / f"{name}.json"
         lines += [f"**{what}**", ""]
         if not path.exists():
@@ -110,14 +119,26 @@ def _falsification(root: Path) -> list[str]:
             continue
         data = json.loads(path.read_text())
         samplers = data["samplers"]
-        contacts = sum(s["falsified"] for s in samplers.values())
+        found = sum(s["falsified"] for s in samplers.values())
         searches = sum(s["n_seeds"] for s in samplers.values())
         lowest = min((s["lowest_robustness_m"] for s in samplers.values() if s["lowest_robustness_m"] is not None),
                      default=None)
+        episodes = data["episodes_evaluated"]
+        random = samplers.get("random")
         lines += meta_lines(data["meta"])
-        lines += [f"{data['episodes_evaluated']} episodes in {searches} searches ({', '.join(sorted(samplers))}): "
-                  f"{contacts} of the searches found a contact; the smallest gap any episode left: "
-                  f"{'—' if lowest is None else f'{lowest:+.3f} m'}.", ""]
+        lines += [f"{episodes} episodes in {searches} searches ({', '.join(sorted(samplers))}): {found} of the "
+                  f"searches found a violation; the lowest robustness any episode left: "
+                  f"{'—' if lowest is None else f'{lowest:+.3f} m'}."
+                  + (f" The random sampler alone (the parameter space drawn uniformly): {random['n_seeds']} searches, "
+                     f"{random['falsified']} violated, lowest {random['lowest_robustness_m']:+.3f} m."
+                     if random and random.get("lowest_robustness_m") is not None else ""), ""]
+        if covered:
+            inside += episodes
+            violated += found
+    if inside:
+        verdict = "met" if inside >= 1000 and violated == 0 else "**not met**"
+        lines += [f"Inside the assumptions, all told: {inside} episodes, {violated} searches with a contact or a run "
+                  f"of the line (asked: at least 1,000 episodes, none): {verdict}.", ""]
     return lines
 
 
@@ -125,8 +146,9 @@ def supervisor_markdown(root: Path) -> str:
     root = Path(root)
     lines = page_head(
         "The supervisor",
-        "Runtime assurance over the following stage (issue 69; [what it does and what it guarantees]"
-        "(../concepts/guarantee.md)): each following row of `racf-7` with ODCA alone and under the supervisor, "
+        "Runtime assurance over every target the car publishes a track of (issues 69 and 78; [what it does and what "
+        "it guarantees](../concepts/guarantee.md)): each following row of `racf-7` with ODCA alone and under the "
+        "supervisor, "
         "on the same episodes (the `lead_vehicle` scenario on sign 1's approach, the lead in each of its four "
         "profiles, the attacks from 2 s for 6 s).")
     path = root / "following-supervisor.json"
@@ -135,5 +157,5 @@ def supervisor_markdown(root: Path) -> str:
     else:
         data = json.loads(path.read_text())
         lines += meta_lines(data["meta"]) + _table(data["rows"])
-        lines += ["What issue 69 asked of the supervisor over ODCA, measured:", "", *checks(data["rows"]), ""]
+        lines += ["What issues 69 and 78 asked of the supervisor over ODCA, measured:", "", *checks(data["rows"]), ""]
     return "\n".join(lines + _falsification(root) + [""])

@@ -14,8 +14,11 @@ the car's true speed (:class:`~.speed.SpeedBound`), with the encoder's error.
   A target the map does not list and no detection came before stays unvouched until two range
   witnesses confirm it.
 - **The stop rule.** While a target is carried, a car faster than stopping ``margin_m`` short of its
-  line allows (:func:`~.envelope.safe_speed` on the worst-case room, the target standing) is told to
-  stop (cap 0). It never raises what the car's braker or another stage says: it only adds a limit.
+  line allows (:func:`~.envelope.safe_speed` on the room, the target standing) is told to stop (cap 0).
+  The room is the car's own distance along its route to the line where the map lists the target (its
+  pose estimate and the map: in a bend a camera's distance to a sign beside the road is no distance
+  along it), else the carried near end less the line's camera depth. It never raises what the car's
+  braker or another stage says: it only adds a limit.
 - **Done** once the car has stood before the line (the stop the sign asks for), or the car's loop
   publishes its next target.
 
@@ -103,7 +106,7 @@ class StaticSupervisor(CarStage):
         self.seen = self.seen or bool(track.detected)
         if not self.held or self.done:
             return self._said(math.inf, math.isfinite(vouched), False, False)
-        room = self.near_m - track.stop_at_m
+        room = track.line_m if math.isfinite(track.line_m) else self.near_m - track.stop_at_m
         if bound < STOOD_MPS and room > -e.margin_m:
             self.done = True  # the car stood before the line: the stop the target asks for is made
             return self._said(math.inf, math.isfinite(vouched), False, False)

@@ -33,6 +33,22 @@ def test_racfs_own_metrics_declare_the_result_rows_columns_once():
     always = [f.name for n in names if METRICS[n].always for f in METRICS[n].fields]
     assert always[:4] == ["rho", "t_atk_s", "attack_start_s", "lost_frames"] and always[-1] == "driving_score"
     # Those asked for (cross_traffic: conflict; stale_map: existence; an estimator run by racf serve:
-    # service) stand in the order their metrics declare; none names a field twice.
-    assert [n for n in names if not METRICS[n].always] == ["conflict", "existence", "service"]
+    # service; a supervised one: supervisor) stand in the order their metrics declare; none names a field twice.
+    assert [n for n in names if not METRICS[n].always] == ["conflict", "existence", "service", "supervisor"]
     assert ["sign_stands", "needless_stop"] == [f.name for f in METRICS["existence"].fields]
+
+
+def test_the_supervisor_metric_counts_control_steps_of_every_supervisor_s_columns():
+    import pandas as pd
+
+    from racf.experiments.metrics.supervisor import SupervisorMeasures
+
+    log = pd.DataFrame({"control": [True, True, False, True], "sup_safe": [True, False, True, True],
+                        "sup_stop": [False, True, True, False], "sup_sign_stop": [True, False, False, False],
+                        "sup_bc_outvoted": [False, True, False, False], "sup_sign_outvoted": [False, True, False, True],
+                        "sup_eased": [False, False, False, False], "lead_bc_accepted": [0, 3, 4, float("nan")]})
+    episode = type("Episode", (), {"log": log})()
+    # Control steps only (the third is not one); a step counts once whichever supervisor's column says so.
+    assert SupervisorMeasures().score(episode) == {"sup_safe_steps": 2, "sup_stop_steps": 2, "sup_outvoted_steps": 2,
+                                                   "sup_eased_steps": 0, "bc_heard": 4}
+    assert SupervisorMeasures().score(type("Episode", (), {"log": log[["control"]]})()) == {}

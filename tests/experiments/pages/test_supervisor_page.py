@@ -36,8 +36,13 @@ def test_what_was_asked_is_judged_from_the_numbers():
     # The adaptive spoof lies outside the assumptions: nothing is asked of it.
     assert "adaptive" not in text
     assert "needless hard brakes in 0.03" in text and "needless hard brakes in 0.02" in text
-    assert "mean time gap: 1.05 s under the supervisor, 1.00 s alone (medians), +5% (asked within 10 %): met" in text
-    assert "time to finish: 10.50 s under the supervisor, 9.00 s alone (medians), +17% (asked within 10 %): **not met**" in text
+    assert "mean time gap: 1.05 s under the supervisor, 1.00 s alone (medians), +5% (asked within 25 %): met" in text
+    # 10.5 / 9.0 = +17 %: within 25 %; at 12.0 / 9.0 = +33 % it would not be.
+    assert "time to finish: 10.50 s under the supervisor, 9.00 s alone (medians), +17% (asked within 25 %): met" in text
+    slow = _rows()
+    slow["clean|odca + supervisor"] = {**slow["clean|odca + supervisor"],
+                                       "finish_s_median": {"median": 12.0, "ci": [11.0, 13.0]}}
+    assert "+33% (asked within 25 %): **not met**" in "\n".join(checks(slow))
 
 
 def test_the_page_pairs_each_defence_with_itself_supervised_and_says_what_is_missing(tmp_path):
@@ -45,13 +50,23 @@ def test_the_page_pairs_each_defence_with_itself_supervised_and_says_what_is_mis
     assert "Not stored yet (`falsify-guarantee`)" in supervisor_markdown(tmp_path)
     (tmp_path / "following-supervisor.json").write_text(json.dumps({"meta": META, "rows": _rows()}))
     page = supervisor_markdown(tmp_path)
-    assert "| the lead hidden from camera and LiDAR | not as built (see the concept page) | odca | 60 | 0.18 [" in page
-    assert "| the lead hidden from camera and LiDAR | not as built (see the concept page) | odca + supervisor | 60 | 0.97 [" in page
+    assert "| the lead hidden from camera and LiDAR | yes | odca | 60 | 0.18 [" in page
+    assert "| the lead hidden from camera and LiDAR | yes | odca + supervisor | 60 | 0.97 [" in page
     assert page.index("| none |") < page.index("the lead hidden") < page.index("a phantom car")
     report = {"meta": META, "episodes_evaluated": 400,
               "samplers": {"random": {"n_seeds": 5, "falsified": 0, "lowest_robustness_m": 0.08},
                            "tpe": {"n_seeds": 5, "falsified": 0, "lowest_robustness_m": 0.05}}}
     (tmp_path / "falsify-guarantee.json").write_text(json.dumps(report))
     page = supervisor_markdown(tmp_path)
-    assert "400 episodes in 10 searches (random, tpe): 0 of the searches found a contact; the smallest gap any " \
-           "episode left: +0.050 m." in page
+    assert "400 episodes in 10 searches (random, tpe): 0 of the searches found a violation; the lowest robustness " \
+           "any episode left: +0.050 m. The random sampler alone (the parameter space drawn uniformly): 5 searches, " \
+           "0 violated, lowest +0.080 m." in page
+    # Inside the assumptions all told: 400 episodes, short of the 1,000 asked; with the sign's 700 more, met.
+    assert "Inside the assumptions, all told: 400 episodes, 0 searches with a contact or a run of the line (asked: at " \
+           "least 1,000 episodes, none): **not met**." in page
+    (tmp_path / "falsify-guarantee-sign.json").write_text(json.dumps({**report, "episodes_evaluated": 700}))
+    assert "all told: 1100 episodes, 0 searches" in supervisor_markdown(tmp_path) and \
+           "none): met." in supervisor_markdown(tmp_path)
+    found = {**report, "samplers": {**report["samplers"], "tpe": {**report["samplers"]["tpe"], "falsified": 1}}}
+    (tmp_path / "falsify-guarantee.json").write_text(json.dumps(found))
+    assert "1 searches with a contact or a run of the line" in supervisor_markdown(tmp_path)

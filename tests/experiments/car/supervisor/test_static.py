@@ -1,0 +1,113 @@
+"""The supervisor of a static target (the stop sign): vouched by two of the car's own witnesses, carried
+down by the car's travel, a stop rule that holds the car short of the line, a served or defended
+distance outvoted, and let go once the car has stood."""
+
+import math
+
+import numpy as np
+import pytest
+
+from racf.experiments.car.stage import CarView, StageContext, TargetTrack
+from racf.experiments.car.supervisor.envelope import Envelope, safe_speed
+from racf.experiments.car.supervisor.static import CONFIRM_FRAMES, StaticSupervisor, static_supervisor
+
+NAN = math.nan
+DT = 0.02
+#: delta 0.1 m: round numbers to work by hand.
+ENV = Envelope(witness_error_m=0.05, attack_error_m=0.05)
+
+
+def _stage(kind: str = "sign") -> StaticSupervisor:
+    context = StageContext(None, (0.1, 0.0), 0.17, (0.0, 0.0), 0.1, lambda: None)
+    stage = static_supervisor(kind)(context, envelope=ENV)
+    stage.reset()
+    return stage
+
+
+def _step(stage, speed, distance=NAN, depth=NAN, lidar=NAN, size=NAN, map_m=NAN, stop_at=0.5, index=0,
+          detected=False, kind="sign"):
+    track = TargetTrack(kind, distance, math.inf, depth_m=depth, lidar_m=lidar, size_m=size, map_m=map_m,
+                        stop_at_m=stop_at, detected=detected, index=index)
+    return stage.step(CarView({}, np.zeros(3), None, 0.0, speed, 0.0, 0.0, DT, True, False, tracks={kind: track}))
+
+
+def test_two_witnesses_that_agree_for_three_frames_vouch_for_the_sign_at_the_nearer():
+    stage = _stage()
+    said = [_step(stage, 0.5, 3.0, depth=2.0, map_m=2.05) for _ in range(CONFIRM_FRAMES)]
+    assert [s.values["sup_sign_vouched"] for s in said] == [False, False, True] and CONFIRM_FRAMES == 3
+    # The near end: 2.0 less delta.
+    assert stage.near_m == pytest.approx(1.9)
+
+
+def test_one_witness_alone_vouches_for_nothing_and_limits_nothing():
+    stage = _stage()
+    for _ in range(10):
+        said = _step(stage, 1.0, 0.6, depth=0.6, stop_at=0.5)
+    assert not said.values["sup_sign_vouched"] and said.speed_cap_mps == math.inf and not stage.held
+
+
+def test_the_stop_rule_holds_the_car_short_of_the_line_whatever_the_defence_says():
+    stage = _stage()
+    for _ in range(3):  # vouched at 1.5 m (depth and the LiDAR on the post agree); the line at 0.5 m
+        _step(stage, 0.5, 1.5, depth=1.5, lidar=1.48)
+    # Room to the line: 1.48 - 0.1 - 0.5 = 0.88 m, less the travel at the bound (0.51 m/s for 0.02 s).
+    room = stage.near_m - 0.5
+    fast = safe_speed(room, 0.0, ENV) + 0.1
+    said = _step(stage, fast, 4.0)  # a served lie: 4 m; the car far too fast for the room left
+    assert said.values["sup_sign_stop"] and said.speed_cap_mps == 0.0
+    assert said.values["sup_sign_outvoted"]  # the defended 4 m lies beyond what the vouched place allows
+
+
+def test_the_near_end_comes_down_by_the_car_s_travel_at_the_bound_on_its_speed():
+    stage = _stage()
+    for _ in range(3):
+        _step(stage, 1.0, 1.5, depth=1.5, lidar=1.5)
+    near = stage.near_m
+    _step(stage, 1.0)  # no witness this step: carried
+    assert stage.near_m == pytest.approx(near - 1.02 * DT)  # the encoder's 1 m/s with its 2 % error
+
+
+def test_once_the_car_has_stood_before_the_line_the_sign_lets_it_go_and_the_next_is_new():
+    stage = _stage()
+    for _ in range(3):
+        _step(stage, 0.2, 0.8, depth=0.8, lidar=0.8)
+    speed = 0.2
+    for _ in range(10):  # the braker brings the car to rest before the line
+        speed = max(speed - 2.0 * DT, 0.0)
+        said = _step(stage, speed)
+    assert stage.done and said.speed_cap_mps == math.inf and not said.values["sup_sign_carried"]
+    said = _step(stage, 0.5, 2.0, index=1)  # the car's next target: nothing carried yet
+    assert not stage.done and not stage.held and said.speed_cap_mps == math.inf
+
+
+def test_a_sign_the_map_does_not_list_needs_two_range_witnesses_until_one_was_detected():
+    stage = _stage()
+    for _ in range(5):  # the depth and the size agree on a picture of a sign: not enough, unlisted
+        said = _step(stage, 0.5, 1.0, depth=1.0, size=1.02)
+    assert not said.values["sup_sign_vouched"]
+    for _ in range(3):  # the LiDAR on its post agrees too: two range witnesses
+        said = _step(stage, 0.5, 1.0, depth=1.0, lidar=1.01, size=1.02)
+    assert said.values["sup_sign_vouched"]
+
+
+def test_each_kind_has_its_own_columns_and_nothing_published_limits_nothing():
+    person = static_supervisor("person")
+    assert person.supervises == "person" and all(c.name.startswith("sup_person_") for c in person.columns)
+    assert static_supervisor("person") is person  # one class a kind
+    stage = _stage()
+    said = stage.step(CarView({}, np.zeros(3), None, 0.0, 1.0, 0.0, 0.0, DT, True, False))
+    assert said.speed_cap_mps == math.inf and set(said.values) == {c.name for c in StaticSupervisor.columns}
+
+
+def test_where_the_map_lists_the_sign_the_room_is_the_car_s_distance_along_its_route_to_the_line():
+    stage = _stage()
+    for _ in range(3):  # vouched at 1.5 m; in a bend its camera distance says little of the road left
+        _step(stage, 0.5, 1.5, depth=1.5, lidar=1.5)
+    track = TargetTrack("sign", 1.5, math.inf, depth_m=1.5, lidar_m=1.5, stop_at_m=0.5, line_m=0.3)
+    view = CarView({}, np.zeros(3), None, 0.0, 1.0, 0.0, 0.0, DT, True, False, tracks={"sign": track})
+    # 0.3 m of road to the line: 1 m/s (1.02 with the encoder's error) is faster than safe_speed(0.3) allows.
+    assert safe_speed(0.3, 0.0, ENV) < 1.02
+    assert stage.step(view).values["sup_sign_stop"]
+    slow = CarView({}, np.zeros(3), None, 0.0, 0.05, 0.0, 0.0, DT, True, False,
+                   tracks={"sign": TargetTrack("sign", 1.5, math.inf, stop_at_m=0.5, line_m=3.0)})
+    assert not _stage().step(slow).values["sup_sign_stop"]
