@@ -111,7 +111,8 @@ def trial_summary(row: dict, log: Path, result: Path) -> str:
 
     criteria = SCENARIOS[row["target"]].criteria if row["target"] in SCENARIOS else ()
     verdict = verdict_line(row, criteria) or "no criterion applied"
-    setting = f"{row['setting']}+supervisor" if row.get("supervisor") else row["setting"]  # what protected the car
+    # What protected the car: a supervised episode scores the supervisor metric.
+    setting = f"{row['setting']}+supervisor" if "sup_stop_steps" in row else row["setting"]
     head = (f"racf trial: {setting} on {row['target']} {row['sign']} at {row['speed']:g} m/s, seed "
             f"{row['seed']}: {verdict}")
     shown = {k: v for k, v in row.items() if k not in _IDENTITY and k not in ("success", "failure") and v is not None}

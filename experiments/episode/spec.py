@@ -362,7 +362,7 @@ class TrialSpec:
 #: checkpoints). Summaries, tables and the CLI are left out: changing them changes no episode.
 EPISODE_CODE = ("racf.sim", "racf.controllers", "racf.odca", "racf.experiments.episode", "racf.experiments.car",
                 "racf.experiments.link", "racf.experiments.scenarios",
-                "racf.experiments.metrics", "racf.assets")
+                "racf.experiments.metrics", "racf.assets", "racf.vehicle")
 
 
 def plugin_sources(spec: TrialSpec) -> dict[str, str]:

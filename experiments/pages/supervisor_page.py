@@ -142,6 +142,32 @@ def _falsification(root: Path) -> list[str]:
     return lines
 
 
+SERVED_LIES_COMMAND = "python -m tests.experiments.link.served_lies"
+
+
+def _served_lies(root: Path) -> list[str]:
+    """The served lies at the stop sign (issue 78): stopped in N of N, alone and supervised."""
+    lines = ["## A served lie at the stop sign", "",
+             "A fake protocol-2 service that keeps the ids and lies in range (the check cannot see it) after its "
+             "first 30 honest answers: always 4 m and nothing stands; the truth + 3 m and nothing stands; no "
+             "target at all. The car runs its onboard ODCA beside the served answer; a served answer is one more "
+             "reading, outvoted where the car's own defence puts the sign nearer or sees it stand.", ""]
+    path = root / "served-lies.json"
+    if not path.exists():
+        return lines + missing("served-lies", SERVED_LIES_COMMAND)
+    data = json.loads(path.read_text())
+    lines += meta_lines(data["meta"])
+    lines += ["| served lie | supervisor | N | stopped at the sign [95 % CI] | lies answered | steps outvoted | "
+              "answers refused | fallback steps |", "|---|---|---|---|---|---|---|---|"]
+    for row in data["rows"]:
+        lines.append(f"| {row['lie']} | {'yes' if row['supervisor'] else 'no'} | {row['n']} | "
+                     f"{row['stopped']} ({rate(row['scr'], row['scr_ci'])}) | {row['lies']} | {row['outvoted_steps']} | "
+                     f"{row['invalid']} | {row['fallback_steps']} |")
+    stopped, n = sum(r["stopped"] for r in data["rows"]), sum(r["n"] for r in data["rows"])
+    verdict = "met" if stopped == n else "**not met**"
+    return lines + ["", f"Every lie leaves the car stopping: {stopped} of {n} episodes (asked: all): {verdict}.", ""]
+
+
 def supervisor_markdown(root: Path) -> str:
     root = Path(root)
     lines = page_head(
@@ -158,4 +184,4 @@ def supervisor_markdown(root: Path) -> str:
         data = json.loads(path.read_text())
         lines += meta_lines(data["meta"]) + _table(data["rows"])
         lines += ["What issues 69 and 78 asked of the supervisor over ODCA, measured:", "", *checks(data["rows"]), ""]
-    return "\n".join(lines + _falsification(root) + [""])
+    return "\n".join(lines + _falsification(root) + _served_lies(root) + [""])

@@ -70,3 +70,19 @@ def test_the_page_pairs_each_defence_with_itself_supervised_and_says_what_is_mis
     found = {**report, "samplers": {**report["samplers"], "tpe": {**report["samplers"]["tpe"], "falsified": 1}}}
     (tmp_path / "falsify-guarantee.json").write_text(json.dumps(found))
     assert "1 searches with a contact or a run of the line" in supervisor_markdown(tmp_path)
+
+
+
+def test_the_served_lies_are_a_table_and_a_verdict_from_the_numbers(tmp_path):
+    assert "Not stored yet (`served-lies`)" in supervisor_markdown(tmp_path)
+    rows = [{"lie": "always 4 m", "supervisor": False, "n": 20, "stopped": 20, "scr": 1.0, "scr_ci": [0.84, 1.0],
+             "lies": 3368, "outvoted_steps": 2553, "invalid": 0, "fallback_steps": 0},
+            {"lie": "always 4 m", "supervisor": True, "n": 20, "stopped": 19, "scr": 0.95, "scr_ci": [0.76, 0.99],
+             "lies": 3400, "outvoted_steps": 2600, "invalid": 0, "fallback_steps": 0}]
+    (tmp_path / "served-lies.json").write_text(json.dumps({"meta": META, "rows": rows}))
+    page = supervisor_markdown(tmp_path)
+    assert "| always 4 m | no | 20 | 20 (1.00 [0.84, 1.00]) | 3368 | 2553 | 0 | 0 |" in page
+    assert "39 of 40 episodes (asked: all): **not met**." in page
+    rows[1] = {**rows[1], "stopped": 20}
+    (tmp_path / "served-lies.json").write_text(json.dumps({"meta": META, "rows": rows}))
+    assert "40 of 40 episodes (asked: all): met." in supervisor_markdown(tmp_path)
