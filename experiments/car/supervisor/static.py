@@ -102,7 +102,7 @@ class StaticSupervisor(CarStage):
         vouched = self._vouch(track)
         if math.isfinite(vouched):
             self.near_m = vouched - e.delta_m if not self.held else max(self.near_m, vouched - e.delta_m)
-            self.far_m = min(self.far_m, vouched + e.delta_m) if math.isfinite(self.far_m) else vouched - e.delta_m
+            self.far_m = min(self.far_m, vouched + e.delta_m) if math.isfinite(self.far_m) else vouched + e.delta_m
         self.seen = self.seen or bool(track.detected)
         if not self.held or self.done:
             return self._said(math.inf, math.isfinite(vouched), False, False)

@@ -35,8 +35,8 @@ def test_two_witnesses_that_agree_for_three_frames_vouch_for_the_sign_at_the_nea
     stage = _stage()
     said = [_step(stage, 0.5, 3.0, depth=2.0, map_m=2.05) for _ in range(CONFIRM_FRAMES)]
     assert [s.values["sup_sign_vouched"] for s in said] == [False, False, True] and CONFIRM_FRAMES == 3
-    # The near end: 2.0 less delta.
-    assert stage.near_m == pytest.approx(1.9)
+    # The near end: 2.0 less delta; the far end: 2.0 plus delta.
+    assert stage.near_m == pytest.approx(1.9) and stage.far_m == pytest.approx(2.1)
 
 
 def test_one_witness_alone_vouches_for_nothing_and_limits_nothing():
