@@ -137,8 +137,9 @@ def _falsification(root: Path) -> list[str]:
             violated += found
     if inside:
         verdict = "met" if inside >= 1000 and violated == 0 else "**not met**"
-        lines += [f"Inside the assumptions, all told: {inside} episodes, {violated} searches with a contact or a run "
-                  f"of the line (asked: at least 1,000 episodes, none): {verdict}.", ""]
+        lines += [f"Inside the assumptions, all told: {inside} episodes, {violated} searches with a violation (a "
+                  f"contact, or the stop rule broken: the line run, or no rest within 3 s of the braking window) "
+                  f"(asked: at least 1,000 episodes, none): {verdict}.", ""]
     return lines
 
 

@@ -62,14 +62,15 @@ def test_the_page_pairs_each_defence_with_itself_supervised_and_says_what_is_mis
            "any episode left: +0.050 m. The random sampler alone (the parameter space drawn uniformly): 5 searches, " \
            "0 violated, lowest +0.080 m." in page
     # Inside the assumptions all told: 400 episodes, short of the 1,000 asked; with the sign's 700 more, met.
-    assert "Inside the assumptions, all told: 400 episodes, 0 searches with a contact or a run of the line (asked: at " \
+    assert "Inside the assumptions, all told: 400 episodes, 0 searches with a violation (a contact, or the stop " \
+           "rule broken: the line run, or no rest within 3 s of the braking window) (asked: at " \
            "least 1,000 episodes, none): **not met**." in page
     (tmp_path / "falsify-guarantee-sign.json").write_text(json.dumps({**report, "episodes_evaluated": 700}))
     assert "all told: 1100 episodes, 0 searches" in supervisor_markdown(tmp_path) and \
            "none): met." in supervisor_markdown(tmp_path)
     found = {**report, "samplers": {**report["samplers"], "tpe": {**report["samplers"]["tpe"], "falsified": 1}}}
     (tmp_path / "falsify-guarantee.json").write_text(json.dumps(found))
-    assert "1 searches with a contact or a run of the line" in supervisor_markdown(tmp_path)
+    assert "1 searches with a violation" in supervisor_markdown(tmp_path)
 
 
 
