@@ -77,12 +77,13 @@ class StaticSupervisor(CarStage):
         self.reset()
 
     def reset(self) -> None:
-        self.near_m = self.far_m = math.nan
-        self.index = None
-        self.done = False
-        self.agreed = 0
-        self.seen = False
+        self._forget(None)
         self.speed_bound.reset()
+
+    def _forget(self, index) -> None:
+        """Starts on target ``index`` (None: none yet): nothing carried, vouched, stood before or seen."""
+        self.near_m = self.far_m = math.nan
+        self.index, self.done, self.agreed, self.seen = index, False, 0, False
 
     @property
     def held(self) -> bool:
@@ -94,8 +95,7 @@ class StaticSupervisor(CarStage):
         if track is None:
             return self._said(math.inf, False, False, False)
         if track.index != self.index:  # the car's next target: what was carried is behind it
-            self.near_m = self.far_m = math.nan
-            self.index, self.done, self.agreed, self.seen = track.index, False, 0, False
+            self._forget(track.index)
         e = self.envelope
         if self.held:  # a standing target comes nearer by the car's travel only
             self.near_m -= bound * view.dt  # the far end stays: an upper bound, for continuity only
