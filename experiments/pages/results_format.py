@@ -33,6 +33,8 @@ def meta_lines(meta: dict) -> list[str]:
                                                                  "dataset", "draws") if k in meta)
     caveat = (" **Measured on uncommitted changes: no commit reproduces it exactly.**"
               if str(meta["commit"]).endswith("+changes") else "")
+    if meta.get("superseded"):  # the code it measured has changed since, and it was not measured again
+        caveat += f" **Superseded: {meta['superseded']}.**"
     return [f"*Measured by* `{meta['command']}` *on commit* `{meta['commit']}` (racf {meta['racf']}), "
             f"{meta['machine']}, {meta['measured']}" + (f"; {extra}." if extra else ".") + caveat, ""]
 

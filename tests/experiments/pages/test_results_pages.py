@@ -142,3 +142,13 @@ def _json(folder):
     path = folder / "source.json"
     path.write_text('{"a": 1}')
     return path
+
+
+def test_a_superseded_result_says_so_on_its_provenance_line():
+    from racf.experiments.pages.results_format import meta_lines
+
+    meta = {"command": "racf sweep x.toml", "commit": "abc1234", "racf": "0.1.0", "machine": "2 CPU cores",
+            "measured": "2026-11-28"}
+    assert "Superseded" not in meta_lines(meta)[0]
+    line = meta_lines({**meta, "superseded": "the code changed"})[0]
+    assert line.endswith("**Superseded: the code changed.**")

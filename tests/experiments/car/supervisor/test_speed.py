@@ -73,3 +73,9 @@ def test_the_bound_never_falls_below_a_body_that_slows_no_faster_than_the_grip(r
     for reading in readings:
         body = max(body - GRIP_MPS2 * DT, 0.0)
         assert bound.step(reading, DT) >= body - 1e-9
+
+
+def test_the_default_bound_takes_the_encoder_s_2_percent_and_the_tyres_grip():
+    bound = SpeedBound()
+    assert bound.step(1.0, DT) == pytest.approx(1.02)
+    assert bound.step(0.0, DT) == pytest.approx(1.02 - 0.75 * 9.81 * DT)

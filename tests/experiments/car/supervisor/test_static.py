@@ -166,3 +166,14 @@ def test_the_stop_rule_s_edge_by_hand_on_the_route_distance():
         track = TargetTrack("sign", 1.5, math.inf, depth_m=1.5, lidar_m=1.5, stop_at_m=0.5, line_m=room)
         view = CarView({}, np.zeros(3), None, 0.0, speed, 0.0, 0.0, DT, True, False, tracks={"sign": track})
         assert stage.step(view).values["sup_sign_stop"] is stops
+
+
+def test_a_carried_sign_shows_its_near_end_and_only_adds_a_limit():
+    assert StaticSupervisor.stands_in is False and static_supervisor("sign").stands_in is False
+    stage = _stage()
+    for _ in range(3):
+        said = _step(stage, 0.5, 1.5, depth=1.5, lidar=1.5)
+    assert said.values["sup_sign_carried"] and said.values["sup_sign_near"] == pytest.approx(1.4)
+    # A later reading where the carried sign is narrows the far end: at most the reading plus delta.
+    _step(stage, 0.0, 1.45, depth=1.45, lidar=1.45)
+    assert stage.far_m == pytest.approx(1.55)
