@@ -29,7 +29,7 @@ GUARANTEE_RESULTS = (
     ("falsify-guarantee-sign", "the stop sign, inside the assumptions: the patch hides the sign from the camera "
      "and the depth, on each sign, at any speed, run-up, coverage and duration", True,
      "racf falsify --defence odca --attack patch_occlusion --objective rule --space "
-     "experiments/falsify/spaces/guarantee-sign.toml --sampler random tpe --seeds 2 --budget 60 --json"),
+     "experiments/falsify/spaces/guarantee-sign.toml --sampler random tpe --seeds 4 --budget 60 --json"),
     ("falsify-guarantee-outside", "the car ahead, outside them: delta doubled (the attacker's share 0.2 m)", False,
      "racf falsify --defence odca --attack lead_range_error --objective gap --space "
      "experiments/falsify/spaces/guarantee-outside.toml --sampler random --seeds 1 --budget 120 --json"),
