@@ -21,6 +21,10 @@ car's speed. Its output is a speed cap for the lane follower.
 - Braking: the remaining distance is dead-reckoned from the measured speed (wheel
   odometry) and the cap follows v = sqrt(2 a' d_remaining) with the constant deceleration
   a' = v^2 / (2 d_remaining) fixed at the trigger; a late trigger therefore brakes harder.
+  The speed it plans and dead-reckons on is a bound on the body's (``SpeedBound``), not the
+  encoder's reading: a hard brake just before the trigger (another stage's) locks the wheels,
+  and a' planned on a locked wheel's 0.13 m/s with the body at 1.16 m/s made the car creep to
+  the stop point for 4 s (the stop rule's rest clause broken, ``falsify-guarantee-sign``).
 - Stopped (speed < ``stopped_mps``) -> dwell for ``dwell_s`` -> done (cap lifted; the
   sign is served and ignored from then on).
 """
@@ -30,6 +34,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from enum import Enum
+
+from racf.controllers.speed import SpeedBound
 
 __all__ = ["BrakingConfig", "Phase", "BrakeDecision", "StopSignBraker"]
 
@@ -124,6 +130,7 @@ class StopSignBraker:
         self._remaining_m = math.inf
         self._profile_decel = self.config.decel_mps2
         self._dwell_s = 0.0
+        self._speed = SpeedBound(error=0.0)
 
     def step(self, detected: bool, distance_m: float, speed_mps: float, dt: float,
              expected_in_view: bool = True) -> BrakeDecision:
@@ -143,7 +150,7 @@ class StopSignBraker:
         has_distance = math.isfinite(distance_m) and 0.0 < distance_m <= c.max_distance_m
         to_line = distance_m - self.sign_depth_at_line_m if has_distance else math.nan
         self._update_track(bool(detected), has_distance and bool(expected_in_view), dt)
-        speed = max(0.0, float(speed_mps))
+        speed = self._speed.step(float(speed_mps), dt)
 
         if self.phase is Phase.CRUISE and self._confirmed and has_distance:
             remaining = to_line - c.target_gap_m

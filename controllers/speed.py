@@ -1,18 +1,29 @@
-"""Speed along a route: a curvature speed limit and a PI speed loop.
+"""Speed along a route: a curvature speed limit, a PI speed loop and a bound on the car's true speed.
 
 The limit keeps lateral acceleration within what the tyres and the lane follower handle
 (at 2 m/s the map's 0.62 m arcs would need 6.4 m/s^2) and slows down ahead of curves at
 a comfortable deceleration. The PI loop turns the reference into the speed command the
 car's motor controller receives, removing the steady-state error of its own P loop.
+
+:class:`SpeedBound` is an upper bound on the car's own true speed. The encoder reads the wheels,
+which spin up and lock faster than the body can follow (per step -25 % to +170 % of the body's
+speed under a hard brake); the body's speed changes no faster than the tyres' grip, so the bound
+is the encoder's reading with its error, or the last bound less what the grip can take off in a
+step, whichever is higher. What plans a stop on the car's speed (the braker, the supervisor's
+stop rule and its carried target) reads it: planned on a locked wheel's reading, a stop creeps.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["SpeedProfile", "SpeedPIConfig", "SpeedPI"]
+__all__ = ["SpeedProfile", "SpeedPIConfig", "SpeedPI", "SpeedBound", "GRIP_MPS2"]
+
+#: The tyres' grip, m/s^2 (friction 0.75 x g): the body's speed changes no faster.
+GRIP_MPS2 = 0.75 * 9.81
 
 
 class SpeedProfile:
@@ -89,3 +100,28 @@ class SpeedPI:
         error = reference_mps - speed_mps
         self._integral = float(np.clip(self._integral + c.ki * error * dt, -c.integral_limit_mps, c.integral_limit_mps))
         return float(np.clip(reference_mps + c.kp * error + self._integral, 0.0, c.max_command_mps))
+
+
+class SpeedBound:
+    """An upper bound on the car's true speed from its encoder (see the module).
+
+    Args:
+        error: the encoder's relative error the bound allows above its reading.
+        grip_mps2: the most the body's speed can fall in a second.
+    """
+
+    def __init__(self, error: float = 0.02, grip_mps2: float = GRIP_MPS2) -> None:
+        self.error, self.grip_mps2 = float(error), float(grip_mps2)
+        self.reset()
+
+    def reset(self) -> None:
+        self.bound_mps = math.nan
+
+    def step(self, encoder_mps: float, dt: float) -> float:
+        """This step's bound, m/s. A reading that is no number tells nothing: the bound falls at the grip."""
+        reading = max(encoder_mps, 0.0) * (1.0 + self.error) if math.isfinite(encoder_mps) else 0.0
+        if not math.isfinite(self.bound_mps):
+            self.bound_mps = reading
+        else:
+            self.bound_mps = max(reading, self.bound_mps - self.grip_mps2 * dt)
+        return self.bound_mps

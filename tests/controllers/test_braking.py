@@ -110,3 +110,17 @@ def test_speed_pi_removes_a_steady_error_and_never_reverses():
     assert v == pytest.approx(1.0, abs=0.01)
     assert pi.command(0.0, 1.0, DT) == 0.0
     assert pi.command(0.5, 2.0, DT) >= 0.0
+
+
+def test_a_wheel_locked_at_the_trigger_does_not_make_the_stop_creep():
+    """Another stage's hard brake locks the wheels just before the trigger: the encoder reads 0.1 m/s
+    while the body, at 1.5 m/s a step before, can have lost no more than the grip (0.75 g) in 20 ms.
+    The braker plans on that bound, so its first cap is 1.5 - 0.75 * 9.81 * 0.02 = 1.35285 m/s, not the
+    locked wheel's 0.1 m/s (on which it crept to the stop point for 4 s)."""
+    braker = StopSignBraker(BrakingConfig(), DEPTH_AT_LINE)
+    for _ in range(5):  # confirmed, far from the trigger (2.58 m left to the stop point)
+        assert braker.step(True, 3.0, 1.5, DT).phase is Phase.CRUISE
+    # 0.82 m: 0.40 m to the stop point (0.82 - 0.12 - 0.30), inside the 0.45 m floor.
+    decision = braker.step(True, 0.82, 0.1, DT)
+    assert decision.phase is Phase.BRAKING
+    assert decision.speed_cap_mps == pytest.approx(1.35285, abs=1e-6)

@@ -5,11 +5,9 @@
   reading plus how far the car went, and its speed is that position's slope over the last
   ``window_s``. Measured once the readings span ``span_s`` and the slope is known to
   ``max_std_mps``: then a hidden target's reach is its last measured speed, not its top speed.
-- :class:`SpeedBound`: an upper bound on the car's own true speed. The encoder reads the wheels,
-  which spin up and lock faster than the body can follow (per step -25 % to +170 % of the body's
-  speed); the body's speed changes no faster than the tyres' grip, so the bound is the encoder's
-  reading with its error, or the last bound less what the grip can take off in a step, whichever
-  is higher. The stop rule and the carried target's near end use it.
+
+The car's own speed is bounded by :class:`racf.controllers.speed.SpeedBound` (the braker reads it
+too): the stop rule and the carried target's near end use it.
 """
 
 from __future__ import annotations
@@ -19,10 +17,7 @@ from collections import deque
 
 import numpy as np
 
-__all__ = ["RangeRate", "SpeedBound", "GRIP_MPS2"]
-
-#: The tyres' grip, m/s^2 (friction 0.75 x g): the body's speed changes no faster.
-GRIP_MPS2 = 0.75 * 9.81
+__all__ = ["RangeRate"]
 
 
 class RangeRate:
@@ -63,23 +58,3 @@ class RangeRate:
         residual = x - x.mean() - slope * tc
         std = math.sqrt(float(residual @ residual) / max(len(t) - 2, 1) / float(tc @ tc))
         return max(slope, 0.0), std <= self.max_std_mps
-
-
-class SpeedBound:
-    """An upper bound on the car's true speed from its encoder (see the module)."""
-
-    def __init__(self, error: float = 0.02, grip_mps2: float = GRIP_MPS2) -> None:
-        self.error, self.grip_mps2 = float(error), float(grip_mps2)
-        self.reset()
-
-    def reset(self) -> None:
-        self.bound_mps = math.nan
-
-    def step(self, encoder_mps: float, dt: float) -> float:
-        """This step's bound, m/s."""
-        reading = max(encoder_mps, 0.0) * (1.0 + self.error)
-        if not math.isfinite(self.bound_mps):
-            self.bound_mps = reading
-        else:
-            self.bound_mps = max(reading, self.bound_mps - self.grip_mps2 * dt)
-        return self.bound_mps

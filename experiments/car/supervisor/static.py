@@ -5,7 +5,7 @@ its line.
 It reads one published track of a static kind (``TargetTrack``: the car's own sign loop publishes its
 stop sign's, a plug-in stage its person's) and nothing else of its publisher. The target never moves,
 so between vouches only the car's travel moves it: its near end falls by the travel at the bound on
-the car's true speed (:class:`~.speed.SpeedBound`), with the encoder's error.
+the car's true speed (:class:`racf.controllers.speed.SpeedBound`), with the encoder's error.
 
 - **Vouched** when two of its witnesses agree on it (the depth, the LiDAR's track of its post, the
   size witness, where the map and the car's pose put it) for ``confirm_frames`` frames, at the nearest
@@ -30,9 +30,9 @@ from __future__ import annotations
 import math
 from functools import lru_cache
 
+from racf.controllers.speed import SpeedBound
 from racf.experiments.car.stage import CarStage, CarView, StageColumn, StageContext, StageLimit, TargetTrack
 from racf.experiments.car.supervisor.envelope import Envelope, safe_speed
-from racf.experiments.car.supervisor.speed import SpeedBound
 from racf.experiments.car.supervisor.vouch import agree_m
 
 __all__ = ["StaticSupervisor", "static_supervisor", "STOOD_MPS"]

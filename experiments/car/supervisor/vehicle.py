@@ -4,7 +4,7 @@ It reads the ``vehicle`` track a stage publishes (:class:`~racf.experiments.car.
 the following stage's, with the episode's defence: ODCA, the EKF, a user's) and nothing else of that
 stage, and its cap stands in for the stage's. Each control step it:
 
-1. bounds the car's own true speed (:class:`~.speed.SpeedBound`) and moves the carried target's
+1. bounds the car's own true speed (:class:`racf.controllers.speed.SpeedBound`) and moves the carried target's
    bounds on by the car's travel at that bound (:class:`~.track.CarriedTarget`);
 2. judges this frame's range reading (:class:`~.vouch.ReadingChain`): vouched, refused or implausible,
    a refusal judged again each step; a vouched one resets the bounds to it +- delta, with the target's
@@ -36,12 +36,13 @@ import math
 
 from racf.controllers.following import FollowingConfig
 from racf.controllers.lead_perception import lane_in_camera
+from racf.controllers.speed import SpeedBound
 from racf.experiments.car.broadcast import AGREE_M
 from racf.experiments.car.following.stage import LANE_AHEAD_M
 from racf.experiments.car.stage import CarStage, CarView, StageColumn, StageContext, StageLimit, TargetTrack
 from racf.experiments.car.supervisor.clear import lane_clear, lane_return
 from racf.experiments.car.supervisor.envelope import Envelope, safe_speed, stopping_m
-from racf.experiments.car.supervisor.speed import RangeRate, SpeedBound
+from racf.experiments.car.supervisor.speed import RangeRate
 from racf.experiments.car.supervisor.track import CarriedTarget
 from racf.experiments.car.supervisor.vouch import ChainConfig, ReadingChain, agree_m
 from racf.vehicle import clear_gap_m
