@@ -51,7 +51,8 @@ TESTS = {
     "experiments/car/supervisor/vehicle.py": [f"{SUP}/test_vehicle_supervisor.py"],
     # The guarantee at every target (issue 78).
     "experiments/car/supervisor/static.py": [f"{SUP}/test_static.py", f"{CAR}/test_assembly.py"],
-    "experiments/car/supervisor/speed.py": [f"{SUP}/test_speed.py"],
+    "experiments/car/supervisor/speed.py": [f"{SUP}/test_range_rate.py"],
+    "controllers/speed.py": ["tests/controllers/test_speed_bound.py", "tests/controllers/test_braking.py"],
     "experiments/car/assembly.py": [f"{CAR}/test_assembly.py", f"{EPISODE}/test_spec.py"],
     "experiments/link/outvote.py": ["tests/experiments/link/test_remote.py"],
     "core/vehicle.py": ["tests/test_clear_gap.py", "tests/experiments/scenarios/test_lead_vehicle.py"],
