@@ -166,7 +166,28 @@ def _served_lies(root: Path) -> list[str]:
                      f"{row['invalid']} | {row['fallback_steps']} |")
     stopped, n = sum(r["stopped"] for r in data["rows"]), sum(r["n"] for r in data["rows"])
     verdict = "met" if stopped == n else "**not met**"
-    return lines + ["", f"Every lie leaves the car stopping: {stopped} of {n} episodes (asked: all): {verdict}.", ""]
+    lines += ["", f"Every lie leaves the car stopping: {stopped} of {n} episodes (asked: all): {verdict}.", ""]
+    return lines + _link_spoof(data.get("link_spoof"))
+
+
+def _link_spoof(rows: list[dict] | None) -> list[str]:
+    """racf-link's plain-link spoof, alone and supervised (asked: supervised >= 0.95)."""
+    lines = ["### racf-link's plain-link spoof", "",
+             "A man in the middle answers 5 m for a real ODCA service (`racf serve`) under the strong patch, at the "
+             "paper's 20 Hz offboard loop, the car's fallback raw depth (racf-link's row).", ""]
+    if not rows:
+        return lines + ["Not measured in the stored file.", ""]
+    lines += ["| supervisor | N | stopped at the sign [95 % CI] | steps outvoted | answers refused | fallback steps |",
+              "|---|---|---|---|---|---|"]
+    for row in rows:
+        lines.append(f"| {'yes' if row['supervisor'] else 'no'} | {row['n']} | "
+                     f"{row['stopped']} ({rate(row['scr'], row['scr_ci'])}) | {row['outvoted_steps']} | "
+                     f"{row['invalid']} | {row['fallback_steps']} |")
+    supervised = [r for r in rows if r["supervisor"]]
+    met = bool(supervised) and all(r["scr"] >= 0.95 for r in supervised)
+    counts = ", ".join(f"{r['stopped']} of {r['n']}" for r in supervised)
+    return lines + ["", f"Supervised, the car stops in {counts} (asked: at least 0.95): {'met' if met else '**not met**'}.",
+                    ""]
 
 
 def supervisor_markdown(root: Path) -> str:

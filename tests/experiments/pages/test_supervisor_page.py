@@ -87,3 +87,22 @@ def test_the_served_lies_are_a_table_and_a_verdict_from_the_numbers(tmp_path):
     rows[1] = {**rows[1], "stopped": 20}
     (tmp_path / "served-lies.json").write_text(json.dumps({"meta": META, "rows": rows}))
     assert "40 of 40 episodes (asked: all): met." in supervisor_markdown(tmp_path)
+
+
+def test_the_plain_link_spoof_is_met_only_where_every_supervised_row_stops_in_95_percent(tmp_path):
+    lies = [{"lie": "always 4 m", "supervisor": True, "n": 20, "stopped": 20, "scr": 1.0, "scr_ci": [0.84, 1.0],
+             "lies": 3368, "outvoted_steps": 2553, "invalid": 0, "fallback_steps": 0}]
+    spoof = [{"lie": "link_spoof (5 m, plain link)", "supervisor": False, "n": 60, "stopped": 31, "scr": 31 / 60,
+              "scr_ci": [0.39, 0.64], "lies": None, "outvoted_steps": 0, "invalid": 0, "fallback_steps": 0},
+             {"lie": "link_spoof (5 m, plain link)", "supervisor": True, "n": 60, "stopped": 56, "scr": 56 / 60,
+              "scr_ci": [0.84, 0.97], "lies": None, "outvoted_steps": 12, "invalid": 0, "fallback_steps": 0}]
+    (tmp_path / "served-lies.json").write_text(json.dumps({"meta": META, "rows": lies}))
+    assert "Not measured in the stored file." in supervisor_markdown(tmp_path)
+    (tmp_path / "served-lies.json").write_text(json.dumps({"meta": META, "rows": lies, "link_spoof": spoof}))
+    page = supervisor_markdown(tmp_path)
+    assert "| no | 60 | 31 (0.52 [0.39, 0.64]) | 0 | 0 | 0 |" in page
+    # 56 of 60 is 0.933: under 0.95.
+    assert "Supervised, the car stops in 56 of 60 (asked: at least 0.95): **not met**." in page
+    spoof[1] = {**spoof[1], "stopped": 57, "scr": 57 / 60}
+    (tmp_path / "served-lies.json").write_text(json.dumps({"meta": META, "rows": lies, "link_spoof": spoof}))
+    assert "57 of 60 (asked: at least 0.95): met." in supervisor_markdown(tmp_path)
