@@ -26,3 +26,11 @@ def test_the_gap_along_the_camera_axis_is_never_more_than_the_referee_s(lead_x, 
     camera_x, camera_y = CAMERA_X * math.cos(ego_yaw), CAMERA_X * math.sin(ego_yaw)
     axial = (rear_x - camera_x) * math.cos(ego_yaw) + (rear_y - camera_y) * math.sin(ego_yaw)
     assert clear_gap_m(axial, BUMPER_X - CAMERA_X) <= gap + 1e-9
+
+
+def test_a_lead_turned_a_quarter_has_its_rear_half_a_length_behind_its_origin_along_its_heading():
+    # The lead at (0, 1) heading +y (yaw 90 degrees): its rear centre at (0, 1 - 0.2125). The ego at the
+    # origin heading +y too: its bumper at (0, 0.2125). Gap 1 - 0.425 = 0.575 m.
+    assert math.isclose(clear_gap_of_poses(0.0, 0.0, math.pi / 2, 0.0, 1.0, math.pi / 2, BUMPER_X), 0.575)
+    # The lead heading -y (towards the ego): its rear is the far face, at (0, 1.2125).
+    assert math.isclose(clear_gap_of_poses(0.0, 0.0, math.pi / 2, 0.0, 1.0, -math.pi / 2, BUMPER_X), 1.0)

@@ -109,3 +109,42 @@ def test_clear_means_every_return_from_beyond_the_point_and_the_car_s_length_too
     wall = _scan(9.0)
     wall[round(0.3 / (2 * math.pi / N))] = 0.8
     assert lane_clear(wall, LANE, 1.0, 1.5, LIDAR)
+
+
+AT_CAMERA = (0.0, 0.0)  # the LiDAR at the camera: bearings by hand
+STEP_DEG = 360 / N  # 0.5 degrees a beam
+
+
+def _one_beam(index: int, range_m: float) -> np.ndarray:
+    scan = _scan(9.0)
+    scan[index % N] = range_m
+    return scan
+
+
+def test_a_car_fills_the_beams_of_its_width_and_no_more():
+    # The nearest place the target could be is 1.0 m straight ahead: a car there (0.192 m wide) fills
+    # the beams within atan(0.096 / 1.0) = 5.48 degrees of ahead. A return at 1.0 m on the beam at 4.5
+    # degrees (0.079 m to the side) is within its width: not clear; one at 6.0 degrees (0.105 m to the
+    # side) is beside it: clear.
+    assert not lane_clear(_one_beam(round(4.5 / STEP_DEG), 1.0), LANE, 1.0, 1.0, AT_CAMERA)
+    assert not lane_clear(_one_beam(-round(4.5 / STEP_DEG), 1.0), LANE, 1.0, 1.0, AT_CAMERA)
+    assert lane_clear(_one_beam(round(6.0 / STEP_DEG), 1.0), LANE, 1.0, 1.0, AT_CAMERA)
+    assert lane_clear(_one_beam(-round(6.0 / STEP_DEG), 1.0), LANE, 1.0, 1.0, AT_CAMERA)
+
+
+def test_a_lane_seen_exactly_to_the_target_s_farthest_place_is_enough():
+    # The far end at 0.575 m and a car's 0.425 m beyond it: the lane must be seen to 1.0 m, and it is.
+    lane = np.column_stack([np.linspace(0.0, 1.0, 51), np.zeros(51)])
+    assert lane.max() == 1.0 and lane_clear(_scan(9.0), lane, 0.5, 0.575, AT_CAMERA)
+    assert not lane_clear(_scan(9.0), lane, 0.5, 0.6, AT_CAMERA)
+
+
+def test_a_return_just_beyond_the_farthest_place_does_not_show_it_clear():
+    # The farthest lane point the target's rear could be at is 1.42 m (the lane's points every 0.02 m,
+    # up to the far end 1.0 m plus a car's length); a wall straight ahead at 1.44 m lies 0.02 m beyond
+    # it, short of the 0.05 m a return must lie beyond to show the point clear.
+    scan = _scan(9.0)
+    scan[np.r_[0:13, N - 12:N]] = 1.44
+    assert not lane_clear(scan, LANE, 1.0, 1.0, AT_CAMERA)
+    scan[np.r_[0:13, N - 12:N]] = 1.48
+    assert lane_clear(scan, LANE, 1.0, 1.0, AT_CAMERA)

@@ -177,3 +177,31 @@ def test_a_carried_sign_shows_its_near_end_and_only_adds_a_limit():
     # A later reading where the carried sign is narrows the far end: at most the reading plus delta.
     _step(stage, 0.0, 1.45, depth=1.45, lidar=1.45)
     assert stage.far_m == pytest.approx(1.55)
+
+
+def test_a_witness_that_reads_zero_is_no_return_and_agrees_with_nothing():
+    # The depth's 0 is "no return": beside the LiDAR's 0.05 m (within the 0.15 m agreement of a 0 m
+    # reading) it would vouch a sign at the camera and stop the car where the map puts it 2 m away.
+    stage = _stage()
+    for _ in range(2 * CONFIRM_FRAMES):
+        said = _step(stage, 1.0, 2.0, depth=0.0, lidar=0.05, map_m=2.0)
+    assert not said.values["sup_sign_vouched"] and not stage.held and said.speed_cap_mps == math.inf
+
+
+def test_at_exactly_the_speed_that_stops_it_at_the_line_the_car_is_not_told_to_stop():
+    # No reaction time, no acceleration, no margin, b = 4 m/s^2, an exact encoder: from 2 m/s the car
+    # stops in 2^2 / (2 x 4) = 0.5 m, the room it has to the mapped line. At that speed it may go on;
+    # the stop rule fires only when the car is faster than that.
+    env = Envelope(reaction_s=0.0, car_accel_mps2=0.0, margin_m=0.0, car_brake_mps2=4.0, odometry_error=0.0)
+    context = StageContext(None, (0.1, 0.0), 0.17, (0.0, 0.0), 0.1, lambda: None)
+    stage = static_supervisor("sign")(context, envelope=env)
+    stage.reset()
+
+    def step(speed):
+        track = TargetTrack("sign", 1.0, math.inf, depth_m=1.0, lidar_m=1.0, map_m=1.0, stop_at_m=0.5, line_m=0.5)
+        return stage.step(CarView({}, np.zeros(3), None, 0.0, speed, 0.0, 0.0, DT, True, False, tracks={"sign": track}))
+
+    said = [step(2.0) for _ in range(CONFIRM_FRAMES)][-1]
+    assert said.values["sup_sign_vouched"] and not said.values["sup_sign_stop"] and said.speed_cap_mps == math.inf
+    said = step(2.001)
+    assert said.values["sup_sign_stop"] and said.speed_cap_mps == 0.0

@@ -250,3 +250,18 @@ def test_an_untrusted_broadcast_alone_only_ever_makes_the_car_more_cautious():
     assert not said.values["sup_broadcast"] and stage.carried.near_m < near  # ignored: carried at the worst
     said = _told(stage, advanced, NAN, NAN, 0.8)  # nearer than the worst case: taken
     assert said.values["sup_broadcast"] and stage.carried.near_m == pytest.approx(0.7)
+
+
+def test_the_lead_s_speed_is_measured_from_its_range_rate_and_the_car_s_travel():
+    # The car at 0.5 m/s; the lead's range grows 0.3 m/s from 1.0 m (its own stage says its speed is
+    # unknown): after 20 steps (0.4 s, past the 0.3 s span) the lead is measured at 0.8 m/s.
+    stage, advanced = _stage()
+    for k in range(20):
+        d = 1.0 + 0.3 * (k + 1) * DT
+        said = _say(stage, advanced, 0.5, d, d, d, math.inf)
+    assert said.values["sup_vouched"] and said.values["sup_lead_mps"] == pytest.approx(0.8)
+    # A new chain (the readings jump 1 m: another target) measures again from its own readings: from
+    # the step after the jump, the lead's speed is unmeasured.
+    _say(stage, advanced, 0.5, 2.4, 2.4, 2.4, math.inf)
+    said = _say(stage, advanced, 0.5, 2.4, 2.4, 2.4, math.inf)
+    assert math.isnan(said.values["sup_lead_mps"])

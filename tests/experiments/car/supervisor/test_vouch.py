@@ -207,3 +207,26 @@ def test_the_default_chain_is_the_one_documented():
     with pytest.raises(dataclasses.FrozenInstanceError):
         ChainConfig().gate_m = 1.0
     assert ChainConfig(gap_s=10.0).gap_s == 10.0
+
+
+def test_one_frame_of_agreement_may_be_asked_and_a_box_of_no_size_bounds_nothing():
+    assert ChainConfig(confirm_frames=1).confirm_frames == 1
+    # A size witness of 0 m is no box: the reading is not bounded by 0 m plus the slack.
+    verdict = ReadingChain().step((1.15, NAN, NAN), 0.0, DT, _carried(1.0), size_m=0.0)
+    assert verdict.vouched and not verdict.sized and verdict.reading_m == 1.15
+
+
+def test_a_chain_that_came_from_nowhere_stays_implausible_as_it_goes_away():
+    # On a watched lane a single witness reads 0.8 m out of nowhere: implausible. The phantom then
+    # recedes smoothly (0.1 m a step, within the 0.25 m gate) past the 1.5 m a car is first seen from:
+    # the same chain, still implausible (one witness never confirms it).
+    chain, nothing = ReadingChain(ChainConfig(watch_s=1.0, seen_from_m=1.5)), CarriedTarget(ENV)
+    for _ in range(60):
+        chain.step((NAN, NAN, NAN), 0.0, DT, nothing)
+    verdicts = [chain.step((0.8 + 0.1 * k, NAN, NAN), 0.0, DT, nothing) for k in range(12)]
+    assert all(v.implausible and not v.vouched for v in verdicts)
+    assert verdicts[-1].reading_m == pytest.approx(1.9)
+    # A new chain (a gap of 0.6 s, past gap_s) first seen at 2.0 m is judged afresh: vouched.
+    for _ in range(30):
+        chain.step((NAN, NAN, NAN), 0.0, DT, nothing)
+    assert chain.step((2.0, NAN, NAN), 0.0, DT, nothing).vouched
