@@ -198,8 +198,8 @@ def start_service(defence, stops: list, max_requests: float = float("inf"), keys
     from racf.experiments.service.server import serve
 
     bound, stop, ready = [], threading.Event(), threading.Event()
-    names = None if defence is None else (defence,)
-    thread = threading.Thread(target=serve, args=(endpoint, names),
+    offers = None if defence is None else {defence: {}}
+    thread = threading.Thread(target=serve, args=(endpoint, offers),
                               kwargs={"ready": lambda e: (bound.append(e), ready.set()), "max_requests": max_requests,
                                       "stop": stop, "keys": keys, **kwargs}, daemon=True)
     thread.start()

@@ -39,11 +39,19 @@ from racf.plugins import ESTIMATORS
 __all__ = ["ESTIMATORS", "make_estimator", "estimator_options", "check_options", "ODCAEstimator", "ChronosEstimator"]
 
 
-@lru_cache(maxsize=None)
 def _odca(checkpoint: str | None, runtime: str = "torch"):
+    """The loaded ODCA of ``checkpoint``, shared by the process's estimators: cached by the folder it
+    resolves to (one folder spelt 20 ways is one load, not 20) and at most a few at once."""
+    from pathlib import Path
+
+    return _odca_loaded(None if checkpoint is None else str(Path(checkpoint).resolve()), runtime)
+
+
+@lru_cache(maxsize=4)
+def _odca_loaded(folder: str | None, runtime: str):
     from racf.odca import ODCA
 
-    return ODCA.load(checkpoint, runtime=runtime)
+    return ODCA.load(folder, runtime=runtime)
 
 
 class ODCAEstimator:

@@ -100,6 +100,9 @@ COMMANDS: dict[str, tuple[str, str | None]] = {
                                " in-process cost and the paper's 49 ms cycle"),
     "bench-service-stress": ("stress", "racf serve under fuzzed requests, many connections and cars "
                                        "at the control rate: alive, every answer, memory held"),
+    "bench-service-probes": ("stress", "an attacker's probes of racf serve, each with its number: "
+                                       "half-sent frames, checkpoint spellings, one host's many "
+                                       "addresses, keep-alives that do no work"),
 }
 
 

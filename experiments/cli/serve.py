@@ -30,11 +30,14 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="serve a non-loopback address without keys: anyone on the network may ask, and anyone "
                         "between may answer")
     s.add_argument("--idle-s", type=float, default=600.0, metavar="S",
-                   help="drop a car's session unused this long (default 600); a session also ends when its "
-                        "car's connection closes")
+                   help="drop a car's session whose defence did no work this long (default 600; a reset or a "
+                        "ping is no work); a session also ends when its car's connection closes")
     s.add_argument("--sessions-per-client", type=int, default=16, metavar="N",
                    help="at most N sessions per car key (CurveZMQ) or address (plain link); a hello beyond is "
                         "refused, and no car's session is ended for it (default 16)")
+    s.add_argument("--sessions-per-range", type=int, default=64, metavar="N",
+                   help="at most N sessions per network range of the cars' addresses (an IPv4 /24, an IPv6 /64): "
+                        "one host holds many addresses (default 64)")
     s.add_argument("--max-sessions", type=int, default=1024, metavar="N",
                    help="at most N sessions in all; a hello beyond is refused (default 1024)")
     estimator_option_flag(s)
@@ -73,20 +76,20 @@ def _serve(args: argparse.Namespace) -> int:
     from racf.experiments.service.sessions import Sessions
     from racf.plugins import ESTIMATORS
 
-    names = tuple(args.defence) if args.defence else None
+    names = tuple(dict.fromkeys(args.defence)) if args.defence else None
     unknown = [d for d in names or () if d not in ESTIMATORS]
     if unknown:
         fail("serve", f"unknown defence {unknown[0]!r}; registered: {', '.join(ESTIMATORS)}")
-    options = None
-    if args.estimator_option:
-        if not names:
-            fail("serve", "--estimator-option sets the options of one defence: name it with --defence")
-        options = estimator_options("serve", args.estimator_option, names, names[0]).get(names[0], {})
+    if args.estimator_option and not names:
+        fail("serve", "--estimator-option sets the options of a defence this service runs: name it with --defence")
+    # The operator's options, the only ones a car may ask for (a bare KEY: the first defence's).
+    chosen = estimator_options("serve", args.estimator_option, names, names[0]) if names else {}
+    offers = {name: chosen.get(name, {}) for name in names} if names else None
     if args.keys is None and not is_loopback(args.bind) and not args.insecure:
         fail("serve", f"{args.bind} is reachable from other machines: serve it with --keys DIR (make them with "
                       f"`racf serve keys DIR`), or say --insecure")
     for flag, value, lo in (("--idle-s", args.idle_s, 1.0), ("--sessions-per-client", args.sessions_per_client, 1),
-                            ("--max-sessions", args.max_sessions, 1)):
+                            ("--sessions-per-range", args.sessions_per_range, 1), ("--max-sessions", args.max_sessions, 1)):
         if value < lo:
             fail("serve", f"{flag} must be >= {lo}, got {value}")
     keys = ServerKeys.load(args.keys) if args.keys is not None else None
@@ -98,11 +101,12 @@ def _serve(args: argparse.Namespace) -> int:
 
     def ready(endpoint: str) -> None:
         link = f"CurveZMQ, cars admitted from {keys.admitted}" if keys else "plain link, no authentication"
-        print(f"listening at {endpoint} (defences: {', '.join(names) if names else 'every registered one'}; {link}); "
-              "Ctrl-C stops", flush=True)
+        served = (", ".join(f"{n}{' ' + str(o) if o else ''}" for n, o in offers.items()) if offers
+                  else "every registered one, with its defaults")
+        print(f"listening at {endpoint} (defences: {served}; {link}); Ctrl-C stops", flush=True)
 
-    sessions = Sessions(args.idle_s, args.sessions_per_client, args.max_sessions)
-    served = serve(args.bind, names, options, ready=ready, keys=keys, sessions=sessions)
+    sessions = Sessions(args.idle_s, args.sessions_per_client, args.max_sessions, args.sessions_per_range)
+    served = serve(args.bind, offers, ready=ready, keys=keys, sessions=sessions)
     print(f"answered {served} requests")
     return 0
 

@@ -31,6 +31,21 @@ def register(sub: argparse._SubParsersAction) -> None:
     b.add_argument("--json", action="store_true", help="print one JSON object")
     b.set_defaults(handler=_stress)
 
+    p = sub.add_parser("bench-service-probes", help="an attacker's probes of racf serve, each with its number: "
+                                                    "half-sent frames, checkpoint spellings, one host's many "
+                                                    "addresses, keep-alives that do no work",
+                       description="Starts a `racf serve` process on a free loopback port for each probe: 300 "
+                                   "connections that half-send a 1 MiB frame (the server's memory before, with "
+                                   "them open and 10 s later), a car served at 50 Hz while another says hello "
+                                   "with the shipped head's path spelt 20 ways (its round trips), sessions from "
+                                   "64 loopback addresses (whether a car from another range is served), and 100 "
+                                   "sessions that only reset beside 100 that only ping past --idle-s 2 (how "
+                                   "many hold on).")
+    p.add_argument("--service-python", default=None, metavar="PY",
+                   help="the Python whose racf serves (default this one): to measure another checkout")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(handler=_probes)
+
 
 def _stress(args: argparse.Namespace) -> int:
     from racf.experiments.episode import TrialSpec
@@ -83,3 +98,37 @@ def _stress(args: argparse.Namespace) -> int:
               f"server memory {c['server_mb_start']:.1f} -> {c['server_mb_end']:.1f} MB ({drift:+.1f} %)")
     print(f"alive at the end: {out['alive']}")
     return 0 if out["alive"] else 1
+
+
+def _probes(args: argparse.Namespace) -> int:
+    from racf.experiments.episode import TrialSpec
+    from racf.experiments.service import probes
+    from racf.experiments.service.bench import record_samples
+    from racf.experiments.sweeps.service_process import service_process
+
+    python, out = args.service_python, {}
+    with service_process("raw", python=python) as (endpoint, proc):
+        out["half_sent"] = probes.half_sent_memory(endpoint, proc.pid)
+    calls, calibration = record_samples(TrialSpec("attack+odca", 1, 1.0, 0))
+    with service_process("odca", python=python) as (endpoint, proc):
+        out["spellings"] = probes.spellings(endpoint, "odca", calls, calibration)
+    with service_process("raw", python=python) as (endpoint, proc):
+        out["range"] = probes.range_fill(endpoint)
+    with service_process("raw", flags=("--idle-s", "2"), python=python) as (endpoint, proc):
+        out["keep_alive"] = probes.keep_alive(endpoint, 2.0)
+    if args.json:
+        print(json.dumps(out, indent=2, allow_nan=False))
+        return 0
+    h, sp, r, k = out["half_sent"], out["spellings"], out["range"], out["keep_alive"]
+    print(f"half-sent frames: {h['connections']} x {h['frame_bytes']} B: server {h['server_mb_before']:.0f} -> "
+          f"{h['server_mb_open']:.0f} MB open -> {h['server_mb_after']:.0f} MB {h['after_s']:.0f} s later; "
+          f"{h['closed_by_server']} closed by the server")
+    car = sp["served_car"]
+    print(f"checkpoint spellings: {sp['spellings']} hellos in {sp['hellos_s']:.2f} s ({sp['answers']}); the served "
+          f"car: {car.get('steps')} steps, {car.get('lost')} lost, round trip p99 {car.get('rtt_p99_ms', float('nan')):.1f}"
+          f" ms, max {car.get('rtt_max_ms', float('nan')):.1f} ms")
+    print(f"one host's addresses: {r['opened']} of {r['asked']} sessions opened from {r['addresses']} addresses in "
+          f"{r['seconds']:.1f} s; a car from another range served: {r['other_range_served']}")
+    print(f"keep-alives: after {k['after_s']:.0f} s (idle {k['idle_s']:g} s), {k['alive_resetting']} of "
+          f"{k['sessions']} resetting and {k['alive_pinging']} of {k['sessions']} pinging still hold a session")
+    return 0

@@ -7,8 +7,14 @@ A key folder (``racf serve keys DIR``) holds the service's pair and each car's:
     DIR/cars/NAME.key_secret  a car's pair: only that car reads it
     DIR/admitted/NAME.key     a car's public key: the service admits the cars listed here
 
-Secret files are created readable by their owner alone (mode 0600, in folders of mode 0700): no
-moment exists in which another user of the machine could read one.
+Secret files are created readable by their owner alone (mode 0600, in folders of mode 0700,
+whatever the umask): no moment exists in which another user of the machine could read one. A key
+folder is checked as OpenSSH's ``StrictModes`` checks one before a key in it is used or written: a
+folder (or ``cars/``, ``admitted/``) that is a symbolic link, is not the user's own, or that others
+may write, and a key file that is not the user's own, that others may write, or (a secret) read,
+is refused in one line naming the fix: whoever can write ``admitted/`` admits any car, and a
+link leads the keys where its maker chose. Every target is checked before anything is written,
+so a refused folder is left as it was.
 
 With CURVE (ZMTP's CURVE mechanism, libsodium's Curve25519 bundled in pyzmq's wheels) the car
 authenticates the service by the key it pins and the service admits only listed cars, once per
@@ -21,13 +27,15 @@ reads the socket's monitor events and says which one it was.
 
 from __future__ import annotations
 
+import os
+import stat
 from dataclasses import dataclass
 from pathlib import Path
 
 from racf.errors import UserError
 
 __all__ = ["CarKeys", "ServerKeys", "make_keys", "handshake_failure", "is_loopback", "DEFAULT_CAR", "car_names",
-           "refusal", "Handshake"]
+           "refusal", "Handshake", "check_folder", "check_file"]
 
 DEFAULT_CAR = "car"
 #: Who may read what racf serve keys writes: secrets their owner alone, folders their owner alone.
@@ -59,6 +67,8 @@ class CarKeys:
             held = f"it holds {', '.join(cars)}" if cars else "it holds none"
             raise UserError(f"no key of car {car!r} in {folder / 'cars'} ({held}); make one with "
                             f"`racf serve keys DIR --car {car}` and admit it where the service runs")
+        for sub in (folder, folder / "cars"):
+            check_folder(sub)
         public, secret = _load(folder / "cars" / f"{car}.key_secret", "this car's key pair", folder)
         server, _ = _load(folder / "server.key", "the service's public key", folder)
         return cls(public, secret, server, car, str(folder))
@@ -79,11 +89,53 @@ class ServerKeys:
     @classmethod
     def load(cls, folder: str | Path) -> "ServerKeys":
         folder = Path(folder)
-        public, secret = _load(folder / "server.key_secret", "the service's key pair", folder)
         admitted = folder / "admitted"
+        for sub in (folder, admitted):
+            check_folder(sub)
+        public, secret = _load(folder / "server.key_secret", "the service's key pair", folder)
         if not any(admitted.glob("*.key")):
             raise UserError(f"no admitted car keys in {admitted}: make them with `racf serve keys {folder}`")
+        for key in sorted(admitted.iterdir()):
+            check_file(key)
         return cls(public, secret, admitted)
+
+
+def _owner_fix(path: Path) -> str:
+    return f"`chown {os.getuid()} {path}` (or remove it)"
+
+
+def check_folder(path: Path) -> None:
+    """Refuses (one line naming the fix) a key folder that is a symbolic link, is not a folder of this
+    user's, or that others may write; a missing one is left to the caller."""
+    path = Path(path)
+    if path.is_symlink():
+        raise UserError(f"key folder {path} is a symbolic link: keys are read and written only in a real folder; "
+                        f"replace the link with the folder it points to")
+    if not path.exists():
+        return
+    info = path.stat()
+    if not stat.S_ISDIR(info.st_mode):
+        raise UserError(f"key folder {path} is not a folder")
+    if info.st_uid != os.getuid():
+        raise UserError(f"key folder {path} belongs to user {info.st_uid}, not to this one: {_owner_fix(path)}")
+    if info.st_mode & 0o022:
+        raise UserError(f"key folder {path} may be written by others (mode {stat.S_IMODE(info.st_mode):o}): whoever "
+                        f"can write it can plant a key; `chmod 700 {path}`")
+
+
+def check_file(path: Path) -> None:
+    """Refuses a key file that is a symbolic link, not this user's, writable by others, or (a secret)
+    readable by them."""
+    path = Path(path)
+    if path.is_symlink():
+        raise UserError(f"key file {path} is a symbolic link: replace it with the file itself")
+    info = path.stat()
+    if info.st_uid != os.getuid():
+        raise UserError(f"key file {path} belongs to user {info.st_uid}, not to this one: {_owner_fix(path)}")
+    secret = path.name.endswith(".key_secret")
+    if info.st_mode & (0o077 if secret else 0o022):
+        raise UserError(f"key file {path} may be {'read or written' if secret else 'written'} by others (mode "
+                        f"{stat.S_IMODE(info.st_mode):o}); `chmod {'600' if secret else '644'} {path}`")
 
 
 def car_names(folder: str | Path) -> list[str]:
@@ -96,6 +148,7 @@ def _load(path: Path, what: str, folder: Path) -> tuple[bytes, bytes | None]:
 
     if not path.is_file():
         raise UserError(f"{what} is not at {path}; make a key folder with `racf serve keys {folder}`")
+    check_file(path)
     try:
         return zmq.auth.load_certificate(path)
     except Exception as err:  # a file that is not a ZeroMQ certificate: one line, whatever the parser says
@@ -110,14 +163,19 @@ def make_keys(folder: str | Path, cars: tuple[str, ...] = (DEFAULT_CAR,)) -> lis
     import zmq
 
     folder = Path(folder)
-    targets = [folder / "server.key_secret", *(folder / "cars" / f"{car}.key_secret" for car in cars)]
-    existing = [p for p in targets if p.exists()]
+    subs = (folder, folder / "cars", folder / "admitted")
+    for sub in subs:
+        check_folder(sub)
+    targets = [folder / "server.key_secret", folder / "server.key",
+               *(folder / sub / f"{car}{end}" for car in cars for sub, end in (("cars", ".key_secret"),
+                                                                             ("admitted", ".key")))]
+    existing = [p for p in targets if os.path.lexists(p)]  # a link, even one that leads nowhere, is there
     if existing:
         raise UserError(f"{existing[0]} exists; keys are never overwritten (choose another folder or remove it)")
-    for sub in (folder, folder / "cars", folder / "admitted"):
-        sub.mkdir(mode=FOLDER_MODE, parents=True, exist_ok=True)
-    (folder / "cars").chmod(FOLDER_MODE)  # mkdir's mode is cut by the umask; an existing folder keeps its own
-    folder.chmod(FOLDER_MODE)
+    for sub in subs:
+        _make_folder(sub)
+    for sub in subs[:2]:  # an existing folder of the user's own holds secrets too: its own alone
+        sub.chmod(FOLDER_MODE)
     written = []
     for name, secret_path, public_path in (("server", folder / "server.key_secret", folder / "server.key"),
                                            *((car, folder / "cars" / f"{car}.key_secret",
@@ -127,6 +185,17 @@ def make_keys(folder: str | Path, cars: tuple[str, ...] = (DEFAULT_CAR,)) -> lis
         _write_certificate(public_path, public, None, PUBLIC_MODE)
         written += [public_path, secret_path] if name == "server" else [secret_path, public_path]
     return written
+
+
+def _make_folder(path: Path) -> None:
+    """``path`` and every missing folder above it, each created with mode 0700 whatever the umask."""
+    missing = []
+    while not os.path.lexists(path):
+        missing.append(path)
+        path = path.parent
+    for folder in reversed(missing):
+        os.mkdir(folder, FOLDER_MODE)
+        os.chmod(folder, FOLDER_MODE)  # mkdir's mode is cut by the umask: never wider, here never narrower
 
 
 def _write_certificate(path: Path, public: bytes, secret: bytes | None, mode: int) -> None:

@@ -1,8 +1,12 @@
 """The service's answers: the protocol's requests, one defence per car.
 
-``hello`` names the defence and its options and opens the car's session (its own estimator,
-built as an episode builds it; the first of a kind is warmed up first, so that what it loads on
-first use is loaded before the car's first timed request), ``calibrate`` hands the estimator the
+``hello`` picks one of the defences the operator serves and opens the car's session (its own
+estimator, built as an episode builds it; each offered defence is warmed up first, so that what it
+loads on first use is loaded before the car's first timed request). The operator sets every option
+when the service starts (``racf serve --defence NAME --estimator-option ...``): a hello names the
+options it expects, and is refused unless they are the operator's. A car never names a file the
+service opens, nor a value it computes with: 20 spellings of one checkpoint once cost the service
+1.45 s and 13.6 MB each, and a served car its round trips. ``calibrate`` hands the estimator the
 car's build, ``reset`` / ``estimate`` / ``would_pass`` are the ``DistanceEstimator`` protocol,
 ``bye`` ends the session, ``ping`` asks whether anyone is there (and which protocol it speaks).
 Every request carries an id (an int) and every answer names it, errors included, so that a car
@@ -42,34 +46,45 @@ class DefenceService:
     """Answers the protocol's requests; one estimator per car.
 
     Args:
-        names: the defences it serves (None: every registered one). The first is built and warmed
-            now: a bad name fails before the service listens.
-        options: options of the first defence it serves, the only ones it accepts for it (None:
-            any the car asks for).
+        offers: the defences it serves, each with the operator's options, the only ones a car may
+            ask for (None: every registered defence, each with its defaults). Each is built and
+            warmed now: a bad name or option fails before the service listens.
         sessions: the sessions' bounds (:class:`~racf.experiments.service.sessions.Sessions`).
     """
 
-    def __init__(self, names: tuple[str, ...] | None = None, options: dict | None = None,
-                 sessions: Sessions | None = None) -> None:
-        self.names, self.options = names, options
+    def __init__(self, offers: dict[str, dict] | None = None, sessions: Sessions | None = None) -> None:
+        self.offers = None if offers is None else {name: dict(options) for name, options in offers.items()}
         self._warm: set[str] = set()
-        if names:
-            self._warm_up(names[0], options or {})
+        for name, options in (self.offers or {}).items():
+            self._warm_up(name, options)
         # Not `sessions or Sessions()`: Sessions has a length, and an empty one is falsy.
         self.sessions = Sessions() if sessions is None else sessions
         self.requests = 0
 
+    @property
+    def names(self) -> tuple[str, ...] | None:
+        """The defences it serves (None: every registered one)."""
+        return None if self.offers is None else tuple(self.offers)
+
+    def offered(self, name: str) -> dict:
+        """The operator's options of ``name`` (the defaults where it serves every registered defence)."""
+        return {} if self.offers is None else self.offers[name]
+
     def _warm_up(self, name: str, options: dict) -> None:
-        key = f"{name}:{sorted(options.items())}"
-        if key not in self._warm:
+        # At most one warm-up per offered defence: the offers are the operator's, fixed at start.
+        if name not in self._warm:
             warm_up(make_estimator(name, options))
-            self._warm.add(key)
+            self._warm.add(name)
 
     def handle(self, identity: bytes, client: str, message: dict, connection: int | None = None) -> dict:
         """The answer to one decoded request from the car at socket ``identity`` (``client``: who;
         ``connection``: the connection it came on, whose end ends the session), naming its id."""
         request_id = message.get("id")
-        reply = self._handle(identity, client, message, connection)
+        try:
+            reply = self._handle(identity, client, message, connection)
+        except Exception as err:  # the service's own fault: the car hears it (by its id), the log one line a second
+            warn("raised", "request %r from %s raised %s: %s", message.get("op"), client, type(err).__name__, err)
+            reply = {"error": f"the service failed on this request: {type(err).__name__}: {err}"}
         if _is_request_id(request_id):  # an id that is not one is not echoed
             reply["id"] = request_id
         return reply
@@ -78,6 +93,8 @@ class DefenceService:
         self.requests += 1
         op = message.get("op")
         try:
+            if not isinstance(op, str):
+                raise BadRequest(f"op must be a request's name (a string), got {type(op).__name__}")
             if op == "hello" and message.get("protocol") != PROTOCOL:  # first: another protocol's car sends no id
                 return {"error": f"protocol {message.get('protocol')!r}; this service speaks {PROTOCOL}"}
             request_id = message.get("id")
@@ -115,8 +132,10 @@ class DefenceService:
             return {"refused": f"this service has no defence {name!r} (it has {', '.join(ESTIMATORS)}); a plug-in "
                                f"defence must be installed where the service runs, or given to it with "
                                f"`racf serve --plugin FILE`"}
-        if self.names is not None and self.options is not None and name == self.names[0] and options != self.options:
-            return {"refused": f"this service runs {name} with options {self.options}, not {options}"}
+        if options != self.offered(name):
+            return {"refused": f"this service runs {name} with its operator's options {self.offered(name)}, not "
+                               f"{options}: a car picks a defence, never its options (start `racf serve --defence "
+                               f"{name} --estimator-option ...` with the ones it asks for)"}
         try:
             self._warm_up(name, options)
             estimator = make_estimator(name, options)
@@ -145,6 +164,8 @@ class DefenceService:
                 _calibrate(session, session.calibration)(session.estimator)
             session.estimator.reset()
             return {"restarted": f"{session.name} raised {type(err).__name__}: {err}"}
+        if op != "reset":  # a reset alone is no work: it keeps no session alive past its idle time
+            self.sessions.worked(session)
         if op == "estimate":
             session.steps += 1
             session.service_ms.append((time.perf_counter() - start) * 1000.0)

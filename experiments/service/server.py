@@ -5,7 +5,12 @@ end; :mod:`~racf.experiments.service.handler` answers them). No message stops it
 that is not a request (``[identity, b"", payload]`` from a REQ socket, ``[identity, payload]``
 from a DEALER) is dropped, a payload that is not a message is answered with an error, each in
 one logged line; ZeroMQ's ``MAXMSGSIZE`` cuts off a peer that sends more than a message may
-hold. With keys (:mod:`~racf.experiments.link.curve`) the socket is a CURVE server and a
+hold. A peer that does not finish what it started is cut off too: libzmq allocates a frame's
+declared size when its header arrives, and 300 connections that each sent 1 MiB less one byte
+once held 320 MB for as long as they stayed open. The handshake must end within ``HANDSHAKE_MS``,
+and each connection is pinged every ``HEARTBEAT_MS``: a peer whose answer does not arrive within
+``HEARTBEAT_TIMEOUT_MS`` (it cannot, behind a frame it never completes) is dropped with what it
+held. With keys (:mod:`~racf.experiments.link.curve`) the socket is a CURVE server and a
 ZAP handler admits only the listed cars.
 
 A session ends with its connection: the socket's monitor reports each closed connection by its
@@ -28,24 +33,33 @@ from racf.experiments.service.sessions import LOG, Sessions, warn
 PLAIN_CAPS = ("plain link: the per-client cap counts network addresses, which every process on a host (or behind "
               "a NAT) shares; it bounds mistakes, not attackers (serve with --keys to cap per car key)")
 
-__all__ = ["DefenceService", "serve", "warm_up"]
+__all__ = ["DefenceService", "serve", "warm_up", "HANDSHAKE_MS", "HEARTBEAT_MS", "HEARTBEAT_TIMEOUT_MS"]
+
+#: A connection's ZeroMQ handshake must end within this, ms (libzmq's default: 30 s).
+HANDSHAKE_MS = 2000
+#: Every connection is pinged this often, ms, and dropped when nothing whole comes back within the timeout.
+HEARTBEAT_MS, HEARTBEAT_TIMEOUT_MS = 1000, 3000
 
 
-def serve(endpoint: str, names: tuple[str, ...] | None = None, options: dict | None = None, ready=None,
+def serve(endpoint: str, offers: dict[str, dict] | None = None, ready=None,
           max_requests: float = math.inf, stop=None, keys: ServerKeys | None = None,
           sessions: Sessions | None = None) -> int:
-    """Serves the defences ``names`` (None: every registered one) at ``endpoint`` until interrupted,
+    """Serves the defences ``offers`` (name -> the operator's options; None: every registered one with
+    its defaults) at ``endpoint`` until interrupted,
     ``stop`` (a ``threading.Event``) is set or ``max_requests`` are answered (then it stops
     answering, as a dead service would); returns the requests answered. ``ready(endpoint)`` is
     called once the socket is bound. ``keys``: serve over CURVE, to the admitted cars only."""
     import zmq
 
-    service = DefenceService(names, options, sessions)
+    service = DefenceService(offers, sessions)
     ctx = zmq.Context.instance()
     auth = _authenticator(ctx, keys) if keys is not None else None
     sock = ctx.socket(zmq.ROUTER)
     sock.setsockopt(zmq.LINGER, 0)
     sock.setsockopt(zmq.MAXMSGSIZE, MAX_MESSAGE_BYTES)
+    sock.setsockopt(zmq.HANDSHAKE_IVL, HANDSHAKE_MS)
+    sock.setsockopt(zmq.HEARTBEAT_IVL, HEARTBEAT_MS)
+    sock.setsockopt(zmq.HEARTBEAT_TIMEOUT, HEARTBEAT_TIMEOUT_MS)
     if keys is not None:
         sock.curve_secretkey, sock.curve_publickey, sock.curve_server = keys.secret, keys.public, True
     monitor = sock.get_monitor_socket(zmq.EVENT_DISCONNECTED)
@@ -114,11 +128,7 @@ def _answer(sock, service: DefenceService) -> None:
         warn("message", "bad message from %s: %s", client, err)
         reply = {"error": f"bad message: {err}"}
     else:
-        try:
-            reply = service.handle(identity, client, message, connection=_connection(frames[-1]))
-        except Exception as err:  # the service's own fault: the car hears it, the service lives on
-            LOG.exception("request %r from %s raised", message.get("op"), client)
-            reply = {"error": f"{type(err).__name__}: {err}"}
+        reply = service.handle(identity, client, message, connection=_connection(frames[-1]))
     sock.send_multipart([identity, *envelope, pack(reply)])
 
 

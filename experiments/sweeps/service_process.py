@@ -14,12 +14,14 @@ __all__ = ["service_process"]
 
 @contextmanager
 def service_process(defence: str, options: dict | None = None, bind: str = "tcp://127.0.0.1:0",
-                    keys=None) -> Iterator[tuple]:
-    """A ``racf serve`` process for ``defence`` (``keys``: a key folder, CurveZMQ); yields (endpoint,
-    process) and stops it after."""
+                    keys=None, flags: tuple[str, ...] = (), python: str | None = None) -> Iterator[tuple]:
+    """A ``racf serve`` process for ``defence`` (``keys``: a key folder, CurveZMQ; ``flags``: more of
+    ``racf serve``'s; ``python``: another interpreter's racf, to measure another checkout); yields
+    (endpoint, process) and stops it after."""
     import json
 
-    cmd = [sys.executable, "-m", "racf.experiments.cli", "serve", "--defence", defence, "--bind", bind]
+    cmd = [python or sys.executable, "-m", "racf.experiments.cli", "serve", "--defence", defence, "--bind", bind,
+           *flags]
     if keys is not None:
         cmd += ["--keys", str(keys)]
     for key, value in (options or {}).items():

@@ -193,7 +193,8 @@ def test_a_request_the_service_itself_fails_on_is_an_error_and_it_serves_on(monk
     stops = []
     endpoint = start_service("raw", stops)
     try:
-        assert _error(_send(endpoint, [b"", pack({"op": "boom", "id": 3})])) == "RuntimeError: its own fault"
+        reply = unpack(_send(endpoint, [b"", pack({"op": "boom", "id": 3})])[-1])
+        assert reply == {"error": "the service failed on this request: RuntimeError: its own fault", "id": 3}
         assert ping(endpoint)
     finally:
         for stop, thread in stops:
@@ -210,7 +211,7 @@ def test_a_service_answers_max_requests_and_no_more():
     stop, thread = stops[0]
     thread.join(5)
     assert answered == [True, True, True, False] and not thread.is_alive()
-    assert serve("tcp://127.0.0.1:0", ("raw",), max_requests=0) == 0
+    assert serve("tcp://127.0.0.1:0", {"raw": {}}, max_requests=0) == 0
 
 
 def test_a_taken_address_is_one_line():
@@ -221,7 +222,7 @@ def test_a_taken_address_is_one_line():
     endpoint = start_service("raw", stops)
     try:
         with pytest.raises(UserError, match=f"cannot listen at {endpoint}: Address already in use"):
-            serve(endpoint, ("raw",))
+            serve(endpoint, {"raw": {}})
     finally:
         for stop, thread in stops:
             stop.set()

@@ -24,7 +24,7 @@ def _estimate(d: float, rid: int = 2) -> dict:
 
 
 def test_every_answer_names_its_request_errors_too():
-    service = DefenceService(("raw",))
+    service = DefenceService({"raw": {}})
     assert service.handle(b"a", "x", {"op": "ping", "id": 7}) == {"pong": True, "protocol": PROTOCOL, "id": 7}
     assert service.handle(b"a", "x", {"op": "estimate", "id": 8})["id"] == 8  # no session: an error, named
     assert "id" not in service.handle(b"a", "x", {"op": "ping", "id": "7"})  # an id that is not one is not echoed
@@ -36,14 +36,14 @@ def test_every_answer_names_its_request_errors_too():
                                       (-0.5, "not a number in the protocol's [0, 50] m"),
                                       (50.5, "not a number in the protocol's [0, 50] m")])
 def test_a_distance_the_protocol_does_not_allow_is_never_sent(d, words):
-    service = DefenceService(("raw",))
+    service = DefenceService({"raw": {}})
     service.handle(b"a", "x", HELLO)
     reply = service.handle(b"a", "x", _estimate(d))
     assert "distance" not in reply and words in reply["error"] and reply["id"] == 2
 
 
 def test_no_target_goes_out_as_none_and_an_answer_in_range_as_it_is():
-    service = DefenceService(("raw",))
+    service = DefenceService({"raw": {}})
     service.handle(b"a", "x", HELLO)
     assert service.handle(b"a", "x", _estimate(math.nan))["distance"] is None
     for d in (0.0, 1.25, 50.0):
@@ -51,7 +51,7 @@ def test_no_target_goes_out_as_none_and_an_answer_in_range_as_it_is():
 
 
 def test_the_options_a_service_was_started_with_are_the_only_ones_it_serves():
-    service = DefenceService(("ekf",), {"config": {"depth_std_m": 0.05}})
+    service = DefenceService({"ekf": {"config": {"depth_std_m": 0.05}}})
     hello = {**HELLO, "estimator": "ekf"}
     assert "refused" in service.handle(b"a", "x", {**hello, "options": {"config": {"depth_std_m": 0.2}}})
     assert "refused" in service.handle(b"a", "x", hello)  # no options is other options too
@@ -59,13 +59,13 @@ def test_the_options_a_service_was_started_with_are_the_only_ones_it_serves():
 
 
 def test_another_protocols_hello_is_told_which_this_service_speaks():
-    reply = DefenceService(("raw",)).handle(b"a", "x", {"op": "hello", "protocol": 1, "estimator": "raw"})
+    reply = DefenceService({"raw": {}}).handle(b"a", "x", {"op": "hello", "protocol": 1, "estimator": "raw"})
     assert reply["error"] == f"protocol 1; this service speaks {PROTOCOL}"
 
 
 def test_the_sessions_given_are_the_sessions_used_even_empty():
     sessions = Sessions(per_client=1)
-    service = DefenceService(("raw",), sessions=sessions)
+    service = DefenceService({"raw": {}}, sessions=sessions)
     assert service.sessions is sessions
     service.handle(b"a", "x", HELLO)
     assert "refused" in service.handle(b"b", "x", HELLO)
@@ -99,7 +99,7 @@ def test_a_defence_rebuilt_after_it_raised_is_calibrated_and_reset_again(tmp_pat
     path = tmp_path / "calibrated.py"
     path.write_text(CALIBRATED)
     load_plugin_file(path)
-    service = DefenceService(("calibrated",))
+    service = DefenceService({"calibrated": {}})
     service.handle(b"a", "x", {**HELLO, "estimator": "calibrated"})
     # As the car sends it: through msgpack, whose tuples come back as lists.
     calibration = unpack(pack({"c": dataclasses.asdict(car_calibration(320, 240))}))["c"]
@@ -114,7 +114,7 @@ def test_a_defence_rebuilt_after_it_raised_is_calibrated_and_reset_again(tmp_pat
 def test_a_session_counts_its_estimates_and_diagnostics_keep_their_words():
     from racf.experiments.service.handler import _floats
 
-    service = DefenceService(("raw",))
+    service = DefenceService({"raw": {}})
     service.handle(b"a", "x", HELLO)
     for k in range(3):
         service.handle(b"a", "x", _estimate(2.0, 2 + k))
@@ -127,7 +127,7 @@ def test_a_session_counts_its_estimates_and_diagnostics_keep_their_words():
 def test_the_largest_id_is_answered_and_one_beyond_refused():
     from racf.experiments.link.wire import MAX_REQUEST_ID
 
-    service = DefenceService(("raw",))
+    service = DefenceService({"raw": {}})
     assert service.handle(b"a", "x", {"op": "ping", "id": MAX_REQUEST_ID}) == {"pong": True, "protocol": PROTOCOL,
                                                                                "id": MAX_REQUEST_ID}
     beyond = service.handle(b"a", "x", {"op": "ping", "id": MAX_REQUEST_ID + 1})
@@ -135,14 +135,27 @@ def test_the_largest_id_is_answered_and_one_beyond_refused():
     assert service.handle(b"a", "x", {"op": "ping", "id": 0}) == {"pong": True, "protocol": PROTOCOL, "id": 0}
 
 
-def test_a_defence_that_cannot_be_built_with_the_cars_options_is_refused_in_words():
-    service = DefenceService(("ekf",))
-    reply = service.handle(b"a", "x", {**HELLO, "estimator": "ekf", "options": {"bogus": 1}})
-    assert "ekf with options {'bogus': 1} cannot be built" in reply["refused"] and len(service.sessions) == 0
+def test_a_car_picks_a_defence_and_never_its_options_not_even_where_every_defence_is_served():
+    for service in (DefenceService({"ekf": {}}), DefenceService(None)):
+        for options in ({"bogus": 1}, {"config": {"depth_std_m": 0.2}}):
+            reply = service.handle(b"a", "x", {**HELLO, "estimator": "ekf", "options": options})
+            assert reply["refused"].startswith("this service runs ekf with its operator's options {}, not ")
+            assert "a car picks a defence, never its options" in reply["refused"] and len(service.sessions) == 0
+        assert "refused" not in service.handle(b"a", "x", {**HELLO, "estimator": "ekf"})
+
+
+def test_a_checkpoint_a_car_names_is_never_opened():
+    # The shipped head's path spelt another way: refused before any file is read.
+    service = DefenceService({"raw": {}})
+    reply = service.handle(b"a", "x", {**HELLO, "estimator": "odca", "options": {"checkpoint": "checkpoints/./odca"}})
+    assert "this service serves raw, not 'odca'" in reply["refused"]
+    everything = DefenceService(None)
+    reply = everything.handle(b"a", "x", {**HELLO, "estimator": "odca", "options": {"checkpoint": "/etc/passwd"}})
+    assert "never its options" in reply["refused"] and "odca" not in everything._warm
 
 
 def test_would_pass_takes_a_map_of_names_and_answers_true_or_false():
-    service = DefenceService(("raw",))
+    service = DefenceService({"raw": {}})
     service.handle(b"a", "x", HELLO)
     reply = service.handle(b"a", "x", {"op": "would_pass", "id": 3,
                                        "kwargs": {"depth": 1.5, "speed_mps": 1.0, "dt": 0.02}})
@@ -150,3 +163,26 @@ def test_would_pass_takes_a_map_of_names_and_answers_true_or_false():
     for kwargs in ({1: 2}, [1], "depth"):
         reply = service.handle(b"a", "x", {"op": "would_pass", "id": 4, "kwargs": kwargs})
         assert "would_pass needs kwargs (a map of names)" in reply["error"]
+
+
+def test_an_op_that_is_no_name_is_a_bad_request_answered_by_its_id():
+    service = DefenceService({"raw": {}})
+    for op in ([1], {"a": 1}, 3, None):
+        reply = service.handle(b"a", "x", {"op": op, "id": 5})
+        assert reply["id"] == 5 and reply["error"].startswith("bad request: op must be a request's name (a string)")
+
+
+def test_a_reset_or_a_ping_keeps_no_session_alive_past_its_idle_time():
+    import time
+
+    sessions = Sessions(idle_s=0.05)
+    service = DefenceService({"raw": {}}, sessions=sessions)
+    service.handle(b"a", "x", HELLO)
+    service.handle(b"b", "y", HELLO)
+    for _ in range(8):  # 0.08 s: car a only resets and pings; car b estimates
+        service.handle(b"a", "x", {"op": "reset", "id": 3})
+        service.handle(b"a", "x", {"op": "ping", "id": 4})
+        service.handle(b"b", "y", _estimate(1.0))
+        time.sleep(0.01)
+        sessions.expire(every_s=0.0)
+    assert sessions.get(b"a") is None and sessions.get(b"b") is not None

@@ -169,3 +169,28 @@ def test_sessions_end_with_their_connections_long_before_they_idle():
         for stop, thread in stops:
             stop.set()
             thread.join(5)
+
+
+def test_a_frame_never_finished_is_dropped_with_its_connection(served):
+    """A peer that sends a 1 MiB frame less one byte held the frame's memory as long as it stayed; it is
+    dropped once a ping (every 1 s) gets nothing whole back within 3 s, and one that never finishes
+    its handshake after 2 s."""
+    from racf.experiments.service.probes import closed_within, half_sent
+    from racf.experiments.service.server import HANDSHAKE_MS, HEARTBEAT_MS, HEARTBEAT_TIMEOUT_MS
+
+    import socket
+
+    endpoint, _ = served
+    assert (HANDSHAKE_MS, HEARTBEAT_MS, HEARTBEAT_TIMEOUT_MS) == (2000, 1000, 3000)
+    start = time.monotonic()
+    peer = half_sent(endpoint, 1 << 20)
+    silent = socket.create_connection(("127.0.0.1", int(endpoint.rsplit(":", 1)[1])))
+    try:
+        assert 1.5 <= closed_within(silent, 6.0) <= 4.0  # the handshake's 2 s
+        assert closed_within(peer, 8.0) is not None and 3.0 <= time.monotonic() - start <= 7.0  # 1 s + 3 s
+    finally:
+        peer.close()
+        silent.close()
+    sock, answer = _hello(endpoint)  # and a car is served after them
+    _close([sock])
+    assert "refused" not in answer

@@ -74,12 +74,14 @@ def test_a_session_ends_with_its_connection_and_only_its_own(caplog):
     assert "session of x ended (its connection closed)" in caplog.text
 
 
-def test_idle_is_measured_from_the_last_request_not_the_opening():
+def test_idle_is_measured_from_the_last_work_not_the_opening():
     import time
 
     sessions = Sessions(idle_s=0.05)
     sessions.open(b"a", _session("x"))
-    sessions.get(b"a").opened -= 10.0  # opened long ago, asked just now
+    sessions.get(b"a").opened -= 10.0  # opened long ago, worked just now
+    sessions.get(b"a").seen -= 10.0
+    sessions.worked(sessions.get(b"a"))
     sessions.expire(every_s=0.0)
     assert sessions.get(b"a") is not None
     time.sleep(0.06)
@@ -135,8 +137,33 @@ def test_the_services_default_bounds_are_the_ones_racf_serve_states():
 
     args = build_parser().parse_args(["serve"])
     bounds = Sessions()
-    assert (bounds.idle_s, bounds.per_client, bounds.total) == (args.idle_s, args.sessions_per_client,
-                                                                args.max_sessions)
+    assert (bounds.idle_s, bounds.per_client, bounds.total, bounds.per_range) == (
+        args.idle_s, args.sessions_per_client, args.max_sessions, args.sessions_per_range)
+    assert (bounds.per_client, bounds.per_range, bounds.total) == (16, 64, 1024)
+
+
+def test_one_host_s_many_addresses_are_capped_as_one_range():
+    from racf.experiments.service.sessions import client_range
+
+    assert client_range("127.0.0.5") == "127.0.0.0/24" and client_range("10.1.2.3") == "10.1.2.0/24"
+    assert client_range("fe80::1:2:3:4") == "fe80::/64" and client_range("car key abc") == "car key abc"
+    sessions = Sessions(per_client=16, total=1024, per_range=64)
+    # 64 loopback addresses, 16 sessions each, would fill the 1,024 places; the range holds 64.
+    refused = [sessions.open(b"%d-%d" % (a, k), _session(f"127.0.0.{a}")) for a in range(64) for k in range(16)]
+    assert len(sessions) == 64 and refused[64].startswith("the addresses of 127.0.0.0/24 hold this service's most")
+    assert sessions.open(b"car", _session("10.0.0.7")) is None  # a car elsewhere is served
+    # Car keys are capped per key, not per range.
+    keyed = Sessions(per_client=2, per_range=1)
+    assert keyed.open(b"k1", _session("car key a")) is None and keyed.open(b"k2", _session("car key a")) is None
+
+
+def test_a_long_session_keeps_the_times_of_its_last_estimates_only():
+    from racf.experiments.service.sessions import TIMES_KEPT
+
+    session = _session("x")
+    for k in range(TIMES_KEPT + 1000):
+        session.service_ms.append(float(k))
+    assert len(session.service_ms) == TIMES_KEPT == 4096 and session.service_ms[0] == 1000.0
 
 
 def test_a_kind_of_line_is_said_once_a_second():
