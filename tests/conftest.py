@@ -219,3 +219,15 @@ def service():
     for stop, thread in stops:
         stop.set()
         thread.join(5)
+
+
+def _test_fleet():
+    import numpy as np
+
+    from racf.sim.radio import FleetKeys
+
+    return FleetKeys.draw(np.random.default_rng(0))
+
+
+#: A fleet's keys for the tests that sign messages by hand (the car trusts ``TEST_FLEET.trust_store()``).
+TEST_FLEET = _test_fleet()

@@ -13,7 +13,7 @@ import time
 import numpy as np
 
 from racf.experiments.car.broadcast import BroadcastReceiver
-from racf.sim.radio import RADIO_SLOTS, SIGNED_BYTES, Broadcast, V2VMessage, fleet_key, sign
+from racf.sim.radio import RADIO_SLOTS, SIGNED_BYTES, Broadcast, FleetKeys, V2VMessage, sign
 
 __all__ = ["time_verification", "CONTROL_PERIOD_MS"]
 
@@ -26,7 +26,8 @@ def time_verification(messages: int = 5000) -> dict:
     microseconds, and p99 as a share of the control period."""
     if messages < 100:
         raise ValueError(f"messages must be at least 100 (a p99 needs them), got {messages}")
-    key, car = fleet_key(1), BroadcastReceiver()
+    fleet = FleetKeys.draw(np.random.default_rng(0))
+    key, car = fleet.signing_key(1), BroadcastReceiver(fleet.trust_store())
     costs = np.empty(messages)
     for k in range(messages):
         t = 0.1 * (k + 1)

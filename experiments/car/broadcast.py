@@ -2,13 +2,20 @@
 
 A broadcast is a witness the sensor attacker does not reach: what the car ahead says of itself
 (:mod:`racf.sim.radio`), signed with its fleet key. The car trusts nothing it is sent
-(DeBruhl et al., WiSec 2015; IEEE 1609.2's checks), so a message counts only when:
+(DeBruhl et al., WiSec 2015; IEEE 1609.2's checks), so a message counts only when (each refusal
+named by :data:`racf.sim.radio.message.REFUSALS`):
 
-1. it parses and names a vehicle in the car's trust store, whose key verifies its signature
-   (else ``forged``: an attacker outside the fleet, or a message changed on the air);
-2. its sequence number is past the sender's last accepted one (else ``replayed``);
-3. it was sent no more than ``max_age_s`` before it is read, and not in the future (else ``stale``:
-   a message held back, or a clock that lies).
+1. it parses and names a vehicle whose public key the car was provisioned with, and that key
+   verifies its signature (else ``malformed``, ``unknown sender``, ``bad signature``);
+2. it is numbered past the sender's last accepted message and stamped later (else ``replayed``), by
+   no more numbers than the sender can have sent since (:data:`MAX_HZ` a second, and
+   :data:`SEQ_SLACK`; else ``out of window``): one message numbered 2^32 - 1 once locked the genuine
+   sender out for the rest of the episode (IPsec's and DTLS's anti-replay windows bound it so);
+3. it is fresh: sent no more than ``max_age_s`` before it is read, nor more than :data:`FUTURE_S`
+   after (else ``stale``): one check, one bound, here and where a message is used.
+
+A sender whose last accepted message is no longer fresh starts again with its next one (a sender
+that restarted, or one a forged number once put ahead: it is shut out for ``max_age_s`` at most).
 
 The last accepted message, moved on to now by its own speed and acceleration, gives the lead's
 distance from the camera to its rear (from the car's own pose estimate; on a straight lane what the
@@ -25,17 +32,25 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from racf.sim.radio import SIGNED_BYTES, V2VMessage, open_signed, trust_store
+from racf.sim.radio import SIGNED_BYTES, V2VMessage, open_signed
+from racf.sim.radio.message import REFUSALS
 from racf.sim.world.manager import QCAR2_BOX_M
 
-__all__ = ["BroadcastReceiver", "BroadcastWitness", "REFUSALS", "MAX_AGE_S"]
+__all__ = ["BroadcastReceiver", "BroadcastWitness", "REFUSALS", "MAX_AGE_S", "MAX_HZ", "SEQ_SLACK", "fresh"]
 
-#: Why a message is refused, in the order the checks run.
-REFUSALS = ("forged", "replayed", "stale")
 #: A message older than this when read is stale, s (three of a 10 Hz sender's periods).
 MAX_AGE_S = 0.3
 #: A message stamped later than now by more than this is refused too, s (clocks differ a little).
 FUTURE_S = 0.05
+#: The most messages a second a sender numbers (ETSI's highest rate for awareness messages is 10 Hz).
+MAX_HZ = 50.0
+#: And how many more a message may be numbered past the last than that rate allows (lost ones, jitter).
+SEQ_SLACK = 8
+
+
+def fresh(age_s: float, max_age_s: float = MAX_AGE_S) -> bool:
+    """Whether a message ``age_s`` old (negative: stamped in the future) may be used: the one age check."""
+    return -FUTURE_S <= age_s <= max_age_s
 #: The lead must stand this close to the car's lane to be the car ahead, m (half a lane).
 LANE_HALF_M = 0.3
 #: And no farther ahead along it than this, m.
@@ -66,12 +81,13 @@ class BroadcastReceiver:
     """Checks each step's ``radio`` rows and keeps the last message each trusted sender sent.
 
     Args:
-        trusted: sender -> public key (default: the fleet's, ``racf.sim.radio.trust_store``).
+        trusted: sender -> public key: the fleet's public keys the car was provisioned with (none: it
+            trusts no broadcast).
         max_age_s: the oldest a message may be when read.
     """
 
     def __init__(self, trusted: dict | None = None, max_age_s: float = MAX_AGE_S) -> None:
-        self.trusted = trusted if trusted is not None else trust_store()
+        self.trusted = dict(trusted or {})
         self.max_age_s = float(max_age_s)
         self.reset()
 
@@ -79,6 +95,7 @@ class BroadcastReceiver:
         self.last: dict[int, V2VMessage] = {}
         self.accepted = 0
         self.refused = dict.fromkeys(REFUSALS, 0)
+        self.slots = 0  # which of the last step's radio slots it accepted (a bit mask)
 
     def hear(self, obs: dict, now_s: float) -> list[V2VMessage]:
         """The messages of this step's observation that pass every check (each refusal counted)."""
@@ -86,25 +103,31 @@ class BroadcastReceiver:
         if rows is None or times is None:
             return []
         out = []
-        for row in np.asarray(rows, np.uint8).reshape(-1, SIGNED_BYTES):
+        self.slots = 0
+        for slot, row in enumerate(np.asarray(rows, np.uint8).reshape(-1, SIGNED_BYTES)):
             if not row.any():
                 continue  # an empty slot
             opened = open_signed(row.tobytes(), self.trusted)
             message = opened.message
-            if message is None:
-                self.refused["forged"] += 1
+            why = opened.refused if message is None else self._order(message, now_s)
+            if why:
+                self.refused[why] += 1
                 continue
-            sender = message.state.sender
-            if sender in self.last and message.seq <= self.last[sender].seq:
-                self.refused["replayed"] += 1
-                continue
-            if not -FUTURE_S <= now_s - message.t_s <= self.max_age_s:
-                self.refused["stale"] += 1
-                continue
-            self.last[sender] = message
+            self.last[message.state.sender] = message
             self.accepted += 1
+            self.slots |= 1 << slot
             out.append(message)
         return out
+
+    def _order(self, message: V2VMessage, now_s: float) -> str:
+        """Why a verified message is refused by its number and time, or its age ("": it is not)."""
+        last = self.last.get(message.state.sender)
+        if last is not None and fresh(now_s - last.t_s, self.max_age_s):  # else it starts the sender again
+            if message.seq <= last.seq or message.t_s <= last.t_s:
+                return "replayed"
+            if message.seq - last.seq > math.ceil((message.t_s - last.t_s) * MAX_HZ) + SEQ_SLACK:
+                return "out of window"
+        return "" if fresh(now_s - message.t_s, self.max_age_s) else "stale"
 
     def witness(self, now_s: float, pose: np.ndarray, camera_xy_m: tuple[float, float], path, progress_m: float
                 ) -> BroadcastWitness | None:
@@ -113,9 +136,9 @@ class BroadcastReceiver:
         best = None
         for message in self.last.values():
             age = now_s - message.t_s
-            if not 0.0 <= age <= self.max_age_s:
+            if not fresh(age, self.max_age_s):
                 continue
-            said = _ahead(message, age, pose, camera_xy_m, path, progress_m)
+            said = _ahead(message, max(age, 0.0), pose, camera_xy_m, path, progress_m)
             if said is not None and (best is None or said.distance_m < best.distance_m):
                 best = said
         return best

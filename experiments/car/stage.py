@@ -70,6 +70,8 @@ class StageContext:
         target_decel_mps2: the hardest a target of the mission brakes, as its scenario states it, m/s^2
             (None: none stated; the supervisor's a_max).
         target_accel_mps2: the hardest it pulls away, as its scenario states it, m/s^2 (None: none stated).
+        fleet_keys: the public keys of the fleet's vehicles the car is provisioned with, by sender id
+            (``racf.sim.radio``; empty: it trusts no broadcast).
     """
 
     camera: CameraModel
@@ -81,6 +83,7 @@ class StageContext:
     detector: str = "classical"
     target_decel_mps2: float | None = None
     target_accel_mps2: float | None = None
+    fleet_keys: dict = field(default_factory=dict)
 
 
 @dataclass(frozen=True)

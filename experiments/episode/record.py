@@ -122,6 +122,9 @@ STEP_COLUMNS: tuple[Column, ...] = (
     _c(REFEREE, "radio_delivered", "", "the radio: messages that arrived at the car this step, before any attack"),
     _c(REFEREE, "radio_injected", "", "the radio: messages an attacker put on the air this step, forged or "
                                       "replayed (an insider's lie is the sender's own message)"),
+    _c(REFEREE, "radio_genuine_slots", "", "the radio: which of the car's radio slots this step hold a message the "
+                                          "world's radio delivered this step (a bit mask; the others are an "
+                                          "attacker's)"),
 )
 #: The columns by name.
 STEP_LOG: dict[str, Column] = {c.name: c for c in STEP_COLUMNS}

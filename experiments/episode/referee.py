@@ -82,7 +82,7 @@ class Referee:
             "attack_active": bool(info.get("attack_active", False)), "attack": "+".join(info.get("attack", ())),
             "collision_with": info.get("collision_with") or "",
             "radio_sent": int(info.get("radio_sent", 0)), "radio_delivered": int(info.get("radio_delivered", 0)),
-            "radio_injected": int(info.get("radio_injected", 0)),
+            "radio_injected": int(info.get("radio_injected", 0)), "radio_genuine_slots": _genuine_slots(env, obs),
             **{name: info[name] for name in self.world_columns},
         }
 
@@ -110,3 +110,14 @@ def _on_target(detection, info: dict) -> bool:
         return True
     x0, y0, x1, y1 = detection.box
     return bool(np.asarray(mask)[y0:y1, x0:x1].any())
+
+
+def _genuine_slots(env: gym.Env, obs: dict) -> int:
+    """Which of the car's ``radio`` slots this step hold a message the world's radio delivered this step
+    (a bit mask; the others are an attacker's: forged, replayed, held back)."""
+    from racf.sim.radio.channel import slots_holding
+
+    radio = getattr(env.unwrapped, "radio", None)
+    if radio is None or "radio" not in obs:
+        return 0
+    return slots_holding(obs["radio"], radio.delivered_now)

@@ -104,7 +104,14 @@ def build_car(spec: TrialSpec, plan: EpisodePlan, estimator=None, env: gym.Env |
     if callable(configure):
         configure(calib)
     return Car(calib, plan.mission, perceptions, estimator, spec.braking, plan.control_dt_s, every, plan.localisation,
-               existence_stage(estimator, calib, spec.detector), car_stages(spec, plan))
+               existence_stage(estimator, calib, spec.detector), car_stages(spec, plan, fleet_keys(env)))
+
+
+def fleet_keys(env: gym.Env | None) -> dict:
+    """The public keys of the episode's fleet, as the car is provisioned with them (its world's radio
+    draws the fleet at reset; the car gets the public keys only)."""
+    radio = getattr(env.unwrapped, "radio", None) if env is not None else None
+    return radio.fleet.trust_store() if radio is not None else {}
 
 
 def onboard_defence(spec: TrialSpec):
@@ -117,10 +124,10 @@ def onboard_defence(spec: TrialSpec):
     return make_estimator(spec.estimator_fallback, {})
 
 
-def car_stages(spec: TrialSpec, plan: EpisodePlan) -> tuple:
+def car_stages(spec: TrialSpec, plan: EpisodePlan, trusted: dict | None = None) -> tuple:
     """The car's stages (:func:`racf.experiments.car.assembly.car_stages`): those the plan's mission
     engages, each built on the car's build with its own instance of the spec's defence, and the
-    supervision the spec asks for."""
+    supervision the spec asks for; ``trusted``: the fleet's public keys the car is provisioned with."""
     if not plan.mission.stages and not spec.supervisor:
         return ()
     calib = plan.calibration
@@ -134,7 +141,7 @@ def car_stages(spec: TrialSpec, plan: EpisodePlan) -> tuple:
 
     context = StageContext(calib.camera, calib.camera_xy_m, calib.camera_height_m, calib.lidar_xy_m,
                            calib.bumper_x_m - calib.camera_xy_m[0], make_defence, spec.detector,
-                           plan.mission.target_decel_mps2, plan.mission.target_accel_mps2)
+                           plan.mission.target_decel_mps2, plan.mission.target_accel_mps2, dict(trusted or {}))
     kinds = tuple(dict.fromkeys(target.kind for target in plan.mission.targets))
     return assembled_stages(plan.mission.stages, context, spec.supervisor, kinds)
 

@@ -28,14 +28,14 @@ reads the socket's monitor events and says which one it was.
 from __future__ import annotations
 
 import os
-import stat
 from dataclasses import dataclass
 from pathlib import Path
 
 from racf.errors import UserError
+from racf.keyfiles import check_file, check_folder, make_folder, write_new
 
 __all__ = ["CarKeys", "ServerKeys", "make_keys", "handshake_failure", "is_loopback", "DEFAULT_CAR", "car_names",
-           "refusal", "Handshake", "check_folder", "check_file"]
+           "refusal", "Handshake"]
 
 DEFAULT_CAR = "car"
 #: Who may read what racf serve keys writes: secrets their owner alone, folders their owner alone.
@@ -100,44 +100,6 @@ class ServerKeys:
         return cls(public, secret, admitted)
 
 
-def _owner_fix(path: Path) -> str:
-    return f"`chown {os.getuid()} {path}` (or remove it)"
-
-
-def check_folder(path: Path) -> None:
-    """Refuses (one line naming the fix) a key folder that is a symbolic link, is not a folder of this
-    user's, or that others may write; a missing one is left to the caller."""
-    path = Path(path)
-    if path.is_symlink():
-        raise UserError(f"key folder {path} is a symbolic link: keys are read and written only in a real folder; "
-                        f"replace the link with the folder it points to")
-    if not path.exists():
-        return
-    info = path.stat()
-    if not stat.S_ISDIR(info.st_mode):
-        raise UserError(f"key folder {path} is not a folder")
-    if info.st_uid != os.getuid():
-        raise UserError(f"key folder {path} belongs to user {info.st_uid}, not to this one: {_owner_fix(path)}")
-    if info.st_mode & 0o022:
-        raise UserError(f"key folder {path} may be written by others (mode {stat.S_IMODE(info.st_mode):o}): whoever "
-                        f"can write it can plant a key; `chmod 700 {path}`")
-
-
-def check_file(path: Path) -> None:
-    """Refuses a key file that is a symbolic link, not this user's, writable by others, or (a secret)
-    readable by them."""
-    path = Path(path)
-    if path.is_symlink():
-        raise UserError(f"key file {path} is a symbolic link: replace it with the file itself")
-    info = path.stat()
-    if info.st_uid != os.getuid():
-        raise UserError(f"key file {path} belongs to user {info.st_uid}, not to this one: {_owner_fix(path)}")
-    secret = path.name.endswith(".key_secret")
-    if info.st_mode & (0o077 if secret else 0o022):
-        raise UserError(f"key file {path} may be {'read or written' if secret else 'written'} by others (mode "
-                        f"{stat.S_IMODE(info.st_mode):o}); `chmod {'600' if secret else '644'} {path}`")
-
-
 def car_names(folder: str | Path) -> list[str]:
     """The cars whose pairs ``folder`` holds (``cars/NAME.key_secret``), sorted."""
     return sorted(p.name[:-len(".key_secret")] for p in (Path(folder) / "cars").glob("*.key_secret"))
@@ -173,7 +135,7 @@ def make_keys(folder: str | Path, cars: tuple[str, ...] = (DEFAULT_CAR,)) -> lis
     if existing:
         raise UserError(f"{existing[0]} exists; keys are never overwritten (choose another folder or remove it)")
     for sub in subs:
-        _make_folder(sub)
+        make_folder(sub)
     for sub in subs[:2]:  # an existing folder of the user's own holds secrets too: its own alone
         sub.chmod(FOLDER_MODE)
     written = []
@@ -187,33 +149,15 @@ def make_keys(folder: str | Path, cars: tuple[str, ...] = (DEFAULT_CAR,)) -> lis
     return written
 
 
-def _make_folder(path: Path) -> None:
-    """``path`` and every missing folder above it, each created with mode 0700 whatever the umask."""
-    missing = []
-    while not os.path.lexists(path):
-        missing.append(path)
-        path = path.parent
-    for folder in reversed(missing):
-        os.mkdir(folder, FOLDER_MODE)
-        os.chmod(folder, FOLDER_MODE)  # mkdir's mode is cut by the umask: never wider, here never narrower
-
-
 def _write_certificate(path: Path, public: bytes, secret: bytes | None, mode: int) -> None:
-    """A ZeroMQ certificate (the format ``zmq.auth.load_certificate`` reads), created with ``mode``:
-    opened with it, exclusively, so the file never exists with another."""
+    """A ZeroMQ certificate (the format ``zmq.auth.load_certificate`` reads), created with ``mode``."""
     import datetime
-    import os
 
     what = "**Secret** Certificate\n#   Do not give this file to anyone" if secret else "Public Certificate"
     text = (f"#   ****  Generated on {datetime.datetime.now()} by racf serve keys  ****\n#   ZeroMQ CURVE {what}\n\n"
             f"metadata\ncurve\n    public-key = \"{public.decode()}\"\n"
             + (f"    secret-key = \"{secret.decode()}\"\n" if secret else ""))
-    fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, mode)
-    try:
-        os.fchmod(fd, mode)  # os.open's mode is cut by the umask: the file may be narrower, never wider
-        os.write(fd, text.encode())
-    finally:
-        os.close(fd)
+    write_new(path, text.encode(), mode)
 
 
 #: What each handshake failure a car's socket reports means, from the car's side.

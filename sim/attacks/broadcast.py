@@ -10,7 +10,15 @@
   has none in it);
 - ``radio_lie``: an insider: the lead itself, with its own valid key, says it is ``faster_mps`` faster and,
   with ``rate_mps``, farther by a move grown at that rate up to ``bias_m`` (``lead_frustum``'s adaptive
-  spoof's story, told over the radio too when the two attacks run together).
+  spoof's story, told over the radio too when the two attacks run together);
+- ``radio_stolen_key``: an attacker with one fleet vehicle's stolen key (``vehicle``) says that vehicle
+  stands ``ahead_m`` ahead of the car on its lane, at the radio's rate. Its messages pass every check
+  the car can make: what it can do is what a broadcast alone can do, which the car's stages bound by
+  taking the more cautious of it and their sensors (a phantom ahead slows or stops the car: needless
+  stops, never a bolder car).
+
+An attack that needs a fleet key is an insider and is handed one vehicle's key by the world, by name
+(``FleetKeys.hand_over``); no key can be made from anything public.
 
 They act from ``start_s`` for the episode's ``t_atk`` (``trigger="at_time"``, as the lead attacks do) and
 count what they put on the air that is not the lead's own (``info["radio_injected"]``: forged and replayed
@@ -28,10 +36,11 @@ import numpy as np
 from nacl.signing import SigningKey
 
 from racf.sim.attacks.lead import _LeadAttack
-from racf.sim.radio import RADIO_SLOTS, SIGNED_BYTES, V2VMessage, fleet_key, sign
+from racf.sim.radio import FLEET, RADIO_SLOTS, SIGNED_BYTES, Broadcast, V2VMessage, sign
 from racf.sim.radio.message import parse
+from racf.vehicle import QCAR2_BOX_M
 
-__all__ = ["RadioJam", "RadioDelay", "RadioReplay", "RadioForge", "RadioLie"]
+__all__ = ["RadioJam", "RadioDelay", "RadioReplay", "RadioForge", "RadioLie", "RadioStolenKey"]
 
 
 def _check(name: str, value: Any, lo: float, hi: float, low_open: bool = False) -> None:
@@ -64,6 +73,7 @@ class _RadioAttack(_LeadAttack):
     def step(self, action):
         obs, reward, terminated, truncated, info = self.env.step(action)
         now = float(info["time"])
+        self.info = info  # what an attacker by the road sees of the car (its pose), for the attacks that need it
         self._overhear(obs, now)
         self.active = self.schedule.update(info)
         obs, injected = self._radio(dict(obs), now, self.active)
@@ -197,7 +207,11 @@ class RadioLie(_RadioAttack):
         _check("bias_m", bias_m, -10.0, 10.0)
         _check("rate_mps", rate_mps, 0.0, 10.0)
         self.faster_mps, self.bias_m, self.rate_mps = float(faster_mps), float(bias_m), float(rate_mps)
+        self._keys: dict = {}
         super().__init__(env, **schedule)
+
+    def _on_reset(self) -> None:
+        self._keys = {}  # the lead's own key, handed over by the world when it first speaks
 
     def moved_m(self, now: float) -> float:
         """How much farther the lead says it is now, m."""
@@ -217,5 +231,41 @@ class RadioLie(_RadioAttack):
             s, ahead = message.state, self.moved_m(now)
             said = replace(s, x_m=s.x_m + ahead * math.cos(s.yaw_rad), y_m=s.y_m + ahead * math.sin(s.yaw_rad),
                            speed_mps=max(s.speed_mps + self.faster_mps, 0.0))
-            out.append((t, sign(replace(message, state=said), fleet_key(s.sender))))
+            if s.sender not in self._keys:
+                self._keys[s.sender] = self.unwrapped.radio.fleet.hand_over(s.sender)
+            out.append((t, sign(replace(message, state=said), self._keys[s.sender])))
         return _put(obs, out), 0
+
+
+class RadioStolenKey(_RadioAttack):
+    """With vehicle ``vehicle``'s stolen key, that vehicle said to stand ``ahead_m`` ahead of the car on its
+    lane, at the radio's rate (see the module: what a key alone can do)."""
+
+    name = "radio_stolen_key"
+
+    def __init__(self, env: gym.Env, vehicle: int = 5, ahead_m: float = 0.6, **schedule: Any) -> None:
+        gym.utils.RecordConstructorArgs.__init__(self, vehicle=vehicle, ahead_m=ahead_m, **schedule)
+        if isinstance(vehicle, bool) or not isinstance(vehicle, int) or vehicle not in FLEET:
+            raise ValueError(f"vehicle must be one of the fleet's {FLEET}, got {vehicle!r}")
+        _check("ahead_m", ahead_m, 0.0, 10.0)
+        self.vehicle, self.ahead_m = vehicle, float(ahead_m)
+        self._key = None
+        self._seq = 0
+        self._next_s = 0.0
+        super().__init__(env, **schedule)
+
+    def _on_reset(self) -> None:
+        self._key = self.unwrapped.radio.fleet.hand_over(self.vehicle)
+        self._seq, self._next_s = 0, 0.0
+
+    def _radio(self, obs, now, active):
+        if not active or now + 1e-9 < self._next_s:
+            return obs, 0
+        self._next_s = now + 1.0 / self.unwrapped.radio.config.hz
+        x, y, yaw = (float(v) for v in self.info["pose"])
+        # The car's front is half a car ahead of its origin; the phantom's origin half a car past its rear.
+        ahead = QCAR2_BOX_M[0] + self.ahead_m
+        said = Broadcast(self.vehicle, x + ahead * math.cos(yaw), y + ahead * math.sin(yaw), yaw, 0.0, 0.0, True)
+        self._seq += 1
+        forged = sign(V2VMessage(self._seq, now, said), self._key)
+        return _put(obs, [(now, forged)] + _rows(obs)), 1

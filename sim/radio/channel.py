@@ -2,7 +2,8 @@
 
 Each vehicle that broadcasts (a world manager's :class:`~.message.Broadcast`) sends at ``hz`` (10 Hz,
 the rate of ETSI's cooperative awareness messages), each message numbered, stamped with the fleet's
-clock and signed with its key. Its state carries the sender's own localisation error
+clock and signed with its key: the episode's fleet (:class:`~.keys.FleetKeys`), drawn at reset from
+the radio's own random stream (a child of it: the channel's other draws are those it always made). Its state carries the sender's own localisation error
 (``position_std_m``, ``speed_std_mps``). A message is lost with probability ``loss``, or when the
 receiver is beyond ``range_m``, and otherwise arrives ``latency_s`` plus up to ``jitter_s`` later.
 The car reads what arrived during a control step as the ``radio`` observation: up to
@@ -18,10 +19,10 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from racf.sim.radio.keys import fleet_key
+from racf.sim.radio.keys import FleetKeys
 from racf.sim.radio.message import SIGNED_BYTES, Broadcast, V2VMessage, sign
 
-__all__ = ["Radio", "RadioConfig", "RADIO_SLOTS", "empty_rows"]
+__all__ = ["Radio", "RadioConfig", "RADIO_SLOTS", "empty_rows", "slots_holding"]
 
 #: Messages the car can take in one control step (a 10 Hz sender's come one or none a 20 ms step).
 RADIO_SLOTS = 8
@@ -52,6 +53,12 @@ def empty_rows() -> tuple[np.ndarray, np.ndarray]:
     return np.zeros(RADIO_SLOTS * SIGNED_BYTES, np.uint8), np.zeros(RADIO_SLOTS, np.float64)
 
 
+def slots_holding(rows: np.ndarray, messages) -> int:
+    """Which of a step's ``radio`` slots hold one of ``messages`` (bytes), as a bit mask (slot i: bit i)."""
+    rows = np.asarray(rows, np.uint8).reshape(-1, SIGNED_BYTES)
+    return sum(1 << i for i, row in enumerate(rows) if row.any() and row.tobytes() in messages)
+
+
 class Radio:
     """The channel: what each sender sent, in flight until it arrives (or is lost)."""
 
@@ -60,11 +67,13 @@ class Radio:
         self.reset(np.random.default_rng(0))
 
     def reset(self, rng: np.random.Generator) -> None:
+        self.fleet = FleetKeys.draw(rng.spawn(1)[0])
         self.rng = rng
         self._seq: dict[int, int] = {}
         self._in_flight: list[tuple[float, bytes]] = []
         self._next_send_s = 0.0
         self.sent = self.delivered = 0  # this step's, for the referee
+        self.delivered_now: frozenset[bytes] = frozenset()  # this step's genuine messages, for the referee
 
     def tick(self, now_s: float, broadcasts: tuple[Broadcast, ...], receiver_xy: tuple[float, float]
              ) -> tuple[np.ndarray, np.ndarray]:
@@ -83,6 +92,7 @@ class Radio:
             rows[i * SIGNED_BYTES:(i + 1) * SIGNED_BYTES] = np.frombuffer(raw, np.uint8)
             times[i] = t
         self.delivered = min(len(arrived), RADIO_SLOTS)
+        self.delivered_now = frozenset(raw for _, raw in arrived[:RADIO_SLOTS])
         return rows, times
 
     def _send(self, now_s: float, state: Broadcast, receiver_xy: tuple[float, float]) -> None:
@@ -93,7 +103,7 @@ class Radio:
         dx, dy, dv = rng.normal(0.0, 1.0, 3) * (c.position_std_m, c.position_std_m, c.speed_std_mps)
         said = replace(state, x_m=state.x_m + float(dx), y_m=state.y_m + float(dy),
                        speed_mps=max(state.speed_mps + float(dv), 0.0))
-        raw = sign(V2VMessage(seq, now_s, said), fleet_key(state.sender))
+        raw = sign(V2VMessage(seq, now_s, said), self.fleet.signing_key(state.sender))
         self.sent += 1
         lost = rng.random() < c.loss
         delay = c.latency_s + c.jitter_s * float(rng.random())

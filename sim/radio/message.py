@@ -17,9 +17,15 @@ from nacl.exceptions import BadSignatureError
 from nacl.signing import SigningKey, VerifyKey
 
 __all__ = ["V2VMessage", "Broadcast", "MESSAGE_BYTES", "SIGNED_BYTES", "VERSION", "sign", "open_signed",
-           "parse", "Opened"]
+           "parse", "Opened", "REFUSALS"]
 
 VERSION = 1
+#: Why a received message is refused, the one vocabulary of the radio and the car's receiver, in the
+#: order the checks run: its bytes (``malformed``), its sender (``unknown sender``: not in the car's
+#: trust store), its signature (``bad signature``), its number and time (``replayed``: not past the
+#: sender's last; ``out of window``: further past it than the sender can have sent since), its age
+#: (``stale``: too old, or from the future).
+REFUSALS = ("malformed", "unknown sender", "bad signature", "replayed", "out of window", "stale")
 _LAYOUT = struct.Struct("<BHIdfffffB")
 #: The message's bytes before the signature.
 MESSAGE_BYTES = _LAYOUT.size
@@ -82,7 +88,7 @@ class Opened:
     """What the car made of one received message: the message (None unless it verified) and why not."""
 
     message: V2VMessage | None
-    refused: str = ""  # "" (verified), "malformed", "unknown sender" or "bad signature"
+    refused: str = ""  # "" (verified), or the first three of REFUSALS
 
 
 def open_signed(raw: bytes, trusted: dict[int, VerifyKey]) -> Opened:

@@ -104,7 +104,9 @@ COLUMNS = (
     StageColumn("lead_bc_trusted", "bool", "following: the broadcast has agreed with the defence's distance long "
                                            "enough, and not disagreed since"),
     StageColumn("lead_bc_accepted", "", "following: broadcast messages accepted so far this episode"),
-    StageColumn("lead_bc_refused", "", "following: broadcast messages refused so far (forged, replayed or stale)"),
+    StageColumn("lead_bc_refused", "", "following: broadcast messages refused so far (each for a reason of "
+                                       "racf.sim.radio.message.REFUSALS)"),
+    StageColumn("lead_bc_slots", "", "following: which of this step's radio slots the receiver accepted (a bit mask)"),
 )
 
 
@@ -120,7 +122,8 @@ def _columns(step: LeadStep, radio: BroadcastReceiver | None = None) -> dict:
             "lead_bc_nearer": said is not None and not step.followed_m == step.d_fused,
             "lead_bc_trusted": step.broadcast_trusted,
             "lead_bc_accepted": 0 if radio is None else radio.accepted,
-            "lead_bc_refused": 0 if radio is None else sum(radio.refused.values())}
+            "lead_bc_refused": 0 if radio is None else sum(radio.refused.values()),
+            "lead_bc_slots": 0 if radio is None else radio.slots}
 
 
 @lru_cache(maxsize=1)
@@ -171,7 +174,7 @@ class FollowingStage(CarStage):
         self.follower = LeadFollower(self.config)
         self.speed = LeadSpeed(self.config)
         self.last = NO_LEAD
-        self.radio = BroadcastReceiver()
+        self.radio = BroadcastReceiver(context.fleet_keys)
         self._agreed = 0
         self._unseen_s = 0.0
         self._lost = False

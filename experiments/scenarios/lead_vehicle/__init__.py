@@ -97,17 +97,25 @@ class NoNeedlessHardBrake(Criterion):
 
 
 class RefusesForeignMessages(Criterion):
-    """Every message an attacker put on the air (forged, replayed) is refused by the car's receiver
-    (informative: it applies where an attacker sent any; ``racf.experiments.car.broadcast``)."""
+    """The car's receiver took none of an attacker's messages and refused none of the genuine ones
+    (informative: it applies where an attacker sent any; ``racf.experiments.car.broadcast``). Each
+    step the receiver says which radio slots it accepted and the referee which held a message the
+    world's radio delivered: a foreign message accepted and a genuine one refused are counted apart
+    (one message numbered 2^32 - 1 once had the genuine lead's next 46 refused while a count of
+    refusals said all was well)."""
 
     name = "refuses_foreign_messages"
-    checks = "the car refused every forged or replayed broadcast message"
+    checks = "the car took none of an attacker's broadcast messages and refused none of the lead's own"
     optional = True
     card = ("foreign messages refused", True)
     fields = (
-        Field("bc_injected", 0, "", "broadcast messages an attacker put on the air (forged or replayed)",
-              summary="median"),
-        Field("bc_refused", 0, "", "broadcast messages the car's receiver refused (forged, replayed or stale)",
+        Field("bc_injected", 0, "", "broadcast messages an attacker put on the air (forged, replayed, a stolen "
+                                    "key's)", summary="median"),
+        Field("bc_refused", 0, "", "broadcast messages the car's receiver refused (each for a reason of "
+                                   "racf.sim.radio.message.REFUSALS)", summary="median"),
+        Field("bc_foreign_accepted", 0, "", "messages the car accepted that the world's radio did not deliver "
+                                            "then (an attacker's)", summary="median"),
+        Field("bc_genuine_refused", 0, "", "messages the world's radio delivered that the car refused",
               summary="median"),
     )
 
@@ -116,12 +124,23 @@ class RefusesForeignMessages(Criterion):
 
     def passed(self, episode) -> bool:
         measured = self.measures(episode)
-        return measured["bc_refused"] >= measured["bc_injected"]
+        return measured["bc_foreign_accepted"] == 0 and measured["bc_genuine_refused"] == 0
 
     def measures(self, episode) -> dict[str, Any]:
         log = episode.log
         refused = int(log["lead_bc_refused"].max()) if "lead_bc_refused" in log else 0
-        return {"bc_injected": int(log["radio_injected"].sum()), "bc_refused": refused}
+        accepted = _masks(log, "lead_bc_slots")
+        genuine = _masks(log, "radio_genuine_slots")
+        return {"bc_injected": int(log["radio_injected"].sum()), "bc_refused": refused,
+                "bc_foreign_accepted": sum(bin(a & ~g).count("1") for a, g in zip(accepted, genuine)),
+                "bc_genuine_refused": sum(bin(g & ~a).count("1") for a, g in zip(accepted, genuine))}
+
+
+def _masks(log, column: str) -> list[int]:
+    """A bit-mask column as ints (zeros where the log has none)."""
+    if column not in log:
+        return [0] * len(log)
+    return [int(v) if v == v else 0 for v in log[column]]
 
 
 class LeadVehicle(Scenario):

@@ -11,6 +11,7 @@ from racf.controllers.following import FollowingConfig
 from racf.controllers.perception import PerceptionSample
 from racf.experiments.car.following.stage import LOST_AFTER_S, FollowingStage
 from racf.experiments.car.stage import CarView, StageContext
+from tests.conftest import TEST_FLEET
 
 PATH = SimpleNamespace(arclength=np.linspace(0.0, 5.0, 51), points=np.column_stack([np.linspace(0.0, 5.0, 51),
                                                                                     np.zeros(51)]))
@@ -48,7 +49,8 @@ class Asked:
         return sample.d_meas
 
 
-CONTEXT = StageContext(None, (0.095, 0.032), 0.172, (0.0, 0.0), 0.12, make_defence=Asked)
+CONTEXT = StageContext(None, (0.095, 0.032), 0.172, (0.0, 0.0), 0.12, make_defence=Asked,
+                       fleet_keys=TEST_FLEET.trust_store())
 
 
 def stage(sample, config=FollowingConfig(confirm_frames=0)):
@@ -112,7 +114,7 @@ def test_a_car_closing_fast_on_a_standing_lead_brakes_in_an_emergency():
 # -- the car ahead's broadcast -----------------------------------------------------------------------------
 from racf.experiments.car.broadcast import AGREE_M  # noqa: E402
 from racf.experiments.car.following.stage import TRUST_STEPS  # noqa: E402
-from racf.sim.radio import RADIO_SLOTS, SIGNED_BYTES, Broadcast, V2VMessage, fleet_key, sign  # noqa: E402
+from racf.sim.radio import RADIO_SLOTS, SIGNED_BYTES, Broadcast, V2VMessage, sign  # noqa: E402
 from racf.sim.world.manager import QCAR2_BOX_M  # noqa: E402
 from racf.sim.world.road_graph import Path  # noqa: E402
 
@@ -123,7 +125,7 @@ def _radio_view(k: int, rear_m: float, lead_mps: float, speed: float = 1.0) -> C
     """Step ``k``'s view with a message from the lead whose rear is ``rear_m`` ahead of the camera now."""
     now = 0.02 * k
     x = CONTEXT.camera_xy_m[0] + rear_m + QCAR2_BOX_M[0] / 2
-    raw = sign(V2VMessage(k + 1, now, Broadcast(1, x, 0.0, 0.0, lead_mps, 0.0, False)), fleet_key(1))
+    raw = sign(V2VMessage(k + 1, now, Broadcast(1, x, 0.0, 0.0, lead_mps, 0.0, False)), TEST_FLEET.signing_key(1))
     rows = np.zeros(RADIO_SLOTS * SIGNED_BYTES, np.uint8)
     rows[:SIGNED_BYTES] = np.frombuffer(raw, np.uint8)
     obs = {**OBS, "radio": rows, "radio_times": np.full(RADIO_SLOTS, now), "timestamps": np.full(5, now)}

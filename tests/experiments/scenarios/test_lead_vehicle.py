@@ -1,6 +1,7 @@
 """The lead_vehicle scenario: its plan, its refusals, its scorer and its episodes."""
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pandas as pd
@@ -158,3 +159,36 @@ def test_the_episode_waits_for_the_lead_to_rest_for_good_then_for_the_car_to_sta
     assert rest > 3.0 and not scenario.over(plan, rows(rest - 0.5, 2.0))
     # Past the lead's last rest: over once the car has stood a second, not before.
     assert scenario.over(plan, rows(rest + 2.0, 1.1)) and not scenario.over(plan, rows(rest + 2.0, 0.5))
+
+
+def test_foreign_messages_accepted_and_genuine_ones_refused_are_counted_apart():
+    """The criterion reads which radio slots the car accepted and which held the world's own messages."""
+    from types import SimpleNamespace
+
+    from racf.experiments.scenarios.lead_vehicle import RefusesForeignMessages
+
+    # Step 1: a genuine message in slot 0 accepted, a forgery in slot 1 refused. Step 2: the lead's own
+    # message in slot 0 refused (locked out) while a foreign one in slot 1 is taken. Step 3: nothing.
+    log = pd.DataFrame({"radio_injected": [1, 1, 0], "lead_bc_refused": [1, 2, 2],
+                        "lead_bc_slots": [0b01, 0b10, 0], "radio_genuine_slots": [0b01, 0b01, 0]})
+    criterion, episode = RefusesForeignMessages(), SimpleNamespace(log=log)
+    assert criterion.applies(episode)
+    assert criterion.measures(episode) == {"bc_injected": 2, "bc_refused": 2, "bc_foreign_accepted": 1,
+                                           "bc_genuine_refused": 1}
+    assert not criterion.passed(episode)
+    honest = log.assign(lead_bc_slots=[0b01, 0b01, 0])
+    assert criterion.passed(SimpleNamespace(log=honest))
+    assert not criterion.applies(SimpleNamespace(log=log.assign(radio_injected=0)))
+
+
+@pytest.mark.slow
+def test_a_stolen_key_s_phantom_is_taken_and_a_key_from_outside_the_fleet_never():
+    """Closed loop, the lead broadcasting: a forger outside the fleet has every message refused and the lead's
+    own all taken; a thief with vehicle 5's key has its phantom taken (what no receiver can refuse)."""
+    base = TrialSpec("clean", 1, 1.0, 3, target="lead_vehicle", t_atk=(3.0, 3.0),
+                     scenario_params={"profile": "cruise", "broadcast": "on"})
+    forged, _ = run_trial(replace(base, setting="clean+radio_forge"))
+    stolen, _ = run_trial(replace(base, setting="clean+radio_stolen_key"))
+    forged, stolen = forged.to_dict(), stolen.to_dict()
+    assert forged["bc_injected"] > 10 and forged["bc_foreign_accepted"] == 0 and forged["bc_genuine_refused"] == 0
+    assert stolen["bc_foreign_accepted"] > 10 and stolen["refuses_foreign_messages"] is False

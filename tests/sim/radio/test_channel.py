@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from racf.sim.radio import RADIO_SLOTS, SIGNED_BYTES, Broadcast, Radio, RadioConfig, open_signed, trust_store
+from racf.sim.radio import RADIO_SLOTS, SIGNED_BYTES, Broadcast, Radio, RadioConfig, open_signed
 
 LEAD = Broadcast(1, 2.0, 0.0, 0.0, 0.6, 0.0, False)
 
@@ -19,7 +19,7 @@ def _run(radio: Radio, seconds: float, receiver=(0.0, 0.0), dt=0.02):
         for i in range(RADIO_SLOTS):
             row = rows[i * SIGNED_BYTES:(i + 1) * SIGNED_BYTES]
             if row.any():
-                got.append((k * dt, times[i], open_signed(row.tobytes(), trust_store()).message))
+                got.append((k * dt, times[i], open_signed(row.tobytes(), radio.fleet.trust_store()).message))
     return got
 
 
