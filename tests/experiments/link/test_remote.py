@@ -371,3 +371,29 @@ def test_a_served_lie_in_range_is_outvoted_and_the_car_stops_at_the_sign():
 def test_every_served_lie_in_range_leaves_the_car_stopping(lie):
     result, _, lies = _served_lie_at_the_sign(lie)
     assert lies > 30 and result.to_dict()["service_outvoted"] > 0 and result.success
+
+
+class _Standing(_Onboard):
+    """An onboard defence whose own witnesses say a target stands."""
+
+    def stands(self) -> bool:
+        return True
+
+
+def test_during_a_fallback_the_onboard_defence_s_verdict_stands_and_late_in_the_episode_the_pause_is_retry_s():
+    """After 10 s of the car's own time a lie: the car falls back to its onboard defence, whose "a target
+    stands" is the car's; it asks again only 0.1 s (retry_s) later, not at once on every step."""
+    with FakeService("nan", honest=500) as fake:
+        car = RemoteEstimator(fake.endpoint, "raw", timeout_ms=5000.0, retry_s=0.1, onboard=_Standing())
+        car.reset()
+        for k in range(500):  # 10 s at 50 Hz, every answer honest
+            car.estimate(_sample(k % 100), 1.0, 0.02)
+        hellos = fake.hellos
+        fell = []
+        for k in range(12):  # the lie, then 0.1 s (5 steps) without asking, then a new session
+            car.estimate(_sample(k), 1.0, 0.02)
+            fell.append(car.diagnostics()["service_fallback"])
+            if k == 0:
+                assert car.stands() is True  # the onboard defence's verdict, not dropped
+        car.close()
+    assert fell[:5] == [1.0] * 5 and fake.hellos == hellos + 1  # one new session after the pause, not one a step

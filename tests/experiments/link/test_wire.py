@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
@@ -135,3 +136,23 @@ def test_a_mask_with_no_rows_is_refused():
     sample["detection"]["mask"] = np.zeros(0, np.uint8)
     with pytest.raises(WireError, match="outside 1..4096 a side"):
         decode_sample(unpack(pack(sample)))
+
+
+def test_an_answer_s_id_must_be_the_request_s_int_never_a_bool():
+    from racf.experiments.link.wire import InvalidAnswer, check_answer
+
+    answer = {"distance": 1.0, "diagnostics": {}, "stands": None}
+    assert check_answer("estimate", {**answer, "id": 1}, 1)["distance"] == 1.0
+    for wrong in (True, 2, "1", None):  # True == 1 in Python: a bool is no request's id
+        with pytest.raises(InvalidAnswer, match="not to request 1"):
+            check_answer("estimate", {**answer, "id": wrong}, 1)
+
+
+def test_a_refused_or_failed_hello_is_told_as_it_is_not_as_another_protocol():
+    from racf.experiments.link.wire import InvalidAnswer, check_answer
+
+    refused = {"refused": "this service serves raw, not 'odca'", "id": 1}
+    assert check_answer("hello", refused, 1) == refused  # a refusal names no protocol: the car hears its words
+    with pytest.raises(InvalidAnswer) as err:
+        check_answer("hello", {"error": "bad request: hello needs estimator", "id": 1}, 1)
+    assert err.value.kind == "error" and "speaks protocol" not in str(err.value)
