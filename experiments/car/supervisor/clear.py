@@ -66,7 +66,7 @@ def lane_clear(scan: np.ndarray, lane: np.ndarray, near_m: float, far_m: float,
     scan = np.asarray(scan, np.float64)
     if not (math.isfinite(near_m) and math.isfinite(far_m)) or scan.size == 0 or len(lane) == 0:
         return False
-    z, y = lane[:, 0], lane[:, 1]
+    z = lane[:, 0]
     where = (z >= near_m) & (z <= far_m + CAR_LENGTH_M)
     if not where.any() or z.max() < far_m + CAR_LENGTH_M:
         return False  # the lane in view ends before the target's farthest place: nothing to see through

@@ -59,7 +59,7 @@ class CarriedTarget:
         elif not held:  # a first sight of unknown speed: anywhere from standing to the top speed
             self.slow_mps, self.fast_mps = 0.0, e.target_max_mps
         # else: a speed the car has lost (a jump restarts its estimate) keeps the bounds carried so far
-        self.speed_measured = lead_known or (held and self.speed_measured)
+        self.speed_measured = lead_known or self.speed_measured  # (nothing held: reset, nothing measured)
         self._vouched_fast = self.fast_mps
         self.unvouched_s = 0.0
 

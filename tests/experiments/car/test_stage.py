@@ -93,3 +93,18 @@ def test_a_stage_is_handed_the_scan_only_on_the_step_it_arrives_and_what_it_is_h
     for frozen in (view, context, StageLimit(1.0), StageColumn("a", "m", "b")):
         with pytest.raises(dataclasses.FrozenInstanceError):
             frozen.name = "changed"
+
+
+def test_a_track_says_only_what_its_stage_says_and_is_frozen():
+    """A published track's unsaid fields: a static target at its face, its speed 0 and known, no broadcast
+    trusted, the publisher's first target."""
+    import dataclasses
+
+    from racf.experiments.car.stage import TargetTrack
+
+    track = TargetTrack("sign", 1.5, math.inf)
+    assert (track.moving, track.speed_mps, track.speed_known, track.stop_at_m, track.broadcast_trusted,
+            track.index) == (False, 0.0, True, 0.0, False, 0)
+    assert all(math.isnan(v) for v in (track.depth_m, track.lidar_m, track.size_m, track.map_m, track.line_m))
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        track.distance_m = 9.0

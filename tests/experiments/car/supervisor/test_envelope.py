@@ -67,3 +67,14 @@ def test_a_lead_reversing_counts_as_standing_and_a_gap_too_small_for_any_speed_s
     assert safe_speed(0.5, -1.0, ENV) == safe_speed(0.5, 0.0, ENV)
     # Gaps that leave no room: no speed is safe (never NaN).
     assert safe_speed(-0.5, 0.0, ENV) == -math.inf and safe_speed(0.01, 0.0, ENV) < 0
+
+
+def test_the_stopping_distance_by_hand_and_gaps_beyond_any_number():
+    from racf.experiments.car.supervisor.envelope import stopping_m
+
+    env = Envelope()  # rho 0.1 s, a 7.36 m/s^2, b 4 m/s^2, margin 0.05 m
+    # From 1 m/s: 1 x 0.1 + 7.36 x 0.1^2 / 2 + (1 + 0.736)^2 / (2 x 4) = 0.1 + 0.0368 + 0.376712 (no margin).
+    assert stopping_m(1.0, env) == pytest.approx(0.513512)
+    assert safe_gap(-0.5, 0.0, env) == safe_gap(0.0, 0.0, env)  # rolling back is standing
+    assert safe_speed(math.inf, 0.0, env) == math.inf
+    assert safe_speed(-math.inf, 0.0, env) == -math.inf and safe_speed(math.nan, 0.0, env) == -math.inf

@@ -4,6 +4,7 @@ carried target could be (a beam with no return proves nothing)."""
 import math
 
 import numpy as np
+import pytest
 
 from racf.experiments.car.supervisor.clear import lane_clear, lane_return
 
@@ -148,3 +149,26 @@ def test_a_return_just_beyond_the_farthest_place_does_not_show_it_clear():
     assert not lane_clear(scan, LANE, 1.0, 1.0, AT_CAMERA)
     scan[np.r_[0:13, N - 12:N]] = 1.48
     assert lane_clear(scan, LANE, 1.0, 1.0, AT_CAMERA)
+
+
+def test_a_lane_of_one_point_is_read_and_can_be_seen_clear():
+    one = np.array([[1.0, 0.0]])
+    assert lane_return(_beams_at(_scan(9.0), AT_CAMERA, 1.0, 0.0), one, AT_CAMERA) == 1.0
+    # Its one point at exactly the far end 0.575 m plus a car's 0.425 m: seen clear.
+    assert lane_clear(_scan(9.0), one, 0.5, 0.575, AT_CAMERA)
+
+
+def test_what_lies_within_5_cm_of_the_camera_or_reads_0_is_no_car_on_the_lane():
+    at_5cm = np.array([[0.05, 0.0], [2.0, 0.0]])
+    assert math.isnan(lane_return(_beams_at(_scan(9.0), AT_CAMERA, 0.05, 0.0), at_5cm, AT_CAMERA))
+    # A beam that reads 0 (no return) at a lane point 6 cm ahead is no return from it.
+    near = np.array([[0.06, 0.0]])
+    assert math.isnan(lane_return(np.zeros(N), near, AT_CAMERA))
+
+
+def test_a_car_to_the_left_fills_the_beams_to_the_left():
+    # A return 1.0 m away at 3 degrees left of ahead: within the width of a car on the lane point 1.0 m
+    # ahead (5.48 degrees each side), and of nothing 20 degrees off.
+    assert not lane_clear(_one_beam(round(3.0 / STEP_DEG), 1.0), LANE, 1.0, 1.0, AT_CAMERA)
+    assert lane_clear(_one_beam(round(20.0 / STEP_DEG), 1.0), LANE, 1.0, 1.0, AT_CAMERA)
+    assert 0.95 <= lane_return(_one_beam(round(3.0 / STEP_DEG), 1.0), LANE, AT_CAMERA) <= 1.0  # the first point it reaches

@@ -47,3 +47,37 @@ def test_only_the_window_counts_and_a_target_never_reverses():
     assert rate.estimate() == (0.0, True)
     times = [t for t, _ in rate._points]
     assert 0.58 - 1e-9 <= times[-1] - times[0] <= 0.6 + 1e-9  # the last 0.6 s only
+
+
+def test_rolling_back_is_no_travel():
+    rate = RangeRate()
+    for k in range(20):  # the encoder reads -0.5 m/s (rolling back); the range grows 0.3 m/s
+        rate.step(-0.5, DT, 1.0 + 0.3 * (k + 1) * DT)
+    assert rate.estimate()[0] == pytest.approx(0.3)
+
+
+def test_four_readings_spanning_the_span_measure_and_three_never():
+    four = RangeRate(window_s=1.0, span_s=0.3)
+    for k in range(4):  # at 0.1 s apart: 0.1 to 0.4 s
+        four.step(0.0, 0.1, 1.0 + 0.2 * k * 0.1)
+    assert four.estimate() == (pytest.approx(0.2), True)
+    three = RangeRate(window_s=1.0, span_s=0.3)
+    for k in range(3):  # 0.16 s apart: they span 0.32 s, but three are too few
+        three.step(0.0, 0.16, 1.0)
+    assert not three.estimate()[1]
+    five = RangeRate(window_s=1.0, span_s=0.35)
+    for k in range(5):  # 0.1 to 0.5 s: the first to the last span 0.4 s
+        five.step(0.0, 0.1, 1.0)
+    assert five.estimate() == (0.0, True)
+
+
+@pytest.mark.parametrize("scatter, measured", [(0.015, True), (0.02, False)])
+def test_the_slope_s_standard_error_by_hand(scatter, measured):
+    # Four readings 0.1 s apart, off a line by +a, -a, -a, +a (no part along the line or its mean): the
+    # residuals' sum of squares 4 a^2, the times' spread 0.05 s^2, so the slope's standard error is
+    # sqrt(4 a^2 / (4 - 2) / 0.05) = 6.32 a: 0.095 m/s for a = 1.5 cm (known to 0.1), 0.126 for 2 cm.
+    rate = RangeRate(window_s=1.0, span_s=0.3, max_std_mps=0.1)
+    for k, e in enumerate((1, -1, -1, 1)):
+        rate.step(0.0, 0.1, 1.0 + 0.5 * k * 0.1 + e * scatter)
+    mps, known = rate.estimate()
+    assert known is measured and mps == pytest.approx(0.5)

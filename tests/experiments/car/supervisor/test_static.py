@@ -205,3 +205,34 @@ def test_at_exactly_the_speed_that_stops_it_at_the_line_the_car_is_not_told_to_s
     assert said.values["sup_sign_vouched"] and not said.values["sup_sign_stop"] and said.speed_cap_mps == math.inf
     said = step(2.001)
     assert said.values["sup_sign_stop"] and said.speed_cap_mps == 0.0
+
+
+def test_a_carried_sign_is_vouched_again_by_one_range_witness_where_it_stands_and_the_near_end_never_jumps_on():
+    stage = _stage()
+    for _ in range(3):
+        _step(stage, 0.5, 2.0, depth=2.0, map_m=2.05)  # vouched at 2.0: near 1.9
+    # One step on at 0.5 m/s (the bound 0.51 m/s): the near end 1.9 - 0.0102. The depth alone reads 1.80 m,
+    # 0.09 m short of it (within the 0.15 m agreement): the same sign, vouched; the near end the nearer of
+    # the carried one and the reading's (1.80 - 0.1 = 1.70).
+    said = _step(stage, 0.5, 2.0, depth=1.80)
+    assert said.values["sup_sign_vouched"] and stage.near_m == pytest.approx(1.9 - 0.51 * DT)
+    # A depth alone 0.5 m off the carried place is no witness of it (and one witness confirms nothing new).
+    assert not _step(stage, 0.5, 2.0, depth=1.2).values["sup_sign_vouched"]
+
+
+def test_a_zero_reading_vouches_nothing_even_where_the_carried_sign_is_within_a_hand_of_the_camera():
+    stage = _stage()
+    for _ in range(3):
+        _step(stage, 0.5, 0.2, depth=0.2, lidar=0.2, map_m=0.2)  # near 0.1 m
+    assert not _step(stage, 0.5, 0.2, depth=0.0).values["sup_sign_vouched"]
+
+
+def test_the_step_the_car_stood_outvotes_nothing():
+    stage = _stage()
+    for _ in range(3):
+        _step(stage, 0.2, 0.8, depth=0.8, lidar=0.8)
+    for _ in range(5):  # at rest before the line (the bound falls at the grip); the defence says 4 m
+        said = _step(stage, 0.0, 4.0)
+        if stage.done:
+            break
+    assert stage.done and not said.values["sup_sign_outvoted"] and not said.values["sup_sign_stop"]

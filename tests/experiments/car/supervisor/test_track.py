@@ -111,3 +111,16 @@ def test_the_bounds_are_inclusive():
     carried.vouch(1.0, 0.0, lead_known=True)
     assert carried.holds(0.9 - 0.05, 0.05) and carried.holds(1.1 + 0.05, 0.05)
     assert not carried.holds(0.84, 0.05) and not carried.holds(1.16, 0.05)
+
+
+def test_a_speed_is_measured_only_once_told_and_kept_only_while_the_same_target_is_held():
+    carried = CarriedTarget(Envelope())
+    assert not carried.speed_measured  # nothing carried: nothing measured
+    carried.vouch(1.0, 0.0, lead_known=False)
+    assert not carried.speed_measured  # first seen, speed unknown
+    carried.vouch(1.0, 0.5, lead_known=True)
+    carried.vouch(1.0, 0.0, lead_known=False)
+    assert carried.speed_measured  # held on: the measured speed is kept
+    carried.reset()
+    carried.vouch(1.0, 0.0, lead_known=False)
+    assert not carried.speed_measured  # a new target: nothing measured of it

@@ -230,3 +230,15 @@ def test_a_chain_that_came_from_nowhere_stays_implausible_as_it_goes_away():
     for _ in range(30):
         chain.step((NAN, NAN, NAN), 0.0, DT, nothing)
     assert chain.step((2.0, NAN, NAN), 0.0, DT, nothing).vouched
+
+
+def test_a_verdict_is_frozen_and_a_new_chain_starts_from_nothing():
+    import dataclasses
+
+    from racf.experiments.car.supervisor.vouch import Verdict
+
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        Verdict(1.0, True).vouched = False
+    chain = ReadingChain()
+    assert (chain.since_s, chain.confirmed, chain.born, chain.state) == (0.0, 0, False, "none")
+    assert math.isnan(chain.last_m)
