@@ -152,7 +152,7 @@ class VehicleSupervisor(CarStage):
         self.rate.step(speed, dt, verdict.reading_m if verdict.vouched else math.nan)
         vouched, by_broadcast, outvoted = self._vouch(verdict, track)
         if math.isfinite(vouched):
-            self.carried.vouch(vouched, 0.0 if not math.isfinite(lead_mps) else lead_mps, known)
+            self.carried.vouch(vouched, lead_mps, known)  # (an unknown speed is not read)
         elif self.carried.held and lane is not None and lane_clear(view.scan, lane, self.carried.near_m,
                                                                     self.carried.far_m, self._lidar_in_camera):
             self.carried.reset()

@@ -265,3 +265,74 @@ def test_the_lead_s_speed_is_measured_from_its_range_rate_and_the_car_s_travel()
     _say(stage, advanced, 0.5, 2.4, 2.4, 2.4, math.inf)
     said = _say(stage, advanced, 0.5, 2.4, 2.4, 2.4, math.inf)
     assert math.isnan(said.values["sup_lead_mps"])
+
+
+def test_who_set_the_vouch_and_who_was_outvoted_is_said_each_step():
+    """sup_broadcast: the broadcast set the vouched distance; sup_bc_outvoted: a broadcast was heard and not
+    taken. Never both; neither without a broadcast."""
+    stage, advanced = _stage()
+    said = _say(stage, advanced, 0.5, 1.5, 1.45, 1.45, 0.7)  # no broadcast
+    assert not said.values["sup_broadcast"] and not said.values["sup_bc_outvoted"] and not said.values["sup_eased"]
+    said = _told(stage, advanced, 1.4, 1.4, 1.45)  # they agree: the sensors' reading, nothing outvoted
+    assert not said.values["sup_broadcast"] and not said.values["sup_bc_outvoted"]
+    stage, advanced = _stage()
+    said = _told(stage, advanced, 1.4, 1.4, 2.4)  # the broadcast farther: outvoted by the sensors
+    assert not said.values["sup_broadcast"] and said.values["sup_bc_outvoted"]
+    stage, advanced = _stage()
+    said = _told(stage, advanced, 2.4, 2.4, 1.4)  # the sensors farther: the broadcast's, nothing outvoted
+    assert said.values["sup_broadcast"] and not said.values["sup_bc_outvoted"]
+    fresh, advanced = _stage()
+    said = _told(fresh, advanced, NAN, NAN, 1.2, trusted=True)  # the broadcast alone, nothing held
+    assert said.values["sup_broadcast"] and not said.values["sup_bc_outvoted"]
+    said = _told(fresh, advanced, NAN, NAN, fresh.carried.far_m + 1.0, trusted=True)  # past where it can be
+    assert not said.values["sup_broadcast"] and said.values["sup_bc_outvoted"]
+    nothing, advanced = _stage()
+    said = _say(nothing, advanced, 1.0, NAN, NAN, NAN, math.inf)
+    assert not said.values["sup_safe"] and not said.values["sup_defence"]  # nothing held: no safe controller
+
+
+def test_a_first_sight_of_unknown_speed_may_be_anything_up_to_the_top_speed():
+    stage, advanced = _stage()
+    _say(stage, advanced, 0.5, 1.5, 1.5, 1.5, 0.7)
+    assert stage.carried.slow_mps == 0.0 and stage.carried.fast_mps == stage.envelope.target_max_mps == 3.0
+
+
+def test_easing_off_ends_at_rest_never_below():
+    stage, _ = _stage()
+    stage._ease = 0.01  # 0.01 m/s left of an ease-off: one more step (0.03 m/s) ends it at rest, not below
+    assert stage._eased(0.5, DT) == 0.0
+
+
+def test_at_rest_close_behind_the_worst_case_the_cap_is_zero_never_negative():
+    # Vouched at 0.3632 m: the near end 0.2632 m, the clear gap 0.1632 m. With b = 4 m/s^2 the car at rest
+    # may stay (the stop rule allows 0.03 m/s), but the comfortable stop (1.5 m/s^2) allows no speed at all
+    # (its formula gives 1.5 (-0.1 + sqrt(0.01 + 2 x 0.15 / 1.5)) - 0.736 = -0.199 m/s): the cap is 0.
+    stage, advanced = _stage()
+    said = _say(stage, advanced, 0.0, 0.3632, 0.3632, NAN, math.inf)
+    assert not said.values["sup_stop"] and said.speed_cap_mps == 0.0
+    assert safe_speed(0.1632, 0.0, stage.envelope, 1.5) == pytest.approx(-0.1986, abs=0.0005)
+
+
+def test_the_headway_policy_divides_the_gap_by_its_time_headway():
+    from racf.controllers.following import FollowingConfig
+
+    context = StageContext(None, (0.2, 0.0), 0.17, (0.1, 0.0), BUMPER, lambda: None, target_decel_mps2=6.0)
+    stage = VehicleSupervisor(context, envelope=Envelope(witness_error_m=0.05, attack_error_m=0.05),
+                              policy=FollowingConfig(time_headway_s=2.0))
+    stage.reset()
+    advanced = Advanced()
+    _say(stage, advanced, 0.3, 1.0, 1.0, 1.0, 1.0)
+    said = _say(stage, advanced, 0.3, 1.0, 1.0, 1.6, 2.0)  # (0.9 - 0.25) / 2 s = 0.325 m/s
+    assert said.speed_cap_mps == pytest.approx(0.325)
+
+
+def test_between_scans_the_lane_return_moves_by_the_closing_speed_of_a_lead_of_known_speed():
+    stage, _ = _stage()
+    view = _scan_view(0.5, _car_scan(1.2))
+    known = TargetTrack("vehicle", NAN, math.inf, moving=True, speed_mps=0.3, speed_known=True)
+    said = stage.step(CarView(view.obs, view.pose, view.path, 0.0, 0.5, 0.0, 0.0, DT, True, True,
+                              tracks={"vehicle": known}))
+    first = said.values["sup_on_lane"]
+    said = stage.step(CarView(view.obs, view.pose, view.path, 0.0, 0.5, 0.0, 0.0, DT, True, False,
+                              tracks={"vehicle": known}))
+    assert said.values["sup_on_lane"] == pytest.approx(first - (0.5 - 0.3) * DT)  # closing at 0.2 m/s

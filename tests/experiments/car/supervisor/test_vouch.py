@@ -242,3 +242,18 @@ def test_a_verdict_is_frozen_and_a_new_chain_starts_from_nothing():
     chain = ReadingChain()
     assert (chain.since_s, chain.confirmed, chain.born, chain.state) == (0.0, 0, False, "none")
     assert math.isnan(chain.last_m)
+
+
+def test_the_chain_s_prediction_follows_a_fast_closing_car_and_a_reading_handed_on_to_another_witness():
+    # At 0.1 s a step and 3 m/s of closing the reading falls 0.3 m a step, past the 0.25 m gate: the same
+    # chain, because the prediction moves with the closing speed.
+    chain, nothing = ReadingChain(), CarriedTarget(ENV)
+    for k, d in enumerate((2.0, 1.7, 1.4)):
+        chain.step((d, NAN, NAN), 3.0, 0.1, nothing)
+        assert chain.born == (k == 0)
+    # The depth reads 1.0, the lane return 1.4 (in a bend they differ); the depth falls silent and the lane
+    # return, read where it was last step (moved on 1 m/s x 0.02 s), is the nearest: handed on, not a jump.
+    chain = ReadingChain()
+    chain.step((1.0, NAN, 1.4), 1.0, DT, nothing)
+    chain.step((NAN, NAN, 1.38), 1.0, DT, nothing)
+    assert not chain.born
