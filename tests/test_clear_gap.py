@@ -34,3 +34,15 @@ def test_a_lead_turned_a_quarter_has_its_rear_half_a_length_behind_its_origin_al
     assert math.isclose(clear_gap_of_poses(0.0, 0.0, math.pi / 2, 0.0, 1.0, math.pi / 2, BUMPER_X), 0.575)
     # The lead heading -y (towards the ego): its rear is the far face, at (0, 1.2125).
     assert math.isclose(clear_gap_of_poses(0.0, 0.0, math.pi / 2, 0.0, 1.0, -math.pi / 2, BUMPER_X), 1.0)
+
+
+def test_the_box_is_the_qcar2_s_stated_size():
+    """0.425 x 0.192 x 0.20 m: the facts page of the car (shared/reference/qcar2.md), length x width x height."""
+    import re
+    from pathlib import Path
+
+    facts = Path(__file__).resolve().parents[2] / "shared" / "reference" / "qcar2.md"
+    if facts.exists():
+        row = re.search(r"length x width x height \| ([\d.]+) x ([\d.]+) x ([\d.]+) m", facts.read_text())
+        assert tuple(float(v) for v in row.groups()) == QCAR2_BOX_M
+    assert QCAR2_BOX_M == (0.425, 0.192, 0.20)
