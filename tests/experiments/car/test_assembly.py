@@ -46,3 +46,12 @@ def test_a_supervisor_that_stands_in_replaces_its_publisher_s_cap_and_no_other()
     assert lowest_cap(0.5, said, stages) == 0.5
     # Without the supervisor, the lowest of all, as before.
     assert lowest_cap(2.0, said[:2], stages[:2]) == 0.0 and lowest_cap(math.inf, [], ()) == math.inf
+
+
+def test_the_stages_are_unsupervised_unless_asked():
+    from racf.experiments.car.assembly import car_stages
+    from racf.experiments.car.stage import StageContext
+
+    context = StageContext(None, (0.2, 0.0), 0.17, (0.1, 0.0), 0.1, lambda: None, target_decel_mps2=6.0)
+    assert car_stages((), context, car_kinds=("sign",)) == ()
+    assert [s.supervises for s in car_stages((), context, True, car_kinds=("sign",))] == ["sign"]

@@ -81,3 +81,8 @@ def test_the_slope_s_standard_error_by_hand(scatter, measured):
         rate.step(0.0, 0.1, 1.0 + 0.5 * k * 0.1 + e * scatter)
     mps, known = rate.estimate()
     assert known is measured and mps == pytest.approx(0.5)
+
+
+def test_the_default_range_rate_is_the_one_documented():
+    rate = RangeRate()
+    assert (rate.window_s, rate.span_s, rate.max_std_mps) == (0.6, 0.3, 0.1)

@@ -236,3 +236,27 @@ def test_the_step_the_car_stood_outvotes_nothing():
         if stage.done:
             break
     assert stage.done and not said.values["sup_sign_outvoted"] and not said.values["sup_sign_stop"]
+
+
+def _line_step(stage, speed, line_m, **witnesses):
+    track = TargetTrack("sign", 1.0, math.inf, stop_at_m=0.5, line_m=line_m, **witnesses)
+    return stage.step(CarView({}, np.zeros(3), None, 0.0, speed, 0.0, 0.0, DT, True, False, tracks={"sign": track}))
+
+
+def test_the_car_stood_with_its_bumper_on_the_line_and_its_near_end_is_no_longer_shown():
+    stage = _stage()
+    for _ in range(3):
+        _line_step(stage, 0.2, 0.3, depth_m=1.0, lidar_m=1.0, map_m=1.0)
+    for _ in range(10):  # at rest, the route's 0 m to the line: stood (within the 0.05 m margin)
+        said = _line_step(stage, 0.0, 0.0)
+        if stage.done:
+            break
+    assert stage.done and math.isnan(said.values["sup_sign_near"]) and not said.values["sup_sign_carried"]
+
+
+def test_a_single_range_witness_just_past_the_carried_far_end_is_the_same_sign():
+    stage = _stage()
+    for _ in range(3):
+        _step(stage, 0.0, 2.0, depth=2.0, map_m=2.05)  # near 1.9, far 2.1 (at rest: they stay)
+    # The depth alone at 2.2 m: 0.1 m past the far end, within its 0.33 m agreement: vouched.
+    assert _step(stage, 0.0, 2.0, depth=2.2).values["sup_sign_vouched"]

@@ -336,3 +336,22 @@ def test_between_scans_the_lane_return_moves_by_the_closing_speed_of_a_lead_of_k
     said = stage.step(CarView(view.obs, view.pose, view.path, 0.0, 0.5, 0.0, 0.0, DT, True, False,
                               tracks={"vehicle": known}))
     assert said.values["sup_on_lane"] == pytest.approx(first - (0.5 - 0.3) * DT)  # closing at 0.2 m/s
+
+
+def test_the_lidar_is_placed_from_the_camera_across_too():
+    # The camera 0.05 m right of the body's axis, the LiDAR 0.25 m left of it: 0.3 m left of the camera.
+    context = StageContext(None, (0.2, -0.05), 0.17, (0.1, 0.25), BUMPER, lambda: None, target_decel_mps2=6.0)
+    stage = VehicleSupervisor(context)
+    assert stage._lidar_in_camera == pytest.approx((-0.1, 0.3))
+
+
+def test_the_flags_of_a_vouched_defence_and_of_a_stop():
+    stage, advanced = _stage()
+    said = _say(stage, advanced, 0.5, 1.5, 1.45, 1.45, 0.7)
+    assert said.values["sup_defence"] and not said.values["sup_safe"]
+    fast = _say(stage, advanced, 3.0, 0.5, 0.5, NAN, math.inf)  # far too fast for 0.4 m: told to stop
+    assert fast.values["sup_stop"] and fast.speed_cap_mps == 0.0 and not fast.values["sup_eased"]
+    cautious, advanced = _stage()
+    _told(cautious, advanced, 1.2, 1.2, 1.2)
+    said = _told(cautious, advanced, NAN, NAN, 0.8)  # an untrusted broadcast nearer than the worst case: taken
+    assert said.values["sup_broadcast"] and not said.values["sup_bc_outvoted"]

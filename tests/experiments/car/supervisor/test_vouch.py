@@ -257,3 +257,9 @@ def test_the_chain_s_prediction_follows_a_fast_closing_car_and_a_reading_handed_
     chain.step((1.0, NAN, 1.4), 1.0, DT, nothing)
     chain.step((NAN, NAN, 1.38), 1.0, DT, nothing)
     assert not chain.born
+
+
+def test_a_verdict_is_unsized_unless_said():
+    from racf.experiments.car.supervisor.vouch import Verdict
+
+    assert Verdict(1.0, True).sized is False
