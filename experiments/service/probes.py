@@ -151,15 +151,15 @@ def spellings(endpoint: str, defence: str, calls: list, calibration, n: int = 20
                                                              timeout_ms)), daemon=True)
     car.start()
     time.sleep(1.0)
-    sock = _req(endpoint)
     start = time.monotonic()
-    try:
-        for way in ways[:n]:
+    for way in ways[:n]:  # each hello on a socket of its own: a service that loads a file may answer late
+        sock = _req(endpoint)
+        try:
             answer = _ask(sock, {"op": "hello", "id": 1, "protocol": PROTOCOL, "estimator": defence,
-                                 "options": {"checkpoint": way}})
-            answers.append("no answer" if answer is None else "refused" if "refused" in answer else "opened")
-    finally:
-        sock.close(0)
+                                 "options": {"checkpoint": way}}, wait_ms=60_000.0)
+        finally:
+            sock.close(0)
+        answers.append("no answer" if answer is None else "refused" if "refused" in answer else "opened")
     hellos_s = time.monotonic() - start
     car.join()
     return {"spellings": n, "hellos_s": hellos_s, "answers": {a: answers.count(a) for a in set(answers)},
