@@ -172,3 +172,11 @@ def test_a_car_to_the_left_fills_the_beams_to_the_left():
     assert not lane_clear(_one_beam(round(3.0 / STEP_DEG), 1.0), LANE, 1.0, 1.0, AT_CAMERA)
     assert lane_clear(_one_beam(round(20.0 / STEP_DEG), 1.0), LANE, 1.0, 1.0, AT_CAMERA)
     assert 0.95 <= lane_return(_one_beam(round(3.0 / STEP_DEG), 1.0), LANE, AT_CAMERA) <= 1.0  # the first point it reaches
+
+
+def test_a_car_s_sector_is_rounded_out_to_whole_beams_alike_on_both_sides():
+    # At 1.0 m a car spans 5.48 degrees each side; the beams at +-5.5 degrees (the 11th each way) are the
+    # first whole beams past it, and a return on either one keeps the lane from being seen clear.
+    for beam in (11, -11):
+        assert not lane_clear(_one_beam(beam, 1.0), LANE, 1.0, 1.0, AT_CAMERA), beam
+    assert lane_clear(_one_beam(12, 1.0), LANE, 1.0, 1.0, AT_CAMERA)

@@ -86,3 +86,12 @@ def test_the_slope_s_standard_error_by_hand(scatter, measured):
 def test_the_default_range_rate_is_the_one_documented():
     rate = RangeRate()
     assert (rate.window_s, rate.span_s, rate.max_std_mps) == (0.6, 0.3, 0.1)
+
+
+def test_late_readings_that_span_less_than_the_span_measure_nothing():
+    rate = RangeRate(window_s=1.0, span_s=0.3)
+    for _ in range(20):  # 1 s of no reading
+        rate.step(0.0, 0.05, math.nan)
+    for _ in range(4):  # then four readings over 0.15 s
+        rate.step(0.0, 0.05, 1.0)
+    assert not rate.estimate()[1]
