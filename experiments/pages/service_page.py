@@ -8,7 +8,9 @@ import math
 
 from racf.experiments.pages.results_format import meta_lines, missing
 
-__all__ = ["bags_and_service_markdown", "table_differences"]
+__all__ = ["bags_and_service_markdown", "table_differences", "probes_markdown", "PROBES_COMMAND"]
+
+PROBES_COMMAND = "racf bench-service-probes --json (and --service-python PY for the code before)"
 
 
 def _flat(value, prefix: str = "") -> dict:
@@ -121,6 +123,7 @@ def link_markdown(d) -> list[str]:
                   "process on 2 cores beside the server).", ""]
     else:
         lines += missing("service-stress", "racf bench service-stress --json")
+    lines += probes_markdown(d)
     if "bench-service-curve" in d and "bench-service" in d:
         plain, curve = d["bench-service"]["round_trip"], d["bench-service-curve"]["round_trip"]
         lines += ["CurveZMQ's cost on the round trip (the same samples, a fresh service each; authentication once per "
@@ -165,3 +168,39 @@ def link_markdown(d) -> list[str]:
     lines += ["The `racf-link` battery (the paper's offboard loop, its link delayed, lost and spoofed, on a plain and "
               "on a CurveZMQ link) is on [the leaderboard](leaderboard.md).", ""]
     return lines
+
+
+def probes_markdown(d) -> list[str]:
+    """An attacker's probes of the service (issue 79), on the code before the fix and after it."""
+    if "service-probes" not in d:
+        return missing("service-probes", PROBES_COMMAND)
+    data = d["service-probes"]
+    lines = ["What the network could cost the service, probed as an attacker would (every target on loopback), on "
+             f"the code before issue 79 ({data['meta'].get('before', '?')}) and after it:", ""]
+    lines += meta_lines(data["meta"]) + ["| probe | before | after |", "|---|---|---|"]
+    b, a = data["before"], data["after"]
+
+    def half(h):
+        return (f"{h['server_mb_before']:.0f} -> {h['server_mb_open']:.0f} MB open -> {h['server_mb_after']:.0f} MB "
+                f"{h['after_s']:.0f} s later; {h['closed_by_server']} of {h['connections']} closed by the service")
+
+    def spelt(s):
+        car = s["served_car"]
+        return (f"{s['spellings']} hellos in {s['hellos_s']:.2f} s ({', '.join(f'{n} {k}' for k, n in sorted(s['answers'].items()))}); "
+                f"the served car lost {car['lost']} of {car['steps']} steps")
+
+    def ranged(r):
+        return (f"{r['opened']} of {r['asked']} sessions opened; a car from another range served: "
+                f"{'yes' if r['other_range_served'] else 'no'}")
+
+    def kept(k):
+        return (f"{k['alive_resetting']} of {k['sessions']} resetting and {k['alive_pinging']} of {k['sessions']} pinging "
+                f"hold a session {k['after_s']:.0f} s on (idle {k['idle_s']:g} s)")
+
+    for title, key, words in (("300 connections half-sending a 1 MiB frame", "half_sent", half),
+                              ("a car served at 50 Hz while another names the shipped head 20 ways", "spellings", spelt),
+                              ("64 loopback addresses, 16 hellos each", "range", ranged),
+                              ("100 sessions that only reset, 100 that only ping", "keep_alive", kept)):
+        lines.append(f"| {title} | {words(b[key])} | {words(a[key])} |")
+    return lines + ["", "The served car's lost steps after the fix are the machine's load (two sweeps and two mutation "
+                        "runs shared its 2 cores): its hellos were refused in milliseconds.", ""]

@@ -152,3 +152,24 @@ def test_a_superseded_result_says_so_on_its_provenance_line():
     assert "Superseded" not in meta_lines(meta)[0]
     line = meta_lines({**meta, "superseded": "the code changed"})[0]
     assert line.endswith("**Superseded: the code changed.**")
+
+
+def test_the_service_probes_are_a_before_and_after_table():
+    from racf.experiments.pages.service_page import probes_markdown
+
+    assert "Not stored yet (`service-probes`)" in "\n".join(probes_markdown({}))
+    half = {"connections": 300, "server_mb_before": 129.0, "server_mb_open": 441.2, "server_mb_after": 441.2,
+            "after_s": 11.0, "closed_by_server": 0}
+    spelt = {"spellings": 20, "hellos_s": 148.3, "answers": {"opened": 19, "refused": 1},
+             "served_car": {"lost": 347, "steps": 400}}
+    ranged = {"opened": 1024, "asked": 1024, "other_range_served": False}
+    kept = {"alive_resetting": 16, "alive_pinging": 0, "sessions": 100, "after_s": 6.0, "idle_s": 2.0}
+    run = {"half_sent": half, "spellings": spelt, "range": ranged, "keep_alive": kept}
+    meta = {"commit": "abc", "before": "ff56873", "command": "racf bench-service-probes --json", "measured": "2026-11-29",
+            "racf": "0.1.0", "machine": "2 CPU cores"}
+    page = "\n".join(probes_markdown({"service-probes": {"meta": meta,
+                                                         "before": run, "after": run}}))
+    assert "| 300 connections half-sending a 1 MiB frame | 129 -> 441 MB open -> 441 MB 11 s later; 0 of 300 closed" in page
+    assert "20 hellos in 148.30 s (19 opened, 1 refused); the served car lost 347 of 400 steps" in page
+    assert "1024 of 1024 sessions opened; a car from another range served: no" in page
+    assert "16 of 100 resetting and 0 of 100 pinging hold a session 6 s on (idle 2 s)" in page
