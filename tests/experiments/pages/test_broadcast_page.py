@@ -90,3 +90,16 @@ def test_the_fallback_table_sets_the_onboard_card_beside_the_raw_depth_one(tmp_p
     page = broadcast_markdown(tmp_path)
     assert "| offboard, the patch, a man in the middle answering 5 m, CurveZMQ link | 30 | 0.50" in page
     assert "Measured 0.97 [0.87, 1.00] (N 30): met." in page
+
+
+def test_the_radio_probes_are_a_table_of_what_was_taken_and_refused(tmp_path):
+    import json as _json
+
+    from racf.experiments.pages.broadcast_page import broadcast_markdown
+
+    assert "Not stored yet (`radio-probes`)" in broadcast_markdown(tmp_path)
+    meta = {"commit": "abc", "command": "python -m tests.sim.radio.radio_probes", "racf": "0.1.0",
+            "machine": "2 CPU cores", "measured": "2026-11-29"}
+    row = {"episodes": [{}] * 5, "injected": 650, "foreign_accepted": 0, "genuine_refused": 2}
+    (tmp_path / "radio-probes.json").write_text(_json.dumps({"meta": meta, "probes": {"derived key": row}}))
+    assert "| derived key | 5 | 650 | 0 | 2 |" in broadcast_markdown(tmp_path)
