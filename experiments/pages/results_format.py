@@ -35,7 +35,11 @@ def meta_lines(meta: dict) -> list[str]:
               if str(meta["commit"]).endswith("+changes") else "")
     if meta.get("superseded"):  # the code it measured has changed since, and it was not measured again
         caveat += f" **Superseded: {meta['superseded']}.**"
-    return [f"*Measured by* `{meta['command']}` *on commit* `{meta['commit']}` (racf {meta['racf']}), "
+    # A result measured in another checkout of an earlier commit names that commit (its episode code is
+    # what ran), and the commit that stored it.
+    commit = (f"`{meta['measured_on']}` (stored at `{meta['commit']}`)" if meta.get("measured_on")
+              else f"`{meta['commit']}`")
+    return [f"*Measured by* `{meta['command']}` *on commit* {commit} (racf {meta['racf']}), "
             f"{meta['machine']}, {meta['measured']}" + (f"; {extra}." if extra else ".") + caveat, ""]
 
 

@@ -173,3 +173,12 @@ def test_the_service_probes_are_a_before_and_after_table():
     assert "20 hellos in 148.30 s (19 opened, 1 refused); the served car lost 347 of 400 steps" in page
     assert "1024 of 1024 sessions opened; a car from another range served: no" in page
     assert "16 of 100 resetting and 0 of 100 pinging hold a session 6 s on (idle 2 s)" in page
+
+
+def test_a_result_measured_on_an_earlier_commit_names_it_and_where_it_was_stored():
+    from racf.experiments.pages.results_format import meta_lines
+
+    meta = {"command": "racf sweep x.toml", "commit": "bbbbbbb", "racf": "0.1.0", "machine": "2 CPU cores",
+            "measured": "2026-11-29"}
+    assert "*on commit* `bbbbbbb` (racf" in meta_lines(meta)[0]
+    assert "*on commit* `aaaaaaa` (stored at `bbbbbbb`) (racf" in meta_lines({**meta, "measured_on": "aaaaaaa"})[0]
