@@ -14,6 +14,7 @@ from pathlib import Path
 
 from racf.experiments.pages.following_page import ATTACK_LABELS
 from racf.experiments.pages.results_format import meta_lines, missing, page_head, rate
+from racf.experiments.pages.sign_rows import sign_rows_markdown
 
 __all__ = ["supervisor_markdown", "SUPERVISOR_COMMAND", "GUARANTEE_RESULTS", "INSIDE", "checks"]
 
@@ -206,4 +207,4 @@ def supervisor_markdown(root: Path) -> str:
         data = json.loads(path.read_text())
         lines += meta_lines(data["meta"]) + _table(data["rows"])
         lines += ["What issues 69 and 78 asked of the supervisor over ODCA, measured:", "", *checks(data["rows"]), ""]
-    return "\n".join(lines + _falsification(root) + _served_lies(root) + [""])
+    return "\n".join(lines + _falsification(root) + _served_lies(root) + sign_rows_markdown(root) + [""])
