@@ -171,6 +171,7 @@ def test_sessions_end_with_their_connections_long_before_they_idle():
             thread.join(5)
 
 
+@pytest.mark.slow  # it waits out the handshake's and the heartbeat's timeouts (about 5 s)
 def test_a_frame_never_finished_is_dropped_with_its_connection(served):
     """A peer that sends a 1 MiB frame less one byte held the frame's memory as long as it stayed; it is
     dropped once a ping (every 1 s) gets nothing whole back within 3 s, and one that never finishes
