@@ -59,7 +59,9 @@ TESTS = {
     "experiments/scenarios/lead_vehicle/following.py": ["tests/experiments/scenarios/test_lead_vehicle.py"],
     # The car ahead's broadcast, its attacks and the onboard fallback (issue 70).
     "sim/radio/message.py": ["tests/sim/radio/test_message.py", "tests/sim/radio/test_channel.py"],
-    "sim/radio/keys.py": ["tests/sim/radio/test_message.py"],
+    "sim/radio/keys.py": ["tests/sim/radio/test_message.py", "tests/sim/radio/test_keys.py"],
+    # Key folders checked (issue 79), the link's and the fleet's.
+    "core/keyfiles.py": ["tests/experiments/link/test_key_folders.py", "tests/sim/radio/test_keys.py"],
     "sim/radio/channel.py": ["tests/sim/radio/test_channel.py"],
     "experiments/car/broadcast.py": [f"{CAR}/test_broadcast.py", "tests/sim/attacks/test_radio_attacks.py",
                                      f"{CAR}/test_following_stage.py"],
