@@ -138,12 +138,12 @@ def test_the_witness_is_found_in_any_frame_as_far_as_the_lane_ahead_reaches_and_
 
 
 def test_a_number_far_past_the_last_is_out_of_window_and_cannot_lock_the_sender_out():
-    # 0.1 s after the last message a sender can have numbered ceil(0.1 x 50) + 8 = 13 more, not 2^32 - 6.
+    # 0.25 s after the last message a sender can have numbered ceil(0.25 x 50) + 8 = 21 more, not 2^32 - 6.
     car = BroadcastReceiver(TEST_FLEET.trust_store())
     car.hear(_obs(_lead(5, 1.0)), now_s=1.0)
-    assert car.hear(_obs(_lead(2 ** 32 - 1, 1.1)), now_s=1.1) == [] and car.refused["out of window"] == 1
-    assert len(car.hear(_obs(_lead(18, 1.1)), now_s=1.1)) == 1  # 13 past 5: the genuine sender goes on
-    assert car.hear(_obs(_lead(32, 1.2)), now_s=1.2) == [] and car.refused["out of window"] == 2  # 14 past 18
+    assert car.hear(_obs(_lead(2 ** 32 - 1, 1.25)), now_s=1.25) == [] and car.refused["out of window"] == 1
+    assert car.hear(_obs(_lead(27, 1.25)), now_s=1.25) == [] and car.refused["out of window"] == 2  # 22 past 5
+    assert len(car.hear(_obs(_lead(26, 1.25)), now_s=1.25)) == 1  # 21 past 5: the genuine sender goes on
     # Such a number as the sender's first is taken, but holds it at most max_age_s: then its next starts it again.
     fresh_car = BroadcastReceiver(TEST_FLEET.trust_store())
     assert len(fresh_car.hear(_obs(_lead(2 ** 32 - 1, 1.0)), now_s=1.0)) == 1

@@ -53,7 +53,8 @@ class RadioEnv(gym.Env):
                 "lidar": np.ones(360, np.float32), "radio": rows, "radio_times": times}
 
     def _info(self):
-        return {"time": self.k * DT, "lead_x": 2.0, "lead_y": 0.0, "lead_yaw": 0.0, "sign_in_view": False,
+        return {"time": self.k * DT, "pose": np.array([0.5 * self.k * DT, 0.0, 0.0]), "lead_x": 2.0, "lead_y": 0.0,
+                "lead_yaw": 0.0, "sign_in_view": False,
                 "sign_mask": np.zeros((4, 4), bool),
                 "d_true": np.nan, "dist_to_stop_line": 5.0}
 
@@ -162,3 +163,25 @@ def test_each_parameter_takes_its_edge_and_refuses_past_it_or_a_flag(name, param
     for bad in (beyond, True):
         with pytest.raises(ValueError, match=param):
             ATTACKS[name].check_params({param: bad})
+
+
+def test_a_stolen_key_says_its_vehicle_stands_just_ahead_at_the_radio_s_rate_and_is_taken():
+    """Vehicle 5's key handed to the thief: from 1 s to 3 s, one message each 0.1 s (the radio's 10 Hz),
+    numbered 1, 2, 3, ..., vehicle 5 standing (braking) 0.6 m ahead of the car's front: the car, at
+    0.5 m/s from x 0, has its origin at 0.5 t, so vehicle 5's origin is at 0.5 t + 0.425 + 0.6."""
+    env = ATTACKS["radio_stolen_key"](RadioEnv(), start_s=1.0, duration_s=2.0, vehicle=5, ahead_m=0.6)
+    obs, info = env.reset(seed=0)
+    car, said = BroadcastReceiver(TEST_FLEET.trust_store()), []
+    for _ in range(int(round(4.0 / DT))):
+        obs, _, _, _, info = env.step(np.zeros(2))
+        said += [(info["time"], m) for m in car.hear(obs, info["time"]) if m.state.sender == 5]
+    assert env.unwrapped.radio.fleet.handed_over == [5]
+    assert len(said) == 20 and [m.seq for _, m in said] == list(range(1, 21))
+    for t, m in said:
+        assert m.t_s == pytest.approx(t) and m.state.x_m == pytest.approx(0.5 * t + 1.025) and m.state.braking
+        assert m.state.speed_mps == 0.0 and m.state.y_m == 0.0
+    assert [round(t, 2) for t, _ in said[:3]] == [1.0, 1.1, 1.2]
+    with pytest.raises(ValueError, match="vehicle must be one of the fleet's"):
+        ATTACKS["radio_stolen_key"](RadioEnv(), vehicle=9)
+    with pytest.raises(ValueError, match="ahead_m must be in"):
+        ATTACKS["radio_stolen_key"](RadioEnv(), ahead_m=11.0)
