@@ -20,6 +20,8 @@ __all__ = ["supervisor_markdown", "SUPERVISOR_COMMAND", "GUARANTEE_RESULTS", "IN
 
 SUPERVISOR_COMMAND = ("racf sweep following-supervisor.toml; python -m racf.experiments.pages.following_page "
                       "outputs/sweeps/following-supervisor")
+OTHERS_COMMAND = ("racf sweep following-supervisor-others.toml; python -m racf.experiments.pages.following_page "
+                  "outputs/sweeps/following-supervisor-others")
 #: The falsifications of the guarantee: (stored result, what it searched, inside the assumptions?, the command).
 GUARANTEE_RESULTS = (
     ("falsify-guarantee", "the car ahead, inside the assumptions: every range witness moved by at most the "
@@ -207,4 +209,13 @@ def supervisor_markdown(root: Path) -> str:
         data = json.loads(path.read_text())
         lines += meta_lines(data["meta"]) + _table(data["rows"])
         lines += ["What issues 69 and 78 asked of the supervisor over ODCA, measured:", "", *checks(data["rows"]), ""]
+    lines += ["## Over raw depth and the EKF", "",
+              "The supervisor takes any defence: the same rows over raw depth and the EKF, each beside itself alone "
+              "on the same episodes (a third of the seeds: N 20 a row).", ""]
+    path = root / "following-supervisor-others.json"
+    if not path.exists():
+        lines += missing("following-supervisor-others", OTHERS_COMMAND)
+    else:
+        data = json.loads(path.read_text())
+        lines += meta_lines(data["meta"]) + _table(data["rows"]) + [""]
     return "\n".join(lines + _falsification(root) + _served_lies(root) + sign_rows_markdown(root) + [""])

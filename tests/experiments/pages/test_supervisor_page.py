@@ -106,3 +106,8 @@ def test_the_plain_link_spoof_is_met_only_where_every_supervised_row_stops_in_95
     spoof[1] = {**spoof[1], "stopped": 57, "scr": 57 / 60}
     (tmp_path / "served-lies.json").write_text(json.dumps({"meta": META, "rows": lies, "link_spoof": spoof}))
     assert "57 of 60 (asked: at least 0.95): met." in supervisor_markdown(tmp_path)
+
+
+def test_the_rows_over_raw_depth_and_the_ekf_say_what_to_run_until_stored(tmp_path):
+    page = supervisor_markdown(tmp_path)
+    assert "## Over raw depth and the EKF" in page and "Not stored yet (`following-supervisor-others`)" in page
