@@ -18,14 +18,13 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import sys
 from pathlib import Path
 
 import pandas as pd
 
 from racf.experiments.scorecard.card_format import current_card
-from racf.experiments.pages.results_format import meta_lines, missing, page_head, rate
+from racf.experiments.pages.results_format import emit_json, meta_lines, missing, page_head, rate
 from racf.stats import median_ci, wilson_interval
 
 __all__ = ["summarise", "following_markdown", "FOLLOWING_COMMAND", "main"]
@@ -319,12 +318,7 @@ def main(argv: list[str] | None = None) -> int:
     except (OSError, ValueError) as err:
         print(f"following_page: {err}", file=sys.stderr)
         return 2
-    text = json.dumps(data, indent=2, allow_nan=False, default=lambda v: None if v is None or
-                      (isinstance(v, float) and math.isnan(v)) else float(v))
-    if args.out is None:
-        print(text)
-    else:
-        args.out.write_text(text + "\n")
+    emit_json(data, args.out)
     return 0
 
 

@@ -58,3 +58,15 @@ class StoredResults:
 
     def __getitem__(self, name: str) -> dict:
         return json.loads((self.root / f"{name}.json").read_text())
+
+
+def emit_json(data: dict, out: Path | None) -> None:
+    """A page's data as strict JSON (NaN as null), to ``out`` or printed: what a page's command writes."""
+    import math
+
+    text = json.dumps(data, indent=2, allow_nan=False, default=lambda v: None if v is None or
+                      (isinstance(v, float) and math.isnan(v)) else float(v))
+    if out is None:
+        print(text)
+    else:
+        Path(out).write_text(text + "\n")

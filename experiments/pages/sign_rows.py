@@ -20,7 +20,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from racf.experiments.pages.results_format import meta_lines, missing, rate
+from racf.experiments.pages.results_format import emit_json, meta_lines, missing, rate
 from racf.stats import wilson_interval
 
 __all__ = ["summarise", "sign_rows_markdown", "SIGN_ROWS_COMMAND", "main"]
@@ -100,11 +100,7 @@ def main(argv: list[str] | None = None) -> int:
     except (OSError, ValueError, KeyError) as err:
         print(f"sign_rows: {err}", file=sys.stderr)
         return 2
-    text = json.dumps(data, indent=2, allow_nan=False)
-    if args.out is None:
-        print(text)
-    else:
-        args.out.write_text(text + "\n")
+    emit_json(data, args.out)
     return 0
 
 
