@@ -25,6 +25,9 @@ __all__ = ["lane_clear", "lane_return", "CAR_LENGTH_M", "CAR_HALF_WIDTH_M"]
 CAR_LENGTH_M, CAR_HALF_WIDTH_M = QCAR2_BOX_M[0], QCAR2_BOX_M[1] / 2
 #: A return must lie this much beyond a lane point to show it clear, m.
 _BEYOND_M = 0.05
+#: A lane point the LiDAR sees: at least this share of the beams a car there would fill return (a few
+#: drop out on their own; a car hidden from the LiDAR leaves all of them without a return).
+SEEN_SHARE = 0.5
 #: A return this near a lane point (before it) is something standing on the lane there, m.
 AT_POINT_M = 0.1
 
@@ -45,15 +48,21 @@ def lane_return(scan: np.ndarray, lane: np.ndarray, lidar_in_camera: tuple[float
     (NaN: nothing on the lane in view): the straight-line distance, which in a bend is the clear gap's
     (:mod:`racf.vehicle`: the camera's distance to the rear less the bumper's lead), where the point's
     part along the camera's axis would put a car going round the bend ever nearer. ``lane``: (N, 2) points as (z ahead, y left) from the camera,
-    in order along the lane."""
+    in order along the lane.
+
+    A return is the first thing on the lane only where the LiDAR sees every nearer lane point: one
+    whose beams mostly give no return (hiding a car leaves none) makes it NaN, never the lane behind."""
     scan = np.asarray(scan, np.float64)
     if scan.size == 0 or len(lane) == 0:
         return math.nan
     ahead = lane[lane[:, 0] > 0.05]
     for point, (r, beams) in zip(ahead, _beams(scan, ahead, lidar_in_camera)):
-        hit = np.isfinite(beams) & (beams > 0) & (beams >= r - AT_POINT_M) & (beams <= r + _BEYOND_M)
+        seen = np.isfinite(beams) & (beams > 0)
+        hit = seen & (beams >= r - AT_POINT_M) & (beams <= r + _BEYOND_M)
         if hit.any():
             return float(np.hypot(point[0], point[1]))
+        if seen.mean() < SEEN_SHARE:
+            return math.nan  # blind before any return: what lies behind is not the first thing on the lane
     return math.nan
 
 

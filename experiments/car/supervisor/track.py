@@ -56,11 +56,13 @@ class CarriedTarget:
         if lead_known:
             self.slow_mps = max(lead_mps - e.lead_speed_error_mps, 0.0)
             self.fast_mps = min(lead_mps + e.lead_speed_error_mps, e.target_max_mps)
+            self._vouched_fast = self.fast_mps
         elif not held:  # a first sight of unknown speed: anywhere from standing to the top speed
             self.slow_mps, self.fast_mps = 0.0, e.target_max_mps
-        # else: a speed the car has lost (a jump restarts its estimate) keeps the bounds carried so far
+            self._vouched_fast = self.fast_mps
+        # else: a speed the car has lost (a jump restarts its estimate) keeps the bounds carried so far, and
+        # the reach its last measured speed (not the far end's, grown at the hardest acceleration since)
         self.speed_measured = lead_known or self.speed_measured  # (nothing held: reset, nothing measured)
-        self._vouched_fast = self.fast_mps
         self.unvouched_s = 0.0
 
     def predict(self, ego_mps: float, dt: float) -> None:

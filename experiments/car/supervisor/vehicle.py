@@ -51,6 +51,10 @@ __all__ = ["VehicleSupervisor", "SUPERVISOR_COLUMNS", "EASE_MPS2", "envelope_of"
 
 #: The LiDAR's lane return is carried between its 10 Hz scans for this long, s.
 SCAN_HOLD_S = 0.15
+#: A depth reading nearer than the LiDAR's lane return by more than this is of nothing on the lane, m:
+#: the lane is seen clear up to the return (A4), and the two read one car at most this far apart (the
+#: depth the box's middle along the camera's axis, the lane return the straight line, in a bend).
+LANE_SPREAD_M = 0.3
 #: How hard the car eases off for what it cannot vouch for, m/s^2 (under the 3 m/s^2 of a hard brake).
 EASE_MPS2 = 1.5
 
@@ -127,7 +131,7 @@ class VehicleSupervisor(CarStage):
         self.chain.reset()
         self.rate.reset()
         self.speed_bound.reset()
-        self._ease = math.inf
+        self._ease, self._eased_now = math.inf, False
         self._on_lane, self._on_lane_age = math.nan, math.inf
 
     def step(self, view: CarView) -> StageLimit:
@@ -135,6 +139,7 @@ class VehicleSupervisor(CarStage):
         if track is None:
             return self.idle()
         speed, dt, env = view.speed_mps, view.dt, self.envelope
+        self._eased_now = False
         bound = self.speed_bound.step(speed, dt)
         self.carried.predict(bound, dt)
         lead_mps, known = self._lead_speed(track)
@@ -145,7 +150,12 @@ class VehicleSupervisor(CarStage):
         else:  # between scans, moved on by the relative motion until the next
             self._on_lane, self._on_lane_age = self._on_lane - closing * dt, self._on_lane_age + dt
         on_lane = self._on_lane if self._on_lane_age <= SCAN_HOLD_S else math.nan
-        verdict = self.chain.step((track.depth_m, track.lidar_m, on_lane), closing, dt, self.carried, track.size_m,
+        # The camera's witnesses (the depth in the box, the distance its size implies) nearer than the lane
+        # the LiDAR sees clear read nothing on the lane (a phantom picture): left out of the chain, so the
+        # car eases off for them (the defence's brake, unconfirmed) and never stops hard on them.
+        depth, size = (math.nan if math.isfinite(on_lane) and r < on_lane - LANE_SPREAD_M else r
+                       for r in (track.depth_m, track.size_m))
+        verdict = self.chain.step((depth, track.lidar_m, on_lane), closing, dt, self.carried, size,
                                   stopping_m(bound, env))
         if self.chain.born:
             self.rate.restart()
@@ -163,8 +173,10 @@ class VehicleSupervisor(CarStage):
         clear_there = (not self.carried.held and lane is not None and math.isfinite(track.distance_m)
                        and lane_clear(view.scan, lane, track.distance_m - env.delta_m, track.distance_m + env.delta_m,
                                       self._lidar_in_camera))
+        ranged = fresh and any(math.isfinite(r) and abs(r - vouched) <= agree_m(vouched) for r in (track.lidar_m, on_lane))
         cap, stop, eased = self._cap(track.cap_mps, speed, dt, bound, fresh, agrees, math.isfinite(track.distance_m),
-                                     evidence=((fresh or verdict.implausible) and not confirmed) or clear_there)
+                                     evidence=((fresh or verdict.implausible) and not confirmed) or clear_there,
+                                     unranged=fresh and not ranged)
         if verdict.implausible:
             cap = min(cap, self._ease if eased else self._eased(speed, dt))
         elif not eased:
@@ -208,14 +220,18 @@ class VehicleSupervisor(CarStage):
         return told, True, False
 
     def _eased(self, speed: float, dt: float) -> float:
-        """The ease-off cap: down from the car's speed at ``EASE_MPS2``, never a hard brake."""
-        self._ease = max(min(self._ease, speed) - EASE_MPS2 * dt, 0.0)
+        """The ease-off cap: down from the car's speed at ``EASE_MPS2``, never a hard brake (lowered once
+        a step, however many of the cap's reasons ask for it)."""
+        if not self._eased_now:
+            self._ease = max(min(self._ease, speed) - EASE_MPS2 * dt, 0.0)
+            self._eased_now = True
         return self._ease
 
     def _cap(self, defence_cap: float, speed: float, dt: float, speed_bound: float, fresh: bool, agrees: bool,
-             defended: bool, evidence: bool) -> tuple[float, bool, bool]:
-        """The speed cap, whether the stop rule fired, and whether the defence's brake was eased off (see
-        the module docstring). ``evidence``: positive evidence against what the defence brakes for."""
+             defended: bool, evidence: bool, unranged: bool = False) -> tuple[float, bool, bool]:
+        """The speed cap, whether the stop rule fired, and whether a brake was eased off (see the module
+        docstring). ``evidence``: positive evidence against what the defence brakes for; ``unranged``:
+        this step's vouched reading is the camera's alone (no LiDAR witness reads it)."""
         softened = defence_cap
         if evidence and defence_cap < speed:
             softened = max(defence_cap, self._eased(speed, dt))
@@ -227,8 +243,8 @@ class VehicleSupervisor(CarStage):
         slow = self.carried.slow_mps
         if speed_bound > safe_speed(gap, slow, env):
             return 0.0, True, False
-        if agrees:
-            return defence_cap, False, False
+        if agrees:  # (eased where no LiDAR witness confirms the distance it brakes for: the stop rule stands)
+            return softened, False, eased
         safe = max(safe_speed(gap, slow, env, env.comfort_brake_mps2), 0.0)
         if defended:  # the defence follows a distance the reading disagrees with: the headway policy on the reading
             policy_gap = gap + (env.delta_m if fresh else 0.0)  # on the reading itself when fresh
@@ -236,7 +252,9 @@ class VehicleSupervisor(CarStage):
         # else the defence has let go of the target (out of its view): it sets no headway, and neither does
         # the supervisor; the comfortable stop on the worst case bounds the car.
         cap = min(safe, softened)
-        return cap, False, eased and cap > defence_cap
+        if unranged and cap < speed:  # a nearer target only the camera reads: ease off, the stop rule stands
+            cap = max(cap, self._eased(speed, dt))
+        return cap, False, cap > min(safe, defence_cap)
 
     def _lane(self, view: CarView):
         """The lane ahead in the camera's frame, from the map and the car's own pose."""

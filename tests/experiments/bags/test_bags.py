@@ -122,6 +122,7 @@ RENAMED = {"/camera/color_image": "/qcar2/rgbd/color", "/camera/depth_image": "/
            "/pose_estimate": "/qcar2/pose"}
 
 
+@pytest.mark.slow  # 5 s: the default run keeps under two minutes on 2 cores
 def test_another_recording_replays_through_a_mapping_file(exported, tmp_path):
     """Other topic names and a 1280 x 720 camera (the QCar 2's own): the mapping file renames and
     resizes, and what the car gets is the episode's (the 4 x 3 enlargement is undone exactly)."""
@@ -206,6 +207,7 @@ def test_a_16_9_camera_declared_by_its_intrinsics_brakes_where_the_simulator_doe
     assert _first_brake(undeclared.log) - _first_brake(exported.log) > 0.1 and declared.warnings == ()
 
 
+@pytest.mark.slow  # its fixture draws and defends a bag (9 s in all): CI's slow stage runs it
 def test_a_lidar_mount_turned_90_degrees_is_one_line_naming_what_to_check(defended):
     exported, foreign = defended
     text = _MAPPED.format(camera=f"intrinsics = {list(TRUE_16_9)}", lidar="yaw_deg = 90")

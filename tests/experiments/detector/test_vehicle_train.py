@@ -33,6 +33,7 @@ def test_the_shipped_segmenter_finds_cars_it_never_saw_and_nothing_where_none_st
     assert report["false_positive"]["frames"] <= 1
 
 
+@pytest.mark.slow  # 2.6 s of training: the default run keeps under two minutes on 2 cores
 def test_training_writes_a_checkpoint_the_detector_loads(tmp_path):
     config = VehicleTrainConfig(n_train=16, n_heldout=4, epochs=1, batch=8)
     _, report = train_vehicle_segmenter(config, tmp_path / "ckpt", progress=False)

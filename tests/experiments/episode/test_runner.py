@@ -71,6 +71,7 @@ def test_the_shared_env_gives_the_log_of_a_fresh_one(sign0_trial):
     pd.testing.assert_frame_equal(log, fresh_log)
 
 
+@pytest.mark.slow  # 3.4 s, two episodes: the default run keeps under two minutes on 2 cores
 def test_skipping_the_clean_pass_changes_only_the_d_clean_diagnostic():
     spec = TrialSpec("attack", 2, 1.5, 4)
     result, log = run_trial(spec)

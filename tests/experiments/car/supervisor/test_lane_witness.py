@@ -39,6 +39,24 @@ def test_the_first_return_on_the_lane_is_the_car_ahead():
     assert math.isnan(lane_return(hidden, LANE, LIDAR))
 
 
+def test_the_lane_behind_a_hidden_car_is_no_reading_and_a_few_beams_dropped_are_no_blindness():
+    # A car at 2.5 m behind one hidden at 1.7 m (no return from its beams): the LiDAR is blind on the
+    # lane at 1.7 m, so 2.5 m is not the first thing on the lane. NaN, not 2.5.
+    behind = _car_at(_scan(9.0), 2.5)
+    hidden = _car_at(behind, 1.7)
+    hidden[np.isclose(hidden, 1.7 - LIDAR[0])] = np.inf
+    assert math.isnan(lane_return(hidden, LANE, LIDAR))
+    assert -0.05 <= lane_return(behind, LANE, LIDAR) - 2.5 <= 0.0  # seen, it is read
+    # Every third beam dropped (a third of each window, under half): still seen, the car at 1.7 m read.
+    noisy = _car_at(_scan(9.0), 1.7)
+    noisy[::3] = np.inf
+    assert -0.05 <= lane_return(noisy, LANE, LIDAR) - 1.7 <= 0.0
+    # Two beams of every three dropped: blind before it, no reading.
+    blind = _car_at(_scan(9.0), 1.7)
+    blind[np.arange(N) % 3 != 0] = np.inf
+    assert math.isnan(lane_return(blind, LANE, LIDAR))
+
+
 def test_the_lane_is_clear_only_when_seen_through_where_the_target_could_be():
     assert lane_clear(_scan(9.0), LANE, 1.0, 1.5, LIDAR)
     # The car is still there: not clear.

@@ -3,6 +3,7 @@ no harder than the envelope says stays between them, however long it goes unseen
 
 import math
 
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -124,3 +125,16 @@ def test_a_speed_is_measured_only_once_told_and_kept_only_while_the_same_target_
     carried.reset()
     carried.vouch(1.0, 0.0, lead_known=False)
     assert not carried.speed_measured  # a new target: nothing measured of it
+
+
+def test_a_vouch_of_lost_speed_keeps_the_reach_at_the_last_measured_speed_not_the_grown_far_end():
+    carried = CarriedTarget(ENV)
+    carried.vouch(1.0, 0.6, lead_known=True)  # fast bound 0.6 + 0.25 = 0.85 m/s
+    for _ in range(20):  # 0.4 s: the far end's speed grows at 7.36 m/s^2 to its 3 m/s top
+        carried.predict(0.0, 0.02)
+    assert carried.fast_mps == 3.0
+    carried.vouch(1.2, math.nan, lead_known=False)  # the chain restarted: its speed is not measured now
+    # Reach from the vouch: 1.2 + 0.1 = 1.3 m, then 0.85 m/s (the last measured), not 3 m/s, for 0.1 s.
+    for _ in range(5):
+        carried.predict(0.0, 0.02)
+    assert carried.reach_m == pytest.approx(1.3 + 0.85 * 0.1)

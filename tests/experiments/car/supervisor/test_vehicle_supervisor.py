@@ -355,3 +355,61 @@ def test_the_flags_of_a_vouched_defence_and_of_a_stop():
     _told(cautious, advanced, 1.2, 1.2, 1.2)
     said = _told(cautious, advanced, NAN, NAN, 0.8)  # an untrusted broadcast nearer than the worst case: taken
     assert said.values["sup_broadcast"] and not said.values["sup_bc_outvoted"]
+
+
+# -- the camera alone never brakes the car hard ---------------------------------------------------------
+
+
+def _with_depth(speed: float, scan, depth: float, fused: float, cap: float, size: float = NAN) -> CarView:
+    view = _scan_view(speed, scan)
+    view.tracks["vehicle"] = TargetTrack("vehicle", fused, cap, moving=True, speed_known=False, depth_m=depth,
+                                         size_m=size)
+    return view
+
+
+def test_a_depth_nearer_than_the_lane_the_lidar_sees_clear_is_no_reading():
+    stage, _ = _stage()
+    stage.step(_scan_view(0.5, _car_scan(1.2)))  # the lead vouched on the lane at about 1.2 m
+    # A phantom picture: depth 0.8 m (and its box's size says 0.8 m), the lane return about 1.2 m.
+    # 0.8 < 1.2 - 0.3 (LANE_SPREAD_M): left out, the lane return is the reading, vouched.
+    said = stage.step(_with_depth(0.5, _car_scan(1.2), 0.8, 0.8, 0.3, size=0.8))
+    assert said.values["sup_vouched"] and said.values["sup_reading"] == pytest.approx(said.values["sup_on_lane"])
+    assert said.values["sup_reading"] > 1.1
+    # 1.0 m is within 0.3 m of the lane return: a reading, the nearest, vouched at 1.0 m.
+    stage2, _ = _stage()
+    stage2.step(_scan_view(0.5, _car_scan(1.2)))
+    said = stage2.step(_with_depth(0.5, _car_scan(1.2), 1.0, 1.0, 0.3))
+    assert said.values["sup_reading"] == pytest.approx(1.0)
+
+
+def test_a_defence_that_agrees_with_a_reading_no_lidar_witness_confirms_is_eased_not_obeyed():
+    stage, advanced = _stage()
+    _say(stage, advanced, 0.5, 1.5, 1.45, 1.45, 0.7)
+    # The depth reads 1.3 m (within the carried bounds: vouched, the nearest); the defence agrees and brakes
+    # to 0.2 m/s. The LiDAR's track reads 1.45 m, within agree_m(1.3) = 0.15 x 1.3 = 0.195 m: it confirms
+    # the distance, so the defence's brake stands.
+    said = _say(stage, advanced, 0.5, 1.3, 1.45, 1.3, 0.2)
+    assert said.values["sup_defence"] and said.speed_cap_mps == 0.2 and not said.values["sup_eased"]
+    # Now the LiDAR's track reads nothing: nothing confirms 1.3 m. Eased from 0.5 m/s: 0.5 - 1.5 x 0.02 = 0.47.
+    stage, advanced = _stage()
+    _say(stage, advanced, 0.5, 1.5, 1.45, 1.45, 0.7)
+    said = _say(stage, advanced, 0.5, 1.3, NAN, 1.3, 0.2)
+    assert said.values["sup_defence"] and said.values["sup_eased"]
+    assert said.speed_cap_mps == pytest.approx(0.47)
+
+
+def test_a_nearer_reading_only_the_camera_gives_lowers_the_cap_by_easing_and_once_a_step():
+    stage, advanced = _stage()
+    _say(stage, advanced, 0.5, 0.9, 0.9, 0.9, 0.7)  # vouched at 0.9 m: near end 0.8 m
+    # The depth alone reads 0.8 m (no farther than the near end plus delta: vouched); gap 0.8 - 0.1 - 0.1 =
+    # 0.6 m. By hand (rho 0.1 s, a 7.36 m/s^2, margin 0.05 m): the comfortable stop (1.5 m/s^2) allows
+    # 1.5 (-0.1 + sqrt(0.01 + 2 x 0.5868 / 1.5)) - 0.736 = 0.449 m/s, the headway policy (0.7 - 0.25) / 1 =
+    # 0.45 m/s, so 0.449 < 0.5; the stop rule (4 m/s^2) allows 1.07 m/s, so it does not fire.
+    said = _say(stage, advanced, 0.5, 0.8, NAN, 2.0, 1.0)
+    assert said.values["sup_vouched"] and not said.values["sup_stop"] and said.values["sup_eased"]
+    assert said.speed_cap_mps == pytest.approx(0.47)  # eased once from 0.5 m/s (0.03 m/s), not twice
+    # The LiDAR's track confirms 0.8 m: no easing, the safe controller's 0.449 m/s.
+    stage, advanced = _stage()
+    _say(stage, advanced, 0.5, 0.9, 0.9, 0.9, 0.7)
+    said = _say(stage, advanced, 0.5, 0.8, 0.8, 2.0, 1.0)
+    assert not said.values["sup_eased"] and said.speed_cap_mps == pytest.approx(0.449, abs=1e-3)
