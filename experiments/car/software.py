@@ -286,7 +286,7 @@ class Car:
         return TargetTrack(target.kind, self._d_fused, self._decision.speed_cap_mps, depth_m=sample.d_meas,
                            lidar_m=sample.lidar_m, size_m=sample.d_size, map_m=map_m,
                            stop_at_m=sign_depth_at_line(self.calibration, target), line_m=line_m,
-                           detected=bool(sample.detected), index=self.slot)
+                           detected=bool(sample.detected), index=self.slot, bearing_rad=sample.bearing_rad)
 
     def step(self, obs: dict) -> CarStep:
         """One 50 Hz step of the car's software on one observation; returns its action and why."""

@@ -114,6 +114,7 @@ class TargetTrack:
             disagreed since.
         detected: the stage's detector found the target on this frame.
         index: which of its targets the publisher means (a new index: another target).
+        bearing_rad: the target's bearing from the camera, left positive (NaN: not seen this frame).
     """
 
     kind: str
@@ -133,6 +134,7 @@ class TargetTrack:
     broadcast_trusted: bool = False
     detected: bool = False
     index: int = 0
+    bearing_rad: float = math.nan
 
     @property
     def ranges(self) -> tuple[float, float]:

@@ -17,7 +17,10 @@ the car's true speed (:class:`racf.controllers.speed.SpeedBound`), with the enco
   line allows (:func:`~.envelope.safe_speed` on the room, the target standing) is told to stop (cap 0).
   The room is the car's own distance along its route to the line where the map lists the target (its
   pose estimate and the map: in a bend a camera's distance to a sign beside the road is no distance
-  along it), else the carried near end less the line's camera depth. It never raises what the car's
+  along it). A target the map does not list is placed on the route by the car itself: each vouched
+  reading less delta, along its bearing from the car's pose, projected on the route, less the line's
+  distance before the target (the farthest of those places is carried: each is a lower bound). Without
+  a bearing or a route, the carried near end less the line's camera depth. It never raises what the car's
   braker or another stage says: it only adds a limit.
 - **Done** once the car has stood before the line (the stop the sign asks for), or the car's loop
   publishes its next target.
@@ -29,6 +32,8 @@ from __future__ import annotations
 
 import math
 from functools import lru_cache
+
+import numpy as np
 
 from racf.controllers.speed import SpeedBound
 from racf.experiments.car.stage import CarStage, CarView, StageColumn, StageContext, StageLimit, TargetTrack
@@ -73,6 +78,8 @@ class StaticSupervisor(CarStage):
         super().__init__(context)
         self.envelope = envelope if envelope is not None else Envelope()
         self.speed_bound = SpeedBound(self.envelope.odometry_error)
+        self._camera_xy = (float(context.camera_xy_m[0]), float(context.camera_xy_m[1]))
+        self._bumper_m = float(context.bumper_ahead_of_camera_m)
         self._prefix = f"sup_{self.supervises}_"
         self.reset()
 
@@ -82,7 +89,7 @@ class StaticSupervisor(CarStage):
 
     def _forget(self, index) -> None:
         """Starts on target ``index`` (None: none yet): nothing carried, vouched, stood before or seen."""
-        self.near_m = self.far_m = math.nan
+        self.near_m = self.far_m = self.line_s = math.nan
         self.index, self.done, self.agreed, self.seen = index, False, 0, False
 
     @property
@@ -103,10 +110,12 @@ class StaticSupervisor(CarStage):
         if math.isfinite(vouched):
             self.near_m = vouched - e.delta_m if not self.held else max(self.near_m, vouched - e.delta_m)
             self.far_m = min(self.far_m, vouched + e.delta_m) if math.isfinite(self.far_m) else vouched + e.delta_m
+            placed = self._line_on_route(view, track, vouched - e.delta_m)
+            self.line_s = placed if not math.isfinite(self.line_s) else max(self.line_s, placed)
         self.seen = self.seen or bool(track.detected)
         if not self.held or self.done:
             return self._said(math.inf, math.isfinite(vouched), False, False)
-        room = track.line_m if math.isfinite(track.line_m) else self.near_m - track.stop_at_m
+        room = track.line_m if math.isfinite(track.line_m) else self._room_unlisted(view, track)
         if bound < STOOD_MPS and room > -e.margin_m:
             self.done = True  # the car stood before the line: the stop the target asks for is made
             return self._said(math.inf, math.isfinite(vouched), False, False)
@@ -114,6 +123,32 @@ class StaticSupervisor(CarStage):
         outvoted = outvoted or (not math.isfinite(track.distance_m) and math.isfinite(vouched))
         stop = bound > safe_speed(room, 0.0, e)
         return self._said(0.0 if stop else math.inf, math.isfinite(vouched), outvoted, stop)
+
+    def _line_on_route(self, view: CarView, track: TargetTrack, depth_m: float) -> float:
+        """Where the line of an unlisted target ``depth_m`` ahead (the camera's axis) at its bearing lies
+        along the route, m of arclength (NaN: the map lists it, or no bearing or route to place it by)."""
+        b = track.bearing_rad
+        if math.isfinite(track.line_m) or not math.isfinite(b) or view.path is None or abs(b) >= math.pi / 2:
+            return math.nan
+        x, y, yaw = (float(v) for v in view.pose)
+        cx, cy = self._camera_xy
+        cam_x, cam_y = x + cx * math.cos(yaw) - cy * math.sin(yaw), y + cx * math.sin(yaw) + cy * math.cos(yaw)
+        ray = max(depth_m, 0.0) / math.cos(b)  # the depth is along the camera's axis, the target off it by b
+        # Along the route the target lies between its straight-line distance and half a circle's arc of it.
+        s, _ = view.path.project(np.array([cam_x + ray * math.cos(yaw + b), cam_y + ray * math.sin(yaw + b)]),
+                                 s_hint=view.progress_m + ray, window_m=ray + 1.0)
+        return float(s) - (track.stop_at_m - self._bumper_m)  # stop_at_m: the camera's depth at the line
+
+    def _room_unlisted(self, view: CarView, track: TargetTrack) -> float:
+        """The room to an unlisted target's line: along the route from the car's bumper to where the car
+        placed the line, else along the camera's axis (the near end less the line's camera depth)."""
+        if not math.isfinite(self.line_s) or view.path is None:
+            return self.near_m - track.stop_at_m
+        x, y, yaw = (float(v) for v in view.pose)
+        ahead = self._camera_xy[0] + self._bumper_m
+        s, _ = view.path.project(np.array([x + ahead * math.cos(yaw), y + ahead * math.sin(yaw)]),
+                                 s_hint=view.progress_m)
+        return self.line_s - float(s)
 
     def _vouch(self, track: TargetTrack) -> float:
         """This step's vouched distance to the target (NaN: none)."""

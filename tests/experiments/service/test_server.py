@@ -141,7 +141,7 @@ def _free_port() -> int:
         return s.getsockname()[1]
 
 
-def test_a_service_killed_and_restarted_mid_episode_gets_a_new_session(service):
+def test_a_service_killed_and_restarted_mid_episode_gets_a_new_session(service, monkeypatch):
     """The first service stops answering after 60 requests; a new one listens on its port 0.5 s later
     (longer than the car's timeout, so that the car must fall back: restarted at once, the new
     service could answer the car's next request in time on a fast machine, and the test would race).
@@ -158,17 +158,21 @@ def test_a_service_killed_and_restarted_mid_episode_gets_a_new_session(service):
     first_stop, first = stops[0]
     threading.Thread(target=lambda: (first.join(), time.sleep(0.5), start_service("odca", stops, endpoint=endpoint)),
                      daemon=True).start()
-    walls, last = [], [time.perf_counter()]
+    # How long the car waited each time no answer came: its own measure of the wait, which a loaded
+    # machine does not stretch the way it stretches a step's whole wall time.
+    from racf.experiments.link import remote
 
-    def clock(env, obs, info, row):
-        now = time.perf_counter()
-        walls.append(now - last[0])
-        last[0] = now
+    waits: list[float] = []
+    told = remote.NoAnswer.__init__
 
+    def counted(self, handshake, waited_ms):
+        waits.append(waited_ms)
+        told(self, handshake, waited_ms)
+
+    monkeypatch.setattr(remote.NoAnswer, "__init__", counted)
     timeout_ms = 100.0  # a loaded machine's answers stay within it (the default is 150 ms)
     try:
-        result, log = run_trial(replace(SPEC, estimator_endpoint=endpoint, estimator_timeout_ms=timeout_ms),
-                                on_step=clock)
+        result, log = run_trial(replace(SPEC, estimator_endpoint=endpoint, estimator_timeout_ms=timeout_ms))
     finally:
         for stop, thread in stops:
             stop.set()
@@ -180,9 +184,9 @@ def test_a_service_killed_and_restarted_mid_episode_gets_a_new_session(service):
     assert fell_back.any() and back > first_down and fell_back[first_down:back].all()
     assert log["service_new_sessions"].to_numpy()[back] == 1.0 and result.service_new_sessions >= 1
     assert result.service_restarts == 0  # the defence itself never raised: no defence restart
-    # A fallback step costs at most the timeout on top of the step's own work (margin 0.25 s).
-    step_cost = float(np.median(walls))
-    assert max(np.asarray(walls)[fell_back]) <= step_cost + timeout_ms / 1000.0 + 0.25
+    # Each time the car went unanswered it waited its timeout and no longer (100 ms of scheduling slack):
+    # the outage costs a step at most the timeout, never the 2 s a first answer may wait.
+    assert waits and max(waits) <= timeout_ms + 100.0, waits
 
 
 def test_an_episode_ends_its_session_with_a_goodbye(service, caplog):

@@ -260,3 +260,47 @@ def test_a_single_range_witness_just_past_the_carried_far_end_is_the_same_sign()
         _step(stage, 0.0, 2.0, depth=2.0, map_m=2.05)  # near 1.9, far 2.1 (at rest: they stay)
     # The depth alone at 2.2 m: 0.1 m past the far end, within its 0.33 m agreement: vouched.
     assert _step(stage, 0.0, 2.0, depth=2.2).values["sup_sign_vouched"]
+
+
+def _bend_view(speed: float, track: TargetTrack, progress: float = 0.0) -> CarView:
+    """A route that runs 1 m east from the origin, then turns north (a right angle); the car's body
+    origin at (progress, 0) heading east (its arclength measured from there)."""
+    from racf.sim.world.road_graph import Path
+
+    east = np.column_stack([np.arange(0.0, 1.0, 0.01), np.zeros(100)])
+    north = np.column_stack([np.ones(300), np.arange(0.0, 3.0, 0.01)])
+    points = np.vstack([east, north])
+    headings = np.where(np.arange(len(points)) < 100, 0.0, math.pi / 2)
+    path = Path(points, headings, np.zeros(len(points)))
+    return CarView({}, np.array([progress, 0.0, 0.0]), path, progress, speed, 0.0, 0.0, DT, True, False,
+                   tracks={"sign": track})
+
+
+def test_an_unlisted_sign_is_placed_on_the_route_by_the_car_itself_not_along_the_camera_s_axis():
+    stage = _stage()
+    # The sign stands 1 m past the bend, beside the road: at (1.2, 1.0). From the camera at (0.1, 0) it
+    # lies at bearing atan2(1.0, 1.1) = 42.3 degrees, 1.1 m along the camera's axis (the depth). The
+    # map lists no line: the line is where the sign projects on the route (stop_at 0.1 = the bumper's
+    # lead on the camera, 0 past the line), arclength 1.0 + 1.0 = 2.0 m. Depth and LiDAR agree on it.
+    bearing = math.atan2(1.0, 1.1)
+    for _ in range(3):  # vouched while moving at 0.3 m/s (a car at rest before the line has made its stop)
+        said = stage.step(_bend_view(0.3, TargetTrack("sign", 1.1, math.inf, depth_m=1.1, lidar_m=1.1, stop_at_m=0.1,
+                                                      detected=True, bearing_rad=bearing)))
+    assert said.values["sup_sign_vouched"] and said.values["sup_sign_carried"]
+    # Placed from 1.1 - 0.1 (delta) = 1.0 m along the axis at that bearing: (0.1 + 1.0, 1.0 x tan(42.3 deg)) =
+    # (1.1, 0.909), on the route at 1.0 + 0.909 = 1.909 m (to the path's 1 cm grid). The bumper at (0.2, 0):
+    # 0.2 m. Room 1.709 m, where the camera's axis would say 1.0 - 0.1 = 0.9 m.
+    assert stage.line_s == pytest.approx(1.909, abs=0.011)
+    fast = safe_speed(0.9, 0.0, ENV) + 0.05  # too fast for 0.9 m of room, slow enough for 1.7 m
+    assert fast * 1.02 < safe_speed(1.70, 0.0, ENV)  # (the bound on its speed: the encoder's, +2 %)
+    said = stage.step(_bend_view(fast, TargetTrack("sign", 1.1, math.inf, depth_m=1.1, lidar_m=1.1, stop_at_m=0.1,
+                                                   detected=True, bearing_rad=bearing)))
+    assert not said.values["sup_sign_stop"]
+    # Without a bearing, the camera's axis: the same speed is told to stop.
+    other = _stage()
+    for _ in range(3):
+        other.step(_bend_view(0.3, TargetTrack("sign", 1.1, math.inf, depth_m=1.1, lidar_m=1.1, stop_at_m=0.1,
+                                               detected=True)))
+    said = other.step(_bend_view(fast, TargetTrack("sign", 1.1, math.inf, depth_m=1.1, lidar_m=1.1, stop_at_m=0.1,
+                                                   detected=True)))
+    assert said.values["sup_sign_stop"] and math.isnan(other.line_s)
