@@ -304,3 +304,56 @@ def test_an_unlisted_sign_is_placed_on_the_route_by_the_car_itself_not_along_the
     said = other.step(_bend_view(fast, TargetTrack("sign", 1.1, math.inf, depth_m=1.1, lidar_m=1.1, stop_at_m=0.1,
                                                    detected=True)))
     assert said.values["sup_sign_stop"] and math.isnan(other.line_s)
+
+
+def _plate_scan(ahead: float, left: float, lidar_in_camera=(-0.1, 0.0), n: int = 720) -> np.ndarray:
+    """A scan with a 0.2 m plate facing the car at (ahead, left) of the camera, walls at 9 m elsewhere."""
+    x, y = ahead - lidar_in_camera[0], left - lidar_in_camera[1]
+    r, bearing = math.hypot(x, y), math.atan2(y, x)
+    beams = np.arange(n) * 2 * math.pi / n
+    scan = np.full(n, 9.0)
+    scan[np.abs((beams - bearing + math.pi) % (2 * math.pi) - math.pi) <= math.atan2(0.1, r)] = r
+    return scan
+
+
+def test_the_lidar_reads_a_mapped_sign_where_the_map_puts_it_without_any_detection():
+    from racf.experiments.car.supervisor.static import mapped_return
+
+    lidar = (-0.1, 0.0)  # the LiDAR 0.1 m behind the camera
+    # The plate 1.5 m ahead, 0.3 m left: from the LiDAR 1.6 m ahead, so r = hypot(1.6, 0.3) = 1.628 m. Read
+    # back: 1.5 m (the return where it is expected, moved along the line of sight by nothing).
+    assert mapped_return(_plate_scan(1.5, 0.3), 1.5, 0.3, lidar) == pytest.approx(1.5, abs=1e-9)
+    # The map 0.1 m too far (1.6 m): the plate's return 0.1 m nearer along the line of sight, within
+    # 0.15 m: read at 1.6 + (1.628 - 1.727) x 1.7 / 1.727 = 1.502 m, the plate's place, not the map's.
+    assert mapped_return(_plate_scan(1.5, 0.3), 1.6, 0.3, lidar) == pytest.approx(1.502, abs=2e-3)
+    # The sign gone (walls at 9 m only), or not listed: no reading.
+    assert math.isnan(mapped_return(np.full(720, 9.0), 1.5, 0.3, lidar))
+    assert math.isnan(mapped_return(_plate_scan(1.5, 0.3), NAN, NAN, lidar))
+    # 0.2 m short of where the map puts it: more than 0.15 m off, not this target.
+    assert math.isnan(mapped_return(_plate_scan(1.3, 0.3), 1.5, 0.3, lidar))
+
+
+def test_a_mapped_sign_no_detector_sees_is_vouched_by_the_map_and_the_lidar_and_the_car_held_short():
+    context = StageContext(None, (0.1, 0.0), 0.17, (0.0, 0.0), 0.1, lambda: None)  # LiDAR 0.1 m behind the camera
+    stage = static_supervisor("sign")(context, envelope=ENV)
+    stage.reset()
+    track = TargetTrack("sign", NAN, math.inf, map_m=1.5, map_left_m=0.3, stop_at_m=0.5)  # a sticker: no box
+    scan = _plate_scan(1.5, 0.3)
+    said = [stage.step(CarView({"lidar": scan}, np.zeros(3), None, 0.0, 0.3, 0.0, 0.0, DT, True, True,
+                               tracks={"sign": track})) for _ in range(3)]
+    assert [s.values["sup_sign_vouched"] for s in said] == [False, False, True]
+    assert stage.near_m == pytest.approx(1.4)  # 1.5 less delta
+    # Between scans the return is carried by the car's travel (0.3 m/s x 1.02 for 0.02 s).
+    stage.step(CarView({"lidar": scan}, np.zeros(3), None, 0.0, 0.3, 0.0, 0.0, DT, True, False, tracks={"sign": track}))
+    assert stage.mapped_return_m == pytest.approx(1.5 - 0.306 * DT)
+    # Too fast for the 0.9 m of room: told to stop.
+    said = stage.step(CarView({"lidar": scan}, np.zeros(3), None, 0.0, 3.0, 0.0, 0.0, DT, True, False,
+                              tracks={"sign": track}))
+    assert said.values["sup_sign_stop"] and said.speed_cap_mps == 0.0
+    # No LiDAR return there (the sign removed): the map alone vouches nothing.
+    gone = static_supervisor("sign")(context, envelope=ENV)
+    gone.reset()
+    for _ in range(5):
+        said = gone.step(CarView({"lidar": np.full(720, 9.0)}, np.zeros(3), None, 0.0, 0.3, 0.0, 0.0, DT, True, True,
+                                 tracks={"sign": track}))
+    assert not said.values["sup_sign_vouched"] and not gone.held
