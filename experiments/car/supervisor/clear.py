@@ -25,20 +25,22 @@ __all__ = ["lane_clear", "lane_return", "CAR_LENGTH_M", "CAR_HALF_WIDTH_M"]
 CAR_LENGTH_M, CAR_HALF_WIDTH_M = QCAR2_BOX_M[0], QCAR2_BOX_M[1] / 2
 #: A return must lie this much beyond a lane point to show it clear, m.
 _BEYOND_M = 0.05
-#: A lane point the LiDAR sees: at least this share of the beams a car there would fill return (a few
-#: drop out on their own; a car hidden from the LiDAR leaves all of them without a return).
-SEEN_SHARE = 0.5
+#: Lane points nearer the LiDAR than this are not judged blind: its beams give nothing under 0.2 m,
+#: and a point that near is under the car's own bonnet.
+BLIND_FROM_M = 0.3
 #: A return this near a lane point (before it) is something standing on the lane there, m.
 AT_POINT_M = 0.1
 
 
-def _beams(scan: np.ndarray, lane: np.ndarray, lidar_in_camera: tuple[float, float]):
-    """Each lane point's range from the LiDAR and the returns of the beams a car there would fill."""
+def _beams(scan: np.ndarray, lane: np.ndarray, lidar_in_camera: tuple[float, float],
+           half_width_m: float = CAR_HALF_WIDTH_M):
+    """Each lane point's range from the LiDAR and the returns of the beams a car there would fill (or,
+    with ``half_width_m``, the beams within that of the point either side)."""
     x, w = lane[:, 0] - lidar_in_camera[0], lane[:, 1] - lidar_in_camera[1]
     ranges, bearings = np.hypot(x, w), np.arctan2(w, x)
     step = 2 * math.pi / scan.size
     for r, bearing in zip(ranges, bearings):
-        half = math.atan2(CAR_HALF_WIDTH_M, r)
+        half = math.atan2(half_width_m, r)
         idx = np.arange(math.floor((bearing - half) / step), math.ceil((bearing + half) / step) + 1) % scan.size
         yield r, scan[idx]
 
@@ -50,18 +52,21 @@ def lane_return(scan: np.ndarray, lane: np.ndarray, lidar_in_camera: tuple[float
     part along the camera's axis would put a car going round the bend ever nearer. ``lane``: (N, 2) points as (z ahead, y left) from the camera,
     in order along the lane.
 
-    A return is the first thing on the lane only where the LiDAR sees every nearer lane point: one
-    whose beams mostly give no return (hiding a car leaves none) makes it NaN, never the lane behind."""
+    A return is the first thing on the lane only where the LiDAR is not blind at a nearer lane point:
+    one where no beam of the middle half of a car's width returns (a car hidden from the LiDAR leaves
+    all of its beams without a return; the sensor's own dropouts and bins without a sample are
+    scattered) makes it NaN, never the lane behind."""
     scan = np.asarray(scan, np.float64)
     if scan.size == 0 or len(lane) == 0:
         return math.nan
     ahead = lane[lane[:, 0] > 0.05]
-    for point, (r, beams) in zip(ahead, _beams(scan, ahead, lidar_in_camera)):
+    middles = _beams(scan, ahead, lidar_in_camera, CAR_HALF_WIDTH_M / 2)
+    for point, (r, beams), (_, middle) in zip(ahead, _beams(scan, ahead, lidar_in_camera), middles):
         seen = np.isfinite(beams) & (beams > 0)
         hit = seen & (beams >= r - AT_POINT_M) & (beams <= r + _BEYOND_M)
         if hit.any():
             return float(np.hypot(point[0], point[1]))
-        if seen.mean() < SEEN_SHARE:
+        if r >= BLIND_FROM_M and not np.any(np.isfinite(middle) & (middle > 0)):
             return math.nan  # blind before any return: what lies behind is not the first thing on the lane
     return math.nan
 

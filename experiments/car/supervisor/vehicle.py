@@ -47,7 +47,7 @@ from racf.experiments.car.supervisor.track import CarriedTarget
 from racf.experiments.car.supervisor.vouch import ChainConfig, ReadingChain, agree_m
 from racf.vehicle import clear_gap_m
 
-__all__ = ["VehicleSupervisor", "SUPERVISOR_COLUMNS", "EASE_MPS2", "envelope_of"]
+__all__ = ["VehicleSupervisor", "SUPERVISOR_COLUMNS", "EASE_MPS2", "FIRM_MPS2", "envelope_of"]
 
 #: The LiDAR's lane return is carried between its 10 Hz scans for this long, s.
 SCAN_HOLD_S = 0.15
@@ -57,6 +57,9 @@ SCAN_HOLD_S = 0.15
 LANE_SPREAD_M = 0.3
 #: How hard the car eases off for what it cannot vouch for, m/s^2 (under the 3 m/s^2 of a hard brake).
 EASE_MPS2 = 1.5
+#: The hardest the safe controller's own cap asks the car to brake, m/s^2 (under a hard brake's 3, with
+#: room for the drive's overshoot): the stop rule alone carries the guarantee, and brakes as hard as it must.
+FIRM_MPS2 = 2.0
 
 SUPERVISOR_COLUMNS = (
     StageColumn("sup_defence", "bool", "supervisor: the defence's distance is vouched and its cap drives the car"),
@@ -131,7 +134,7 @@ class VehicleSupervisor(CarStage):
         self.chain.reset()
         self.rate.reset()
         self.speed_bound.reset()
-        self._ease, self._eased_now = math.inf, False
+        self._ease, self._eased_now, self._firm = math.inf, False, math.inf
         self._on_lane, self._on_lane_age = math.nan, math.inf
 
     def step(self, view: CarView) -> StageLimit:
@@ -150,13 +153,14 @@ class VehicleSupervisor(CarStage):
         else:  # between scans, moved on by the relative motion until the next
             self._on_lane, self._on_lane_age = self._on_lane - closing * dt, self._on_lane_age + dt
         on_lane = self._on_lane if self._on_lane_age <= SCAN_HOLD_S else math.nan
-        # The camera's witnesses (the depth in the box, the distance its size implies) nearer than the lane
-        # the LiDAR sees clear read nothing on the lane (a phantom picture): left out of the chain, so the
+        # A witness nearer than the lane the LiDAR sees clear reads nothing on the lane (A4): a phantom
+        # picture's depth and box, the LiDAR's track on a wall beside the lane. Left out of the chain, so the
         # car eases off for them (the defence's brake, unconfirmed) and never stops hard on them.
-        depth, size = (math.nan if math.isfinite(on_lane) and r < on_lane - LANE_SPREAD_M else r
-                       for r in (track.depth_m, track.size_m))
-        verdict = self.chain.step((depth, track.lidar_m, on_lane), closing, dt, self.carried, size,
-                                  stopping_m(bound, env))
+        def on_the_lane(r: float) -> float:
+            return math.nan if math.isfinite(on_lane) and r < on_lane - LANE_SPREAD_M else r
+
+        depth, lidar, size = on_the_lane(track.depth_m), on_the_lane(track.lidar_m), on_the_lane(track.size_m)
+        verdict = self.chain.step((depth, lidar, on_lane), closing, dt, self.carried, size, stopping_m(bound, env))
         if self.chain.born:
             self.rate.restart()
         self.rate.step(speed, dt, verdict.reading_m if verdict.vouched else math.nan)
@@ -169,11 +173,13 @@ class VehicleSupervisor(CarStage):
         fresh = math.isfinite(vouched)
         agrees = fresh and math.isfinite(track.distance_m) and abs(track.distance_m - vouched) <= agree_m(vouched)
         confirmed = any(math.isfinite(r) and abs(r - track.distance_m) <= agree_m(track.distance_m)
-                        for r in (track.lidar_m, on_lane))
-        clear_there = (not self.carried.held and lane is not None and math.isfinite(track.distance_m)
-                       and lane_clear(view.scan, lane, track.distance_m - env.delta_m, track.distance_m + env.delta_m,
-                                      self._lidar_in_camera))
-        ranged = fresh and any(math.isfinite(r) and abs(r - vouched) <= agree_m(vouched) for r in (track.lidar_m, on_lane))
+                        for r in (lidar, on_lane))
+        clear_there = math.isfinite(track.distance_m) and (
+            math.isnan(on_the_lane(track.distance_m))  # the lane seen clear beyond where the defence puts it
+            or (not self.carried.held and lane is not None
+                and lane_clear(view.scan, lane, track.distance_m - env.delta_m, track.distance_m + env.delta_m,
+                               self._lidar_in_camera)))
+        ranged = fresh and any(math.isfinite(r) and abs(r - vouched) <= agree_m(vouched) for r in (lidar, on_lane))
         cap, stop, eased = self._cap(track.cap_mps, speed, dt, bound, fresh, agrees, math.isfinite(track.distance_m),
                                      evidence=((fresh or verdict.implausible) and not confirmed) or clear_there,
                                      unranged=fresh and not ranged)
@@ -232,6 +238,7 @@ class VehicleSupervisor(CarStage):
         """The speed cap, whether the stop rule fired, and whether a brake was eased off (see the module
         docstring). ``evidence``: positive evidence against what the defence brakes for; ``unranged``:
         this step's vouched reading is the camera's alone (no LiDAR witness reads it)."""
+        firm, self._firm = self._firm, math.inf  # the safe controller's last cap, while it drives on
         softened = defence_cap
         if evidence and defence_cap < speed:
             softened = max(defence_cap, self._eased(speed, dt))
@@ -251,6 +258,9 @@ class VehicleSupervisor(CarStage):
             safe = min(safe, max(0.0, (policy_gap - self.policy.standstill_gap_m) / self.policy.time_headway_s))
         # else the defence has let go of the target (out of its view): it sets no headway, and neither does
         # the supervisor; the comfortable stop on the worst case bounds the car.
+        # Never a hard brake of its own (the stop rule is there): down from its last cap at FIRM_MPS2 at most.
+        if safe < speed:
+            safe = self._firm = max(safe, min(firm, speed) - FIRM_MPS2 * dt)
         cap = min(safe, softened)
         if unranged and cap < speed:  # a nearer target only the camera reads: ease off, the stop rule stands
             cap = max(cap, self._eased(speed, dt))

@@ -47,13 +47,16 @@ def test_the_lane_behind_a_hidden_car_is_no_reading_and_a_few_beams_dropped_are_
     hidden[np.isclose(hidden, 1.7 - LIDAR[0])] = np.inf
     assert math.isnan(lane_return(hidden, LANE, LIDAR))
     assert -0.05 <= lane_return(behind, LANE, LIDAR) - 2.5 <= 0.0  # seen, it is read
-    # Every third beam dropped (a third of each window, under half): still seen, the car at 1.7 m read.
+    # Two beams of every three dropped, scattered (the sensor's dropouts and its bins without a sample):
+    # the LiDAR still sees the lane, the car at 1.7 m read (to the lane's 2 cm grid, 0.05 m short at most).
     noisy = _car_at(_scan(9.0), 1.7)
-    noisy[::3] = np.inf
+    noisy[np.arange(N) % 3 != 0] = np.inf
     assert -0.05 <= lane_return(noisy, LANE, LIDAR) - 1.7 <= 0.0
-    # Two beams of every three dropped: blind before it, no reading.
+    # A run of no returns 0.1 m wide at 1.2 m (more than the middle half of a car's width, 0.096 m), the
+    # car at 1.7 m behind it: blind at 1.2 m, no reading.
     blind = _car_at(_scan(9.0), 1.7)
-    blind[np.arange(N) % 3 != 0] = np.inf
+    beams = np.arange(N) * 2 * math.pi / N
+    blind[np.abs((beams + math.pi) % (2 * math.pi) - math.pi) <= math.atan2(0.05, 1.3)] = np.inf
     assert math.isnan(lane_return(blind, LANE, LIDAR))
 
 
