@@ -6,7 +6,8 @@ stage, and its cap stands in for the stage's. Each control step it:
 
 1. bounds the car's own true speed (:class:`racf.controllers.speed.SpeedBound`) and moves the carried target's
    bounds on by the car's travel at that bound (:class:`~.track.CarriedTarget`);
-2. judges this frame's range reading (:class:`~.vouch.ReadingChain`): vouched, refused or implausible,
+2. judges this frame's range reading (:class:`~.vouch.ReadingChain`; a witness nearer than the lane the
+   LiDAR sees clear is left out: it reads nothing on the lane): vouched, refused or implausible,
    a refusal judged again each step; a vouched one resets the bounds to it +- delta, with the target's
    speed the car measured itself (:class:`~.speed.RangeRate`: the chain's range rate plus its odometry);
 3. drops the carried target only when the LiDAR sees the lane clear where it could be (:func:`~.clear.lane_clear`);
@@ -14,11 +15,14 @@ stage, and its cap stands in for the stage's. Each control step it:
 
    - nothing carried: the defence's cap; eased off (never a hard brake) only where the LiDAR sees the
      lane clear where the defence puts its target;
-   - the defence's distance agrees with the vouched reading: the defence's cap;
+   - the defence's distance agrees with the vouched reading: the defence's cap (eased off where no LiDAR
+     witness confirms it);
    - otherwise, a target carried: the lower of the safe controller's cap (the headway policy and a
      comfortable stop on the worst-case gap) and the defence's; the defence's eased off (never a hard
      brake) where it brakes for what no LiDAR witness confirms against positive evidence: a reading
-     vouched this step, or one nearer than the carried target can be (a phantom).
+     vouched this step, one nearer than the carried target can be (a phantom), or the lane seen clear
+     beyond where it puts its target. The safe controller's own cap falls at ``FIRM_MPS2`` at most, and
+     eases off where the reading it acts on is the camera's alone.
 
    Whatever drives, a car faster than the worst-case gap allows is told to stop (cap 0,
    :func:`~.envelope.safe_speed`): the rule the guarantee rests on.
@@ -51,9 +55,9 @@ __all__ = ["VehicleSupervisor", "SUPERVISOR_COLUMNS", "EASE_MPS2", "FIRM_MPS2", 
 
 #: The LiDAR's lane return is carried between its 10 Hz scans for this long, s.
 SCAN_HOLD_S = 0.15
-#: A depth reading nearer than the LiDAR's lane return by more than this is of nothing on the lane, m:
-#: the lane is seen clear up to the return (A4), and the two read one car at most this far apart (the
-#: depth the box's middle along the camera's axis, the lane return the straight line, in a bend).
+#: A witness nearer than the LiDAR's lane return by more than this reads nothing on the lane, m: the lane
+#: is seen clear up to the return (A4), and two witnesses read one car at most this far apart (the depth
+#: the box's middle along the camera's axis, the lane return the straight line, in a bend).
 LANE_SPREAD_M = 0.3
 #: How hard the car eases off for what it cannot vouch for, m/s^2 (under the 3 m/s^2 of a hard brake).
 EASE_MPS2 = 1.5
