@@ -416,3 +416,17 @@ def test_a_nearer_reading_only_the_camera_gives_lowers_the_cap_by_easing_and_onc
     assert not said.values["sup_eased"] and said.speed_cap_mps == pytest.approx(0.46)
     said = _say(stage, advanced, 0.5, 0.8, 0.8, 2.0, 1.0)  # from its last cap 0.46: 0.42 < 0.449, so 0.449
     assert said.speed_cap_mps == pytest.approx(0.449, abs=2e-3)
+
+
+def test_a_lidar_track_on_something_beside_the_lane_is_no_reading_and_the_brake_for_it_is_eased():
+    stage, _ = _stage()
+    stage.step(_scan_view(0.5, _car_scan(1.2)))  # the lead vouched on the lane at about 1.2 m
+    # The LiDAR's track latches on a wall at 0.6 m beside the lane; the defence follows it and stops the
+    # car. The lane return (about 1.2 m) sees the lane clear to there: 0.6 < 1.2 - 0.3, so the track is
+    # left out, the lane return vouched, and the defence's 0 eased: 0.5 - 1.5 x 0.02 = 0.47 m/s.
+    view = _scan_view(0.5, _car_scan(1.2))
+    view.tracks["vehicle"] = TargetTrack("vehicle", 0.6, 0.0, moving=True, speed_known=False, lidar_m=0.6)
+    said = stage.step(view)
+    assert said.values["sup_vouched"] and said.values["sup_reading"] > 1.1 and said.values["sup_eased"]
+    assert said.speed_cap_mps == pytest.approx(0.47)
+    assert not said.values["sup_stop"]
