@@ -38,6 +38,7 @@ def test_the_defence_and_the_attack_run_in_trials_on_spawned_workers(cusum_insta
     assert set(rows["setting"]) == {"clean+depth_scale+lidar_cusum"} and set(rows["estimator"]) == {"lidar_cusum"}
 
 
+@pytest.mark.slow  # 2.2 s, a sweep: the default run keeps under two minutes on 2 cores
 def test_a_sweep_from_flags_runs_both_and_an_edited_plugin_reruns(cusum_installed, plugin_env, tmp_path):
     argv = ["sweep", "--plugin", ATTACK, "--attack", "depth_scale", "--estimator", "lidar_cusum", "--sign", "1",
             "--workers", "1", "--json", "--out", str(tmp_path / "sweep")]

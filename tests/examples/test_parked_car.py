@@ -20,6 +20,7 @@ def test_the_scenario_is_listed_with_its_parameters(parked_car_installed):
     assert entry["params"]["ahead_m"]["low"] == 0.2 and entry["params"]["ahead_m"]["unit"] == "m"
 
 
+@pytest.mark.slow  # 2.2 s, an episode: the default run keeps under two minutes on 2 cores
 def test_a_trial_runs_it_and_the_van_hides_the_sign_for_the_far_part(parked_car_installed, tmp_path):
     first_seen = {}
     for target in ("sign", "parked_car"):

@@ -2,6 +2,7 @@
 
 import numpy as np
 import pandas as pd
+import pytest
 
 from racf.odca import LastValuePrior
 from racf.odca.synthetic import approach_curve
@@ -66,6 +67,7 @@ class SyntheticDataset:
         return pd.concat(parts, ignore_index=True)
 
 
+@pytest.mark.slow  # 3.4 s of training: the default run keeps under two minutes on 2 cores
 def test_training_runs_end_to_end_and_repairs_strong_corruption():
     _, report = train_odca(SyntheticDataset(), LastValuePrior(), epochs=150, progress=False)
     assert report["head_parameters"] == 917

@@ -30,6 +30,7 @@ def test_the_between_car_hides_part_of_the_sign_when_it_says():
     assert masks["traffic"] < 0.7 * masks["empty"]
 
 
+@pytest.mark.slow  # 1.4 s: the default run keeps under two minutes on 2 cores
 def test_a_case_reports_both_maps_on_the_same_seeds():
     out = measure_case(CASES["red_car"], seeds=1)
     assert out["empty"]["n"] == out["traffic"]["n"] == 1

@@ -20,7 +20,7 @@ def _run(name, samples):
 
 
 @pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.slow)  # 3-5 s each: the prior, or ODCA inside
-                                  if n in ("chronos", "vote", "detectors_or") else n for n in ESTIMATORS])
+                                  if n in ("chronos", "vote", "detectors_or", "odca") else n for n in ESTIMATORS])
 def test_changing_the_future_does_not_change_the_past(name):
     rng = np.random.default_rng(0)
     depths = list(2.0 - 0.02 * np.arange(40) + rng.normal(0, 0.005, 40))

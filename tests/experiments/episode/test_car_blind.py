@@ -55,7 +55,8 @@ class ScrambledInfo(gym.Wrapper):
 
 @pytest.mark.parametrize("spec", [TrialSpec("attack+odca", 0, 1.5, 1),
                                   # Two other cars crossing: their states in info are scrambled too.
-                                  TrialSpec("attack+odca", 3, 1.5, 1, target="cross_traffic", scenario_params={"cars": 2}),
+                                  pytest.param(TrialSpec("attack+odca", 3, 1.5, 1, target="cross_traffic",
+                                                         scenario_params={"cars": 2}), marks=pytest.mark.slow),
                                   # The existence vote's witnesses, a sticker up from the start on a mapped sign.
                                   pytest.param(TrialSpec("clean+physical_patch+vote", 1, 1.5, 1, target="stale_map",
                                                          attack_params={"physical_patch": {"from_start": True}}),

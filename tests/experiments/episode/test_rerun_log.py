@@ -101,6 +101,7 @@ def _views(container):
             yield item
 
 
+@pytest.mark.slow  # 1.3 s, an episode: the default run keeps under two minutes on 2 cores
 def test_other_cars_appear_in_the_world_and_on_the_map(tmp_path):
     recorder = FrameRecorder(every=10)
     _, log = run_trial(TrialSpec("clean", 3, 1.5, 0, target="cross_traffic", scenario_params={"cars": 2}), on_step=recorder, clean_pass=False)

@@ -83,6 +83,7 @@ def test_skipping_the_clean_pass_changes_only_the_d_clean_diagnostic():
     pd.testing.assert_frame_equal(fast_log.drop(columns="d_clean"), log.drop(columns="d_clean"))
 
 
+@pytest.mark.slow  # 2.1 s, an episode: the default run keeps under two minutes on 2 cores
 def test_strong_patch_attack_hides_the_sign_and_the_car_runs_the_line():
     result, log = run_trial(TrialSpec("attack", 0, 1.0, 0, rho=1.0, t_atk=3.0))
     assert not result.success and result.failure == "confirmed_lost"

@@ -44,7 +44,7 @@ def test_a_move_beyond_its_range_is_refused_naming_it():
         TrialSpec("clean", 0, 1.0, 0, target="stale_map", scenario_params={"case": "moved", "shift_m": 2.0})
 
 
-@pytest.mark.parametrize("case", ["removed", "phantom"])
+@pytest.mark.parametrize("case", ["removed", pytest.param("phantom", marks=pytest.mark.slow)])  # 1.4 s each
 def test_where_no_sign_stands_there_is_no_scr_and_no_broken_stop_rule_but_needless_stops(case, caplog):
     """The referee's world has no sign (its body is under the floor): the stop rule does not apply, the
     needless-stop rule does, and the driving score is that rule's."""

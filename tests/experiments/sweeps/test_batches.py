@@ -11,6 +11,7 @@ from racf.stats import wilson_interval
 from racf.experiments.sweeps.summary import summarize
 
 
+@pytest.mark.slow  # 2.1 s, a batch: the default run keeps under two minutes on 2 cores
 def test_batch_covers_every_sign_and_speed_and_resumes(tmp_path, monkeypatch):
     specs = batch_specs("clean", 12)
     assert {(s.sign, s.speed) for s in specs} == {(g, v) for g in range(4) for v in (1.0, 1.5, 2.0)}
