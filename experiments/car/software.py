@@ -280,14 +280,13 @@ class Car:
         defended distance and the braker's cap, the perception's witnesses and the map's place for it."""
         sample, target = self._sample, self.target
         mapped = bearing is not None and math.isfinite(bearing)
-        map_m, map_left = camera_offset(self.calibration, target, self._pose) if mapped else (math.nan, math.nan)
+        map_m = camera_offset(self.calibration, target, self._pose)[0] if mapped else math.nan
         listed = getattr(target, "mapped", True)
         line_m = target.stop_s - (self.follower.progress_m + self._bumper_ahead_of_axle) if listed else math.nan
         return TargetTrack(target.kind, self._d_fused, self._decision.speed_cap_mps, depth_m=sample.d_meas,
                            lidar_m=sample.lidar_m, size_m=sample.d_size, map_m=map_m,
                            stop_at_m=sign_depth_at_line(self.calibration, target), line_m=line_m,
-                           detected=bool(sample.detected), index=self.slot, bearing_rad=sample.bearing_rad,
-                           map_left_m=map_left)
+                           detected=bool(sample.detected), index=self.slot, bearing_rad=sample.bearing_rad)
 
     def step(self, obs: dict) -> CarStep:
         """One 50 Hz step of the car's software on one observation; returns its action and why."""

@@ -115,8 +115,6 @@ class TargetTrack:
         detected: the stage's detector found the target on this frame.
         index: which of its targets the publisher means (a new index: another target).
         bearing_rad: the target's bearing from the camera, left positive (NaN: not seen this frame).
-        map_left_m: how far left of the camera's axis the map and the car's pose put it, m (NaN: the
-            map does not list it; ``map_m`` is how far ahead).
     """
 
     kind: str
@@ -137,7 +135,6 @@ class TargetTrack:
     detected: bool = False
     index: int = 0
     bearing_rad: float = math.nan
-    map_left_m: float = math.nan
 
     @property
     def ranges(self) -> tuple[float, float]:

@@ -8,8 +8,7 @@ so between vouches only the car's travel moves it: its near end falls by the tra
 the car's true speed (:class:`racf.controllers.speed.SpeedBound`), with the encoder's error.
 
 - **Vouched** when two of its witnesses agree on it (the depth, the LiDAR's track of its post, the
-  LiDAR's return where the map puts it, the size witness, where the map and the car's pose put it)
-  for ``confirm_frames`` frames, at the nearest
+  size witness, where the map and the car's pose put it) for ``confirm_frames`` frames, at the nearest
   of those that agree; or by a range reading that lies where the carried target is. A served or
   defended distance is never a witness: it is what the supervisor checks (a served lie outvoted).
   A target the map does not list and no detection came before stays unvouched until two range
@@ -41,17 +40,12 @@ from racf.experiments.car.stage import CarStage, CarView, StageColumn, StageCont
 from racf.experiments.car.supervisor.envelope import Envelope, safe_speed
 from racf.experiments.car.supervisor.vouch import agree_m
 
-__all__ = ["StaticSupervisor", "static_supervisor", "mapped_return", "STOOD_MPS"]
+__all__ = ["StaticSupervisor", "static_supervisor", "STOOD_MPS"]
 
 #: The car stood before the line once the bound on its speed fell under this, m/s.
 STOOD_MPS = 0.02
 #: Frames two witnesses must agree on a target before it is first vouched.
 CONFIRM_FRAMES = 3
-#: The LiDAR reads a mapped target where the map puts it from returns within this of its place, m
-#: (across: a sign's plate is 0.2 m wide; along: the map's place and the car's pose are good to this).
-MAPPED_RETURN_M = 0.15
-#: A mapped target's LiDAR return is carried between the 10 Hz scans for this long, s.
-SCAN_HOLD_S = 0.15
 
 
 def _columns(kind: str) -> tuple[StageColumn, ...]:
@@ -85,8 +79,6 @@ class StaticSupervisor(CarStage):
         self.envelope = envelope if envelope is not None else Envelope()
         self.speed_bound = SpeedBound(self.envelope.odometry_error)
         self._camera_xy = (float(context.camera_xy_m[0]), float(context.camera_xy_m[1]))
-        self._lidar_in_camera = (float(context.lidar_xy_m[0]) - self._camera_xy[0],
-                                 float(context.lidar_xy_m[1]) - self._camera_xy[1])
         self._bumper_m = float(context.bumper_ahead_of_camera_m)
         self._prefix = f"sup_{self.supervises}_"
         self.reset()
@@ -97,8 +89,7 @@ class StaticSupervisor(CarStage):
 
     def _forget(self, index) -> None:
         """Starts on target ``index`` (None: none yet): nothing carried, vouched, stood before or seen."""
-        self.near_m = self.far_m = self.line_s = self.mapped_return_m = math.nan
-        self._return_age_s = math.inf
+        self.near_m = self.far_m = self.line_s = math.nan
         self.index, self.done, self.agreed, self.seen = index, False, 0, False
 
     @property
@@ -115,7 +106,6 @@ class StaticSupervisor(CarStage):
         e = self.envelope
         if self.held:  # a standing target comes nearer by the car's travel only
             self.near_m -= bound * view.dt  # the far end stays: an upper bound, for continuity only
-        self._read_mapped_return(view, track, bound)
         vouched = self._vouch(track)
         if math.isfinite(vouched):
             self.near_m = vouched - e.delta_m if not self.held else max(self.near_m, vouched - e.delta_m)
@@ -160,29 +150,14 @@ class StaticSupervisor(CarStage):
                                  s_hint=view.progress_m)
         return self.line_s - float(s)
 
-    def _read_mapped_return(self, view: CarView, track: TargetTrack, bound: float) -> None:
-        """The LiDAR's reading of a mapped target where the map puts it (``mapped_return_m``, camera depth;
-        NaN: none): a range witness that needs no detector (a sticker that hides the sign from the
-        camera leaves its plate to the LiDAR). Carried between scans by the car's travel."""
-        scan = view.scan
-        if scan is None:  # between scans: the car's travel brings it nearer
-            self._return_age_s += view.dt
-            self.mapped_return_m -= bound * view.dt
-            if self._return_age_s > SCAN_HOLD_S:
-                self.mapped_return_m = math.nan
-            return
-        self._return_age_s = 0.0
-        self.mapped_return_m = mapped_return(np.asarray(scan, np.float64), track.map_m, track.map_left_m,
-                                             self._lidar_in_camera)
-
     def _vouch(self, track: TargetTrack) -> float:
         """This step's vouched distance to the target (NaN: none)."""
-        ranges = [r for r in (*track.ranges, self.mapped_return_m) if math.isfinite(r) and r > 0]
+        ranges = [r for r in track.ranges if math.isfinite(r) and r > 0]
         if self.held:  # a range reading where the carried target is: the same target
             near = [r for r in ranges if self.near_m - agree_m(r) <= r <= self.far_m + agree_m(r)]
             if near:
                 return min(near)
-        witnesses = sorted(r for r in (*ranges, track.size_m, track.map_m) if math.isfinite(r) and r > 0)
+        witnesses = sorted(r for r in (*track.ranges, track.size_m, track.map_m) if math.isfinite(r) and r > 0)
         agreeing = [(a, b) for a, b in zip(witnesses, witnesses[1:]) if b - a <= agree_m(a)]
         # The map alone with the size (no range witness) or an unlisted target first seen: two range witnesses.
         unlisted = not math.isfinite(track.map_m) and not self.seen
@@ -203,24 +178,6 @@ class StaticSupervisor(CarStage):
 
     def idle(self) -> StageLimit:
         return self._said(math.inf, False, False, False)
-
-
-def mapped_return(scan: np.ndarray, ahead_m: float, left_m: float, lidar_in_camera: tuple[float, float]) -> float:
-    """The camera depth of the LiDAR's return from where the map puts a target ``ahead_m`` along the
-    camera's axis and ``left_m`` left of it, m (NaN: not listed, or no return within
-    ``MAPPED_RETURN_M`` of that place). ``scan``: beam i at 2 pi i / N, counter-clockwise from ahead."""
-    if not (math.isfinite(ahead_m) and math.isfinite(left_m)) or ahead_m <= 0 or scan.size == 0:
-        return math.nan
-    x, y = ahead_m - lidar_in_camera[0], left_m - lidar_in_camera[1]
-    r, bearing = math.hypot(x, y), math.atan2(y, x)
-    step = 2 * math.pi / scan.size
-    half = math.atan2(MAPPED_RETURN_M, r)
-    idx = np.arange(math.floor((bearing - half) / step), math.ceil((bearing + half) / step) + 1) % scan.size
-    beams = scan[idx]
-    near = beams[np.isfinite(beams) & (np.abs(beams - r) <= MAPPED_RETURN_M)]
-    if near.size == 0:
-        return math.nan
-    return ahead_m + (float(near.min()) - r) * x / r  # the nearest return, moved along the line of sight
 
 
 @lru_cache(maxsize=None)
