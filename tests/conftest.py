@@ -26,7 +26,10 @@ settings.register_profile("ci", derandomize=True, deadline=None, print_blob=True
 # make mutate: the same examples for every mutant, and none remembered from another mutant's run (a
 # failure kept in the database would be replayed against every mutant after it).
 settings.register_profile("mutation", derandomize=True, deadline=None, database=None)
-settings.load_profile("ci" if os.environ.get("CI") else "default")
+# Elsewhere too, no deadline: a test's first example pays for imports, and a loaded machine stretches
+# it past any deadline (a deadline is a timing test of the machine, not of racf).
+settings.register_profile("local", deadline=None)
+settings.load_profile("ci" if os.environ.get("CI") else "local")
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLES = ROOT / "examples"
