@@ -25,6 +25,7 @@ import pandas as pd
 
 from racf.experiments.scorecard.card_format import current_card
 from racf.experiments.pages.results_format import emit_json, meta_lines, missing, page_head, rate
+from racf.experiments.pages.sweep_episodes import current_episodes
 from racf.stats import median_ci, wilson_interval
 
 __all__ = ["summarise", "following_markdown", "FOLLOWING_COMMAND", "main"]
@@ -49,19 +50,7 @@ ATTACK_LABELS = {"clean": "none", "clean+lead_patch": "lead patch (depth read 1 
 
 
 def _rows(folder: Path) -> pd.DataFrame:
-    parts = sorted((folder / "parts").glob("*.parquet"))
-    if not parts:
-        raise ValueError(f"{folder} holds no episodes (parts/*.parquet): give a sweep's output folder")
-    frame = pd.concat([pd.read_parquet(p) for p in parts], ignore_index=True)
-    spec = (folder / "spec.toml").read_text() if (folder / "spec.toml").exists() else ""
-    specs = {}
-    if spec:  # the sweep's episodes as this code makes them: a part left from older code is not one of them
-        from racf.experiments.sweeps.spec import parse_spec
-
-        specs = {s.trial_id: s for s in parse_spec(spec).episodes()}
-        frame = frame[frame["trial_id"].isin(specs)]
-        if frame.empty:
-            raise ValueError(f"{folder}'s episodes were run by other code; run its sweep again")
+    frame, specs = current_episodes(folder)  # a part left from older code is not one of them
     attack = frame["setting"].str.replace(r"\+[a-z_0-9]+$", "", regex=True).where(frame["estimator"] != "raw",
                                                                                  frame["setting"])
     # The frustum spoof that moves the depth too is its own row, and the one that moves the picture too.

@@ -21,6 +21,7 @@ from pathlib import Path
 import pandas as pd
 
 from racf.experiments.pages.results_format import emit_json, meta_lines, missing, rate
+from racf.experiments.pages.sweep_episodes import current_episodes
 from racf.stats import wilson_interval
 
 __all__ = ["summarise", "sign_rows_markdown", "SIGN_ROWS_COMMAND", "main"]
@@ -41,10 +42,7 @@ def _share(flags: list) -> dict:
 
 
 def _episodes(folder: Path) -> pd.DataFrame:
-    parts = sorted((folder / "parts").glob("*.parquet"))
-    if not parts:
-        raise ValueError(f"{folder} holds no episodes (parts/*.parquet)")
-    frame = pd.concat([pd.read_parquet(p) for p in parts], ignore_index=True)
+    frame, _ = current_episodes(folder)  # a part left from older code is not one of them
     frame["sweep"] = folder.name
     frame["supervised"] = frame["trial_id"].str.contains(r"\+supervisor_", regex=True)
     if "scenario_case" not in frame:

@@ -33,3 +33,34 @@ def test_the_rows_split_by_case_defence_and_supervision_and_count_what_applies(t
     page = "\n".join(sign_rows_markdown(tmp_path))
     assert "| stale | phantom | odca + supervisor | 1 | — | 1 of 1 (1.00 [0.21, 1.00]) | 0 |" in page
     assert main([str(tmp_path / "nowhere")]) == 2 and "holds no episodes" in capsys.readouterr().err
+
+
+def test_a_part_left_from_older_code_is_not_counted(tmp_path):
+    """The folder of a sweep run again by new code keeps the old code's parts (their ids carry the code's
+    identity): the rows count the episodes the spec makes with this code, each once."""
+    from racf.experiments.sweeps.spec import parse_spec
+
+    spec = '''name = "s"
+mode = "grid"
+repeats = 1
+seed = 0
+target = "stale_map"
+supervisor = [true]
+
+[space]
+attack = ["none"]
+estimator = ["odca"]
+sign = [0]
+speed = [1.5]
+
+[scenario.stale_map]
+case = ["temporary"]
+'''
+    (tid,) = [s.trial_id for s in parse_spec(spec).episodes()]
+    base = {"estimator": "odca", "collision": False, "scenario_case": "temporary", "no_needless_stop": None}
+    _sweep(tmp_path / "s", [{**base, "trial_id": tid, "stop_rule": True},
+                            {**base, "trial_id": tid, "stop_rule": True},  # the same episode, stored twice
+                            {**base, "trial_id": tid.rsplit("_", 1)[0] + "_0ldc0de0ldc0", "stop_rule": False}])
+    (tmp_path / "s" / "spec.toml").write_text(spec)
+    row = summarise([tmp_path / "s"])["rows"]["s|temporary|odca|True"]
+    assert row["n"] == 1 and row["stop_rule"]["k"] == 1 and row["stop_rule"]["n"] == 1
