@@ -160,10 +160,7 @@ class VehicleSupervisor(CarStage):
         # A witness nearer than the lane the LiDAR sees clear reads nothing on the lane (A4): a phantom
         # picture's depth and box, the LiDAR's track on a wall beside the lane. Left out of the chain, so the
         # car eases off for them (the defence's brake, unconfirmed) and never stops hard on them.
-        def on_the_lane(r: float) -> float:
-            return math.nan if math.isfinite(on_lane) and r < on_lane - LANE_SPREAD_M else r
-
-        depth, lidar, size = on_the_lane(track.depth_m), on_the_lane(track.lidar_m), on_the_lane(track.size_m)
+        depth, lidar, size = (_on_the_lane(r, on_lane) for r in (track.depth_m, track.lidar_m, track.size_m))
         verdict = self.chain.step((depth, lidar, on_lane), closing, dt, self.carried, size, stopping_m(bound, env))
         if self.chain.born:
             self.rate.restart()
@@ -179,7 +176,7 @@ class VehicleSupervisor(CarStage):
         confirmed = any(math.isfinite(r) and abs(r - track.distance_m) <= agree_m(track.distance_m)
                         for r in (lidar, on_lane))
         clear_there = math.isfinite(track.distance_m) and (
-            math.isnan(on_the_lane(track.distance_m))  # the lane seen clear beyond where the defence puts it
+            math.isnan(_on_the_lane(track.distance_m, on_lane))  # the lane seen clear beyond where the defence puts it
             or (not self.carried.held and lane is not None
                 and lane_clear(view.scan, lane, track.distance_m - env.delta_m, track.distance_m + env.delta_m,
                                self._lidar_in_camera)))
@@ -275,3 +272,9 @@ class VehicleSupervisor(CarStage):
         path = view.path
         ahead = (path.arclength >= view.progress_m) & (path.arclength <= view.progress_m + LANE_AHEAD_M)
         return lane_in_camera(path.points[ahead], view.pose, self.camera_xy_m)
+
+
+def _on_the_lane(reading_m: float, on_lane_m: float) -> float:
+    """``reading_m``, or NaN where it lies more than ``LANE_SPREAD_M`` nearer than the lane the LiDAR sees
+    clear (``on_lane_m``, NaN: no lane return): then it reads nothing on the lane (A4)."""
+    return math.nan if math.isfinite(on_lane_m) and reading_m < on_lane_m - LANE_SPREAD_M else reading_m

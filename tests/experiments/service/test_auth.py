@@ -35,20 +35,11 @@ WHO = {"no keys": "speaks CurveZMQ and this car has no keys",
 
 @pytest.mark.parametrize("who", WHO)
 def test_a_car_that_cannot_authenticate_is_told_why_in_its_own_line_within_3_s(service, keys, who, capsys,
-                                                                                 monkeypatch):
+                                                                                 unanswered_waits):
     """Three causes, three lines, each through the command line (exit 2) before any episode. Within
     3 s of the car's own waiting for the service: what it measures of its wait, which a loaded machine
     does not stretch as it stretches the command's whole wall time (its imports, its set-up)."""
-    from racf.experiments.link import remote
-
-    waits: list[float] = []
-    told = remote.NoAnswer.__init__
-
-    def counted(self, handshake, waited_ms):
-        waits.append(waited_ms)
-        told(self, handshake, waited_ms)
-
-    monkeypatch.setattr(remote.NoAnswer, "__init__", counted)
+    waits = unanswered_waits
 
     endpoint = service("raw", keys=ServerKeys.load(keys / "ours"))
     folder = {"no keys": None, "a car the service does not admit": keys / "stranger",

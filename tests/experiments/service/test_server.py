@@ -141,7 +141,7 @@ def _free_port() -> int:
         return s.getsockname()[1]
 
 
-def test_a_service_killed_and_restarted_mid_episode_gets_a_new_session(service, monkeypatch):
+def test_a_service_killed_and_restarted_mid_episode_gets_a_new_session(service, unanswered_waits):
     """The first service stops answering after 60 requests; a new one listens on its port 0.5 s later
     (longer than the car's timeout, so that the car must fall back: restarted at once, the new
     service could answer the car's next request in time on a fast machine, and the test would race).
@@ -158,18 +158,7 @@ def test_a_service_killed_and_restarted_mid_episode_gets_a_new_session(service, 
     first_stop, first = stops[0]
     threading.Thread(target=lambda: (first.join(), time.sleep(0.5), start_service("odca", stops, endpoint=endpoint)),
                      daemon=True).start()
-    # How long the car waited each time no answer came: its own measure of the wait, which a loaded
-    # machine does not stretch the way it stretches a step's whole wall time.
-    from racf.experiments.link import remote
-
-    waits: list[float] = []
-    told = remote.NoAnswer.__init__
-
-    def counted(self, handshake, waited_ms):
-        waits.append(waited_ms)
-        told(self, handshake, waited_ms)
-
-    monkeypatch.setattr(remote.NoAnswer, "__init__", counted)
+    waits = unanswered_waits  # how long the car waited each time no answer came, as it measured it
     timeout_ms = 100.0  # a loaded machine's answers stay within it (the default is 150 ms)
     try:
         result, log = run_trial(replace(SPEC, estimator_endpoint=endpoint, estimator_timeout_ms=timeout_ms))
