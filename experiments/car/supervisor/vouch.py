@@ -6,7 +6,9 @@ that is not. Readings form a chain while each lies where the last one, moved on 
 motion, puts it (within ``gate_m``) and no gap longer than ``gap_s`` parts them.
 
 A chain is judged when it is born, and a chain not vouched is judged again on every later reading
-(a refusal is not for life: the carried bounds and the witnesses change):
+(a refusal is not for life: the carried bounds and the witnesses change). A refused chain is lifted only
+on the safe side (no farther than the worst case plus delta) or where the box confirms it; never
+because the bounds grew to meet it:
 
 - with nothing carried, on a lane the car has not yet watched: it is the target, vouched;
 - on a watched lane, first seen nearer than ``seen_from_m`` (a vehicle is seen from farther), or
@@ -193,6 +195,12 @@ class ReadingChain:
             return "vouched"  # no farther than the worst case allows: on the safe side whatever it is
         if sized:
             return "vouched"  # the box confirms a target there, and bounds the vouch
+        if keep == "refused":
+            # A chain refused as no reading of the target stays so until it comes to the safe side or the box
+            # confirms it: the bounds growing to meet it are no evidence (the far end grows at the hardest
+            # pull-away, the reach at a range rate that errs in a bend), and the lane behind a hidden car
+            # stays behind it (seed 95366: a lane return 0.5 m behind the car, vouched once the reach met it).
+            return "refused"
         # The reach already holds the witnesses' error (delta, budgeted once): no tolerance on top, or a
         # lane return behind a hidden car walks the bounds away by delta plus the tolerance each time.
         return "vouched" if reading <= self._reach(carried, stopping_m) else "refused"

@@ -130,13 +130,37 @@ def test_a_vouched_chain_that_walks_past_the_far_end_is_refused():
     assert walked.step((carried.far_m + 0.06, NAN, NAN), 0.0, DT, carried).refused
 
 
-def test_a_refusal_is_judged_again_and_lifted_where_the_reading_comes_back_within_reach():
-    chain, carried = ReadingChain(), _carried(1.0)  # near 0.9, far 1.1, the lead standing, measured
+def test_a_refusal_is_judged_again_and_lifted_on_the_safe_side_or_by_the_box():
+    chain, carried = ReadingChain(), _carried(1.0)  # near 0.9, far 1.1, reach 1.1, the lead standing, measured
     chain.step((1.0, NAN, NAN), 0.0, DT, carried)
     assert chain.step((1.45, NAN, NAN), 0.0, DT, carried).refused  # a jump no car makes
-    # The same chain reads on, now where the target is: no longer refused, vouched.
     assert chain.step((1.3, NAN, NAN), 0.0, DT, carried).refused
-    assert chain.step((1.1, NAN, NAN), 0.0, DT, carried).vouched
+    # Within the reach (1.1 m) but born behind the target: still refused.
+    assert chain.step((1.08, NAN, NAN), 0.0, DT, carried).refused
+    # The same chain reads on where the worst case allows (near 0.9 + delta 0.1): vouched.
+    assert chain.step((0.98, NAN, NAN), 0.0, DT, carried).vouched
+    boxed = ReadingChain()
+    boxed.step((1.0, NAN, NAN), 0.0, DT, carried)
+    assert boxed.step((1.45, NAN, NAN), 0.0, DT, carried).refused
+    # A box 0.9 m away says the target reads no farther than 0.9 + 0.2 slack: vouched at 1.1 m.
+    lifted = boxed.step((1.25, NAN, NAN), 0.0, DT, carried, size_m=0.9)
+    assert lifted.vouched and lifted.reading_m == pytest.approx(1.1)
+
+
+def test_a_refused_chain_is_not_vouched_once_the_bounds_grow_to_meet_it():
+    # Seed 95366 (the EKF, the lead hidden in a bend): the lane behind the hidden car read 0.5 m past the
+    # last vouch, refused; the reach, growing at a range rate 0.35 m/s too fast, met it 0.24 s later.
+    config = ChainConfig(reacquire_s=0.5)
+    chain, carried = ReadingChain(config), _carried(1.0)
+    carried.vouch(1.0, 1.0, lead_known=True)  # its reach grows at 1.25 m/s, from 1.1 m
+    chain.step((1.0, NAN, NAN), 0.0, DT, carried)
+    assert chain.step((1.5, NAN, NAN), 0.0, DT, carried).refused  # past the far end and its tolerance (1.1 + 0.225)
+    for _ in range(20):  # 0.4 s: the reach grows to 1.1 + 1.25 x 0.4 = 1.6 m, past the reading
+        carried.predict(0.0, DT)
+        assert chain.step((1.5, NAN, NAN), 0.0, DT, carried).refused
+    assert carried.reach_m == pytest.approx(1.6)
+    # A new chain born there now would be a re-acquisition within the reach: vouched.
+    assert ReadingChain(config).step((1.5, NAN, NAN), 0.0, DT, carried).vouched
 
 
 def test_a_target_lost_longer_than_reacquire_s_is_taken_back_only_near_its_worst_case():
