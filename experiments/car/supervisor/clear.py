@@ -19,7 +19,7 @@ import numpy as np
 
 from racf.vehicle import QCAR2_BOX_M
 
-__all__ = ["lane_clear", "lane_return", "CAR_LENGTH_M", "CAR_HALF_WIDTH_M"]
+__all__ = ["along_lane", "lane_clear", "lane_return", "CAR_LENGTH_M", "CAR_HALF_WIDTH_M"]
 
 #: A QCar 2's length and half width, m (its box, :data:`racf.vehicle.QCAR2_BOX_M`).
 CAR_LENGTH_M, CAR_HALF_WIDTH_M = QCAR2_BOX_M[0], QCAR2_BOX_M[1] / 2
@@ -43,6 +43,28 @@ def _beams(scan: np.ndarray, lane: np.ndarray, lidar_in_camera: tuple[float, flo
         half = math.atan2(half_width_m, r)
         idx = np.arange(math.floor((bearing - half) / step), math.ceil((bearing + half) / step) + 1) % scan.size
         yield r, scan[idx]
+
+
+def along_lane(axial_m: float, lane: np.ndarray | None) -> float:
+    """The straight-line distance of a target on the lane that a witness reads ``axial_m`` along the
+    camera's axis, m: the camera's distance to the lane point that lies ``axial_m`` ahead.
+
+    The depth, the LiDAR's track and the box's size read along the camera's axis; the lane return and
+    the clear gap are straight-line distances. In a bend the two part by r (1 - cos bearing): 0.15 m
+    for a car 0.73 m away at 37 degrees, where the axial witnesses would otherwise put the car's worst
+    case that much nearer and the stop rule brake hard for nothing. The conversion reads only the map
+    and the car's own pose, and never gives less than ``axial_m``. Where the lane in view does not
+    reach that far ahead (or there is no lane: ``lane`` None or empty), the reading itself.
+    ``lane``: (N, 2) points as (z ahead, y left) from the camera, in order along the lane."""
+    if lane is None or len(lane) < 2 or not math.isfinite(axial_m):
+        return axial_m
+    z, y = lane[:, 0], lane[:, 1]
+    crossing = np.flatnonzero((z[:-1] <= axial_m) & (z[1:] >= axial_m))
+    if not crossing.size:
+        return axial_m
+    i = int(crossing[0])
+    share = (axial_m - z[i]) / (z[i + 1] - z[i]) if z[i + 1] > z[i] else 0.0
+    return float(math.hypot(axial_m, y[i] + share * (y[i + 1] - y[i])))
 
 
 def lane_return(scan: np.ndarray, lane: np.ndarray, lidar_in_camera: tuple[float, float]) -> float:
@@ -75,14 +97,14 @@ def lane_clear(scan: np.ndarray, lane: np.ndarray, near_m: float, far_m: float,
                lidar_in_camera: tuple[float, float]) -> bool:
     """``scan``: the LiDAR's ranges (beam i at 2 pi i / N, counter-clockwise from ahead); ``lane``:
     (N, 2) lane points as (z ahead, y left) from the camera; ``near_m``, ``far_m``: where the carried
-    target's rear can be (camera distance); ``lidar_in_camera``: the LiDAR's place in the camera's
+    target's rear can be (the camera's straight-line distance); ``lidar_in_camera``: the LiDAR's place in the camera's
     frame (ahead, left), m. True only when every such lane point is seen clear."""
     scan = np.asarray(scan, np.float64)
     if not (math.isfinite(near_m) and math.isfinite(far_m)) or scan.size == 0 or len(lane) == 0:
         return False
-    z = lane[:, 0]
-    where = (z >= near_m) & (z <= far_m + CAR_LENGTH_M)
-    if not where.any() or z.max() < far_m + CAR_LENGTH_M:
+    r = np.hypot(lane[:, 0], lane[:, 1])  # straight-line distances, as near_m and far_m are (in a bend, past z)
+    where = (r >= near_m) & (r <= far_m + CAR_LENGTH_M)
+    if not where.any() or r.max() < far_m + CAR_LENGTH_M:
         return False  # the lane in view ends before the target's farthest place: nothing to see through
     for r, beams in _beams(scan, lane[where], lidar_in_camera):
         if not (np.all(np.isfinite(beams)) and np.all(beams > r + _BEYOND_M)):

@@ -6,7 +6,9 @@ stage, and its cap stands in for the stage's. Each control step it:
 
 1. bounds the car's own true speed (:class:`racf.controllers.speed.SpeedBound`) and moves the carried target's
    bounds on by the car's travel at that bound (:class:`~.track.CarriedTarget`);
-2. judges this frame's range reading (:class:`~.vouch.ReadingChain`; a witness nearer than the lane the
+2. judges this frame's range reading (:class:`~.vouch.ReadingChain`; the witnesses that read along the
+   camera's axis are first taken to the straight line of the lane point there, :func:`~.clear.along_lane`,
+   as the lane return and the clear gap are; a witness nearer than the lane the
    LiDAR sees clear is left out: it reads nothing on the lane): vouched, refused or implausible,
    a refusal judged again each step; a vouched one resets the bounds to it +- delta, with the target's
    speed the car measured itself (:class:`~.speed.RangeRate`: the chain's range rate plus its odometry);
@@ -44,7 +46,7 @@ from racf.controllers.speed import SpeedBound
 from racf.experiments.car.broadcast import AGREE_M
 from racf.experiments.car.following.stage import LANE_AHEAD_M
 from racf.experiments.car.stage import CarStage, CarView, StageColumn, StageContext, StageLimit, TargetTrack
-from racf.experiments.car.supervisor.clear import lane_clear, lane_return
+from racf.experiments.car.supervisor.clear import along_lane, lane_clear, lane_return
 from racf.experiments.car.supervisor.envelope import Envelope, safe_speed, stopping_m
 from racf.experiments.car.supervisor.speed import RangeRate
 from racf.experiments.car.supervisor.track import CarriedTarget
@@ -151,7 +153,8 @@ class VehicleSupervisor(CarStage):
         self.carried.predict(bound, dt)
         lead_mps, known = self._lead_speed(track)
         closing = speed - (lead_mps if math.isfinite(lead_mps) else 0.0)
-        lane = self._lane(view) if view.scan is not None else None
+        ahead = self._lane(view)
+        lane = ahead if view.scan is not None else None  # (the lane for the LiDAR: on the steps it scans)
         if lane is not None:
             self._on_lane, self._on_lane_age = lane_return(view.scan, lane, self._lidar_in_camera), 0.0
         else:  # between scans, moved on by the relative motion until the next
@@ -159,8 +162,11 @@ class VehicleSupervisor(CarStage):
         on_lane = self._on_lane if self._on_lane_age <= SCAN_HOLD_S else math.nan
         # A witness nearer than the lane the LiDAR sees clear reads nothing on the lane (A4): a phantom
         # picture's depth and box, the LiDAR's track on a wall beside the lane. Left out of the chain, so the
-        # car eases off for them (the defence's brake, unconfirmed) and never stops hard on them.
-        depth, lidar, size = (_on_the_lane(r, on_lane) for r in (track.depth_m, track.lidar_m, track.size_m))
+        # car eases off for them (the defence's brake, unconfirmed) and never stops hard on them. Each read
+        # along the camera's axis, taken to the straight line of the lane return and the clear gap first.
+        depth, lidar, size = (_on_the_lane(along_lane(r, ahead), on_lane)
+                              for r in (track.depth_m, track.lidar_m, track.size_m))
+        defended = along_lane(track.distance_m, ahead)  # the defence's distance, the same way
         verdict = self.chain.step((depth, lidar, on_lane), closing, dt, self.carried, size, stopping_m(bound, env))
         if self.chain.born:
             self.rate.restart()
@@ -172,16 +178,16 @@ class VehicleSupervisor(CarStage):
                                                                     self.carried.far_m, self._lidar_in_camera):
             self.carried.reset()
         fresh = math.isfinite(vouched)
-        agrees = fresh and math.isfinite(track.distance_m) and abs(track.distance_m - vouched) <= agree_m(vouched)
-        confirmed = any(math.isfinite(r) and abs(r - track.distance_m) <= agree_m(track.distance_m)
+        agrees = fresh and math.isfinite(defended) and abs(defended - vouched) <= agree_m(vouched)
+        confirmed = any(math.isfinite(r) and abs(r - defended) <= agree_m(defended)
                         for r in (lidar, on_lane))
-        clear_there = math.isfinite(track.distance_m) and (
-            math.isnan(_on_the_lane(track.distance_m, on_lane))  # the lane seen clear beyond where the defence puts it
+        clear_there = math.isfinite(defended) and (
+            math.isnan(_on_the_lane(defended, on_lane))  # the lane seen clear beyond where the defence puts it
             or (not self.carried.held and lane is not None
-                and lane_clear(view.scan, lane, track.distance_m - env.delta_m, track.distance_m + env.delta_m,
+                and lane_clear(view.scan, lane, defended - env.delta_m, defended + env.delta_m,
                                self._lidar_in_camera)))
         ranged = fresh and any(math.isfinite(r) and abs(r - vouched) <= agree_m(vouched) for r in (lidar, on_lane))
-        cap, stop, eased = self._cap(track.cap_mps, speed, dt, bound, fresh, agrees, math.isfinite(track.distance_m),
+        cap, stop, eased = self._cap(track.cap_mps, speed, dt, bound, fresh, agrees, math.isfinite(defended),
                                      evidence=((fresh or verdict.implausible) and not confirmed) or clear_there,
                                      unranged=fresh and not ranged)
         if verdict.implausible:
@@ -268,8 +274,10 @@ class VehicleSupervisor(CarStage):
         return cap, False, cap > min(safe, defence_cap)
 
     def _lane(self, view: CarView):
-        """The lane ahead in the camera's frame, from the map and the car's own pose."""
+        """The lane ahead in the camera's frame, from the map and the car's own pose (None: no map)."""
         path = view.path
+        if path is None or view.pose is None:
+            return None
         ahead = (path.arclength >= view.progress_m) & (path.arclength <= view.progress_m + LANE_AHEAD_M)
         return lane_in_camera(path.points[ahead], view.pose, self.camera_xy_m)
 

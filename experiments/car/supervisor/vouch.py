@@ -15,6 +15,10 @@ because the bounds grew to meet it:
   nearer than the carried target can be: it appeared from nowhere (a phantom), implausible until
   two range witnesses agree on it for ``confirm_frames`` frames (a real car that cut in). Until
   then the car may ease off, not brake hard;
+- nearer than the carried worst case (its near end) and read by one witness alone: no reading of the
+  carried target (it cannot be there) and none a second witness confirms, implausible as above (the car
+  eases off; the worst case still bounds it). The LiDAR's track on a car's near corner in a bend reads
+  0.3 m short of the lane return: taken as the car ahead, the stop rule braked hard for nothing;
 - within the carried bounds and no farther than the carried worst case plus delta: vouched (a
   reading that near is on the safe side whatever it is);
 - farther than that, a *re-acquisition*: vouched only within the target's reach (where it would be
@@ -166,7 +170,8 @@ class ReadingChain:
         if self.born:
             self.confirmed = 0
         if self.born or self.state != "vouched":
-            self.state = self._judge(reading, carried, sized, stopping_m, keep=self.state if continuous else "none")
+            self.state = self._judge(reading, carried, sized, stopping_m, keep=self.state if continuous else "none",
+                                     both=both)
         elif carried.held and reading > carried.far_m + c.noise_m and not handed_on:
             self.state = "refused"  # walked away faster than the target can go
         self.last_m, self.since_s = reading, 0.0
@@ -180,8 +185,10 @@ class ReadingChain:
         return Verdict(said, False, implausible=self.state == "implausible", refused=self.state == "refused",
                        sized=sized)
 
-    def _judge(self, reading: float, carried: CarriedTarget, sized: bool, stopping_m: float, keep: str) -> str:
-        """A chain's verdict on this reading (``keep``: its verdict so far, "none" for a new chain)."""
+    def _judge(self, reading: float, carried: CarriedTarget, sized: bool, stopping_m: float, keep: str,
+               both: bool = False) -> str:
+        """A chain's verdict on this reading (``keep``: its verdict so far, "none" for a new chain;
+        ``both``: two range witnesses agree on it)."""
         c, tolerance = self.config, agree_m(reading)
         if not carried.held:
             if keep == "implausible" or (keep == "none" and self.watched_s >= c.watch_s and reading < c.seen_from_m):
@@ -189,6 +196,12 @@ class ReadingChain:
             return "vouched"
         if reading < carried.near_m - tolerance:
             return "implausible"  # nearer than the target can be: appeared from nowhere
+        if reading < carried.near_m and not both:
+            # Nearer than the carried worst case, a jump from the chain the car held, and one witness alone:
+            # no reading of the carried target (it cannot be there), and none a second witness confirms. The
+            # car eases off for it and the worst case still bounds the car; the stop rule waits for a second
+            # witness (the LiDAR's track on a car's near corner in a bend, 0.3 m short of the lane return).
+            return "implausible"
         if reading > carried.far_m + tolerance:
             return "refused"  # farther than the target can have gone: a jump
         if reading <= carried.near_m + carried.env.delta_m:

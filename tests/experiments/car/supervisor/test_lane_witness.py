@@ -201,3 +201,32 @@ def test_a_car_s_sector_is_rounded_out_to_whole_beams_alike_on_both_sides():
     for beam in (11, -11):
         assert not lane_clear(_one_beam(beam, 1.0), LANE, 1.0, 1.0, AT_CAMERA), beam
     assert lane_clear(_one_beam(12, 1.0), LANE, 1.0, 1.0, AT_CAMERA)
+
+
+def test_an_axial_reading_on_a_bending_lane_is_taken_to_the_lane_point_s_straight_line():
+    from racf.experiments.car.supervisor.clear import along_lane
+
+    # A lane that runs ahead and bends left at 45 degrees: points (z, y) = (t, 0) to z = 0.4, then (0.4 + u, u).
+    bend = np.array([[0.0, 0.0], [0.4, 0.0], [0.8, 0.4], [1.2, 0.8]])
+    # 0.6 m along the axis lies on the second leg at y = 0.2: sqrt(0.36 + 0.04) = 0.632 m.
+    assert along_lane(0.6, bend) == pytest.approx(math.sqrt(0.4))
+    # Before the bend the axis and the straight line are one.
+    assert along_lane(0.3, bend) == pytest.approx(0.3)
+    # Beyond the lane in view, or with no lane: the reading itself, never less.
+    assert along_lane(1.5, bend) == 1.5 and along_lane(0.6, None) == 0.6 and along_lane(0.6, bend[:1]) == 0.6
+    assert math.isnan(along_lane(math.nan, bend))
+
+
+def test_a_bending_lane_is_judged_clear_by_its_points_straight_line_distances():
+    # The lane bends away: at z 0.6 a point lies 0.8 to the left, 1.0 m away in a straight line.
+    bend = np.array([[z, 0.0] for z in np.arange(0.0, 0.6, 0.02)] + [[0.6, 0.8], [0.6, 1.0], [0.6, 2.0],
+                                                                        [0.6, 3.0]])
+    clear = _scan(5.0)
+    # Where the target can be (1.0 - 1.2 m, straight line): the points at 1.0 m and beyond, on the bend.
+    assert lane_clear(clear, bend, 1.0, 1.2, LIDAR)
+    # Something 1.05 m away on the bend (beam at atan2(0.8, 0.7)): not clear. Taken by z (0.6) alone,
+    # no point would lie in 1.0 - 1.2 m and the lane's z ends at 0.6: never judged at all.
+    beam = int(round(math.atan2(0.8, 0.7) / (2 * math.pi / N)))
+    blocked = clear.copy()
+    blocked[beam - 2:beam + 3] = math.hypot(0.7, 0.8)
+    assert not lane_clear(blocked, bend, 1.0, 1.2, LIDAR)

@@ -291,3 +291,25 @@ def test_a_verdict_is_unsized_unless_said():
     from racf.experiments.car.supervisor.vouch import Verdict
 
     assert Verdict(1.0, True).sized is False
+
+
+def test_a_new_reading_nearer_than_the_worst_case_that_one_witness_gives_is_eased_not_vouched():
+    # Seed 497095 (raw depth, a bend): the LiDAR's track on the lead's near corner read 0.3 m short of the
+    # lane return; taken as the car ahead, it put the worst case 0.3 m nearer and the stop rule braked hard.
+    carried = CarriedTarget(Envelope())  # the default delta, 0.17 m
+    carried.vouch(1.0, 0.0, lead_known=True)  # near 0.83 m; a reading's tolerance 0.15 m
+    chain = ReadingChain()
+    assert chain.step((NAN, NAN, 1.0), 0.0, DT, carried).vouched
+    # 0.72 m, by the track alone: a jump of 0.28 m (past the 0.25 m gate: a new chain), nearer than the
+    # near end (0.83) but within its tolerance (0.68).
+    alone = chain.step((NAN, 0.72, 1.0), 0.0, DT, carried)
+    assert alone.implausible and not alone.vouched and alone.reading_m == 0.72
+    assert chain.step((NAN, 0.72, 1.0), 0.0, DT, carried).implausible  # and so while it goes on alone
+    # Two witnesses agree on it (the depth 0.74 m): within the near end's tolerance, vouched at once.
+    agreed = ReadingChain()
+    agreed.step((NAN, NAN, 1.0), 0.0, DT, carried)
+    assert agreed.step((0.74, 0.72, 1.0), 0.0, DT, carried).vouched
+    # At or past the near end, one witness is enough, as before: the safe side.
+    nearer = ReadingChain()
+    nearer.step((NAN, NAN, 1.2), 0.0, DT, carried)
+    assert nearer.step((NAN, 0.84, 1.2), 0.0, DT, carried).vouched
