@@ -7,8 +7,9 @@ the option ``sign_props`` (``{"remove": i, "phantom": j}``, either None) and
   sensor's sight), as a sign that was removed while the map still lists it;
 - puts up a **phantom** at sign ``j``'s place: the stop sign's picture, its red octagon and white
   border at a real sign's height, printed on a wall panel standing on the floor, with no pole
-  (a poster on a wall, "Phantom of the ADAS", Nassi et al., CCS 2020). The panel reaches from
-  the plate's edge nearest the lane outwards, so a car in the lane passes it as it would the sign.
+  (a poster on a wall, "Phantom of the ADAS", Nassi et al., CCS 2020), half a plate out from the
+  sign's pole: the panel reaches from the pole's place outwards, so a car in the lane passes it as it
+  would the sign.
 
 ``info`` reports which sign is gone (``sign_removed``) and where the phantom stands
 (``phantom_at``), -1 for none: ground truth, for the referee.
@@ -28,6 +29,8 @@ __all__ = ["SignPropsManager", "PHANTOM_PANEL_M", "PHANTOM_BODY"]
 
 #: The phantom's wall panel: width and height, m (the plate is 0.10 across).
 PHANTOM_PANEL_M = (0.24, 0.36)
+#: Half the stop sign's plate across, m: the picture's near edge lies this far out from its centre.
+PLATE_HALF_M = 0.05
 #: The phantom's body in the model.
 PHANTOM_BODY = "phantom_poster"
 _PARKED = np.array([0.0, 0.0, -5.0])
@@ -82,15 +85,20 @@ class SignPropsManager(WorldManager):
         from racf.sim.world.stop_signs import stop_signs
 
         sign = stop_signs()[phantom]
-        model.body_pos[self._phantom] = (*sign.position, 0.0)
-        model.body_quat[self._phantom] = (math.cos(sign.face_yaw / 2), 0.0, 0.0, math.sin(sign.face_yaw / 2))
-        # The panel reaches away from the lane: from the plate's edge nearest it, outwards.
+        # The panel reaches away from the lane: from the plate's edge nearest it, outwards; and the whole
+        # picture stands half a plate out from the sign's pole, so the panel's nearest edge (it stands on
+        # the floor, where a sign's plate is on a pole) is where the pole is: a car that passes the sign
+        # passes it. (At the plate's edge, 5 cm nearer, a supervised car that stopped in sign 2's bend and
+        # pulled off grazed it, 7 mm off the line a car that never stopped drove.)
         s, _ = sign.path.project(np.asarray(sign.position))
         lane_x, lane_y, _ = sign.path.pose_at(s)
         outward = np.array([sign.position[0] - lane_x, sign.position[1] - lane_y])
         across = np.array([-math.sin(sign.face_yaw), math.cos(sign.face_yaw)])  # the plate's local +y
         side = 1.0 if float(outward @ across) >= 0 else -1.0
-        model.geom_pos[self._panel][1] = side * (PHANTOM_PANEL_M[0] / 2 - 0.05)
+        x, y = np.asarray(sign.position, float) + side * PLATE_HALF_M * across
+        model.body_pos[self._phantom] = (x, y, 0.0)
+        model.body_quat[self._phantom] = (math.cos(sign.face_yaw / 2), 0.0, 0.0, math.sin(sign.face_yaw / 2))
+        model.geom_pos[self._panel][1] = side * (PHANTOM_PANEL_M[0] / 2 - PLATE_HALF_M)
 
     def _index(self, value: Any, key: str) -> int:
         if value is None:
