@@ -17,7 +17,7 @@ the car's true speed (:class:`racf.controllers.speed.SpeedBound`), with the enco
   line allows (:func:`~.envelope.safe_speed` on the room, the target standing) is told to stop (cap 0).
   The room is the car's own distance along its route to the line where the map lists the target (its
   pose estimate and the map: in a bend a camera's distance to a sign beside the road is no distance
-  along it). A target the map does not list is placed on the route by the car itself: each vouched
+  along it), less what that may be off (``route_error_m``, A6). A target the map does not list is placed on the route by the car itself: each vouched
   reading less delta, along its bearing from the car's pose, projected on the route, less the line's
   distance before the target (the farthest of those places is carried: each is a lower bound). Without
   a bearing or a route, the carried near end less the line's camera depth. It never raises what the car's
@@ -121,7 +121,8 @@ class StaticSupervisor(CarStage):
             return self._said(math.inf, math.isfinite(vouched), False, False)
         outvoted = math.isfinite(track.distance_m) and track.distance_m > self.far_m + agree_m(self.far_m)
         outvoted = outvoted or (not math.isfinite(track.distance_m) and math.isfinite(vouched))
-        stop = bound > safe_speed(room, 0.0, e)
+        # The room along the route is the car's own (its pose against the map): less what that may be off (A6).
+        stop = bound > safe_speed(room - e.route_error_m, 0.0, e)
         return self._said(0.0 if stop else math.inf, math.isfinite(vouched), outvoted, stop)
 
     def _line_on_route(self, view: CarView, track: TargetTrack, depth_m: float) -> float:

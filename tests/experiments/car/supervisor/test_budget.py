@@ -46,3 +46,12 @@ def test_the_reading_the_supervisor_vouches_for_over_reads_by_no_more_than_witne
     over = (log["sup_reading"].to_numpy(float) - truth)[vouched]
     assert vouched.sum() > 20, "the supervisor vouched too seldom to measure"
     assert over.max() <= Envelope().witness_error_m, f"the vouched reading over-read by {over.max():.3f} m"
+
+
+@pytest.mark.parametrize("sign", range(4))
+def test_the_car_s_route_distance_is_off_by_no_more_than_route_error(sign):
+    # A6 measured: one approach per sign (the full measurement, 60 episodes, is route_error.py's: 0.071 m).
+    from tests.experiments.car.supervisor.route_error import BASE_SEED, route_errors
+
+    errors = route_errors(sign, 1.5, BASE_SEED + 1)
+    assert errors.size > 20 and np.abs(errors).max() <= Envelope().route_error_m
