@@ -41,9 +41,9 @@ class Envelope:
         margin_m: the gap left when both have stopped, m.
         odometry_error: the car's travel from its encoder is off by at most this share.
         route_error_m: how far the car's own distance along its route to a line may lie from the truth,
-            m (A6: its localisation against the map; measured at most 0.071 m over 60 supervised
-            sign approaches, ``tests/experiments/car/supervisor/route_error.py``). The static target's
-            room is budgeted it, once.
+            m (A6: its localisation against the map; measured at most 0.069 m over 60 supervised
+            sign approaches, 0.080 m with a 0.075 m budget, ``tests/experiments/car/supervisor/route_error.py``).
+            The static target's room is budgeted it, once.
         comfort_brake_mps2: the braking the safe controller plans with when it has the room, m/s^2
             (under the 3 m/s^2 a hard brake begins at).
     """
@@ -59,7 +59,7 @@ class Envelope:
     reaction_s: float = 0.1
     margin_m: float = 0.05
     odometry_error: float = 0.02
-    route_error_m: float = 0.075
+    route_error_m: float = 0.1
     comfort_brake_mps2: float = 1.5
 
     @property

@@ -25,11 +25,19 @@ SPEEDS = (1.0, 1.5, 2.0)
 def route_errors(sign: int, speed: float, seed: int) -> np.ndarray:
     """The car's route position less the truth's, m, at each step the car moves (positive: the car
     thinks itself farther along, with less room than it has)."""
+    return _errors(sign, _episode(sign, speed, seed)[1])
+
+
+def _episode(sign: int, speed: float, seed: int):
     from racf.experiments.episode import TrialSpec, run_trial
+
+    return run_trial(TrialSpec("clean+odca", sign, speed, seed, supervisor=True))
+
+
+def _errors(sign: int, log) -> np.ndarray:
     from racf.sim.world.stop_signs import stop_signs
 
     path = stop_signs()[sign].path
-    _, log = run_trial(TrialSpec("clean+odca", sign, speed, seed, supervisor=True))
     moving = log["speed"].to_numpy(float) > 0.05
     errors, hint = [], None
     for x, y, xe, ye in log.loc[moving, ["x", "y", "x_est", "y_est"]].to_numpy(float):
@@ -45,9 +53,11 @@ def measure(seeds: int) -> list[dict]:
     for sign in range(4):
         for k in range(seeds):
             speed = SPEEDS[k % len(SPEEDS)]
-            err = route_errors(sign, speed, BASE_SEED + k)
+            row, log = _episode(sign, speed, BASE_SEED + k)
+            err = _errors(sign, log)
             rows.append({"sign": sign, "speed": speed, "seed": BASE_SEED + k, "steps": int(err.size),
-                         "ahead_max_m": float(err.max()), "behind_max_m": float(-err.min())})
+                         "ahead_max_m": float(err.max()), "behind_max_m": float(-err.min()),
+                         "success": bool(row.success), "stop_distance_m": float(row.stop_distance_m)})
             print(f"sign {sign} at {speed} m/s, seed {BASE_SEED + k}: {rows[-1]['behind_max_m']:.3f} m behind, "
                   f"{rows[-1]['ahead_max_m']:.3f} m ahead at most", file=sys.stderr, flush=True)
     return rows
@@ -62,9 +72,11 @@ def main(argv: list[str] | None = None) -> int:
         parser.error(f"--seeds must be at least 1, got {args.seeds}")
     rows = measure(args.seeds)
     summary = {"episodes": len(rows), "behind_max_m": max(r["behind_max_m"] for r in rows),
-               "ahead_max_m": max(r["ahead_max_m"] for r in rows)}
+               "ahead_max_m": max(r["ahead_max_m"] for r in rows),
+               "stopped_in_band": sum(r["success"] for r in rows)}
     print(f"N {summary['episodes']} episodes: the car's route position off the truth by at most "
-          f"{summary['behind_max_m']:.3f} m behind (more room than it has) and {summary['ahead_max_m']:.3f} m ahead")
+          f"{summary['behind_max_m']:.3f} m behind (more room than it has) and {summary['ahead_max_m']:.3f} m ahead; "
+          f"{summary['stopped_in_band']} of {len(rows)} stopped for the sign")
     if args.json:
         with open(args.json, "w") as f:
             json.dump({"summary": summary, "rows": rows}, f, indent=1, allow_nan=False)

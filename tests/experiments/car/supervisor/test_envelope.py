@@ -54,7 +54,7 @@ def test_the_envelope_is_the_one_the_guarantee_page_states():
 
     stated = {"witness_error_m": 0.12, "attack_error_m": 0.05, "lead_speed_error_mps": 0.25, "target_decel_mps2": 6.0, "target_accel_mps2": 7.36,
               "target_max_mps": 3.0, "car_brake_mps2": 4.0, "car_accel_mps2": 7.36, "reaction_s": 0.1,
-              "margin_m": 0.05, "odometry_error": 0.02, "route_error_m": 0.075, "comfort_brake_mps2": 1.5}
+              "margin_m": 0.05, "odometry_error": 0.02, "route_error_m": 0.1, "comfort_brake_mps2": 1.5}
     assert dataclasses.asdict(ENV) == stated and ENV.delta_m == pytest.approx(0.17)  # each error once, summed
     with pytest.raises(dataclasses.FrozenInstanceError):
         ENV.witness_error_m = 0.2
