@@ -193,6 +193,35 @@ def _link_spoof(rows: list[dict] | None) -> list[str]:
                     ""]
 
 
+ROUTE_ERROR_COMMAND = "python -m tests.experiments.car.supervisor.route_error --json route-error.json"
+
+
+def _route_error(root: Path) -> list[str]:
+    """A6 measured: how far the car's own route distance to a line lies from the truth's."""
+    lines = ["## A6: the car's route distance to a line", "",
+             "The static supervisor's room is the car's own distance along its route to the line (its pose "
+             "estimate against the map), less `route_error_m`. Measured each step the car moves on supervised "
+             "clean stop-sign approaches (ODCA), four signs at 1, 1.5 and 2 m/s in turn.", ""]
+    path = root / "route-error.json"
+    if not path.exists():
+        return lines + missing("route-error", ROUTE_ERROR_COMMAND)
+    data = json.loads(path.read_text())
+    summary = data["summary"]
+    lines += meta_lines(data["meta"])
+    lines += ["| sign | N | largest error behind (more room than it has), m | largest error ahead, m | "
+              "stopped for the sign |", "|---|---|---|---|---|"]
+    for sign in sorted({r["sign"] for r in data["rows"]}):
+        rows = [r for r in data["rows"] if r["sign"] == sign]
+        lines.append(f"| {sign} | {len(rows)} | {max(r['behind_max_m'] for r in rows):.3f} | "
+                     f"{max(r['ahead_max_m'] for r in rows):.3f} | {sum(r['success'] for r in rows)} of {len(rows)} |")
+    from racf.experiments.car.supervisor.envelope import Envelope
+
+    budget = Envelope().route_error_m
+    verdict = "within it" if summary["behind_max_m"] <= budget else "**past it**"
+    return lines + ["", f"At most {summary['behind_max_m']:.3f} m behind over {summary['episodes']} episodes, against "
+                        f"the budget of {budget:g} m: {verdict}.", ""]
+
+
 def supervisor_markdown(root: Path) -> str:
     root = Path(root)
     lines = page_head(
@@ -218,4 +247,5 @@ def supervisor_markdown(root: Path) -> str:
     else:
         data = json.loads(path.read_text())
         lines += meta_lines(data["meta"]) + _table(data["rows"]) + [""]
-    return "\n".join(lines + _falsification(root) + _served_lies(root) + sign_rows_markdown(root) + [""])
+    return "\n".join(lines + _falsification(root) + _served_lies(root) + _route_error(root) + sign_rows_markdown(root)
+                     + [""])

@@ -111,3 +111,22 @@ def test_the_plain_link_spoof_is_met_only_where_every_supervised_row_stops_in_95
 def test_the_rows_over_raw_depth_and_the_ekf_say_what_to_run_until_stored(tmp_path):
     page = supervisor_markdown(tmp_path)
     assert "## Over raw depth and the EKF" in page and "Not stored yet (`following-supervisor-others`)" in page
+
+
+def test_a6_is_a_table_per_sign_and_a_verdict_against_the_budget(tmp_path):
+    assert "Not stored yet (`route-error`)" in supervisor_markdown(tmp_path)
+    rows = [{"sign": 0, "speed": 1.0, "seed": 1000, "steps": 100, "ahead_max_m": 0.02, "behind_max_m": 0.03,
+             "success": True, "stop_distance_m": 0.2},
+            {"sign": 0, "speed": 1.5, "seed": 1001, "steps": 100, "ahead_max_m": 0.05, "behind_max_m": 0.01,
+             "success": False, "stop_distance_m": 0.9},
+            {"sign": 1, "speed": 1.0, "seed": 1000, "steps": 100, "ahead_max_m": 0.0, "behind_max_m": 0.09,
+             "success": True, "stop_distance_m": 0.3}]
+    summary = {"episodes": 3, "behind_max_m": 0.09, "ahead_max_m": 0.05, "stopped_in_band": 2}
+    (tmp_path / "route-error.json").write_text(json.dumps({"meta": META, "summary": summary, "rows": rows}))
+    page = supervisor_markdown(tmp_path)
+    # Sign 0: the larger of each column over its two episodes, one of two stopped.
+    assert "| 0 | 2 | 0.030 | 0.050 | 1 of 2 |" in page and "| 1 | 1 | 0.090 | 0.000 | 1 of 1 |" in page
+    assert "At most 0.090 m behind over 3 episodes, against the budget of 0.1 m: within it." in page
+    summary["behind_max_m"] = 0.11
+    (tmp_path / "route-error.json").write_text(json.dumps({"meta": META, "summary": summary, "rows": rows}))
+    assert "against the budget of 0.1 m: **past it**." in supervisor_markdown(tmp_path)
