@@ -97,14 +97,14 @@ def lane_clear(scan: np.ndarray, lane: np.ndarray, near_m: float, far_m: float,
                lidar_in_camera: tuple[float, float]) -> bool:
     """``scan``: the LiDAR's ranges (beam i at 2 pi i / N, counter-clockwise from ahead); ``lane``:
     (N, 2) lane points as (z ahead, y left) from the camera; ``near_m``, ``far_m``: where the carried
-    target's rear can be (the camera's straight-line distance); ``lidar_in_camera``: the LiDAR's place in the camera's
-    frame (ahead, left), m. True only when every such lane point is seen clear."""
+    target's rear can be (the camera's straight-line distance); ``lidar_in_camera``: the LiDAR's place
+    in the camera's frame (ahead, left), m. True only when every such lane point is seen clear."""
     scan = np.asarray(scan, np.float64)
     if not (math.isfinite(near_m) and math.isfinite(far_m)) or scan.size == 0 or len(lane) == 0:
         return False
-    r = np.hypot(lane[:, 0], lane[:, 1])  # straight-line distances, as near_m and far_m are (in a bend, past z)
-    where = (r >= near_m) & (r <= far_m + CAR_LENGTH_M)
-    if not where.any() or r.max() < far_m + CAR_LENGTH_M:
+    away = np.hypot(lane[:, 0], lane[:, 1])  # straight-line distances, as near_m and far_m are (in a bend, past z)
+    where = (away >= near_m) & (away <= far_m + CAR_LENGTH_M)
+    if not where.any() or away.max() < far_m + CAR_LENGTH_M:
         return False  # the lane in view ends before the target's farthest place: nothing to see through
     for r, beams in _beams(scan, lane[where], lidar_in_camera):
         if not (np.all(np.isfinite(beams)) and np.all(beams > r + _BEYOND_M)):

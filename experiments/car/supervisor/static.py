@@ -17,11 +17,12 @@ the car's true speed (:class:`racf.controllers.speed.SpeedBound`), with the enco
   line allows (:func:`~.envelope.safe_speed` on the room, the target standing) is told to stop (cap 0).
   The room is the car's own distance along its route to the line where the map lists the target (its
   pose estimate and the map: in a bend a camera's distance to a sign beside the road is no distance
-  along it), less what that may be off (``route_error_m``, A6). A target the map does not list is placed on the route by the car itself: each vouched
-  reading less delta, along its bearing from the car's pose, projected on the route, less the line's
-  distance before the target (the farthest of those places is carried: each is a lower bound). Without
-  a bearing or a route, the carried near end less the line's camera depth. It never raises what the car's
-  braker or another stage says: it only adds a limit.
+  along it), less what that may be off (``route_error_m``, A6). A target the map does not list is
+  placed on the route by the car itself: each vouched reading less delta, along its bearing from the
+  car's pose, projected on the route, less the line's distance before the target (the farthest of
+  those places is carried: each is a lower bound). Without a bearing or a route, the carried near end
+  less the line's camera depth. It never raises what the car's braker or another stage says: it only
+  adds a limit.
 - **Done** once the car has stood before the line (the stop the sign asks for), or the car's loop
   publishes its next target.
 

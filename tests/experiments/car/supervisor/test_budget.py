@@ -50,7 +50,8 @@ def test_the_reading_the_supervisor_vouches_for_over_reads_by_no_more_than_witne
 
 @pytest.mark.parametrize("sign", range(4))
 def test_the_car_s_route_distance_is_off_by_no_more_than_route_error(sign):
-    # A6 measured: one approach per sign (the full measurement, 60 episodes, is route_error.py's: 0.069 m, 0.080 m with a 0.075 m budget).
+    # A6 measured: one approach per sign (the full measurement, 60 episodes, is route_error.py's: 0.069 m;
+    # 0.080 m with a 0.075 m budget).
     from tests.experiments.car.supervisor.route_error import BASE_SEED, route_errors
 
     errors = route_errors(sign, 1.5, BASE_SEED + 1)
