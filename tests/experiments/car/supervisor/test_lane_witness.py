@@ -230,3 +230,27 @@ def test_a_bending_lane_is_judged_clear_by_its_points_straight_line_distances():
     blocked = clear.copy()
     blocked[beam - 2:beam + 3] = math.hypot(0.7, 0.8)
     assert not lane_clear(blocked, bend, 1.0, 1.2, LIDAR)
+
+
+def test_along_the_lane_by_hand_on_lanes_of_every_shape():
+    from racf.experiments.car.supervisor.clear import along_lane
+
+    # Two points: the lane's one segment, (0, 0) to (1, 1): 0.5 m along the axis lies at y 0.5.
+    assert along_lane(0.5, np.array([[0.0, 0.0], [1.0, 1.0]])) == pytest.approx(math.hypot(0.5, 0.5))
+    # Irregular points: 0.7 m lies halfway from (0.5, 0.1) to (0.9, 0.5), at y 0.3.
+    irregular = np.array([[0.0, 0.0], [0.5, 0.1], [0.9, 0.5], [1.0, 1.0]])
+    assert along_lane(0.7, irregular) == pytest.approx(math.hypot(0.7, 0.3))
+    # Exactly at the lane's first and last points.
+    assert along_lane(0.0, irregular) == 0.0 and along_lane(1.0, irregular) == pytest.approx(math.hypot(1.0, 1.0))
+    start_aside = np.array([[0.3, 0.4], [1.0, 0.4]])
+    assert along_lane(0.3, start_aside) == pytest.approx(0.5)
+    # A segment across the axis (z stands still): the point where it begins, not where it ends.
+    across = np.array([[0.5, 0.0], [0.5, 0.6], [1.0, 0.6]])
+    assert along_lane(0.5, across) == pytest.approx(0.5)
+    # A lane that turns back and out again (a chicane seen from its start): 0.7 m ahead is met first at y 0,
+    # then again at y 0.6 on the second way out: the lane's first pass is the car's.
+    chicane = np.array([[0.0, 0.0], [1.0, 0.0], [0.5, 0.5], [1.5, 1.0]])
+    assert along_lane(0.7, chicane) == pytest.approx(0.7)
+    # A lane that begins beyond the reading (it doubles back first): met on its way out again, at y 0.45.
+    back_first = np.array([[1.0, 0.0], [0.2, 0.3], [1.2, 0.8]])
+    assert along_lane(0.5, back_first) == pytest.approx(math.hypot(0.5, 0.45))

@@ -76,7 +76,7 @@ def test_a_chain_follows_the_relative_motion_and_a_gap_ends_it():
 
 
 @pytest.mark.parametrize("field, value", [("gate_m", 0.0), ("gap_s", 11.0), ("confirm_frames", 0),
-                                          ("seen_from_m", "far")])
+                                          ("confirm_frames", True), ("seen_from_m", "far")])
 def test_bad_settings_are_refused(field, value):
     with pytest.raises(ValueError, match=field):
         ChainConfig(**{field: value})
@@ -313,3 +313,30 @@ def test_a_new_reading_nearer_than_the_worst_case_that_one_witness_gives_is_ease
     nearer = ReadingChain()
     nearer.step((NAN, NAN, 1.2), 0.0, DT, carried)
     assert nearer.step((NAN, 0.84, 1.2), 0.0, DT, carried).vouched
+
+
+def test_a_reading_exactly_at_the_near_end_is_on_the_safe_side_and_one_exactly_at_the_box_s_bound_is_its_own():
+    carried = CarriedTarget(Envelope())  # the default delta, 0.17 m
+    carried.vouch(1.0, 0.0, lead_known=True)
+    chain = ReadingChain()
+    assert chain.step((NAN, NAN, 1.1), 0.0, DT, carried).vouched  # within the reach (1.17)
+    # A jump (0.27 m, past the gate) to exactly the near end, by one witness: not nearer than the worst
+    # case, so vouched (the safe side), not eased.
+    at_near = chain.step((NAN, carried.near_m, 1.1), 0.0, DT, carried)
+    assert at_near.vouched and not at_near.implausible
+    # The box says 0.8 m (its slack 0.2 m): a range of exactly 1.0 m is not beyond it, read as it is.
+    boxed = ReadingChain().step((1.0, NAN, NAN), 0.0, DT, _carried(1.0), size_m=0.8)
+    assert boxed.vouched and not boxed.sized and boxed.reading_m == 1.0
+
+
+def test_without_the_car_s_stopping_distance_an_unmeasured_target_is_taken_back_only_on_the_safe_side():
+    carried = CarriedTarget(ENV)
+    carried.vouch(1.0, 0.0, lead_known=False)  # near 0.9, far 1.1 (delta 0.1); the speed unmeasured
+    chain = ReadingChain()
+    chain.step((1.0, NAN, NAN), 0.0, DT, carried)
+    for _ in range(5):
+        chain.step((NAN, NAN, NAN), 0.0, DT, carried)
+        carried.predict(0.0, DT)
+    # Near end 0.9 m, no stopping distance given: 1.0 m vouched (near + delta), 1.05 m refused.
+    assert ReadingChain().step((1.0, NAN, NAN), 0.0, DT, carried).vouched
+    assert ReadingChain().step((1.05, NAN, NAN), 0.0, DT, carried).refused
