@@ -62,12 +62,18 @@ def test_the_page_pairs_each_defence_with_itself_supervised_and_says_what_is_mis
            "any episode left: +0.050 m. The random sampler alone (the parameter space drawn uniformly): 5 searches, " \
            "0 violated, lowest +0.080 m." in page
     # Inside the assumptions all told: 400 episodes, short of the 1,000 asked; with the sign's 700 more, met.
-    assert "Inside the assumptions, all told: 400 episodes, 0 searches with a violation (a contact, or the stop " \
-           "rule broken: the line run, or no rest within 3 s of the braking window) (asked: at " \
-           "least 1,000 episodes, none): **not met**." in page
+    assert "Inside the assumptions, all told: 400 episodes at one commit (abc), 0 searches with a violation (a " \
+           "contact, or the stop rule broken: the line run, or no rest within 3 s of the braking window) (asked: at " \
+           "least 1,000 episodes at one commit, none): **not met**." in page
     (tmp_path / "falsify-guarantee-sign.json").write_text(json.dumps({**report, "episodes_evaluated": 700}))
-    assert "all told: 1100 episodes, 0 searches" in supervisor_markdown(tmp_path) and \
+    assert "all told: 1100 episodes at one commit (abc), 0 searches" in supervisor_markdown(tmp_path) and \
            "none): met." in supervisor_markdown(tmp_path)
+    # The sign's searched at another commit (measured_on names it): two commits, not met.
+    other = {**report, "episodes_evaluated": 700, "meta": {**META, "measured_on": "def"}}
+    (tmp_path / "falsify-guarantee-sign.json").write_text(json.dumps(other))
+    assert "all told: 1100 episodes at 2 commits (abc, def), 0 searches" in supervisor_markdown(tmp_path) and \
+           "none): **not met**." in supervisor_markdown(tmp_path)
+    (tmp_path / "falsify-guarantee-sign.json").write_text(json.dumps({**report, "episodes_evaluated": 700}))
     found = {**report, "samplers": {**report["samplers"], "tpe": {**report["samplers"]["tpe"], "falsified": 1}}}
     (tmp_path / "falsify-guarantee.json").write_text(json.dumps(found))
     assert "1 searches with a violation" in supervisor_markdown(tmp_path)
