@@ -8,7 +8,7 @@ from pathlib import Path
 
 from racf.stats import ci, num, rate
 
-__all__ = ["NOTE", "page_head", "ci", "num", "rate", "meta_lines", "missing", "StoredResults"]
+__all__ = ["NOTE", "page_head", "ci", "num", "rate", "meta_lines", "missing", "stored", "StoredResults"]
 
 NOTE = ("Written by `racf.experiments.pages.results_pages` from the stored results in `docs/results/data/`: every "
         "number is what the command beside it printed, on the code, machine and sensors named. Intervals are "
@@ -45,6 +45,16 @@ def meta_lines(meta: dict) -> list[str]:
 
 def missing(name: str, command: str) -> list[str]:
     return [f"Not stored yet (`{name}`): run `{command}` and store it with `results_store`.", ""]
+
+
+def stored(root: Path, name: str, command: str) -> tuple[dict | None, list[str]]:
+    """A stored result and the lines that open its section: who measured it where, or (with None)
+    that it is not stored yet and the command that makes it."""
+    path = Path(root) / f"{name}.json"
+    if not path.exists():
+        return None, missing(name, command)
+    data = json.loads(path.read_text())
+    return data, meta_lines(data["meta"])
 
 
 class StoredResults:

@@ -13,7 +13,7 @@ import json
 from pathlib import Path
 
 from racf.experiments.pages.following_page import ATTACK_LABELS
-from racf.experiments.pages.results_format import meta_lines, missing, page_head, rate
+from racf.experiments.pages.results_format import meta_lines, missing, page_head, rate, stored
 from racf.experiments.pages.sign_rows import sign_rows_markdown
 
 __all__ = ["supervisor_markdown", "SUPERVISOR_COMMAND", "GUARANTEE_RESULTS", "INSIDE", "checks"]
@@ -160,11 +160,10 @@ def _served_lies(root: Path) -> list[str]:
              "first 30 honest answers: always 4 m and nothing stands; the truth + 3 m and nothing stands; no "
              "target at all. The car runs its onboard ODCA beside the served answer; a served answer is one more "
              "reading, outvoted where the car's own defence puts the sign nearer or sees it stand.", ""]
-    path = root / "served-lies.json"
-    if not path.exists():
-        return lines + missing("served-lies", SERVED_LIES_COMMAND)
-    data = json.loads(path.read_text())
-    lines += meta_lines(data["meta"])
+    data, opening = stored(root, "served-lies", SERVED_LIES_COMMAND)
+    lines += opening
+    if data is None:
+        return lines
     lines += ["| served lie | supervisor | N | stopped at the sign [95 % CI] | lies answered | steps outvoted | "
               "answers refused | fallback steps |", "|---|---|---|---|---|---|---|---|"]
     for row in data["rows"]:
@@ -206,12 +205,11 @@ def _route_error(root: Path) -> list[str]:
              "The static supervisor's room is the car's own distance along its route to the line (its pose "
              "estimate against the map), less `route_error_m`. Measured each step the car moves on supervised "
              "clean stop-sign approaches (ODCA), four signs at 1, 1.5 and 2 m/s in turn.", ""]
-    path = root / "route-error.json"
-    if not path.exists():
-        return lines + missing("route-error", ROUTE_ERROR_COMMAND)
-    data = json.loads(path.read_text())
+    data, opening = stored(root, "route-error", ROUTE_ERROR_COMMAND)
+    lines += opening
+    if data is None:
+        return lines
     summary = data["summary"]
-    lines += meta_lines(data["meta"])
     lines += ["| sign | N | largest error behind (more room than it has), m | largest error ahead, m | "
               "stopped for the sign |", "|---|---|---|---|---|"]
     for sign in sorted({r["sign"] for r in data["rows"]}):

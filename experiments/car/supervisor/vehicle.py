@@ -40,6 +40,8 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from racf.controllers.following import FollowingConfig
 from racf.controllers.lead_perception import lane_in_camera
 from racf.controllers.speed import SpeedBound
@@ -278,8 +280,11 @@ class VehicleSupervisor(CarStage):
         path = view.path
         if path is None or view.pose is None:
             return None
-        ahead = (path.arclength >= view.progress_m) & (path.arclength <= view.progress_m + LANE_AHEAD_M)
-        return lane_in_camera(path.points[ahead], view.pose, self.camera_xy_m)
+        # Every step (the axial witnesses are read along it): a slice of the sorted arclengths, not a mask
+        # over the whole route.
+        first = int(np.searchsorted(path.arclength, view.progress_m, side="left"))
+        last = int(np.searchsorted(path.arclength, view.progress_m + LANE_AHEAD_M, side="right"))
+        return lane_in_camera(path.points[first:last], view.pose, self.camera_xy_m)
 
 
 def _on_the_lane(reading_m: float, on_lane_m: float) -> float:
