@@ -430,3 +430,28 @@ def test_a_lidar_track_on_something_beside_the_lane_is_no_reading_and_the_brake_
     assert said.values["sup_vouched"] and said.values["sup_reading"] > 1.1 and said.values["sup_eased"]
     assert said.speed_cap_mps == pytest.approx(0.47)
     assert not said.values["sup_stop"]
+
+
+class _Route:
+    """A route as the map gives it (points and their arclengths): 0.8 m straight ahead, then 45 degrees left."""
+
+    def __init__(self) -> None:
+        straight = [(x, 0.0) for x in np.arange(0.0, 0.8, 0.01)]
+        bend = [(0.8 + u, u) for u in np.arange(0.0, 1.5, 0.01)]
+        self.points = np.array(straight + bend)
+        self.arclength = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(self.points, axis=0).T))])
+
+
+def test_a_reading_along_the_camera_s_axis_is_vouched_at_the_lane_point_s_straight_line():
+    stage, advanced = _stage()  # the camera 0.2 m ahead of the car's origin, the car at the route's start
+    advanced.next = (0.8, NAN, 0.8, math.inf)  # the depth reads the lead 0.8 m along the axis
+    view = CarView({}, np.zeros(3), _Route(), 0.0, 0.5, 0.0, 0.0, DT, True, False,
+                   tracks={"vehicle": advanced.track()})
+    said = stage.step(view)
+    # 0.8 m ahead of the camera is x = 1.0 on the route, 0.2 m past the bend's start, so y = 0.2: in the
+    # camera's frame (0.8, 0.2), a straight line of sqrt(0.64 + 0.04) m, what the chain vouches for.
+    assert said.values["sup_vouched"] and said.values["sup_reading"] == pytest.approx(math.hypot(0.8, 0.2), abs=0.005)
+    # With no route, the reading itself.
+    plain, advanced = _stage()
+    advanced.next = (0.8, NAN, 0.8, math.inf)
+    assert plain.step(_view(0.5, advanced.track())).values["sup_reading"] == pytest.approx(0.8)
